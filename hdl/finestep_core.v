@@ -1,0 +1,116 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// finestep core: the fine-interpolation half of a two-stage CNC controller. Period
+// records (every axis's Q16.16 increment for one period + flags) enter through a
+// valid/ready port; the period timer loads one per period on the same clock for all
+// axes; a DDA per axis spreads each increment over the period; a step shaper per axis
+// turns the step requests into drive-timed step/dir, up/down or quadrature pins.
+//
+// Latency from an increment taking effect to the first pin edge: 3 clocks.
+// Every output is a flip-flop or a function of flip-flops only.
+module finestep_core #(
+    parameter N_AXES   = 4,
+    parameter P_WIDTH  = 20,
+    parameter TIMING_W = 12
+) (
+    // clock, reset
+    input  wire                       clk,
+    input  wire                       rst,
+    // control
+    input  wire                       run,
+    input  wire [P_WIDTH-1:0]         period_clocks,
+    input  wire                       clear_errors,
+    // per-axis configuration
+    input  wire [N_AXES-1:0]          axis_enable,
+    input  wire [TIMING_W*N_AXES-1:0] step_len,
+    input  wire [TIMING_W*N_AXES-1:0] step_space,
+    input  wire [TIMING_W*N_AXES-1:0] dir_setup,
+    input  wire [TIMING_W*N_AXES-1:0] dir_hold,
+    input  wire [2*N_AXES-1:0]        out_mode,
+    input  wire [3*N_AXES-1:0]        invert,
+    // period record port
+    input  wire                       rec_valid,
+    output wire                       rec_ready,
+    input  wire [32*N_AXES-1:0]       rec_inc,
+    input  wire [7:0]                 rec_flags,
+    // drive pins
+    output wire [N_AXES-1:0]          pin_a,
+    output wire [N_AXES-1:0]          pin_b,
+    output wire [N_AXES-1:0]          pin_en,
+    // status
+    output wire [32*N_AXES-1:0]       position,
+    output wire [N_AXES-1:0]          rate_error,
+    output wire [N_AXES-1:0]          step_lost,
+    output wire                       record_error,
+    output wire                       block_end
+);
+
+    wire [P_WIDTH-1:0]   p_active;
+    wire [32*N_AXES-1:0] inc;
+
+    period_timer #(
+        .N_AXES(N_AXES),
+        .P_WIDTH(P_WIDTH)
+    ) timer (
+        .clk(clk),
+        .rst(rst),
+        .run(run),
+        .period_clocks(period_clocks),
+        .clear_errors(clear_errors),
+        .rec_valid(rec_valid),
+        .rec_ready(rec_ready),
+        .rec_inc(rec_inc),
+        .rec_flags(rec_flags),
+        .p_active(p_active),
+        .inc(inc),
+        .block_end(block_end),
+        .record_error(record_error)
+    );
+
+    genvar i;
+    generate
+        for (i = 0; i < N_AXES; i = i + 1) begin : axis
+            wire req_valid;
+            wire req_negative;
+
+            dda_axis #(
+                .P_WIDTH(P_WIDTH)
+            ) dda (
+                .clk(clk),
+                .rst(rst),
+                .run(run),
+                .period_clocks(period_clocks),
+                .p_active(p_active),
+                .inc(inc[32*i +: 32]),
+                .req_valid(req_valid),
+                .req_negative(req_negative)
+            );
+
+            step_shaper #(
+                .TIMING_W(TIMING_W)
+            ) shaper (
+                .clk(clk),
+                .rst(rst),
+                .step_len(step_len[TIMING_W*i +: TIMING_W]),
+                .step_space(step_space[TIMING_W*i +: TIMING_W]),
+                .dir_setup(dir_setup[TIMING_W*i +: TIMING_W]),
+                .dir_hold(dir_hold[TIMING_W*i +: TIMING_W]),
+                .out_mode(out_mode[2*i +: 2]),
+                .invert(invert[3*i +: 3]),
+                .axis_enable(axis_enable[i]),
+                .clear_errors(clear_errors),
+                .req_valid(req_valid),
+                .req_negative(req_negative),
+                .pin_a(pin_a[i]),
+                .pin_b(pin_b[i]),
+                .pin_en(pin_en[i]),
+                .position(position[32*i +: 32]),
+                .rate_error(rate_error[i]),
+                .step_lost(step_lost[i])
+            );
+        end
+    endgenerate
+
+endmodule
+
+`default_nettype wire

