@@ -94,9 +94,13 @@ module dda_axis #(
         if (run) assume (f_inc < f_modulus && -f_inc < f_modulus);
     end
     always @(posedge clk) if (f_past_valid) begin
-        if ($past(rst)) assume (p_active == {{(P_WIDTH-1){1'b0}}, 1'b1});
-        else if (!$past(run)) assume (p_active == $past(period_sampled));
-        else assume (p_active == $past(p_active));
+        if ($past(rst)) begin
+            assume (p_active == {{(P_WIDTH-1){1'b0}}, 1'b1});
+        end else if (!$past(run)) begin
+            assume (p_active == $past(period_sampled));
+        end else begin
+            assume (p_active == $past(p_active));
+        end
     end
 
     always @(posedge clk) begin

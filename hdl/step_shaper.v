@@ -197,8 +197,11 @@ module step_shaper #(
 
     always @(*) if (f_past_valid && !rst) begin
         // The shaper's counters agree with the independent ones.
-        if (level_reg) assert (f_cnt == f_sat_high && f_high <= f_len);
-        else assert (f_cnt == f_sat_low);
+        if (level_reg) begin
+            assert (f_cnt == f_sat_high && f_high <= f_len);
+        end else begin
+            assert (f_cnt == f_sat_low);
+        end
         assert (f_dcnt == f_sat_dir);
         assert (pending_reg <= 8'sd127 && pending_reg >= -8'sd127);
         if (!f_clamped) assert (position_reg + {{24{pending_reg[PEND_W-1]}}, pending_reg} == f_net);
