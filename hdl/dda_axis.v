@@ -6,7 +6,7 @@
 // The accumulator counts position in units of 1/(P * 2^16) step, modulo M = P * 2^16:
 // each clock acc + d wraps at most once (the period timer guarantees |d| < M), and a
 // wrap upward or downward is a +1 or -1 step request. No division: P only sets the
-// modulus. While run is low acc sits at M/2, so the requests of a run sum to
+// modulus. Until the period timer runs, acc sits at M/2, so the requests of a run sum to
 // floor(T / M + 1/2): the commanded position rounded half up, with no drift.
 //
 // Latency: an update in cycle n gives req in cycle n+1.
@@ -18,7 +18,7 @@ module dda_axis #(
     input  wire               clk,
     input  wire               rst,
     // control
-    input  wire               run,
+    input  wire               run,             // the period timer is running
     input  wire [P_WIDTH-1:0] period_clocks,   // sampled while stopped
     input  wire [P_WIDTH-1:0] p_active,        // period of the running move
     input  wire [31:0]        inc,             // Q16.16 steps per period

@@ -45,7 +45,10 @@ module finestep_core #(
     output wire                       block_end
 );
 
+    wire                 timer_active;
     wire [P_WIDTH-1:0]   p_active;
+    // The DDAs hold their phase at M/2 until the period timer runs.
+    wire                 dda_run = run && timer_active;
     wire [32*N_AXES-1:0] inc;
 
     period_timer #(
@@ -61,6 +64,7 @@ module finestep_core #(
         .rec_ready(rec_ready),
         .rec_inc(rec_inc),
         .rec_flags(rec_flags),
+        .active(timer_active),
         .p_active(p_active),
         .inc(inc),
         .block_end(block_end),
@@ -78,7 +82,7 @@ module finestep_core #(
             ) dda (
                 .clk(clk),
                 .rst(rst),
-                .run(run),
+                .run(dda_run),
                 .period_clocks(period_clocks),
                 .p_active(p_active),
                 .inc(inc[32*i +: 32]),

@@ -10,6 +10,7 @@
 // unacceptable one (some |D| >= P: more than one step per clock), runs an idle period
 // (all increments zero); the latter sets the sticky record_error.
 //
+// P is sampled in every cycle before a run starts.
 // Invariants: remaining < p_act; every loaded increment satisfies |inc| < p_act * 2^16.
 module period_timer #(
     parameter N_AXES  = 4,
@@ -28,6 +29,7 @@ module period_timer #(
     input  wire [32*N_AXES-1:0] rec_inc,
     input  wire [7:0]           rec_flags,
     // to the DDAs
+    output wire                 active,        // periods are running
     output wire [P_WIDTH-1:0]   p_active,
     output wire [32*N_AXES-1:0] inc,
     // status
@@ -82,6 +84,7 @@ module period_timer #(
             p_act_reg     <= period_sampled;
         end else if (!active_reg) begin
             active_reg <= 1'b1;
+            p_act_reg  <= period_sampled;
         end else if (!boundary) begin
             remaining_reg <= remaining_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else begin
@@ -107,6 +110,7 @@ module period_timer #(
     end
 
     assign rec_ready    = boundary;
+    assign active       = active_reg;
     assign p_active     = p_act_reg;
     assign inc          = inc_reg;
     assign block_end    = block_end_reg;
@@ -141,6 +145,7 @@ module period_timer #(
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(run) && $past(active_reg)) assert (p_act_reg == $past(p_act_reg));
+        if (!$past(active_reg)) assert (p_act_reg == $past(period_sampled));
         // A boundary after a running period comes exactly P cycles after the last one.
         if (boundary && $past(active_reg) && $past(run) && !$past(boundary))
             assert (f_since_boundary == {1'b0, p_act_reg});

@@ -1,0 +1,239 @@
+//! Lockstep co-simulation: the Verilated core and the reference model get the same
+//! inputs and must produce the same outputs, every pin and every status bit, on every
+//! clock.
+//!
+//! Both sides run the same chunks of cycles with constant inputs and report an event for
+//! every cycle whose outputs changed; equal event lists mean equal outputs on every
+//! cycle, at the cost of comparing only the cycles where something happens. On the first
+//! difference, [`Mismatch`] names the cycle, the signal, the expected (model) and actual
+//! (RTL) values and the last events of both, and a waveform window of the RTL around it
+//! is written to `target/cosim-failures/<test name>.vcd`.
+//!
+//! ```no_run
+//! use finestep_cosim::{Harness, ModelPath};
+//! use finestep_model::{CoreInputs, PeriodRecord};
+//! let mut harness = Harness::new("doc_example", ModelPath::PerClock);
+//! let mut inputs = CoreInputs { run: true, period_clocks: 100, ..Default::default() };
+//! harness.feed(&mut inputs, std::iter::repeat(PeriodRecord::default()).take(10)).unwrap();
+//! ```
+
+mod mismatch;
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+
+use finestep_model::{pins, ChunkEnd, Core, CoreInputs, CoreOutputs, Event, PeriodRecord, MAX_AXES};
+use finestep_rtl_sys::Rtl;
+
+pub use mismatch::{describe_difference, Mismatch};
+
+/// Which model path runs against the RTL.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModelPath {
+    /// The model's per-clock `step()`: the definition.
+    PerClock,
+    /// The model's event-driven fast path, proven identical to the per-clock path.
+    Fast,
+}
+
+/// How many events of each side a mismatch report shows.
+const HISTORY: usize = 12;
+/// Waveform window before the mismatch, in cycles.
+const WINDOW_BEFORE: u64 = 256;
+/// Waveform window after the mismatch, in cycles.
+const WINDOW_AFTER: u64 = 16;
+
+/// The RTL and the model side by side.
+pub struct Harness {
+    name: String,
+    path: ModelPath,
+    rtl: Rtl,
+    model: Core,
+    /// Every chunk run since reset: its inputs and the cycles it ran (for waveform replay).
+    log: Vec<(CoreInputs, u64)>,
+    rtl_events: Vec<Event>,
+    model_events: Vec<Event>,
+    history: VecDeque<Event>,
+    outputs: CoreOutputs,
+    pulses: [u64; MAX_AXES],
+}
+
+impl Harness {
+    /// Both sides fresh out of reset. `name` names the waveform of a failure.
+    pub fn new(name: &str, path: ModelPath) -> Harness {
+        let rtl = Rtl::new();
+        let model = Core::new(finestep_rtl_sys::params());
+        let outputs = model.outputs();
+        Harness {
+            name: name.to_string(),
+            path,
+            rtl,
+            model,
+            log: Vec::new(),
+            rtl_events: Vec::new(),
+            model_events: Vec::new(),
+            history: VecDeque::with_capacity(HISTORY),
+            outputs,
+            pulses: [0; MAX_AXES],
+        }
+    }
+
+    /// Clock edges since reset.
+    pub fn cycle(&self) -> u64 {
+        self.model.cycle()
+    }
+
+    /// The outputs in the current cycle (equal on both sides).
+    pub fn outputs(&self) -> CoreOutputs {
+        self.outputs
+    }
+
+    /// Rising edges seen on each axis's pin A since reset (steps, in step/dir mode).
+    pub fn pulses(&self) -> [u64; MAX_AXES] {
+        self.pulses
+    }
+
+    /// Write a waveform of the RTL from now until [`Harness::trace_close`].
+    pub fn trace_open(&mut self, path: &std::path::Path) -> std::io::Result<()> {
+        self.rtl.trace_open(path)
+    }
+
+    /// Close the waveform opened by [`Harness::trace_open`].
+    pub fn trace_close(&mut self) {
+        self.rtl.trace_close()
+    }
+
+    /// The reference model (read-only).
+    pub fn model(&self) -> &Core {
+        &self.model
+    }
+
+    /// Up to `max_cycles` cycles with constant `inputs` on both sides, stopping after a
+    /// consumed record; every cycle's outputs compared.
+    pub fn run_chunk(&mut self, inputs: &CoreInputs, max_cycles: u64) -> Result<ChunkEnd, Box<Mismatch>> {
+        self.rtl_events.clear();
+        self.model_events.clear();
+        let start_cycle = self.model.cycle();
+        let before = self.outputs;
+        let rtl_end = self.rtl.run_chunk(inputs, max_cycles, &mut self.rtl_events);
+        let model_end = match self.path {
+            ModelPath::PerClock => self.model.run_chunk(inputs, max_cycles, &mut self.model_events),
+            ModelPath::Fast => self.model.run_chunk_fast(inputs, max_cycles, &mut self.model_events),
+        };
+        self.log.push((*inputs, rtl_end.cycles.max(model_end.cycles)));
+        if rtl_end != model_end || self.rtl_events != self.model_events {
+            return Err(Box::new(self.report(start_cycle, before, rtl_end, model_end)));
+        }
+        let mut previous = self.outputs.pins;
+        for event in &self.model_events {
+            let rising = event.outputs.pins & !previous;
+            for (axis, count) in self.pulses.iter_mut().enumerate() {
+                *count += (rising >> pins::pin_a(axis)) & 1;
+            }
+            previous = event.outputs.pins;
+        }
+        if let Some(last) = self.model_events.last() {
+            self.outputs = last.outputs;
+        }
+        for event in &self.model_events[self.model_events.len().saturating_sub(HISTORY)..] {
+            if self.history.len() == HISTORY {
+                self.history.pop_front();
+            }
+            self.history.push_back(*event);
+        }
+        Ok(model_end)
+    }
+
+    /// Offer each record on the record port until it is consumed, with `inputs` as the
+    /// rest of the inputs (its `rec_valid` and `record` are overwritten).
+    pub fn feed(
+        &mut self,
+        inputs: &mut CoreInputs,
+        records: impl IntoIterator<Item = PeriodRecord>,
+    ) -> Result<(), Box<Mismatch>> {
+        inputs.rec_valid = true;
+        for record in records {
+            inputs.record = record;
+            let limit = u64::from(inputs.period_clocks.max(1)) + 8;
+            let mut waited = 0;
+            loop {
+                let end = self.run_chunk(inputs, limit)?;
+                waited += end.cycles;
+                if end.consumed {
+                    break;
+                }
+                assert!(inputs.run || waited < 16 * limit, "record never consumed: core stopped");
+            }
+        }
+        inputs.rec_valid = false;
+        Ok(())
+    }
+
+    /// Run `cycles` cycles with constant inputs (a record offered is consumed at most once).
+    pub fn idle(&mut self, inputs: &CoreInputs, cycles: u64) -> Result<(), Box<Mismatch>> {
+        let mut done = 0;
+        while done < cycles {
+            done += self.run_chunk(inputs, cycles - done)?.cycles;
+        }
+        Ok(())
+    }
+
+    fn report(&mut self, start: u64, before: CoreOutputs, rtl_end: ChunkEnd, model_end: ChunkEnd) -> Mismatch {
+        let (cycle, expected, actual) =
+            mismatch::first_difference(start, before, &self.model_events, &self.rtl_events, model_end, rtl_end);
+        let mut recent_model: Vec<Event> = self.history.iter().copied().collect();
+        let mut recent_rtl = recent_model.clone();
+        recent_model.extend(self.model_events.iter().filter(|e| e.cycle <= cycle + 2));
+        recent_rtl.extend(self.rtl_events.iter().filter(|e| e.cycle <= cycle + 2));
+        let keep = |v: &mut Vec<Event>| {
+            let skip = v.len().saturating_sub(HISTORY);
+            v.drain(..skip);
+        };
+        keep(&mut recent_model);
+        keep(&mut recent_rtl);
+        let waveform = self.write_window(cycle).map_err(|e| e.to_string());
+        Mismatch {
+            test: self.name.clone(),
+            cycle,
+            expected,
+            actual,
+            model_end,
+            rtl_end,
+            recent_model,
+            recent_rtl,
+            waveform,
+        }
+    }
+
+    /// Replay the logged inputs on a fresh RTL and trace the cycles around `cycle`.
+    fn write_window(&self, cycle: u64) -> std::io::Result<PathBuf> {
+        let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../target/cosim-failures"));
+        std::fs::create_dir_all(&dir)?;
+        let suffix = if finestep_rtl_sys::trace_is_fst() { "fst" } else { "vcd" };
+        let path = dir.join(format!("{}.{suffix}", self.name));
+        let window_start = cycle.saturating_sub(WINDOW_BEFORE);
+        let window_end = cycle + WINDOW_AFTER;
+        let mut rtl = Rtl::new();
+        let mut scratch = Vec::new();
+        let mut tracing = false;
+        for (inputs, cycles) in &self.log {
+            let mut left = *cycles;
+            while left > 0 && rtl.cycle() < window_end {
+                if !tracing && rtl.cycle() >= window_start {
+                    rtl.trace_open(&path)?;
+                    tracing = true;
+                }
+                let stop = if tracing { window_end } else { window_start };
+                let run = left.min(stop - rtl.cycle());
+                scratch.clear();
+                let end = rtl.run_chunk(inputs, run, &mut scratch);
+                left -= end.cycles;
+                if end.consumed || end.cycles == 0 {
+                    break;
+                }
+            }
+        }
+        rtl.trace_close();
+        Ok(path)
+    }
+}

@@ -1,0 +1,122 @@
+//! Random stimulus for co-simulation tests: sequences of actions on the core's inputs.
+
+#![allow(dead_code)]
+
+use finestep_cosim::{Harness, Mismatch, ModelPath};
+use finestep_model::{AxisConfig, CoreInputs, Increment, PeriodRecord, MAX_AXES};
+use proptest::prelude::*;
+
+/// Axes of the Verilated core.
+pub const AXES: usize = 4;
+
+/// One thing done to the core's inputs.
+#[derive(Clone, Debug)]
+pub enum Action {
+    /// Offer this record until it is consumed.
+    Feed(PeriodRecord),
+    /// Keep the inputs, no record offered, for this many cycles.
+    Idle(u64),
+    /// Drop `run` for this many cycles (abort), then raise it again.
+    Stop(u64),
+    /// Pulse clear_errors for one cycle.
+    Clear,
+    /// New configuration for one axis (takes effect at once).
+    Configure(usize, AxisConfig),
+}
+
+/// A test case: the period and per-axis configuration, then the actions.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    pub period_clocks: u32,
+    pub axes: [AxisConfig; AXES],
+    pub actions: Vec<Action>,
+}
+
+pub fn axis_config() -> impl Strategy<Value = AxisConfig> {
+    let timing = prop_oneof![4 => 0u32..6, 1 => 0u32..40, 1 => Just(4095u32), 1 => any::<u32>()];
+    (timing.clone(), timing.clone(), timing.clone(), timing, 0u8..4, 0u8..8, any::<bool>()).prop_map(
+        |(step_len, step_space, dir_setup, dir_hold, mode, invert, enable)| AxisConfig {
+            step_len,
+            step_space,
+            dir_setup,
+            dir_hold,
+            mode,
+            invert,
+            enable,
+        },
+    )
+}
+
+/// Raw Q16.16 increments around what a period of `p` clocks can take.
+fn increment(p: u32) -> impl Strategy<Value = Increment> {
+    let max = i64::from(p) * 65536 - 1;
+    let raw = prop_oneof![
+        3 => Just(0i64),
+        3 => -131072i64..131072,                    // fractions of a step per period
+        3 => (-max / 8)..=(max / 8),                // comfortably within one step per clock
+        1 => (-max)..=max,                          // up to one step per clock (over-rate)
+        1 => prop_oneof![Just(max), Just(-max), Just(max + 1), Just(-max - 1)], // the limit, and just past it
+        1 => any::<i32>().prop_map(i64::from),      // anything, mostly unacceptable records
+    ];
+    raw.prop_map(|r| Increment::from_bits(r.clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32))
+}
+
+fn record(p: u32) -> impl Strategy<Value = PeriodRecord> {
+    (proptest::collection::vec(increment(p), AXES), 0u8..4).prop_map(|(incs, flags)| {
+        let mut record = PeriodRecord { flags, ..Default::default() };
+        record.inc[..AXES].copy_from_slice(&incs);
+        record
+    })
+}
+
+fn action(p: u32) -> impl Strategy<Value = Action> {
+    prop_oneof![
+        12 => record(p).prop_map(Action::Feed),
+        2 => prop_oneof![1u64..20, 1u64..5000].prop_map(Action::Idle),
+        1 => (1u64..4).prop_map(Action::Stop),
+        1 => Just(Action::Clear),
+        1 => (0..AXES, axis_config()).prop_map(|(axis, config)| Action::Configure(axis, config)),
+    ]
+}
+
+/// Random scenarios with short periods (so each case is a few thousand cycles).
+pub fn scenario(max_actions: usize) -> impl Strategy<Value = Scenario> {
+    let period = prop_oneof![1 => 0u32..4, 4 => 4u32..64, 2 => 64u32..600];
+    period.prop_flat_map(move |p| {
+        (proptest::collection::vec(axis_config(), AXES), proptest::collection::vec(action(p.max(1)), 1..max_actions))
+            .prop_map(move |(axes, actions)| Scenario {
+                period_clocks: p,
+                axes: axes.try_into().unwrap(),
+                actions,
+            })
+    })
+}
+
+/// Play a scenario on RTL and model side by side; the first difference is an error.
+pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
+    let mut harness = Harness::new(name, path);
+    let mut inputs = CoreInputs { run: true, period_clocks: scenario.period_clocks, ..Default::default() };
+    inputs.axes[..AXES].copy_from_slice(&scenario.axes);
+    for action in &scenario.actions {
+        match action {
+            Action::Feed(record) => harness.feed(&mut inputs, [*record])?,
+            Action::Idle(cycles) => harness.idle(&inputs, *cycles)?,
+            Action::Stop(cycles) => {
+                let stopped = CoreInputs { run: false, ..inputs };
+                harness.idle(&stopped, *cycles)?;
+            }
+            Action::Clear => {
+                let clearing = CoreInputs { clear_errors: true, ..inputs };
+                harness.idle(&clearing, 1)?;
+            }
+            Action::Configure(axis, config) => inputs.axes[*axis] = *config,
+        }
+    }
+    // Drain: a few idle periods so every pending step reaches the pins.
+    let drain = 3 * u64::from(scenario.period_clocks.max(1)) + 4 * 4096;
+    harness.idle(&inputs, drain)?;
+    Ok(harness)
+}
+
+/// Unused axes stay zero in the record; every axis config is within MAX_AXES.
+pub const _CHECK: () = assert!(AXES <= MAX_AXES);

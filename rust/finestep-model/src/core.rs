@@ -1,0 +1,434 @@
+//! `finestep_core`: the composition of one [`PeriodTimer`], and per axis one
+//! [`DdaAxis`] and one [`StepShaper`], with the packed outputs.
+//!
+//! Latency: a DDA update in cycle `n` gives `req` in `n+1`, the earliest rise decision
+//! in `n+1` (level and `position` in `n+2`) and the pin edge in `n+3`. Every output is a
+//! function of the state only.
+
+use crate::config::{AxisSettings, CoreInputs, CoreParams, ParamsError};
+use crate::dda_axis::{DdaAxis, ONE_STEP};
+use crate::period_timer::{PeriodTimer, TimerInputs};
+use crate::step_shaper::StepShaper;
+use crate::MAX_AXES;
+
+/// Bit positions in [`CoreOutputs::pins`] (the layout of the Verilator shim).
+pub mod pins {
+    /// Pin A of `axis` (step, up, or quadrature A).
+    pub const fn pin_a(axis: usize) -> u32 {
+        3 * axis as u32
+    }
+    /// Pin B of `axis` (direction, down, or quadrature B).
+    pub const fn pin_b(axis: usize) -> u32 {
+        3 * axis as u32 + 1
+    }
+    /// The enable pin of `axis`.
+    pub const fn pin_en(axis: usize) -> u32 {
+        3 * axis as u32 + 2
+    }
+    /// Sticky `rate_error` of `axis`.
+    pub const fn rate_error(axis: usize) -> u32 {
+        24 + axis as u32
+    }
+    /// Sticky `step_lost` of `axis`.
+    pub const fn step_lost(axis: usize) -> u32 {
+        32 + axis as u32
+    }
+    /// `rec_ready`.
+    pub const REC_READY: u32 = 40;
+    /// Sticky `record_error`.
+    pub const RECORD_ERROR: u32 = 41;
+    /// `block_end` pulse.
+    pub const BLOCK_END: u32 = 42;
+    /// The mask of bit `index`.
+    pub const fn bit(index: u32) -> u64 {
+        1 << index
+    }
+}
+
+/// Every output of the core in one cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct CoreOutputs {
+    /// Pins and flags packed as in [`pins`]; the bits of axes at and above `n_axes` are 0.
+    pub pins: u64,
+    /// Each axis's `position` (two's complement steps); 0 for axes at and above `n_axes`.
+    pub positions: [u32; MAX_AXES],
+}
+
+impl CoreOutputs {
+    /// Bit `index` of [`Self::pins`].
+    pub fn bit(&self, index: u32) -> bool {
+        self.pins & pins::bit(index) != 0
+    }
+    /// Pin A of `axis`.
+    pub fn pin_a(&self, axis: usize) -> bool {
+        self.bit(pins::pin_a(axis))
+    }
+    /// Pin B of `axis`.
+    pub fn pin_b(&self, axis: usize) -> bool {
+        self.bit(pins::pin_b(axis))
+    }
+    /// The enable pin of `axis`.
+    pub fn pin_en(&self, axis: usize) -> bool {
+        self.bit(pins::pin_en(axis))
+    }
+    /// `rate_error` of `axis`.
+    pub fn rate_error(&self, axis: usize) -> bool {
+        self.bit(pins::rate_error(axis))
+    }
+    /// `step_lost` of `axis`.
+    pub fn step_lost(&self, axis: usize) -> bool {
+        self.bit(pins::step_lost(axis))
+    }
+    /// `rec_ready`: this cycle is a period boundary.
+    pub fn rec_ready(&self) -> bool {
+        self.bit(pins::REC_READY)
+    }
+    /// `record_error`.
+    pub fn record_error(&self) -> bool {
+        self.bit(pins::RECORD_ERROR)
+    }
+    /// `block_end`.
+    pub fn block_end(&self) -> bool {
+        self.bit(pins::BLOCK_END)
+    }
+    /// The position of `axis` as a signed number of steps.
+    pub fn position(&self, axis: usize) -> i32 {
+        self.positions[axis] as i32
+    }
+}
+
+/// A change of the outputs: `outputs` hold from cycle `cycle` on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Event {
+    /// The cycle (as [`Core::cycle`] after the edge) whose outputs differ from the
+    /// cycle before.
+    pub cycle: u64,
+    /// The outputs in that cycle.
+    pub outputs: CoreOutputs,
+}
+
+/// How a call of [`Core::run_chunk`] or [`Core::run_chunk_fast`] ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ChunkEnd {
+    /// Clock edges run in the call.
+    pub cycles: u64,
+    /// The last edge consumed the offered record (the call stopped there).
+    pub consumed: bool,
+}
+
+/// The inputs of one cycle masked and decoded, shared by the per-clock and fast paths.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Settings {
+    /// `max(period_clocks & P_MASK, 1)`.
+    pub(crate) period: u32,
+    pub(crate) axes: [AxisSettings; MAX_AXES],
+}
+
+/// The cycle-accurate model of `finestep_core`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Core {
+    pub(crate) params: CoreParams,
+    /// Saturation value of the shaper counters, `2^TIMING_W - 1`.
+    pub(crate) counter_max: u32,
+    pub(crate) timer: PeriodTimer,
+    pub(crate) dda: [DdaAxis; MAX_AXES],
+    pub(crate) shaper: [StepShaper; MAX_AXES],
+    pub(crate) cycle: u64,
+}
+
+impl Core {
+    /// A core in its reset state at cycle 0.
+    ///
+    /// # Panics
+    /// If `params` is outside the supported ranges (see [`CoreParams::validate`]);
+    /// [`Core::try_new`] returns the error instead.
+    pub fn new(params: CoreParams) -> Core {
+        match Core::try_new(params) {
+            Ok(core) => core,
+            Err(e) => panic!("invalid core parameters: {e}"),
+        }
+    }
+
+    /// A core in its reset state at cycle 0, or why `params` are not supported.
+    pub fn try_new(params: CoreParams) -> Result<Core, ParamsError> {
+        params.validate()?;
+        let counter_max = params.timing_mask();
+        Ok(Core {
+            params,
+            counter_max,
+            timer: PeriodTimer::default(),
+            dda: [DdaAxis::default(); MAX_AXES],
+            shaper: [StepShaper::new(counter_max); MAX_AXES],
+            cycle: 0,
+        })
+    }
+
+    /// Synchronous reset: every register to its reset state, cycle counter to 0.
+    pub fn reset(&mut self) {
+        *self = Core::new(self.params);
+    }
+
+    /// The design parameters.
+    pub fn params(&self) -> CoreParams {
+        self.params
+    }
+
+    /// Clock edges since reset (wrapping at 2^64).
+    pub fn cycle(&self) -> u64 {
+        self.cycle
+    }
+
+    /// The period timer's state.
+    pub fn timer(&self) -> &PeriodTimer {
+        &self.timer
+    }
+
+    /// The DDA state of `axis`.
+    ///
+    /// # Panics
+    /// If `axis >= MAX_AXES`.
+    pub fn dda(&self, axis: usize) -> &DdaAxis {
+        &self.dda[axis]
+    }
+
+    /// The step shaper state of `axis`.
+    ///
+    /// # Panics
+    /// If `axis >= MAX_AXES`.
+    pub fn shaper(&self, axis: usize) -> &StepShaper {
+        &self.shaper[axis]
+    }
+
+    /// The outputs in the current cycle (a function of the state only).
+    pub fn outputs(&self) -> CoreOutputs {
+        let mut out = CoreOutputs::default();
+        for (i, sh) in self.shaper[..self.params.n_axes].iter().enumerate() {
+            out.pins |= u64::from(sh.pins) << pins::pin_a(i)
+                | u64::from(sh.rate_error) << pins::rate_error(i)
+                | u64::from(sh.step_lost) << pins::step_lost(i);
+            out.positions[i] = sh.position;
+        }
+        out.pins |= u64::from(self.timer.rec_ready()) << pins::REC_READY
+            | u64::from(self.timer.record_error) << pins::RECORD_ERROR
+            | u64::from(self.timer.block_end) << pins::BLOCK_END;
+        out
+    }
+
+    /// The masked and decoded form of `inputs`.
+    #[inline]
+    pub(crate) fn settings(&self, inputs: &CoreInputs) -> Settings {
+        let mut axes = [AxisSettings::default(); MAX_AXES];
+        for (set, cfg) in axes.iter_mut().zip(&inputs.axes).take(self.params.n_axes) {
+            *set = AxisSettings::masked(cfg, self.counter_max);
+        }
+        Settings {
+            period: self.params.effective_period(inputs.period_clocks),
+            axes,
+        }
+    }
+
+    /// One rising clock edge with `inputs`; the cycle counter advances by 1.
+    #[inline]
+    pub fn step(&mut self, inputs: &CoreInputs) {
+        let period = self.params.effective_period(inputs.period_clocks);
+        let mask = self.counter_max;
+        self.edge(inputs, period, |i| {
+            AxisSettings::masked(&inputs.axes[i], mask)
+        });
+    }
+
+    /// One rising clock edge with decoded settings; returns whether an output changed.
+    #[inline]
+    pub(crate) fn step_with(&mut self, set: &Settings, inputs: &CoreInputs) -> bool {
+        self.edge(inputs, set.period, |i| set.axes[i])
+    }
+
+    /// One rising clock edge; `axis(i)` gives axis `i`'s masked settings. Returns
+    /// whether an output changed (exactly: the outputs after the edge differ from
+    /// those before it).
+    #[inline(always)]
+    fn edge(
+        &mut self,
+        inputs: &CoreInputs,
+        period: u32,
+        axis: impl Fn(usize) -> AxisSettings,
+    ) -> bool {
+        let n = self.params.n_axes;
+        let m = i64::from(self.timer.p_act) * ONE_STEP;
+        let mut changed = false;
+        let axes = self.shaper[..n]
+            .iter_mut()
+            .zip(&mut self.dda[..n])
+            .zip(&self.timer.inc[..n])
+            .enumerate();
+        // The DDAs hold their phase at M/2 until the period timer is running.
+        let running = inputs.run && self.timer.active;
+        for (i, ((shaper, dda), &d)) in axes {
+            changed |= shaper.step(dda.req, &axis(i), self.counter_max, inputs.clear_errors);
+            dda.step(running, period, d, m);
+        }
+        let timer_before = self.timer.output_bits();
+        self.timer.step(&TimerInputs {
+            run: inputs.run,
+            period,
+            clear_errors: inputs.clear_errors,
+            rec_valid: inputs.rec_valid,
+            record: &inputs.record,
+            n_axes: n,
+        });
+        self.cycle = self.cycle.wrapping_add(1);
+        changed || self.timer.output_bits() != timer_before
+    }
+
+    /// Runs up to `max_cycles` clock edges with the same `inputs`, one at a time,
+    /// stopping after the edge that consumes the offered record. Every edge after which
+    /// the outputs differ from before it pushes an [`Event`].
+    pub fn run_chunk(
+        &mut self,
+        inputs: &CoreInputs,
+        max_cycles: u64,
+        events: &mut Vec<Event>,
+    ) -> ChunkEnd {
+        let set = self.settings(inputs);
+        for ran in 1..=max_cycles {
+            let consumed = self.timer.rec_ready() && inputs.rec_valid;
+            // The edge reports exactly whether the outputs differ from before it.
+            if self.step_with(&set, inputs) {
+                events.push(Event {
+                    cycle: self.cycle,
+                    outputs: self.outputs(),
+                });
+            }
+            if consumed {
+                return ChunkEnd {
+                    cycles: ran,
+                    consumed: true,
+                };
+            }
+        }
+        ChunkEnd {
+            cycles: max_cycles,
+            consumed: false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::AxisConfig;
+    use crate::record::PeriodRecord;
+
+    fn inputs(run: bool, period_clocks: u32) -> CoreInputs {
+        let axis = AxisConfig {
+            step_len: 2,
+            step_space: 2,
+            dir_setup: 1,
+            dir_hold: 1,
+            enable: true,
+            ..AxisConfig::default()
+        };
+        CoreInputs {
+            run,
+            period_clocks,
+            axes: [axis; MAX_AXES],
+            ..CoreInputs::default()
+        }
+    }
+
+    #[test]
+    fn reset_state_and_unused_axes_are_zero() {
+        let params = CoreParams {
+            n_axes: 2,
+            ..CoreParams::default()
+        };
+        let mut core = Core::new(params);
+        assert_eq!(core.cycle(), 0);
+        assert_eq!(core.outputs(), CoreOutputs::default());
+        core.step(&inputs(false, 10));
+        let out = core.outputs();
+        assert_eq!(
+            out.pins, 0b110_110,
+            "dir (pin B) and enable of axes 0 and 1 only"
+        );
+        core.reset();
+        assert_eq!(core, Core::new(params));
+    }
+
+    #[test]
+    fn latency_from_record_to_pin_edge() {
+        let mut core = Core::new(CoreParams::default());
+        core.step(&inputs(false, 4));
+        core.step(&inputs(true, 4));
+        assert!(core.outputs().rec_ready());
+        let b = core.cycle();
+        let mut inp = inputs(true, 4);
+        inp.rec_valid = true;
+        // 3 steps in 4 clocks, with acc starting at M/2: first request after one update.
+        inp.record = PeriodRecord::from_raw(&[3 << 16], 0);
+        let mut events = vec![];
+        let end = core.run_chunk(&inp, 10, &mut events);
+        assert_eq!(
+            end,
+            ChunkEnd {
+                cycles: 1,
+                consumed: true
+            }
+        );
+        inp.rec_valid = false;
+        let mut first_pos = None;
+        let mut first_pin = None;
+        for _ in 0..6 {
+            core.step(&inp);
+            let out = core.outputs();
+            if out.position(0) == 1 && first_pos.is_none() {
+                first_pos = Some(core.cycle());
+            }
+            if out.pin_a(0) && first_pin.is_none() {
+                first_pin = Some(core.cycle());
+            }
+        }
+        // DDA update in b+1, req in b+2, level and position in b+3, pin in b+4.
+        assert_eq!(first_pos, Some(b + 3));
+        assert_eq!(first_pin, Some(b + 4));
+    }
+
+    #[test]
+    fn run_chunk_reports_changes_and_stops_at_consumption() {
+        let mut core = Core::new(CoreParams::default());
+        let mut events = vec![];
+        let end = core.run_chunk(&inputs(false, 3), 5, &mut events);
+        assert_eq!(
+            end,
+            ChunkEnd {
+                cycles: 5,
+                consumed: false
+            }
+        );
+        assert_eq!(events.len(), 1, "enable pins rise once");
+        assert_eq!(events[0].cycle, 1);
+        events.clear();
+        let mut inp = inputs(true, 3);
+        inp.rec_valid = true;
+        let end = core.run_chunk(&inp, 100, &mut events);
+        assert_eq!(
+            end,
+            ChunkEnd {
+                cycles: 2,
+                consumed: true
+            }
+        );
+        assert_eq!(events.len(), 2, "rec_ready rises, then falls");
+        assert!(events[0].outputs.rec_ready() && !events[1].outputs.rec_ready());
+    }
+
+    #[test]
+    fn bad_params_panic_or_error() {
+        let params = CoreParams {
+            n_axes: 0,
+            ..CoreParams::default()
+        };
+        assert_eq!(Core::try_new(params).unwrap_err(), ParamsError::Axes(0));
+        assert!(std::panic::catch_unwind(|| Core::new(params)).is_err());
+    }
+}

