@@ -40,15 +40,24 @@ module dda_axis #(
     wire [ACC_W-1:0] half_modulus = {1'b0, period_sampled, {(FRAC_BITS-1){1'b0}}};
 
     wire signed [SUM_W-1:0] modulus = {2'b00, p_active, {FRAC_BITS{1'b0}}};
-    wire [SUM_W+31:0]       inc_extended = {{SUM_W{inc[31]}}, inc};
-    wire signed [SUM_W-1:0] sum = $signed({2'b00, acc_reg}) + $signed(inc_extended[SUM_W-1:0]);
+    // The increment sign-extended (or, for the narrow proofs, truncated: |inc| < M
+    // always fits) to the sum's width.
+    wire [SUM_W-1:0] inc_resized;
+    generate
+        if (SUM_W > 32) begin : widen
+            assign inc_resized = {{(SUM_W-32){inc[31]}}, inc};
+        end else begin : narrow
+            assign inc_resized = inc[SUM_W-1:0];
+            wire [31:0] unused_inc_top = {{SUM_W{1'b0}}, inc[31:SUM_W]};
+        end
+    endgenerate
+    wire signed [SUM_W-1:0] sum = $signed({2'b00, acc_reg}) + $signed(inc_resized);
     wire wrap_up   = (sum >= modulus);
     wire wrap_down = sum[SUM_W-1];
     wire signed [SUM_W-1:0] sum_wrapped =
         wrap_up ? (sum - modulus) : (wrap_down ? (sum + modulus) : sum);
     // The wrapped sum is in [0, M): its sign and carry bits are always zero.
     wire [1:0] unused_wrapped_top = sum_wrapped[SUM_W-1:ACC_W];
-    wire [31:0] unused_inc_extension = inc_extended[SUM_W+31:SUM_W];
 
     always @(posedge clk) begin
         if (!run) begin

@@ -49,7 +49,7 @@ fn drive(periods: u64, mut run_chunk: impl FnMut(&CoreInputs, &mut Vec<Event>) -
 
 fn report(what: &str, cycles: u64, seconds: f64) {
     println!(
-        "  {what:<44} {:>8.2} M cycles/s  ({:>9.0} periods/s, {:>6.0}x real time)",
+        "  {what:<44} {:>7.2} M cycles/s  {:>9.0} periods/s  {:>7.3}x real time",
         cycles as f64 / seconds / 1e6,
         cycles as f64 / f64::from(PERIOD_CLOCKS) / seconds,
         cycles as f64 / CLOCK_HZ / seconds
