@@ -1,15 +1,20 @@
 // C ABI shim around the Verilated finestep_core (see finestep_sim.h).
+//
+// Two Verilations of the same RTL are linked: Vfinestep_core without tracing (fast)
+// and Vfinestep_core_traced with it; tracing support costs about a third of the speed
+// even when no waveform is open.
 #include "finestep_sim.h"
 
 #include <cstring>
 #include <memory>
 
 #include "Vfinestep_core.h"
+#include "Vfinestep_core_traced.h"
 #include "verilated.h"
 #if VM_TRACE_FST
 #include "verilated_fst_c.h"
 typedef VerilatedFstC TraceFile;
-#elif VM_TRACE
+#else
 #include "verilated_vcd_c.h"
 typedef VerilatedVcdC TraceFile;
 #endif
@@ -58,23 +63,55 @@ uint64_t get_bits(const VlWide<W> &port, unsigned lsb, unsigned width) {
     return value;
 }
 
+// The output ports as Verilator holds them: compared every cycle, packed only on change.
+struct RawOutputs {
+    uint32_t positions[FS_N_AXES];
+    uint8_t pin_a, pin_b, pin_en, rate_error, step_lost, flags;
+    uint8_t padding[2];  // explicit, so memcmp sees no indeterminate bytes
+
+    bool operator!=(const RawOutputs &other) const {
+        return std::memcmp(this, &other, sizeof *this) != 0;
+    }
+};
+
+static_assert(sizeof(RawOutputs) == 4 * FS_N_AXES + 8, "RawOutputs must have no implicit padding");
+
 }  // namespace
 
+// The interface the C functions call; one virtual call per chunk, not per cycle.
 struct fs_sim {
-    std::unique_ptr<VerilatedContext> context;
-    std::unique_ptr<Vfinestep_core> top;
-#if VM_TRACE
-    std::unique_ptr<TraceFile> trace;
-#endif
     uint64_t cycle = 0;
     fs_outputs last{};
 
-    fs_sim() : context(new VerilatedContext), top(new Vfinestep_core(context.get())) {
-#if VM_TRACE
-        context->traceEverOn(true);
-#endif
+    virtual ~fs_sim() = default;
+    virtual void reset() = 0;
+    virtual void step(const fs_inputs &in) = 0;
+    virtual fs_chunk_end run_chunk(const fs_inputs &in, uint64_t max_cycles, fs_event *events,
+                                   size_t capacity, size_t *n_events) = 0;
+    virtual int trace_open(const char *path) = 0;
+    virtual void trace_close() = 0;
+};
+
+namespace {
+
+template <typename Model, bool TRACED>
+struct Sim final : fs_sim {
+    std::unique_ptr<VerilatedContext> context;
+    std::unique_ptr<Model> top;
+    std::unique_ptr<TraceFile> trace;
+    RawOutputs raw{};
+
+    Sim() : context(new VerilatedContext) {
+        if (TRACED) context->traceEverOn(true);
+        top.reset(new Model(context.get()));
         top->clk = 0;
         top->eval();
+        reset();
+    }
+
+    ~Sim() override {
+        trace_close();
+        top->final();
     }
 
     void apply(const fs_inputs &in) {
@@ -100,33 +137,120 @@ struct fs_sim {
         top->clk = 1;
         top->eval();
         ++cycle;
-#if VM_TRACE
-        if (trace) trace->dump(2 * cycle);
-#endif
+        if (TRACED && trace) trace->dump(2 * cycle);
         top->clk = 0;
         top->eval();
-#if VM_TRACE
-        if (trace) trace->dump(2 * cycle + 1);
-#endif
+        if (TRACED && trace) trace->dump(2 * cycle + 1);
     }
 
-    void read(fs_outputs &out) const {
+    RawOutputs read_raw() const {
+        RawOutputs now{};
+        now.padding[0] = now.padding[1] = 0;
+        for (unsigned i = 0; i < FS_N_AXES; ++i)
+            now.positions[i] = static_cast<uint32_t>(get_bits(top->position, 32 * i, 32));
+        now.pin_a = top->pin_a;
+        now.pin_b = top->pin_b;
+        now.pin_en = top->pin_en;
+        now.rate_error = top->rate_error;
+        now.step_lost = top->step_lost;
+        now.flags = (top->rec_ready & 1) | ((top->record_error & 1) << 1) | ((top->block_end & 1) << 2);
+        return now;
+    }
+
+    static fs_outputs pack(const RawOutputs &raw) {
+        fs_outputs out{};
         uint64_t pins = 0;
         for (unsigned i = 0; i < FS_N_AXES; ++i) {
-            pins |= get_bits(top->pin_a, i, 1) << (3 * i);
-            pins |= get_bits(top->pin_b, i, 1) << (3 * i + 1);
-            pins |= get_bits(top->pin_en, i, 1) << (3 * i + 2);
-            pins |= get_bits(top->rate_error, i, 1) << (FS_BIT_RATE_ERROR0 + i);
-            pins |= get_bits(top->step_lost, i, 1) << (FS_BIT_STEP_LOST0 + i);
-            out.positions[i] = static_cast<uint32_t>(get_bits(top->position, 32 * i, 32));
+            pins |= static_cast<uint64_t>((raw.pin_a >> i) & 1) << (3 * i);
+            pins |= static_cast<uint64_t>((raw.pin_b >> i) & 1) << (3 * i + 1);
+            pins |= static_cast<uint64_t>((raw.pin_en >> i) & 1) << (3 * i + 2);
+            pins |= static_cast<uint64_t>((raw.rate_error >> i) & 1) << (FS_BIT_RATE_ERROR0 + i);
+            pins |= static_cast<uint64_t>((raw.step_lost >> i) & 1) << (FS_BIT_STEP_LOST0 + i);
+            out.positions[i] = raw.positions[i];
         }
-        for (unsigned i = FS_N_AXES; i < FS_MAX_AXES; ++i) out.positions[i] = 0;
-        pins |= static_cast<uint64_t>(top->rec_ready & 1) << FS_BIT_REC_READY;
-        pins |= static_cast<uint64_t>(top->record_error & 1) << FS_BIT_RECORD_ERROR;
-        pins |= static_cast<uint64_t>(top->block_end & 1) << FS_BIT_BLOCK_END;
+        pins |= static_cast<uint64_t>(raw.flags & 1) << FS_BIT_REC_READY;
+        pins |= static_cast<uint64_t>((raw.flags >> 1) & 1) << FS_BIT_RECORD_ERROR;
+        pins |= static_cast<uint64_t>((raw.flags >> 2) & 1) << FS_BIT_BLOCK_END;
         out.pins = pins;
+        return out;
+    }
+
+    void reset() override {
+        fs_inputs idle;
+        std::memset(&idle, 0, sizeof idle);
+        apply(idle);
+        top->rst = 1;
+        edge();
+        top->rst = 0;
+        top->eval();
+        cycle = 0;
+        raw = read_raw();
+        last = pack(raw);
+    }
+
+    void step(const fs_inputs &in) override {
+        apply(in);
+        edge();
+        raw = read_raw();
+        last = pack(raw);
+    }
+
+    fs_chunk_end run_chunk(const fs_inputs &in, uint64_t max_cycles, fs_event *events,
+                           size_t capacity, size_t *n_events) override {
+        apply(in);
+        fs_chunk_end end{0, 0};
+        size_t stored = 0;
+        const bool valid = in.rec_valid & 1;
+        while (end.cycles < max_cycles && stored < capacity) {
+            const bool consumed = valid && (raw.flags & 1);
+            edge();
+            ++end.cycles;
+            const RawOutputs now = read_raw();
+            if (now != raw) {
+                raw = now;
+                last = pack(now);
+                events[stored].cycle = cycle;
+                events[stored].outputs = last;
+                ++stored;
+            }
+            if (consumed) {
+                end.consumed = 1;
+                break;
+            }
+        }
+        *n_events = stored;
+        return end;
+    }
+
+    int trace_open(const char *path) override {
+        if (!TRACED) return -1;
+        trace_close();
+        trace.reset(new TraceFile);
+        top->trace(trace.get(), 99);
+        trace->open(path);
+        if (!trace->isOpen()) {
+            trace.reset();
+            return -1;
+        }
+        trace->dump(2 * cycle + 1);
+        return 0;
+    }
+
+    void trace_close() override {
+        if (trace) {
+            trace->close();
+            trace.reset();
+        }
     }
 };
+
+// Only the traced model has trace(); give the untraced one a stub so one template fits.
+struct FastModel : Vfinestep_core {
+    using Vfinestep_core::Vfinestep_core;
+    void trace(TraceFile *, int) {}
+};
+
+}  // namespace
 
 extern "C" {
 
@@ -135,97 +259,20 @@ uint32_t fs_p_width(void) { return FS_P_WIDTH; }
 uint32_t fs_timing_width(void) { return FS_TIMING_W; }
 int fs_trace_is_fst(void) { return VM_TRACE_FST ? 1 : 0; }
 
-fs_sim *fs_new(void) {
-    fs_sim *sim = new fs_sim;
-    fs_reset(sim);
-    return sim;
-}
-
-void fs_free(fs_sim *sim) {
-    if (!sim) return;
-    fs_trace_close(sim);
-    sim->top->final();
-    delete sim;
-}
-
-void fs_reset(fs_sim *sim) {
-    fs_inputs idle;
-    std::memset(&idle, 0, sizeof idle);
-    sim->apply(idle);
-    sim->top->rst = 1;
-    sim->edge();
-    sim->top->rst = 0;
-    sim->top->eval();
-    sim->cycle = 0;
-    sim->read(sim->last);
-}
-
+fs_sim *fs_new(void) { return new Sim<FastModel, false>; }
+fs_sim *fs_new_traced(void) { return new Sim<Vfinestep_core_traced, true>; }
+void fs_free(fs_sim *sim) { delete sim; }
+void fs_reset(fs_sim *sim) { sim->reset(); }
 uint64_t fs_cycle(const fs_sim *sim) { return sim->cycle; }
-
 void fs_read_outputs(const fs_sim *sim, fs_outputs *out) { *out = sim->last; }
-
-void fs_step(fs_sim *sim, const fs_inputs *in) {
-    sim->apply(*in);
-    sim->edge();
-    sim->read(sim->last);
-}
+void fs_step(fs_sim *sim, const fs_inputs *in) { sim->step(*in); }
 
 fs_chunk_end fs_run_chunk(fs_sim *sim, const fs_inputs *in, uint64_t max_cycles,
                           fs_event *events, size_t capacity, size_t *n_events) {
-    sim->apply(*in);
-    fs_chunk_end end{0, 0};
-    size_t stored = 0;
-    const bool valid = in->rec_valid & 1;
-    while (end.cycles < max_cycles && stored < capacity) {
-        const bool consumed = valid && ((sim->last.pins >> FS_BIT_REC_READY) & 1);
-        sim->edge();
-        ++end.cycles;
-        fs_outputs now;
-        sim->read(now);
-        if (now.pins != sim->last.pins ||
-            std::memcmp(now.positions, sim->last.positions, sizeof now.positions) != 0) {
-            events[stored].cycle = sim->cycle;
-            events[stored].outputs = now;
-            ++stored;
-            sim->last = now;
-        }
-        if (consumed) {
-            end.consumed = 1;
-            break;
-        }
-    }
-    *n_events = stored;
-    return end;
+    return sim->run_chunk(*in, max_cycles, events, capacity, n_events);
 }
 
-int fs_trace_open(fs_sim *sim, const char *path) {
-#if VM_TRACE
-    fs_trace_close(sim);
-    sim->trace.reset(new TraceFile);
-    sim->top->trace(sim->trace.get(), 99);
-    sim->trace->open(path);
-    if (!sim->trace->isOpen()) {
-        sim->trace.reset();
-        return -1;
-    }
-    sim->trace->dump(2 * sim->cycle + 1);
-    return 0;
-#else
-    (void)sim;
-    (void)path;
-    return -1;
-#endif
-}
-
-void fs_trace_close(fs_sim *sim) {
-#if VM_TRACE
-    if (sim->trace) {
-        sim->trace->close();
-        sim->trace.reset();
-    }
-#else
-    (void)sim;
-#endif
-}
+int fs_trace_open(fs_sim *sim, const char *path) { return sim->trace_open(path); }
+void fs_trace_close(fs_sim *sim) { sim->trace_close(); }
 
 }  // extern "C"

@@ -68,7 +68,10 @@ uint32_t fs_timing_width(void);
 /* 1 when waveforms are written as FST, 0 for VCD. */
 int fs_trace_is_fst(void);
 
+/* A core built without waveform support (the fast one). */
 fs_sim *fs_new(void);
+/* A core that can write waveforms (fs_trace_open); slower. */
+fs_sim *fs_new_traced(void);
 void fs_free(fs_sim *sim);
 
 /* One clock with rst high and all other inputs zero; the cycle count restarts at 0. */
@@ -83,8 +86,9 @@ void fs_step(fs_sim *sim, const fs_inputs *in);
 fs_chunk_end fs_run_chunk(fs_sim *sim, const fs_inputs *in, uint64_t max_cycles,
                           fs_event *events, size_t capacity, size_t *n_events);
 
-/* Waveform tracing: open a file (VCD, or FST when fs_trace_is_fst()), dump every
- * cycle until closed. Returns 0 on success. */
+/* Waveform tracing on a core from fs_new_traced: open a file (VCD, or FST when
+ * fs_trace_is_fst()), dump every cycle until closed. Returns 0 on success, -1 when the
+ * file cannot be opened or the core was made by fs_new. */
 int fs_trace_open(fs_sim *sim, const char *path);
 void fs_trace_close(fs_sim *sim);
 

@@ -41,26 +41,6 @@ fn main() {
         println!("cargo:rerun-if-changed={}", source.display());
     }
 
-    let _ = std::fs::remove_dir_all(&mdir);
-    let status = Command::new(&verilator)
-        .arg("--cc")
-        .args(["--top-module", TOP, "--prefix", "Vfinestep_core"])
-        .arg("--Mdir")
-        .arg(&mdir)
-        .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
-        .arg(if fst { "--trace-fst" } else { "--trace" })
-        .arg(format!("-GN_AXES={N_AXES}"))
-        .arg(format!("-GP_WIDTH={P_WIDTH}"))
-        .arg(format!("-GTIMING_W={TIMING_W}"))
-        .args(&sources)
-        .status()
-        .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
-    assert!(status.success(), "verilator failed on hdl/");
-
-    let classes = parse_make_vars(&mdir.join("Vfinestep_core_classes.mk"));
-    let list = |name: &str| -> Vec<String> {
-        classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
-    };
     let mut build = cc::Build::new();
     build
         .cpp(true)
@@ -68,7 +48,6 @@ fn main() {
         .warnings(false)
         .include(root.join("include"))
         .include(root.join("include/vltstd"))
-        .include(&mdir)
         .include(&sim)
         .define("VL_TIME_CONTEXT", None)
         .define("FS_N_AXES", N_AXES.to_string().as_str())
@@ -77,20 +56,37 @@ fn main() {
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
-    for (name, value) in &classes {
-        if name.starts_with("VM_") && value.trim().parse::<i64>().is_ok() {
-            build.define(name, value.trim());
+    // The same RTL twice: without tracing (fast) and with it (waveforms).
+    let trace_flag = if fst { "--trace-fst" } else { "--trace" };
+    let mut globals = std::collections::BTreeSet::new();
+    let mut defines = BTreeMap::new();
+    for (prefix, trace) in [("Vfinestep_core", None), ("Vfinestep_core_traced", Some(trace_flag))] {
+        let dir = mdir.join(prefix);
+        let classes = verilate(&verilator, &sources, prefix, trace, &dir);
+        let list = |name: &str| -> Vec<String> {
+            classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
+        };
+        build.include(&dir);
+        for name in ["VM_CLASSES_FAST", "VM_CLASSES_SLOW", "VM_SUPPORT_FAST", "VM_SUPPORT_SLOW"] {
+            for stem in list(name) {
+                build.file(dir.join(format!("{stem}.cpp")));
+            }
+        }
+        for name in ["VM_GLOBAL_FAST", "VM_GLOBAL_SLOW"] {
+            globals.extend(list(name));
+        }
+        // The traced model's switches (VM_TRACE=1 ...) are a superset of the fast one's.
+        for (name, value) in classes {
+            if name.starts_with("VM_") && value.trim().parse::<i64>().is_ok() {
+                defines.insert(name, value.trim().to_string());
+            }
         }
     }
-    for name in ["VM_CLASSES_FAST", "VM_CLASSES_SLOW", "VM_SUPPORT_FAST", "VM_SUPPORT_SLOW"] {
-        for stem in list(name) {
-            build.file(mdir.join(format!("{stem}.cpp")));
-        }
+    for (name, value) in &defines {
+        build.define(name, value.as_str());
     }
-    for name in ["VM_GLOBAL_FAST", "VM_GLOBAL_SLOW"] {
-        for stem in list(name) {
-            build.file(root.join("include").join(format!("{stem}.cpp")));
-        }
+    for stem in globals {
+        build.file(root.join("include").join(format!("{stem}.cpp")));
     }
     build.file(sim.join("finestep_sim.cpp"));
     build.compile("finestep_core");
@@ -108,6 +104,26 @@ fn main() {
         .expect("bindgen on sim/finestep_sim.h")
         .write_to_file(out.join("bindings.rs"))
         .expect("write bindings");
+}
+
+/// Runs Verilator on the core into `dir` and returns the variables of its `*_classes.mk`.
+fn verilate(verilator: &str, sources: &[PathBuf], prefix: &str, trace: Option<&str>, dir: &Path) -> BTreeMap<String, String> {
+    let _ = std::fs::remove_dir_all(dir);
+    let status = Command::new(verilator)
+        .arg("--cc")
+        .args(["--top-module", TOP, "--prefix", prefix])
+        .arg("--Mdir")
+        .arg(dir)
+        .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
+        .args(trace)
+        .arg(format!("-GN_AXES={N_AXES}"))
+        .arg(format!("-GP_WIDTH={P_WIDTH}"))
+        .arg(format!("-GTIMING_W={TIMING_W}"))
+        .args(sources)
+        .status()
+        .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+    assert!(status.success(), "verilator failed on hdl/");
+    parse_make_vars(&dir.join(format!("{prefix}_classes.mk")))
 }
 
 /// `verilator --getenv VERILATOR_ROOT`.

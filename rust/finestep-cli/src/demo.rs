@@ -59,18 +59,12 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
 
     let mut harness = Harness::new("demo", ModelPath::PerClock);
     let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });
-    harness.trace_open(&waveform)?;
     let mut traces: Vec<AxisTrace> = (0..AXIS_NAMES.len()).map(|_| AxisTrace::default()).collect();
     let mut commanded = [0i64; MAX_AXES];
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} periods {per_sec}")?);
-    let mut tracing = true;
     for record in records.iter().copied().chain(std::iter::once(PeriodRecord::default())) {
         harness.feed(&mut inputs, [record])?;
-        if tracing && harness.cycle() > TRACED_PERIODS * u64::from(period_clocks) {
-            harness.trace_close();
-            tracing = false;
-        }
         // The record just consumed starts now; sample what the previous one left.
         let emitted = harness.outputs().positions;
         for (axis, trace) in traces.iter_mut().enumerate() {
@@ -102,6 +96,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     }
     println!("  bit-exact over {} cycles ({:.3} s of machine time)", harness.cycle(), harness.cycle() as f64 / CLOCK_HZ);
 
+    harness.write_waveform(&waveform, 0, TRACED_PERIODS * u64::from(period_clocks))?;
     let png = out.join("demo.png");
     plot_axes(&png, &traces, &AXIS_NAMES, machine.period_s)?;
     println!("  waveform (first {TRACED_PERIODS} periods): {}", waveform.display());

@@ -93,14 +93,30 @@ impl Harness {
         self.pulses
     }
 
-    /// Write a waveform of the RTL from now until [`Harness::trace_close`].
-    pub fn trace_open(&mut self, path: &std::path::Path) -> std::io::Result<()> {
-        self.rtl.trace_open(path)
-    }
-
-    /// Close the waveform opened by [`Harness::trace_open`].
-    pub fn trace_close(&mut self) {
-        self.rtl.trace_close()
+    /// Replay everything run so far on a traced RTL and write the waveform of cycles
+    /// `from..to` to `path` (VCD, or FST with the -sys crate's feature `fst`).
+    pub fn write_waveform(&self, path: &std::path::Path, from: u64, to: u64) -> std::io::Result<()> {
+        let mut rtl = Rtl::new_traced();
+        let mut scratch = Vec::new();
+        let mut tracing = false;
+        for (inputs, cycles) in &self.log {
+            let mut left = *cycles;
+            while left > 0 && rtl.cycle() < to {
+                if !tracing && rtl.cycle() >= from {
+                    rtl.trace_open(path)?;
+                    tracing = true;
+                }
+                let stop = if tracing { to } else { from };
+                scratch.clear();
+                let end = rtl.run_chunk(inputs, left.min(stop - rtl.cycle()), &mut scratch);
+                left -= end.cycles;
+                if end.consumed || end.cycles == 0 {
+                    break;
+                }
+            }
+        }
+        rtl.trace_close();
+        Ok(())
     }
 
     /// The reference model (read-only).
@@ -205,35 +221,13 @@ impl Harness {
         }
     }
 
-    /// Replay the logged inputs on a fresh RTL and trace the cycles around `cycle`.
+    /// The waveform window around a mismatch at `cycle`, named after the test.
     fn write_window(&self, cycle: u64) -> std::io::Result<PathBuf> {
         let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../target/cosim-failures"));
         std::fs::create_dir_all(&dir)?;
         let suffix = if finestep_rtl_sys::trace_is_fst() { "fst" } else { "vcd" };
         let path = dir.join(format!("{}.{suffix}", self.name));
-        let window_start = cycle.saturating_sub(WINDOW_BEFORE);
-        let window_end = cycle + WINDOW_AFTER;
-        let mut rtl = Rtl::new();
-        let mut scratch = Vec::new();
-        let mut tracing = false;
-        for (inputs, cycles) in &self.log {
-            let mut left = *cycles;
-            while left > 0 && rtl.cycle() < window_end {
-                if !tracing && rtl.cycle() >= window_start {
-                    rtl.trace_open(&path)?;
-                    tracing = true;
-                }
-                let stop = if tracing { window_end } else { window_start };
-                let run = left.min(stop - rtl.cycle());
-                scratch.clear();
-                let end = rtl.run_chunk(inputs, run, &mut scratch);
-                left -= end.cycles;
-                if end.consumed || end.cycles == 0 {
-                    break;
-                }
-            }
-        }
-        rtl.trace_close();
+        self.write_waveform(&path, cycle.saturating_sub(WINDOW_BEFORE), cycle + WINDOW_AFTER)?;
         Ok(path)
     }
 }
