@@ -88,7 +88,7 @@ struct fs_sim {
     virtual void step(const fs_inputs &in) = 0;
     virtual fs_chunk_end run_chunk(const fs_inputs &in, uint64_t max_cycles, fs_event *events,
                                    size_t capacity, size_t *n_events) = 0;
-    virtual int trace_open(const char *path) = 0;
+    virtual int trace_open(const char *path, uint32_t levels) = 0;
     virtual void trace_close() = 0;
 };
 
@@ -222,10 +222,12 @@ struct Sim final : fs_sim {
         return end;
     }
 
-    int trace_open(const char *path) override {
+    int trace_open(const char *path, uint32_t levels) override {
         if (!TRACED) return -1;
         trace_close();
         trace.reset(new TraceFile);
+        // Verilator names top-level ports "TOP <port>": one level below TOP is the ports.
+        trace->dumpvars(static_cast<int>(levels) + 1, "TOP");
         top->trace(trace.get(), 99);
         trace->open(path);
         if (!trace->isOpen()) {
@@ -272,7 +274,9 @@ fs_chunk_end fs_run_chunk(fs_sim *sim, const fs_inputs *in, uint64_t max_cycles,
     return sim->run_chunk(*in, max_cycles, events, capacity, n_events);
 }
 
-int fs_trace_open(fs_sim *sim, const char *path) { return sim->trace_open(path); }
+int fs_trace_open(fs_sim *sim, const char *path, uint32_t levels) {
+    return sim->trace_open(path, levels);
+}
 void fs_trace_close(fs_sim *sim) { sim->trace_close(); }
 
 }  // extern "C"

@@ -88,8 +88,9 @@ fs_chunk_end fs_run_chunk(fs_sim *sim, const fs_inputs *in, uint64_t max_cycles,
 
 /* Waveform tracing on a core from fs_new_traced: open a file (VCD, or FST when
  * fs_trace_is_fst()), dump every cycle until closed. Returns 0 on success, -1 when the
- * file cannot be opened or the core was made by fs_new. */
-int fs_trace_open(fs_sim *sim, const char *path);
+ * file cannot be opened or the core was made by fs_new. `levels` is the depth of the
+ * hierarchy traced: 0 for the ports only, 99 for everything. */
+int fs_trace_open(fs_sim *sim, const char *path, uint32_t levels);
 void fs_trace_close(fs_sim *sim);
 
 #ifdef __cplusplus

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use anyhow::{bail, Context};
-use finestep_cosim::{Harness, ModelPath};
+use finestep_cosim::{Harness, ModelPath, TraceDepth};
 use finestep_model::limits::{AxisTiming, RateChecker};
 use finestep_model::{AxisConfig, CoreInputs, PeriodRecord, MAX_AXES};
 use finestep_planner::{interpolate_line, LineMove, Machine};
@@ -17,8 +17,8 @@ use crate::plot::{plot_axes, AxisTrace};
 pub const CLOCK_HZ: f64 = 50e6;
 const AXIS_NAMES: [&str; 3] = ["X", "Z", "C"];
 const AXIS_UNITS: [&str; 3] = ["mm", "mm", "deg"];
-/// Periods traced into the waveform.
-const TRACED_PERIODS: u64 = 3;
+/// Periods traced into the waveform (the start of the move: direction set-up, first steps).
+const TRACED_PERIODS: u64 = 4;
 
 /// Drive timing of the demo's drives, in clocks at 50 MHz: 2 us step, 2 us space,
 /// 5 us dir setup and hold.
@@ -96,10 +96,11 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     }
     println!("  bit-exact over {} cycles ({:.3} s of machine time)", harness.cycle(), harness.cycle() as f64 / CLOCK_HZ);
 
-    harness.write_waveform(&waveform, 0, TRACED_PERIODS * u64::from(period_clocks))?;
+    let traced = TRACED_PERIODS * u64::from(period_clocks);
+    harness.write_waveform(&waveform, TraceDepth::Ports, 0, traced)?;
     let png = out.join("demo.png");
     plot_axes(&png, &traces, &AXIS_NAMES, machine.period_s)?;
-    println!("  waveform (first {TRACED_PERIODS} periods): {}", waveform.display());
+    println!("  waveform of the ports, first {TRACED_PERIODS} periods: {}", waveform.display());
     println!("  plot: {}", png.display());
     Ok(())
 }

@@ -23,6 +23,7 @@ use std::collections::VecDeque;
 use std::path::PathBuf;
 
 use finestep_model::{pins, ChunkEnd, Core, CoreInputs, CoreOutputs, Event, PeriodRecord, MAX_AXES};
+pub use finestep_rtl_sys::TraceDepth;
 use finestep_rtl_sys::Rtl;
 
 pub use mismatch::{describe_difference, Mismatch};
@@ -95,7 +96,7 @@ impl Harness {
 
     /// Replay everything run so far on a traced RTL and write the waveform of cycles
     /// `from..to` to `path` (VCD, or FST with the -sys crate's feature `fst`).
-    pub fn write_waveform(&self, path: &std::path::Path, from: u64, to: u64) -> std::io::Result<()> {
+    pub fn write_waveform(&self, path: &std::path::Path, depth: TraceDepth, from: u64, to: u64) -> std::io::Result<()> {
         let mut rtl = Rtl::new_traced();
         let mut scratch = Vec::new();
         let mut tracing = false;
@@ -103,7 +104,7 @@ impl Harness {
             let mut left = *cycles;
             while left > 0 && rtl.cycle() < to {
                 if !tracing && rtl.cycle() >= from {
-                    rtl.trace_open(path)?;
+                    rtl.trace_open(path, depth)?;
                     tracing = true;
                 }
                 let stop = if tracing { to } else { from };
@@ -227,7 +228,7 @@ impl Harness {
         std::fs::create_dir_all(&dir)?;
         let suffix = if finestep_rtl_sys::trace_is_fst() { "fst" } else { "vcd" };
         let path = dir.join(format!("{}.{suffix}", self.name));
-        self.write_waveform(&path, cycle.saturating_sub(WINDOW_BEFORE), cycle + WINDOW_AFTER)?;
+        self.write_waveform(&path, TraceDepth::Everything, cycle.saturating_sub(WINDOW_BEFORE), cycle + WINDOW_AFTER)?;
         Ok(path)
     }
 }

@@ -44,6 +44,15 @@ pub fn trace_is_fst() -> bool {
     unsafe { ffi::fs_trace_is_fst() != 0 }
 }
 
+/// How much of the design a waveform holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TraceDepth {
+    /// The core's ports only: pins, positions, flags and inputs (small files).
+    Ports,
+    /// Every signal of every block (for debugging a mismatch).
+    Everything,
+}
+
 /// One Verilated core with its own clock. Not `Send`: a Verilated model belongs to the
 /// thread that made it.
 pub struct Rtl {
@@ -138,11 +147,15 @@ impl Rtl {
 
     /// Start writing a waveform (VCD, or FST with feature `fst`) of every following
     /// cycle. Only a core made by [`Rtl::new_traced`] can.
-    pub fn trace_open(&mut self, path: &Path) -> std::io::Result<()> {
+    pub fn trace_open(&mut self, path: &Path, depth: TraceDepth) -> std::io::Result<()> {
         let c_path = CString::new(path.to_string_lossy().as_bytes())
             .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
         // SAFETY: c_path is a valid NUL-terminated string for the call.
-        let status = unsafe { ffi::fs_trace_open(self.sim.as_ptr(), c_path.as_ptr()) };
+        let levels = match depth {
+            TraceDepth::Ports => 0,
+            TraceDepth::Everything => 99,
+        };
+        let status = unsafe { ffi::fs_trace_open(self.sim.as_ptr(), c_path.as_ptr(), levels) };
         if status == 0 {
             Ok(())
         } else {
