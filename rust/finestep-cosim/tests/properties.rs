@@ -10,7 +10,7 @@ use proptest::prelude::*;
 
 #[test]
 fn random_streams_are_bit_exact_per_clock_model() {
-    let mut runner = finestep_testkit::runner("random_streams_are_bit_exact_per_clock_model", 2000);
+    let mut runner = finestep_testkit::runner("random_streams_are_bit_exact_per_clock_model", 5000);
     runner
         .run(&common::scenario(60), |scenario| {
             if let Err(mismatch) = common::play("random_streams_per_clock", ModelPath::PerClock, &scenario) {
@@ -23,7 +23,7 @@ fn random_streams_are_bit_exact_per_clock_model() {
 
 #[test]
 fn random_streams_are_bit_exact_fast_model() {
-    let mut runner = finestep_testkit::runner("random_streams_are_bit_exact_fast_model", 2000);
+    let mut runner = finestep_testkit::runner("random_streams_are_bit_exact_fast_model", 5000);
     runner
         .run(&common::scenario(60), |scenario| {
             if let Err(mismatch) = common::play("random_streams_fast", ModelPath::Fast, &scenario) {

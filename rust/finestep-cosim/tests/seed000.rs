@@ -53,7 +53,7 @@ fn run_line(line: &LineMove, path: ModelPath) -> Result<(), TestCaseError> {
 
 #[test]
 fn seed000_lines_are_exact_and_bit_exact() {
-    let mut runner = finestep_testkit::runner("seed000_lines_are_exact_and_bit_exact", 64);
+    let mut runner = finestep_testkit::runner("seed000_lines_are_exact_and_bit_exact", 200);
     let coord = -10.0..10.0f64;
     let strategy = (
         proptest::collection::vec(coord, 3),

@@ -39,3 +39,20 @@ fn directed_stream_is_bit_exact_on_both_model_paths() {
         }
     }
 }
+
+#[test]
+fn waveform_of_a_run_is_written() {
+    let harness = play("smoke_waveform", ModelPath::Fast, &scenario()).unwrap_or_else(|m| panic!("{m}"));
+    let dir = std::env::temp_dir().join(format!("finestep-smoke-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(if finestep_rtl_sys::trace_is_fst() { "run.fst" } else { "run.vcd" });
+    harness.write_waveform(&path, finestep_cosim::TraceDepth::Everything, 100, 400).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    if finestep_rtl_sys::trace_is_fst() {
+        assert!(bytes.len() > 100, "FST file of {} bytes", bytes.len());
+    } else {
+        let text = String::from_utf8_lossy(&bytes);
+        assert!(text.contains("$var") && text.contains("pin_a") && text.contains("#800"), "VCD lacks signals or cycles");
+    }
+}
