@@ -1,9 +1,10 @@
 //! `position_fifo`: the buffer of period records between the host and the period timer.
 //!
-//! First-word-fall-through: the head record is readable whenever the FIFO is not empty,
-//! from the cycle after the write that filled it. A write to a full FIFO is refused and
-//! sets the sticky `overflow`; a pop of an empty FIFO does nothing; `flush` empties it
-//! and wins over a write or pop in the same cycle. The block is proven in `make formal`
+//! First-word-fall-through: the head record is readable whenever the FIFO holds a
+//! committed record. Writes are staged and become readable only at a commit; an abort
+//! drops them (a bus frame whose CRC fails never reaches the period timer). A write when
+//! committed + staged records fill the FIFO is refused and sets the sticky `overflow`; a
+//! pop of an empty FIFO does nothing; `flush` empties it and wins over everything else. The block is proven in `make formal`
 //! (never overwrites, never reads empty, level right, order kept); the co-simulation of
 //! it comes with the host-interface top that instantiates it.
 
@@ -18,8 +19,12 @@ pub struct FifoInputs {
     pub flush: bool,
     /// Clear the sticky `overflow` (a new overflow in the same cycle wins).
     pub clear_errors: bool,
-    /// A record written this cycle.
+    /// A record staged this cycle.
     pub write: Option<PeriodRecord>,
+    /// Make the staged records, this cycle's included, readable.
+    pub commit: bool,
+    /// Drop the staged records, this cycle's included (wins over `commit`).
+    pub abort: bool,
     /// Pop the head this cycle.
     pub pop: bool,
 }
@@ -28,6 +33,7 @@ pub struct FifoInputs {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PositionFifo {
     entries: VecDeque<PeriodRecord>,
+    staged: Vec<PeriodRecord>,
     depth: usize,
     overflow: bool,
 }
@@ -36,12 +42,17 @@ impl PositionFifo {
     /// An empty FIFO of `2^depth_log2` records (the RTL's `DEPTH_LOG2`).
     pub fn new(depth_log2: u32) -> Self {
         let depth = 1usize << depth_log2;
-        PositionFifo { entries: VecDeque::with_capacity(depth), depth, overflow: false }
+        PositionFifo { entries: VecDeque::with_capacity(depth), staged: Vec::new(), depth, overflow: false }
     }
 
-    /// Records held (`level`).
+    /// Committed records (`level`).
     pub fn level(&self) -> usize {
         self.entries.len()
+    }
+
+    /// Records written but not yet committed (`staged`).
+    pub fn staged(&self) -> usize {
+        self.staged.len()
     }
 
     /// The capacity in records.
@@ -49,9 +60,9 @@ impl PositionFifo {
         self.depth
     }
 
-    /// Whether a write would be refused.
+    /// Whether a write would be refused: committed + staged records fill the FIFO.
     pub fn full(&self) -> bool {
-        self.entries.len() == self.depth
+        self.entries.len() + self.staged.len() == self.depth
     }
 
     /// Sticky: a write was refused because the FIFO was full.
@@ -70,13 +81,19 @@ impl PositionFifo {
         let refused = inputs.write.is_some() && self.full() && !inputs.flush;
         if inputs.flush {
             self.entries.clear();
+            self.staged.clear();
         } else {
             let was_full = self.full();
             if inputs.pop {
                 self.entries.pop_front();
             }
             if let (Some(record), false) = (inputs.write, was_full) {
-                self.entries.push_back(record);
+                self.staged.push(record);
+            }
+            if inputs.abort {
+                self.staged.clear();
+            } else if inputs.commit {
+                self.entries.extend(self.staged.drain(..));
             }
         }
         self.overflow = refused || (self.overflow && !inputs.clear_errors);
@@ -95,7 +112,7 @@ mod tests {
     }
 
     fn write(n: i32) -> FifoInputs {
-        FifoInputs { write: Some(record(n)), ..Default::default() }
+        FifoInputs { write: Some(record(n)), commit: true, ..Default::default() }
     }
 
     #[test]
@@ -106,7 +123,7 @@ mod tests {
         }
         assert_eq!(fifo.level(), 3);
         assert_eq!(fifo.head(), Some(&record(0)));
-        fifo.step(&FifoInputs { pop: true, write: Some(record(3)), ..Default::default() });
+        fifo.step(&FifoInputs { pop: true, write: Some(record(3)), commit: true, ..Default::default() });
         assert_eq!((fifo.level(), fifo.head()), (3, Some(&record(1))));
         for n in 1..4 {
             assert_eq!(fifo.head(), Some(&record(n)));
@@ -126,7 +143,7 @@ mod tests {
         }
         assert!(fifo.full() && !fifo.overflow());
         // Refused even with a pop in the same cycle: fullness is that before the edge.
-        fifo.step(&FifoInputs { pop: true, write: Some(record(99)), ..Default::default() });
+        fifo.step(&FifoInputs { pop: true, write: Some(record(99)), commit: true, ..Default::default() });
         assert!(fifo.overflow());
         assert_eq!(fifo.level(), 3);
         let drained: Vec<_> = std::iter::from_fn(|| {
@@ -140,6 +157,28 @@ mod tests {
         assert!(fifo.overflow());
         fifo.step(&FifoInputs { clear_errors: true, ..Default::default() });
         assert!(!fifo.overflow());
+    }
+
+    #[test]
+    fn staged_records_are_invisible_until_commit_and_gone_after_abort() {
+        let mut fifo = PositionFifo::new(2);
+        fifo.step(&write(0));
+        let stage = |n| FifoInputs { write: Some(record(n)), ..Default::default() };
+        fifo.step(&stage(1));
+        fifo.step(&stage(2));
+        assert_eq!((fifo.level(), fifo.staged(), fifo.full()), (1, 2, false));
+        fifo.step(&FifoInputs { abort: true, ..stage(3) });
+        assert_eq!((fifo.level(), fifo.staged()), (1, 0));
+        fifo.step(&stage(4));
+        fifo.step(&FifoInputs { commit: true, ..stage(5) });
+        assert_eq!((fifo.level(), fifo.staged()), (3, 0));
+        let drained: Vec<_> = std::iter::from_fn(|| {
+            let head = fifo.head().copied();
+            fifo.step(&FifoInputs { pop: true, ..Default::default() });
+            head
+        })
+        .collect();
+        assert_eq!(drained, vec![record(0), record(4), record(5)]);
     }
 
     #[test]
