@@ -42,6 +42,7 @@
 #![warn(missing_docs)]
 
 pub mod config;
+pub mod crc16_serial;
 pub mod core;
 pub mod dda_axis;
 pub mod fast;
