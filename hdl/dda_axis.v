@@ -46,6 +46,8 @@ module dda_axis #(
     generate
         if (SUM_W > 32) begin : widen
             assign inc_resized = {{(SUM_W-32){inc[31]}}, inc};
+        end else if (SUM_W == 32) begin : same
+            assign inc_resized = inc;
         end else begin : narrow
             assign inc_resized = inc[SUM_W-1:0];
             wire [31:0] unused_inc_top = {{SUM_W{1'b0}}, inc[31:SUM_W]};

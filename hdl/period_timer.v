@@ -71,7 +71,8 @@ module period_timer #(
 
     always @(posedge clk) begin
         block_end_reg <= run && boundary && cur_end_reg;
-        if (take_record && !record_ok)
+        // A record consumed while stopping is discarded unchecked (the abort case).
+        if (take_record && run && !record_ok)
             record_error_reg <= 1'b1;
         else if (clear_errors)
             record_error_reg <= 1'b0;
@@ -149,7 +150,9 @@ module period_timer #(
         // A boundary after a running period comes exactly P cycles after the last one.
         if (boundary && $past(active_reg) && $past(run) && !$past(boundary))
             assert (f_since_boundary == {1'b0, p_act_reg});
-        if ($past(take_record) && !$past(record_ok)) assert (record_error_reg);
+        if ($past(take_record && run) && !$past(record_ok)) assert (record_error_reg);
+        if (!$past(record_error_reg) && !($past(take_record && run) && !$past(record_ok))) assert (!record_error_reg);
+        if ($past(record_error_reg) && !$past(clear_errors)) assert (record_error_reg);
         cover (boundary && f_in_period && p_act_reg == 3 && $past(take_record, 3) && $past(record_ok, 3));
         cover (record_error_reg);
         cover (block_end_reg);

@@ -213,8 +213,24 @@ module step_shaper #(
         if ($fell(level_reg)) assert ($past(f_high) == $past(f_len));
         if ($rose(level_reg)) assert ($past(f_low) >= {2'b00, step_space} && $past(f_dir_age) >= {2'b00, dir_setup});
         if ($past(dir_reg) != dir_reg) assert (!$past(level_reg) && !level_reg && $past(f_low) >= {2'b00, dir_hold});
-        if ($past(out_mode) == 2'd0 && $past(invert) == 3'd0)
-            assert (pin_a == $past(level_reg) && pin_b == $past(dir_reg));
+        // The pins in every mode and polarity, one cycle behind the state.
+        case ($past(out_mode))
+            MODE_UP_DOWN: assert ((pin_a ^ $past(invert[0])) == $past(level_reg && dir_reg)
+                                  && (pin_b ^ $past(invert[1])) == $past(level_reg && !dir_reg));
+            MODE_QUADRATURE: assert ((pin_a ^ $past(invert[0])) == $past(quad_reg[0] ^ quad_reg[1])
+                                     && (pin_b ^ $past(invert[1])) == $past(quad_reg[1]));
+            default: assert ((pin_a ^ $past(invert[0])) == $past(level_reg)
+                             && (pin_b ^ $past(invert[1])) == $past(dir_reg));
+        endcase
+        assert ((pin_en ^ $past(invert[2])) == $past(axis_enable));
+        // Quadrature: one step is one Gray-code move, +1 forward and -1 backward.
+        if ($past(rise)) assert (quad_reg == ($past(dir_reg) ? $past(quad_reg) + 2'd1 : $past(quad_reg) - 2'd1));
+        else assert (quad_reg == $past(quad_reg));
+        // Sticky flags: set by their cause, held until clear_errors, cleared by it.
+        if ($past(rate_error_reg) && !$past(clear_errors)) assert (rate_error_reg);
+        if (!$past(behind) && ($past(clear_errors) || !$past(rate_error_reg))) assert (!rate_error_reg);
+        if ($past(step_lost_reg) && !$past(clear_errors)) assert (step_lost_reg);
+        if (!$past(clamp_high || clamp_low) && ($past(clear_errors) || !$past(step_lost_reg))) assert (!step_lost_reg);
         cover ($fell(level_reg) && !dir_reg);
         cover ($past(dir_reg) != dir_reg && dir_reg);
         cover (rate_error_reg);

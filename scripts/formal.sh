@@ -12,7 +12,8 @@ for sby in sim/formal/*.sby; do
     # Run a copy with absolute [files] paths from build/formal, so that nothing sby
     # writes (work directories, its status database) lands in the source tree.
     sed "s|^\.\./\.\./hdl/|$PWD/hdl/|" "$sby" > "build/formal/$block.sby"
-    for task in prove cover; do
+    tasks=$(awk '/^\[tasks\]/ { listing = 1; next } /^\[/ { listing = 0 } listing && NF { print $1 }' "$sby")
+    for task in $tasks; do
         log="build/formal/${block}_${task}.log"
         if (cd build/formal && "${SBY[@]}" -f "$block.sby" "$task") >"$log" 2>&1; then
             echo "formal: $block $task PASS"

@@ -131,16 +131,19 @@ struct Sim final : fs_sim {
             put_bits(top->invert, 3 * i, 3, axis.invert);
             put_bits(top->axis_enable, i, 1, axis.enable);
         }
+        top->eval();  // settle the logic on the new inputs, clock low
     }
 
+    // Cycle c is drawn from time 2c (its rising edge) to 2c+2; its inputs, settled with
+    // the clock low, at 2c+1, so a waveform shows each input before the edge sampling it.
     void edge() {
+        if (TRACED && trace) trace->dump(2 * cycle + 1);
         top->clk = 1;
         top->eval();
         ++cycle;
         if (TRACED && trace) trace->dump(2 * cycle);
         top->clk = 0;
         top->eval();
-        if (TRACED && trace) trace->dump(2 * cycle + 1);
     }
 
     RawOutputs read_raw() const {
@@ -176,6 +179,7 @@ struct Sim final : fs_sim {
     }
 
     void reset() override {
+        trace_close();  // the cycle count restarts: a waveform cannot go on across it
         fs_inputs idle;
         std::memset(&idle, 0, sizeof idle);
         apply(idle);
@@ -234,7 +238,6 @@ struct Sim final : fs_sim {
             trace.reset();
             return -1;
         }
-        trace->dump(2 * cycle + 1);
         return 0;
     }
 

@@ -74,7 +74,8 @@ fs_sim *fs_new(void);
 fs_sim *fs_new_traced(void);
 void fs_free(fs_sim *sim);
 
-/* One clock with rst high and all other inputs zero; the cycle count restarts at 0. */
+/* One clock with rst high and all other inputs zero; the cycle count restarts at 0 and
+ * an open waveform is closed. */
 void fs_reset(fs_sim *sim);
 uint64_t fs_cycle(const fs_sim *sim);
 void fs_read_outputs(const fs_sim *sim, fs_outputs *out);

@@ -26,8 +26,12 @@ fn main() {
     let fst = env::var_os("CARGO_FEATURE_FST").is_some();
 
     println!("cargo:rerun-if-env-changed=VERILATOR");
+    println!("cargo:rerun-if-env-changed=VERILATOR_ROOT");
+    // hdl/ holds only sources (a new module appears here); of sim/ only the shim counts.
     println!("cargo:rerun-if-changed={}", hdl.display());
-    println!("cargo:rerun-if-changed={}", sim.display());
+    for shim in ["finestep_sim.cpp", "finestep_sim.h"] {
+        println!("cargo:rerun-if-changed={}", sim.join(shim).display());
+    }
 
     let verilator = env::var("VERILATOR").unwrap_or_else(|_| "verilator".to_string());
     let root = verilator_root(&verilator);
@@ -122,6 +126,8 @@ fn verilate(verilator: &str, sources: &[PathBuf], prefix: &str, trace: Option<&s
         .arg("--Mdir")
         .arg(dir)
         .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
+        // Lint is `make lint`'s job; a newer Verilator's new warnings must not stop a build.
+        .arg("-Wno-fatal")
         .args(trace)
         .arg(format!("-GN_AXES={N_AXES}"))
         .arg(format!("-GP_WIDTH={P_WIDTH}"))

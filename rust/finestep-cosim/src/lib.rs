@@ -65,6 +65,8 @@ impl Harness {
         let rtl = Rtl::new();
         let model = Core::new(finestep_rtl_sys::params());
         let outputs = model.outputs();
+        // Change lists are only equal outputs if both sides start equal.
+        assert_eq!(rtl.outputs(), outputs, "RTL and model differ out of reset");
         Harness {
             name: name.to_string(),
             path,
@@ -138,7 +140,10 @@ impl Harness {
             ModelPath::Fast => self.model.run_chunk_fast(inputs, max_cycles, &mut self.model_events),
         };
         self.log.push((*inputs, rtl_end.cycles.max(model_end.cycles)));
-        if rtl_end != model_end || self.rtl_events != self.model_events {
+        if rtl_end != model_end
+            || self.rtl_events != self.model_events
+            || self.rtl.outputs() != self.model.outputs()
+        {
             return Err(Box::new(self.report(start_cycle, before, rtl_end, model_end)));
         }
         let mut previous = self.outputs.pins;
@@ -171,7 +176,7 @@ impl Harness {
         inputs.rec_valid = true;
         for record in records {
             inputs.record = record;
-            let limit = u64::from(inputs.period_clocks.max(1)) + 8;
+            let limit = u64::from(self.model.params().effective_period(inputs.period_clocks)) + 8;
             let mut waited = 0;
             loop {
                 let end = self.run_chunk(inputs, limit)?;

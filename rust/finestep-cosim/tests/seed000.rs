@@ -23,8 +23,12 @@ fn run_line(line: &LineMove, path: ModelPath) -> Result<(), TestCaseError> {
     let mut inputs = CoreInputs { run: true, period_clocks: PERIOD_CLOCKS, ..Default::default() };
     inputs.axes[..3].copy_from_slice(&[axis; 3]);
     let mut checker = RateChecker::new(PERIOD_CLOCKS, &inputs.axes.iter().map(AxisTiming::from).collect::<Vec<_>>());
-    for record in &records {
-        prop_assume!(checker.check(record).is_ok());
+    // The parameter ranges below keep every line within the rated rate: a refusal is a
+    // planner defect, not a case to skip.
+    for (index, record) in records.iter().enumerate() {
+        if let Err((axis, why)) = checker.check(record) {
+            prop_assert!(false, "period {}: axis {}: {}", index, axis, why);
+        }
     }
     let mut harness = Harness::new("seed000_lines", path);
     let mut commanded = [0i64; 3];

@@ -21,7 +21,7 @@ fn scenario() -> Scenario {
             record.inc[axis] = Increment::from_bits((k - 20) * (axis as i32 + 1) * 9000);
         }
         record.flags = u8::from(k % 10 == 9);
-        actions.push(Action::Feed(record));
+        actions.push(Action::Feed(record, false));
     }
     actions.push(Action::Idle(300));
     Scenario { period_clocks: 200, axes, actions }

@@ -216,7 +216,10 @@ pub struct RateChecker {
 
 impl RateChecker {
     /// A checker for axes with `timings` (at most [`MAX_AXES`], extra ones ignored) and a
-    /// period of `period_clocks`, every axis settled positive as after reset.
+    /// period of `period_clocks`, every axis settled positive as after reset. The period
+    /// is the one the core runs with: pass a `period_clocks` input through
+    /// [`CoreParams::effective_period`](crate::CoreParams::effective_period) first (it
+    /// masks the input to `P_WIDTH` bits, as the core does).
     pub fn new(period_clocks: u32, timings: &[AxisTiming]) -> Self {
         RateChecker {
             period_clocks,

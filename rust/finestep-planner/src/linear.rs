@@ -63,6 +63,14 @@ pub enum PlanError {
         /// the endpoint in steps
         steps: f64,
     },
+    /// One period's move does not fit an I16F16 increment (32 767 steps).
+    #[error("axis {axis} would move {steps} steps in one period, more than an I16F16 increment holds")]
+    IncrementTooLarge {
+        /// axis index
+        axis: usize,
+        /// the steps of that period
+        steps: f64,
+    },
 }
 
 fn positive(name: &'static str, value: f64) -> Result<f64, PlanError> {
@@ -134,17 +142,22 @@ pub fn interpolate_line(machine: &Machine, line: &LineMove) -> Result<Vec<Period
         (0..axes).map(|a| (line.from_mm[a] * machine.steps_per_unit[a]).round() as i64).collect();
     let end_steps: Vec<i64> =
         (0..axes).map(|a| (line.to_mm[a] * machine.steps_per_unit[a]).round() as i64).collect();
-    let length: f64 =
-        (0..axes).map(|a| (line.to_mm[a] - line.from_mm[a]).powi(2)).sum::<f64>().sqrt();
+    // The path between the endpoints rounded to whole steps: the one the increments take,
+    // so that the feed and acceleration hold for it exactly.
+    let length: f64 = (0..axes)
+        .map(|a| ((end_steps[a] - start_steps[a]) as f64 / machine.steps_per_unit[a]).powi(2))
+        .sum::<f64>()
+        .sqrt();
     if length == 0.0 {
         return Ok(Vec::new());
     }
 
     let mut records = Vec::new();
     let mut travelled = 0.0_f64;
-    let mut speed = start_speed;
-    let mut last_grid: Vec<i64> = start_steps.iter().map(|&s| s << 16).collect();
     let step = accel * period;
+    // The first period runs at the start speed.
+    let mut speed = start_speed - step;
+    let mut last_grid: Vec<i64> = start_steps.iter().map(|&s| s << 16).collect();
     while travelled < length {
         let remaining = length - travelled;
         // Seed 000: raise the feed every period towards F and lower it again so that it
@@ -166,7 +179,11 @@ pub fn interpolate_line(machine: &Machine, line: &LineMove) -> Result<Vec<Period
                     + fraction * (end_steps[axis] - start_steps[axis]) as f64;
                 grid(ideal)
             };
-            record.inc[axis] = Increment::from_bits((target - last_grid[axis]) as i32);
+            let raw = i32::try_from(target - last_grid[axis]).map_err(|_| PlanError::IncrementTooLarge {
+                axis,
+                steps: (target - last_grid[axis]) as f64 / 65536.0,
+            })?;
+            record.inc[axis] = Increment::from_bits(raw);
             last_grid[axis] = target;
         }
         records.push(record);
@@ -245,12 +262,16 @@ mod tests {
         assert!(matches!(interpolate_line(&machine, &line), Err(PlanError::OutOfRange { axis: 0, .. })));
         line.to_mm = vec![1.0, 2.0];
         assert!(matches!(interpolate_line(&machine, &line), Err(PlanError::AxisCount { .. })));
+        // 100 000 steps/mm at 1 m/s: 100 000 steps in a 1 ms period do not fit I16F16.
+        let fast = Machine::new(vec![100_000.0], 0.001);
+        let long = LineMove { from_mm: vec![0.0], to_mm: vec![1000.0], feed_mm_s: 1000.0, start_speed_mm_s: 1000.0, accel_mm_s2: 1.0 };
+        assert!(matches!(interpolate_line(&fast, &long), Err(PlanError::IncrementTooLarge { axis: 0, .. })));
     }
 
     #[test]
     fn random_lines_are_exact_and_stay_on_the_line() {
-        let mut runner = finestep_testkit::runner("random_lines_are_exact_and_stay_on_the_line", 64);
-        let coord = -200.0..200.0f64;
+        let mut runner = finestep_testkit::runner("random_lines_are_exact_and_stay_on_the_line", 256);
+        let coord = prop_oneof![-200.0..200.0f64, -0.05..0.05f64];
         let strategy = (
             proptest::collection::vec((coord.clone(), coord), 1..=4),
             1.0..100.0f64,
@@ -289,6 +310,28 @@ mod tests {
                 }
                 for axis in 0..points.len() {
                     prop_assert_eq!(pos[axis], end[axis] << 16);
+                }
+                // Path speed from the increments alone: within the feed, and changing by at
+                // most A*T per period, but for the start and stop speed jumps at the ends.
+                let speeds: Vec<f64> = records
+                    .iter()
+                    .map(|r| {
+                        (0..points.len())
+                            .map(|a| (r.inc[a].to_num::<f64>() / 200.0).powi(2))
+                            .sum::<f64>()
+                            .sqrt()
+                            / 0.001
+                    })
+                    .collect();
+                let quantum = 4.0 * (points.len() as f64).sqrt() / 65536.0 / 200.0 / 0.001;
+                for &v in &speeds {
+                    prop_assert!(v <= feed + quantum, "speed {} over feed {}", v, feed);
+                }
+                for pair in speeds.windows(2).take(speeds.len().saturating_sub(2)) {
+                    prop_assert!(
+                        (pair[1] - pair[0]).abs() <= accel * 0.001 * (1.0 + 1e-9) + quantum,
+                        "speed step {:?} over A*T = {}", pair, accel * 0.001
+                    );
                 }
                 Ok(())
             })

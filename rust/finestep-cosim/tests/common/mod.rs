@@ -12,16 +12,20 @@ pub const AXES: usize = 4;
 /// One thing done to the core's inputs.
 #[derive(Clone, Debug)]
 pub enum Action {
-    /// Offer this record until it is consumed.
-    Feed(PeriodRecord),
+    /// Offer this record until it is consumed (with clear_errors held if the flag is set).
+    Feed(PeriodRecord, bool),
     /// Keep the inputs, no record offered, for this many cycles.
     Idle(u64),
-    /// Drop `run` for this many cycles (abort), then raise it again.
-    Stop(u64),
+    /// Drop `run` for this many cycles (abort), offering a record meanwhile if given,
+    /// then raise it again.
+    Stop(u64, Option<PeriodRecord>),
     /// Pulse clear_errors for one cycle.
     Clear,
     /// New configuration for one axis (takes effect at once).
     Configure(usize, AxisConfig),
+    /// New `period_clocks` input (sampled before the next run starts); may exceed
+    /// P_WIDTH bits, which the core masks off.
+    Period(u32),
 }
 
 /// A test case: the period and per-axis configuration, then the actions.
@@ -62,28 +66,32 @@ fn increment(p: u32) -> impl Strategy<Value = Increment> {
 }
 
 fn record(p: u32) -> impl Strategy<Value = PeriodRecord> {
-    (proptest::collection::vec(increment(p), AXES), 0u8..4).prop_map(|(incs, flags)| {
+    (proptest::collection::vec(increment(p), AXES), any::<u8>()).prop_map(|(incs, flags)| {
         let mut record = PeriodRecord { flags, ..Default::default() };
         record.inc[..AXES].copy_from_slice(&incs);
         record
     })
 }
 
+fn period() -> impl Strategy<Value = u32> {
+    prop_oneof![1 => 0u32..4, 4 => 4u32..64, 2 => 64u32..600, 1 => (0u32..64).prop_map(|p| (1 << 20) | p)]
+}
+
 fn action(p: u32) -> impl Strategy<Value = Action> {
     prop_oneof![
-        12 => record(p).prop_map(Action::Feed),
+        12 => (record(p), proptest::bool::weighted(0.1)).prop_map(|(r, clear)| Action::Feed(r, clear)),
         2 => prop_oneof![1u64..20, 1u64..5000].prop_map(Action::Idle),
-        1 => (1u64..4).prop_map(Action::Stop),
+        1 => (1u64..4, proptest::option::of(record(p))).prop_map(|(cycles, offer)| Action::Stop(cycles, offer)),
         1 => Just(Action::Clear),
         1 => (0..AXES, axis_config()).prop_map(|(axis, config)| Action::Configure(axis, config)),
+        1 => period().prop_map(Action::Period),
     ]
 }
 
 /// Random scenarios with short periods (so each case is a few thousand cycles).
 pub fn scenario(max_actions: usize) -> impl Strategy<Value = Scenario> {
-    let period = prop_oneof![1 => 0u32..4, 4 => 4u32..64, 2 => 64u32..600];
-    period.prop_flat_map(move |p| {
-        (proptest::collection::vec(axis_config(), AXES), proptest::collection::vec(action(p.max(1)), 1..max_actions))
+    period().prop_flat_map(move |p| {
+        (proptest::collection::vec(axis_config(), AXES), proptest::collection::vec(action(effective(p)), 1..max_actions))
             .prop_map(move |(axes, actions)| Scenario {
                 period_clocks: p,
                 axes: axes.try_into().unwrap(),
@@ -99,12 +107,25 @@ pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness,
     inputs.axes[..AXES].copy_from_slice(&scenario.axes);
     for action in &scenario.actions {
         match action {
-            Action::Feed(record) => harness.feed(&mut inputs, [*record])?,
-            Action::Idle(cycles) => harness.idle(&inputs, *cycles)?,
-            Action::Stop(cycles) => {
-                let stopped = CoreInputs { run: false, ..inputs };
-                harness.idle(&stopped, *cycles)?;
+            Action::Feed(record, clear) => {
+                inputs.clear_errors = *clear;
+                harness.feed(&mut inputs, [*record])?;
+                inputs.clear_errors = false;
             }
+            Action::Idle(cycles) => harness.idle(&inputs, *cycles)?,
+            Action::Stop(cycles, offer) => {
+                let stopped = CoreInputs {
+                    run: false,
+                    rec_valid: offer.is_some(),
+                    record: offer.unwrap_or_default(),
+                    ..inputs
+                };
+                // A record offered while stopping is consumed at most once, and discarded.
+                let end = harness.run_chunk(&stopped, *cycles)?;
+                let rest = CoreInputs { rec_valid: false, ..stopped };
+                harness.idle(&rest, cycles - end.cycles)?;
+            }
+            Action::Period(p) => inputs.period_clocks = *p,
             Action::Clear => {
                 let clearing = CoreInputs { clear_errors: true, ..inputs };
                 harness.idle(&clearing, 1)?;
@@ -113,9 +134,15 @@ pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness,
         }
     }
     // Drain: a few idle periods so every pending step reaches the pins.
-    let drain = 3 * u64::from(scenario.period_clocks.max(1)) + 4 * 4096;
+    let drain = 3 * u64::from(effective(inputs.period_clocks).max(effective(scenario.period_clocks))) + 4 * 4096;
     harness.idle(&inputs, drain)?;
     Ok(harness)
+}
+
+/// The period the core runs with for a `period_clocks` input (masked to P_WIDTH = 20
+/// bits, 0 acts as 1).
+pub fn effective(period_clocks: u32) -> u32 {
+    (period_clocks & ((1 << 20) - 1)).max(1)
 }
 
 /// Unused axes stay zero in the record; every axis config is within MAX_AXES.
