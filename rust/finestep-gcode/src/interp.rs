@@ -1,0 +1,621 @@
+//! The modal interpreter: one block of words at a time, against the modal state, to
+//! canonical blocks with positions resolved to absolute millimetres.
+
+use crate::error::LineError;
+use crate::lexer::Word;
+use crate::{BlockKind, CompSide, PathControl, Plane, Point, SpindleRotation};
+
+/// Millimetres per inch.
+const MM_PER_INCH: f64 = 25.4;
+/// Largest absolute coordinate a resolved position may have, in mm (or degrees).
+const MAX_POSITION: f64 = 1e10;
+/// A centre-form arc is refused when its start and end radii differ by more than this
+/// absolute amount AND by more than [`ARC_RELATIVE_TOLERANCE`] of the start radius
+/// (LinuxCNC's rule).
+pub(crate) const ARC_ABSOLUTE_TOLERANCE_MM: f64 = 0.002;
+/// See [`ARC_ABSOLUTE_TOLERANCE_MM`].
+pub(crate) const ARC_RELATIVE_TOLERANCE: f64 = 0.001;
+/// Lengths below this are zero (end equal to start, zero radius).
+const ZERO_MM: f64 = 1e-9;
+
+/// A G code in tenths: G90.1 is 901.
+type Code = u32;
+
+/// The modal state between blocks.
+#[derive(Debug, Clone)]
+pub(crate) struct State {
+    position: [f64; 4],
+    motion: Option<Code>,
+    plane: Plane,
+    inches: bool,
+    incremental: bool,
+    arc_incremental: bool,
+    comp: CompSide,
+    feed_mm_per_min: Option<f64>,
+    rotation: SpindleRotation,
+    rpm: f64,
+    mist: bool,
+    flood: bool,
+    tool: u32,
+}
+
+impl Default for State {
+    /// G17 G21 G90 G91.1 G40 G64, no motion mode, at the origin, no feed, spindle off
+    /// at 0 rpm, coolant off, tool 0.
+    fn default() -> Self {
+        State {
+            position: [0.0; 4],
+            motion: None,
+            plane: Plane::Xy,
+            inches: false,
+            incremental: false,
+            arc_incremental: true,
+            comp: CompSide::Off,
+            feed_mm_per_min: None,
+            rotation: SpindleRotation::Off,
+            rpm: 0.0,
+            mist: false,
+            flood: false,
+            tool: 0,
+        }
+    }
+}
+
+/// Modal groups of the supported codes (LinuxCNC's numbering in comments).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Group {
+    NonModal,    // G group 0: G4
+    Motion,      // G group 1: G0 G1 G2 G3
+    Plane,       // G group 2: G17 G18 G19
+    Distance,    // G group 3: G90 G91
+    ArcDistance, // G group 4: G90.1 G91.1
+    Units,       // G group 6: G20 G21
+    Comp,        // G group 7: G40 G41 G42
+    Path,        // G group 13: G61 G64
+    Stop,        // M group 4: M0 M2 M30
+    ToolChange,  // M group 6: M6
+    Spindle,     // M group 7: M3 M4 M5
+    Coolant,     // M group 8: M7 M8 M9
+}
+
+const GROUPS: usize = 12;
+
+fn g_group(code: Code) -> Option<Group> {
+    Some(match code {
+        40 => Group::NonModal,
+        0 | 10 | 20 | 30 => Group::Motion,
+        170 | 180 | 190 => Group::Plane,
+        900 | 910 => Group::Distance,
+        901 | 911 => Group::ArcDistance,
+        200 | 210 => Group::Units,
+        400 | 410 | 420 => Group::Comp,
+        610 | 640 => Group::Path,
+        _ => return None,
+    })
+}
+
+fn m_group(code: u32) -> Option<Group> {
+    Some(match code {
+        0 | 2 | 30 => Group::Stop,
+        6 => Group::ToolChange,
+        3..=5 => Group::Spindle,
+        7..=9 => Group::Coolant,
+        _ => return None,
+    })
+}
+
+/// `G2`, `G90.1`: a code in tenths as written.
+fn g_name(code: Code) -> String {
+    match (code / 10, code % 10) {
+        (whole, 0) => format!("G{whole}"),
+        (whole, tenth) => format!("G{whole}.{tenth}"),
+    }
+}
+
+/// A non-negative integral value as u32.
+fn as_u32(value: f64) -> Option<u32> {
+    (value >= 0.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX)).then_some(value as u32)
+}
+
+/// The parameter letters a block may carry once each (besides G, M and N).
+const PARAMS: &str = "ADFIJKPRSTXYZ";
+const AXES: [char; 4] = ['X', 'Y', 'Z', 'A'];
+
+/// The words of one block, sorted by meaning.
+#[derive(Default)]
+struct Words {
+    n: Option<u32>,
+    /// Per group: the code and its column. The coolant group may hold M7 and M8.
+    groups: [Option<(Code, usize)>; GROUPS],
+    mist_and_flood: Option<usize>,
+    params: [Option<(f64, usize)>; 26],
+}
+
+impl Words {
+    fn param(&self, letter: char) -> Option<(f64, usize)> {
+        self.params.get(letter_index(letter)).copied().flatten()
+    }
+    fn group(&self, group: Group) -> Option<(Code, usize)> {
+        self.groups[group as usize]
+    }
+    fn has(&self, group: Group, code: Code) -> bool {
+        self.group(group).is_some_and(|(c, _)| c == code)
+    }
+}
+
+fn letter_index(letter: char) -> usize {
+    (letter as usize).wrapping_sub('A' as usize)
+}
+
+fn sort_words(words: &[Word]) -> Result<Words, LineError> {
+    let mut out = Words::default();
+    for (index, word) in words.iter().enumerate() {
+        let Word {
+            letter,
+            value,
+            column,
+        } = *word;
+        let coded = match letter {
+            'N' => {
+                if out.n.is_some() {
+                    return Err(LineError::new(column, "word N appears twice"));
+                }
+                if index != 0 {
+                    return Err(LineError::new(
+                        column,
+                        "N word must come first in the block",
+                    ));
+                }
+                let n = as_u32(value).ok_or_else(|| {
+                    LineError::new(column, "N word must be a non-negative integer")
+                })?;
+                out.n = Some(n);
+                continue;
+            }
+            'G' => {
+                let tenths = value * 10.0;
+                let code = (tenths.round() == tenths).then(|| as_u32(tenths)).flatten();
+                let group = code.and_then(|c| g_group(c).map(|g| (c, g)));
+                group
+                    .ok_or_else(|| LineError::new(column, format!("unsupported G-code G{value}")))?
+            }
+            'M' => {
+                let group = as_u32(value).and_then(|c| m_group(c).map(|g| (c * 10, g)));
+                group
+                    .ok_or_else(|| LineError::new(column, format!("unsupported M-code M{value}")))?
+            }
+            l if PARAMS.contains(l) => {
+                let slot = &mut out.params[letter_index(l)];
+                if slot.is_some() {
+                    return Err(LineError::new(column, format!("word {l} appears twice")));
+                }
+                *slot = Some((value, column));
+                continue;
+            }
+            l => return Err(LineError::new(column, format!("unknown word {l}"))),
+        };
+        let (code, group) = coded;
+        let slot = &mut out.groups[group as usize];
+        match *slot {
+            None => *slot = Some((code, column)),
+            // M7 and M8 together turn both coolants on, as in LinuxCNC.
+            Some((other, _))
+                if group == Group::Coolant
+                    && other + code == 150
+                    && out.mist_and_flood.is_none() =>
+            {
+                out.mist_and_flood = Some(column);
+            }
+            Some((other, _)) => {
+                let name = |c: Code| {
+                    if letter == 'M' {
+                        format!("M{}", c / 10)
+                    } else {
+                        g_name(c)
+                    }
+                };
+                return Err(LineError::new(
+                    column,
+                    format!(
+                        "{} and {} are in the same modal group",
+                        name(other),
+                        name(code)
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The result of one block: what it emits, its line number, and whether it ends the
+/// program.
+pub(crate) struct Executed {
+    pub n: Option<u32>,
+    pub kinds: Vec<BlockKind>,
+    pub end: bool,
+}
+
+impl State {
+    fn length_mm(&self, value: f64) -> f64 {
+        if self.inches {
+            value * MM_PER_INCH
+        } else {
+            value
+        }
+    }
+
+    /// Executes one block in LinuxCNC's order, except that G20/G21 act first so that
+    /// every number of the block is read in the block's new units.
+    pub(crate) fn execute(&mut self, words: &[Word]) -> Result<Executed, LineError> {
+        let w = sort_words(words)?;
+        let mut kinds = Vec::new();
+
+        // Units.
+        if let Some((code, _)) = w.group(Group::Units) {
+            self.inches = code == 200;
+        }
+
+        // What will move, to check that every parameter word has a user.
+        let motion = w.group(Group::Motion).map(|(c, _)| c).or(self.motion);
+        let first_axis = AXES
+            .iter()
+            .filter_map(|&l| w.param(l))
+            .map(|(_, c)| c)
+            .min();
+        let motion_column = w.group(Group::Motion).map(|(_, c)| c).or(first_axis);
+        let arc_mode = matches!(motion, Some(20 | 30));
+        let arc_move = arc_mode && first_axis.is_some();
+        for letter in ['I', 'J', 'K', 'R'] {
+            if let Some((_, column)) = w.param(letter) {
+                if arc_mode && !arc_move {
+                    let name = g_name(motion.unwrap_or(20));
+                    return Err(LineError::new(
+                        motion_column.unwrap_or(column),
+                        format!("{name} with no axis words"),
+                    ));
+                }
+                if !arc_move {
+                    return Err(LineError::new(
+                        column,
+                        format!("{letter} word with no G2 or G3 to use it"),
+                    ));
+                }
+            }
+        }
+        if let Some((_, column)) = w.param('P') {
+            let users = [
+                w.group(Group::NonModal).is_some(),
+                w.has(Group::Path, 640),
+                arc_move,
+            ];
+            match users.iter().filter(|&&u| u).count() {
+                0 => {
+                    return Err(LineError::new(
+                        column,
+                        "P word with no G4, G64, G2 or G3 to use it",
+                    ))
+                }
+                1 => {}
+                _ => {
+                    return Err(LineError::new(
+                        column,
+                        "P word is used by more than one code",
+                    ))
+                }
+            }
+        }
+        if let Some((_, column)) = w.param('D') {
+            if !(w.has(Group::Comp, 410) || w.has(Group::Comp, 420)) {
+                return Err(LineError::new(
+                    column,
+                    "D word with no G41 or G42 to use it",
+                ));
+            }
+        }
+        if let (Some(column), None) = (first_axis, motion) {
+            return Err(LineError::new(
+                column,
+                "axis word with no motion mode (G0, G1, G2 or G3) to use it",
+            ));
+        }
+
+        // Feed, speed, tool selection.
+        if let Some((f, column)) = w.param('F') {
+            if f < 0.0 {
+                return Err(LineError::new(column, "negative feed rate"));
+            }
+            self.feed_mm_per_min = Some(self.length_mm(f));
+        }
+        if let Some((s, column)) = w.param('S') {
+            if s < 0.0 {
+                return Err(LineError::new(column, "negative spindle speed"));
+            }
+            self.rpm = s;
+        }
+        if let Some((t, column)) = w.param('T') {
+            self.tool = as_u32(t)
+                .ok_or_else(|| LineError::new(column, "T word must be a non-negative integer"))?;
+            kinds.push(BlockKind::ToolSelect { tool: self.tool });
+        }
+        if w.group(Group::ToolChange).is_some() {
+            kinds.push(BlockKind::ToolChange { tool: self.tool });
+        }
+
+        // Spindle and coolant.
+        if let Some((code, _)) = w.group(Group::Spindle) {
+            self.rotation = match code {
+                30 => SpindleRotation::Clockwise,
+                40 => SpindleRotation::CounterClockwise,
+                _ => SpindleRotation::Off,
+            };
+        }
+        if w.group(Group::Spindle).is_some() || w.param('S').is_some() {
+            kinds.push(BlockKind::Spindle {
+                rotation: self.rotation,
+                rpm: self.rpm,
+            });
+        }
+        if let Some((code, _)) = w.group(Group::Coolant) {
+            match code {
+                70 => self.mist = true,
+                80 => self.flood = true,
+                _ => (self.mist, self.flood) = (false, false),
+            }
+            if w.mist_and_flood.is_some() {
+                (self.mist, self.flood) = (true, true);
+            }
+            kinds.push(BlockKind::Coolant {
+                mist: self.mist,
+                flood: self.flood,
+            });
+        }
+
+        // Dwell.
+        if let Some((_, column)) = w.group(Group::NonModal) {
+            let (p, p_column) = w
+                .param('P')
+                .ok_or_else(|| LineError::new(column, "G4 with no P word"))?;
+            if p < 0.0 {
+                return Err(LineError::new(p_column, "negative dwell time"));
+            }
+            kinds.push(BlockKind::Dwell { seconds: p });
+        }
+
+        // Plane and distance modes.
+        if let Some((code, _)) = w.group(Group::Plane) {
+            self.plane = match code {
+                170 => Plane::Xy,
+                180 => Plane::Zx,
+                _ => Plane::Yz,
+            };
+        }
+        if let Some((code, _)) = w.group(Group::Distance) {
+            self.incremental = code == 910;
+        }
+        if let Some((code, _)) = w.group(Group::ArcDistance) {
+            self.arc_incremental = code == 911;
+        }
+
+        // Cutter compensation.
+        if let Some((code, column)) = w.group(Group::Comp) {
+            let side = match code {
+                410 => CompSide::Left,
+                420 => CompSide::Right,
+                _ => CompSide::Off,
+            };
+            if side != CompSide::Off && self.comp != CompSide::Off {
+                return Err(LineError::new(
+                    column,
+                    "cutter compensation is already on (G40 first)",
+                ));
+            }
+            let tool = match w.param('D') {
+                Some((d, d_column)) => Some(as_u32(d).ok_or_else(|| {
+                    LineError::new(d_column, "D word must be a non-negative integer")
+                })?),
+                None => None,
+            };
+            self.comp = side;
+            kinds.push(BlockKind::CutterComp { side, tool });
+        }
+
+        // Path control.
+        if let Some((code, _)) = w.group(Group::Path) {
+            let mode = if code == 610 {
+                PathControl::ExactPath
+            } else {
+                let tolerance_mm = match w.param('P') {
+                    Some((p, p_column)) if p < 0.0 => {
+                        return Err(LineError::new(p_column, "negative path tolerance"))
+                    }
+                    Some((p, _)) => Some(self.length_mm(p)),
+                    None => None,
+                };
+                PathControl::Blend { tolerance_mm }
+            };
+            kinds.push(BlockKind::PathControl(mode));
+        }
+
+        // Motion.
+        if let Some((code, _)) = w.group(Group::Motion) {
+            self.motion = Some(code);
+        }
+        if let (Some(code), Some(column)) = (self.motion, first_axis) {
+            let to = self.target(&w)?;
+            let feed = || match self.feed_mm_per_min {
+                Some(f) if f > 0.0 => Ok(f),
+                _ => Err(LineError::new(
+                    column_of(&w, column),
+                    format!("{} with no feed rate", g_name(code)),
+                )),
+            };
+            let kind = match code {
+                0 => BlockKind::Rapid {
+                    to: Point::from_array(to),
+                },
+                10 => BlockKind::Linear {
+                    to: Point::from_array(to),
+                    feed_mm_per_min: feed()?,
+                },
+                _ => {
+                    let feed_mm_per_min = feed()?;
+                    let clockwise = code == 20;
+                    let (centre, extra_turns) =
+                        self.arc_centre(&w, to, g_name(code), column_of(&w, column))?;
+                    BlockKind::Arc {
+                        to: Point::from_array(to),
+                        centre: Point::from_array(centre),
+                        plane: self.plane,
+                        clockwise,
+                        extra_turns,
+                        feed_mm_per_min,
+                    }
+                }
+            };
+            kinds.push(kind);
+            self.position = to;
+        }
+
+        // Stops.
+        let mut end = false;
+        if let Some((code, _)) = w.group(Group::Stop) {
+            if code == 0 {
+                kinds.push(BlockKind::Pause);
+            } else {
+                kinds.push(BlockKind::End);
+                end = true;
+            }
+        }
+        Ok(Executed { n: w.n, kinds, end })
+    }
+
+    /// The block's end point, absolute, in mm (and degrees for A).
+    fn target(&self, w: &Words) -> Result<[f64; 4], LineError> {
+        let mut to = self.position;
+        for (axis, &letter) in AXES.iter().enumerate() {
+            if let Some((value, column)) = w.param(letter) {
+                let value = if letter == 'A' {
+                    value
+                } else {
+                    self.length_mm(value)
+                };
+                to[axis] = if self.incremental {
+                    to[axis] + value
+                } else {
+                    value
+                };
+                if to[axis].abs() > MAX_POSITION {
+                    return Err(LineError::new(column, "position out of range"));
+                }
+            }
+        }
+        Ok(to)
+    }
+
+    /// The centre of an arc from the current position to `to`, and its extra turns.
+    fn arc_centre(
+        &self,
+        w: &Words,
+        to: [f64; 4],
+        name: String,
+        column: usize,
+    ) -> Result<([f64; 4], u32), LineError> {
+        let from = self.position;
+        // In-plane axes (p, q) and normal, right-handed; the centre-offset letters of
+        // p and q, and the letter of the normal axis.
+        let (p, q, [lp, lq, ln], plane_code) = match self.plane {
+            Plane::Xy => (0, 1, ['I', 'J', 'K'], 17),
+            Plane::Zx => (2, 0, ['K', 'I', 'J'], 18),
+            Plane::Yz => (1, 2, ['J', 'K', 'I'], 19),
+        };
+        if let Some((_, c)) = w.param(ln) {
+            return Err(LineError::new(
+                c,
+                format!("{ln} word not allowed for an arc in the G{plane_code} plane"),
+            ));
+        }
+        let ijk = w.param(lp).or(w.param(lq));
+        let r = w.param('R');
+        let mut centre = from;
+        match (ijk, r) {
+            (None, None) => {
+                return Err(LineError::new(column, format!("{name} without I/J/K or R")));
+            }
+            (Some(_), Some((_, c))) => {
+                return Err(LineError::new(c, format!("{name} with both R and I/J/K")));
+            }
+            (Some(_), None) => {
+                for (axis, letter) in [(p, lp), (q, lq)] {
+                    let offset = w.param(letter).map_or(0.0, |(v, _)| self.length_mm(v));
+                    centre[axis] = if self.arc_incremental {
+                        from[axis] + offset
+                    } else {
+                        offset
+                    };
+                }
+                let radius = |point: [f64; 4]| (point[p] - centre[p]).hypot(point[q] - centre[q]);
+                let (r_start, r_end) = (radius(from), radius(to));
+                if r_start <= ZERO_MM {
+                    return Err(LineError::new(column, "arc radius is zero"));
+                }
+                let differs = (r_end - r_start).abs();
+                if !(differs <= ARC_ABSOLUTE_TOLERANCE_MM
+                    || differs <= ARC_RELATIVE_TOLERANCE * r_start)
+                {
+                    return Err(LineError::new(
+                        column,
+                        format!("arc end not on circle: radius differs by {differs:.3} mm"),
+                    ));
+                }
+            }
+            (None, Some((r, r_column))) => {
+                let r = self.length_mm(r);
+                let (dp, dq) = (to[p] - from[p], to[q] - from[q]);
+                let chord = dp.hypot(dq);
+                if chord <= ZERO_MM {
+                    return Err(LineError::new(
+                        r_column,
+                        "R-form arc needs an end point different from its start",
+                    ));
+                }
+                let half = chord / 2.0;
+                if half - r.abs() > ARC_ABSOLUTE_TOLERANCE_MM {
+                    return Err(LineError::new(
+                        r_column,
+                        format!(
+                            "arc radius {:.3} mm is less than half the chord {half:.3} mm",
+                            r.abs()
+                        ),
+                    ));
+                }
+                // The centre is on the chord's bisector, at distance h; on the right of
+                // the chord (start to end) for a clockwise short arc.
+                let h = (r * r - half * half).max(0.0).sqrt();
+                let clockwise = name == "G2";
+                let side = if clockwise == (r > 0.0) { 1.0 } else { -1.0 };
+                let (up, uq) = (dp / chord, dq / chord);
+                centre[p] = from[p] + dp / 2.0 + side * h * uq;
+                centre[q] = from[q] + dq / 2.0 - side * h * up;
+            }
+        }
+        let extra_turns = match w.param('P') {
+            Some((turns, c)) => match as_u32(turns) {
+                Some(t) if t >= 1 => t - 1,
+                _ => {
+                    return Err(LineError::new(
+                        c,
+                        format!("P word for {name} must be a positive integer"),
+                    ))
+                }
+            },
+            None => 0,
+        };
+        Ok((centre, extra_turns))
+    }
+}
+
+/// The column of a move's motion word: its G word if the block has one, else `axis`.
+fn column_of(w: &Words, axis: usize) -> usize {
+    w.group(Group::Motion).map_or(axis, |(_, c)| c)
+}

@@ -1,0 +1,275 @@
+//! The G-code front end of finestep: a LinuxCNC-compatible part program to a typed
+//! sequence of canonical blocks, with the modal state tracked and resolved away.
+//!
+//! Every position in the output is absolute and in millimetres (A in degrees),
+//! whatever G20/G21 and G90/G91 said; arcs carry their centre and have been checked.
+//! Cutter compensation is not applied here (it is kept as a [`BlockKind::CutterComp`]
+//! value for the stage after this one), nor is any planning or interpolation.
+//!
+//! ```
+//! use finestep_gcode::{parse_str, BlockKind, Point};
+//! let program = parse_str("G20 G91 F10\nG1 X1 Y-0.5 (inches, incremental)\nM2\n", "part.ngc")
+//!     .unwrap();
+//! let BlockKind::Linear { to, feed_mm_per_min } = program.blocks[0].kind else { panic!() };
+//! assert_eq!(to, Point { x_mm: 25.4, y_mm: -12.7, z_mm: 0.0, a_deg: 0.0 });
+//! assert_eq!(feed_mm_per_min, 254.0);
+//! assert_eq!(program.blocks[0].line, 2);
+//!
+//! let err = parse_str("G0 X1 X2\n", "part.ngc").unwrap_err();
+//! assert_eq!(err.to_string(), "part.ngc:1:7: word X appears twice");
+//! ```
+//!
+//! # Dialect
+//!
+//! - Words: a letter (any case) and a number (optional sign, digits, at most one decimal
+//!   point, no exponent, magnitude at most 1e9); spaces and tabs anywhere outside
+//!   comments, also inside numbers. Comments `( ... )` (one line, not nested) and after
+//!   `;`. `N` line number (integer, first word). A leading `/` (block delete) is
+//!   ignored and the block runs. A line holding only `%` opens the program if it is the
+//!   first non-blank line; any later `%` line ends it. Lines after M2/M30 are not read.
+//! - G0 G1 G2 G3 G4 G17 G18 G19 G20 G21 G40 G41 G42 G61 G64 G90 G91 G90.1 G91.1;
+//!   M0 M2 M3 M4 M5 M6 M7 M8 M9 M30; F S T D P R I J K; axes X Y Z A. Anything else is
+//!   an error (`unsupported G-code G33`, `unknown word Q`).
+//! - Start state: G17 G21 G90 G91.1 G40 G64, no motion mode, at the origin, no feed
+//!   rate, spindle off at 0 rpm, coolant off, tool 0.
+//!
+//! See [`BlockKind`] for what each block means and [`GcodeError`] for the error format.
+
+mod error;
+mod interp;
+mod lexer;
+
+use std::path::Path;
+
+pub use error::GcodeError;
+
+/// A position: named axis fields whose names carry their units. Linear axes are in
+/// millimetres, the rotary axis A in degrees.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Point {
+    /// X in mm.
+    pub x_mm: f64,
+    /// Y in mm.
+    pub y_mm: f64,
+    /// Z in mm.
+    pub z_mm: f64,
+    /// A (rotary) in degrees.
+    pub a_deg: f64,
+}
+
+impl Point {
+    fn from_array([x_mm, y_mm, z_mm, a_deg]: [f64; 4]) -> Self {
+        Point {
+            x_mm,
+            y_mm,
+            z_mm,
+            a_deg,
+        }
+    }
+}
+
+/// The arc plane, named by its in-plane axes in right-handed order (the first axis
+/// turned a quarter turn counter-clockwise, seen from the positive normal axis, is the
+/// second).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    /// G17: X and Y, normal Z; centre offsets I and J.
+    Xy,
+    /// G18: Z and X, normal Y; centre offsets K and I.
+    Zx,
+    /// G19: Y and Z, normal X; centre offsets J and K.
+    Yz,
+}
+
+/// Which side of the path the cutter is kept on (G40/G41/G42).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CompSide {
+    /// G40: compensation off.
+    Off,
+    /// G41: tool to the left of the path.
+    Left,
+    /// G42: tool to the right of the path.
+    Right,
+}
+
+/// Path control mode (G61/G64).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PathControl {
+    /// G61: follow the programmed path exactly.
+    ExactPath,
+    /// G64: blend corners, within the tolerance when `P` is given (converted to mm).
+    Blend {
+        /// The path tolerance from `P`, in mm.
+        tolerance_mm: Option<f64>,
+    },
+}
+
+/// Spindle rotation (M3/M4/M5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpindleRotation {
+    /// M5.
+    Off,
+    /// M3.
+    Clockwise,
+    /// M4.
+    CounterClockwise,
+}
+
+/// One canonical operation. A source block may give several, in LinuxCNC's order of
+/// execution: tool select, tool change, spindle, coolant, dwell, cutter compensation,
+/// path control, motion, stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BlockKind {
+    /// G0: a rapid move to `to`.
+    Rapid {
+        /// End point.
+        to: Point,
+    },
+    /// G1: a straight feed move to `to`.
+    Linear {
+        /// End point.
+        to: Point,
+        /// Feed rate in mm/min (in G20 the programmed inch/min times 25.4).
+        feed_mm_per_min: f64,
+    },
+    /// G2/G3: an arc (or helix) from the previous end point to `to` around `centre`.
+    ///
+    /// The in-plane coordinates of `centre` are the arc's centre; its normal-axis and A
+    /// coordinates are those of the start point. The normal axis and A move linearly
+    /// with the angle (a helix). When `to` equals the start in the plane the arc is a
+    /// full circle. The end radius may differ from the start radius by up to
+    /// 0.002 mm or 0.1 % (whichever is larger); the centre is kept as programmed.
+    Arc {
+        /// End point.
+        to: Point,
+        /// Centre (see above).
+        centre: Point,
+        /// The plane (G17/G18/G19).
+        plane: Plane,
+        /// G2 (clockwise seen from the positive normal axis) or G3.
+        clockwise: bool,
+        /// Full turns in addition to the programmed arc: `P` minus 1, else 0.
+        extra_turns: u32,
+        /// Feed rate in mm/min.
+        feed_mm_per_min: f64,
+    },
+    /// G4: wait.
+    Dwell {
+        /// Time in seconds.
+        seconds: f64,
+    },
+    /// M3/M4/M5 or S: the spindle's state after the block.
+    Spindle {
+        /// Rotation.
+        rotation: SpindleRotation,
+        /// Speed in revolutions per minute (the last S).
+        rpm: f64,
+    },
+    /// M7/M8/M9: the coolant's state after the block.
+    Coolant {
+        /// Mist (M7) on.
+        mist: bool,
+        /// Flood (M8) on.
+        flood: bool,
+    },
+    /// T: select the tool for the next M6.
+    ToolSelect {
+        /// Tool number.
+        tool: u32,
+    },
+    /// M6: change to the selected tool.
+    ToolChange {
+        /// Tool number (the last T, 0 if none).
+        tool: u32,
+    },
+    /// G40/G41/G42: cutter radius compensation (applied by a later stage).
+    CutterComp {
+        /// Side, or off.
+        side: CompSide,
+        /// The tool number from `D`, if given.
+        tool: Option<u32>,
+    },
+    /// G61/G64.
+    PathControl(PathControl),
+    /// M0: pause until resumed.
+    Pause,
+    /// M2/M30: end of program.
+    End,
+}
+
+/// One canonical operation and where it came from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Block {
+    /// 1-based source line.
+    pub line: usize,
+    /// The block's `N` number, if any.
+    pub n: Option<u32>,
+    /// What to do.
+    pub kind: BlockKind,
+}
+
+/// A parsed part program.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Program {
+    /// The canonical blocks in order.
+    pub blocks: Vec<Block>,
+}
+
+/// Parses a part program held in memory. `file_name` is only used in errors.
+pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
+    let mut state = interp::State::default();
+    let mut blocks = Vec::new();
+    let mut seen_content = false;
+    for (index, raw) in source.split('\n').enumerate() {
+        let line = index + 1;
+        let text = raw.strip_suffix('\r').unwrap_or(raw);
+        let located = |e: error::LineError| GcodeError::Parse {
+            file: file_name.to_string(),
+            line,
+            column: e.column,
+            message: e.message,
+        };
+        if text.trim_matches([' ', '\t']) == "%" {
+            if seen_content {
+                break;
+            }
+            seen_content = true;
+            continue;
+        }
+        let words = lexer::lex_line(text).map_err(located)?;
+        if words.is_empty() {
+            continue;
+        }
+        seen_content = true;
+        let executed = state.execute(&words).map_err(located)?;
+        blocks.extend(executed.kinds.into_iter().map(|kind| Block {
+            line,
+            n: executed.n,
+            kind,
+        }));
+        if executed.end {
+            break;
+        }
+    }
+    Ok(Program { blocks })
+}
+
+/// Parses raw bytes. Bytes that are not UTF-8 are refused where they stand outside a
+/// comment (as an unexpected character `'\u{fffd}'`) and ignored inside one.
+pub fn parse_bytes(source: &[u8], file_name: &str) -> Result<Program, GcodeError> {
+    parse_str(&String::from_utf8_lossy(source), file_name)
+}
+
+/// Reads and parses a part program file; errors name the file as `path` displays.
+pub fn parse_file(path: impl AsRef<Path>) -> Result<Program, GcodeError> {
+    let path = path.as_ref();
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| GcodeError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    parse_bytes(&bytes, &file)
+}
+
+#[cfg(test)]
+mod tests;

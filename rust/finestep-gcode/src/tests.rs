@@ -1,0 +1,520 @@
+//! Directed tests: every supported word, every error message with its exact place.
+
+use crate::*;
+
+const FILE: &str = "t.ngc";
+
+fn parse(source: &str) -> Vec<BlockKind> {
+    match parse_str(source, FILE) {
+        Ok(p) => p.blocks.into_iter().map(|b| b.kind).collect(),
+        Err(e) => panic!("{source:?} failed: {e}"),
+    }
+}
+
+fn err(source: &str) -> String {
+    match parse_str(source, FILE) {
+        Ok(p) => panic!("{source:?} parsed: {p:?}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn p(x_mm: f64, y_mm: f64, z_mm: f64, a_deg: f64) -> Point {
+    Point {
+        x_mm,
+        y_mm,
+        z_mm,
+        a_deg,
+    }
+}
+
+fn close(a: Point, b: Point) -> bool {
+    let d = [
+        a.x_mm - b.x_mm,
+        a.y_mm - b.y_mm,
+        a.z_mm - b.z_mm,
+        a.a_deg - b.a_deg,
+    ];
+    d.iter().all(|v| v.abs() < 1e-9)
+}
+
+/// The single arc of a program.
+fn arc(source: &str) -> (Point, Point, Plane, bool, u32, f64) {
+    let arcs: Vec<_> = parse(source)
+        .into_iter()
+        .filter_map(|k| match k {
+            BlockKind::Arc {
+                to,
+                centre,
+                plane,
+                clockwise,
+                extra_turns,
+                feed_mm_per_min,
+            } => Some((to, centre, plane, clockwise, extra_turns, feed_mm_per_min)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(arcs.len(), 1, "{source:?}");
+    arcs[0]
+}
+
+#[test]
+fn rapid_and_linear_with_lines_and_numbers() {
+    let program = parse_str(
+        "%\n\nN10 G0 X1 Y2 Z3 A90\nn20 g1 x4 f100\n(comment)\nY5\n%\nG0 X99\n",
+        FILE,
+    )
+    .unwrap();
+    let got: Vec<_> = program
+        .blocks
+        .iter()
+        .map(|b| (b.line, b.n, b.kind))
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            (
+                3,
+                Some(10),
+                BlockKind::Rapid {
+                    to: p(1.0, 2.0, 3.0, 90.0)
+                }
+            ),
+            (
+                4,
+                Some(20),
+                BlockKind::Linear {
+                    to: p(4.0, 2.0, 3.0, 90.0),
+                    feed_mm_per_min: 100.0
+                }
+            ),
+            (
+                6,
+                None,
+                BlockKind::Linear {
+                    to: p(4.0, 5.0, 3.0, 90.0),
+                    feed_mm_per_min: 100.0
+                }
+            ),
+        ]
+    );
+}
+
+#[test]
+fn percent_later_ends_the_program_and_m2_stops_reading() {
+    assert_eq!(
+        parse("G0 X1\n%\nG0 X2 Q1\n"),
+        vec![BlockKind::Rapid {
+            to: p(1.0, 0.0, 0.0, 0.0)
+        }]
+    );
+    assert_eq!(
+        parse("G0 X1 M2\nthis is not G-code\n"),
+        vec![
+            BlockKind::Rapid {
+                to: p(1.0, 0.0, 0.0, 0.0)
+            },
+            BlockKind::End
+        ]
+    );
+    assert_eq!(parse("M30\nQ"), vec![BlockKind::End]);
+    assert_eq!(parse("M0"), vec![BlockKind::Pause]);
+}
+
+#[test]
+fn spaces_case_crlf_and_block_delete() {
+    assert_eq!(
+        parse("g 1 x 1 0 . 5 f 6 0\r\n/G0 Y-2\r\n"),
+        vec![
+            BlockKind::Linear {
+                to: p(10.5, 0.0, 0.0, 0.0),
+                feed_mm_per_min: 60.0
+            },
+            BlockKind::Rapid {
+                to: p(10.5, -2.0, 0.0, 0.0)
+            },
+        ]
+    );
+}
+
+#[test]
+fn modal_motion_without_axes_sets_the_mode_only() {
+    assert_eq!(
+        parse("G1 F100\nG0\nX1\n"),
+        vec![BlockKind::Rapid {
+            to: p(1.0, 0.0, 0.0, 0.0)
+        }]
+    );
+}
+
+#[test]
+fn units_convert_to_mm_and_a_stays_in_degrees() {
+    assert_eq!(
+        parse("G20 G0 X1 A10\nG1 Y2 F10\nG21 G1 Z3\n"),
+        vec![
+            BlockKind::Rapid {
+                to: p(25.4, 0.0, 0.0, 10.0)
+            },
+            BlockKind::Linear {
+                to: p(25.4, 50.8, 0.0, 10.0),
+                feed_mm_per_min: 254.0
+            },
+            // F keeps its mm/min value across a unit change.
+            BlockKind::Linear {
+                to: p(25.4, 50.8, 3.0, 10.0),
+                feed_mm_per_min: 254.0
+            },
+        ]
+    );
+    // G20 acts on the whole block, also on F given before it.
+    assert_eq!(
+        parse("F1 G20 G1 X1"),
+        vec![BlockKind::Linear {
+            to: p(25.4, 0.0, 0.0, 0.0),
+            feed_mm_per_min: 25.4
+        }]
+    );
+}
+
+#[test]
+fn incremental_distances_resolve_to_absolute() {
+    assert_eq!(
+        parse("G0 X1 Y1 A5\nG91 G0 X1 A-10\nG0 X1 Y-3\nG90 G0 X0\nG91 G20 G0 Z1"),
+        vec![
+            BlockKind::Rapid {
+                to: p(1.0, 1.0, 0.0, 5.0)
+            },
+            BlockKind::Rapid {
+                to: p(2.0, 1.0, 0.0, -5.0)
+            },
+            BlockKind::Rapid {
+                to: p(3.0, -2.0, 0.0, -5.0)
+            },
+            BlockKind::Rapid {
+                to: p(0.0, -2.0, 0.0, -5.0)
+            },
+            BlockKind::Rapid {
+                to: p(0.0, -2.0, 25.4, -5.0)
+            },
+        ]
+    );
+}
+
+#[test]
+fn dwell_spindle_coolant_tools_comp_path() {
+    assert_eq!(
+        parse("G4 P1.5\nS1000 M3\nM4\nS200\nM5\nM7\nM8\nM9\nM7 M8\nT3\nT4 M6\nM6\nG41 D3\nG40\nG42\nG40\nG61\nG64\nG64 P0.01\nG20 G64 P0.001\n"),
+        vec![
+            BlockKind::Dwell { seconds: 1.5 },
+            BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 1000.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::CounterClockwise, rpm: 1000.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::CounterClockwise, rpm: 200.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0 },
+            BlockKind::Coolant { mist: true, flood: false },
+            BlockKind::Coolant { mist: true, flood: true },
+            BlockKind::Coolant { mist: false, flood: false },
+            BlockKind::Coolant { mist: true, flood: true },
+            BlockKind::ToolSelect { tool: 3 },
+            BlockKind::ToolSelect { tool: 4 },
+            BlockKind::ToolChange { tool: 4 },
+            BlockKind::ToolChange { tool: 4 },
+            BlockKind::CutterComp { side: CompSide::Left, tool: Some(3) },
+            BlockKind::CutterComp { side: CompSide::Off, tool: None },
+            BlockKind::CutterComp { side: CompSide::Right, tool: None },
+            BlockKind::CutterComp { side: CompSide::Off, tool: None },
+            BlockKind::PathControl(PathControl::ExactPath),
+            BlockKind::PathControl(PathControl::Blend { tolerance_mm: None }),
+            BlockKind::PathControl(PathControl::Blend { tolerance_mm: Some(0.01) }),
+            BlockKind::PathControl(PathControl::Blend { tolerance_mm: Some(0.0254) }),
+        ]
+    );
+}
+
+#[test]
+fn one_block_runs_in_linuxcnc_order() {
+    let got = parse("G1 X1 F100 M2 G4 P1 M8 M3 S500 T2 M6 G41 D1 G61");
+    assert_eq!(
+        got,
+        vec![
+            BlockKind::ToolSelect { tool: 2 },
+            BlockKind::ToolChange { tool: 2 },
+            BlockKind::Spindle {
+                rotation: SpindleRotation::Clockwise,
+                rpm: 500.0
+            },
+            BlockKind::Coolant {
+                mist: false,
+                flood: true
+            },
+            BlockKind::Dwell { seconds: 1.0 },
+            BlockKind::CutterComp {
+                side: CompSide::Left,
+                tool: Some(1)
+            },
+            BlockKind::PathControl(PathControl::ExactPath),
+            BlockKind::Linear {
+                to: p(1.0, 0.0, 0.0, 0.0),
+                feed_mm_per_min: 100.0
+            },
+            BlockKind::End,
+        ]
+    );
+}
+
+#[test]
+fn arcs_centre_form_in_all_planes_with_helix() {
+    // G17: quarter circle from (10,0) to (0,10) counter-clockwise round the origin,
+    // Z rising 5 (helix), A turning.
+    let (to, centre, plane, cw, turns, feed) = arc("G0 X10\nG3 X0 Y10 Z5 A30 I-10 J0 F50");
+    assert_eq!(
+        (to, plane, cw, turns, feed),
+        (p(0.0, 10.0, 5.0, 30.0), Plane::Xy, false, 0, 50.0)
+    );
+    assert!(close(centre, p(0.0, 0.0, 0.0, 0.0)), "{centre:?}");
+    // G18: Z-X plane, normal Y helix.
+    let (to, centre, plane, cw, _, _) = arc("G18 G0 Z10\nG2 Z0 X10 Y-3 K-10 F50");
+    assert_eq!((to, plane, cw), (p(10.0, -3.0, 0.0, 0.0), Plane::Zx, true));
+    assert!(close(centre, p(0.0, 0.0, 0.0, 0.0)), "{centre:?}");
+    // G19: Y-Z plane, normal X helix.
+    let (to, centre, plane, cw, _, _) = arc("G19 G0 Y10\nG2 Y0 Z10 X7 J-10 F50");
+    assert_eq!((to, plane, cw), (p(7.0, 0.0, 10.0, 0.0), Plane::Yz, true));
+    assert!(close(centre, p(0.0, 0.0, 0.0, 0.0)), "{centre:?}");
+}
+
+#[test]
+fn arc_centre_absolute_and_incremental_and_units() {
+    let (_, centre, ..) = arc("G0 X10 Y5 Z2\nG90.1 G2 X20 Y5 I15 J5 F1");
+    assert!(close(centre, p(15.0, 5.0, 2.0, 0.0)), "{centre:?}");
+    let (_, centre, ..) = arc("G0 X10 Y5\nG90.1\nG91.1 G2 X20 Y5 I5 F1");
+    assert!(close(centre, p(15.0, 5.0, 0.0, 0.0)), "{centre:?}");
+    let (to, centre, ..) = arc("G20 G0 X1\nG91 G3 X-1 Y1 I-1 F1");
+    assert!(close(to, p(0.0, 25.4, 0.0, 0.0)), "{to:?}");
+    assert!(close(centre, p(0.0, 0.0, 0.0, 0.0)), "{centre:?}");
+}
+
+#[test]
+fn full_circle_and_helix_turns() {
+    let (to, centre, _, cw, turns, _) = arc("G0 X10\nG2 X10 Y0 Z-1 I-10 P3 F100");
+    assert_eq!((to, cw, turns), (p(10.0, 0.0, -1.0, 0.0), true, 2));
+    assert!(close(centre, p(0.0, 0.0, 0.0, 0.0)));
+    // Only Z given: still a full circle (helix) in the plane.
+    let (_, _, _, _, turns, _) = arc("G0 X10\nG3 Z-1 I-10 F100");
+    assert_eq!(turns, 0);
+}
+
+#[test]
+fn r_form_short_and_long_arcs() {
+    let h = 3.0f64.sqrt(); // chord 2, radius 2: centre sqrt(3) off the chord's middle
+    let cases = [
+        ("G2", "R2", -h), // clockwise short arc: centre to the right of (0,0)->(2,0)
+        ("G2", "R-2", h), // clockwise long arc: to the left
+        ("G3", "R2", h),
+        ("G3", "R-2", -h),
+    ];
+    for (g, r, y) in cases {
+        let (_, centre, ..) = arc(&format!("{g} X2 {r} F10"));
+        assert!(close(centre, p(1.0, y, 0.0, 0.0)), "{g} {r}: {centre:?}");
+    }
+    // A half circle: R exactly half the chord.
+    let (_, centre, ..) = arc("G2 X2 R1 F10");
+    assert!(close(centre, p(1.0, 0.0, 0.0, 0.0)), "{centre:?}");
+    // In G18, G2 with R in inches.
+    let (_, centre, ..) = arc("G18 G20 G2 Z2 R1 F10");
+    assert!(close(centre, p(0.0, 0.0, 25.4, 0.0)), "{centre:?}");
+}
+
+#[test]
+fn arc_end_tolerance_is_linuxcnc_s() {
+    // 0.0015 mm off a 1 mm radius: within the absolute 0.002 mm.
+    arc("G0 X1\nG3 X-1.0015 I-1 F1");
+    // 0.05 mm off a 100 mm radius: within 0.1 %.
+    arc("G0 X100\nG3 X-100.05 I-100 F1");
+    assert_eq!(
+        err("G0 X100\nG3 X-100.2 I-100 F1"),
+        "t.ngc:2:1: arc end not on circle: radius differs by 0.200 mm"
+    );
+    assert_eq!(
+        err("G0 X10\nG2 X-10.012 I-10 F1"),
+        "t.ngc:2:1: arc end not on circle: radius differs by 0.012 mm"
+    );
+}
+
+#[test]
+fn file_api_and_io_errors() {
+    let dir = std::env::temp_dir().join(format!("finestep-gcode-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("part.ngc");
+    std::fs::write(&file, b"G0 X1 (\xff in a comment)\nG0 \xff\n").unwrap();
+    let e = parse_file(&file).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!("{}:2:4: unexpected character '\u{fffd}'", file.display())
+    );
+    assert_eq!((e.line(), e.column()), (Some(2), Some(4)));
+    std::fs::write(&file, "G0 X1\n").unwrap();
+    assert_eq!(parse_file(&file).unwrap().blocks.len(), 1);
+    std::fs::remove_dir_all(&dir).unwrap();
+    let e = parse_file(dir.join("missing.ngc")).unwrap_err();
+    assert!(matches!(e, GcodeError::Io { .. }));
+    assert_eq!((e.line(), e.column()), (None, None));
+    assert!(e
+        .to_string()
+        .starts_with(&format!("{}: ", dir.join("missing.ngc").display())));
+}
+
+#[test]
+fn every_error_message_with_its_place() {
+    let cases: &[(&str, &str)] = &[
+        // Lexical (more in lexer.rs).
+        ("G0 X1 (never closed", "1:7: unclosed comment"),
+        ("\n  G0 X", "2:6: missing value for word X"),
+        ("G0 X1.2.3", "1:4: bad number for word X"),
+        ("G0 X12345678901234", "1:4: number out of range for word X"),
+        ("N99999999999999 G0", "1:1: number out of range for word N"),
+        ("G0 X1 @", "1:7: unexpected character '@'"),
+        // Words.
+        ("G0 X1 Q2", "1:7: unknown word Q"),
+        ("G0 X1 B2", "1:7: unknown word B"),
+        ("G0 X1e5", "1:6: unknown word E"),
+        ("G0 X1 x2", "1:7: word X appears twice"),
+        ("F1 G1 X1 F2", "1:10: word F appears twice"),
+        ("N1 N2", "1:4: word N appears twice"),
+        ("G0 N1", "1:4: N word must come first in the block"),
+        ("N1.5 G0", "1:1: N word must be a non-negative integer"),
+        ("G33 X1", "1:1: unsupported G-code G33"),
+        ("G1.23 X1", "1:1: unsupported G-code G1.23"),
+        ("G-1", "1:1: unsupported G-code G-1"),
+        ("M98", "1:1: unsupported M-code M98"),
+        ("M3.5", "1:1: unsupported M-code M3.5"),
+        // Modal groups.
+        ("G0 G1 X1", "1:4: G0 and G1 are in the same modal group"),
+        ("G1 G1 X1 F1", "1:4: G1 and G1 are in the same modal group"),
+        ("G17 G18", "1:5: G17 and G18 are in the same modal group"),
+        (
+            "G90.1 G91.1",
+            "1:7: G90.1 and G91.1 are in the same modal group",
+        ),
+        ("G20 G21", "1:5: G20 and G21 are in the same modal group"),
+        ("G41 G40", "1:5: G41 and G40 are in the same modal group"),
+        ("G61 G64", "1:5: G61 and G64 are in the same modal group"),
+        ("M3 M5", "1:4: M3 and M5 are in the same modal group"),
+        ("M7 M9", "1:4: M7 and M9 are in the same modal group"),
+        ("M7 M8 M8", "1:7: M7 and M8 are in the same modal group"),
+        ("M0 M2", "1:4: M0 and M2 are in the same modal group"),
+        ("M6 M6", "1:4: M6 and M6 are in the same modal group"),
+        // Words with nothing to use them.
+        (
+            "X1",
+            "1:1: axis word with no motion mode (G0, G1, G2 or G3) to use it",
+        ),
+        (
+            "F100 Y2 X1",
+            "1:6: axis word with no motion mode (G0, G1, G2 or G3) to use it",
+        ),
+        ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
+        ("R1", "1:1: R word with no G2 or G3 to use it"),
+        (
+            "G0 X1 P1",
+            "1:7: P word with no G4, G64, G2 or G3 to use it",
+        ),
+        ("G4 G64 P1", "1:8: P word is used by more than one code"),
+        (
+            "G4 P1 G2 X1 I1 F1",
+            "1:4: P word is used by more than one code",
+        ),
+        ("G40 D1", "1:5: D word with no G41 or G42 to use it"),
+        ("D1", "1:1: D word with no G41 or G42 to use it"),
+        ("F1 G2 I1", "1:4: G2 with no axis words"),
+        ("F1 G3 X1 Y1 I1\nJ1", "2:1: G3 with no axis words"),
+        // Values.
+        ("F-1", "1:1: negative feed rate"),
+        ("S-1", "1:1: negative spindle speed"),
+        ("T1.5", "1:1: T word must be a non-negative integer"),
+        ("T-1", "1:1: T word must be a non-negative integer"),
+        ("G41 D-2", "1:5: D word must be a non-negative integer"),
+        ("G4", "1:1: G4 with no P word"),
+        ("G4 P-1", "1:4: negative dwell time"),
+        ("G64 P-0.1", "1:5: negative path tolerance"),
+        (
+            "G41\nG42",
+            "2:1: cutter compensation is already on (G40 first)",
+        ),
+        (
+            "G91 G0 X1000000000\nX1000000000\nX1000000000\nG20 X1000000000",
+            "4:5: position out of range",
+        ),
+        // Feed.
+        ("G1 X1", "1:1: G1 with no feed rate"),
+        ("G1 F0\n X1", "2:2: G1 with no feed rate"),
+        ("G2 X1 I1", "1:1: G2 with no feed rate"),
+        ("G3 X1 I1", "1:1: G3 with no feed rate"),
+        // Arcs.
+        ("F1 G2 X1", "1:4: G2 without I/J/K or R"),
+        ("F1 G3 X1 Y1 I1\n Y2", "2:2: G3 without I/J/K or R"),
+        ("F1 G2 X2 I1 R1", "1:13: G2 with both R and I/J/K"),
+        (
+            "F1 G2 X2 I1 K1",
+            "1:13: K word not allowed for an arc in the G17 plane",
+        ),
+        (
+            "F1 G18 G2 X2 I1 J1",
+            "1:17: J word not allowed for an arc in the G18 plane",
+        ),
+        (
+            "F1 G19 G2 Y2 I1 J1",
+            "1:14: I word not allowed for an arc in the G19 plane",
+        ),
+        ("F1 G2 X2 J0", "1:4: arc radius is zero"),
+        (
+            "F1 G2 X2 I1 P0",
+            "1:13: P word for G2 must be a positive integer",
+        ),
+        (
+            "F1 G2 X2 I1 P1.5",
+            "1:13: P word for G2 must be a positive integer",
+        ),
+        (
+            "F1 G2 X0 R1",
+            "1:10: R-form arc needs an end point different from its start",
+        ),
+        (
+            "F1 G2 X2 Y0 R0.99",
+            "1:13: arc radius 0.990 mm is less than half the chord 1.000 mm",
+        ),
+        (
+            "F1 G3 X2 R-0.5",
+            "1:10: arc radius 0.500 mm is less than half the chord 1.000 mm",
+        ),
+        (
+            "G0 X10\nF1 G2 X-10.012 I-10",
+            "2:4: arc end not on circle: radius differs by 0.012 mm",
+        ),
+    ];
+    for (source, expected) in cases {
+        assert_eq!(err(source), format!("t.ngc:{expected}"), "{source:?}");
+    }
+}
+
+#[test]
+fn r_form_tolerates_rounding_of_the_half_chord() {
+    let (_, centre, ..) = arc("F1 G2 X2 R0.999");
+    assert!(close(centre, p(1.0, 0.0, 0.0, 0.0)), "{centre:?}");
+}
+
+#[test]
+fn hostile_input_is_an_error_not_a_panic() {
+    let long = format!("G0 X1 ({})", "a".repeat(10_000));
+    assert_eq!(parse(&long).len(), 1);
+    let long = format!("G0 {}", "X1 ".repeat(5_000));
+    assert_eq!(err(&long), "t.ngc:1:7: word X appears twice");
+    let digits = format!("G0 X{}", "9".repeat(10_000));
+    assert_eq!(err(&digits), "t.ngc:1:4: number out of range for word X");
+    assert_eq!(
+        err("T99999999999"),
+        "t.ngc:1:1: number out of range for word T"
+    );
+    assert_eq!(
+        err("T4294967296"),
+        "t.ngc:1:1: number out of range for word T"
+    );
+    assert!(parse_str("", FILE).unwrap().blocks.is_empty());
+}

@@ -1,0 +1,246 @@
+//! Randomised tests through the public API: hostile input never panics and every error
+//! points inside the input; random valid programs mean the same in every notation.
+
+use finestep_gcode::{parse_bytes, parse_str, BlockKind, GcodeError, Program};
+use proptest::prelude::*;
+
+/// Every error is located on a line of the input, at a column up to one past its end.
+fn check_location(source: &str, result: &Result<Program, GcodeError>) -> Result<(), TestCaseError> {
+    match result {
+        Ok(program) => {
+            for block in &program.blocks {
+                if let BlockKind::Rapid { to }
+                | BlockKind::Linear { to, .. }
+                | BlockKind::Arc { to, .. } = block.kind
+                {
+                    prop_assert!([to.x_mm, to.y_mm, to.z_mm, to.a_deg]
+                        .iter()
+                        .all(|v| v.is_finite()));
+                }
+            }
+        }
+        Err(GcodeError::Parse {
+            file,
+            line,
+            column,
+            message,
+        }) => {
+            prop_assert_eq!(file.as_str(), "fuzz.ngc");
+            prop_assert!(!message.is_empty());
+            let lines: Vec<&str> = source.split('\n').collect();
+            prop_assert!(
+                *line >= 1 && *line <= lines.len(),
+                "line {} of {}",
+                line,
+                lines.len()
+            );
+            let text = lines[*line - 1];
+            let width = text.strip_suffix('\r').unwrap_or(text).chars().count();
+            prop_assert!(
+                *column >= 1 && *column <= width + 1,
+                "column {} of {}",
+                column,
+                width
+            );
+        }
+        Err(e) => prop_assert!(false, "unexpected error {e}"),
+    }
+    Ok(())
+}
+
+#[test]
+fn random_bytes_never_panic() {
+    let mut runner = finestep_testkit::runner("random_bytes_never_panic", 2000);
+    runner
+        .run(&proptest::collection::vec(any::<u8>(), 0..300), |bytes| {
+            let result = parse_bytes(&bytes, "fuzz.ngc");
+            check_location(&String::from_utf8_lossy(&bytes), &result)
+        })
+        .unwrap();
+}
+
+/// Tokens that are nearly G-code: words, fragments, numbers, separators, comments.
+fn token() -> impl Strategy<Value = String> {
+    let fixed = prop::sample::select(vec![
+        "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42",
+        "G61", "G64", "G90", "G91", "G90.1", "G91.1", "G33", "M0", "M2", "M3", "M4", "M5", "M6",
+        "M7", "M8", "M9", "M30", "F", "S", "T", "D", "P", "R", "I", "J", "K", "X", "Y", "Z", "A",
+        "N", "Q", "B", "-", "+", ".", " ", "\t", "(", ")", "(c)", ";", "\n", "\r\n", "%", "/", "#",
+        "[", "0", "1", "5", "9", "1e5", "é", "\u{fffd}",
+    ])
+    .prop_map(str::to_string);
+    let letter = prop::sample::select("GMFSTDPRIJKXYZAN".chars().collect::<Vec<_>>());
+    let word = (letter, -1000.0f64..1000.0).prop_map(|(l, v)| format!("{l}{v:.3}"));
+    let huge = (0usize..40).prop_map(|n| format!("X{}", "9".repeat(n * 20)));
+    prop_oneof![4 => fixed, 4 => word, 1 => huge]
+}
+
+#[test]
+fn token_soup_never_panics() {
+    let mut runner = finestep_testkit::runner("token_soup_never_panics", 3000);
+    runner
+        .run(&proptest::collection::vec(token(), 0..60), |tokens| {
+            let source = tokens.concat();
+            check_location(&source, &parse_str(&source, "fuzz.ngc"))
+        })
+        .unwrap();
+}
+
+/// A random feed move programmed absolute in mm, incremental in mm, and absolute in
+/// inches arrives at the same points.
+#[test]
+fn notations_agree() {
+    let mut runner = finestep_testkit::runner("notations_agree", 300);
+    let point = proptest::array::uniform3(-5000i32..5000); // in 0.1 mm... of an inch
+    runner
+        .run(&proptest::collection::vec(point, 1..20), |points| {
+            // Values in units of 0.0001 inch = 0.00254 mm so that all three notations
+            // are exact decimal numbers.
+            let (mut absolute_mm, mut incremental_mm, mut inches) = (
+                "G21 G90 F100\n".to_string(),
+                "G21 G91 F100\n".to_string(),
+                "G20 G90 F3.937\n".to_string(),
+            );
+            let mut last = [0i32; 3];
+            for p in &points {
+                let mm = |v: i32| f64::from(v) * 0.00254;
+                absolute_mm += &format!("G1 X{:.5} Y{:.5} Z{:.5}\n", mm(p[0]), mm(p[1]), mm(p[2]));
+                incremental_mm += &format!(
+                    "G1 X{:.5} Y{:.5} Z{:.5}\n",
+                    mm(p[0] - last[0]),
+                    mm(p[1] - last[1]),
+                    mm(p[2] - last[2])
+                );
+                inches += &format!(
+                    "G1 X{:.4} Y{:.4} Z{:.4}\n",
+                    f64::from(p[0]) / 1e4,
+                    f64::from(p[1]) / 1e4,
+                    f64::from(p[2]) / 1e4
+                );
+                last = *p;
+            }
+            let ends = |source: &str| -> Result<Vec<[f64; 3]>, TestCaseError> {
+                let program =
+                    parse_str(source, "n.ngc").map_err(|e| TestCaseError::fail(e.to_string()))?;
+                Ok(program
+                    .blocks
+                    .iter()
+                    .filter_map(|b| match b.kind {
+                        BlockKind::Linear { to, .. } => Some([to.x_mm, to.y_mm, to.z_mm]),
+                        _ => None,
+                    })
+                    .collect())
+            };
+            let (a, b, c) = (ends(&absolute_mm)?, ends(&incremental_mm)?, ends(&inches)?);
+            prop_assert_eq!(a.len(), points.len());
+            for ((a, b), c) in a.iter().zip(&b).zip(&c) {
+                for axis in 0..3 {
+                    prop_assert!(
+                        (a[axis] - b[axis]).abs() < 1e-6 && (a[axis] - c[axis]).abs() < 1e-6,
+                        "{:?} {:?} {:?}",
+                        a,
+                        b,
+                        c
+                    );
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// Lines of well-formed words with values that mean something to the interpreter, so
+/// the random programs reach arcs, modes and their checks rather than the lexer.
+fn block_line() -> impl Strategy<Value = String> {
+    let g = prop::sample::select(vec![
+        "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42",
+        "G61", "G64", "G90", "G91", "G90.1", "G91.1", "M0", "M3", "M5", "M6", "M7", "M8", "M9",
+    ])
+    .prop_map(str::to_string);
+    let value = prop::sample::select(vec![
+        "0", "1", "-1", "2", "0.5", "-0.5", "3", "10", "-10", "0.001", "100",
+    ]);
+    let letter = prop::sample::select("FXYZAIJKRPSTD".chars().collect::<Vec<_>>());
+    let word = (letter, value).prop_map(|(l, v)| format!("{l}{v}"));
+    let item = prop_oneof![1 => g, 3 => word];
+    proptest::collection::vec(item, 0..7).prop_map(|words| words.join(" "))
+}
+
+#[test]
+fn block_soup_never_panics() {
+    let mut runner = finestep_testkit::runner("block_soup_never_panics", 3000);
+    runner
+        .run(&proptest::collection::vec(block_line(), 0..12), |lines| {
+            let source = lines.join("\n");
+            check_location(&source, &parse_str(&source, "fuzz.ngc"))
+        })
+        .unwrap();
+}
+
+/// A random arc on a random circle in a random plane: the centre form gives back the
+/// programmed centre, and the R form (signed for the short or long way) finds the same.
+#[test]
+fn arc_centre_and_radius_forms_agree() {
+    use std::f64::consts::{PI, TAU};
+    let mut runner = finestep_testkit::runner("arc_centre_and_radius_forms_agree", 500);
+    let case = (
+        0usize..3,
+        -50.0f64..50.0,
+        -50.0f64..50.0,
+        0.5f64..100.0,
+        0.0..TAU,
+        0.0..TAU,
+        any::<bool>(),
+    );
+    runner
+        .run(&case, |(plane, cp, cq, radius, start, end, clockwise)| {
+            let ccw_sweep = (end - start).rem_euclid(TAU);
+            let sweep = if clockwise {
+                TAU - ccw_sweep
+            } else {
+                ccw_sweep
+            };
+            prop_assume!([0.0, PI, TAU].iter().all(|s| (sweep - s).abs() > 0.05));
+            let (g, [lp, lq], [op, oq]) = match plane {
+                0 => ("G17", ['X', 'Y'], ['I', 'J']),
+                1 => ("G18", ['Z', 'X'], ['K', 'I']),
+                _ => ("G19", ['Y', 'Z'], ['J', 'K']),
+            };
+            let (sp, sq) = (cp + radius * start.cos(), cq + radius * start.sin());
+            let (ep, eq) = (cp + radius * end.cos(), cq + radius * end.sin());
+            let motion = if clockwise { "G2" } else { "G3" };
+            let head =
+                format!("{g} F100\nG0 {lp}{sp:.6} {lq}{sq:.6}\n{motion} {lp}{ep:.6} {lq}{eq:.6}");
+            let centre_form = format!("{head} {op}{:.6} {oq}{:.6}\n", cp - sp, cq - sq);
+            let r = if sweep <= PI { radius } else { -radius };
+            let radius_form = format!("{head} R{r:.6}\n");
+            let centre = |source: &str| -> Result<[f64; 3], TestCaseError> {
+                let program =
+                    parse_str(source, "arc.ngc").map_err(|e| TestCaseError::fail(e.to_string()))?;
+                match program.blocks.last().map(|b| b.kind) {
+                    Some(BlockKind::Arc { centre, .. }) => {
+                        Ok([centre.x_mm, centre.y_mm, centre.z_mm])
+                    }
+                    other => Err(TestCaseError::fail(format!("not an arc: {other:?}"))),
+                }
+            };
+            let axis = |letter: char| "XYZ".find(letter).unwrap_or(0);
+            let (a, b) = (centre(&centre_form)?, centre(&radius_form)?);
+            for (letter, want) in [(lp, cp), (lq, cq)] {
+                prop_assert!(
+                    (a[axis(letter)] - want).abs() < 1e-5,
+                    "centre form {:?} want {}",
+                    a,
+                    want
+                );
+                prop_assert!(
+                    (b[axis(letter)] - want).abs() < 1e-3,
+                    "R form {:?} want {}",
+                    b,
+                    want
+                );
+            }
+            Ok(())
+        })
+        .unwrap();
+}
