@@ -17,6 +17,10 @@
 //! assert_eq!(total, 4000 << 16); // exactly 4 mm of steps on Y
 //! ```
 
+pub mod arc;
 pub mod linear;
+pub mod path;
+pub mod profile;
 
+pub use arc::{interpolate_arc, ArcMove};
 pub use linear::{interpolate_line, LineMove, Machine, PlanError};

@@ -1,9 +1,11 @@
 //! Seed 000's time-division linear interpolation with trapezoidal feed.
 
-use finestep_model::{Increment, PeriodRecord, MAX_AXES};
+use finestep_model::{PeriodRecord, MAX_AXES};
 
-/// Flag bit of [`PeriodRecord::flags`]: the last period of a block.
-pub const FLAG_BLOCK_END: u8 = 1;
+use crate::path::{check_endpoints, quantise, to_steps};
+use crate::profile::FeedProfile;
+
+pub use crate::path::FLAG_BLOCK_END;
 
 /// The machine as the coarse interpolator sees it.
 #[derive(Clone, Debug, PartialEq)]
@@ -73,48 +75,7 @@ pub enum PlanError {
     },
 }
 
-fn positive(name: &'static str, value: f64) -> Result<f64, PlanError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(value)
-    } else {
-        Err(PlanError::NotPositive { name, value })
-    }
-}
 
-/// Position on the Q16.16 grid: steps * 2^16, rounded to nearest.
-fn grid(steps: f64) -> i64 {
-    (steps * 65536.0).round() as i64
-}
-
-/// Distance covered after a period at `speed` when every later period is `step` slower,
-/// down to the stop speed: T * sum over j = 1..k of (speed - j*step), k = floor((speed - stop) / step).
-fn braking_distance(speed: f64, stop: f64, step: f64, period: f64) -> f64 {
-    let k = ((speed - stop) / step).floor().max(0.0);
-    period * (k * speed - step * k * (k + 1.0) / 2.0)
-}
-
-/// Whether a period at `speed` still leaves room to brake to the stop speed.
-fn can_stop(speed: f64, remaining: f64, stop: f64, step: f64, period: f64) -> bool {
-    remaining - speed * period >= braking_distance(speed, stop, step, period)
-}
-
-/// The largest speed in [stop, ceiling] that can still brake in time (bisection; the
-/// stop speed itself when none can: the last, partial period).
-fn fastest_stoppable(ceiling: f64, remaining: f64, stop: f64, step: f64, period: f64) -> f64 {
-    let (mut lo, mut hi) = (stop, ceiling);
-    if !can_stop(lo, remaining, stop, step, period) {
-        return stop;
-    }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if can_stop(mid, remaining, stop, step, period) {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
-}
 
 /// One record per period moving from `from_mm` to `to_mm`, the last flagged
 /// [`FLAG_BLOCK_END`]. Endpoints are first rounded to whole steps; the increments sum
@@ -124,24 +85,12 @@ pub fn interpolate_line(machine: &Machine, line: &LineMove) -> Result<Vec<Period
     if axes > MAX_AXES || line.from_mm.len() != axes || line.to_mm.len() != axes {
         return Err(PlanError::AxisCount { coords: line.to_mm.len(), axes });
     }
-    let period = positive("period", machine.period_s)?;
-    let feed = positive("feed", line.feed_mm_s)?;
-    let start_speed = positive("start speed", line.start_speed_mm_s)?.min(feed);
-    let accel = positive("acceleration", line.accel_mm_s2)?;
-    for (axis, &scale) in machine.steps_per_unit.iter().enumerate() {
-        positive("steps per unit", scale)?;
-        for end in [line.from_mm[axis], line.to_mm[axis]] {
-            let steps = end * scale;
-            if !steps.is_finite() || steps.abs() >= 2f64.powi(31) {
-                return Err(PlanError::OutOfRange { axis, steps });
-            }
-        }
-    }
+    let profile = FeedProfile::new(line.feed_mm_s, line.start_speed_mm_s, line.accel_mm_s2, machine.period_s)?;
+    check_endpoints(machine, &line.from_mm)?;
+    check_endpoints(machine, &line.to_mm)?;
 
-    let start_steps: Vec<i64> =
-        (0..axes).map(|a| (line.from_mm[a] * machine.steps_per_unit[a]).round() as i64).collect();
-    let end_steps: Vec<i64> =
-        (0..axes).map(|a| (line.to_mm[a] * machine.steps_per_unit[a]).round() as i64).collect();
+    let start_steps = to_steps(machine, &line.from_mm);
+    let end_steps = to_steps(machine, &line.to_mm);
     // The path between the endpoints rounded to whole steps: the one the increments take,
     // so that the feed and acceleration hold for it exactly.
     let length: f64 = (0..axes)
@@ -152,46 +101,13 @@ pub fn interpolate_line(machine: &Machine, line: &LineMove) -> Result<Vec<Period
         return Ok(Vec::new());
     }
 
-    let mut records = Vec::new();
-    let mut travelled = 0.0_f64;
-    let step = accel * period;
-    // The first period runs at the start speed.
-    let mut speed = start_speed - step;
-    let mut last_grid: Vec<i64> = start_steps.iter().map(|&s| s << 16).collect();
-    while travelled < length {
-        let remaining = length - travelled;
-        // Seed 000: raise the feed every period towards F and lower it again so that it
-        // is back at the stop speed at the end, changing by at most A*T per period.
-        let ceiling = (speed + step).min(feed);
-        speed = if can_stop(ceiling, remaining, start_speed, step, period) {
-            ceiling
-        } else {
-            fastest_stoppable(ceiling, remaining, start_speed, step, period)
-        };
-        travelled = (travelled + speed * period).min(length);
+    let points = profile.distances(length).into_iter().map(|travelled| {
         let fraction = travelled / length;
-        let mut record = PeriodRecord::default();
-        for axis in 0..axes {
-            let target = if travelled >= length {
-                end_steps[axis] << 16
-            } else {
-                let ideal = start_steps[axis] as f64
-                    + fraction * (end_steps[axis] - start_steps[axis]) as f64;
-                grid(ideal)
-            };
-            let raw = i32::try_from(target - last_grid[axis]).map_err(|_| PlanError::IncrementTooLarge {
-                axis,
-                steps: (target - last_grid[axis]) as f64 / 65536.0,
-            })?;
-            record.inc[axis] = Increment::from_bits(raw);
-            last_grid[axis] = target;
-        }
-        records.push(record);
-    }
-    if let Some(last) = records.last_mut() {
-        last.flags |= FLAG_BLOCK_END;
-    }
-    Ok(records)
+        (0..axes)
+            .map(|a| start_steps[a] as f64 + fraction * (end_steps[a] - start_steps[a]) as f64)
+            .collect::<Vec<f64>>()
+    });
+    quantise(&start_steps, &end_steps, points)
 }
 
 #[cfg(test)]
