@@ -3,6 +3,7 @@
 mod bench;
 mod demo;
 mod plot;
+mod run;
 
 use std::path::PathBuf;
 
@@ -24,6 +25,15 @@ enum Command {
         #[arg(long, default_value = "target/demo")]
         out: PathBuf,
     },
+    /// Run a G-code part program (exact stop at every block; no look-ahead or cutter
+    /// compensation yet) through the planner into the co-simulated core.
+    Run {
+        /// The part program.
+        file: PathBuf,
+        /// Use the reference model's fast path alone (no RTL), for long programs.
+        #[arg(long)]
+        fast: bool,
+    },
     /// Lockstep and fast-path throughput figures.
     Bench {
         /// Simulated clock cycles per measurement.
@@ -35,6 +45,7 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Demo { out } => demo::run(&out),
+        Command::Run { file, fast } => run::run(&file, fast),
         Command::Bench { cycles } => bench::run(cycles),
     }
 }

@@ -195,18 +195,23 @@ mod tests {
                 let quantum = 2.0 / SCALE; // rounding of the endpoints and the grid
                 let mut previous = arc.from_mm.iter().map(|&s| (s * SCALE).round() / SCALE).collect::<Vec<_>>();
                 let mut speeds = Vec::new();
+                let mut planar_speeds = Vec::new();
                 for p in &path {
                     // The chord's midpoint is within the tolerance of the circle.
                     let (mu, mv) = (0.5 * (p[0] + previous[0]), 0.5 * (p[1] + previous[1]));
                     prop_assert!(radius - mu.hypot(mv) <= tolerance + quantum, "chord error {} > {}", radius - mu.hypot(mv), tolerance);
                     let step: f64 = (0..3).map(|a| (p[a] - previous[a]).powi(2)).sum::<f64>().sqrt();
                     speeds.push(step / T);
+                    planar_speeds.push((p[0] - previous[0]).hypot(p[1] - previous[1]) / T);
                     previous = p.clone();
                 }
-                for &v in &speeds {
+                for (&v, &planar) in speeds.iter().zip(&planar_speeds) {
                     prop_assert!(v <= feed + quantum / T, "speed {} over feed {}", v, feed);
-                    // Centripetal acceleration of the planar part within A.
-                    prop_assert!(v * v / radius <= 800.0 * (1.0 + 1e-6) + 2.0 * v * quantum / T / radius);
+                    // Centripetal acceleration of the planar motion within A.
+                    prop_assert!(
+                        planar * planar / radius <= 800.0 * (1.0 + 1e-6) + 2.0 * planar * quantum / T / radius,
+                        "centripetal {} over 800", planar * planar / radius
+                    );
                 }
                 for pair in speeds.windows(2).take(speeds.len().saturating_sub(2)) {
                     prop_assert!((pair[1] - pair[0]).abs() <= 800.0 * T + 2.0 * quantum / T, "{:?}", pair);

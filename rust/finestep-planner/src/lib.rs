@@ -20,7 +20,9 @@
 pub mod arc;
 pub mod linear;
 pub mod path;
+pub mod program;
 pub mod profile;
 
 pub use arc::{interpolate_arc, ArcMove};
 pub use linear::{interpolate_line, LineMove, Machine, PlanError};
+pub use program::{plan_program, MotionLimits, PlannedBlock, PlannedProgram, ProgramError};
