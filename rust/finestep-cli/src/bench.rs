@@ -56,6 +56,46 @@ fn report(what: &str, cycles: u64, seconds: f64) {
     );
 }
 
+/// A CAM-like program of `moves` short G1 segments along a wavy spiral.
+fn cam_program(moves: usize) -> String {
+    let mut text = String::with_capacity(moves * 32);
+    text.push_str("G21 G90 G17 G61\nF3000\n");
+    for i in 0..moves {
+        let t = i as f64 * 0.01;
+        let r = 20.0 + 5.0 * (7.0 * t).sin();
+        text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * i as f64 % 5.0));
+    }
+    text
+}
+
+/// Parse and plan throughput on a 100 000-segment program.
+fn front_end() -> anyhow::Result<()> {
+    const MOVES: usize = 100_000;
+    let text = cam_program(MOVES);
+    let start = Instant::now();
+    let program = finestep_gcode::parse_str(&text, "cam.ngc")?;
+    let parse_s = start.elapsed().as_secs_f64();
+    let machine = finestep_planner::Machine::new(vec![800.0, 800.0, 400.0, 100.0], 0.001);
+    let limits = finestep_planner::MotionLimits {
+        rapid_mm_s: 50.0,
+        start_speed_mm_s: 1.0,
+        accel_mm_s2: 500.0,
+        chord_tolerance_mm: 0.001,
+    };
+    let start = Instant::now();
+    let planned = finestep_planner::plan_program(&machine, &limits, &program).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let plan_s = start.elapsed().as_secs_f64();
+    let periods: usize = planned.blocks.iter().map(|b| b.records.len()).sum();
+    println!("  {:<44} {:>7.2} M lines/s", "parse G-code (100 000 short G1 segments)", (MOVES + 2) as f64 / parse_s / 1e6);
+    println!(
+        "  {:<44} {:>7.0} k moves/s  {:>9.0} periods/s",
+        "plan + interpolate (exact stop, no look-ahead)",
+        MOVES as f64 / plan_s / 1e3,
+        periods as f64 / plan_s
+    );
+    Ok(())
+}
+
 pub fn run(cycles: u64) -> anyhow::Result<()> {
     let periods = (cycles / u64::from(PERIOD_CLOCKS)).max(1);
     let limit = u64::from(PERIOD_CLOCKS) + 8;
@@ -86,5 +126,5 @@ pub fn run(cycles: u64) -> anyhow::Result<()> {
         harness.feed(&mut inputs, stream(periods)).map_err(|m| anyhow::anyhow!("{m}"))?;
         report(what, harness.cycle(), start.elapsed().as_secs_f64());
     }
-    Ok(())
+    front_end()
 }
