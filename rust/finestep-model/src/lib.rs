@@ -50,6 +50,7 @@ pub mod limits;
 pub mod period_timer;
 pub mod position_fifo;
 pub mod record;
+pub mod safety_monitor;
 pub mod step_shaper;
 
 pub use crate::config::{AxisConfig, CoreInputs, CoreParams, ParamsError};
