@@ -139,10 +139,9 @@ pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness,
     Ok(harness)
 }
 
-/// The period the core runs with for a `period_clocks` input (masked to P_WIDTH = 20
-/// bits, 0 acts as 1).
+/// The period the core runs with for a `period_clocks` input.
 pub fn effective(period_clocks: u32) -> u32 {
-    (period_clocks & ((1 << 20) - 1)).max(1)
+    finestep_rtl_sys::params().effective_period(period_clocks)
 }
 
 /// Unused axes stay zero in the record; every axis config is within MAX_AXES.
