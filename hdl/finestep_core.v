@@ -20,6 +20,7 @@ module finestep_core #(
     input  wire                       run,
     input  wire [P_WIDTH-1:0]         period_clocks,
     input  wire                       clear_errors,
+    input  wire                       halt,          // safety fault: see step_shaper
     // per-axis configuration
     input  wire [N_AXES-1:0]          axis_enable,
     input  wire [TIMING_W*N_AXES-1:0] step_len,
@@ -103,6 +104,7 @@ module finestep_core #(
                 .invert(invert[3*i +: 3]),
                 .axis_enable(axis_enable[i]),
                 .clear_errors(clear_errors),
+                .halt(halt),
                 .req_valid(req_valid),
                 .req_negative(req_negative),
                 .pin_a(pin_a[i]),

@@ -51,7 +51,9 @@ module position_fifo #(
     reg [DEPTH_LOG2-1:0] rd_ptr_reg;
     reg [DEPTH_LOG2:0]   level_reg;
     reg [DEPTH_LOG2:0]   staged_reg;
-    reg [WIDTH-1:0]      head_reg;
+    reg [WIDTH-1:0]      ram_q_reg;          // the RAM's registered read port
+    reg [WIDTH-1:0]      bypass_reg;         // a record written into the head slot
+    reg                  use_bypass_reg;
     reg                  overflow_reg;
 
     wire not_empty = (level_reg != {(DEPTH_LOG2+1){1'b0}});
@@ -70,8 +72,16 @@ module position_fifo #(
 
     always @(posedge clk) begin
         if (write) mem[stage_ptr_reg] <= wr_data;
-        head_reg <= head_written ? wr_data : mem[head_addr];
+        ram_q_reg <= mem[head_addr];
     end
+
+    // The forwarding sits outside the RAM so that the read port is a plain registered
+    // read, which every block RAM has, whatever drives the address.
+    always @(posedge clk) begin
+        bypass_reg     <= wr_data;
+        use_bypass_reg <= head_written;
+    end
+    wire [WIDTH-1:0] head = use_bypass_reg ? bypass_reg : ram_q_reg;
 
     always @(posedge clk) begin
         if (flush) begin
@@ -112,7 +122,7 @@ module position_fifo #(
     end
 
     assign rd_valid = not_empty;
-    assign rd_data  = head_reg;
+    assign rd_data  = head;
     assign level    = level_reg;
     assign staged   = staged_reg;
     assign full     = is_full;
@@ -133,7 +143,7 @@ module position_fifo #(
     always @(*) if (f_past_valid && !rst) begin
         assert ({1'b0, level_reg} + {1'b0, staged_reg} <= {1'b0, LEVEL_FULL});
         assert (f_used == level_reg[DEPTH_LOG2-1:0] && f_staged == staged_reg[DEPTH_LOG2-1:0]);
-        if (not_empty) assert (head_reg == mem[rd_ptr_reg]);
+        if (not_empty) assert (head == mem[rd_ptr_reg]);
     end
 
     // Track one record: f_tag is written when chosen, then must come out unchanged.

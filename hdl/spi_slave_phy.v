@@ -84,6 +84,10 @@ module spi_slave_phy (
         if (rst) begin
             cs_n_sync_reg   <= 2'b11;
             sck_sync_reg    <= 3'b000;
+            mosi_sync_reg   <= 2'b00;
+            rx_shift_reg    <= 7'd0;
+            tx_shift_reg    <= 8'd0;
+            rx_byte_reg     <= 8'd0;
             selected_reg    <= 1'b0;
             bit_count_reg   <= 3'd0;
             rx_valid_reg    <= 1'b0;

@@ -8,6 +8,10 @@
 // of opposite sign cancel. Falling behind by two steps sets the sticky rate_error;
 // a pending count beyond +-127 is clamped and sets the sticky step_lost.
 //
+// halt (a safety fault): no new rise or direction change, pending steps are dropped,
+// a pulse already high still lasts its full L (a runt pulse is ambiguous to a drive),
+// and the enable pin goes inactive.
+//
 // Latency: a request in cycle n rises the step level in n+1 at the earliest; the pins
 // are flip-flops one cycle behind the level.
 // Invariants: the timing rules above hold on the pins for any input sequence.
@@ -26,6 +30,7 @@ module step_shaper #(
     input  wire [2:0]          invert,
     input  wire                axis_enable,
     input  wire                clear_errors,
+    input  wire                halt,
     // step requests from the DDA
     input  wire                req_valid,
     input  wire                req_negative,
@@ -66,15 +71,15 @@ module step_shaper #(
     wire dir_matches  = (want_forward == dir_reg);
 
     wire fall       = level_reg && (cnt_reg >= step_len);
-    wire rise       = !level_reg && want_step && dir_matches &&
+    wire rise       = !halt && !level_reg && want_step && dir_matches &&
                       (cnt_reg >= step_space) && (dcnt_reg >= dir_setup);
-    wire dir_change = !level_reg && want_step && !dir_matches && (cnt_reg >= dir_hold);
+    wire dir_change = !halt && !level_reg && want_step && !dir_matches && (cnt_reg >= dir_hold);
 
     wire signed [PEND_W:0] issued  = rise ? (dir_reg ? 9'sd1 : -9'sd1) : 9'sd0;
     wire signed [PEND_W:0] left    = wanted - issued;
-    wire clamp_high = (left > 9'sd127);
-    wire clamp_low  = (left < -9'sd127);
-    wire behind     = (wanted > 9'sd1) || (wanted < -9'sd1);
+    wire clamp_high = !halt && (left > 9'sd127);
+    wire clamp_low  = !halt && (left < -9'sd127);
+    wire behind     = !halt && ((wanted > 9'sd1) || (wanted < -9'sd1));
 
     // Pin functions of the current state, registered into the pins.
     reg a_now, b_now;
@@ -98,7 +103,7 @@ module step_shaper #(
     always @(posedge clk) begin
         pin_a_reg  <= a_now ^ invert[0];
         pin_b_reg  <= b_now ^ invert[1];
-        pin_en_reg <= axis_enable ^ invert[2];
+        pin_en_reg <= (axis_enable && !halt) ^ invert[2];
 
         if (rise) level_reg <= 1'b1;
         else if (fall) level_reg <= 1'b0;
@@ -113,7 +118,8 @@ module step_shaper #(
             dcnt_reg <= dcnt_reg + COUNT_ONE;
         end
 
-        if (clamp_high) pending_reg <= PEND_MAX;
+        if (halt) pending_reg <= {PEND_W{1'b0}};
+        else if (clamp_high) pending_reg <= PEND_MAX;
         else if (clamp_low) pending_reg <= -PEND_MAX;
         else pending_reg <= left[PEND_W-1:0];
 
@@ -177,7 +183,9 @@ module step_shaper #(
         f_low     <= (level_reg && fall) ? {{(F_TW-1){1'b0}}, 1'b1}
                    : ((f_low == F_MAX || level_reg) ? f_low : f_low + 1'b1);
         f_dir_age <= dir_change ? {{(F_TW-1){1'b0}}, 1'b1} : ((f_dir_age == F_MAX) ? F_MAX : f_dir_age + 1'b1);
-        f_net     <= f_net + {{31{request[PEND_W]}}, request[0]};
+        // A halt drops the pending steps: what was requested becomes what was issued.
+        f_net     <= halt ? position_reg
+                          : f_net + {{31{request[PEND_W]}}, request[0]};
         f_clamped <= f_clamped || clamp_high || clamp_low;
         if (rst) begin
             f_high    <= {{(F_TW-1){1'b0}}, 1'b1};
@@ -222,7 +230,8 @@ module step_shaper #(
             default: assert ((pin_a ^ $past(invert[0])) == $past(level_reg)
                              && (pin_b ^ $past(invert[1])) == $past(dir_reg));
         endcase
-        assert ((pin_en ^ $past(invert[2])) == $past(axis_enable));
+        assert ((pin_en ^ $past(invert[2])) == $past(axis_enable && !halt));
+        if ($past(halt)) assert (!$rose(level_reg) && $past(dir_reg) == dir_reg && pending_reg == 8'sd0);
         // Quadrature: one step is one Gray-code move, +1 forward and -1 backward.
         if ($past(rise)) assert (quad_reg == ($past(dir_reg) ? $past(quad_reg) + 2'd1 : $past(quad_reg) - 2'd1));
         else assert (quad_reg == $past(quad_reg));
@@ -234,6 +243,7 @@ module step_shaper #(
         cover ($fell(level_reg) && !dir_reg);
         cover ($past(dir_reg) != dir_reg && dir_reg);
         cover (rate_error_reg);
+        cover ($past(halt) && $fell(level_reg));
     end
 `endif
 

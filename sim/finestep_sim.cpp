@@ -117,6 +117,7 @@ struct Sim final : fs_sim {
     void apply(const fs_inputs &in) {
         top->run = in.run & 1;
         top->clear_errors = in.clear_errors & 1;
+        top->halt = in.halt & 1;
         top->rec_valid = in.rec_valid & 1;
         top->rec_flags = in.rec_flags;
         put_bits(top->period_clocks, 0, FS_P_WIDTH, in.period_clocks);

@@ -36,6 +36,7 @@ typedef struct fs_axis_config {
 typedef struct fs_inputs {
     uint8_t run;
     uint8_t clear_errors;
+    uint8_t halt;
     uint8_t rec_valid;
     uint8_t rec_flags;
     uint32_t period_clocks;

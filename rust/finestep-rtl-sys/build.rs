@@ -10,11 +10,11 @@ use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const TOP: &str = "finestep_core";
-/// Core parameters the simulator is built with (finestep_sim.h reports them).
+/// Parameters the simulators are built with (the shims report them).
 const N_AXES: u32 = 4;
 const P_WIDTH: u32 = 20;
 const TIMING_W: u32 = 12;
+const FIFO_DEPTH_LOG2: u32 = 8;
 
 fn main() {
     let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap());
@@ -29,9 +29,15 @@ fn main() {
     println!("cargo:rerun-if-env-changed=VERILATOR_ROOT");
     // hdl/ holds only sources (a new module appears here); of sim/ only the shim counts.
     println!("cargo:rerun-if-changed={}", hdl.display());
-    for shim in ["finestep_sim.cpp", "finestep_sim.h"] {
+    for shim in ["finestep_sim.cpp", "finestep_sim.h", "finestep_top_sim.cpp", "finestep_top_sim.h"] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
+    // The register map's Verilog constants, generated from the one source.
+    println!("cargo:rerun-if-changed={}", repo.join(finestep_regmap::MAP_PATH).display());
+    let gen = out.join("gen");
+    std::fs::create_dir_all(&gen).expect("OUT_DIR/gen");
+    let map = finestep_regmap::load_map(&repo).unwrap_or_else(|e| panic!("{}: {e}", finestep_regmap::MAP_PATH));
+    std::fs::write(gen.join("finestep_regs.vh"), finestep_regmap::verilog::generate(&map)).expect("write finestep_regs.vh");
 
     let verilator = env::var("VERILATOR").unwrap_or_else(|_| "verilator".to_string());
     let root = verilator_root(&verilator);
@@ -56,7 +62,11 @@ fn main() {
         .define("VL_TIME_CONTEXT", None)
         .define("FS_N_AXES", N_AXES.to_string().as_str())
         .define("FS_P_WIDTH", P_WIDTH.to_string().as_str())
-        .define("FS_TIMING_W", TIMING_W.to_string().as_str());
+        .define("FS_TIMING_W", TIMING_W.to_string().as_str())
+        .define("FT_N_AXES", N_AXES.to_string().as_str())
+        .define("FT_P_WIDTH", P_WIDTH.to_string().as_str())
+        .define("FT_TIMING_W", TIMING_W.to_string().as_str())
+        .define("FT_FIFO_DEPTH_LOG2", FIFO_DEPTH_LOG2.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -64,9 +74,16 @@ fn main() {
     let trace_flag = if fst { "--trace-fst" } else { "--trace" };
     let mut globals = std::collections::BTreeSet::new();
     let mut defines = BTreeMap::new();
-    for (prefix, trace) in [("Vfinestep_core", None), ("Vfinestep_core_traced", Some(trace_flag))] {
+    // The core alone (its own co-simulation) and the top behind the host interface.
+    let models = [
+        ("finestep_core", "Vfinestep_core", None),
+        ("finestep_core", "Vfinestep_core_traced", Some(trace_flag)),
+        ("finestep_top", "Vfinestep_top", None),
+        ("finestep_top", "Vfinestep_top_traced", Some(trace_flag)),
+    ];
+    for (top, prefix, trace) in models {
         let dir = mdir.join(prefix);
-        let classes = verilate(&verilator, &sources, prefix, trace, &dir);
+        let classes = verilate(&verilator, &sources, &gen, top, prefix, trace, &dir);
         let list = |name: &str| -> Vec<String> {
             classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
         };
@@ -95,6 +112,7 @@ fn main() {
         build.file(root.join("include").join(format!("{stem}.cpp")));
     }
     build.file(sim.join("finestep_sim.cpp"));
+    build.file(sim.join("finestep_top_sim.cpp"));
     build.compile("finestep_core");
     if fst {
         // FST compresses with zlib (and, in current Verilator, lz4).
@@ -106,23 +124,33 @@ fn main() {
 
     bindgen::Builder::default()
         .header(sim.join("finestep_sim.h").to_string_lossy())
-        .allowlist_function("fs_.*")
-        .allowlist_type("fs_.*")
-        .allowlist_var("FS_.*")
+        .header(sim.join("finestep_top_sim.h").to_string_lossy())
+        .allowlist_function("fs_.*|ft_.*")
+        .allowlist_type("fs_.*|ft_.*")
+        .allowlist_var("FS_.*|FT_.*")
         .derive_default(true)
         .generate()
-        .expect("bindgen on sim/finestep_sim.h")
+        .expect("bindgen on the shims in sim/")
         .write_to_file(out.join("bindings.rs"))
         .expect("write bindings");
 }
 
-/// Runs Verilator on the core into `dir` and returns the variables of its `*_classes.mk`.
-fn verilate(verilator: &str, sources: &[PathBuf], prefix: &str, trace: Option<&str>, dir: &Path) -> BTreeMap<String, String> {
+/// Runs Verilator on module `top` into `dir` and returns the variables of its `*_classes.mk`.
+fn verilate(
+    verilator: &str,
+    sources: &[PathBuf],
+    include: &Path,
+    top: &str,
+    prefix: &str,
+    trace: Option<&str>,
+    dir: &Path,
+) -> BTreeMap<String, String> {
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     let status = Command::new(verilator)
         .arg("--cc")
-        .args(["--top-module", TOP, "--prefix", prefix])
+        .args(["--top-module", top, "--prefix", prefix])
+        .arg(format!("-I{}", include.display()))
         .arg("--Mdir")
         .arg(dir)
         .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
@@ -132,6 +160,7 @@ fn verilate(verilator: &str, sources: &[PathBuf], prefix: &str, trace: Option<&s
         .arg(format!("-GN_AXES={N_AXES}"))
         .arg(format!("-GP_WIDTH={P_WIDTH}"))
         .arg(format!("-GTIMING_W={TIMING_W}"))
+        .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={FIFO_DEPTH_LOG2}")))
         .args(sources)
         .status()
         .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));

@@ -56,10 +56,10 @@ fn report(what: &str, cycles: u64, seconds: f64) {
     );
 }
 
-/// A CAM-like program of `moves` short G1 segments along a wavy spiral.
-fn cam_program(moves: usize) -> String {
+/// A CAM-like program of `moves` short G1 segments along a wavy spiral, blended (G64).
+pub fn cam_program(moves: usize) -> String {
     let mut text = String::with_capacity(moves * 32);
-    text.push_str("G21 G90 G17 G61\nF3000\n");
+    text.push_str("G21 G90 G17 G64 P0.01\nF3000\n");
     for i in 0..moves {
         let t = i as f64 * 0.01;
         let r = 20.0 + 5.0 * (7.0 * t).sin();
@@ -68,31 +68,46 @@ fn cam_program(moves: usize) -> String {
     text
 }
 
-/// Parse and plan throughput on a 100 000-segment program.
-fn front_end() -> anyhow::Result<()> {
+/// Parse, plan and interpolate throughput on a 100 000-segment program, per profile.
+pub fn front_end() -> anyhow::Result<()> {
+    use finestep_planner::{geometry, interpolate, lookahead, MachineConfig, ProfileKind};
     const MOVES: usize = 100_000;
     let text = cam_program(MOVES);
     let start = Instant::now();
     let program = finestep_gcode::parse_str(&text, "cam.ngc")?;
     let parse_s = start.elapsed().as_secs_f64();
-    let machine = finestep_planner::Machine::new(vec![800.0, 800.0, 400.0, 100.0], 0.001);
-    let limits = finestep_planner::MotionLimits {
-        rapid_mm_s: 50.0,
-        start_speed_mm_s: 1.0,
-        accel_mm_s2: 500.0,
-        chord_tolerance_mm: 0.001,
-    };
-    let start = Instant::now();
-    let planned = finestep_planner::plan_program(&machine, &limits, &program).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let plan_s = start.elapsed().as_secs_f64();
-    let periods: usize = planned.blocks.iter().map(|b| b.records.len()).sum();
     println!("  {:<44} {:>7.2} M lines/s", "parse G-code (100 000 short G1 segments)", (MOVES + 2) as f64 / parse_s / 1e6);
-    println!(
-        "  {:<44} {:>7.0} k moves/s  {:>9.0} periods/s",
-        "plan + interpolate (exact stop, no look-ahead)",
-        MOVES as f64 / plan_s / 1e3,
-        periods as f64 / plan_s
-    );
+    for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
+        let config = MachineConfig { profile, ..MachineConfig::default() }.resolve()?;
+        let start = Instant::now();
+        let path = geometry::elements(&config, &program).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let speeds = lookahead::junction_speeds(&config, &path.elements);
+        let plan_s = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let interpolate_s = start.elapsed().as_secs_f64();
+        let periods = out.records.len() as f64;
+        let name = format!("{profile:?}");
+        println!(
+            "  {:<44} {:>7.0} k moves/s  ({} elements with blends)",
+            format!("plan: path, blends, look-ahead ({name})"),
+            MOVES as f64 / plan_s / 1e3,
+            path.elements.len()
+        );
+        println!(
+            "  {:<44} {:>7.0} k moves/s  {:>9.2} M periods/s",
+            format!("interpolate ({name})"),
+            MOVES as f64 / interpolate_s / 1e3,
+            periods / interpolate_s / 1e6
+        );
+        println!(
+            "  {:<44} {:>7.0} k moves/s  {:>9.2} M periods/s  ({:.1} s of machining)",
+            format!("plan + interpolate ({name})"),
+            MOVES as f64 / (plan_s + interpolate_s) / 1e3,
+            periods / (plan_s + interpolate_s) / 1e6,
+            periods * config.period_s
+        );
+    }
     Ok(())
 }
 

@@ -1,4 +1,5 @@
-//! `finestep`: run the seed-000 demo move in lockstep co-simulation, or measure speed.
+//! `finestep`: run the seed-000 demo move or a part program in lockstep co-simulation,
+//! or measure speed.
 
 mod bench;
 mod demo;
@@ -25,27 +26,46 @@ enum Command {
         #[arg(long, default_value = "target/demo")]
         out: PathBuf,
     },
-    /// Run a G-code part program (exact stop at every block; no look-ahead or cutter
-    /// compensation yet) through the planner into the co-simulated core.
+    /// Run a G-code part program: plan it (look-ahead, G64 blending, trapezoid or S-curve
+    /// feed), check the periods independently, plot them, and stream them into the
+    /// co-simulated core (G41/G42 are refused until cutter compensation is wired in).
     Run {
         /// The part program.
         file: PathBuf,
         /// Use the reference model's fast path alone (no RTL), for long programs.
         #[arg(long)]
         fast: bool,
+        /// Machine configuration (TOML); the built-in machine when absent.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Override the configuration's feed profile.
+        #[arg(long, value_parser = ["trapezoid", "s-curve"])]
+        profile: Option<String>,
+        /// Where the plots go.
+        #[arg(long, default_value = "target/run")]
+        out: PathBuf,
     },
     /// Lockstep and fast-path throughput figures.
     Bench {
         /// Simulated clock cycles per measurement.
         #[arg(long, default_value_t = 20_000_000)]
         cycles: u64,
+        /// Only the host side: parse, plan and interpolate.
+        #[arg(long)]
+        host_only: bool,
     },
 }
 
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Demo { out } => demo::run(&out),
-        Command::Run { file, fast } => run::run(&file, fast),
-        Command::Bench { cycles } => bench::run(cycles),
+        Command::Run { file, fast, config, profile, out } => run::run(&file, fast, config.as_deref(), profile.as_deref(), &out),
+        Command::Bench { cycles, host_only } => {
+            if host_only {
+                bench::front_end()
+            } else {
+                bench::run(cycles)
+            }
+        }
     }
 }

@@ -78,3 +78,72 @@ pub fn plot_axes(path: &Path, traces: &[AxisTrace], names: &[&str], period_s: f6
     root.present().with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
+
+/// At most `buckets` points of `values` against time: the largest value of each bucket,
+/// so that short peaks (jerk at a junction) stay visible.
+fn envelope(values: &[f64], period_s: f64, buckets: usize) -> Vec<(f64, f64)> {
+    let size = values.len().div_ceil(buckets.max(1)).max(1);
+    values
+        .chunks(size)
+        .enumerate()
+        .map(|(i, chunk)| ((i * size) as f64 * period_s, chunk.iter().cloned().fold(0.0, f64::max)))
+        .collect()
+}
+
+/// The commanded toolpath (every period boundary) in the X-Y and X-Z planes.
+pub fn plot_toolpath(path: &Path, samples: &[finestep_planner::checker::Sample]) -> anyhow::Result<()> {
+    register_font()?;
+    let root = BitMapBackend::new(path, (1400, 700)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (left, right) = root.split_horizontally(700);
+    let stride = (samples.len() / 20_000).max(1);
+    for (area, (u, v), title) in [(left, (0, 1), "toolpath X-Y, mm"), (right, (0, 2), "toolpath X-Z, mm")] {
+        let points: Vec<(f64, f64)> = samples.iter().step_by(stride).map(|s| (s.position[u], s.position[v])).collect();
+        let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
+        for &(x, y) in points.iter().chain(std::iter::once(&(0.0, 0.0))) {
+            lo = (lo.0.min(x), lo.1.min(y));
+            hi = (hi.0.max(x), hi.1.max(y));
+        }
+        // Equal scales on both axes, with a margin.
+        let span = (hi.0 - lo.0).max(hi.1 - lo.1).max(1e-3) * 1.05;
+        let (cx, cy) = (0.5 * (lo.0 + hi.0), 0.5 * (lo.1 + hi.1));
+        let mut chart = ChartBuilder::on(&area)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d((cx - span / 2.0)..(cx + span / 2.0), (cy - span / 2.0)..(cy + span / 2.0))?;
+        chart.configure_mesh().draw()?;
+        chart.draw_series(LineSeries::new(points, COLOURS[0]))?;
+    }
+    root.present().with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// Path feed, acceleration and jerk (vector norms over the axes) against time.
+pub fn plot_motion(path: &Path, samples: &[finestep_planner::checker::Sample], period_s: f64) -> anyhow::Result<()> {
+    register_font()?;
+    let root = BitMapBackend::new(path, (1200, 1000)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let panels = root.split_evenly((3, 1));
+    let t_end = (samples.len() as f64 * period_s).max(period_s);
+    let series: [(&str, Vec<f64>); 3] = [
+        ("path feed, units/s", samples.iter().map(|s| s.speed).collect()),
+        ("path acceleration, units/s^2", samples.iter().map(|s| s.acceleration).collect()),
+        ("path jerk, units/s^3", samples.iter().map(|s| s.jerk).collect()),
+    ];
+    for (area, (title, values)) in panels.iter().zip(series) {
+        let points = envelope(&values, period_s, 2000);
+        let top = points.iter().map(|p| p.1).fold(0.0, f64::max).max(1e-9) * 1.1;
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 20))
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.0..t_end, 0.0..top)?;
+        chart.configure_mesh().x_desc("time, s").draw()?;
+        chart.draw_series(LineSeries::new(points, COLOURS[1]))?;
+    }
+    root.present().with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}

@@ -43,3 +43,30 @@ fn compensation_is_refused_not_ignored() {
     assert!(!ok);
     assert!(text.contains(&format!("{path}:2: cutter radius compensation")), "{text}");
 }
+
+#[test]
+fn run_reports_the_checker_and_writes_plots() {
+    let out = std::env::temp_dir().join(format!("finestep-cli-plots-{}", std::process::id()));
+    let config = scratch("machine.toml", "profile = \"s-curve\"\n[axes.X]\nsteps_per_unit = 800\n[axes.Y]\n[axes.Z]\nsteps_per_unit = 400\nmax_velocity = 50\nmax_acceleration = 500\nmax_jerk = 50000\n");
+    let (ok, text) = finestep(&["run", "--fast", "--config", &config, "--out", &out.display().to_string(), &program("corners.ngc")]);
+    // corners.ngc turns A at the end: a machine without A refuses it by line.
+    assert!(!ok);
+    assert!(text.contains("corners.ngc:65: axis A moves but is not configured"), "{text}");
+    let (ok, text) = finestep(&["run", "--fast", "--profile", "s-curve", "--out", &out.display().to_string(), &program("corners.ngc")]);
+    assert!(ok, "{text}");
+    assert!(text.contains("SCurve profile"), "{text}");
+    assert!(text.contains("checker: every limit held"), "{text}");
+    assert!(text.contains("max path deviation 0.02"), "{text}");
+    for plot in ["corners-toolpath.png", "corners-motion.png"] {
+        let bytes = std::fs::read(out.join(plot)).unwrap();
+        assert!(bytes.len() > 10_000 && bytes.starts_with(b"\x89PNG"), "{plot}");
+    }
+}
+
+#[test]
+fn a_bad_configuration_names_the_file_and_the_key() {
+    let config = scratch("bad.toml", "[axes.Y]\nmax_jerk = 0\n");
+    let (ok, text) = finestep(&["run", "--fast", "--config", &config, &program("contour.ngc")]);
+    assert!(!ok);
+    assert!(text.contains(&format!("{config}: axes.Y.max_jerk: must be a positive finite number, got 0")), "{text}");
+}

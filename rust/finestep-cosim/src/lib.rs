@@ -18,6 +18,7 @@
 //! ```
 
 mod mismatch;
+pub mod top_lockstep;
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -27,6 +28,7 @@ pub use finestep_rtl_sys::TraceDepth;
 use finestep_rtl_sys::Rtl;
 
 pub use mismatch::{describe_difference, Mismatch};
+pub use top_lockstep::{rtl_top_params, ModelPins, RtlPins, TopLockstep, TopMismatch};
 
 /// Which model path runs against the RTL.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

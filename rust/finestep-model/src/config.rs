@@ -136,6 +136,11 @@ pub struct CoreInputs {
     pub rec_valid: bool,
     /// `rec_inc` and `rec_flags`: the record offered.
     pub record: PeriodRecord,
+    /// `halt` (the safety monitor's): every step shaper stops starting pulses and
+    /// changing direction, drops its pending steps and drives its enable pin inactive; a
+    /// high step level still lasts its full `L`. It goes to the step shapers only: the
+    /// period timer and DDAs follow `run`, which `finestep_top` holds low while halted.
+    pub halt: bool,
 }
 
 /// One axis's settings masked to the port widths, as the blocks use them.
@@ -147,12 +152,15 @@ pub(crate) struct AxisSettings {
     pub(crate) h: u32,
     pub(crate) mode: u8,
     pub(crate) invert: u8,
+    /// `axis_enable & !halt`: the enable the pins show.
     pub(crate) enable: bool,
+    /// The core's `halt` input.
+    pub(crate) halt: bool,
 }
 
 impl AxisSettings {
     #[inline]
-    pub(crate) fn masked(cfg: &AxisConfig, timing_mask: u32) -> Self {
+    pub(crate) fn masked(cfg: &AxisConfig, timing_mask: u32, halt: bool) -> Self {
         AxisSettings {
             l: cfg.step_len & timing_mask,
             s: cfg.step_space & timing_mask,
@@ -160,7 +168,8 @@ impl AxisSettings {
             h: cfg.dir_hold & timing_mask,
             mode: cfg.mode & 0b11,
             invert: cfg.invert & 0b111,
-            enable: cfg.enable,
+            enable: cfg.enable && !halt,
+            halt,
         }
     }
 }
@@ -215,8 +224,10 @@ mod tests {
             invert: 0xFF,
             enable: true,
         };
-        let s = AxisSettings::masked(&cfg, 0xF);
+        let s = AxisSettings::masked(&cfg, 0xF, false);
         assert_eq!((s.l, s.s, s.u, s.h), (3, 15, 0, 1));
-        assert_eq!((s.mode, s.invert), (2, 7));
+        assert_eq!((s.mode, s.invert, s.enable), (2, 7, true));
+        let halted = AxisSettings::masked(&cfg, 0xF, true);
+        assert!(halted.halt && !halted.enable, "halt drops the enable");
     }
 }

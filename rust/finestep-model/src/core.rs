@@ -219,7 +219,7 @@ impl Core {
     pub(crate) fn settings(&self, inputs: &CoreInputs) -> Settings {
         let mut axes = [AxisSettings::default(); MAX_AXES];
         for (set, cfg) in axes.iter_mut().zip(&inputs.axes).take(self.params.n_axes) {
-            *set = AxisSettings::masked(cfg, self.counter_max);
+            *set = AxisSettings::masked(cfg, self.counter_max, inputs.halt);
         }
         Settings {
             period: self.params.effective_period(inputs.period_clocks),
@@ -233,7 +233,7 @@ impl Core {
         let period = self.params.effective_period(inputs.period_clocks);
         let mask = self.counter_max;
         self.edge(inputs, period, |i| {
-            AxisSettings::masked(&inputs.axes[i], mask)
+            AxisSettings::masked(&inputs.axes[i], mask, inputs.halt)
         });
     }
 

@@ -11,7 +11,8 @@
 //! (closed form: for `acc` in `[0, M)` and increment `d > 0` the update in `j` cycles'
 //! time wraps first for `j = ceil((M - acc) / d) - 1`, for `d < 0` for
 //! `j = floor(acc / |d|)`), and per axis the clocks until the shaper's counters reach
-//! the threshold of its next decision. Every other cycle is run by the per-clock
+//! the threshold of its next decision (while `halt`, only a fall is decided, and a cycle
+//! with `pending != 0` is not quiet since the edge drops it). Every other cycle is run by the per-clock
 //! [`Core::step`], so the cost is O(output changes + requests + periods), not O(cycles).
 
 use crate::core::{ChunkEnd, Core, Event, Settings};
@@ -99,6 +100,10 @@ impl Core {
             let sh = &self.shaper[i];
             let axis = &set.axes[i];
             let e = sh.pending;
+            // Halted, the edge zeroes `pending`: quiet only once it is 0.
+            if axis.halt && e != 0 {
+                return 0;
+            }
             if sh.pins != sh.next_pins(axis)
                 || (sh.step_lost && clear)
                 || (e.unsigned_abs() >= 2 || (sh.rate_error && !clear)) != sh.rate_error
@@ -107,7 +112,7 @@ impl Core {
             }
             let to_decision = if sh.level {
                 axis.l.saturating_sub(sh.cnt)
-            } else if e == 0 {
+            } else if e == 0 || axis.halt {
                 u32::MAX
             } else if (e > 0) == sh.dir {
                 axis.s

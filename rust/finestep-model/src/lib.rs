@@ -1,4 +1,5 @@
-//! Cycle-accurate reference model of the finestep motion core.
+//! Cycle-accurate reference model of the finestep motion core and its host-interface
+//! top.
 //!
 //! The FPGA core takes one [`PeriodRecord`] of per-axis increments (I16F16 steps per
 //! period) per interpolation period, spreads each increment evenly over the period's
@@ -13,6 +14,13 @@
 //! and reports output changes, and [`Core::run_chunk_fast`] gives the same results by
 //! skipping quiet cycles ([`fast`]). [`limits`] holds the rated rate: the increments
 //! within which the pulse train follows the ideal position to within one step.
+//!
+//! The host-interface top [`top`] (`finestep_top`) is modelled per clock by
+//! [`top::Top::step`] with the pins of [`top::TopInputs`]: [`spi_slave_phy`] and
+//! [`spi_frame`] (the SPI link, with [`crc16_byte`]), [`parallel_bus_slave`] (the
+//! 8080/FSMC link), [`register_file`] (register bus, registers from the generated
+//! register map `finestep_regmap`, counters, interrupt, position latch, FIFO write
+//! port), [`position_fifo`], [`motion_control`], [`safety_monitor`] and the core.
 //!
 //! # Example
 //!
@@ -42,21 +50,28 @@
 #![warn(missing_docs)]
 
 pub mod config;
-pub mod crc16_serial;
+pub mod crc16_byte;
 pub mod core;
 pub mod dda_axis;
 pub mod fast;
 pub mod limits;
+pub mod motion_control;
+pub mod parallel_bus_slave;
 pub mod period_timer;
 pub mod position_fifo;
 pub mod record;
+pub mod register_file;
 pub mod safety_monitor;
+pub mod spi_frame;
+pub mod spi_slave_phy;
 pub mod step_shaper;
+pub mod top;
 
 pub use crate::config::{AxisConfig, CoreInputs, CoreParams, ParamsError};
 pub use crate::core::{pins, ChunkEnd, Core, CoreOutputs, Event};
 pub use crate::limits::{AxisTiming, RateChecker, RateError};
 pub use crate::record::PeriodRecord;
+pub use crate::top::{top_pins, Top, TopInputs, TopOutputs, TopParams, TopParamsError};
 
 /// The most axes a core can have (`N_AXES <= 8`).
 pub const MAX_AXES: usize = 8;

@@ -70,6 +70,11 @@ impl PositionFifo {
         self.overflow
     }
 
+    /// The committed records, oldest first.
+    pub fn records(&self) -> impl Iterator<Item = &PeriodRecord> + '_ {
+        self.entries.iter()
+    }
+
     /// The head record (`rd_data` while `rd_valid`).
     pub fn head(&self) -> Option<&PeriodRecord> {
         self.entries.front()

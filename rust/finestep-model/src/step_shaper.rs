@@ -4,6 +4,11 @@
 //! the level has been low at least `S` clocks and `dir` has been stable at least `U`
 //! clocks; `dir` changes only while low and at least `H` clocks after the fall. The pins
 //! are registered from the state (one clock behind it).
+//!
+//! While `halt` (the safety monitor's) is 1 no pulse starts and `dir` holds, a pulse
+//! already high still lasts its full `L` (a drive never sees a runt pulse), `pending` is
+//! dropped without flagging `rate_error` or `step_lost`, and the enable pin goes
+//! inactive in the next cycle.
 
 use crate::config::{mode, AxisSettings};
 
@@ -117,8 +122,8 @@ impl StepShaper {
     }
 
     /// One rising edge: `r` is the DDA's request in this cycle, `counter_max` the
-    /// saturation value of `cnt` and `dcnt`. Returns whether an output (pins, flags,
-    /// position) changed.
+    /// saturation value of `cnt` and `dcnt`, `set.halt` the core's `halt`. Returns
+    /// whether an output (pins, flags, position) changed.
     #[inline]
     pub(crate) fn step(
         &mut self,
@@ -135,6 +140,8 @@ impl StepShaper {
         let mut turn = false;
         if self.level {
             fall = self.cnt >= set.l;
+        } else if set.halt {
+            // Halted: only a running pulse may end.
         } else if e != 0 {
             if (e > 0) == self.dir {
                 rise = self.cnt >= set.s && self.dcnt >= set.u;
@@ -159,13 +166,20 @@ impl StepShaper {
         } else if self.dcnt < counter_max {
             self.dcnt += 1;
         }
-        let left = e - step;
-        let kept = left.clamp(-PENDING_MAX, PENDING_MAX);
-        self.pending = kept as i8;
         self.position = self.position.wrapping_add_signed(step);
         self.quad = (i32::from(self.quad) + step) as u8 & 0b11;
-        self.rate_error = e.abs() >= 2 || (self.rate_error && !clear);
-        self.step_lost = kept != left || (self.step_lost && !clear);
+        if set.halt {
+            // The dropped requests flag nothing.
+            self.pending = 0;
+            self.rate_error &= !clear;
+            self.step_lost &= !clear;
+        } else {
+            let left = e - step;
+            let kept = left.clamp(-PENDING_MAX, PENDING_MAX);
+            self.pending = kept as i8;
+            self.rate_error = e.abs() >= 2 || (self.rate_error && !clear);
+            self.step_lost = kept != left || (self.step_lost && !clear);
+        }
         rise || self.output_bits() != outputs_before
     }
 
@@ -260,6 +274,29 @@ mod tests {
         sh.step(0, &set, 15, true);
         assert!(!sh.step_lost(), "cleared");
         assert!(sh.rate_error(), "set again in the clearing cycle: set wins");
+    }
+
+    #[test]
+    fn halt_finishes_the_pulse_drops_pending_and_the_enable() {
+        let run = AxisSettings { enable: true, ..settings(4, 1, 1, 1) };
+        let halted = AxisSettings { halt: true, enable: false, ..run };
+        let mut sh = StepShaper::new(15);
+        sh.step(1, &run, 15, false);
+        sh.step(1, &run, 15, false);
+        sh.step(1, &run, 15, false);
+        assert!(sh.level() && sh.pending() == 2 && sh.rate_error());
+        // Halted from the pulse's third cycle on: it still lasts L = 4 cycles.
+        let mut levels = vec![];
+        for _ in 0..4 {
+            sh.step(-1, &halted, 15, true);
+            levels.push(sh.level());
+        }
+        assert_eq!(levels, [true, false, false, false]);
+        assert_eq!((sh.pending(), sh.position(), sh.dir()), (0, 1, true));
+        assert!(!sh.rate_error() && !sh.step_lost(), "cleared; the dropped steps flag nothing");
+        assert_eq!(sh.pins & PIN_EN, 0, "enable inactive while halted");
+        sh.step(0, &run, 15, false);
+        assert_eq!(sh.pins & PIN_EN, PIN_EN);
     }
 
     #[test]

@@ -11,6 +11,8 @@ use proptest::prelude::*;
 #[derive(Clone, Debug)]
 struct Chunk {
     run: bool,
+    /// The core's `halt` (safety monitor), independent of `run` at this level.
+    halt: bool,
     /// A new `period_clocks`, else the previous one.
     period: Option<u32>,
     clear_errors: bool,
@@ -90,7 +92,7 @@ fn max_cycles() -> impl Strategy<Value = u64> {
 
 fn chunk() -> impl Strategy<Value = Chunk> {
     (
-        prop::bool::weighted(0.85),
+        (prop::bool::weighted(0.85), prop::bool::weighted(0.12)),
         prop::option::weighted(0.1, period_value()),
         prop::bool::weighted(0.08),
         prop::option::weighted(0.1, (0..MAX_AXES, axis_config())),
@@ -100,8 +102,9 @@ fn chunk() -> impl Strategy<Value = Chunk> {
         max_cycles(),
     )
         .prop_map(
-            |(run, period, clear_errors, axis, rec_valid, incs, flags, max_cycles)| Chunk {
+            |((run, halt), period, clear_errors, axis, rec_valid, incs, flags, max_cycles)| Chunk {
                 run,
+                halt,
                 period,
                 clear_errors,
                 axis,
@@ -210,6 +213,7 @@ fn fast_path_is_identical_to_per_clock() {
             let (mut ev_slow, mut ev_fast): (Vec<Event>, Vec<Event>) = (vec![], vec![]);
             for (k, chunk) in case.chunks.iter().enumerate() {
                 inputs.run = chunk.run;
+                inputs.halt = chunk.halt;
                 if let Some(p) = chunk.period {
                     inputs.period_clocks = p;
                 }

@@ -1,11 +1,37 @@
-//! Coarse interpolation: from a programmed move to one [`PeriodRecord`] per period.
+//! Coarse interpolation: from a parsed part program to one [`PeriodRecord`] per period T,
+//! the per-axis fixed-point increments the core's DDAs fine-interpolate.
 //!
-//! This first part implements seed 000's time-division (data-sampling) linear
-//! interpolation: for a line O->P of length L at feed V_i in period i, every axis moves
-//! dx_i = V_i * T * (x_e - x_o) / L, with the feed raised every period from a start
-//! speed to the programmed feed and lowered again to stop. Positions are quantised to
-//! the core's Q16.16 step grid from the exact cumulative position, so the increments of
-//! a move sum exactly to its endpoint in steps and no rounding error accumulates.
+//! The pipeline of [`plan_program`]:
+//!
+//! 1. [`config`]: the machine (axes, steps per unit, velocity, acceleration and jerk
+//!    limits, T, the FPGA clock, drive timing, tolerances) from a TOML file or defaults.
+//! 2. [`geometry`]: programmed lines and arcs with vertices on whole steps; in G64 each
+//!    line-line corner becomes a blend arc within the path tolerance P; per-axis limits
+//!    projected onto each element's direction give its speed, acceleration and jerk caps.
+//! 3. [`lookahead`]: junction speeds from the corner criterion, backward and forward
+//!    passes over a window of at least `lookahead_moves` moves.
+//! 4. [`velocity`]: per element a trapezoid or S-curve profile, acceleration and
+//!    deceleration halves planned separately (seed 002).
+//! 5. [`interpolate`]: seed 000's time-division interpolation, a period straddling
+//!    elements where the path flows on, positions quantised to the Q16.16 grid from their
+//!    exact values so the increments sum exactly to every exact stop and the end; every
+//!    record checked against the drive's rated rate before it is emitted.
+//!
+//! [`checker`] checks the result independently, from the records and the program alone.
+//!
+//! ```
+//! use finestep_planner::{check_program, plan_program, MachineConfig};
+//! let program = finestep_gcode::parse_str("G64 P0.01\nG1 X10 F1200\nG1 Y10\nM2\n", "square.ngc").unwrap();
+//! let config = MachineConfig::default(); // X, Y at 800 steps/mm, T = 1 ms
+//! let planned = plan_program(&config, &program).unwrap();
+//! let y: i64 = planned.records.iter().map(|r| i64::from(r.inc[1].to_bits())).sum();
+//! assert_eq!(y, (10 * 800) << 16); // exactly 10 mm of steps on Y
+//! let report = check_program(&config, &program, &planned.records).unwrap();
+//! assert!(report.passed() && report.max_deviation <= 0.011);
+//! ```
+//!
+//! The single-move interpolators of seed 000 ([`interpolate_line`], [`interpolate_arc`])
+//! remain for the co-simulation tests that drive one move at a time:
 //!
 //! ```
 //! use finestep_planner::{Machine, LineMove, interpolate_line};
@@ -16,13 +42,24 @@
 //! let total: i64 = records.iter().map(|r| r.inc[1].to_bits() as i64).sum();
 //! assert_eq!(total, 4000 << 16); // exactly 4 mm of steps on Y
 //! ```
+//!
+//! [`PeriodRecord`]: finestep_model::PeriodRecord
 
 pub mod arc;
+pub mod checker;
+pub mod config;
+pub mod cutter_comp;
+pub mod geometry;
+pub mod interpolate;
 pub mod linear;
+pub mod lookahead;
 pub mod path;
-pub mod program;
 pub mod profile;
+pub mod program;
+pub mod velocity;
 
 pub use arc::{interpolate_arc, ArcMove};
+pub use checker::{check_program, CheckReport};
+pub use config::{ConfigError, MachineConfig, ProfileKind};
 pub use linear::{interpolate_line, LineMove, Machine, PlanError};
-pub use program::{plan_program, MotionLimits, PlannedBlock, PlannedProgram, ProgramError};
+pub use program::{plan_program, PlannedProgram, ProgramError};

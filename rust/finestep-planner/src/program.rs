@@ -1,45 +1,31 @@
-//! A parsed part program to period records, block by block, in exact-stop mode: every
-//! move accelerates from and decelerates to the start/stop speed on its own (G61).
-//! Look-ahead with blended corners (G64) and cutter compensation are not implemented
-//! yet: a program asking for compensation is refused rather than cut uncompensated, and
-//! G64 runs as exact stop (reported in [`PlannedProgram::notes`]).
+//! A parsed part program to period records: the path (lines, arcs, G64 corner blends,
+//! see [`crate::geometry`]), look-ahead junction speeds ([`crate::lookahead`]), a
+//! trapezoid or S-curve speed profile per element ([`crate::velocity`]) and time-division
+//! interpolation across element boundaries ([`crate::interpolate`]).
+//!
+//! Cutter radius compensation is not wired in yet: a program asking for G41/G42 is
+//! refused rather than cut uncompensated.
 
-use finestep_gcode::{BlockKind, CompSide, PathControl, Plane, Point, Program};
+use finestep_gcode::Program;
 use finestep_model::PeriodRecord;
 
-use crate::arc::{interpolate_arc, ArcMove};
-use crate::linear::{interpolate_line, LineMove, Machine, PlanError};
+use crate::config::{ConfigError, MachineConfig};
+use crate::geometry::elements;
+use crate::interpolate::interpolate;
+use crate::lookahead::junction_speeds;
 
-/// Feed limits of a machine with axes X, Y, Z (mm) and A (degrees), in that order.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MotionLimits {
-    /// Feed of G0 rapids, units/s.
-    pub rapid_mm_s: f64,
-    /// Start and stop speed of every move, units/s.
-    pub start_speed_mm_s: f64,
-    /// Path acceleration, units/s^2.
-    pub accel_mm_s2: f64,
-    /// Largest distance between an arc's chords and the circle, mm.
-    pub chord_tolerance_mm: f64,
-}
-
-/// The records of one program block.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PlannedBlock {
-    /// 1-based source line.
-    pub line: usize,
-    /// The block's periods.
-    pub records: Vec<PeriodRecord>,
-}
-
-/// A whole program's periods, block by block.
+/// A whole program's periods.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct PlannedProgram {
-    /// Blocks that move or wait, in order.
-    pub blocks: Vec<PlannedBlock>,
-    /// Where the program ends, in axis units (X, Y, Z, A).
+    /// One record per period, in order.
+    pub records: Vec<PeriodRecord>,
+    /// The source line being executed at the end of each period.
+    pub lines: Vec<usize>,
+    /// Where the program ends, in axis units (X, Y, Z, A), on whole steps.
     pub end: [f64; 4],
-    /// What was not carried out as programmed, for the report.
+    /// Path elements planned (programmed moves plus corner blends).
+    pub elements: usize,
+    /// What was adjusted or not carried out as programmed, for the report.
     pub notes: Vec<String>,
 }
 
@@ -47,114 +33,44 @@ pub struct PlannedProgram {
 #[derive(Debug, thiserror::Error, PartialEq)]
 #[error("line {line}: {reason}")]
 pub struct ProgramError {
-    /// 1-based source line.
+    /// 1-based source line (0: not about one line).
     pub line: usize,
     /// What is wrong.
     pub reason: String,
 }
 
-fn coords(p: &Point) -> [f64; 4] {
-    [p.x_mm, p.y_mm, p.z_mm, p.a_deg]
+impl From<ConfigError> for ProgramError {
+    fn from(e: ConfigError) -> Self {
+        ProgramError { line: 0, reason: e.to_string() }
+    }
 }
 
-/// Plan `program` for a machine with four axes X, Y, Z, A (`machine.steps_per_unit` has
-/// four entries), starting at the origin.
-pub fn plan_program(machine: &Machine, limits: &MotionLimits, program: &Program) -> Result<PlannedProgram, ProgramError> {
-    if machine.steps_per_unit.len() != 4 {
-        return Err(ProgramError { line: 0, reason: "the machine must have the four axes X, Y, Z, A".into() });
+/// Plan and interpolate `program` on the machine `config`, starting at rest at the origin.
+pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<PlannedProgram, ProgramError> {
+    let resolved = config.resolve()?;
+    let path = elements(&resolved, program)?;
+    for e in &path.elements {
+        if !(e.length.is_finite() && e.v_cap > 0.0 && e.v_cap.is_finite() && e.accel > 0.0 && e.jerk > 0.0) {
+            return Err(ProgramError { line: e.line, reason: format!("no usable speed limits for this move ({e:?})") });
+        }
     }
-    let mut planned = PlannedProgram::default();
-    let mut at = [0.0; 4];
-    let mut warned_blend = false;
-    for block in &program.blocks {
-        let fail = |e: PlanError| ProgramError { line: block.line, reason: e.to_string() };
-        let records = match block.kind {
-            BlockKind::Rapid { to } | BlockKind::Linear { to, .. } => {
-                let feed = match block.kind {
-                    BlockKind::Linear { feed_mm_per_min, .. } => feed_mm_per_min / 60.0,
-                    _ => limits.rapid_mm_s,
-                };
-                let line = LineMove {
-                    from_mm: at.to_vec(),
-                    to_mm: coords(&to).to_vec(),
-                    feed_mm_s: feed,
-                    start_speed_mm_s: limits.start_speed_mm_s,
-                    accel_mm_s2: limits.accel_mm_s2,
-                };
-                at = coords(&to);
-                interpolate_line(machine, &line).map_err(fail)?
-            }
-            BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
-                // Plane axes ordered so that counter-clockwise turns from the first to the second.
-                let (first, second) = match plane {
-                    Plane::Xy => (0, 1),
-                    Plane::Zx => (2, 0),
-                    Plane::Yz => (1, 2),
-                };
-                let c = coords(&centre);
-                let arc = ArcMove {
-                    from_mm: at.to_vec(),
-                    to_mm: coords(&to).to_vec(),
-                    plane: (first, second),
-                    centre_mm: (c[first], c[second]),
-                    clockwise,
-                    extra_turns,
-                    feed_mm_s: feed_mm_per_min / 60.0,
-                    start_speed_mm_s: limits.start_speed_mm_s,
-                    accel_mm_s2: limits.accel_mm_s2,
-                    chord_tolerance_mm: limits.chord_tolerance_mm,
-                };
-                at = coords(&to);
-                interpolate_arc(machine, &arc).map_err(fail)?
-            }
-            BlockKind::Dwell { seconds } => {
-                let periods = (seconds / machine.period_s).ceil();
-                if !(0.0..=1e9).contains(&periods) {
-                    return Err(ProgramError { line: block.line, reason: format!("dwell of {seconds} s is out of range") });
-                }
-                vec![PeriodRecord::default(); periods as usize]
-            }
-            BlockKind::CutterComp { side: CompSide::Left | CompSide::Right, .. } => {
-                return Err(ProgramError {
-                    line: block.line,
-                    reason: "cutter radius compensation (G41/G42) is not implemented yet; refusing to cut uncompensated".into(),
-                });
-            }
-            BlockKind::PathControl(PathControl::Blend { .. }) => {
-                if !warned_blend {
-                    planned.notes.push(format!("line {}: G64 blending runs as exact stop (no look-ahead yet)", block.line));
-                    warned_blend = true;
-                }
-                continue;
-            }
-            BlockKind::End => break,
-            _ => continue,
-        };
-        planned.blocks.push(PlannedBlock { line: block.line, records });
-    }
-    planned.end = at;
-    Ok(planned)
+    let speeds = junction_speeds(&resolved, &path.elements);
+    let out = interpolate(&resolved, &path.elements, &speeds, path.leading_dwell)?;
+    let mut notes = resolved.notes;
+    notes.extend(path.notes);
+    Ok(PlannedProgram { records: out.records, lines: out.lines, end: path.end, elements: path.elements.len(), notes })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn limits() -> MotionLimits {
-        MotionLimits { rapid_mm_s: 50.0, start_speed_mm_s: 1.0, accel_mm_s2: 500.0, chord_tolerance_mm: 0.001 }
-    }
-
-    fn machine() -> Machine {
-        Machine::new(vec![800.0, 800.0, 400.0, 100.0], 0.001)
-    }
+    use crate::config::ProfileKind;
 
     fn totals(planned: &PlannedProgram) -> [i64; 4] {
         let mut sum = [0i64; 4];
-        for block in &planned.blocks {
-            for record in &block.records {
-                for (axis, total) in sum.iter_mut().enumerate() {
-                    *total += i64::from(record.inc[axis].to_bits());
-                }
+        for record in &planned.records {
+            for (axis, total) in sum.iter_mut().enumerate() {
+                *total += i64::from(record.inc[axis].to_bits());
             }
         }
         sum
@@ -164,20 +80,63 @@ mod tests {
     fn a_contour_with_arcs_ends_exactly_where_the_program_ends() {
         let source = "G21 G90 G17\nG0 X5 Y0 Z2\nG1 Z-1 F600\nG3 X0 Y5 I-5 J0\nG2 X-5 Y0 R5\nG18 G2 X-5 Z-3 I0 K-1\nG4 P0.01\nG1 X0 Y0 Z0 A90\nM2\n";
         let program = finestep_gcode::parse_str(source, "contour.ngc").unwrap();
-        let planned = plan_program(&machine(), &limits(), &program).unwrap();
-        assert_eq!(planned.end, [0.0, 0.0, 0.0, 90.0]);
-        assert_eq!(totals(&planned), [0, 0, 0, (90 * 100) << 16]);
-        assert_eq!(planned.blocks.iter().find(|b| b.line == 7).map(|b| b.records.len()), Some(10));
+        for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
+            let config = MachineConfig { profile, ..MachineConfig::default() };
+            let planned = plan_program(&config, &program).unwrap();
+            assert_eq!(planned.end, [0.0, 0.0, 0.0, 90.0]);
+            assert_eq!(totals(&planned), [0, 0, 0, (90 * 100) << 16]);
+            // The dwell: ten idle periods on line 7.
+            assert_eq!(planned.lines.iter().filter(|&&l| l == 7).count(), 10);
+            assert!(planned.records.iter().filter(|r| r.flags & 1 != 0).count() >= 6);
+        }
     }
 
     #[test]
-    fn compensation_is_refused_and_blending_noted() {
+    fn compensation_is_refused() {
         let program = finestep_gcode::parse_str("G64 P0.01\nG41 D1\nG1 X1 F100\n", "comp.ngc").unwrap();
-        let error = plan_program(&machine(), &limits(), &program).unwrap_err();
+        let error = plan_program(&MachineConfig::default(), &program).unwrap_err();
         assert_eq!(error.line, 2);
-        assert!(error.reason.contains("not implemented"), "{error}");
-        let program = finestep_gcode::parse_str("G64 P0.01\nG1 X1 F100\n", "blend.ngc").unwrap();
-        let planned = plan_program(&machine(), &limits(), &program).unwrap();
-        assert_eq!(planned.notes.len(), 1);
+        assert!(error.reason.contains("not wired"), "{error}");
+    }
+
+    #[test]
+    fn unconfigured_axes_may_not_move() {
+        let config = MachineConfig::from_toml_str("[axes.X]\n[axes.Y]\n", "xy.toml").unwrap();
+        let program = finestep_gcode::parse_str("G1 X1 Y1 F600\nG1 Z1\n", "z.ngc").unwrap();
+        let error = plan_program(&config, &program).unwrap_err();
+        assert_eq!((error.line, error.reason.as_str()), (2, "axis Z moves but is not configured"));
+    }
+
+    #[test]
+    fn blending_keeps_speed_through_shallow_corners_and_exact_stop_does_not() {
+        // A zig-zag of 40 short segments turning 10 degrees each way.
+        let mut text = String::from("G21 G90 F3000\n");
+        let (mut x, mut y) = (0.0f64, 0.0f64);
+        for i in 0..40 {
+            let angle = if i % 2 == 0 { 5.0f64 } else { -5.0 }.to_radians();
+            x += 2.0 * angle.cos();
+            y += 2.0 * angle.sin();
+            text.push_str(&format!("G1 X{x:.4} Y{y:.4}\n"));
+        }
+        let blended = finestep_gcode::parse_str(&format!("G64 P0.01\n{text}"), "z.ngc").unwrap();
+        let exact = finestep_gcode::parse_str(&format!("G61\n{text}"), "z.ngc").unwrap();
+        // Trapezoid: blends at 10 degrees run at about sqrt(0.45 A R) = 34 mm/s. S-curve
+        // is held back by the jerk where the blend's curvature starts, sqrt(0.25 J T R):
+        // 8 mm/s at the default 1e5 mm/s^3, 26 mm/s at 1e6.
+        for (profile, jerk, speed_up) in [(ProfileKind::Trapezoid, 1e5, 2.0), (ProfileKind::SCurve, 1e6, 1.5)] {
+            let mut config = MachineConfig { profile, ..MachineConfig::default() };
+            for axis in config.axes.values_mut() {
+                axis.max_jerk = jerk;
+            }
+            let fast = plan_program(&config, &blended).unwrap();
+            let slow = plan_program(&config, &exact).unwrap();
+            assert_eq!(totals(&fast), totals(&slow));
+            let (fast, slow) = (fast.records.len() as f64, slow.records.len() as f64);
+            assert!(fast * speed_up < slow, "{profile:?}: {fast} vs {slow} periods");
+        }
+        // No period of the blended run is idle before the end.
+        let fast = plan_program(&MachineConfig::default(), &blended).unwrap();
+        let idle = fast.records.iter().filter(|r| r.inc.iter().all(|d| d.to_bits() == 0)).count();
+        assert_eq!(idle, 0);
     }
 }

@@ -1,0 +1,165 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// 8080/FSMC parallel bus slave: the STM32 FSMC's asynchronous multiplexed mode of seed
+// 003 (chip select, NADV address latch, RD, WR, 16-bit address/data). The strobes and
+// the bus are synchronised before use, so the host's timing only has to be slow enough
+// (see README). Registers are 32 bits: reading the low half latches the high half and
+// the high half must be written right after the low half, so 32-bit accesses over the
+// 16-bit bus are coherent and a torn write is refused rather than applied.
+//
+// Latency: read data is driven 6 clocks after RD falls at the pins (5 when the high half
+// comes from the latch); a write reaches the register bus 4 clocks after WR rises.
+module parallel_bus_slave (
+    // clock, reset
+    input  wire        clk,
+    input  wire        rst,
+    // pins (asynchronous)
+    input  wire        bus_cs_n,
+    input  wire        bus_adv_n,
+    input  wire        bus_rd_n,
+    input  wire        bus_wr_n,
+    input  wire [15:0] bus_ad_in,
+    output wire [15:0] bus_ad_out,
+    output wire        bus_ad_oe,
+    // register bus master
+    output wire        bus_req,
+    output wire        bus_we,
+    output wire [6:0]  bus_addr,
+    output wire [31:0] bus_wdata,
+    input  wire        bus_grant,
+    input  wire [31:0] bus_rdata,
+    // event, in the cycle that detects it
+    output wire        error
+);
+
+    // Two synchroniser flops, then one more for edge detection: [1] = now, [2] = before.
+    reg [2:0]  cs_n_sync_reg;
+    reg [1:0]  adv_n_sync_reg;   // no edge needed: the address is sampled while low
+    reg [2:0]  rd_n_sync_reg;
+    reg [2:0]  wr_n_sync_reg;
+    reg [15:0] ad_meta_reg;
+    reg [15:0] ad_sync_reg;
+
+    reg [7:0]  addr_reg;          // halfword address: register [7:1], half [0]
+    reg [15:0] wdata_reg;
+    reg [15:0] lo_data_reg;       // low half written, waiting for its high half
+    reg [6:0]  lo_reg_reg;
+    reg        lo_valid_reg;
+    reg [15:0] hi_data_reg;       // high half latched by a low-half read
+    reg [6:0]  hi_reg_reg;
+    reg        hi_valid_reg;
+    reg [15:0] ad_out_reg;
+    reg        ad_oe_reg;
+    reg        req_reg;
+    reg        we_reg;
+    reg [6:0]  req_addr_reg;
+    reg [31:0] req_wdata_reg;
+    reg        wait_data_reg;     // a read was granted: rdata is valid now
+    reg        read_half_reg;
+
+    wire cs_active  = !cs_n_sync_reg[1];
+    wire cs_before  = !cs_n_sync_reg[2];
+    wire rd_low     = !rd_n_sync_reg[1];
+    wire write_end  = wr_n_sync_reg[1] && !wr_n_sync_reg[2] && cs_before;
+    wire read_start = rd_low && rd_n_sync_reg[2] && cs_active;
+    wire busy       = req_reg || wait_data_reg;
+    wire [6:0] reg_addr = addr_reg[7:1];
+    wire       half_hi  = addr_reg[0];
+    wire lo_matches = lo_valid_reg && (lo_reg_reg == reg_addr);
+    wire hi_matches = hi_valid_reg && (hi_reg_reg == reg_addr);
+
+    wire torn_write = write_end && !busy && half_hi && !lo_matches;
+    wire overrun    = (write_end || read_start) && busy;
+
+    always @(posedge clk) begin
+        cs_n_sync_reg  <= {cs_n_sync_reg[1:0], bus_cs_n};
+        adv_n_sync_reg <= {adv_n_sync_reg[0], bus_adv_n};
+        rd_n_sync_reg  <= {rd_n_sync_reg[1:0], bus_rd_n};
+        wr_n_sync_reg  <= {wr_n_sync_reg[1:0], bus_wr_n};
+        ad_meta_reg    <= bus_ad_in;
+        ad_sync_reg    <= ad_meta_reg;
+
+        if (cs_active && !adv_n_sync_reg[1]) addr_reg <= ad_sync_reg[7:0];
+        if (!wr_n_sync_reg[1]) wdata_reg <= ad_sync_reg;
+        if (!rd_low) ad_oe_reg <= 1'b0;
+
+        if (bus_grant) begin
+            req_reg       <= 1'b0;
+            wait_data_reg <= !we_reg;
+        end
+        if (wait_data_reg) begin
+            wait_data_reg <= 1'b0;
+            ad_out_reg    <= read_half_reg ? bus_rdata[31:16] : bus_rdata[15:0];
+            ad_oe_reg     <= rd_low;
+            if (!read_half_reg) begin
+                hi_data_reg  <= bus_rdata[31:16];
+                hi_reg_reg   <= req_addr_reg;
+                hi_valid_reg <= 1'b1;
+            end else begin
+                hi_valid_reg <= 1'b0;
+            end
+        end
+
+        if (write_end && !busy) begin
+            hi_valid_reg <= 1'b0;
+            lo_valid_reg <= !half_hi;
+            if (!half_hi) begin
+                lo_data_reg <= wdata_reg;
+                lo_reg_reg  <= reg_addr;
+            end else if (lo_matches) begin
+                req_reg       <= 1'b1;
+                we_reg        <= 1'b1;
+                req_addr_reg  <= reg_addr;
+                req_wdata_reg <= {wdata_reg, lo_data_reg};
+            end
+        end else if (read_start && !busy) begin
+            lo_valid_reg <= 1'b0;
+            if (half_hi && hi_matches) begin
+                ad_out_reg   <= hi_data_reg;
+                ad_oe_reg    <= 1'b1;
+                hi_valid_reg <= 1'b0;
+            end else begin
+                req_reg       <= 1'b1;
+                we_reg        <= 1'b0;
+                req_addr_reg  <= reg_addr;
+                read_half_reg <= half_hi;
+            end
+        end
+
+        if (rst) begin
+            cs_n_sync_reg  <= 3'b111;
+            adv_n_sync_reg <= 2'b11;
+            rd_n_sync_reg  <= 3'b111;
+            wr_n_sync_reg  <= 3'b111;
+            ad_meta_reg    <= 16'd0;
+            ad_sync_reg    <= 16'd0;
+            addr_reg       <= 8'd0;
+            wdata_reg      <= 16'd0;
+            lo_data_reg    <= 16'd0;
+            lo_reg_reg     <= 7'd0;
+            lo_valid_reg   <= 1'b0;
+            hi_data_reg    <= 16'd0;
+            hi_reg_reg     <= 7'd0;
+            hi_valid_reg   <= 1'b0;
+            ad_out_reg     <= 16'd0;
+            ad_oe_reg      <= 1'b0;
+            req_reg        <= 1'b0;
+            we_reg         <= 1'b0;
+            req_addr_reg   <= 7'd0;
+            req_wdata_reg  <= 32'd0;
+            wait_data_reg  <= 1'b0;
+            read_half_reg  <= 1'b0;
+        end
+    end
+
+    assign bus_ad_out = ad_out_reg;
+    assign bus_ad_oe  = ad_oe_reg;
+    assign bus_req    = req_reg;
+    assign bus_we     = we_reg;
+    assign bus_addr   = req_addr_reg;
+    assign bus_wdata  = req_wdata_reg;
+    assign error      = torn_write || overrun;
+
+endmodule
+
+`default_nettype wire

@@ -1,0 +1,418 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Register file: the host-visible registers of hdl/registers.toml (addresses and field
+// positions come from the generated finestep_regs.vh), the register-bus arbiter for the
+// two host links (SPI first), error counters, the interrupt, the per-period position
+// latch and the RECORD_PUSH path into the position FIFO.
+//
+// Latency: a write granted in cycle n takes effect at the edge ending n (its command
+// pulses, push and watchdog kick are high in n+1); a read granted in n returns rdata in
+// n+1, computed from the state of cycle n.
+module register_file #(
+    parameter N_AXES          = 4,
+    parameter P_WIDTH         = 20,
+    parameter TIMING_W        = 12,
+    parameter FIFO_DEPTH_LOG2 = 8,
+    parameter WD_W            = 24,
+    parameter CLOCK_HZ        = 50000000,
+    parameter HAS_SPI         = 1,
+    parameter HAS_PARALLEL    = 1
+) (
+    // clock, reset
+    input  wire                         clk,
+    input  wire                         rst,
+    // register bus: SPI master
+    input  wire                         spi_req,
+    input  wire                         spi_we,
+    input  wire [6:0]                   spi_addr,
+    input  wire [31:0]                  spi_wdata,
+    output wire                         spi_grant,
+    // register bus: parallel master
+    input  wire                         par_req,
+    input  wire                         par_we,
+    input  wire [6:0]                   par_addr,
+    input  wire [31:0]                  par_wdata,
+    output wire                         par_grant,
+    output wire [31:0]                  rdata,
+    // configuration out
+    output wire                         run,
+    output wire                         watchdog_enable,
+    output wire                         estop_active_high,
+    output wire [P_WIDTH-1:0]           period_clocks,
+    output wire [WD_W-1:0]              watchdog_timeout,
+    output wire [7:0]                   estop_filter,
+    output wire [15:0]                  start_level,
+    output wire [N_AXES-1:0]            axis_enable,
+    output wire [TIMING_W*N_AXES-1:0]   step_len,
+    output wire [TIMING_W*N_AXES-1:0]   step_space,
+    output wire [TIMING_W*N_AXES-1:0]   dir_setup,
+    output wire [TIMING_W*N_AXES-1:0]   dir_hold,
+    output wire [2*N_AXES-1:0]          out_mode,
+    output wire [3*N_AXES-1:0]          invert,
+    // command pulses and the watchdog kick
+    output wire                         clear_errors,
+    output wire                         clear_faults,
+    output wire                         flush_cmd,
+    output wire                         kick,
+    // machine state in
+    input  wire                         core_run,
+    input  wire                         gate,
+    input  wire                         halt,
+    input  wire                         fault_estop,
+    input  wire                         fault_watchdog,
+    input  wire                         estop_active,
+    input  wire                         underrun,
+    input  wire                         underrun_event,
+    input  wire                         record_error,
+    input  wire [N_AXES-1:0]            rate_error,
+    input  wire [N_AXES-1:0]            step_lost,
+    input  wire                         boundary,
+    input  wire                         block_end,
+    input  wire [32*N_AXES-1:0]         position,
+    input  wire [FIFO_DEPTH_LOG2:0]     fifo_level,
+    input  wire [FIFO_DEPTH_LOG2:0]     fifo_staged,
+    input  wire                         fifo_full,
+    // SPI frame layer events and FIFO port use
+    input  wire                         latch_hold,
+    input  wire                         spi_crc_error,
+    input  wire                         spi_frame_error,
+    input  wire                         spi_refused,
+    input  wire [7:0]                   spi_refused_count,
+    input  wire                         spi_fifo_in_use,
+    input  wire                         spi_fifo_commit,
+    input  wire                         par_error,
+    // RECORD_PUSH into the FIFO (write and commit together)
+    output wire                         push_write,
+    output wire [32*N_AXES+7:0]         push_data,
+    // out
+    output wire [7:0]                   status_byte,
+    output wire                         irq
+);
+
+`include "finestep_regs.vh"
+
+    localparam FIFO_DEPTH = 1 << FIFO_DEPTH_LOG2;
+    localparam IRQ_W = FS_IRQ_MASK_MASK_WIDTH;
+    localparam [31:0] VERSION_WORD = (FS_MAP_VERSION_MAJOR << FS_VERSION_MAJOR_LSB) |
+                                     (FS_MAP_VERSION_MINOR << FS_VERSION_MINOR_LSB) |
+                                     (FS_MAP_VERSION_PATCH << FS_VERSION_PATCH_LSB);
+    localparam [31:0] CAPS_WORD = (N_AXES << FS_CAPS_N_AXES_LSB) |
+                                  (FIFO_DEPTH_LOG2 << FS_CAPS_FIFO_DEPTH_LOG2_LSB) |
+                                  (P_WIDTH << FS_CAPS_P_WIDTH_LSB) |
+                                  (TIMING_W << FS_CAPS_TIMING_W_LSB) |
+                                  ((HAS_SPI != 0 ? 1 : 0) << FS_CAPS_HAS_SPI_LSB) |
+                                  ((HAS_PARALLEL != 0 ? 1 : 0) << FS_CAPS_HAS_PARALLEL_LSB);
+
+    // Host registers
+    reg                        run_reg;
+    reg                        watchdog_enable_reg;
+    reg                        estop_active_high_reg;
+    reg [P_WIDTH-1:0]          period_reg;
+    reg [WD_W-1:0]             watchdog_timeout_reg;
+    reg [7:0]                  estop_filter_reg;
+    reg [15:0]                 watermark_reg;
+    reg [15:0]                 start_level_reg;
+    reg [IRQ_W-1:0]            irq_mask_reg;
+    reg [N_AXES-1:0]           axis_enable_reg;
+    reg [TIMING_W*N_AXES-1:0]  step_len_reg;
+    reg [TIMING_W*N_AXES-1:0]  step_space_reg;
+    reg [TIMING_W*N_AXES-1:0]  dir_setup_reg;
+    reg [TIMING_W*N_AXES-1:0]  dir_hold_reg;
+    reg [2*N_AXES-1:0]         out_mode_reg;
+    reg [3*N_AXES-1:0]         invert_reg;
+    reg [32*N_AXES-1:0]        record_inc_reg;
+    // Hardware state
+    reg [31:0]                 timestamp_reg;
+    reg [31:0]                 latch_time_reg;
+    reg [31:0]                 period_count_reg;
+    reg [32*N_AXES-1:0]        position_latch_reg;
+    reg                        irq_period_reg;
+    reg                        irq_block_end_reg;
+    reg                        overflow_reg;
+    reg                        bus_error_reg;
+    reg [15:0]                 underrun_count_reg;
+    reg [15:0]                 crc_error_count_reg;
+    reg [15:0]                 frame_error_count_reg;
+    reg [15:0]                 parallel_error_count_reg;
+    reg [15:0]                 refused_count_reg;
+    reg                        irq_reg;
+    reg [31:0]                 rdata_reg;
+    // One-cycle pulses after a write
+    reg                        clear_errors_reg;
+    reg                        clear_faults_reg;
+    reg                        flush_reg;
+    reg                        clear_counters_reg;
+    reg                        kick_reg;
+    reg                        push_reg;
+    reg [7:0]                  push_flags_reg;
+
+    // Arbiter: SPI first.
+    wire        grant_spi = spi_req;
+    wire        grant_par = par_req && !spi_req;
+    wire        granted   = grant_spi || grant_par;
+    wire        bus_we    = grant_spi ? spi_we : par_we;
+    wire [6:0]  bus_addr  = grant_spi ? spi_addr : par_addr;
+    wire [31:0] bus_wdata = grant_spi ? spi_wdata : par_wdata;
+    wire        write     = granted && bus_we;
+    wire        read      = granted && !bus_we;
+
+    wire any_rate_error = |rate_error;
+    wire any_step_lost  = |step_lost;
+    wire any_error = underrun || overflow_reg || record_error || any_rate_error || any_step_lost || bus_error_reg;
+    wire fifo_low  = ({{(15-FIFO_DEPTH_LOG2){1'b0}}, fifo_level} < watermark_reg);
+    wire [IRQ_W-1:0] irq_status;
+    assign irq_status[FS_IRQ_STATUS_FIFO_LOW_LSB]  = fifo_low;
+    assign irq_status[FS_IRQ_STATUS_PERIOD_LSB]    = irq_period_reg;
+    assign irq_status[FS_IRQ_STATUS_BLOCK_END_LSB] = irq_block_end_reg;
+    assign irq_status[FS_IRQ_STATUS_FAULT_LSB]     = halt;
+    assign irq_status[FS_IRQ_STATUS_ERROR_LSB]     = any_error;
+
+    wire [FIFO_DEPTH_LOG2:0] fifo_free = FIFO_DEPTH[FIFO_DEPTH_LOG2:0] - fifo_level - fifo_staged;
+
+    reg [31:0] status_word;
+    always @* begin
+        status_word = 32'd0;
+        status_word[FS_STATUS_RUNNING_LSB]        = core_run;
+        status_word[FS_STATUS_STREAMING_LSB]      = gate;
+        status_word[FS_STATUS_HALT_LSB]           = halt;
+        status_word[FS_STATUS_FAULT_ESTOP_LSB]    = fault_estop;
+        status_word[FS_STATUS_FAULT_WATCHDOG_LSB] = fault_watchdog;
+        status_word[FS_STATUS_ESTOP_ACTIVE_LSB]   = estop_active;
+        status_word[FS_STATUS_UNDERRUN_LSB]       = underrun;
+        status_word[FS_STATUS_OVERFLOW_LSB]       = overflow_reg;
+        status_word[FS_STATUS_RECORD_ERROR_LSB]   = record_error;
+        status_word[FS_STATUS_RATE_ERROR_LSB]     = any_rate_error;
+        status_word[FS_STATUS_STEP_LOST_LSB]      = any_step_lost;
+        status_word[FS_STATUS_BUS_ERROR_LSB]      = bus_error_reg;
+        status_word[FS_STATUS_IRQ_LSB]            = irq_reg;
+    end
+
+    // The read value of every address, from the state of this cycle.
+    reg [31:0] read_value;
+    integer axis;
+    always @* begin
+        read_value = 32'd0;
+        case (bus_addr)
+            FS_ID_ADDR:       read_value = FS_ID_MAGIC_VALUE;
+            FS_VERSION_ADDR:  read_value = VERSION_WORD;
+            FS_CAPS_ADDR:     read_value = CAPS_WORD;
+            FS_CLOCK_HZ_ADDR: read_value = CLOCK_HZ;
+            FS_CONTROL_ADDR: begin
+                read_value[FS_CONTROL_RUN_LSB]               = run_reg;
+                read_value[FS_CONTROL_WATCHDOG_ENABLE_LSB]   = watchdog_enable_reg;
+                read_value[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB] = estop_active_high_reg;
+            end
+            FS_STATUS_ADDR: read_value = status_word;
+            FS_FIFO_LEVEL_ADDR: begin
+                read_value[FS_FIFO_LEVEL_LEVEL_LSB +: FIFO_DEPTH_LOG2 + 1] = fifo_level;
+                read_value[FS_FIFO_LEVEL_FREE_LSB +: FIFO_DEPTH_LOG2 + 1]  = fifo_free;
+            end
+            FS_FIFO_WATERMARK_ADDR:   read_value[15:0] = watermark_reg;
+            FS_START_LEVEL_ADDR:      read_value[15:0] = start_level_reg;
+            FS_PERIOD_CLOCKS_ADDR:    read_value[P_WIDTH-1:0] = period_reg;
+            FS_WATCHDOG_TIMEOUT_ADDR: read_value[WD_W-1:0] = watchdog_timeout_reg;
+            FS_ESTOP_FILTER_ADDR:     read_value[7:0] = estop_filter_reg;
+            FS_IRQ_STATUS_ADDR:       read_value[IRQ_W-1:0] = irq_status;
+            FS_IRQ_MASK_ADDR:         read_value[IRQ_W-1:0] = irq_mask_reg;
+            FS_TIMESTAMP_ADDR:        read_value = timestamp_reg;
+            FS_LATCH_TIME_ADDR:       read_value = latch_time_reg;
+            FS_PERIOD_COUNT_ADDR:     read_value = period_count_reg;
+            FS_UNDERRUN_COUNT_ADDR:       read_value[15:0] = underrun_count_reg;
+            FS_CRC_ERROR_COUNT_ADDR:      read_value[15:0] = crc_error_count_reg;
+            FS_FRAME_ERROR_COUNT_ADDR:    read_value[15:0] = frame_error_count_reg;
+            FS_PARALLEL_ERROR_COUNT_ADDR: read_value[15:0] = parallel_error_count_reg;
+            FS_REFUSED_RECORD_COUNT_ADDR: read_value[15:0] = refused_count_reg;
+            FS_AXIS_STATUS_ADDR: begin
+                read_value[FS_AXIS_STATUS_RATE_ERROR_LSB +: N_AXES] = rate_error;
+                read_value[FS_AXIS_STATUS_STEP_LOST_LSB +: N_AXES]  = step_lost;
+            end
+            FS_AXIS_ENABLE_ADDR: read_value[N_AXES-1:0] = axis_enable_reg;
+            default: ;
+        endcase
+        for (axis = 0; axis < N_AXES; axis = axis + 1) begin
+            if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + axis * FS_AXIS_TIMING_A_STRIDE) begin
+                read_value[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*axis +: TIMING_W];
+                read_value[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*axis +: TIMING_W];
+            end
+            if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + axis * FS_AXIS_TIMING_B_STRIDE) begin
+                read_value[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*axis +: TIMING_W];
+                read_value[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*axis +: TIMING_W];
+            end
+            if ({25'd0, bus_addr} == {25'd0, FS_AXIS_MODE_ADDR} + axis * FS_AXIS_MODE_STRIDE) begin
+                read_value[FS_AXIS_MODE_OUT_MODE_LSB +: 2] = out_mode_reg[2*axis +: 2];
+                read_value[FS_AXIS_MODE_INVERT_A_LSB]      = invert_reg[3*axis];
+                read_value[FS_AXIS_MODE_INVERT_B_LSB]      = invert_reg[3*axis + 1];
+                read_value[FS_AXIS_MODE_INVERT_EN_LSB]     = invert_reg[3*axis + 2];
+            end
+            if ({25'd0, bus_addr} == {25'd0, FS_POSITION_ADDR} + axis * FS_POSITION_STRIDE)
+                read_value = position_latch_reg[32*axis +: 32];
+            if ({25'd0, bus_addr} == {25'd0, FS_RECORD_INC_ADDR} + axis * FS_RECORD_INC_STRIDE)
+                read_value = record_inc_reg[32*axis +: 32];
+        end
+    end
+
+    wire push_refused = push_reg && (fifo_full || spi_fifo_in_use);
+    wire [15:0] refused_now = (push_refused ? 16'd1 : 16'd0) + (spi_refused ? {8'd0, spi_refused_count} : 16'd0);
+
+    always @(posedge clk) begin
+        timestamp_reg <= timestamp_reg + 32'd1;
+        if (boundary) period_count_reg <= period_count_reg + 32'd1;
+        if (!latch_hold && (boundary || !core_run)) begin
+            position_latch_reg <= position;
+            latch_time_reg     <= timestamp_reg;
+        end
+        irq_reg <= |(irq_status & irq_mask_reg);
+        if (read) rdata_reg <= read_value;
+
+        clear_errors_reg   <= 1'b0;
+        clear_faults_reg   <= 1'b0;
+        flush_reg          <= 1'b0;
+        clear_counters_reg <= 1'b0;
+        push_reg           <= 1'b0;
+        kick_reg           <= write || spi_fifo_commit;
+
+        if (write) begin
+            case (bus_addr)
+                FS_CONTROL_ADDR: begin
+                    run_reg               <= bus_wdata[FS_CONTROL_RUN_LSB];
+                    watchdog_enable_reg   <= bus_wdata[FS_CONTROL_WATCHDOG_ENABLE_LSB];
+                    estop_active_high_reg <= bus_wdata[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB];
+                end
+                FS_COMMAND_ADDR: begin
+                    clear_errors_reg   <= bus_wdata[FS_COMMAND_CLEAR_ERRORS_LSB];
+                    clear_faults_reg   <= bus_wdata[FS_COMMAND_CLEAR_FAULTS_LSB];
+                    flush_reg          <= bus_wdata[FS_COMMAND_FLUSH_FIFO_LSB];
+                    clear_counters_reg <= bus_wdata[FS_COMMAND_CLEAR_COUNTERS_LSB];
+                end
+                FS_FIFO_WATERMARK_ADDR:   watermark_reg        <= bus_wdata[15:0];
+                FS_START_LEVEL_ADDR:      start_level_reg      <= bus_wdata[15:0];
+                FS_PERIOD_CLOCKS_ADDR:    period_reg           <= bus_wdata[P_WIDTH-1:0];
+                FS_WATCHDOG_TIMEOUT_ADDR: watchdog_timeout_reg <= bus_wdata[WD_W-1:0];
+                FS_ESTOP_FILTER_ADDR:     estop_filter_reg     <= bus_wdata[7:0];
+                FS_IRQ_MASK_ADDR:         irq_mask_reg         <= bus_wdata[IRQ_W-1:0];
+                FS_AXIS_ENABLE_ADDR:      axis_enable_reg      <= bus_wdata[N_AXES-1:0];
+                FS_RECORD_PUSH_ADDR: begin
+                    push_reg       <= 1'b1;
+                    push_flags_reg <= bus_wdata[FS_RECORD_PUSH_FLAGS_LSB +: 8];
+                end
+                default: ;
+            endcase
+            for (axis = 0; axis < N_AXES; axis = axis + 1) begin
+                if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + axis * FS_AXIS_TIMING_A_STRIDE) begin
+                    step_len_reg[TIMING_W*axis +: TIMING_W]   <= bus_wdata[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W];
+                    step_space_reg[TIMING_W*axis +: TIMING_W] <= bus_wdata[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W];
+                end
+                if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + axis * FS_AXIS_TIMING_B_STRIDE) begin
+                    dir_setup_reg[TIMING_W*axis +: TIMING_W] <= bus_wdata[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W];
+                    dir_hold_reg[TIMING_W*axis +: TIMING_W]  <= bus_wdata[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W];
+                end
+                if ({25'd0, bus_addr} == {25'd0, FS_AXIS_MODE_ADDR} + axis * FS_AXIS_MODE_STRIDE) begin
+                    out_mode_reg[2*axis +: 2] <= bus_wdata[FS_AXIS_MODE_OUT_MODE_LSB +: 2];
+                    invert_reg[3*axis]        <= bus_wdata[FS_AXIS_MODE_INVERT_A_LSB];
+                    invert_reg[3*axis + 1]    <= bus_wdata[FS_AXIS_MODE_INVERT_B_LSB];
+                    invert_reg[3*axis + 2]    <= bus_wdata[FS_AXIS_MODE_INVERT_EN_LSB];
+                end
+                if ({25'd0, bus_addr} == {25'd0, FS_RECORD_INC_ADDR} + axis * FS_RECORD_INC_STRIDE)
+                    record_inc_reg[32*axis +: 32] <= bus_wdata;
+            end
+        end
+        // A halt wins over a write of RUN.
+        if (halt) run_reg <= 1'b0;
+
+        // Sticky interrupt sources: set wins over a write-1-to-clear.
+        if (boundary) irq_period_reg <= 1'b1;
+        else if (write && bus_addr == FS_IRQ_STATUS_ADDR && bus_wdata[FS_IRQ_STATUS_PERIOD_LSB]) irq_period_reg <= 1'b0;
+        if (block_end) irq_block_end_reg <= 1'b1;
+        else if (write && bus_addr == FS_IRQ_STATUS_ADDR && bus_wdata[FS_IRQ_STATUS_BLOCK_END_LSB]) irq_block_end_reg <= 1'b0;
+
+        if (push_refused || spi_refused) overflow_reg <= 1'b1;
+        else if (clear_errors_reg) overflow_reg <= 1'b0;
+        if (spi_crc_error || spi_frame_error || par_error) bus_error_reg <= 1'b1;
+        else if (clear_errors_reg) bus_error_reg <= 1'b0;
+
+        if (clear_counters_reg) begin
+            underrun_count_reg       <= 16'd0;
+            crc_error_count_reg      <= 16'd0;
+            frame_error_count_reg    <= 16'd0;
+            parallel_error_count_reg <= 16'd0;
+            refused_count_reg        <= 16'd0;
+        end else begin
+            if (underrun_event) underrun_count_reg <= underrun_count_reg + 16'd1;
+            if (spi_crc_error) crc_error_count_reg <= crc_error_count_reg + 16'd1;
+            if (spi_frame_error) frame_error_count_reg <= frame_error_count_reg + 16'd1;
+            if (par_error) parallel_error_count_reg <= parallel_error_count_reg + 16'd1;
+            refused_count_reg <= refused_count_reg + refused_now;
+        end
+
+        if (rst) begin
+            run_reg                  <= FS_CONTROL_RUN_RESET;
+            watchdog_enable_reg      <= FS_CONTROL_WATCHDOG_ENABLE_RESET;
+            estop_active_high_reg    <= FS_CONTROL_ESTOP_ACTIVE_HIGH_RESET;
+            period_reg               <= FS_PERIOD_CLOCKS_CLOCKS_RESET[P_WIDTH-1:0];
+            watchdog_timeout_reg     <= FS_WATCHDOG_TIMEOUT_CLOCKS_RESET[WD_W-1:0];
+            estop_filter_reg         <= FS_ESTOP_FILTER_SAMPLES_RESET;
+            watermark_reg            <= FS_FIFO_WATERMARK_WATERMARK_RESET;
+            start_level_reg          <= FS_START_LEVEL_LEVEL_RESET;
+            irq_mask_reg             <= FS_IRQ_MASK_MASK_RESET;
+            axis_enable_reg          <= FS_AXIS_ENABLE_ENABLE_RESET[N_AXES-1:0];
+            step_len_reg             <= {N_AXES{FS_AXIS_TIMING_A_STEP_LEN_RESET[TIMING_W-1:0]}};
+            step_space_reg           <= {N_AXES{FS_AXIS_TIMING_A_STEP_SPACE_RESET[TIMING_W-1:0]}};
+            dir_setup_reg            <= {N_AXES{FS_AXIS_TIMING_B_DIR_SETUP_RESET[TIMING_W-1:0]}};
+            dir_hold_reg             <= {N_AXES{FS_AXIS_TIMING_B_DIR_HOLD_RESET[TIMING_W-1:0]}};
+            out_mode_reg             <= {N_AXES{FS_AXIS_MODE_OUT_MODE_RESET}};
+            invert_reg               <= {N_AXES{FS_AXIS_MODE_INVERT_EN_RESET, FS_AXIS_MODE_INVERT_B_RESET, FS_AXIS_MODE_INVERT_A_RESET}};
+            record_inc_reg           <= {N_AXES{FS_RECORD_INC_INC_RESET}};
+            timestamp_reg            <= 32'd0;
+            latch_time_reg           <= 32'd0;
+            period_count_reg         <= 32'd0;
+            position_latch_reg       <= {32*N_AXES{1'b0}};
+            irq_period_reg           <= 1'b0;
+            irq_block_end_reg        <= 1'b0;
+            overflow_reg             <= 1'b0;
+            bus_error_reg            <= 1'b0;
+            underrun_count_reg       <= 16'd0;
+            crc_error_count_reg      <= 16'd0;
+            frame_error_count_reg    <= 16'd0;
+            parallel_error_count_reg <= 16'd0;
+            refused_count_reg        <= 16'd0;
+            irq_reg                  <= 1'b0;
+            rdata_reg                <= 32'd0;
+            clear_errors_reg         <= 1'b0;
+            clear_faults_reg         <= 1'b0;
+            flush_reg                <= 1'b0;
+            clear_counters_reg       <= 1'b0;
+            kick_reg                 <= 1'b0;
+            push_reg                 <= 1'b0;
+            push_flags_reg           <= 8'd0;
+        end
+    end
+
+    assign spi_grant         = grant_spi;
+    assign par_grant         = grant_par;
+    assign rdata             = rdata_reg;
+    assign run               = run_reg;
+    assign watchdog_enable   = watchdog_enable_reg;
+    assign estop_active_high = estop_active_high_reg;
+    assign period_clocks     = period_reg;
+    assign watchdog_timeout  = watchdog_timeout_reg;
+    assign estop_filter      = estop_filter_reg;
+    assign start_level       = start_level_reg;
+    assign axis_enable       = axis_enable_reg;
+    assign step_len          = step_len_reg;
+    assign step_space        = step_space_reg;
+    assign dir_setup         = dir_setup_reg;
+    assign dir_hold          = dir_hold_reg;
+    assign out_mode          = out_mode_reg;
+    assign invert            = invert_reg;
+    assign clear_errors      = clear_errors_reg;
+    assign clear_faults      = clear_faults_reg;
+    assign flush_cmd         = flush_reg;
+    assign kick              = kick_reg;
+    assign push_write        = push_reg && !push_refused;
+    assign push_data         = {push_flags_reg, record_inc_reg};
+    assign status_byte       = status_word[7:0];
+    assign irq               = irq_reg;
+
+endmodule
+
+`default_nettype wire

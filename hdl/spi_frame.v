@@ -1,0 +1,322 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// SPI frame layer: turns the byte stream of spi_slave_phy into register reads and
+// writes and into period records for the position FIFO. Every frame is
+// `cmd, addr, count`, then data; a write is applied only when the frame's CRC-16 checks
+// (the FIFO stages a frame's records and commits them only then), so a corrupted,
+// truncated or aborted frame changes nothing. The result of a write frame is the byte
+// the host reads after the CRC; a read frame returns its data followed by a CRC of the
+// header and the data.
+//
+// Latency: a byte's effect is decided in the clock its rx_valid arrives; the next byte
+// out (tx_byte) is valid from the next clock, as spi_slave_phy needs.
+module spi_frame #(
+    parameter N_AXES  = 4,
+    parameter LEVEL_W = 9
+) (
+    // clock, reset
+    input  wire                     clk,
+    input  wire                     rst,
+    // byte stream from spi_slave_phy
+    input  wire                     frame_start,
+    input  wire                     frame_end,
+    input  wire                     frame_whole,
+    input  wire                     rx_valid,
+    input  wire [7:0]               rx_byte,
+    output wire [7:0]               tx_byte,
+    // machine state
+    input  wire [7:0]               status_byte,
+    input  wire [LEVEL_W-1:0]       fifo_free,
+    input  wire                     fifo_flush,
+    // register bus master
+    output wire                     bus_req,
+    output wire                     bus_we,
+    output wire [6:0]               bus_addr,
+    output wire [31:0]              bus_wdata,
+    input  wire                     bus_grant,
+    input  wire [31:0]              bus_rdata,
+    // position FIFO write port
+    output wire                     fifo_wr_en,
+    output wire [32*N_AXES+7:0]     fifo_wr_data,
+    output wire                     fifo_wr_commit,
+    output wire                     fifo_wr_abort,
+    output wire                     fifo_busy,      // a FIFO frame owns the write port
+    // to the register file
+    output wire                     latch_hold,     // a read frame is in progress
+    output wire                     crc_error,      // events, in the cycle deciding them
+    output wire                     frame_error,
+    output wire                     refused,
+    output wire [7:0]               refused_count
+);
+
+    localparam REC_BYTES = 4 * N_AXES + 1;
+    localparam REC_W     = 8 * REC_BYTES;
+
+    localparam [7:0] CMD_READ  = 8'h01;
+    localparam [7:0] CMD_WRITE = 8'h02;
+    localparam [7:0] CMD_FIFO  = 8'h03;
+
+    localparam [7:0] RESULT_ACK       = 8'hA0;
+    localparam [7:0] RESULT_CRC       = 8'hE1;
+    localparam [7:0] RESULT_BAD       = 8'hE2;
+    localparam [7:0] RESULT_REFUSED   = 8'hE3;
+    localparam [7:0] RESULT_FLUSHED   = 8'hE4;
+
+    localparam [3:0] PHASE_IDLE        = 4'd0;
+    localparam [3:0] PHASE_ADDR        = 4'd1;
+    localparam [3:0] PHASE_COUNT       = 4'd2;
+    localparam [3:0] PHASE_DATA        = 4'd3;
+    localparam [3:0] PHASE_CRC_HI      = 4'd4;
+    localparam [3:0] PHASE_CRC_LO      = 4'd5;
+    localparam [3:0] PHASE_RESULT      = 4'd6;
+    localparam [3:0] PHASE_READ_DATA   = 4'd7;
+    localparam [3:0] PHASE_READ_CRC_HI = 4'd8;
+    localparam [3:0] PHASE_READ_CRC_LO = 4'd9;
+    localparam [3:0] PHASE_READ_TAIL   = 4'd10;
+
+    reg [3:0]       phase_reg;
+    reg [7:0]       cmd_reg;
+    reg [6:0]       addr_reg;
+    reg [7:0]       items_left_reg;
+    reg [5:0]       byte_in_item_reg;
+    reg [15:0]      crc_reg;
+    reg [7:0]       result_reg;
+    reg [31:0]      word_reg;          // the data word of a WRITE frame
+    reg [REC_W-1:0] record_reg;        // the record being received, first byte on top
+    reg [31:0]      tx_word_reg;       // the word being sent by a READ frame
+    reg [31:0]      next_word_reg;     // the word after it, read ahead
+    reg [6:0]       read_addr_reg;     // address of the next read ahead
+    reg             any_bits_reg;
+    reg             fifo_busy_reg;
+    reg             bus_req_reg;
+    reg             bus_we_reg;
+    reg [6:0]       bus_addr_reg;
+    reg [31:0]      bus_wdata_reg;
+    reg             capture_reg;       // bus_rdata holds a read for next_word
+    reg             wr_en_reg;
+    reg             wr_commit_reg;
+    reg             wr_abort_reg;
+
+    // The byte offered for the next byte out.
+    reg [7:0] tx_now;
+    always @* begin
+        case (phase_reg)
+            PHASE_IDLE:        tx_now = status_byte;
+            PHASE_RESULT:      tx_now = result_reg;
+            PHASE_READ_DATA:
+                case (byte_in_item_reg[1:0])
+                    2'd0:    tx_now = tx_word_reg[31:24];
+                    2'd1:    tx_now = tx_word_reg[23:16];
+                    2'd2:    tx_now = tx_word_reg[15:8];
+                    default: tx_now = tx_word_reg[7:0];
+                endcase
+            PHASE_READ_CRC_HI: tx_now = crc_reg[15:8];
+            PHASE_READ_CRC_LO: tx_now = crc_reg[7:0];
+            default:           tx_now = 8'h00;
+        endcase
+    end
+
+    wire [15:0] crc_with_rx;
+    wire [15:0] crc_with_tx;
+    crc16_byte crc_received (.crc_in(crc_reg), .data(rx_byte), .crc_out(crc_with_rx));
+    crc16_byte crc_sent (.crc_in(crc_reg), .data(tx_now), .crc_out(crc_with_tx));
+
+    wire is_read  = (cmd_reg == CMD_READ);
+    wire is_write = (cmd_reg == CMD_WRITE);
+    wire is_fifo  = (cmd_reg == CMD_FIFO);
+    wire [5:0] item_last = is_fifo ? REC_BYTES[5:0] - 6'd1 : 6'd3;
+    wire count_nonzero = (rx_byte != 8'd0);
+    wire fifo_room     = ({8'd0, rx_byte} <= {{(16-LEVEL_W){1'b0}}, fifo_free});   // LEVEL_W <= 16
+
+    // Which event this cycle handles (the first that applies).
+    wire do_end   = frame_end;
+    wire do_start = !do_end && frame_start;
+    wire do_flush = !do_end && !do_start && fifo_flush && fifo_busy_reg;
+    wire do_byte  = !do_end && !do_start && !do_flush && rx_valid;
+
+    wire incomplete = (phase_reg == PHASE_ADDR) || (phase_reg == PHASE_COUNT) ||
+                      (phase_reg == PHASE_DATA) || (phase_reg == PHASE_CRC_HI) ||
+                      (phase_reg == PHASE_CRC_LO) || (phase_reg == PHASE_IDLE && !frame_whole);
+    wire end_error   = do_end && any_bits_reg && incomplete;
+    wire count_byte  = do_byte && (phase_reg == PHASE_COUNT);
+    wire fifo_refuse = count_byte && is_fifo && count_nonzero && !fifo_room;
+    wire bad_header  = count_byte && !(is_read && count_nonzero) && !(is_write && rx_byte == 8'd1) &&
+                       !(is_fifo && count_nonzero);
+    wire crc_checked = do_byte && (phase_reg == PHASE_CRC_LO);
+    wire crc_good    = (crc_with_rx == 16'h0000);
+
+    always @(posedge clk) begin
+        wr_en_reg     <= 1'b0;
+        wr_commit_reg <= 1'b0;
+        wr_abort_reg  <= 1'b0;
+        capture_reg   <= bus_grant && !bus_we_reg;
+        if (capture_reg) next_word_reg <= bus_rdata;
+        if (bus_grant) bus_req_reg <= 1'b0;
+
+        if (do_end) begin
+            if (fifo_busy_reg) wr_abort_reg <= 1'b1;
+            fifo_busy_reg <= 1'b0;
+            phase_reg     <= PHASE_IDLE;
+            any_bits_reg  <= 1'b0;
+        end else if (do_start) begin
+            phase_reg    <= PHASE_IDLE;
+            crc_reg      <= 16'hFFFF;
+            any_bits_reg <= 1'b1;
+        end else if (do_flush) begin
+            wr_abort_reg  <= 1'b1;
+            fifo_busy_reg <= 1'b0;
+            result_reg    <= RESULT_FLUSHED;
+            phase_reg     <= PHASE_RESULT;
+        end else if (do_byte) begin
+            case (phase_reg)
+                PHASE_IDLE: begin
+                    cmd_reg   <= rx_byte;
+                    crc_reg   <= crc_with_rx;
+                    phase_reg <= PHASE_ADDR;
+                end
+                PHASE_ADDR: begin
+                    addr_reg  <= rx_byte[6:0];
+                    crc_reg   <= crc_with_rx;
+                    phase_reg <= PHASE_COUNT;
+                    if (is_read) begin
+                        bus_req_reg   <= 1'b1;
+                        bus_we_reg    <= 1'b0;
+                        bus_addr_reg  <= rx_byte[6:0];
+                        read_addr_reg <= rx_byte[6:0] + 7'd1;
+                    end
+                end
+                PHASE_COUNT: begin
+                    crc_reg          <= crc_with_rx;
+                    byte_in_item_reg <= 6'd0;
+                    items_left_reg   <= rx_byte;
+                    if (bad_header) begin
+                        result_reg <= RESULT_BAD;
+                        phase_reg  <= PHASE_RESULT;
+                    end else if (fifo_refuse) begin
+                        result_reg <= RESULT_REFUSED;
+                        phase_reg  <= PHASE_RESULT;
+                    end else if (is_read) begin
+                        phase_reg     <= PHASE_READ_DATA;
+                        tx_word_reg   <= next_word_reg;
+                        bus_req_reg   <= 1'b1;
+                        bus_we_reg    <= 1'b0;
+                        bus_addr_reg  <= read_addr_reg;
+                        read_addr_reg <= read_addr_reg + 7'd1;
+                    end else begin
+                        phase_reg <= PHASE_DATA;
+                        if (is_fifo) fifo_busy_reg <= 1'b1;
+                    end
+                end
+                PHASE_DATA: begin
+                    crc_reg    <= crc_with_rx;
+                    word_reg   <= {word_reg[23:0], rx_byte};
+                    record_reg <= {record_reg[REC_W-9:0], rx_byte};
+                    if (byte_in_item_reg == item_last) begin
+                        byte_in_item_reg <= 6'd0;
+                        items_left_reg   <= items_left_reg - 8'd1;
+                        if (is_fifo) wr_en_reg <= 1'b1;
+                        if (items_left_reg == 8'd1) phase_reg <= PHASE_CRC_HI;
+                    end else begin
+                        byte_in_item_reg <= byte_in_item_reg + 6'd1;
+                    end
+                end
+                PHASE_CRC_HI: begin
+                    crc_reg   <= crc_with_rx;
+                    phase_reg <= PHASE_CRC_LO;
+                end
+                PHASE_CRC_LO: begin
+                    crc_reg   <= crc_with_rx;
+                    phase_reg <= PHASE_RESULT;
+                    if (is_fifo) fifo_busy_reg <= 1'b0;
+                    if (crc_good) begin
+                        result_reg <= RESULT_ACK;
+                        if (is_fifo) wr_commit_reg <= 1'b1;
+                        if (is_write) begin
+                            bus_req_reg   <= 1'b1;
+                            bus_we_reg    <= 1'b1;
+                            bus_addr_reg  <= addr_reg;
+                            bus_wdata_reg <= word_reg;
+                        end
+                    end else begin
+                        result_reg <= RESULT_CRC;
+                        if (is_fifo) wr_abort_reg <= 1'b1;
+                    end
+                end
+                PHASE_READ_DATA: begin
+                    crc_reg <= crc_with_tx;
+                    if (byte_in_item_reg == 6'd3) begin
+                        byte_in_item_reg <= 6'd0;
+                        items_left_reg   <= items_left_reg - 8'd1;
+                        if (items_left_reg == 8'd1) begin
+                            phase_reg <= PHASE_READ_CRC_HI;
+                        end else begin
+                            tx_word_reg   <= next_word_reg;
+                            bus_req_reg   <= 1'b1;
+                            bus_we_reg    <= 1'b0;
+                            bus_addr_reg  <= read_addr_reg;
+                            read_addr_reg <= read_addr_reg + 7'd1;
+                        end
+                    end else begin
+                        byte_in_item_reg <= byte_in_item_reg + 6'd1;
+                    end
+                end
+                PHASE_READ_CRC_HI: phase_reg <= PHASE_READ_CRC_LO;
+                PHASE_READ_CRC_LO: phase_reg <= PHASE_READ_TAIL;
+                default: ;   // RESULT, READ_TAIL: the rest of the frame is ignored
+            endcase
+        end
+
+        if (rst) begin
+            phase_reg        <= PHASE_IDLE;
+            cmd_reg          <= 8'h00;
+            addr_reg         <= 7'd0;
+            items_left_reg   <= 8'd0;
+            byte_in_item_reg <= 6'd0;
+            crc_reg          <= 16'hFFFF;
+            result_reg       <= 8'h00;
+            word_reg         <= 32'd0;
+            record_reg       <= {REC_W{1'b0}};
+            tx_word_reg      <= 32'd0;
+            next_word_reg    <= 32'd0;
+            read_addr_reg    <= 7'd0;
+            any_bits_reg     <= 1'b0;
+            fifo_busy_reg    <= 1'b0;
+            bus_req_reg      <= 1'b0;
+            bus_we_reg       <= 1'b0;
+            bus_addr_reg     <= 7'd0;
+            bus_wdata_reg    <= 32'd0;
+            capture_reg      <= 1'b0;
+            wr_en_reg        <= 1'b0;
+            wr_commit_reg    <= 1'b0;
+            wr_abort_reg     <= 1'b0;
+        end
+    end
+
+    // The record's bytes are axis 0, 1, ... (each most significant first), then flags;
+    // in the FIFO axis i sits at [32i +: 32] and the flags on top.
+    genvar axis;
+    generate
+        for (axis = 0; axis < N_AXES; axis = axis + 1) begin : unpack
+            assign fifo_wr_data[32*axis +: 32] = record_reg[REC_W-1-32*axis -: 32];
+        end
+    endgenerate
+    assign fifo_wr_data[32*N_AXES +: 8] = record_reg[7:0];
+
+    assign tx_byte        = tx_now;
+    assign bus_req        = bus_req_reg;
+    assign bus_we         = bus_we_reg;
+    assign bus_addr       = bus_addr_reg;
+    assign bus_wdata      = bus_wdata_reg;
+    assign fifo_wr_en     = wr_en_reg;
+    assign fifo_wr_commit = wr_commit_reg;
+    assign fifo_wr_abort  = wr_abort_reg;
+    assign fifo_busy      = fifo_busy_reg;
+    assign latch_hold     = is_read && (phase_reg != PHASE_IDLE);
+    assign crc_error      = crc_checked && !crc_good;
+    assign frame_error    = end_error || do_flush || bad_header;
+    assign refused        = fifo_refuse;
+    assign refused_count  = rx_byte;
+
+endmodule
+
+`default_nettype wire

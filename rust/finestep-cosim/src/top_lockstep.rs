@@ -1,0 +1,237 @@
+//! Lockstep co-simulation of `finestep_top` at its pins: the Verilated RTL and the
+//! reference model get the same pin inputs every clock and must drive the same outputs
+//! every clock. [`TopLockstep`] is a [`PinTarget`], so the host driver's SPI and 8080
+//! masters (and everything built on them: register reads, record streaming) run on
+//! both at once, and every register read the host makes is compared on the way.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use finestep_host::{BusError, PinTarget};
+use finestep_model::top::{top_pins, Top, TopInputs, TopParams};
+use finestep_rtl_sys::{top_build, PinEvent, RtlTop, TraceDepth};
+
+/// Cycles of waveform after the mismatch.
+const WINDOW_AFTER: u64 = 16;
+
+/// The RTL and the model disagreed at the pins.
+#[derive(Debug)]
+pub struct TopMismatch {
+    /// The test (or run) that failed; names the waveform.
+    pub test: String,
+    /// The first cycle whose outputs differ.
+    pub cycle: u64,
+    /// The model's packed outputs.
+    pub expected: u64,
+    /// The RTL's packed outputs.
+    pub actual: u64,
+    /// The packed inputs held in that cycle.
+    pub inputs: u64,
+    /// The waveform of the whole run up to the mismatch, or why it could not be written.
+    pub waveform: Result<PathBuf, String>,
+}
+
+/// The name of bit `index` of the packed outputs.
+fn output_name(index: u32) -> String {
+    use top_pins::output as o;
+    match index {
+        0..=7 => format!("pin_a[{index}]"),
+        8..=15 => format!("pin_b[{}]", index - 8),
+        16..=23 => format!("pin_en[{}]", index - 16),
+        o::SPI_MISO => "spi_miso".into(),
+        o::SPI_MISO_OE => "spi_miso_oe".into(),
+        o::IRQ => "irq".into(),
+        o::BUS_AD_OE => "bus_ad_oe".into(),
+        32..=47 => format!("bus_ad_out[{}]", index - o::BUS_AD_OUT),
+        _ => format!("outputs bit {index}"),
+    }
+}
+
+impl fmt::Display for TopMismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "{}: RTL and model differ at the pins in cycle {}", self.test, self.cycle)?;
+        let differ = self.expected ^ self.actual;
+        for bit in (0..64).filter(|b| differ >> b & 1 != 0) {
+            writeln!(
+                f,
+                "  {}: model {}, RTL {}",
+                output_name(bit),
+                self.expected >> bit & 1,
+                self.actual >> bit & 1
+            )?;
+        }
+        writeln!(f, "  inputs {:?}", TopInputs::unpack(self.inputs))?;
+        match &self.waveform {
+            Ok(path) => write!(f, "  waveform (every signal): {}", path.display()),
+            Err(why) => write!(f, "  no waveform: {why}"),
+        }
+    }
+}
+
+impl std::error::Error for TopMismatch {}
+
+/// The Verilated top and the model side by side, compared every clock.
+pub struct TopLockstep {
+    name: String,
+    rtl: RtlTop,
+    model: Top,
+    /// Every drive since construction, run-length merged (for waveform replay).
+    log: Vec<(u64, u64)>,
+    events: Vec<PinEvent>,
+    cycle: u64,
+    outputs: u64,
+}
+
+/// The model parameters of the Verilated top.
+pub fn rtl_top_params() -> TopParams {
+    let build = top_build();
+    TopParams {
+        n_axes: build.n_axes,
+        p_width: build.p_width,
+        timing_w: build.timing_width,
+        fifo_depth_log2: build.fifo_depth_log2,
+        ..TopParams::default()
+    }
+}
+
+impl TopLockstep {
+    /// Both sides at power-on; drive `rst` first. `name` names the failure waveform.
+    pub fn new(name: &str) -> TopLockstep {
+        let rtl = RtlTop::new();
+        let outputs = rtl.outputs();
+        TopLockstep {
+            name: name.to_string(),
+            rtl,
+            model: Top::new(rtl_top_params()),
+            log: Vec::new(),
+            events: Vec::new(),
+            cycle: 0,
+            outputs,
+        }
+    }
+
+    /// The model (for assertions on internal state in tests).
+    pub fn model(&self) -> &Top {
+        &self.model
+    }
+
+    /// Cycles run.
+    pub fn cycle(&self) -> u64 {
+        self.cycle
+    }
+
+    fn mismatch(&self, cycle: u64, expected: u64, actual: u64, inputs: u64) -> TopMismatch {
+        TopMismatch {
+            test: self.name.clone(),
+            cycle,
+            expected,
+            actual,
+            inputs,
+            waveform: self.replay(cycle + WINDOW_AFTER),
+        }
+    }
+
+    /// Replays the run on a traced RTL up to `until` and writes every signal.
+    fn replay(&self, until: u64) -> Result<PathBuf, String> {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/cosim-failures");
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        let extension = if finestep_rtl_sys::trace_is_fst() { "fst" } else { "vcd" };
+        let path = dir.join(format!("{}.{extension}", self.name));
+        let mut rtl = RtlTop::new_traced();
+        rtl.trace_open(&path, TraceDepth::Everything).map_err(|e| e.to_string())?;
+        let mut scratch = Vec::new();
+        let mut ran = 0;
+        for &(inputs, cycles) in &self.log {
+            let cycles = cycles.min(until.saturating_sub(ran));
+            if cycles == 0 {
+                break;
+            }
+            rtl.run(inputs, cycles, &mut scratch);
+            scratch.clear();
+            ran += cycles;
+        }
+        rtl.trace_close();
+        Ok(path)
+    }
+}
+
+impl PinTarget for TopLockstep {
+    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+        match self.log.last_mut() {
+            Some((last, run)) if *last == inputs => *run += cycles,
+            _ => self.log.push((inputs, cycles)),
+        }
+        self.events.clear();
+        self.rtl.run(inputs, cycles, &mut self.events);
+        let model_inputs = TopInputs::unpack(inputs);
+        let mut rtl_outputs = self.outputs;
+        let mut next_event = 0;
+        for offset in 1..=cycles {
+            self.model.step(&model_inputs);
+            let cycle = self.cycle + offset;
+            while next_event < self.events.len() && self.events[next_event].cycle == cycle {
+                rtl_outputs = self.events[next_event].outputs;
+                next_event += 1;
+            }
+            let expected = self.model.outputs().pack();
+            if expected != rtl_outputs {
+                return Err(BusError::Transport(Box::new(self.mismatch(cycle, expected, rtl_outputs, inputs))));
+            }
+        }
+        self.cycle += cycles;
+        self.outputs = rtl_outputs;
+        Ok(())
+    }
+
+    fn outputs(&self) -> u64 {
+        self.outputs
+    }
+}
+
+/// The reference model alone at its pins.
+pub struct ModelPins(pub Top);
+
+impl PinTarget for ModelPins {
+    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+        let inputs = TopInputs::unpack(inputs);
+        for _ in 0..cycles {
+            self.0.step(&inputs);
+        }
+        Ok(())
+    }
+
+    fn outputs(&self) -> u64 {
+        self.0.outputs().pack()
+    }
+}
+
+/// The Verilated RTL alone at its pins.
+pub struct RtlPins {
+    rtl: RtlTop,
+    scratch: Vec<PinEvent>,
+}
+
+impl RtlPins {
+    /// A Verilated top at power-on.
+    pub fn new() -> RtlPins {
+        RtlPins { rtl: RtlTop::new(), scratch: Vec::new() }
+    }
+}
+
+impl Default for RtlPins {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl PinTarget for RtlPins {
+    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+        self.rtl.run(inputs, cycles, &mut self.scratch);
+        self.scratch.clear();
+        Ok(())
+    }
+
+    fn outputs(&self) -> u64 {
+        self.rtl.outputs()
+    }
+}

@@ -1,0 +1,96 @@
+//! The bus-level top in lockstep: the host driver over SPI and over the 8080 bus.
+
+use finestep_cosim::TopLockstep;
+use finestep_host::regs::{command, control, fifo_level, status};
+use finestep_host::stream::{stream, wait_idle, StreamConfig};
+use finestep_host::{AxisSetup, Bus, Machine, ParallelBus, PinHost, PinTiming, SpiBus};
+use finestep_model::PeriodRecord;
+
+fn spi_machine(name: &str) -> Machine<SpiBus<PinHost<TopLockstep>>> {
+    let mut host = PinHost::new(TopLockstep::new(name), PinTiming::default());
+    host.reset(4).unwrap();
+    host.idle(4).unwrap();
+    Machine::connect(SpiBus::new(host, 4)).unwrap()
+}
+
+fn parallel_machine(name: &str) -> Machine<ParallelBus<TopLockstep>> {
+    let mut host = PinHost::new(TopLockstep::new(name), PinTiming::default());
+    host.reset(4).unwrap();
+    host.idle(4).unwrap();
+    Machine::connect(ParallelBus::new(host, 4)).unwrap()
+}
+
+fn start<B: Bus>(machine: &mut Machine<B>, period: u32) {
+    let axis = AxisSetup { step_len: 3, step_space: 3, dir_setup: 2, dir_hold: 2, ..AxisSetup::default() };
+    for i in 0..machine.caps().n_axes {
+        machine.configure_axis(i, &axis).unwrap();
+    }
+    machine.enable_axes(0xF).unwrap();
+    machine.set_period(period).unwrap();
+    machine.set_start_level(4).unwrap();
+    machine.clear_faults_and_errors().unwrap();
+    let status_word = machine.status().unwrap();
+    assert_eq!(status::HALT.get(status_word), 0, "status {status_word:#x}");
+    machine.set_control(true, false, true).unwrap();
+}
+
+fn moves(n: usize) -> Vec<PeriodRecord> {
+    (0..n)
+        .map(|k| {
+            let flags = if k + 1 == n { 1 } else { 0 };
+            PeriodRecord::from_raw(&[3 << 15, -(5 << 14), (k as i32) << 12, 0], flags)
+        })
+        .collect()
+}
+
+fn expected_steps(records: &[PeriodRecord], axis: usize) -> i32 {
+    let total: i64 = records.iter().map(|r| i64::from(r.inc[axis].to_bits())).sum();
+    // Round half up, as the DDA does.
+    ((total + (1 << 15)) >> 16) as i32
+}
+
+#[test]
+fn spi_identity_and_registers() {
+    let mut machine = spi_machine("spi_identity_and_registers");
+    assert_eq!(machine.caps().n_axes, 4);
+    assert_eq!(machine.caps().fifo_depth, 256);
+    let bus = machine.bus();
+    assert_eq!(control::ESTOP_ACTIVE_HIGH.get(bus.read_one(control::ADDR).unwrap()), 1);
+    bus.write(fifo_level::ADDR + 1, 17).unwrap();
+    assert_eq!(bus.read_one(fifo_level::ADDR + 1).unwrap(), 17);
+    let status_word = bus.read_one(status::ADDR).unwrap();
+    assert_eq!(status::HALT.get(status_word), 1, "the core starts halted");
+    bus.write(command::ADDR, command::CLEAR_FAULTS.set(0, 1)).unwrap();
+    assert_eq!(status::HALT.get(bus.read_one(status::ADDR).unwrap()), 0);
+}
+
+#[test]
+fn spi_stream_moves_exactly() {
+    let mut machine = spi_machine("spi_stream_moves_exactly");
+    start(&mut machine, 2000);
+    let records = moves(40);
+    let report = stream(machine.bus(), records.clone(), StreamConfig::default()).unwrap();
+    assert_eq!(report.records, 40);
+    wait_idle(machine.bus(), 1000, 200_000).unwrap();
+    machine.bus().wait(200).unwrap();
+    let positions = machine.positions().unwrap();
+    for axis in 0..4 {
+        assert_eq!(positions.steps[axis], expected_steps(&records, axis), "axis {axis}");
+    }
+    assert_eq!(report.underruns, 0);
+}
+
+#[test]
+fn parallel_stream_moves_exactly() {
+    let mut machine = parallel_machine("parallel_stream_moves_exactly");
+    start(&mut machine, 3000);
+    let records = moves(12);
+    stream(machine.bus(), records.clone(), StreamConfig::default()).unwrap();
+    wait_idle(machine.bus(), 1000, 200_000).unwrap();
+    machine.bus().wait(200).unwrap();
+    let positions = machine.positions().unwrap();
+    for axis in 0..4 {
+        assert_eq!(positions.steps[axis], expected_steps(&records, axis), "axis {axis}");
+    }
+}
+

@@ -1,0 +1,186 @@
+//! [`Machine`]: one finestep core behind a [`Bus`], at the level a machine builder
+//! thinks in: identity, axis setup, faults, run, positions.
+
+use crate::regs::{
+    axis_enable, axis_mode, axis_timing_a, axis_timing_b, caps, clock_hz, command, control, fifo_level, id,
+    latch_time, period_clocks, position, start_level, status, version,
+};
+use crate::{Bus, BusError};
+
+/// What the core was built with (`CAPS`, `CLOCK_HZ`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Caps {
+    /// Step/dir axes.
+    pub n_axes: usize,
+    /// The position FIFO holds this many records.
+    pub fifo_depth: usize,
+    /// Bits of the period register.
+    pub p_width: u32,
+    /// Bits of each step timing.
+    pub timing_w: u32,
+    /// The core clock in Hz.
+    pub clock_hz: u32,
+}
+
+/// Step timing and output mode of one axis, in core clocks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct AxisSetup {
+    /// Step pulse high time L.
+    pub step_len: u32,
+    /// Least low time between pulses S.
+    pub step_space: u32,
+    /// Direction change to the next rising edge U.
+    pub dir_setup: u32,
+    /// Falling edge to a direction change H.
+    pub dir_hold: u32,
+    /// 0 step/dir, 1 up/down, 2 quadrature.
+    pub out_mode: u32,
+    /// Pin inversions: bit 0 A, bit 1 B, bit 2 enable.
+    pub invert: u32,
+}
+
+/// Every axis's position latched on one clock, with that clock's timestamp.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Positions {
+    /// Steps per axis.
+    pub steps: Vec<i32>,
+    /// `TIMESTAMP` at the latch.
+    pub latch_time: u32,
+}
+
+/// A finestep core behind a bus.
+pub struct Machine<B> {
+    bus: B,
+    caps: Caps,
+}
+
+impl<B: Bus> Machine<B> {
+    /// Checks the identity and version, and reads the capabilities.
+    pub fn connect(mut bus: B) -> Result<Machine<B>, BusError> {
+        let mut words = [0u32; 4];
+        bus.read(id::ADDR, &mut words)?;
+        let [magic, version_word, caps_word, clock] = words;
+        if magic != id::MAGIC_VALUE {
+            return Err(BusError::Identity(format!("ID reads {magic:#010x}, not {:#010x}", id::MAGIC_VALUE)));
+        }
+        let major = version::MAJOR.get(version_word);
+        if major != crate::regs::MAP_VERSION_MAJOR {
+            return Err(BusError::Identity(format!(
+                "register map version {major}.x, this driver speaks {}.x",
+                crate::regs::MAP_VERSION_MAJOR
+            )));
+        }
+        debug_assert_eq!(clock_hz::ADDR, id::ADDR + 3);
+        let caps = Caps {
+            n_axes: caps::N_AXES.get(caps_word) as usize,
+            fifo_depth: 1 << caps::FIFO_DEPTH_LOG2.get(caps_word),
+            p_width: caps::P_WIDTH.get(caps_word),
+            timing_w: caps::TIMING_W.get(caps_word),
+            clock_hz: clock,
+        };
+        Ok(Machine { bus, caps })
+    }
+
+    /// The capabilities read at connection.
+    pub fn caps(&self) -> Caps {
+        self.caps
+    }
+
+    /// The bus.
+    pub fn bus(&mut self) -> &mut B {
+        &mut self.bus
+    }
+
+    /// Sets the step timing and output mode of `axis`.
+    pub fn configure_axis(&mut self, axis: usize, setup: &AxisSetup) -> Result<(), BusError> {
+        let limit = (1u32 << self.caps.timing_w) - 1;
+        for (name, value) in [
+            ("step_len", setup.step_len),
+            ("step_space", setup.step_space),
+            ("dir_setup", setup.dir_setup),
+            ("dir_hold", setup.dir_hold),
+        ] {
+            if value > limit {
+                return Err(BusError::Protocol(format!("axis {axis}: {name} {value} exceeds {limit} clocks")));
+            }
+        }
+        if axis >= self.caps.n_axes {
+            return Err(BusError::Protocol(format!("axis {axis}: the core has {} axes", self.caps.n_axes)));
+        }
+        let a = axis_timing_a::STEP_SPACE.set(axis_timing_a::STEP_LEN.set(0, setup.step_len), setup.step_space);
+        let b = axis_timing_b::DIR_HOLD.set(axis_timing_b::DIR_SETUP.set(0, setup.dir_setup), setup.dir_hold);
+        let mode = axis_mode::INVERT_EN.set(
+            axis_mode::INVERT_B.set(
+                axis_mode::INVERT_A.set(axis_mode::OUT_MODE.set(0, setup.out_mode & 3), setup.invert & 1),
+                setup.invert >> 1 & 1,
+            ),
+            setup.invert >> 2 & 1,
+        );
+        self.bus.write(axis_timing_a::addr(axis), a)?;
+        self.bus.write(axis_timing_b::addr(axis), b)?;
+        self.bus.write(axis_mode::addr(axis), mode)
+    }
+
+    /// Drive enables, bit `i` for axis `i`.
+    pub fn enable_axes(&mut self, mask: u32) -> Result<(), BusError> {
+        self.bus.write(axis_enable::ADDR, axis_enable::ENABLE.set(0, mask & 0xFF))
+    }
+
+    /// The interpolation period in clocks (taken when a run starts).
+    pub fn set_period(&mut self, clocks: u32) -> Result<(), BusError> {
+        self.bus.write(period_clocks::ADDR, period_clocks::CLOCKS.set(0, clocks & period_clocks::CLOCKS.max()))
+    }
+
+    /// The FIFO level at which streaming starts.
+    pub fn set_start_level(&mut self, records: u16) -> Result<(), BusError> {
+        self.bus.write(start_level::ADDR, start_level::LEVEL.set(0, u32::from(records)))
+    }
+
+    /// Writes CONTROL: run request, watchdog, E-stop polarity.
+    pub fn set_control(&mut self, run: bool, watchdog: bool, estop_active_high: bool) -> Result<(), BusError> {
+        let word = control::ESTOP_ACTIVE_HIGH.set(
+            control::WATCHDOG_ENABLE.set(control::RUN.set(0, run.into()), watchdog.into()),
+            estop_active_high.into(),
+        );
+        self.bus.write(control::ADDR, word)
+    }
+
+    /// Issues COMMAND bits (see `regs::command`).
+    pub fn command(&mut self, word: u32) -> Result<(), BusError> {
+        self.bus.write(command::ADDR, word)
+    }
+
+    /// Clears the E-stop and watchdog faults (only those whose cause is gone) and every
+    /// sticky error flag.
+    pub fn clear_faults_and_errors(&mut self) -> Result<(), BusError> {
+        self.command(command::CLEAR_FAULTS.set(command::CLEAR_ERRORS.set(0, 1), 1))
+    }
+
+    /// The STATUS word.
+    pub fn status(&mut self) -> Result<u32, BusError> {
+        self.bus.read_one(status::ADDR)
+    }
+
+    /// Committed records in the FIFO and the room left.
+    pub fn fifo(&mut self) -> Result<(u32, u32), BusError> {
+        let word = self.bus.read_one(fifo_level::ADDR)?;
+        Ok((fifo_level::LEVEL.get(word), fifo_level::FREE.get(word)))
+    }
+
+    /// Every axis's position, all latched on the same clock. Reads LATCH_TIME before and
+    /// after and retries if a latch came in between (over SPI one read frame already
+    /// holds the latch; over the 8080 bus the reads are separate).
+    pub fn positions(&mut self) -> Result<Positions, BusError> {
+        let n = self.caps.n_axes;
+        for _ in 0..8 {
+            let before = self.bus.read_one(latch_time::ADDR)?;
+            let mut words = vec![0u32; n];
+            self.bus.read(position::addr(0), &mut words)?;
+            let after = self.bus.read_one(latch_time::ADDR)?;
+            if before == after {
+                return Ok(Positions { steps: words.into_iter().map(|w| w as i32).collect(), latch_time: after });
+            }
+        }
+        Err(BusError::Protocol("positions kept changing during 8 attempts to read them".into()))
+    }
+}

@@ -1,0 +1,92 @@
+//! [`Bus`] over SPI frames.
+
+use finestep_model::PeriodRecord;
+
+use crate::frame::{self, FrameResult};
+use crate::{Bus, BusError};
+
+/// One full-duplex SPI frame: chip select low, `tx` out, the same number of bytes in.
+pub trait SpiTransfer {
+    /// Sends `tx` in one frame and returns the bytes received meanwhile.
+    fn transfer(&mut self, tx: &[u8]) -> Result<Vec<u8>, BusError>;
+    /// Lets `clocks` core clocks pass.
+    fn wait(&mut self, clocks: u64) -> Result<(), BusError>;
+}
+
+/// [`Bus`] over an [`SpiTransfer`]: every access is one CRC-checked frame.
+pub struct SpiBus<T> {
+    link: T,
+    n_axes: usize,
+    last_status: u8,
+}
+
+impl<T: SpiTransfer> SpiBus<T> {
+    /// A bus to a core with `n_axes` axes (`CAPS.N_AXES`; [`crate::Machine::connect`]
+    /// reads it).
+    pub fn new(link: T, n_axes: usize) -> SpiBus<T> {
+        SpiBus { link, n_axes, last_status: 0 }
+    }
+
+    /// The status byte (`STATUS[7:0]`) the core sent at the start of the last frame.
+    pub fn last_status(&self) -> u8 {
+        self.last_status
+    }
+
+    /// The transport.
+    pub fn link_mut(&mut self) -> &mut T {
+        &mut self.link
+    }
+
+    /// Sets the axis count used to encode records.
+    pub fn set_n_axes(&mut self, n_axes: usize) {
+        self.n_axes = n_axes;
+    }
+
+    fn exchange(&mut self, tx: &[u8]) -> Result<Vec<u8>, BusError> {
+        let rx = self.link.transfer(tx)?;
+        if let Some(&status) = rx.first() {
+            self.last_status = status;
+        }
+        Ok(rx)
+    }
+
+    fn checked_write(&mut self, tx: &[u8]) -> Result<(), BusError> {
+        let rx = self.exchange(tx)?;
+        match frame::write_result(&rx) {
+            FrameResult::Ack => Ok(()),
+            other => Err(BusError::Refused(other)),
+        }
+    }
+}
+
+impl<T: SpiTransfer> Bus for SpiBus<T> {
+    fn read(&mut self, addr: u8, out: &mut [u32]) -> Result<(), BusError> {
+        let mut addr = addr;
+        for chunk in out.chunks_mut(frame::MAX_COUNT) {
+            let tx = frame::read_request(addr, chunk.len());
+            let rx = self.exchange(&tx)?;
+            chunk.copy_from_slice(&frame::read_response(&tx, &rx)?);
+            addr = addr.wrapping_add(chunk.len() as u8) & 0x7F;
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, addr: u8, value: u32) -> Result<(), BusError> {
+        self.checked_write(&frame::write_request(addr, value))
+    }
+
+    fn push_records(&mut self, records: &[PeriodRecord]) -> Result<(), BusError> {
+        if records.is_empty() {
+            return Ok(());
+        }
+        if records.len() > frame::MAX_COUNT {
+            return Err(BusError::Protocol(format!("{} records in one burst (at most 255)", records.len())));
+        }
+        let tx = frame::fifo_request(records, self.n_axes);
+        self.checked_write(&tx)
+    }
+
+    fn wait(&mut self, clocks: u64) -> Result<(), BusError> {
+        self.link.wait(clocks)
+    }
+}

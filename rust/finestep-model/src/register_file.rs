@@ -1,0 +1,591 @@
+//! `register_file`: the register bus (arbiter, `rdata`), the registers of
+//! `hdl/registers.toml`, the per-cycle bookkeeping (timestamp, position latch, period
+//! count, interrupt, sticky flags, error counters) and the position FIFO's write-port
+//! multiplexer.
+//!
+//! Addresses, field positions, access types and reset values come from the generated
+//! register map ([`finestep_regmap::regs`]); the `rw` bits live in one word per address,
+//! masked on every write to the bits this build implements (timing fields to
+//! `TIMING_W`, `PERIOD_CLOCKS` to `P_WIDTH`, `WATCHDOG_TIMEOUT` to `WD_W`, per-axis
+//! registers and bits to `N_AXES`).
+//!
+//! Latency: a request granted in cycle `n` is served at the edge ending `n`: a read's
+//! value (from the state of cycle `n`) is in `rdata` in `n+1`; a write's `rw` bits hold
+//! from `n+1`, and its pulses (`COMMAND`, `RECORD_PUSH`, the watchdog kick) are high in
+//! `n+1` only.
+
+use finestep_regmap::regs;
+use finestep_regmap::{Access, Field};
+
+use crate::position_fifo::FifoInputs;
+use crate::record::PeriodRecord;
+use crate::spi_frame::{SpiFifoPort, SpiFrameEvents};
+use crate::top::TopParams;
+use crate::{Increment, MAX_AXES};
+
+/// Number of word addresses on the register bus (7-bit addresses).
+pub const ADDRESSES: usize = 1 << regs::ADDRESS_BITS;
+
+/// A register-bus request, held by its master until granted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BusRequest {
+    /// `we`: a write (else a read).
+    pub write: bool,
+    /// `addr[6:0]`: the word address.
+    pub addr: u8,
+    /// `wdata`: the word to write.
+    pub wdata: u32,
+}
+
+/// Which master the register bus serves in a cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Grant {
+    /// The SPI frame layer (it has priority).
+    Spi,
+    /// The parallel slave.
+    Parallel,
+}
+
+/// The arbiter: the SPI frame layer if it requests, else the parallel slave if it does.
+pub fn arbitrate(spi: Option<BusRequest>, parallel: Option<BusRequest>) -> Option<(Grant, BusRequest)> {
+    match (spi, parallel) {
+        (Some(request), _) => Some((Grant::Spi, request)),
+        (None, Some(request)) => Some((Grant::Parallel, request)),
+        (None, None) => None,
+    }
+}
+
+/// The hardware values a register read shows, from the other blocks in one cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HardwareStatus {
+    /// `core_run = CONTROL.RUN && !halt`.
+    pub core_run: bool,
+    /// Motion control's gate (`STATUS.STREAMING`).
+    pub gate: bool,
+    /// The safety monitor's `halt`.
+    pub halt: bool,
+    /// Sticky E-stop fault.
+    pub fault_estop: bool,
+    /// Sticky watchdog fault.
+    pub fault_watchdog: bool,
+    /// The filtered E-stop is active.
+    pub estop_active: bool,
+    /// Motion control's sticky `UNDERRUN`.
+    pub underrun: bool,
+    /// The core's sticky `record_error`.
+    pub record_error: bool,
+    /// Per-axis `rate_error`, bit `i` for axis `i`.
+    pub rate_error: u8,
+    /// Per-axis `step_lost`, bit `i` for axis `i`.
+    pub step_lost: u8,
+    /// The FIFO's committed records.
+    pub fifo_level: usize,
+    /// The FIFO's free room: depth - committed - staged.
+    pub fifo_free: usize,
+}
+
+/// Everything the register file sees in one cycle besides its own state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RegisterFileInputs {
+    /// The request served at this edge, if any.
+    pub served: Option<BusRequest>,
+    /// Hardware values of this cycle.
+    pub hw: HardwareStatus,
+    /// The core's `rec_ready`.
+    pub rec_ready: bool,
+    /// The core's `block_end`.
+    pub block_end: bool,
+    /// The core's `position` of every axis.
+    pub positions: [u32; MAX_AXES],
+    /// The SPI frame layer's `latch_hold`.
+    pub latch_hold: bool,
+    /// The SPI frame layer's error events.
+    pub spi: SpiFrameEvents,
+    /// A parallel error.
+    pub parallel_error: bool,
+    /// Motion control counted an underrun.
+    pub underrun: bool,
+    /// The FIFO port refused a `push` (see [`RegisterFile::fifo_port`]).
+    pub push_refused: bool,
+}
+
+/// State of the register file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RegisterFile {
+    params: TopParams,
+    /// The `rw` bits of every address.
+    rw: [u32; ADDRESSES],
+    /// The `rw` bits this build implements at every address.
+    write_mask: [u32; ADDRESSES],
+    rdata: u32,
+    clear_errors: bool,
+    clear_faults: bool,
+    flush_cmd: bool,
+    clear_counters: bool,
+    push: bool,
+    push_flags: u8,
+    kick: bool,
+    timestamp: u32,
+    latch_time: u32,
+    period_count: u32,
+    positions: [u32; MAX_AXES],
+    irq_period: bool,
+    irq_block_end: bool,
+    irq: bool,
+    overflow: bool,
+    bus_error: bool,
+    underrun_count: u16,
+    crc_error_count: u16,
+    frame_error_count: u16,
+    parallel_error_count: u16,
+    refused_record_count: u16,
+    halt_prev: bool,
+}
+
+/// Axis `i` of the per-axis register array at `base` with `stride`, if `addr` is one of
+/// its first `n_axes` elements.
+fn axis_index(addr: u8, base: u8, stride: u8, n_axes: usize) -> Option<usize> {
+    let offset = addr.checked_sub(base)?;
+    if offset % stride != 0 {
+        return None;
+    }
+    let index = usize::from(offset / stride);
+    (index < n_axes).then_some(index)
+}
+
+/// `field` narrowed to its low `width` bits (no narrower than it is).
+fn narrowed(field: Field, width: u32) -> Field {
+    Field { lsb: field.lsb, width: field.width.min(width) }
+}
+
+/// The register arrays with one element per axis.
+const PER_AXIS_ARRAYS: [u8; 5] = [
+    regs::axis_timing_a::ADDR,
+    regs::axis_timing_b::ADDR,
+    regs::axis_mode::ADDR,
+    regs::position::ADDR,
+    regs::record_inc::ADDR,
+];
+
+/// The `rw` bits this build implements, per address, and their reset values.
+fn implemented_rw(params: &TopParams) -> ([u32; ADDRESSES], [u32; ADDRESSES]) {
+    let mut mask = [0u32; ADDRESSES];
+    let mut reset = [0u32; ADDRESSES];
+    for register in regs::REGISTERS {
+        let per_axis = PER_AXIS_ARRAYS.contains(&register.addr);
+        for index in 0..register.count() {
+            if per_axis && index >= params.n_axes {
+                continue;
+            }
+            let Some(addr) = register.addr_of(index) else { continue };
+            for info in register.fields.iter().filter(|f| f.access == Access::ReadWrite) {
+                let width = match register.addr {
+                    regs::axis_timing_a::ADDR | regs::axis_timing_b::ADDR => params.timing_w,
+                    regs::period_clocks::ADDR => params.p_width,
+                    regs::watchdog_timeout::ADDR => params.wd_w,
+                    regs::axis_enable::ADDR => params.n_axes as u32,
+                    _ => info.field.width,
+                };
+                let field = narrowed(info.field, width);
+                mask[usize::from(addr)] |= field.mask();
+                reset[usize::from(addr)] |= field.set(0, info.reset.unwrap_or(0) & field.max());
+            }
+        }
+    }
+    (mask, reset)
+}
+
+impl RegisterFile {
+    /// The reset state for a build with `params`.
+    pub fn new(params: &TopParams) -> Self {
+        let (write_mask, rw) = implemented_rw(params);
+        RegisterFile {
+            params: *params,
+            rw,
+            write_mask,
+            rdata: 0,
+            clear_errors: false,
+            clear_faults: false,
+            flush_cmd: false,
+            clear_counters: false,
+            push: false,
+            push_flags: 0,
+            kick: false,
+            timestamp: 0,
+            latch_time: 0,
+            period_count: 0,
+            positions: [0; MAX_AXES],
+            irq_period: false,
+            irq_block_end: false,
+            irq: false,
+            overflow: false,
+            bus_error: false,
+            underrun_count: 0,
+            crc_error_count: 0,
+            frame_error_count: 0,
+            parallel_error_count: 0,
+            refused_record_count: 0,
+            // The power-on halt must not flush an empty FIFO a second time.
+            halt_prev: true,
+        }
+    }
+
+    fn rw_field(&self, addr: u8, field: Field) -> u32 {
+        field.get(self.rw[usize::from(addr)])
+    }
+
+    /// `rdata`: the value of the last read served.
+    pub fn rdata(&self) -> u32 {
+        self.rdata
+    }
+
+    /// `CONTROL.RUN`.
+    pub fn run(&self) -> bool {
+        self.rw_field(regs::control::ADDR, regs::control::RUN) != 0
+    }
+
+    /// `CONTROL.WATCHDOG_ENABLE`.
+    pub fn watchdog_enable(&self) -> bool {
+        self.rw_field(regs::control::ADDR, regs::control::WATCHDOG_ENABLE) != 0
+    }
+
+    /// `CONTROL.ESTOP_ACTIVE_HIGH`.
+    pub fn estop_active_high(&self) -> bool {
+        self.rw_field(regs::control::ADDR, regs::control::ESTOP_ACTIVE_HIGH) != 0
+    }
+
+    /// `WATCHDOG_TIMEOUT` in clocks.
+    pub fn watchdog_timeout(&self) -> u32 {
+        self.rw_field(regs::watchdog_timeout::ADDR, regs::watchdog_timeout::CLOCKS)
+    }
+
+    /// `ESTOP_FILTER` in samples.
+    pub fn estop_filter(&self) -> u32 {
+        self.rw_field(regs::estop_filter::ADDR, regs::estop_filter::SAMPLES)
+    }
+
+    /// `START_LEVEL` in records.
+    pub fn start_level(&self) -> u32 {
+        self.rw_field(regs::start_level::ADDR, regs::start_level::LEVEL)
+    }
+
+    /// `PERIOD_CLOCKS` (masked to `P_WIDTH`).
+    pub fn period_clocks(&self) -> u32 {
+        self.rw_field(regs::period_clocks::ADDR, regs::period_clocks::CLOCKS)
+    }
+
+    /// The enable of `axis` (`AXIS_ENABLE`).
+    pub fn axis_enable(&self, axis: usize) -> bool {
+        let enables = self.rw_field(regs::axis_enable::ADDR, regs::axis_enable::ENABLE);
+        axis < MAX_AXES && enables >> axis & 1 != 0
+    }
+
+    /// The step-shaper settings of `axis` from `AXIS_TIMING_A`/`_B`, `AXIS_MODE` and
+    /// `AXIS_ENABLE` (all zero for an axis this build does not have).
+    pub fn axis_config(&self, axis: usize) -> crate::AxisConfig {
+        if axis >= self.params.n_axes {
+            return crate::AxisConfig::default();
+        }
+        use regs::{axis_mode as m, axis_timing_a as a, axis_timing_b as b};
+        let timing_a = self.rw[usize::from(a::addr(axis))];
+        let timing_b = self.rw[usize::from(b::addr(axis))];
+        let mode = self.rw[usize::from(m::addr(axis))];
+        crate::AxisConfig {
+            step_len: a::STEP_LEN.get(timing_a),
+            step_space: a::STEP_SPACE.get(timing_a),
+            dir_setup: b::DIR_SETUP.get(timing_b),
+            dir_hold: b::DIR_HOLD.get(timing_b),
+            mode: m::OUT_MODE.get(mode) as u8,
+            invert: [
+                (m::INVERT_A, crate::config::invert::PIN_A),
+                (m::INVERT_B, crate::config::invert::PIN_B),
+                (m::INVERT_EN, crate::config::invert::PIN_EN),
+            ]
+            .iter()
+            .filter(|(field, _)| field.get(mode) != 0)
+            .fold(0, |bits, (_, pin)| bits | pin),
+            enable: self.axis_enable(axis),
+        }
+    }
+
+    /// The record `RECORD_PUSH` queues: `RECORD_INC[0..N_AXES)` and `flags`.
+    pub fn push_record(&self, flags: u8) -> PeriodRecord {
+        let mut record = PeriodRecord { flags, ..PeriodRecord::default() };
+        for (axis, inc) in record.inc[..self.params.n_axes].iter_mut().enumerate() {
+            let word = self.rw[usize::from(regs::record_inc::addr(axis))];
+            *inc = Increment::from_bits(regs::record_inc::INC.get(word) as i32);
+        }
+        record
+    }
+
+    /// `clear_errors` pulse (from `COMMAND.CLEAR_ERRORS`), high in this cycle.
+    pub fn clear_errors(&self) -> bool {
+        self.clear_errors
+    }
+
+    /// `clear_faults` pulse, high in this cycle.
+    pub fn clear_faults(&self) -> bool {
+        self.clear_faults
+    }
+
+    /// `kick` pulse (a register write was served last cycle), high in this cycle.
+    pub fn kick(&self) -> bool {
+        self.kick
+    }
+
+    /// The FIFO's `flush` in this cycle: `flush_cmd`, or the rising edge of `halt`.
+    pub fn fifo_flush(&self, halt: bool) -> bool {
+        self.flush_cmd || (halt && !self.halt_prev)
+    }
+
+    /// The `irq` pin.
+    pub fn irq(&self) -> bool {
+        self.irq
+    }
+
+    /// The FIFO's inputs in this cycle, and whether a `push` is refused: the SPI frame
+    /// layer has the write port whenever it is busy or strobes; otherwise a `push`
+    /// writes and commits `{push_flags, RECORD_INC}` unless the FIFO is full. A push
+    /// while the SPI layer has the port is refused too (the port cannot take it).
+    pub fn fifo_port(&self, spi: &SpiFifoPort, fifo_full: bool, halt: bool, pop: bool) -> (FifoInputs, bool) {
+        let mut inputs = FifoInputs {
+            flush: self.fifo_flush(halt),
+            clear_errors: self.clear_errors,
+            pop,
+            ..FifoInputs::default()
+        };
+        let mut refused = false;
+        if spi.owns_port() {
+            inputs.write = spi.write;
+            inputs.commit = spi.commit;
+            inputs.abort = spi.abort;
+            refused = self.push;
+        } else if self.push {
+            if fifo_full {
+                refused = true;
+            } else {
+                inputs.write = Some(self.push_record(self.push_flags));
+                inputs.commit = true;
+            }
+        }
+        (inputs, refused)
+    }
+
+    /// `STATUS` from this cycle's state.
+    fn status(&self, hw: &HardwareStatus) -> u32 {
+        use regs::status as s;
+        let bits = [
+            (s::RUNNING, hw.core_run),
+            (s::STREAMING, hw.gate),
+            (s::HALT, hw.halt),
+            (s::FAULT_ESTOP, hw.fault_estop),
+            (s::FAULT_WATCHDOG, hw.fault_watchdog),
+            (s::ESTOP_ACTIVE, hw.estop_active),
+            (s::UNDERRUN, hw.underrun),
+            (s::OVERFLOW, self.overflow),
+            (s::RECORD_ERROR, hw.record_error),
+            (s::RATE_ERROR, hw.rate_error != 0),
+            (s::STEP_LOST, hw.step_lost != 0),
+            (s::BUS_ERROR, self.bus_error),
+            (s::IRQ, self.irq),
+        ];
+        bits.iter().fold(0, |word, &(field, bit)| field.set(word, u32::from(bit)))
+    }
+
+    /// Whether a sticky error flag of `STATUS` is set (`IRQ_STATUS.ERROR`).
+    fn any_error(&self, hw: &HardwareStatus) -> bool {
+        use regs::status as s;
+        let status = self.status(hw);
+        [s::UNDERRUN, s::OVERFLOW, s::RECORD_ERROR, s::RATE_ERROR, s::STEP_LOST, s::BUS_ERROR]
+            .iter()
+            .any(|field| field.get(status) != 0)
+    }
+
+    /// `IRQ_STATUS` from this cycle's state.
+    fn irq_status(&self, hw: &HardwareStatus) -> u32 {
+        use regs::irq_status as i;
+        let watermark = self.rw_field(regs::fifo_watermark::ADDR, regs::fifo_watermark::WATERMARK);
+        let bits = [
+            (i::FIFO_LOW, (hw.fifo_level as u64) < u64::from(watermark)),
+            (i::PERIOD, self.irq_period),
+            (i::BLOCK_END, self.irq_block_end),
+            (i::FAULT, hw.halt),
+            (i::ERROR, self.any_error(hw)),
+        ];
+        bits.iter().fold(0, |word, &(field, bit)| field.set(word, u32::from(bit)))
+    }
+
+    /// The value a read of `addr` (7 bits; higher bits ignored) returns in this cycle.
+    pub fn read(&self, addr: u8, hw: &HardwareStatus) -> u32 {
+        let addr = addr & (ADDRESSES - 1) as u8;
+        let p = &self.params;
+        let n = p.n_axes;
+        let stored = self.rw[usize::from(addr)];
+        let axes_mask = |mask: u8| u32::from(mask) & ((1u32 << n) - 1);
+        let hardware = match addr {
+            regs::id::ADDR => regs::id::MAGIC.set(0, regs::id::MAGIC_VALUE),
+            regs::version::ADDR => {
+                use regs::version as v;
+                let word = v::MAJOR.set(0, regs::MAP_VERSION_MAJOR);
+                let word = v::MINOR.set(word, regs::MAP_VERSION_MINOR);
+                v::PATCH.set(word, regs::MAP_VERSION_PATCH)
+            }
+            regs::caps::ADDR => {
+                use regs::caps as c;
+                [
+                    (c::N_AXES, n as u32),
+                    (c::N_ENC, 0),
+                    (c::FIFO_DEPTH_LOG2, p.fifo_depth_log2),
+                    (c::P_WIDTH, p.p_width),
+                    (c::TIMING_W, p.timing_w),
+                    (c::HAS_SPI, u32::from(p.has_spi)),
+                    (c::HAS_PARALLEL, u32::from(p.has_parallel)),
+                ]
+                .iter()
+                .fold(0, |word, &(field, value)| field.set(word, value & field.max()))
+            }
+            regs::clock_hz::ADDR => regs::clock_hz::HZ.set(0, p.clock_hz),
+            regs::status::ADDR => self.status(hw),
+            regs::fifo_level::ADDR => {
+                use regs::fifo_level as f;
+                let level = (hw.fifo_level as u32).min(f::LEVEL.max());
+                let free = (hw.fifo_free as u32).min(f::FREE.max());
+                f::FREE.set(f::LEVEL.set(0, level), free)
+            }
+            regs::irq_status::ADDR => self.irq_status(hw),
+            regs::timestamp::ADDR => regs::timestamp::CLOCKS.set(0, self.timestamp),
+            regs::latch_time::ADDR => regs::latch_time::CLOCKS.set(0, self.latch_time),
+            regs::period_count::ADDR => regs::period_count::COUNT.set(0, self.period_count),
+            regs::underrun_count::ADDR => regs::underrun_count::COUNT.set(0, self.underrun_count.into()),
+            regs::crc_error_count::ADDR => regs::crc_error_count::COUNT.set(0, self.crc_error_count.into()),
+            regs::frame_error_count::ADDR => regs::frame_error_count::COUNT.set(0, self.frame_error_count.into()),
+            regs::parallel_error_count::ADDR => {
+                regs::parallel_error_count::COUNT.set(0, self.parallel_error_count.into())
+            }
+            regs::refused_record_count::ADDR => {
+                regs::refused_record_count::COUNT.set(0, self.refused_record_count.into())
+            }
+            regs::axis_status::ADDR => {
+                use regs::axis_status as a;
+                a::STEP_LOST.set(a::RATE_ERROR.set(0, axes_mask(hw.rate_error)), axes_mask(hw.step_lost))
+            }
+            _ => match axis_index(addr, regs::position::ADDR, regs::position::STRIDE, n) {
+                Some(axis) => regs::position::STEPS.set(0, self.positions[axis]),
+                None => 0,
+            },
+        };
+        stored | hardware
+    }
+
+    /// One rising clock edge.
+    pub fn step(&mut self, inp: &RegisterFileInputs) {
+        let hw = &inp.hw;
+        let irq_next = self.irq_status(hw) & self.rw_field(regs::irq_mask::ADDR, regs::irq_mask::MASK) != 0;
+        let boundary = hw.core_run && inp.rec_ready;
+        let clear_errors = self.clear_errors;
+        let clear_counters = self.clear_counters;
+
+        // Pulses last one cycle.
+        self.clear_errors = false;
+        self.clear_faults = false;
+        self.flush_cmd = false;
+        self.clear_counters = false;
+        self.push = false;
+        self.kick = false;
+
+        let mut irq_clear = 0;
+        match inp.served {
+            Some(BusRequest { write: false, addr, .. }) => self.rdata = self.read(addr, hw),
+            Some(BusRequest { write: true, addr, wdata }) => {
+                let addr = addr & (ADDRESSES - 1) as u8;
+                let slot = usize::from(addr);
+                self.rw[slot] = (self.rw[slot] & !self.write_mask[slot]) | (wdata & self.write_mask[slot]);
+                self.kick = true;
+                match addr {
+                    regs::command::ADDR => {
+                        use regs::command as c;
+                        self.clear_errors = c::CLEAR_ERRORS.get(wdata) != 0;
+                        self.clear_faults = c::CLEAR_FAULTS.get(wdata) != 0;
+                        self.flush_cmd = c::FLUSH_FIFO.get(wdata) != 0;
+                        self.clear_counters = c::CLEAR_COUNTERS.get(wdata) != 0;
+                    }
+                    regs::irq_status::ADDR => irq_clear = wdata,
+                    regs::record_push::ADDR => {
+                        self.push = true;
+                        self.push_flags = regs::record_push::FLAGS.get(wdata) as u8;
+                    }
+                    _ => {}
+                }
+            }
+            None => {}
+        }
+        if hw.halt {
+            let control = usize::from(regs::control::ADDR);
+            self.rw[control] = regs::control::RUN.set(self.rw[control], 0);
+        }
+
+        if !inp.latch_hold && (boundary || !hw.core_run) {
+            self.positions = inp.positions;
+            self.latch_time = self.timestamp;
+        }
+        self.timestamp = self.timestamp.wrapping_add(1);
+        self.period_count = self.period_count.wrapping_add(u32::from(boundary));
+        let keep = |flag: bool, field: Field| flag && field.get(irq_clear) == 0;
+        self.irq_period = boundary || keep(self.irq_period, regs::irq_status::PERIOD);
+        self.irq_block_end = inp.block_end || keep(self.irq_block_end, regs::irq_status::BLOCK_END);
+        self.irq = irq_next;
+
+        let refused = u16::from(inp.spi.refused_records) + u16::from(inp.push_refused);
+        let bus_error = inp.spi.frame_error || inp.spi.crc_error || inp.parallel_error;
+        self.overflow = refused != 0 || (self.overflow && !clear_errors);
+        self.bus_error = bus_error || (self.bus_error && !clear_errors);
+        let count = |counter: u16, add: u16| if clear_counters { 0 } else { counter.wrapping_add(add) };
+        self.underrun_count = count(self.underrun_count, inp.underrun.into());
+        self.crc_error_count = count(self.crc_error_count, inp.spi.crc_error.into());
+        self.frame_error_count = count(self.frame_error_count, inp.spi.frame_error.into());
+        self.parallel_error_count = count(self.parallel_error_count, inp.parallel_error.into());
+        self.refused_record_count = count(self.refused_record_count, refused);
+        self.halt_prev = hw.halt;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(addr: u8, wdata: u32) -> RegisterFileInputs {
+        RegisterFileInputs { served: Some(BusRequest { write: true, addr, wdata }), ..Default::default() }
+    }
+
+    #[test]
+    fn rw_fields_keep_only_the_implemented_bits_and_reset_from_the_map() {
+        let params = TopParams { n_axes: 2, timing_w: 4, p_width: 12, ..TopParams::default() };
+        let mut rf = RegisterFile::new(&params);
+        let hw = HardwareStatus::default();
+        assert_eq!(rf.read(regs::control::ADDR, &hw), regs::control::reset_word());
+        assert_eq!(rf.read(regs::period_clocks::ADDR, &hw), regs::period_clocks::CLOCKS_RESET & 0xFFF);
+        rf.step(&write(regs::axis_timing_a::addr(1), 0xFFFF_FFFF));
+        assert_eq!(rf.read(regs::axis_timing_a::addr(1), &hw), 0x000F_000F);
+        rf.step(&write(regs::axis_timing_a::addr(2), 0xFFFF_FFFF));
+        assert_eq!(rf.read(regs::axis_timing_a::addr(2), &hw), 0, "axis 2 of 2 does not exist");
+        rf.step(&write(regs::axis_enable::ADDR, 0xFF));
+        assert_eq!(rf.read(regs::axis_enable::ADDR, &hw), 0b11);
+        assert!(rf.kick(), "every served write kicks the watchdog");
+        rf.step(&write(0x7F, 0xFFFF_FFFF));
+        assert_eq!(rf.read(0x7F, &hw), 0, "unmapped");
+    }
+
+    #[test]
+    fn command_pulses_last_one_cycle_and_run_drops_while_halted() {
+        let mut rf = RegisterFile::new(&TopParams::default());
+        rf.step(&write(regs::command::ADDR, regs::command::CLEAR_FAULTS.set(0, 1)));
+        assert!(rf.clear_faults() && !rf.clear_errors());
+        rf.step(&RegisterFileInputs::default());
+        assert!(!rf.clear_faults());
+        let halted = RegisterFileInputs { hw: HardwareStatus { halt: true, ..Default::default() }, ..write(regs::control::ADDR, 1) };
+        rf.step(&halted);
+        assert!(!rf.run(), "halt wins over the write");
+        rf.step(&write(regs::control::ADDR, 1));
+        assert!(rf.run());
+    }
+}

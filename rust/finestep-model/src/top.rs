@@ -1,0 +1,666 @@
+//! `finestep_top`: the host-interface top. Two host links (SPI and 8080/FSMC) on one
+//! register bus, the register file, the position FIFO, motion control, the safety
+//! monitor and [`Core`], composed cycle by cycle.
+//!
+//! [`Top::step`] is one clock edge with the pins of [`TopInputs`]; [`Top::outputs`] are
+//! the pins of the current cycle, a function of the state only. Every block computes its
+//! next state from the state of the current cycle, so the order the blocks are stepped
+//! in does not matter; the composition takes all cross-block signals first.
+//!
+//! ```
+//! use finestep_model::top::{Top, TopInputs, TopParams};
+//! use finestep_regmap::regs;
+//!
+//! let mut top = Top::new(TopParams::default());
+//! let idle = TopInputs::default();
+//! top.step(&TopInputs { rst: true, ..idle });
+//! top.step(&TopInputs { rst: true, ..idle });
+//! assert_eq!(top.register(regs::id::ADDR), regs::id::MAGIC_VALUE);
+//! // Out of reset the machine is halted by the E-stop fault.
+//! assert_eq!(regs::status::HALT.get(top.register(regs::status::ADDR)), 1);
+//! ```
+
+use finestep_regmap::regs;
+
+use crate::config::CoreParams;
+use crate::core::Core;
+use crate::motion_control::{MotionControl, MotionInputs};
+use crate::parallel_bus_slave::{ParallelBusSlave, ParallelPins};
+use crate::position_fifo::PositionFifo;
+use crate::register_file::{arbitrate, Grant, HardwareStatus, RegisterFile, RegisterFileInputs};
+use crate::safety_monitor::{SafetyInputs, SafetyMonitor};
+use crate::spi_frame::{SpiFrame, SpiFrameInputs};
+use crate::spi_slave_phy::{SpiPins, SpiSlavePhy};
+use crate::{CoreInputs, MAX_AXES};
+
+/// `FILTER_W` of the safety monitor's E-stop filter (the width of `ESTOP_FILTER`).
+pub const ESTOP_FILTER_WIDTH: u32 = regs::estop_filter::SAMPLES.width;
+
+/// Design-time parameters of the top (the Verilog module parameters).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TopParams {
+    /// `N_AXES`: number of axes, 1 ..= [`MAX_AXES`].
+    pub n_axes: usize,
+    /// `P_WIDTH`: bits of the period, 1 ..= the width of `PERIOD_CLOCKS.CLOCKS` (24).
+    pub p_width: u32,
+    /// `TIMING_W`: bits of each step timing, 1 ..= the width of the timing fields (16).
+    pub timing_w: u32,
+    /// `FIFO_DEPTH_LOG2`: the FIFO holds `2^n` records, 1 ..= 15 (`LEVEL` is 16 bits).
+    pub fifo_depth_log2: u32,
+    /// `WD_W`: bits of the watchdog, 1 ..= the width of `WATCHDOG_TIMEOUT.CLOCKS` (24).
+    pub wd_w: u32,
+    /// `CLOCK_HZ`: the clock frequency, only reported in `CLOCK_HZ`.
+    pub clock_hz: u32,
+    /// `HAS_SPI`: the SPI slave is built.
+    pub has_spi: bool,
+    /// `HAS_PARALLEL`: the 8080/FSMC slave is built.
+    pub has_parallel: bool,
+}
+
+impl Default for TopParams {
+    /// The defaults of the Verilog: 4 axes, `P_WIDTH = 20`, `TIMING_W = 12`, 256 records,
+    /// `WD_W = 24`, 50 MHz, both host links.
+    fn default() -> Self {
+        TopParams {
+            n_axes: 4,
+            p_width: 20,
+            timing_w: 12,
+            fifo_depth_log2: 8,
+            wd_w: 24,
+            clock_hz: 50_000_000,
+            has_spi: true,
+            has_parallel: true,
+        }
+    }
+}
+
+/// A [`TopParams`] value outside what the top supports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TopParamsError {
+    /// `n_axes` is 0 or above [`MAX_AXES`].
+    #[error("n_axes = {0} is outside 1..={MAX_AXES}")]
+    Axes(usize),
+    /// `p_width` is 0 or wider than `PERIOD_CLOCKS`.
+    #[error("p_width = {0} is outside 1..={max}", max = regs::period_clocks::CLOCKS.width)]
+    PeriodWidth(u32),
+    /// `timing_w` is 0 or wider than the timing fields.
+    #[error("timing_w = {0} is outside 1..={max}", max = regs::axis_timing_a::STEP_LEN.width)]
+    TimingWidth(u32),
+    /// `fifo_depth_log2` is 0 or the depth does not fit `FIFO_LEVEL.LEVEL`.
+    #[error("fifo_depth_log2 = {0} is outside 1..={max}", max = MAX_FIFO_DEPTH_LOG2)]
+    FifoDepth(u32),
+    /// `wd_w` is 0 or wider than `WATCHDOG_TIMEOUT`.
+    #[error("wd_w = {0} is outside 1..={max}", max = regs::watchdog_timeout::CLOCKS.width)]
+    WatchdogWidth(u32),
+}
+
+/// The deepest FIFO whose full level still fits `FIFO_LEVEL.LEVEL`.
+pub const MAX_FIFO_DEPTH_LOG2: u32 = regs::fifo_level::LEVEL.width - 1;
+
+impl TopParams {
+    /// Checks the parameters are in the supported ranges.
+    pub fn validate(&self) -> Result<(), TopParamsError> {
+        let within = |value: u32, max: u32| (1..=max).contains(&value);
+        if !(1..=MAX_AXES).contains(&self.n_axes) {
+            return Err(TopParamsError::Axes(self.n_axes));
+        }
+        if !within(self.p_width, regs::period_clocks::CLOCKS.width) {
+            return Err(TopParamsError::PeriodWidth(self.p_width));
+        }
+        if !within(self.timing_w, regs::axis_timing_a::STEP_LEN.width) {
+            return Err(TopParamsError::TimingWidth(self.timing_w));
+        }
+        if !within(self.fifo_depth_log2, MAX_FIFO_DEPTH_LOG2) {
+            return Err(TopParamsError::FifoDepth(self.fifo_depth_log2));
+        }
+        if !within(self.wd_w, regs::watchdog_timeout::CLOCKS.width) {
+            return Err(TopParamsError::WatchdogWidth(self.wd_w));
+        }
+        Ok(())
+    }
+
+    /// The parameters of the core inside.
+    pub fn core_params(&self) -> CoreParams {
+        CoreParams { n_axes: self.n_axes, p_width: self.p_width, timing_width: self.timing_w }
+    }
+}
+
+/// Bit positions of the packed pins (the layout of the Verilator shim).
+pub mod top_pins {
+    /// Bits of [`TopInputs::pack`](super::TopInputs::pack).
+    pub mod input {
+        /// `rst`.
+        pub const RST: u32 = 0;
+        /// `spi_cs_n`.
+        pub const SPI_CS_N: u32 = 1;
+        /// `spi_sck`.
+        pub const SPI_SCK: u32 = 2;
+        /// `spi_mosi`.
+        pub const SPI_MOSI: u32 = 3;
+        /// `bus_cs_n`.
+        pub const BUS_CS_N: u32 = 4;
+        /// `bus_adv_n`.
+        pub const BUS_ADV_N: u32 = 5;
+        /// `bus_rd_n`.
+        pub const BUS_RD_N: u32 = 6;
+        /// `bus_wr_n`.
+        pub const BUS_WR_N: u32 = 7;
+        /// `estop_pin`.
+        pub const ESTOP_PIN: u32 = 8;
+        /// Lowest bit of `bus_ad_in[15:0]` (bits 16..=31).
+        pub const BUS_AD_IN: u32 = 16;
+    }
+
+    /// Bits of [`TopOutputs::pack`](super::TopOutputs::pack).
+    pub mod output {
+        /// `pin_a[axis]`.
+        pub const fn pin_a(axis: usize) -> u32 {
+            axis as u32
+        }
+        /// `pin_b[axis]`.
+        pub const fn pin_b(axis: usize) -> u32 {
+            8 + axis as u32
+        }
+        /// `pin_en[axis]`.
+        pub const fn pin_en(axis: usize) -> u32 {
+            16 + axis as u32
+        }
+        /// `spi_miso`.
+        pub const SPI_MISO: u32 = 24;
+        /// `spi_miso_oe`.
+        pub const SPI_MISO_OE: u32 = 25;
+        /// `irq`.
+        pub const IRQ: u32 = 26;
+        /// `bus_ad_oe`.
+        pub const BUS_AD_OE: u32 = 27;
+        /// Lowest bit of `bus_ad_out[15:0]` (bits 32..=47).
+        pub const BUS_AD_OUT: u32 = 32;
+    }
+}
+
+/// Every input pin of the top in one cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TopInputs {
+    /// Synchronous reset, active high; hold at least 2 cycles.
+    pub rst: bool,
+    /// SPI chip select, active low.
+    pub spi_cs_n: bool,
+    /// SPI clock.
+    pub spi_sck: bool,
+    /// SPI MOSI.
+    pub spi_mosi: bool,
+    /// 8080 chip select, active low.
+    pub bus_cs_n: bool,
+    /// 8080 address valid, active low.
+    pub bus_adv_n: bool,
+    /// 8080 read strobe, active low.
+    pub bus_rd_n: bool,
+    /// 8080 write strobe, active low.
+    pub bus_wr_n: bool,
+    /// 8080 multiplexed address/data from the host.
+    pub bus_ad_in: u16,
+    /// The E-stop input; its active level is `CONTROL.ESTOP_ACTIVE_HIGH`.
+    pub estop_pin: bool,
+}
+
+impl Default for TopInputs {
+    /// Idle pins: not in reset, chip selects and strobes high, SCK and MOSI low,
+    /// `bus_ad_in` 0, and `estop_pin` 0, which is *released* for the reset polarity
+    /// (`CONTROL.ESTOP_ACTIVE_HIGH = 1`).
+    fn default() -> Self {
+        TopInputs {
+            rst: false,
+            spi_cs_n: true,
+            spi_sck: false,
+            spi_mosi: false,
+            bus_cs_n: true,
+            bus_adv_n: true,
+            bus_rd_n: true,
+            bus_wr_n: true,
+            bus_ad_in: 0,
+            estop_pin: false,
+        }
+    }
+}
+
+impl TopInputs {
+    /// The pins in one word, see [`top_pins::input`].
+    pub fn pack(&self) -> u64 {
+        use top_pins::input as i;
+        u64::from(self.rst) << i::RST
+            | u64::from(self.spi_cs_n) << i::SPI_CS_N
+            | u64::from(self.spi_sck) << i::SPI_SCK
+            | u64::from(self.spi_mosi) << i::SPI_MOSI
+            | u64::from(self.bus_cs_n) << i::BUS_CS_N
+            | u64::from(self.bus_adv_n) << i::BUS_ADV_N
+            | u64::from(self.bus_rd_n) << i::BUS_RD_N
+            | u64::from(self.bus_wr_n) << i::BUS_WR_N
+            | u64::from(self.estop_pin) << i::ESTOP_PIN
+            | u64::from(self.bus_ad_in) << i::BUS_AD_IN
+    }
+
+    /// The pins from one word (bits not in [`top_pins::input`] are ignored).
+    pub fn unpack(word: u64) -> Self {
+        use top_pins::input as i;
+        let bit = |index: u32| word >> index & 1 != 0;
+        TopInputs {
+            rst: bit(i::RST),
+            spi_cs_n: bit(i::SPI_CS_N),
+            spi_sck: bit(i::SPI_SCK),
+            spi_mosi: bit(i::SPI_MOSI),
+            bus_cs_n: bit(i::BUS_CS_N),
+            bus_adv_n: bit(i::BUS_ADV_N),
+            bus_rd_n: bit(i::BUS_RD_N),
+            bus_wr_n: bit(i::BUS_WR_N),
+            bus_ad_in: (word >> i::BUS_AD_IN) as u16,
+            estop_pin: bit(i::ESTOP_PIN),
+        }
+    }
+}
+
+/// Every output pin of the top in one cycle (all flip-flops).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TopOutputs {
+    /// `pin_a`, bit `i` for axis `i` (0 at and above `N_AXES`).
+    pub pin_a: u8,
+    /// `pin_b`, bit `i` for axis `i`.
+    pub pin_b: u8,
+    /// `pin_en`, bit `i` for axis `i`.
+    pub pin_en: u8,
+    /// `spi_miso` (meaningful while `spi_miso_oe`).
+    pub spi_miso: bool,
+    /// `spi_miso_oe`: the SPI link is selected.
+    pub spi_miso_oe: bool,
+    /// `irq`, active high.
+    pub irq: bool,
+    /// `bus_ad_oe`: the parallel slave drives `bus_ad`.
+    pub bus_ad_oe: bool,
+    /// `bus_ad_out`.
+    pub bus_ad_out: u16,
+}
+
+impl TopOutputs {
+    /// The pins in one word, see [`top_pins::output`].
+    pub fn pack(&self) -> u64 {
+        use top_pins::output as o;
+        u64::from(self.pin_a) << o::pin_a(0)
+            | u64::from(self.pin_b) << o::pin_b(0)
+            | u64::from(self.pin_en) << o::pin_en(0)
+            | u64::from(self.spi_miso) << o::SPI_MISO
+            | u64::from(self.spi_miso_oe) << o::SPI_MISO_OE
+            | u64::from(self.irq) << o::IRQ
+            | u64::from(self.bus_ad_oe) << o::BUS_AD_OE
+            | u64::from(self.bus_ad_out) << o::BUS_AD_OUT
+    }
+
+    /// The pins from one word (bits not in [`top_pins::output`] are ignored).
+    pub fn unpack(word: u64) -> Self {
+        use top_pins::output as o;
+        let bit = |index: u32| word >> index & 1 != 0;
+        TopOutputs {
+            pin_a: (word >> o::pin_a(0)) as u8,
+            pin_b: (word >> o::pin_b(0)) as u8,
+            pin_en: (word >> o::pin_en(0)) as u8,
+            spi_miso: bit(o::SPI_MISO),
+            spi_miso_oe: bit(o::SPI_MISO_OE),
+            irq: bit(o::IRQ),
+            bus_ad_oe: bit(o::BUS_AD_OE),
+            bus_ad_out: (word >> o::BUS_AD_OUT) as u16,
+        }
+    }
+
+    /// Pin A of `axis`.
+    pub fn pin_a(&self, axis: usize) -> bool {
+        axis < MAX_AXES && self.pin_a >> axis & 1 != 0
+    }
+
+    /// Pin B of `axis`.
+    pub fn pin_b(&self, axis: usize) -> bool {
+        axis < MAX_AXES && self.pin_b >> axis & 1 != 0
+    }
+
+    /// The enable pin of `axis`.
+    pub fn pin_en(&self, axis: usize) -> bool {
+        axis < MAX_AXES && self.pin_en >> axis & 1 != 0
+    }
+}
+
+/// The cycle-accurate model of `finestep_top`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Top {
+    params: TopParams,
+    spi_phy: SpiSlavePhy,
+    spi_frame: SpiFrame,
+    parallel: ParallelBusSlave,
+    registers: RegisterFile,
+    motion: MotionControl,
+    fifo: PositionFifo,
+    safety: SafetyMonitor,
+    core: Core,
+    cycle: u64,
+}
+
+impl Top {
+    /// A top in its reset state (the state after `rst`; power-on state is the same).
+    ///
+    /// # Panics
+    /// If `params` is outside the supported ranges (see [`TopParams::validate`]);
+    /// [`Top::try_new`] returns the error instead.
+    pub fn new(params: TopParams) -> Top {
+        match Top::try_new(params) {
+            Ok(top) => top,
+            Err(e) => panic!("invalid top parameters: {e}"),
+        }
+    }
+
+    /// A top in its reset state, or why `params` are not supported.
+    pub fn try_new(params: TopParams) -> Result<Top, TopParamsError> {
+        params.validate()?;
+        let registers = RegisterFile::new(&params);
+        let safety = SafetyMonitor::new(params.wd_w, ESTOP_FILTER_WIDTH, &safety_config(&registers));
+        Ok(Top {
+            params,
+            spi_phy: SpiSlavePhy::default(),
+            spi_frame: SpiFrame::new(params.n_axes),
+            parallel: ParallelBusSlave::default(),
+            registers,
+            motion: MotionControl::default(),
+            fifo: PositionFifo::new(params.fifo_depth_log2),
+            safety,
+            core: Core::new(params.core_params()),
+            cycle: 0,
+        })
+    }
+
+    /// The design parameters.
+    pub fn params(&self) -> TopParams {
+        self.params
+    }
+
+    /// Clock edges since this model was made (resets do not restart it; `TIMESTAMP`
+    /// does).
+    pub fn cycle(&self) -> u64 {
+        self.cycle
+    }
+
+    /// The core.
+    pub fn core(&self) -> &Core {
+        &self.core
+    }
+
+    /// The position FIFO.
+    pub fn fifo(&self) -> &PositionFifo {
+        &self.fifo
+    }
+
+    /// The FIFO's committed records (`FIFO_LEVEL.LEVEL`).
+    pub fn fifo_level(&self) -> usize {
+        self.fifo.level()
+    }
+
+    /// The safety monitor.
+    pub fn safety(&self) -> &SafetyMonitor {
+        &self.safety
+    }
+
+    /// Motion control.
+    pub fn motion(&self) -> &MotionControl {
+        &self.motion
+    }
+
+    /// The register file.
+    pub fn registers(&self) -> &RegisterFile {
+        &self.registers
+    }
+
+    /// The SPI byte-level slave.
+    pub fn spi_phy(&self) -> &SpiSlavePhy {
+        &self.spi_phy
+    }
+
+    /// The SPI frame layer.
+    pub fn spi_frame(&self) -> &SpiFrame {
+        &self.spi_frame
+    }
+
+    /// The parallel slave.
+    pub fn parallel(&self) -> &ParallelBusSlave {
+        &self.parallel
+    }
+
+    /// `halt`: the safety monitor stops the machine.
+    pub fn halt(&self) -> bool {
+        self.safety.halt()
+    }
+
+    /// `core_run = CONTROL.RUN && !halt`.
+    pub fn core_run(&self) -> bool {
+        self.registers.run() && !self.halt()
+    }
+
+    /// The value a register-bus read of `addr` would latch now.
+    pub fn register(&self, addr: u8) -> u32 {
+        self.registers.read(addr, &self.hardware_status())
+    }
+
+    /// The outputs in the current cycle (a function of the state only).
+    pub fn outputs(&self) -> TopOutputs {
+        let mut out = TopOutputs::default();
+        for axis in 0..self.params.n_axes {
+            let (a, b, en) = self.core.shaper(axis).pins();
+            out.pin_a |= u8::from(a) << axis;
+            out.pin_b |= u8::from(b) << axis;
+            out.pin_en |= u8::from(en) << axis;
+        }
+        if self.params.has_spi {
+            out.spi_miso = self.spi_phy.miso();
+            out.spi_miso_oe = self.spi_phy.miso_oe();
+        }
+        out.irq = self.registers.irq();
+        if self.params.has_parallel {
+            out.bus_ad_oe = self.parallel.ad_oe();
+            out.bus_ad_out = self.parallel.ad_out();
+        }
+        out
+    }
+
+    /// The hardware values register reads show in this cycle.
+    fn hardware_status(&self) -> HardwareStatus {
+        let core_out = self.core.outputs();
+        let mut rate_error = 0;
+        let mut step_lost = 0;
+        for axis in 0..self.params.n_axes {
+            rate_error |= u8::from(core_out.rate_error(axis)) << axis;
+            step_lost |= u8::from(core_out.step_lost(axis)) << axis;
+        }
+        let config = safety_config(&self.registers);
+        HardwareStatus {
+            core_run: self.core_run(),
+            gate: self.motion.gate(),
+            halt: self.halt(),
+            fault_estop: self.safety.fault_estop(),
+            fault_watchdog: self.safety.fault_watchdog(),
+            estop_active: self.safety.estop_active(&config),
+            underrun: self.motion.underrun(),
+            record_error: core_out.record_error(),
+            rate_error,
+            step_lost,
+            fifo_level: self.fifo.level(),
+            fifo_free: self.fifo.depth() - self.fifo.level() - self.fifo.staged(),
+        }
+    }
+
+    /// Synchronous reset. The safety monitor takes its configuration from the register
+    /// file as it is in this cycle (why `rst` must last 2 cycles).
+    fn reset(&mut self) {
+        let config = safety_config(&self.registers);
+        let cycle = self.cycle;
+        *self = Top::new(self.params);
+        self.safety = SafetyMonitor::new(self.params.wd_w, ESTOP_FILTER_WIDTH, &config);
+        self.cycle = cycle;
+    }
+
+    /// One rising clock edge with the pins of this cycle.
+    pub fn step(&mut self, inputs: &TopInputs) {
+        self.cycle = self.cycle.wrapping_add(1);
+        if inputs.rst {
+            self.reset();
+            return;
+        }
+        let p = self.params;
+        let hw = self.hardware_status();
+        let halt = hw.halt;
+        let core_out = self.core.outputs();
+
+        // The register bus: SPI has priority.
+        let spi_request = if p.has_spi { self.spi_frame.request() } else { None };
+        let parallel_request = if p.has_parallel { self.parallel.request() } else { None };
+        let grant = arbitrate(spi_request, parallel_request);
+        let served = grant.map(|(_, request)| request);
+        let rdata = self.registers.rdata();
+
+        // The FIFO's write port and read side.
+        let spi_port = self.spi_frame.fifo_port();
+        let head = self.fifo.head().copied();
+        let motion_inputs = MotionInputs {
+            core_run: hw.core_run,
+            rec_ready: core_out.rec_ready(),
+            head: head.as_ref(),
+            level: self.fifo.level(),
+            start_level: self.registers.start_level(),
+            clear_errors: self.registers.clear_errors(),
+        };
+        let pop = self.motion.pop(&motion_inputs);
+        let (fifo_inputs, push_refused) = self.registers.fifo_port(&spi_port, self.fifo.full(), halt, pop);
+
+        let mut core_inputs = CoreInputs {
+            run: hw.core_run,
+            period_clocks: self.registers.period_clocks(),
+            clear_errors: self.registers.clear_errors(),
+            rec_valid: self.motion.rec_valid(&motion_inputs),
+            record: head.unwrap_or_default(),
+            halt,
+            ..CoreInputs::default()
+        };
+        for (axis, config) in core_inputs.axes.iter_mut().enumerate().take(p.n_axes) {
+            *config = self.registers.axis_config(axis);
+        }
+        let mut safety_inputs = safety_config(&self.registers);
+        safety_inputs.kick = self.registers.kick() || spi_port.commit;
+        safety_inputs.clear_faults = self.registers.clear_faults();
+        safety_inputs.estop_pin = inputs.estop_pin;
+
+        // The host links.
+        let mut spi_events = Default::default();
+        let latch_hold = p.has_spi && self.spi_frame.latch_hold();
+        if p.has_spi {
+            let phy = &self.spi_phy;
+            let frame_inputs = SpiFrameInputs {
+                frame_start: phy.frame_start(),
+                frame_end: phy.frame_end(),
+                frame_whole: phy.frame_whole(),
+                rx_valid: phy.rx_valid(),
+                rx_byte: phy.rx_byte(),
+                fifo_free: hw.fifo_free,
+                fifo_flush: fifo_inputs.flush,
+                granted: matches!(grant, Some((Grant::Spi, _))),
+                rdata,
+            };
+            let tx_byte = if phy.takes_tx_byte() {
+                let status = self.registers.read(regs::status::ADDR, &hw);
+                self.spi_frame.tx_byte(status as u8)
+            } else {
+                0
+            };
+            let pins = SpiPins { cs_n: inputs.spi_cs_n, sck: inputs.spi_sck, mosi: inputs.spi_mosi };
+            self.spi_phy.step(&pins, tx_byte);
+            spi_events = self.spi_frame.step(&frame_inputs);
+        }
+        let mut parallel_error = false;
+        if p.has_parallel {
+            let pins = ParallelPins {
+                cs_n: inputs.bus_cs_n,
+                adv_n: inputs.bus_adv_n,
+                rd_n: inputs.bus_rd_n,
+                wr_n: inputs.bus_wr_n,
+                ad: inputs.bus_ad_in,
+            };
+            let granted = matches!(grant, Some((Grant::Parallel, _)));
+            parallel_error = self.parallel.step(&pins, granted, rdata);
+        }
+
+        let underrun = self.motion.step(&motion_inputs);
+        self.registers.step(&RegisterFileInputs {
+            served,
+            hw,
+            rec_ready: core_out.rec_ready(),
+            block_end: core_out.block_end(),
+            positions: core_out.positions,
+            latch_hold,
+            spi: spi_events,
+            parallel_error,
+            underrun,
+            push_refused,
+        });
+        self.fifo.step(&fifo_inputs);
+        self.safety.step(&safety_inputs);
+        self.core.step(&core_inputs);
+    }
+}
+
+/// The safety monitor's configuration from the register file (kick, clear and pin
+/// left inactive).
+fn safety_config(registers: &RegisterFile) -> SafetyInputs {
+    SafetyInputs {
+        watchdog_enable: registers.watchdog_enable(),
+        watchdog_timeout: registers.watchdog_timeout(),
+        estop_active_high: registers.estop_active_high(),
+        estop_filter: registers.estop_filter(),
+        ..SafetyInputs::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pins_pack_and_unpack() {
+        let inputs = TopInputs { rst: true, spi_mosi: true, bus_ad_in: 0xBEEF, estop_pin: true, ..TopInputs::default() };
+        let word = inputs.pack();
+        assert_eq!(word, 1 | 0b10 | 0b1000 | 0b1111_0000 | 1 << 8 | 0xBEEF << 16);
+        assert_eq!(TopInputs::unpack(word), inputs);
+        let outputs = TopOutputs { pin_a: 0x81, pin_en: 0x0F, irq: true, bus_ad_out: 0x1234, ..TopOutputs::default() };
+        assert_eq!(outputs.pack(), 0x81 | 0x0F << 16 | 1 << 26 | 0x1234 << 32);
+        assert_eq!(TopOutputs::unpack(outputs.pack()), outputs);
+    }
+
+    #[test]
+    fn bad_params_are_refused() {
+        let bad = |p: TopParams| Top::try_new(p).unwrap_err();
+        let d = TopParams::default();
+        assert_eq!(bad(TopParams { n_axes: 0, ..d }), TopParamsError::Axes(0));
+        assert_eq!(bad(TopParams { p_width: 25, ..d }), TopParamsError::PeriodWidth(25));
+        assert_eq!(bad(TopParams { timing_w: 17, ..d }), TopParamsError::TimingWidth(17));
+        assert_eq!(bad(TopParams { fifo_depth_log2: 16, ..d }), TopParamsError::FifoDepth(16));
+        assert_eq!(bad(TopParams { wd_w: 0, ..d }), TopParamsError::WatchdogWidth(0));
+        assert!(std::panic::catch_unwind(|| Top::new(TopParams { n_axes: 9, ..d })).is_err());
+    }
+
+    #[test]
+    fn power_on_equals_reset_and_reads_the_map() {
+        let mut top = Top::new(TopParams::default());
+        let fresh = top.clone();
+        for _ in 0..10 {
+            top.step(&TopInputs::default());
+        }
+        top.step(&TopInputs { rst: true, ..TopInputs::default() });
+        top.step(&TopInputs { rst: true, ..TopInputs::default() });
+        assert_eq!(Top { cycle: 0, ..top.clone() }, fresh);
+        assert_eq!(top.register(regs::id::ADDR), regs::id::MAGIC_VALUE);
+        let caps = top.register(regs::caps::ADDR);
+        assert_eq!(regs::caps::N_AXES.get(caps), 4);
+        assert_eq!(regs::caps::P_WIDTH.get(caps), 20);
+        assert_eq!(top.outputs(), TopOutputs::default());
+    }
+}

@@ -1,0 +1,224 @@
+//! The 8080/FSMC link of `finestep_top`, driven by a pin-level master: 32-bit writes
+//! and coherent 32-bit reads, the read timing of the README, and aborted or mismatched
+//! cycles that must write nothing.
+
+mod host;
+
+use finestep_model::top::TopParams;
+use finestep_model::MAX_AXES;
+use finestep_regmap::regs;
+use host::*;
+use proptest::prelude::*;
+
+fn master() -> impl Strategy<Value = ParallelMaster> {
+    (3..7u64, 3..7u64, 9..14u64, 4..9u64)
+        .prop_map(|(adv_low, wr_low, rd_low, recovery)| ParallelMaster { adv_low, wr_low, rd_low, recovery })
+}
+
+#[test]
+fn register_writes_read_back_as_stored() {
+    let mut runner = finestep_testkit::runner("parallel_register_writes_read_back", 64);
+    let case = (
+        1..=MAX_AXES,
+        1..=16u32,
+        master(),
+        prop::collection::vec((any::<prop::sample::Index>(), any::<u32>()), 1..24),
+    );
+    runner
+        .run(&case, |(n_axes, timing_w, bus, writes)| {
+            let p = TopParams { n_axes, timing_w, ..TopParams::default() };
+            let mut bench = Bench::new(p);
+            let addrs = rw_addresses(&p);
+            let mut expected: Vec<u32> = (0..128).map(|a| rw_reset(a as u8, &p)).collect();
+            for (index, value) in writes {
+                let addr = addrs[index.index(addrs.len())];
+                bus.write32(&mut bench, addr, value);
+                let mut stored = value & rw_mask(addr, &p).unwrap();
+                if addr == regs::control::ADDR {
+                    stored = regs::control::RUN.set(stored, 0); // halted since reset
+                }
+                expected[usize::from(addr)] = stored;
+                prop_assert_eq!(bus.read32(&mut bench, addr), stored, "register {:#04x}", addr);
+            }
+            for &addr in &addrs {
+                prop_assert_eq!(bus.read32(&mut bench, addr), expected[usize::from(addr)], "register {:#04x}", addr);
+            }
+            prop_assert_eq!(bench.reg(regs::parallel_error_count::ADDR), 0);
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// `TIMESTAMP` counts clocks from reset, so its true value in every cycle is known: a
+/// 32-bit read must give the value of one cycle within its low-half strobe, also when
+/// the low half wraps between the halves and SPI traffic or a pause comes in between.
+#[test]
+fn thirty_two_bit_reads_are_coherent_across_the_low_half_wrap() {
+    let mut runner = finestep_testkit::runner("parallel_reads_are_coherent", 96);
+    let case = (master(), 0..200u64, prop::bool::ANY, prop_oneof![Just(0u64), 0..300u64]);
+    runner
+        .run(&case, |(bus, offset, spi_between, pause)| {
+            let mut bench = Bench::new(TopParams::default());
+            // Start the read so the low half wraps (0xFFFF -> 0x0000) between halves.
+            bench.clock((0x1_0000u64 - 100).saturating_sub(bench.since_reset) + offset / 2);
+            let start = bench.since_reset;
+            let low = bus.read16(&mut bench, regs::timestamp::ADDR, false).expect("low half driven");
+            let low_end = bench.since_reset;
+            if spi_between {
+                SpiMaster::default().read(&mut bench, regs::timestamp::ADDR, 2);
+            }
+            bench.clock(pause);
+            let high = bus.read16(&mut bench, regs::timestamp::ADDR, true).expect("high half driven");
+            let value = u64::from(high) << 16 | u64::from(low);
+            prop_assert!(value >= start && value <= low_end, "value {:#x} outside [{:#x}, {:#x}]", value, start, low_end);
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn read_data_timing_is_as_documented() {
+    let mut bench = Bench::new(TopParams::default());
+    let bus = ParallelMaster::default();
+    // Address phase, then hold bus_rd_n low and watch bus_ad_oe.
+    bench.pins.bus_cs_n = false;
+    bench.pins.bus_ad_in = u16::from(regs::id::ADDR) << 1;
+    bench.pins.bus_adv_n = false;
+    bench.clock(bus.adv_low);
+    bench.pins.bus_adv_n = true;
+    bench.pins.bus_rd_n = false;
+    let fall = bench.since_reset;
+    let mut first_driven = None;
+    for _ in 0..12 {
+        bench.clock(1);
+        let out = bench.top.outputs();
+        if out.bus_ad_oe && first_driven.is_none() {
+            first_driven = Some(bench.since_reset - fall);
+            assert_eq!(out.bus_ad_out, regs::id::MAGIC_VALUE as u16);
+        }
+    }
+    assert!(first_driven.is_some_and(|d| d <= 6), "driven {first_driven:?} clocks after bus_rd_n fell, README: from 6");
+    bench.pins.bus_rd_n = true;
+    let rise = bench.since_reset;
+    let mut released = None;
+    for _ in 0..8 {
+        bench.clock(1);
+        if !bench.top.outputs().bus_ad_oe && released.is_none() {
+            released = Some(bench.since_reset - rise);
+        }
+    }
+    assert_eq!(released, Some(3), "README: released 3 clocks after bus_rd_n rises");
+    // The high half was latched by the low-half read.
+    bench.pins.bus_cs_n = true;
+    bench.clock(4);
+    assert_eq!(bus.read16(&mut bench, regs::id::ADDR, true), Some((regs::id::MAGIC_VALUE >> 16) as u16));
+}
+
+#[test]
+fn mismatched_and_aborted_cycles_write_nothing_and_count() {
+    let bus = ParallelMaster::default();
+    let p = TopParams::default();
+    let mut bench = Bench::new(p);
+    let target = regs::fifo_watermark::ADDR;
+    let other = regs::start_level::ADDR;
+    let before = (bench.reg(target), bench.reg(other));
+    // A high half alone.
+    bus.write16(&mut bench, target, true, 0x1234);
+    // A low half of one register completed by the high half of another.
+    bus.write16(&mut bench, other, false, 0x0005);
+    bus.write16(&mut bench, target, true, 0x0000);
+    // A low half, then a read (which drops the held low half), then the high half.
+    bus.write16(&mut bench, target, false, 0x0007);
+    bus.read16(&mut bench, regs::id::ADDR, false);
+    bus.write16(&mut bench, target, true, 0x0000);
+    bench.clock(4);
+    assert_eq!((bench.reg(target), bench.reg(other)), before, "nothing written");
+    assert_eq!(bench.reg(regs::parallel_error_count::ADDR), 3);
+    assert_eq!(regs::status::BUS_ERROR.get(bench.reg(regs::status::ADDR)), 1);
+    // A read strobe too short to be answered in time, then a normal read: still right.
+    let short = ParallelMaster { rd_low: 3, ..bus };
+    short.read16(&mut bench, regs::id::ADDR, false);
+    assert_eq!(bus.read32(&mut bench, regs::id::ADDR), regs::id::MAGIC_VALUE);
+    // A complete 32-bit write after all that.
+    bus.write32(&mut bench, target, 0x0000_0042);
+    assert_eq!(bench.reg(target), 0x42);
+    assert_eq!(bench.reg(regs::parallel_error_count::ADDR), 3);
+}
+
+/// Both host links at once: the SPI frame layer has priority on the register bus and
+/// the 8080 slave waits for it, within the 8080 read timing; every access of both is
+/// right.
+#[test]
+fn spi_and_parallel_at_once_both_get_their_accesses() {
+    let mut runner = finestep_testkit::runner("spi_and_parallel_at_once", 96);
+    let case = (
+        0..400usize,
+        prop::collection::vec(any::<u32>(), 1..4),
+        prop::collection::vec(any::<u32>(), 1..4),
+        4..7u64,
+    );
+    runner
+        .run(&case, |(delay, spi_values, bus_values, half_period)| {
+            let p = TopParams::default();
+            let mut bench = Bench::new(p);
+            let spi = SpiMaster { half_period, ..SpiMaster::default() };
+            let bus = ParallelMaster::default();
+            // SPI writes RECORD_INC[k] and reads them all back in one frame; the 8080
+            // master writes and reads AXIS_TIMING_A[k] meanwhile.
+            let mut spi_bytes = vec![];
+            for (k, value) in spi_values.iter().enumerate() {
+                spi_bytes.push(write_frame(regs::record_inc::addr(k), *value));
+            }
+            let count = spi_values.len() as u8;
+            let mut read = vec![CMD_READ, regs::record_inc::ADDR, count];
+            read.resize(3 + 4 * usize::from(count) + 2, 0);
+            let mut spi_wave = Waveform { pins: vec![(true, false, false); delay], samples: vec![] };
+            let mut frame_samples = vec![];
+            for bytes in spi_bytes.iter().chain([&read]) {
+                let wave = spi.waveform(bytes, None);
+                let offset = spi_wave.pins.len();
+                frame_samples.push((spi_wave.samples.len(), wave.samples.len()));
+                spi_wave.samples.extend(wave.samples.iter().map(|s| s + offset));
+                spi_wave.pins.extend(wave.pins);
+            }
+            let mut accesses = vec![];
+            for (k, value) in bus_values.iter().enumerate() {
+                accesses.extend(ParallelMaster::write32_accesses(regs::axis_timing_a::addr(k), *value));
+            }
+            for k in 0..bus_values.len() {
+                accesses.extend(ParallelMaster::read32_accesses(regs::axis_timing_a::addr(k)));
+            }
+            // Repeat the reads for the whole SPI traffic, so requests collide.
+            let mut bus_wave = bus.waveform(&accesses);
+            let reads: Vec<BusAccess> = (0..bus_values.len()).flat_map(|k| ParallelMaster::read32_accesses(regs::axis_timing_a::addr(k))).collect();
+            while bus_wave.pins.len() < spi_wave.pins.len() {
+                let more = bus.waveform(&reads);
+                let offset = bus_wave.pins.len();
+                bus_wave.samples.extend(more.samples.iter().map(|s| s + offset));
+                bus_wave.pins.extend(more.pins);
+            }
+            let (miso, ad) = run_waveforms(&mut bench, &spi_wave, &bus_wave);
+
+            let timing_mask = 0x0FFF_0FFF;
+            let expected: Vec<u32> = bus_values.iter().map(|v| v & timing_mask).collect();
+            for (i, pair) in ad.chunks(2).enumerate() {
+                let low = pair[0].expect("low half not driven");
+                let high = pair[1].expect("high half not driven");
+                let k = i % bus_values.len();
+                prop_assert_eq!(u32::from(high) << 16 | u32::from(low), expected[k], "8080 read {} of AXIS_TIMING_A[{}]", i, k);
+            }
+            for (frame, &(first, len)) in frame_samples.iter().enumerate() {
+                let rx = bits_to_bytes(&miso[first..first + len]);
+                if frame < spi_values.len() {
+                    prop_assert_eq!(rx[rx.len() - 1], ACK, "SPI write {}", frame);
+                } else {
+                    let words: Vec<u32> = rx[3..3 + 4 * usize::from(count)].chunks(4).map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]])).collect();
+                    prop_assert_eq!(&words, &spi_values, "SPI read-back");
+                }
+            }
+            prop_assert_eq!(bench.reg(regs::parallel_error_count::ADDR), 0);
+            prop_assert_eq!(bench.reg(regs::frame_error_count::ADDR), 0);
+            Ok(())
+        })
+        .unwrap();
+}

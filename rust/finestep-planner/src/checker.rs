@@ -1,0 +1,416 @@
+//! An independent check of a planned program, from the emitted records and the parsed
+//! program alone. It shares no code with the planner's geometry, look-ahead or profile
+//! math: it rebuilds the programmed geometry from the G-code blocks itself, and reads
+//! the machine's limits from the configuration.
+//!
+//! From the increments it rebuilds the commanded position at every period boundary
+//! (the machine at rest at the origin before the first record and after the last),
+//! and from its differences per-axis velocity `u_k = dx_k / T`, acceleration
+//! `(u_k - u_{k-1}) / T` and jerk `(a_k - a_{k-1}) / T`, and the path's (vector norm over
+//! the axes). It asserts:
+//!
+//! - every axis within its velocity and acceleration limit, and in S-curve mode its
+//!   jerk limit (a trapezoid profile has unbounded jerk by design: reported only);
+//! - path speed within the programmed feed of the block(s) the period runs on; path
+//!   acceleration and jerk within the norm of the per-axis limits (which they must be
+//!   when every axis is within its own);
+//! - every period boundary within the allowed distance of the programmed path: the
+//!   G64 tolerance P of a neighbouring corner (0 in G61), plus the chord tolerance,
+//!   plus half a step per axis (vertices are rounded to whole steps); chord midpoints too;
+//! - the position exactly (in Q16.16 steps) on every exact stop and the program end;
+//! - every record within the drive's rated rate (the model's `RateChecker`).
+//!
+//! # Quantisation tolerance
+//!
+//! Each position is the exact one rounded to the core's 2^-16 step grid, so it is off
+//! by at most `e = 2^-17` steps, `e / steps_per_unit` units. A k-th difference of
+//! positions sums k+1 of them with coefficients whose magnitudes add to 2^k, so the
+//! velocity may read up to `2e/T` high, the acceleration `4e/T^2`, the jerk `8e/T^3`.
+//! The limits are asserted with these added, and a relative 1e-9 for floating point.
+
+use std::f64::consts::TAU;
+
+use finestep_gcode::{BlockKind, PathControl, Plane, Program};
+use finestep_model::limits::RateChecker;
+use finestep_model::PeriodRecord;
+
+use crate::config::{ConfigError, MachineConfig, ProfileKind, AXIS_NAMES};
+
+/// Motion at one period boundary, from the increments.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Sample {
+    /// Commanded position, units.
+    pub position: [f64; 4],
+    /// Path speed over the period ending here, units/s.
+    pub speed: f64,
+    /// Path acceleration (norm), units/s^2.
+    pub acceleration: f64,
+    /// Path jerk (norm), units/s^3.
+    pub jerk: f64,
+}
+
+/// What the check found.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct CheckReport {
+    /// Periods checked.
+    pub periods: usize,
+    /// The period, s.
+    pub period_s: f64,
+    /// Largest per-axis velocity, acceleration and jerk seen, units/s^k.
+    pub axis_max: [[f64; 3]; 4],
+    /// Their limits (jerk: infinite unless the profile is S-curve).
+    pub axis_limit: [[f64; 3]; 4],
+    /// Which axes exist.
+    pub axis_present: [bool; 4],
+    /// Largest path speed, acceleration and jerk seen.
+    pub path_max: [f64; 3],
+    /// Largest ratio of path speed to the feed allowed there.
+    pub max_feed_ratio: f64,
+    /// Largest distance of a period boundary or chord midpoint from the programmed path, units.
+    pub max_deviation: f64,
+    /// The source line where it occurs.
+    pub max_deviation_line: usize,
+    /// Final position minus the programmed end, steps (Q16.16 raw / 65536).
+    pub endpoint_error_steps: [f64; 4],
+    /// Exact stops checked.
+    pub exact_stops: usize,
+    /// Every period boundary.
+    pub samples: Vec<Sample>,
+    /// What broke a limit, the first few, with the period.
+    pub violations: Vec<String>,
+    /// How many violations in all.
+    pub violation_count: usize,
+}
+
+impl CheckReport {
+    fn violate(&mut self, message: String) {
+        self.violation_count += 1;
+        if self.violations.len() < 20 {
+            self.violations.push(message);
+        }
+    }
+
+    /// Whether every assertion held.
+    pub fn passed(&self) -> bool {
+        self.violation_count == 0
+    }
+}
+
+/// An arc as the checker reads it: plane axes, centre, start radius, start angle and
+/// signed sweep.
+type ArcGeometry = ((usize, usize), (f64, f64), f64, f64, f64);
+
+/// A programmed piece of path as the checker understands it.
+#[derive(Clone, Copy, Debug)]
+struct Piece {
+    line: usize,
+    start: [f64; 4],
+    end: [f64; 4],
+    /// Plane axes, centre, start radius, start angle, signed sweep for arcs.
+    arc: Option<ArcGeometry>,
+    feed: f64,
+    /// G64 tolerance of its mode (0 in G61): the corner at its end.
+    own_tolerance: f64,
+    /// Allowed distance from it (corner tolerances of its two ends).
+    allowance: f64,
+    /// Stops exactly at its end.
+    stops: bool,
+}
+
+impl Piece {
+    fn point(&self, f: f64) -> [f64; 4] {
+        let mut p: [f64; 4] = std::array::from_fn(|a| self.start[a] + f * (self.end[a] - self.start[a]));
+        if let Some(((u, v), (cu, cv), r0, theta0, sweep)) = self.arc {
+            let r1 = (self.end[u] - cu).hypot(self.end[v] - cv);
+            let r = r0 + f * (r1 - r0);
+            let theta = theta0 + f * sweep;
+            p[u] = cu + r * theta.cos();
+            p[v] = cv + r * theta.sin();
+        }
+        p
+    }
+
+    /// Distance from `q` to the piece.
+    fn distance(&self, q: &[f64; 4], present: &[bool; 4]) -> f64 {
+        let dist = |p: [f64; 4]| -> f64 { (0..4).filter(|&a| present[a]).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>().sqrt() };
+        match self.arc {
+            None => {
+                let mut along = 0.0;
+                let mut len2 = 0.0;
+                for a in (0..4).filter(|&a| present[a]) {
+                    along += (q[a] - self.start[a]) * (self.end[a] - self.start[a]);
+                    len2 += (self.end[a] - self.start[a]).powi(2);
+                }
+                let f = if len2 > 0.0 { (along / len2).clamp(0.0, 1.0) } else { 0.0 };
+                dist(self.point(f))
+            }
+            Some(((u, v), (cu, cv), _, theta0, sweep)) => {
+                // Start points for a local search: the parameter of q's angle on every
+                // turn the arc makes, and of q's height along a helix's rise.
+                let phi = (q[v] - cv).atan2(q[u] - cu);
+                let base = (phi - theta0) / sweep;
+                let turns = (sweep.abs() / TAU).ceil() as i64 + 1;
+                let mut starts: Vec<f64> = (-turns..=turns).map(|k| base + k as f64 * TAU / sweep).filter(|f| (0.0..=1.0).contains(f)).collect();
+                let mut rise2 = 0.0;
+                let mut along = 0.0;
+                for a in (0..4).filter(|&a| present[a] && a != u && a != v) {
+                    rise2 += (self.end[a] - self.start[a]).powi(2);
+                    along += (q[a] - self.start[a]) * (self.end[a] - self.start[a]);
+                }
+                if rise2 > 0.0 {
+                    starts.push((along / rise2).clamp(0.0, 1.0));
+                }
+                let d2 = |f: f64| -> f64 { (0..4).filter(|&a| present[a]).map(|a| (self.point(f)[a] - q[a]).powi(2)).sum() };
+                let mut best = dist(self.start).min(dist(self.end));
+                for f0 in starts {
+                    // Newton on the squared distance, numerically, kept within the arc.
+                    let mut f = f0;
+                    let h = 1e-5;
+                    for _ in 0..12 {
+                        let (lo, mid, hi) = (d2(f - h), d2(f), d2(f + h));
+                        let slope = (hi - lo) / (2.0 * h);
+                        let curve = (hi - 2.0 * mid + lo) / (h * h);
+                        if curve.is_nan() || curve <= 0.0 {
+                            break;
+                        }
+                        let next = (f - slope / curve).clamp(0.0, 1.0);
+                        if (next - f).abs() < 1e-12 {
+                            break;
+                        }
+                        f = next;
+                    }
+                    best = best.min(d2(f0).sqrt()).min(d2(f).sqrt());
+                }
+                best
+            }
+        }
+    }
+}
+
+fn arc_sweep(theta0: f64, theta1: f64, clockwise: bool, extra_turns: u32) -> f64 {
+    let mut ccw = theta1 - theta0;
+    while ccw <= 1e-12 {
+        ccw += TAU;
+    }
+    while ccw > TAU + 1e-12 {
+        ccw -= TAU;
+    }
+    // A full turn when the ends coincide, else the short way round in the chosen sense.
+    let one = if clockwise { if ccw >= TAU - 1e-12 { -TAU } else { ccw - TAU } } else { ccw };
+    one + one.signum() * TAU * f64::from(extra_turns)
+}
+
+/// The programmed path, rounded nowhere: the checker measures against the program.
+fn pieces(program: &Program, default_tolerance: f64) -> (Vec<Piece>, Vec<usize>) {
+    let mut out: Vec<Piece> = Vec::new();
+    let mut at = [0.0; 4];
+    let mut tolerance = Some(default_tolerance);
+    let mark_stop = |out: &mut Vec<Piece>| {
+        if let Some(last) = out.last_mut() {
+            last.stops = true;
+        }
+    };
+    for block in &program.blocks {
+        let (to, feed, arc) = match block.kind {
+            BlockKind::Rapid { to } => (to, f64::INFINITY, None),
+            BlockKind::Linear { to, feed_mm_per_min } => (to, feed_mm_per_min / 60.0, None),
+            BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
+                let (u, v) = match plane {
+                    Plane::Xy => (0, 1),
+                    Plane::Zx => (2, 0),
+                    Plane::Yz => (1, 2),
+                };
+                let c = [centre.x_mm, centre.y_mm, centre.z_mm, centre.a_deg];
+                let t = [to.x_mm, to.y_mm, to.z_mm, to.a_deg];
+                let theta0 = (at[v] - c[v]).atan2(at[u] - c[u]);
+                let theta1 = (t[v] - c[v]).atan2(t[u] - c[u]);
+                let r0 = (at[u] - c[u]).hypot(at[v] - c[v]);
+                let sweep = arc_sweep(theta0, theta1, clockwise, extra_turns);
+                (to, feed_mm_per_min / 60.0, Some(((u, v), (c[u], c[v]), r0, theta0, sweep)))
+            }
+            BlockKind::Dwell { .. } | BlockKind::Pause | BlockKind::ToolChange { .. } => {
+                mark_stop(&mut out);
+                continue;
+            }
+            BlockKind::PathControl(PathControl::Blend { tolerance_mm }) => {
+                tolerance = Some(tolerance_mm.filter(|&p| p > 0.0).unwrap_or(default_tolerance));
+                continue;
+            }
+            BlockKind::PathControl(PathControl::ExactPath) => {
+                tolerance = None;
+                continue;
+            }
+            BlockKind::End => break,
+            _ => continue,
+        };
+        let to = [to.x_mm, to.y_mm, to.z_mm, to.a_deg];
+        if arc.is_none() && to == at {
+            continue;
+        }
+        // The corner at a piece's end is blended in the piece's own mode; the corner at
+        // its start in the previous piece's.
+        let before = out.last().filter(|p| !p.stops).map_or(0.0, |p| p.own_tolerance);
+        let own_tolerance = tolerance.unwrap_or(0.0);
+        let allowance = own_tolerance.max(before);
+        out.push(Piece { line: block.line, start: at, end: to, arc, feed, own_tolerance, allowance, stops: tolerance.is_none() });
+        at = to;
+    }
+    mark_stop(&mut out);
+    let stops = (0..out.len()).filter(|&i| out[i].stops).collect();
+    (out, stops)
+}
+
+/// Checks `records` as the plan of `program` on the machine `config` (module docs).
+pub fn check_program(config: &MachineConfig, program: &Program, records: &[PeriodRecord]) -> Result<CheckReport, ConfigError> {
+    let machine = config.resolve()?;
+    let period = machine.period_s;
+    let present: [bool; 4] = machine.axes.map(|a| a.present);
+    let scale: [f64; 4] = machine.axes.map(|a| a.steps_per_unit);
+    let mut report = CheckReport { periods: records.len(), period_s: period, axis_present: present, ..CheckReport::default() };
+    let scurve = machine.profile == ProfileKind::SCurve;
+    let (pieces, stops) = pieces(program, machine.path_tolerance_mm);
+
+    let mut tolerance = [[0.0; 3]; 4];
+    for a in 0..4 {
+        let axis = &machine.axes[a];
+        report.axis_limit[a] = [axis.max_velocity, axis.max_acceleration, if scurve { axis.max_jerk } else { f64::INFINITY }];
+        let e = 0.5 / 65536.0 / scale[a];
+        tolerance[a] = [2.0 * e / period, 4.0 * e / period.powi(2), 8.0 * e / period.powi(3)];
+    }
+    let norm_limit = |k: usize| -> f64 {
+        (0..4).filter(|&a| present[a]).map(|a| report.axis_limit[a][k].powi(2)).sum::<f64>().sqrt()
+            + (0..4).filter(|&a| present[a]).map(|a| tolerance[a][k]).sum::<f64>()
+    };
+    let path_limit = [0.0, norm_limit(1), norm_limit(2)];
+    let rounding: f64 = (0..4).filter(|&a| present[a]).map(|a| (0.5 / scale[a]).powi(2)).sum::<f64>().sqrt();
+    let base_allowance = machine.chord_tolerance_mm + rounding + 1e-9;
+
+    let mut rate = RateChecker::new(machine.period_clocks, &machine.timing);
+    let mut raw = [0i64; 4];
+    let mut velocity = [0.0f64; 4];
+    let mut accel = [0.0f64; 4];
+    let mut previous_point = [0.0f64; 4];
+    let mut piece = 0usize;
+    let mut next_stop = 0usize;
+    // Two rest periods after the end: the machine stops there.
+    let rest = [PeriodRecord::default(); 2];
+    for (k, record) in records.iter().chain(rest.iter()).enumerate() {
+        let emitted = k < records.len();
+        if emitted {
+            if let Err((axis, why)) = rate.check(record) {
+                report.violate(format!("period {k}: axis {}: {why}", AXIS_NAMES[axis]));
+            }
+        }
+        let mut point = [0.0; 4];
+        let mut new_velocity = [0.0; 4];
+        let mut new_accel = [0.0; 4];
+        let mut jerk = [0.0; 4];
+        for a in 0..4 {
+            raw[a] += i64::from(record.inc[a].to_bits());
+            point[a] = raw[a] as f64 / 65536.0 / scale[a];
+            new_velocity[a] = (point[a] - previous_point[a]) / period;
+            new_accel[a] = (new_velocity[a] - velocity[a]) / period;
+            jerk[a] = (new_accel[a] - accel[a]) / period;
+            if !present[a] {
+                if record.inc[a].to_bits() != 0 {
+                    report.violate(format!("period {k}: axis {} is not configured but moves", AXIS_NAMES[a]));
+                }
+                continue;
+            }
+            let values = [new_velocity[a].abs(), new_accel[a].abs(), jerk[a].abs()];
+            for q in 0..3 {
+                report.axis_max[a][q] = report.axis_max[a][q].max(values[q]);
+                let limit = report.axis_limit[a][q];
+                if values[q] > limit * (1.0 + 1e-9) + tolerance[a][q] {
+                    let what = ["velocity", "acceleration", "jerk"][q];
+                    report.violate(format!("period {k}: axis {} {what} {:.6} over {limit}", AXIS_NAMES[a], values[q]));
+                }
+            }
+        }
+        let norm = |v: &[f64; 4]| (0..4).filter(|&a| present[a]).map(|a| v[a] * v[a]).sum::<f64>().sqrt();
+        let path = [norm(&new_velocity), norm(&new_accel), norm(&jerk)];
+        for q in 1..3 {
+            report.path_max[q] = report.path_max[q].max(path[q]);
+            if path[q] > path_limit[q] * (1.0 + 1e-9) {
+                report.violate(format!("period {k}: path {} {:.6} over {}", ["", "acceleration", "jerk"][q], path[q], path_limit[q]));
+            }
+        }
+        report.path_max[0] = report.path_max[0].max(path[0]);
+
+        // Where on the program the period ends, and how far from it.
+        if emitted && !pieces.is_empty() {
+            let from_piece = piece;
+            // The path moves on through the program in order: the first piece from the
+            // current one that the point is close enough to (a later piece can pass through
+            // the same point: a circle through a vertex).
+            let last = (piece + 64).min(pieces.len() - 1);
+            let found = (piece..=last).find(|&i| pieces[i].distance(&point, &present) <= pieces[i].allowance + base_allowance);
+            let within = found.is_some();
+            let best = found.unwrap_or(piece);
+            let deviation = (best.saturating_sub(1)..=(best + 1).min(pieces.len() - 1))
+                .map(|i| pieces[i].distance(&point, &present))
+                .fold(f64::INFINITY, f64::min);
+            // The chord midpoint, against the pieces around the period.
+            let midpoint: [f64; 4] = std::array::from_fn(|a| 0.5 * (point[a] + previous_point[a]));
+            let lo = from_piece.min(best).saturating_sub(1);
+            // One piece on: the period may have crossed a vertex the tracker has not passed.
+            let around = &pieces[lo..=(best + 1).min(pieces.len() - 1)];
+            let d_mid = around.iter().map(|p| p.distance(&midpoint, &present)).fold(f64::INFINITY, f64::min);
+            let mid_fits = around.iter().any(|p| p.distance(&midpoint, &present) <= p.allowance + base_allowance);
+            if deviation.max(d_mid) > report.max_deviation {
+                report.max_deviation = deviation.max(d_mid);
+                report.max_deviation_line = pieces[best].line;
+            }
+            if !within || !mid_fits {
+                report.violate(format!(
+                    "period {k} (line {}): {:.6} from the programmed path (chord midpoint {:.6})",
+                    pieces[best].line, deviation, d_mid
+                ));
+            }
+            piece = best;
+            // Feed over the pieces the period ran on.
+            let next_fits = best + 1 < pieces.len() && pieces[best + 1].distance(&point, &present) <= pieces[best + 1].allowance + base_allowance;
+            let feed = pieces[from_piece.min(best)..=if next_fits { best + 1 } else { best }].iter().map(|p| p.feed).fold(0.0, f64::max);
+            let speed_allowance = (0..4).filter(|&a| present[a]).map(|a| tolerance[a][0]).sum::<f64>();
+            if feed.is_finite() {
+                report.max_feed_ratio = report.max_feed_ratio.max(path[0] / feed);
+                if path[0] > feed * (1.0 + 1e-9) + speed_allowance {
+                    report.violate(format!("period {k}: path speed {:.6} over the feed {feed}", path[0]));
+                }
+            }
+            // Exact stops, in order: one is missed once the path is two pieces past it
+            // (one piece past may still be the vertex both pieces share).
+            while next_stop < stops.len() && stops[next_stop] + 1 < piece {
+                report.violate(format!("exact stop at the end of line {} was passed without stopping on it", pieces[stops[next_stop]].line));
+                next_stop += 1;
+            }
+            if let Some(&stop) = stops.get(next_stop) {
+                let target: [i64; 4] = std::array::from_fn(|a| ((pieces[stop].end[a] * scale[a]).round() as i64) << 16);
+                if (0..4).all(|a| !present[a] || raw[a] == target[a]) {
+                    report.exact_stops += 1;
+                    next_stop += 1;
+                    piece = (stop + 1).min(pieces.len() - 1);
+                }
+            }
+        }
+        report.samples.push(Sample { position: point, speed: path[0], acceleration: path[1], jerk: path[2] });
+        previous_point = point;
+        velocity = new_velocity;
+        accel = new_accel;
+    }
+    report.samples.truncate(records.len());
+    if next_stop < stops.len() {
+        let line = pieces[stops[next_stop]].line;
+        report.violate(format!("{} exact stops not reached, the first at the end of line {line}", stops.len() - next_stop));
+    }
+    let end = pieces.last().map(|p| p.end).unwrap_or([0.0; 4]);
+    for a in 0..4 {
+        let target = ((end[a] * scale[a]).round() as i64) << 16;
+        report.endpoint_error_steps[a] = (raw[a] - target) as f64 / 65536.0;
+        if present[a] && raw[a] != target {
+            report.violate(format!("axis {} ends {} steps from the programmed end", AXIS_NAMES[a], report.endpoint_error_steps[a]));
+        }
+    }
+    Ok(report)
+}
+

@@ -1,0 +1,358 @@
+//! Machine configuration: axes, limits, period, clock, drive timing and tolerances,
+//! read from a TOML file. Every key has a default, so an empty file (or none) gives a
+//! machine that runs `tests/programs/`.
+//!
+//! ```toml
+//! period_ms = 1.0               # interpolation period T
+//! clock_hz = 50_000_000         # FPGA clock
+//! profile = "trapezoid"         # or "s-curve"
+//! path_tolerance_mm = 0.01      # G64 without P
+//! chord_tolerance_mm = 0.001    # arcs: largest chord-to-circle distance
+//! lookahead_moves = 2000        # every move is planned seeing at least this many ahead
+//!
+//! [drive]                       # step/dir timing of every axis, ns
+//! step_len_ns = 2000
+//! step_space_ns = 2000
+//! dir_setup_ns = 5000
+//! dir_hold_ns = 5000
+//!
+//! [axes.X]                      # X, Y, Z (mm) and A (degrees); a listed [axes] table
+//! steps_per_unit = 800.0        # replaces the default axes, missing keys take defaults
+//! max_velocity = 100.0          # units/s
+//! max_acceleration = 1000.0     # units/s^2
+//! max_jerk = 100000.0           # units/s^3 (S-curve profile only)
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use finestep_model::limits::{forward_interval, reversal_interval, AxisTiming};
+use finestep_model::CoreParams;
+use serde::Deserialize;
+
+/// The axis names the planner knows, in record slot order.
+pub const AXIS_NAMES: [&str; 4] = ["X", "Y", "Z", "A"];
+
+/// Which feed profile along the path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+pub enum ProfileKind {
+    /// Constant acceleration phases (unbounded jerk): the default, as in grbl and
+    /// LinuxCNC.
+    #[default]
+    #[serde(rename = "trapezoid")]
+    Trapezoid,
+    /// Jerk-limited: every speed change is a 7-segment-style S-curve half (jerk up,
+    /// constant acceleration, jerk down), acceleration and deceleration planned separately.
+    /// The jerk limit also holds where the path's curvature jumps (a line meeting an arc
+    /// or a corner blend), which caps the speed there at about `sqrt(0.25 J T R)`.
+    #[serde(rename = "s-curve")]
+    SCurve,
+}
+
+/// Limits and scale of one axis.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AxisLimits {
+    /// Steps per unit (mm, or degree for A).
+    pub steps_per_unit: f64,
+    /// Largest speed, units/s (capped by the drive's rated step rate).
+    pub max_velocity: f64,
+    /// Largest acceleration, units/s^2.
+    pub max_acceleration: f64,
+    /// Largest jerk, units/s^3 (used by the S-curve profile).
+    pub max_jerk: f64,
+}
+
+impl Default for AxisLimits {
+    fn default() -> Self {
+        AxisLimits { steps_per_unit: 800.0, max_velocity: 100.0, max_acceleration: 1000.0, max_jerk: 100_000.0 }
+    }
+}
+
+/// Step/direction timing of the drives, ns; rounded up to whole clocks.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DriveTiming {
+    /// Step pulse length.
+    pub step_len_ns: f64,
+    /// Least space between pulses.
+    pub step_space_ns: f64,
+    /// Direction set-up before a step.
+    pub dir_setup_ns: f64,
+    /// Direction hold after a step.
+    pub dir_hold_ns: f64,
+}
+
+impl Default for DriveTiming {
+    fn default() -> Self {
+        DriveTiming { step_len_ns: 2000.0, step_space_ns: 2000.0, dir_setup_ns: 5000.0, dir_hold_ns: 5000.0 }
+    }
+}
+
+/// The machine as the planner sees it. Build with [`MachineConfig::default`],
+/// [`MachineConfig::from_toml_str`] or [`MachineConfig::load`]; the loaders validate.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MachineConfig {
+    /// Interpolation period T, ms.
+    pub period_ms: f64,
+    /// FPGA clock, Hz.
+    pub clock_hz: f64,
+    /// Feed profile.
+    pub profile: ProfileKind,
+    /// Path tolerance of G64 without P, mm.
+    pub path_tolerance_mm: f64,
+    /// Largest distance between an arc and its per-period chords, mm.
+    pub chord_tolerance_mm: f64,
+    /// Every move is planned seeing at least this many programmed moves ahead.
+    pub lookahead_moves: usize,
+    /// Drive timing, the same for every axis.
+    pub drive: DriveTiming,
+    /// Axes by name (X, Y, Z, A); absent axes must not move.
+    pub axes: BTreeMap<String, AxisLimits>,
+}
+
+impl Default for MachineConfig {
+    /// X, Y at 800 steps/mm, Z at 400 steps/mm, A at 100 steps/degree; T = 1 ms at 50 MHz.
+    fn default() -> Self {
+        let axis = |steps_per_unit, max_velocity, max_acceleration, max_jerk| AxisLimits {
+            steps_per_unit,
+            max_velocity,
+            max_acceleration,
+            max_jerk,
+        };
+        let axes = [
+            ("X", axis(800.0, 100.0, 1000.0, 100_000.0)),
+            ("Y", axis(800.0, 100.0, 1000.0, 100_000.0)),
+            ("Z", axis(400.0, 50.0, 500.0, 50_000.0)),
+            ("A", axis(100.0, 180.0, 1800.0, 180_000.0)),
+        ];
+        MachineConfig {
+            period_ms: 1.0,
+            clock_hz: 50e6,
+            profile: ProfileKind::Trapezoid,
+            path_tolerance_mm: 0.01,
+            chord_tolerance_mm: 0.001,
+            lookahead_moves: 2000,
+            drive: DriveTiming::default(),
+            axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
+        }
+    }
+}
+
+/// A configuration that cannot be used: the file and the key, and why.
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("{file}: {key}: {reason}")]
+pub struct ConfigError {
+    /// The file (or `<built-in>`).
+    pub file: String,
+    /// The TOML key, dotted (`axes.X.max_velocity`), or `-` for the whole file.
+    pub key: String,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// One axis after validation, with its drive's rated limits folded in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ResolvedAxis {
+    /// Whether the axis exists on this machine.
+    pub present: bool,
+    /// Steps per unit.
+    pub steps_per_unit: f64,
+    /// Speed limit, units/s: the configured one, capped below the rated forward step rate.
+    pub max_velocity: f64,
+    /// Acceleration limit, units/s^2.
+    pub max_acceleration: f64,
+    /// Jerk limit, units/s^3.
+    pub max_jerk: f64,
+}
+
+/// A validated configuration in the units the planner computes in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Resolved {
+    /// Period T, s.
+    pub period_s: f64,
+    /// Period in FPGA clocks (as the core runs it).
+    pub period_clocks: u32,
+    /// The drive timing in clocks, one per record slot.
+    pub timing: [AxisTiming; 4],
+    /// Axes X, Y, Z, A.
+    pub axes: [ResolvedAxis; 4],
+    /// Profile.
+    pub profile: ProfileKind,
+    /// G64 tolerance without P, mm.
+    pub path_tolerance_mm: f64,
+    /// Chord tolerance, mm.
+    pub chord_tolerance_mm: f64,
+    /// Look-ahead in moves.
+    pub lookahead_moves: usize,
+    /// What was adjusted (velocity caps), for the report.
+    pub notes: Vec<String>,
+}
+
+impl MachineConfig {
+    /// Parses and validates TOML text; `file` names it in errors.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<MachineConfig, ConfigError> {
+        let config: MachineConfig = toml::from_str(text).map_err(|e| ConfigError {
+            file: file.to_string(),
+            key: "-".to_string(),
+            reason: e.to_string().trim_end().replace('\n', " "),
+        })?;
+        config.resolve_in(file)?;
+        Ok(config)
+    }
+
+    /// Reads, parses and validates a TOML file.
+    pub fn load(path: &Path) -> Result<MachineConfig, ConfigError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| ConfigError { file: file.clone(), key: "-".into(), reason: e.to_string() })?;
+        MachineConfig::from_toml_str(&text, &file)
+    }
+
+    /// Validates and converts to planner units (file name `<built-in>` in errors).
+    pub fn resolve(&self) -> Result<Resolved, ConfigError> {
+        self.resolve_in("<built-in>")
+    }
+
+    fn resolve_in(&self, file: &str) -> Result<Resolved, ConfigError> {
+        let fail = |key: String, reason: String| ConfigError { file: file.to_string(), key, reason };
+        let positive = |key: &str, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(value)
+            } else {
+                Err(fail(key.to_string(), format!("must be a positive finite number, got {value}")))
+            }
+        };
+        let period_s = positive("period_ms", self.period_ms)? * 1e-3;
+        let clock_hz = positive("clock_hz", self.clock_hz)?;
+        let clocks = (period_s * clock_hz).round();
+        let params = CoreParams::default();
+        if !(1.0..=f64::from(params.period_mask())).contains(&clocks) {
+            return Err(fail(
+                "period_ms".into(),
+                format!("{clocks} clocks per period is outside the core's 1..={} (P_WIDTH = {})", params.period_mask(), params.p_width),
+            ));
+        }
+        let period_clocks = clocks as u32;
+        positive("path_tolerance_mm", self.path_tolerance_mm)?;
+        positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
+        if !(2..=1_000_000).contains(&self.lookahead_moves) {
+            return Err(fail("lookahead_moves".into(), format!("must be within 2..=1000000, got {}", self.lookahead_moves)));
+        }
+        let to_clocks = |key: &str, ns: f64| -> Result<u32, ConfigError> {
+            // Up to whole clocks, ignoring the floating-point dust of exact multiples.
+            let clocks = (ns * 1e-9 * clock_hz * (1.0 - 1e-12)).ceil();
+            if !(ns.is_finite() && ns >= 0.0) || clocks > f64::from(params.timing_mask()) {
+                return Err(fail(format!("drive.{key}"), format!("{ns} ns is not within 0..={} clocks", params.timing_mask())));
+            }
+            Ok(clocks as u32)
+        };
+        let timing = AxisTiming {
+            step_len: to_clocks("step_len_ns", self.drive.step_len_ns)?,
+            step_space: to_clocks("step_space_ns", self.drive.step_space_ns)?,
+            dir_setup: to_clocks("dir_setup_ns", self.drive.dir_setup_ns)?,
+            dir_hold: to_clocks("dir_hold_ns", self.drive.dir_hold_ns)?,
+        };
+        if let Some(name) = self.axes.keys().find(|n| !AXIS_NAMES.contains(&n.as_str())) {
+            return Err(fail(format!("axes.{name}"), "unknown axis (the planner knows X, Y, Z, A)".into()));
+        }
+        let mut notes = Vec::new();
+        let absent = ResolvedAxis { present: false, steps_per_unit: 1.0, max_velocity: 0.0, max_acceleration: 0.0, max_jerk: 0.0 };
+        let mut axes = [absent; 4];
+        for (slot, name) in AXIS_NAMES.iter().enumerate() {
+            let Some(limits) = self.axes.get(*name) else { continue };
+            let key = |field: &str| format!("axes.{name}.{field}");
+            let steps_per_unit = positive(&key("steps_per_unit"), limits.steps_per_unit)?;
+            let mut max_velocity = positive(&key("max_velocity"), limits.max_velocity)?;
+            let max_acceleration = positive(&key("max_acceleration"), limits.max_acceleration)?;
+            let max_jerk = positive(&key("max_jerk"), limits.max_jerk)?;
+            // Rated rates in steps per period (README, "Rated rate"), with 5 % kept back
+            // for the Q16.16 rounding of positions.
+            let forward = f64::from(period_clocks) / forward_interval(&timing) as f64 * 0.95;
+            let reverse = f64::from(period_clocks) / reversal_interval(&timing) as f64 * 0.95;
+            let rated_velocity = forward / period_s / steps_per_unit;
+            if max_velocity > rated_velocity {
+                notes.push(format!("{name} max velocity {max_velocity} capped at the drive's rated {rated_velocity:.3} units/s"));
+                max_velocity = rated_velocity;
+            }
+            // A reversing axis must stay within the reversal rate until it has moved two
+            // steps: from rest with acceleration A (steps/period^2) it reaches sqrt(4A)
+            // in two steps, plus one more period's A.
+            let accel_steps = max_acceleration * steps_per_unit * period_s * period_s;
+            if (4.0 * accel_steps).sqrt() + accel_steps > reverse {
+                return Err(fail(
+                    key("max_acceleration"),
+                    format!("{max_acceleration} units/s^2 is too high for the drive's reversal rate ({reverse:.2} steps per period)"),
+                ));
+            }
+            axes[slot] = ResolvedAxis { present: true, steps_per_unit, max_velocity, max_acceleration, max_jerk };
+        }
+        if !axes.iter().any(|a| a.present) {
+            return Err(fail("axes".into(), "no axis configured".into()));
+        }
+        Ok(Resolved {
+            period_s,
+            period_clocks,
+            timing: [timing; 4],
+            axes,
+            profile: self.profile,
+            path_tolerance_mm: self.path_tolerance_mm,
+            chord_tolerance_mm: self.chord_tolerance_mm,
+            lookahead_moves: self.lookahead_moves,
+            notes,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_empty_file_gives_the_defaults() {
+        let config = MachineConfig::from_toml_str("", "m.toml").unwrap();
+        assert_eq!(config, MachineConfig::default());
+        let resolved = config.resolve().unwrap();
+        assert_eq!(resolved.period_clocks, 50_000);
+        assert!(resolved.axes.iter().all(|a| a.present));
+    }
+
+    #[test]
+    fn a_partial_file_overrides_what_it_names() {
+        let text = "profile = \"s-curve\"\nperiod_ms = 2\n[axes.X]\nsteps_per_unit = 1000\n[axes.Z]\nmax_velocity = 20\n";
+        let config = MachineConfig::from_toml_str(text, "m.toml").unwrap();
+        let resolved = config.resolve().unwrap();
+        assert_eq!(resolved.profile, ProfileKind::SCurve);
+        assert_eq!(resolved.period_clocks, 100_000);
+        assert_eq!(resolved.axes[0].steps_per_unit, 1000.0);
+        assert_eq!(resolved.axes[0].max_velocity, 100.0);
+        assert!(!resolved.axes[1].present && !resolved.axes[3].present);
+        assert_eq!(resolved.axes[2].max_velocity, 20.0);
+    }
+
+    #[test]
+    fn errors_name_the_file_and_the_key() {
+        let err = MachineConfig::from_toml_str("[axes.X]\nmax_velocity = -1\n", "m.toml").unwrap_err();
+        assert_eq!(err.to_string(), "m.toml: axes.X.max_velocity: must be a positive finite number, got -1");
+        let err = MachineConfig::from_toml_str("[axes.X]\nmax_vel = 1\n", "m.toml").unwrap_err();
+        assert!(err.to_string().starts_with("m.toml: -:") && err.reason.contains("max_vel"), "{err}");
+        let err = MachineConfig::from_toml_str("[axes.B]\n", "m.toml").unwrap_err();
+        assert_eq!(err.key, "axes.B");
+        let err = MachineConfig::from_toml_str("period_ms = 100\n", "m.toml").unwrap_err();
+        assert_eq!(err.key, "period_ms");
+        let err = MachineConfig::from_toml_str("[axes.X]\nmax_acceleration = 1e9\n", "m.toml").unwrap_err();
+        assert_eq!(err.key, "axes.X.max_acceleration");
+        let err = MachineConfig::from_toml_str("profile = \"cubic\"\n", "m.toml").unwrap_err();
+        assert!(err.reason.contains("cubic"), "{err}");
+    }
+
+    #[test]
+    fn velocity_is_capped_at_the_rated_rate() {
+        let text = "[axes.X]\nmax_velocity = 10000\n";
+        let resolved = MachineConfig::from_toml_str(text, "m.toml").unwrap().resolve().unwrap();
+        // 50 000 clocks / (100 + 100) clocks per step = 250 steps per ms, less 5 %.
+        assert!((resolved.axes[0].max_velocity - 250.0 * 0.95 / 0.001 / 800.0).abs() < 1e-9);
+        assert_eq!(resolved.notes.len(), 1);
+    }
+}

@@ -1,0 +1,568 @@
+//! The path as the planner follows it: programmed lines and arcs, vertices rounded to
+//! whole steps, and (in G64) line-line corners replaced by blend arcs.
+//!
+//! # Corner blending and the path tolerance criterion
+//!
+//! Where two lines meet at a corner C turning by an angle phi in G64 with tolerance P, the
+//! corner is replaced by the circle tangent to both lines whose midpoint is P from C:
+//! radius `R = P / (1/cos(phi/2) - 1)`, tangent points `t = R tan(phi/2)` before and
+//! after C. `t` is at most half of either line (so neighbouring blends never overlap),
+//! which shrinks R for short lines. The blend is an arc element like any other: its
+//! speed is capped by the normal acceleration it needs (`v^2/R`), by the chord tolerance
+//! and in S-curve mode by the jerk of turning, and every point of it is within P of the
+//! programmed corner. Corners involving programmed arcs, reversals, and corners in G61
+//! are not blended; their speed comes from the junction criterion in
+//! [`crate::lookahead`].
+
+use std::f64::consts::TAU;
+
+use finestep_gcode::{BlockKind, CompSide, PathControl, Plane, Point, Program};
+
+use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
+use crate::program::ProgramError;
+
+/// A point or direction over the four record slots X, Y, Z, A.
+pub type Vec4 = [f64; 4];
+
+pub(crate) fn sub(a: Vec4, b: Vec4) -> Vec4 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2], a[3] - b[3]]
+}
+pub(crate) fn add_scaled(a: Vec4, k: f64, b: Vec4) -> Vec4 {
+    [a[0] + k * b[0], a[1] + k * b[1], a[2] + k * b[2], a[3] + k * b[3]]
+}
+pub(crate) fn dot(a: Vec4, b: Vec4) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]
+}
+pub(crate) fn norm(a: Vec4) -> f64 {
+    dot(a, a).sqrt()
+}
+pub(crate) fn scale(k: f64, a: Vec4) -> Vec4 {
+    [k * a[0], k * a[1], k * a[2], k * a[3]]
+}
+
+/// The shape of one element.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// A straight line from the element's start along a unit direction.
+    Line {
+        /// Unit direction.
+        dir: Vec4,
+    },
+    /// `centre + r(f) (cos(f sweep) e1 + sin(f sweep) e2) + f rise` for f in 0..=1, with
+    /// `r(f) = r0 + f (r1 - r0)`: a circle, spiral (rounded endpoints) or helix.
+    Arc {
+        /// Centre at f = 0.
+        centre: Vec4,
+        /// Unit vector from the centre to the start.
+        e1: Vec4,
+        /// Unit vector a quarter turn on (the direction of motion at the start for sweep > 0).
+        e2: Vec4,
+        /// Start radius.
+        r0: f64,
+        /// End radius.
+        r1: f64,
+        /// Signed angle swept, radians.
+        sweep: f64,
+        /// Motion of the axes outside the plane over the whole arc.
+        rise: Vec4,
+    },
+}
+
+/// One piece of the path with its own speed limits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Element {
+    /// Shape.
+    pub shape: Shape,
+    /// Start point, units.
+    pub start: Vec4,
+    /// End point, units.
+    pub end: Vec4,
+    /// Path length, units.
+    pub length: f64,
+    /// Source line of the block.
+    pub line: usize,
+    /// Speed cap along the element, units/s: feed, per-axis speeds, arc limits.
+    pub v_cap: f64,
+    /// Tangential acceleration limit, units/s^2.
+    pub accel: f64,
+    /// Tangential jerk limit, units/s^3.
+    pub jerk: f64,
+    /// The junction after this element is an exact stop; `dwell_periods` idle periods follow.
+    pub stop_after: bool,
+    /// Idle periods after the stop (G4).
+    pub dwell_periods: u64,
+    /// Source line of the dwell.
+    pub dwell_line: usize,
+    /// The last element of a programmed block (its period gets the block-end flag).
+    pub block_end: bool,
+}
+
+impl Element {
+    /// The point at path distance `s` (0..=length).
+    #[inline]
+    pub fn position(&self, s: f64) -> Vec4 {
+        if s >= self.length {
+            return self.end;
+        }
+        match self.shape {
+            Shape::Line { dir } => add_scaled(self.start, s, dir),
+            Shape::Arc { centre, e1, e2, r0, r1, sweep, rise } => {
+                let f = s / self.length;
+                let r = r0 + f * (r1 - r0);
+                let (sin, cos) = (f * sweep).sin_cos();
+                let mut p = [0.0; 4];
+                for a in 0..4 {
+                    p[a] = centre[a] + r * (cos * e1[a] + sin * e2[a]) + f * rise[a];
+                }
+                p
+            }
+        }
+    }
+
+    /// Unit tangent at fraction 0 or 1.
+    pub fn tangent(&self, at_end: bool) -> Vec4 {
+        match self.shape {
+            Shape::Line { dir } => dir,
+            Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
+                let f: f64 = if at_end { 1.0 } else { 0.0 };
+                let r = r0 + f * (r1 - r0);
+                let (sin, cos) = (f * sweep).sin_cos();
+                let mut d = [0.0; 4];
+                for a in 0..4 {
+                    d[a] = (r1 - r0) * (cos * e1[a] + sin * e2[a]) + r * sweep * (cos * e2[a] - sin * e1[a]) + rise[a];
+                }
+                let n = norm(d);
+                scale(1.0 / n, d)
+            }
+        }
+    }
+
+    /// Curvature vector (acceleration per unit speed squared) at fraction 0 or 1.
+    pub fn curvature(&self, at_end: bool) -> Vec4 {
+        match self.shape {
+            Shape::Line { .. } => [0.0; 4],
+            Shape::Arc { e1, e2, sweep, .. } => {
+                let (planar, r) = self.planar_fraction_and_radius();
+                let f: f64 = if at_end { 1.0 } else { 0.0 };
+                let (sin, cos) = (f * sweep).sin_cos();
+                let k = planar * planar / r;
+                scale(-k, [0, 1, 2, 3].map(|a| cos * e1[a] + sin * e2[a]))
+            }
+        }
+    }
+
+    /// For arcs: the share of the speed in the plane, and the smaller radius.
+    fn planar_fraction_and_radius(&self) -> (f64, f64) {
+        match self.shape {
+            Shape::Line { .. } => (0.0, f64::INFINITY),
+            Shape::Arc { r0, r1, sweep, .. } => {
+                let planar = (r0.max(r1) * sweep.abs() / self.length).min(1.0);
+                (planar, r0.min(r1))
+            }
+        }
+    }
+}
+
+/// A programmed move before blending, vertices rounded to whole steps.
+#[derive(Clone, Copy, Debug)]
+struct Move {
+    line: usize,
+    start: Vec4,
+    end: Vec4,
+    /// Path feed, units/s (infinite for rapids: the axes limit them).
+    feed: f64,
+    /// `Some(centre, plane axes, clockwise, extra turns)` for arcs.
+    arc: Option<(Vec4, (usize, usize), bool, u32)>,
+    /// Start and end as programmed, before rounding (arcs take their sweep from these).
+    programmed: (Vec4, Vec4),
+    /// Blend tolerance with the next move (None: exact stop).
+    blend: Option<f64>,
+    stop_after: bool,
+    dwell_periods: u64,
+    dwell_line: usize,
+}
+
+fn coords(p: &Point) -> Vec4 {
+    [p.x_mm, p.y_mm, p.z_mm, p.a_deg]
+}
+
+/// A point moved to the nearest whole step on every axis.
+pub(crate) fn round_to_steps(config: &Resolved, p: Vec4) -> Vec4 {
+    let mut q = p;
+    for (a, axis) in config.axes.iter().enumerate() {
+        q[a] = (p[a] * axis.steps_per_unit).round() / axis.steps_per_unit;
+    }
+    q
+}
+
+/// The signed angle from `start` to `end`, a full turn when they coincide.
+fn sweep_angle(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
+    let ccw = (end - start).rem_euclid(TAU);
+    let base = if clockwise { -((TAU - ccw) % TAU) } else { ccw };
+    let base = if base.abs() < 1e-12 { if clockwise { -TAU } else { TAU } } else { base };
+    base + f64::from(extra_turns) * TAU * base.signum()
+}
+
+/// Reads the program's moves: positions rounded to steps, modes resolved.
+fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64), ProgramError> {
+    let mut out: Vec<Move> = Vec::new();
+    let mut at = [0.0; 4];
+    let mut at_programmed = [0.0; 4];
+    let mut blend: Option<f64> = Some(config.path_tolerance_mm); // LinuxCNC starts in G64
+    let stop_previous = |out: &mut Vec<Move>, dwell: u64, line: usize| {
+        if let Some(last) = out.last_mut() {
+            last.stop_after = true;
+            last.blend = None;
+            last.dwell_periods += dwell;
+            if dwell > 0 {
+                last.dwell_line = line;
+            }
+            true
+        } else {
+            false
+        }
+    };
+    let mut leading_dwell = 0u64;
+    for block in &program.blocks {
+        let fail = |reason: String| ProgramError { line: block.line, reason };
+        let (to, feed, arc) = match block.kind {
+            BlockKind::Rapid { to } => (coords(&to), f64::INFINITY, None),
+            BlockKind::Linear { to, feed_mm_per_min } => (coords(&to), feed_mm_per_min / 60.0, None),
+            BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
+                let axes = match plane {
+                    Plane::Xy => (0, 1),
+                    Plane::Zx => (2, 0),
+                    Plane::Yz => (1, 2),
+                };
+                (coords(&to), feed_mm_per_min / 60.0, Some((coords(&centre), axes, clockwise, extra_turns)))
+            }
+            BlockKind::Dwell { seconds } => {
+                let periods = (seconds / config.period_s).ceil();
+                if !(0.0..=1e9).contains(&periods) {
+                    return Err(fail(format!("dwell of {seconds} s is out of range")));
+                }
+                if !stop_previous(&mut out, periods as u64, block.line) {
+                    leading_dwell += periods as u64;
+                }
+                continue;
+            }
+            BlockKind::CutterComp { side: CompSide::Left | CompSide::Right, .. } => {
+                return Err(fail(
+                    "cutter radius compensation (G41/G42) is not wired into the planner yet; refusing to cut uncompensated".into(),
+                ));
+            }
+            BlockKind::PathControl(PathControl::Blend { tolerance_mm }) => {
+                blend = Some(tolerance_mm.filter(|&p| p > 0.0).unwrap_or(config.path_tolerance_mm));
+                continue;
+            }
+            BlockKind::PathControl(PathControl::ExactPath) => {
+                blend = None;
+                continue;
+            }
+            BlockKind::Pause | BlockKind::ToolChange { .. } => {
+                stop_previous(&mut out, 0, block.line);
+                continue;
+            }
+            BlockKind::End => break,
+            _ => continue,
+        };
+        if feed.is_nan() || feed <= 0.0 {
+            return Err(fail(format!("feed {} mm/min must be positive", feed * 60.0)));
+        }
+        let programmed = (at_programmed, to);
+        at_programmed = to;
+        let to = round_to_steps(config, to);
+        for (a, axis) in config.axes.iter().enumerate() {
+            if !axis.present && to[a] != at[a] {
+                return Err(fail(format!("axis {} moves but is not configured", AXIS_NAMES[a])));
+            }
+            let steps = (to[a] * axis.steps_per_unit).abs();
+            if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
+                return Err(fail(format!("axis {} endpoint {} is outside the core's 32-bit step position", AXIS_NAMES[a], to[a])));
+            }
+        }
+        if arc.is_none() && to == at {
+            continue; // nothing to do; keeps neighbouring corners blendable
+        }
+        // G61 stops at the end of every move.
+        out.push(Move { line: block.line, start: at, end: to, feed, arc, programmed, blend, stop_after: blend.is_none(), dwell_periods: 0, dwell_line: 0 });
+        at = to;
+    }
+    if let Some(last) = out.last_mut() {
+        last.stop_after = true;
+        last.blend = None;
+    }
+    Ok((out, at, leading_dwell))
+}
+
+/// Per-axis shares of the path speed for a unit path speed (an upper bound on arcs).
+fn axis_weights(shape: &Shape, length: f64) -> Vec4 {
+    match *shape {
+        Shape::Line { dir } => dir.map(f64::abs),
+        Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
+            let planar = (r0.max(r1) * sweep.abs() / length).min(1.0);
+            let radial = (r1 - r0).abs() / length;
+            [0, 1, 2, 3].map(|a| ((planar + radial) * e1[a].hypot(e2[a]) + (rise[a] / length).abs()).min(1.0))
+        }
+    }
+}
+
+/// Share of each axis's acceleration the planner spends on speeding up and slowing
+/// down along the path; [`GEOMETRIC_ACCEL_SHARE`] goes to turning (arcs, junctions).
+pub const TANGENTIAL_ACCEL_SHARE: f64 = 0.5;
+/// Share of each axis's acceleration spent on turning.
+pub const GEOMETRIC_ACCEL_SHARE: f64 = 0.45;
+/// Share of each axis's jerk spent on changing the acceleration along the path.
+pub const TANGENTIAL_JERK_SHARE: f64 = 0.4;
+/// Share of each axis's jerk spent inside arcs (rotation of the normal acceleration, and
+/// the tangential acceleration turning with the path), each.
+pub const ARC_JERK_SHARE: f64 = 0.15;
+/// Share of each axis's jerk spent at a junction (tangent or curvature jump within a period).
+pub const JUNCTION_JERK_SHARE: f64 = 0.25;
+
+/// Fills in the speed, acceleration and jerk limits of an element.
+fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
+    let weights = axis_weights(&element.shape, element.length);
+    let mut v_cap = feed;
+    let mut accel = f64::INFINITY;
+    let mut jerk = f64::INFINITY;
+    for (axis, &w) in config.axes.iter().zip(&weights) {
+        if w > 1e-12 && axis.present {
+            v_cap = v_cap.min(axis.max_velocity / w);
+            accel = accel.min(TANGENTIAL_ACCEL_SHARE * axis.max_acceleration / w);
+            jerk = jerk.min(TANGENTIAL_JERK_SHARE * axis.max_jerk / w);
+        }
+    }
+    if let Shape::Arc { e1, e2, .. } = element.shape {
+        let (planar, r) = element.planar_fraction_and_radius();
+        let k = planar * planar / r; // curvature of the path
+        let scurve = config.profile == ProfileKind::SCurve;
+        // Chord error (seed 002): a chord of length c on radius r sags r - sqrt(r^2 - c^2/4).
+        let delta = config.chord_tolerance_mm.min(r);
+        let chord = 2.0 * (r * r - (r - delta).powi(2)).sqrt();
+        v_cap = v_cap.min(chord / config.period_s / planar.max(1e-12));
+        for axis in 0..4 {
+            let h = e1[axis].hypot(e2[axis]);
+            let limits = &config.axes[axis];
+            if h < 1e-12 || !limits.present {
+                continue;
+            }
+            // Normal acceleration k v^2 within its share.
+            v_cap = v_cap.min((GEOMETRIC_ACCEL_SHARE * limits.max_acceleration / (k * h)).sqrt());
+            if scurve {
+                // Rotation of the normal acceleration: k^2 v^3.
+                v_cap = v_cap.min((ARC_JERK_SHARE * limits.max_jerk / (k * k * h)).cbrt());
+            }
+        }
+        if scurve {
+            for axis in 0..4 {
+                let h = e1[axis].hypot(e2[axis]);
+                let limits = &config.axes[axis];
+                if h >= 1e-12 && limits.present {
+                    // Tangential acceleration turning with the path: 3 k v a.
+                    accel = accel.min(ARC_JERK_SHARE * limits.max_jerk / (3.0 * k * v_cap * h));
+                }
+            }
+        }
+    }
+    element.v_cap = v_cap;
+    element.accel = accel;
+    element.jerk = jerk;
+    element
+}
+
+fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) -> Option<Element> {
+    let delta = sub(end, start);
+    let length = norm(delta);
+    if length < 1e-12 {
+        return None;
+    }
+    let shape = Shape::Line { dir: scale(1.0 / length, delta) };
+    let element = Element {
+        shape,
+        start,
+        end,
+        length,
+        line: m.line,
+        v_cap: 0.0,
+        accel: 0.0,
+        jerk: 0.0,
+        stop_after: false,
+        dwell_periods: 0,
+        dwell_line: 0,
+        block_end: false,
+    };
+    Some(limit(config, element, feed))
+}
+
+/// The element of an arc move; `None` when rounding to steps left nothing to move.
+fn arc_element(config: &Resolved, m: &Move) -> Result<Option<Element>, ProgramError> {
+    let (centre, (u, v), clockwise, extra_turns) = m.arc.expect("arc move");
+    let fail = |reason: String| ProgramError { line: m.line, reason };
+    let (cu, cv) = (centre[u], centre[v]);
+    let r0 = (m.start[u] - cu).hypot(m.start[v] - cv);
+    let r1 = (m.end[u] - cu).hypot(m.end[v] - cv);
+    if r0.min(r1).is_nan() || r0.min(r1) <= 1e-9 || !r0.is_finite() || !r1.is_finite() {
+        return Err(fail(format!("arc radius {} is too small to interpolate", r0.min(r1))));
+    }
+    let theta0 = (m.start[v] - cv).atan2(m.start[u] - cu);
+    let theta1 = (m.end[v] - cv).atan2(m.end[u] - cu);
+    // The sweep as programmed, then moved by the small angle rounding the endpoints to
+    // steps turned them through: rounding must not turn a tiny arc into a full circle.
+    let (p0, p1) = m.programmed;
+    let programmed_theta0 = (p0[v] - cv).atan2(p0[u] - cu);
+    let programmed_theta1 = (p1[v] - cv).atan2(p1[u] - cu);
+    let programmed_sweep = sweep_angle(programmed_theta0, programmed_theta1, clockwise, extra_turns);
+    let wrap = |angle: f64| (angle + std::f64::consts::PI).rem_euclid(TAU) - std::f64::consts::PI;
+    let sweep = programmed_sweep + wrap(theta1 - programmed_theta1) - wrap(theta0 - programmed_theta0);
+    let mut unit_u = [0.0; 4];
+    unit_u[u] = 1.0;
+    let mut unit_v = [0.0; 4];
+    unit_v[v] = 1.0;
+    let e1 = add_scaled(scale(theta0.cos(), unit_u), theta0.sin(), unit_v);
+    let e2 = add_scaled(scale(-theta0.sin(), unit_u), theta0.cos(), unit_v);
+    let mut rise = sub(m.end, m.start);
+    rise[u] = 0.0;
+    rise[v] = 0.0;
+    let mut c = m.start;
+    c[u] = cu;
+    c[v] = cv;
+    // The path parameter runs uniformly in angle, so the speed along the path is
+    // |dp/df| / length with |dp/df|^2 = (r1 - r0)^2 + r^2 sweep^2 + |rise|^2: taking the
+    // larger radius makes `length` an upper bound on it, so the real speed never exceeds
+    // the planned one (a spiral from rounded endpoints is a hair shorter than planned).
+    let planar = r0.max(r1) * sweep.abs();
+    let length = (planar * planar + (r1 - r0).powi(2) + dot(rise, rise)).sqrt();
+    if !length.is_finite() {
+        return Err(fail("arc is too long".into()));
+    }
+    if length < 1e-12 {
+        return Ok(None);
+    }
+    let shape = Shape::Arc { centre: c, e1, e2, r0, r1, sweep, rise };
+    let element = Element {
+        shape,
+        start: m.start,
+        end: m.end,
+        length,
+        line: m.line,
+        v_cap: 0.0,
+        accel: 0.0,
+        jerk: 0.0,
+        stop_after: false,
+        dwell_periods: 0,
+        dwell_line: 0,
+        block_end: false,
+    };
+    Ok(Some(limit(config, element, m.feed)))
+}
+
+/// The blend arc for the corner between lines `d1` then `d2` at `corner`, with the
+/// tangent distance along each line: `None` when the corner needs none (straight on)
+/// or cannot have one (reversal, no room).
+fn blend_arc(corner: Vec4, d1: Vec4, d2: Vec4, tolerance: f64, room: f64) -> Option<(Vec4, Vec4, Shape, f64)> {
+    let cos_phi = dot(d1, d2).clamp(-1.0, 1.0);
+    let phi = cos_phi.acos();
+    if !(1e-6..=std::f64::consts::PI - 1e-3).contains(&phi) {
+        return None;
+    }
+    let half = 0.5 * phi;
+    let r_tolerance = tolerance / (1.0 / half.cos() - 1.0);
+    let radius = r_tolerance.min(room / half.tan());
+    let t = radius * half.tan();
+    if !(radius > 1e-9 && t > 1e-9) {
+        return None;
+    }
+    let a = add_scaled(corner, -t, d1);
+    let b = add_scaled(corner, t, d2);
+    let across = add_scaled(d2, -cos_phi, d1);
+    let n = scale(1.0 / norm(across), across);
+    let centre = add_scaled(a, radius, n);
+    let shape = Shape::Arc { centre, e1: scale(-1.0, n), e2: d1, r0: radius, r1: radius, sweep: phi, rise: [0.0; 4] };
+    Some((a, b, shape, radius * phi))
+}
+
+/// The path of a program.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PathElements {
+    /// Elements in order; the last one stops.
+    pub elements: Vec<Element>,
+    /// Idle periods before the first move (G4 first).
+    pub leading_dwell: u64,
+    /// Where the program ends, on whole steps.
+    pub end: Vec4,
+    /// Remarks for the report.
+    pub notes: Vec<String>,
+}
+
+/// The program as elements, and where it ends.
+pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, ProgramError> {
+    let (moves, end, leading_dwell) = moves(config, program)?;
+    let mut out: Vec<Element> = Vec::with_capacity(moves.len() * 2);
+    // Where the current move's element starts (after the previous blend).
+    let mut start = moves.first().map(|m| m.start).unwrap_or([0.0; 4]);
+    let mut pending_blend: Option<Element> = None;
+    for (index, m) in moves.iter().enumerate() {
+        if let Some(b) = pending_blend.take() {
+            out.push(b);
+        }
+        if m.arc.is_some() {
+            if let Some(mut e) = arc_element(config, m)? {
+                e.block_end = true;
+                e.stop_after = m.stop_after;
+                e.dwell_periods = m.dwell_periods;
+                e.dwell_line = m.dwell_line;
+                out.push(e);
+            } else if let Some(last) = out.last_mut() {
+                last.stop_after |= m.stop_after;
+                last.dwell_periods += m.dwell_periods;
+                last.dwell_line = last.dwell_line.max(m.dwell_line);
+            }
+            start = m.end;
+            continue;
+        }
+        // A line: blend into the next line when both are lines and the mode allows.
+        let next = moves.get(index + 1).filter(|n| n.arc.is_none());
+        let mut end_here = m.end;
+        if let (Some(tolerance), Some(n)) = (m.blend, next) {
+            let d1 = sub(m.end, m.start);
+            let d2 = sub(n.end, n.start);
+            let (l1, l2) = (norm(d1), norm(d2));
+            let room = 0.5 * l1.min(l2);
+            if let Some((a, b, shape, length)) = blend_arc(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room) {
+                let blend = Element {
+                    shape,
+                    start: a,
+                    end: b,
+                    length,
+                    line: n.line,
+                    v_cap: 0.0,
+                    accel: 0.0,
+                    jerk: 0.0,
+                    stop_after: false,
+                    dwell_periods: 0,
+                    dwell_line: 0,
+                    block_end: false,
+                };
+                pending_blend = Some(limit(config, blend, m.feed.min(n.feed)));
+                end_here = a;
+            }
+        }
+        if let Some(mut e) = line_element(config, m, start, end_here, m.feed) {
+            e.block_end = true;
+            e.stop_after = m.stop_after;
+            e.dwell_periods = m.dwell_periods;
+            e.dwell_line = m.dwell_line;
+            out.push(e);
+        } else if let Some(last) = out.last_mut() {
+            last.stop_after |= m.stop_after;
+            last.dwell_periods += m.dwell_periods;
+            last.dwell_line = last.dwell_line.max(m.dwell_line);
+        }
+        start = pending_blend.as_ref().map(|b| b.end).unwrap_or(m.end);
+    }
+    if let Some(b) = pending_blend {
+        out.push(b);
+    }
+    Ok(PathElements { elements: out, leading_dwell, end, notes: Vec::new() })
+}

@@ -1,0 +1,348 @@
+//! The test corpus: every program in `tests/programs/`, a CAM-like program generated
+//! here, and random programs, planned with both profiles and checked by the independent
+//! checker ([`finestep_planner::checker`]), plus each program's own expected properties.
+
+use std::path::PathBuf;
+
+use finestep_gcode::Program;
+use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, PlannedProgram, ProfileKind};
+use proptest::prelude::*;
+
+const PROFILES: [ProfileKind; 2] = [ProfileKind::Trapezoid, ProfileKind::SCurve];
+
+fn programs_dir() -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"))
+}
+
+fn config(profile: ProfileKind) -> MachineConfig {
+    MachineConfig { profile, ..MachineConfig::default() }
+}
+
+fn parse(name: &str, source: &str) -> Program {
+    finestep_gcode::parse_str(source, name).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Plans and checks `program`, failing with the checker's findings.
+fn plan_and_check(name: &str, program: &Program, config: &MachineConfig) -> (PlannedProgram, CheckReport) {
+    let planned = plan_program(config, program).unwrap_or_else(|e| panic!("{name} ({:?}): {e}", config.profile));
+    let report = check_program(config, program, &planned.records).unwrap();
+    assert!(
+        report.passed(),
+        "{name} ({:?}): {} violations, the first: {:#?}",
+        config.profile,
+        report.violation_count,
+        report.violations
+    );
+    assert_eq!(report.endpoint_error_steps, [0.0; 4], "{name}");
+    (planned, report)
+}
+
+fn read(name: &str) -> Program {
+    let path = programs_dir().join(name);
+    let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    parse(name, &source)
+}
+
+/// Path speed in each period, from the increments, units/s.
+fn speeds(planned: &PlannedProgram, config: &MachineConfig) -> Vec<f64> {
+    let resolved = config.resolve().unwrap();
+    planned
+        .records
+        .iter()
+        .map(|r| {
+            (0..4)
+                .map(|a| (r.inc[a].to_num::<f64>() / resolved.axes[a].steps_per_unit).powi(2))
+                .sum::<f64>()
+                .sqrt()
+                / resolved.period_s
+        })
+        .collect()
+}
+
+#[test]
+fn every_committed_program_passes_the_checker() {
+    let mut names: Vec<String> = std::fs::read_dir(programs_dir())
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
+        .filter(|n| n.ends_with(".ngc"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 4, "{names:?}");
+    for name in &names {
+        for profile in PROFILES {
+            plan_and_check(name, &read(name), &config(profile));
+        }
+    }
+}
+
+#[test]
+fn contour_stops_exactly_at_every_block() {
+    for profile in PROFILES {
+        let (planned, report) = plan_and_check("contour.ngc", &read("contour.ngc"), &config(profile));
+        // G61 throughout: every one of the 8 moves ends on its step.
+        assert_eq!(report.exact_stops, 8);
+        assert_eq!(planned.end, [0.0, 0.0, 0.0, 90.0]);
+        assert!(report.max_deviation < 0.002, "{}", report.max_deviation);
+    }
+}
+
+#[test]
+fn corners_blend_within_p_and_stop_in_g61() {
+    for profile in PROFILES {
+        let (planned, report) = plan_and_check("corners.ngc", &read("corners.ngc"), &config(profile));
+        // The largest P is 0.02 mm; blends reach it (they are not exact stops in disguise).
+        assert!(report.max_deviation > 0.01 && report.max_deviation < 0.0215, "{}", report.max_deviation);
+        // The G61 zig-zag stops on each of its 16 vertices, and the plunges before it too.
+        assert!(report.exact_stops >= 16, "{}", report.exact_stops);
+        // The 3-degree corner of the first (G64 P0.02, F1800) zig-zag, from line 7 to 8,
+        // is taken at nearly the feed (the blend of radius 0.76 mm allows 18 mm/s at the
+        // normal acceleration share; 30 mm/s is the feed).
+        let config = config(profile);
+        let v = speeds(&planned, &config);
+        let corner = planned.lines.iter().position(|&l| l == 8).unwrap();
+        let least = if profile == ProfileKind::Trapezoid { 15.0 } else { 5.0 };
+        assert!(v[corner] > least, "{profile:?}: {} mm/s through a 3 degree corner", v[corner]);
+    }
+}
+
+#[test]
+fn arcs_stay_on_their_circles() {
+    for profile in PROFILES {
+        let (_, report) = plan_and_check("arcs.ngc", &read("arcs.ngc"), &config(profile));
+        // No corner here is blended (arcs are not), so only chords and rounding remain.
+        assert!(report.max_deviation < 0.0015, "{}", report.max_deviation);
+        // The 0.07 mm arc at F3000 is held far below the feed by the centripetal limit.
+        assert!(report.max_feed_ratio <= 1.0 + 1e-4, "{}", report.max_feed_ratio);
+    }
+}
+
+#[test]
+fn helices_end_exactly_after_many_turns() {
+    for profile in PROFILES {
+        let (planned, report) = plan_and_check("helix.ngc", &read("helix.ngc"), &config(profile));
+        assert_eq!(planned.end, [0.0; 4]);
+        assert!(report.max_deviation < 0.0015, "{}", report.max_deviation);
+        // A turned 90 degrees and back.
+        assert!(report.axis_max[3][0] > 1.0);
+    }
+}
+
+/// A CAM-like program of `moves` short segments on a wavy spiral, descending, G64.
+fn cam_program(moves: usize) -> String {
+    let mut text = String::from("G21 G90 G17 G64 P0.01\nF3000\n");
+    for i in 0..moves {
+        let t = i as f64 * 0.01;
+        let r = 20.0 + 5.0 * (7.0 * t).sin();
+        text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.0005 * i as f64));
+    }
+    text.push_str("M2\n");
+    text
+}
+
+#[test]
+fn a_long_cam_program_flows_without_stopping() {
+    let program = parse("cam.ngc", &cam_program(20_000));
+    for profile in PROFILES {
+        let config = config(profile);
+        let (planned, report) = plan_and_check("cam.ngc", &program, &config);
+        let v = speeds(&planned, &config);
+        // Never stops between the first and last 50 periods.
+        let slowest = v[50..v.len() - 50].iter().cloned().fold(f64::INFINITY, f64::min);
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        eprintln!("{profile:?}: {} periods, mean {mean:.1} mm/s, slowest {slowest:.2} mm/s, deviation {:.4}", v.len(), report.max_deviation);
+        let (least, least_mean) = if profile == ProfileKind::Trapezoid { (5.0, 30.0) } else { (1.0, 10.0) };
+        assert!(slowest > least, "{profile:?}: slowed to {slowest} mm/s");
+        assert!(mean > least_mean, "{profile:?}: mean {mean} mm/s");
+        assert!(report.max_deviation <= 0.01 + 0.002, "{}", report.max_deviation);
+    }
+}
+
+/// 3000 collinear 0.01 mm segments, then a right angle: reaching 100 mm/s needs 10 mm
+/// (1000 segments) of braking distance at the 500 mm/s^2 the path gets, so only a
+/// look-ahead of that many moves runs at the feed.
+fn tiny_segments() -> Program {
+    let mut text = String::from("G21 G90 G64 P0.01\nF6000\n");
+    for i in 1..=3000 {
+        text.push_str(&format!("G1 X{:.2}\n", i as f64 * 0.01));
+    }
+    text.push_str("G1 Y10\nM2\n");
+    parse("tiny.ngc", &text)
+}
+
+#[test]
+fn look_ahead_sees_two_thousand_moves_and_brakes_in_time_for_the_corner() {
+    let program = tiny_segments();
+    let config = MachineConfig { lookahead_moves: 2000, ..MachineConfig::default() };
+    let (planned, _) = plan_and_check("tiny.ngc", &program, &config);
+    let v = speeds(&planned, &config);
+    // The peak on the 3000 tiny segments (lines 3 to 3002), not on the last 10 mm line.
+    let peak_on_x = |planned: &PlannedProgram, v: &[f64]| {
+        planned.lines.iter().zip(v).filter(|(l, _)| **l <= 3002).map(|(_, v)| *v).fold(0.0, f64::max)
+    };
+    let peak = peak_on_x(&planned, &v);
+    assert!(peak > 99.0, "peak {peak} mm/s");
+    // The corner (X30 reached) is taken slowly; braking began at least 1000 moves before.
+    let resolved = config.resolve().unwrap();
+    let mut x = 0i64;
+    let mut corner_speed = f64::INFINITY;
+    let mut braking_from = None;
+    for (k, r) in planned.records.iter().enumerate() {
+        x += i64::from(r.inc[0].to_bits());
+        let x_mm = x as f64 / 65536.0 / resolved.axes[0].steps_per_unit;
+        if braking_from.is_none() && k > 0 && v[k] < v[k - 1] - 1e-6 && v[k - 1] > 99.0 {
+            braking_from = Some(x_mm);
+        }
+        if (x_mm - 30.0).abs() < 0.05 {
+            corner_speed = corner_speed.min(v[k]);
+        }
+    }
+    assert!(corner_speed < 5.0, "corner at {corner_speed} mm/s");
+    let braking_from = braking_from.expect("no braking");
+    assert!(30.0 - braking_from > 9.9, "braking started {braking_from} mm, {} mm before the corner", 30.0 - braking_from);
+
+    // A short look-ahead cannot reach the feed on the same segments.
+    let short = MachineConfig { lookahead_moves: 20, ..MachineConfig::default() };
+    let (planned, _) = plan_and_check("tiny.ngc", &program, &short);
+    let peak_short = peak_on_x(&planned, &speeds(&planned, &short));
+    // 20 moves of look-ahead: a window of 80 elements, at least 0.2 mm to stop in.
+    assert!(peak_short < 30.0, "short look-ahead peak {peak_short}");
+}
+
+/// Random polylines, arcs in any plane and helices, in random G61/G64 modes and feeds.
+fn random_program() -> impl Strategy<Value = String> {
+    let step = (0u8..4, -20.0..20.0f64, -20.0..20.0f64, -3.0..3.0f64, 0.0..6.3f64, 0.3..8.0f64, 100.0..6000.0f64, any::<bool>());
+    (prop::collection::vec(step, 1..40), 0.001..0.05f64).prop_map(|(steps, tolerance)| {
+        let mut text = format!("G21 G90 G64 P{tolerance:.4}\n");
+        let (mut x, mut y, mut z) = (0.0f64, 0.0f64, 0.0f64);
+        for (kind, dx, dy, dz, angle, radius, feed, exact) in steps {
+            if exact {
+                text.push_str(if kind == 0 { "G61\n" } else { "G64\n" });
+            }
+            match kind {
+                0 | 1 => {
+                    x += dx;
+                    y += dy;
+                    z += dz;
+                    text.push_str(&format!("G1 X{x:.4} Y{y:.4} Z{z:.4} F{feed:.0}\n"));
+                }
+                2 => {
+                    // An XY arc (helix when dz != 0) around a centre `radius` away.
+                    let (cx, cy) = (x + radius * angle.cos(), y + radius * angle.sin());
+                    let end = angle + dx;
+                    let (ex, ey) = (cx - radius * end.cos(), cy - radius * end.sin());
+                    z += dz;
+                    let g = if dy > 0.0 { 2 } else { 3 };
+                    text.push_str(&format!(
+                        "G17 G{g} X{ex:.4} Y{ey:.4} Z{z:.4} I{:.4} J{:.4} F{feed:.0}\n",
+                        cx - x,
+                        cy - y
+                    ));
+                    x = (ex * 1e4).round() / 1e4;
+                    y = (ey * 1e4).round() / 1e4;
+                }
+                _ => {
+                    // A ZX or YZ arc.
+                    let (plane, (u, v)) = if dy > 0.0 { ("G18", (z, x)) } else { ("G19", (y, z)) };
+                    let (cu, cv) = (u + radius * angle.cos(), v + radius * angle.sin());
+                    let end = angle + dx;
+                    let round = |value: f64| (value * 1e4).round() / 1e4;
+                    let (eu, ev) = (round(cu - radius * end.cos()), round(cv - radius * end.sin()));
+                    let (words, offsets) = if plane == "G18" {
+                        (format!("Z{eu:.4} X{ev:.4}"), format!("K{:.4} I{:.4}", cu - u, cv - v))
+                    } else {
+                        (format!("Y{eu:.4} Z{ev:.4}"), format!("J{:.4} K{:.4}", cu - u, cv - v))
+                    };
+                    text.push_str(&format!("{plane} G2 {words} {offsets} F{feed:.0}\n"));
+                    if plane == "G18" {
+                        z = eu;
+                        x = ev;
+                    } else {
+                        y = eu;
+                        z = ev;
+                    }
+                }
+            }
+        }
+        text
+    })
+}
+
+#[test]
+fn random_programs_pass_the_checker() {
+    let mut runner = finestep_testkit::runner("random_programs_pass_the_checker", 24);
+    runner
+        .run(&(random_program(), any::<bool>()), |(text, scurve)| {
+            let program = match finestep_gcode::parse_str(&text, "random.ngc") {
+                Ok(p) => p,
+                Err(_) => return Ok(()), // an arc the parser refuses (end off its circle)
+            };
+            let profile = if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid };
+            let config = config(profile);
+            let planned = plan_program(&config, &program).map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
+            let report = check_program(&config, &program, &planned.records).unwrap();
+            prop_assert!(report.passed(), "{profile:?}: {:#?}\n{}", report.violations, text);
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// Random machines (scales, limits, period, profile, tolerances over decades) on random
+/// programs: planning either refuses with an error or gives periods the checker passes;
+/// it never panics.
+#[test]
+fn random_machines_plan_or_refuse_and_pass_the_checker() {
+    // Log-uniform over decades: steps/unit 1..3000, velocity 1..1000, acceleration
+    // 10..30 000, jerk 1e3..1e7.
+    let axis = (0.0..3.5f64, 0.0..3.0f64, 1.0..4.5f64, 3.0..7.0f64).prop_map(|(s, v, a, j)| (10f64.powf(s), 10f64.powf(v), 10f64.powf(a), 10f64.powf(j)));
+    let machine = (
+        prop::array::uniform4(axis),
+        0.25..4.0f64,
+        any::<bool>(),
+        1e-4..1.0f64,
+        1e-4..0.1f64,
+        2usize..50,
+    );
+    let mut runner = finestep_testkit::runner("random_machines_plan_or_refuse_and_pass_the_checker", 24);
+    let outcomes = std::cell::RefCell::new([0usize; 4]); // parse refused, config refused, plan refused, planned
+    runner
+        .run(&(machine, random_program()), |((axes, period_ms, scurve, path_tolerance, chord_tolerance, lookahead), text)| {
+            let mut config = MachineConfig {
+                period_ms,
+                profile: if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid },
+                path_tolerance_mm: path_tolerance,
+                chord_tolerance_mm: chord_tolerance,
+                lookahead_moves: lookahead,
+                ..MachineConfig::default()
+            };
+            for ((name, limits), (steps, velocity, accel, jerk)) in config.axes.iter_mut().zip(axes) {
+                let _ = name;
+                *limits = finestep_planner::config::AxisLimits { steps_per_unit: steps, max_velocity: velocity, max_acceleration: accel, max_jerk: jerk };
+            }
+            let Ok(program) = finestep_gcode::parse_str(&text, "random.ngc") else {
+                outcomes.borrow_mut()[0] += 1;
+                return Ok(());
+            };
+            if let Err(e) = config.resolve() {
+                eprintln!("machine refused: {e}");
+                outcomes.borrow_mut()[1] += 1;
+                return Ok(()); // refused with a named key, e.g. acceleration past the reversal rate
+            }
+            match plan_program(&config, &program) {
+                Err(e) => {
+                    eprintln!("refused: {e}");
+                    outcomes.borrow_mut()[2] += 1;
+                    Ok(())
+                }
+                Ok(planned) => {
+                    outcomes.borrow_mut()[3] += 1;
+                    let report = check_program(&config, &program, &planned.records).unwrap();
+                    prop_assert!(report.passed(), "{config:?}: {:#?}\n{}", report.violations, text);
+                    Ok(())
+                }
+            }
+        })
+        .unwrap();
+    let outcomes = outcomes.into_inner();
+    eprintln!("parse refused, machine refused, plan refused, planned: {outcomes:?}");
+    assert!(outcomes[3] * 3 >= outcomes.iter().sum::<usize>(), "too few random machines planned: {outcomes:?}");
+}

@@ -1,0 +1,139 @@
+//! The Verilated `finestep_top`: the core behind its host interface, driven and
+//! observed at its pins as packed 64-bit words (layout in `sim/finestep_top_sim.h`,
+//! mirrored by `finestep_model::top_pins`).
+
+use std::ffi::CString;
+use std::marker::PhantomData;
+use std::path::Path;
+use std::ptr::NonNull;
+
+use crate::{ffi, TraceDepth};
+
+/// The parameters the Verilated top was built with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TopBuild {
+    /// Step/dir axes.
+    pub n_axes: usize,
+    /// Width of the period register.
+    pub p_width: u32,
+    /// Width of the step timing settings.
+    pub timing_width: u32,
+    /// The position FIFO holds `2^fifo_depth_log2` records.
+    pub fifo_depth_log2: u32,
+}
+
+/// The build parameters of the Verilated top.
+pub fn top_build() -> TopBuild {
+    // SAFETY: pure functions returning build-time constants.
+    unsafe {
+        TopBuild {
+            n_axes: ffi::ft_n_axes() as usize,
+            p_width: ffi::ft_p_width(),
+            timing_width: ffi::ft_timing_width(),
+            fifo_depth_log2: ffi::ft_fifo_depth_log2(),
+        }
+    }
+}
+
+/// An output change: the packed outputs from cycle `cycle` on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PinEvent {
+    /// The cycle whose outputs these are (after the edge ending cycle `cycle - 1`).
+    pub cycle: u64,
+    /// Packed outputs.
+    pub outputs: u64,
+}
+
+/// One Verilated `finestep_top` with its own clock, all state zero at construction
+/// (drive `rst` for at least 2 cycles first). Not `Send`.
+pub struct RtlTop {
+    sim: NonNull<ffi::ft_sim>,
+    events: Vec<ffi::ft_event>,
+    _not_send: PhantomData<*const ()>,
+}
+
+impl Default for RtlTop {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl RtlTop {
+    /// A top without waveform support (fast).
+    pub fn new() -> RtlTop {
+        // SAFETY: ft_new returns a valid owned pointer, freed in Drop.
+        Self::from_raw(unsafe { ffi::ft_new() })
+    }
+
+    /// A top that can write waveforms ([`RtlTop::trace_open`]).
+    pub fn new_traced() -> RtlTop {
+        // SAFETY: ft_new_traced returns a valid owned pointer, freed in Drop.
+        Self::from_raw(unsafe { ffi::ft_new_traced() })
+    }
+
+    fn from_raw(sim: *mut ffi::ft_sim) -> RtlTop {
+        RtlTop { sim: NonNull::new(sim).expect("ft_new returned null"), events: Vec::new(), _not_send: PhantomData }
+    }
+
+    /// Edges run since construction.
+    pub fn cycle(&self) -> u64 {
+        // SAFETY: self.sim is valid for our lifetime.
+        unsafe { ffi::ft_cycle(self.sim.as_ptr()) }
+    }
+
+    /// The packed outputs in the current cycle.
+    pub fn outputs(&self) -> u64 {
+        // SAFETY: as above.
+        unsafe { ffi::ft_outputs(self.sim.as_ptr()) }
+    }
+
+    /// `cycles` edges with the packed `inputs` held; appends an event for every cycle
+    /// whose outputs changed.
+    pub fn run(&mut self, inputs: u64, cycles: u64, events: &mut Vec<PinEvent>) {
+        const BATCH: usize = 4096;
+        self.events.resize(BATCH, ffi::ft_event::default());
+        let mut ran = 0;
+        while ran < cycles {
+            let mut stored = 0usize;
+            // SAFETY: the event buffer holds BATCH entries.
+            ran += unsafe {
+                ffi::ft_run(self.sim.as_ptr(), inputs, cycles - ran, self.events.as_mut_ptr(), BATCH, &mut stored)
+            };
+            events.extend(self.events[..stored].iter().map(|e| PinEvent { cycle: e.cycle, outputs: e.outputs }));
+        }
+    }
+
+    /// Start writing a waveform of every following cycle (a top from
+    /// [`RtlTop::new_traced`] only).
+    pub fn trace_open(&mut self, path: &Path, depth: TraceDepth) -> std::io::Result<()> {
+        let c_path = CString::new(path.to_string_lossy().as_bytes())
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
+        let levels = match depth {
+            TraceDepth::Ports => 0,
+            TraceDepth::Everything => 99,
+        };
+        // SAFETY: c_path is a valid NUL-terminated string for the call.
+        let status = unsafe { ffi::ft_trace_open(self.sim.as_ptr(), c_path.as_ptr(), levels) };
+        if status == 0 {
+            Ok(())
+        } else {
+            Err(std::io::Error::other(format!(
+                "cannot open waveform {} (a top from RtlTop::new_traced is needed)",
+                path.display()
+            )))
+        }
+    }
+
+    /// Flush and close the waveform, if one is open.
+    pub fn trace_close(&mut self) {
+        // SAFETY: closing with no trace open is a no-op.
+        unsafe { ffi::ft_trace_close(self.sim.as_ptr()) }
+    }
+}
+
+impl Drop for RtlTop {
+    fn drop(&mut self) {
+        // SAFETY: we own the pointer and never use it again.
+        unsafe { ffi::ft_free(self.sim.as_ptr()) }
+    }
+}

@@ -1,0 +1,172 @@
+// C ABI shim around the Verilated finestep_top (see finestep_top_sim.h). As for the
+// core, two Verilations are linked: Vfinestep_top (fast) and Vfinestep_top_traced.
+#include "finestep_top_sim.h"
+
+#include <memory>
+
+#include "Vfinestep_top.h"
+#include "Vfinestep_top_traced.h"
+#include "verilated.h"
+#if VM_TRACE_FST
+#include "verilated_fst_c.h"
+typedef VerilatedFstC TopTraceFile;
+#else
+#include "verilated_vcd_c.h"
+typedef VerilatedVcdC TopTraceFile;
+#endif
+
+#ifndef FT_N_AXES
+#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W and FT_FIFO_DEPTH_LOG2 must match the Verilated parameters"
+#endif
+
+struct ft_sim {
+    uint64_t cycle = 0;
+    uint64_t outputs = 0;
+
+    virtual ~ft_sim() = default;
+    virtual uint64_t run(uint64_t inputs, uint64_t cycles, ft_event *events, size_t capacity,
+                         size_t *n_events) = 0;
+    virtual int trace_open(const char *path, uint32_t levels) = 0;
+    virtual void trace_close() = 0;
+};
+
+namespace {
+
+inline uint64_t bit(uint64_t word, unsigned index) { return (word >> index) & 1; }
+
+template <typename Model, bool TRACED>
+struct TopSim final : ft_sim {
+    std::unique_ptr<VerilatedContext> context;
+    std::unique_ptr<Model> top;
+    std::unique_ptr<TopTraceFile> trace;
+
+    TopSim() : context(new VerilatedContext) {
+        if (TRACED) context->traceEverOn(true);
+        top.reset(new Model(context.get()));
+        top->clk = 0;
+        apply(idle_inputs());
+        outputs = read_outputs();
+    }
+
+    ~TopSim() override {
+        trace_close();
+        top->final();
+    }
+
+    static uint64_t idle_inputs() {
+        return (1ULL << FT_IN_SPI_CS_N) | (1ULL << FT_IN_BUS_CS_N) | (1ULL << FT_IN_BUS_ADV_N) |
+               (1ULL << FT_IN_BUS_RD_N) | (1ULL << FT_IN_BUS_WR_N);
+    }
+
+    void apply(uint64_t in) {
+        top->rst = bit(in, FT_IN_RST);
+        top->spi_cs_n = bit(in, FT_IN_SPI_CS_N);
+        top->spi_sck = bit(in, FT_IN_SPI_SCK);
+        top->spi_mosi = bit(in, FT_IN_SPI_MOSI);
+        top->bus_cs_n = bit(in, FT_IN_BUS_CS_N);
+        top->bus_adv_n = bit(in, FT_IN_BUS_ADV_N);
+        top->bus_rd_n = bit(in, FT_IN_BUS_RD_N);
+        top->bus_wr_n = bit(in, FT_IN_BUS_WR_N);
+        top->estop_pin = bit(in, FT_IN_ESTOP);
+        top->bus_ad_in = static_cast<uint16_t>(in >> FT_IN_BUS_AD0);
+        top->eval();  // settle on the new inputs, clock low
+    }
+
+    uint64_t read_outputs() const {
+        uint64_t out = 0;
+        out |= static_cast<uint64_t>(top->pin_a & 0xFF) << FT_OUT_PIN_A0;
+        out |= static_cast<uint64_t>(top->pin_b & 0xFF) << FT_OUT_PIN_B0;
+        out |= static_cast<uint64_t>(top->pin_en & 0xFF) << FT_OUT_PIN_EN0;
+        out |= static_cast<uint64_t>(top->spi_miso & 1) << FT_OUT_SPI_MISO;
+        out |= static_cast<uint64_t>(top->spi_miso_oe & 1) << FT_OUT_SPI_MISO_OE;
+        out |= static_cast<uint64_t>(top->irq & 1) << FT_OUT_IRQ;
+        out |= static_cast<uint64_t>(top->bus_ad_oe & 1) << FT_OUT_BUS_AD_OE;
+        out |= static_cast<uint64_t>(top->bus_ad_out & 0xFFFF) << FT_OUT_BUS_AD0;
+        return out;
+    }
+
+    // Cycle c is drawn from time 2c (its rising edge) to 2c+2, its inputs at 2c+1.
+    void edge() {
+        if (TRACED && trace) trace->dump(2 * cycle + 1);
+        top->clk = 1;
+        top->eval();
+        ++cycle;
+        if (TRACED && trace) trace->dump(2 * cycle);
+        top->clk = 0;
+        top->eval();
+    }
+
+    uint64_t run(uint64_t inputs, uint64_t cycles, ft_event *events, size_t capacity,
+                 size_t *n_events) override {
+        apply(inputs);
+        uint64_t ran = 0;
+        size_t stored = 0;
+        while (ran < cycles && stored < capacity) {
+            edge();
+            ++ran;
+            const uint64_t now = read_outputs();
+            if (now != outputs) {
+                outputs = now;
+                events[stored].cycle = cycle;
+                events[stored].outputs = now;
+                ++stored;
+            }
+        }
+        *n_events = stored;
+        return ran;
+    }
+
+    int trace_open(const char *path, uint32_t levels) override {
+        if (!TRACED) return -1;
+        trace_close();
+        trace.reset(new TopTraceFile);
+        trace->dumpvars(static_cast<int>(levels) + 1, "TOP");
+        top->trace(trace.get(), 99);
+        trace->open(path);
+        if (!trace->isOpen()) {
+            trace.reset();
+            return -1;
+        }
+        return 0;
+    }
+
+    void trace_close() override {
+        if (trace) {
+            trace->close();
+            trace.reset();
+        }
+    }
+};
+
+// Only the traced model has trace(); give the untraced one a stub so one template fits.
+struct FastTop : Vfinestep_top {
+    using Vfinestep_top::Vfinestep_top;
+    void trace(TopTraceFile *, int) {}
+};
+
+}  // namespace
+
+extern "C" {
+
+uint32_t ft_n_axes(void) { return FT_N_AXES; }
+uint32_t ft_p_width(void) { return FT_P_WIDTH; }
+uint32_t ft_timing_width(void) { return FT_TIMING_W; }
+uint32_t ft_fifo_depth_log2(void) { return FT_FIFO_DEPTH_LOG2; }
+
+ft_sim *ft_new(void) { return new TopSim<FastTop, false>; }
+ft_sim *ft_new_traced(void) { return new TopSim<Vfinestep_top_traced, true>; }
+void ft_free(ft_sim *sim) { delete sim; }
+uint64_t ft_cycle(const ft_sim *sim) { return sim->cycle; }
+uint64_t ft_outputs(const ft_sim *sim) { return sim->outputs; }
+
+uint64_t ft_run(ft_sim *sim, uint64_t inputs, uint64_t cycles, ft_event *events, size_t capacity,
+                size_t *n_events) {
+    return sim->run(inputs, cycles, events, capacity, n_events);
+}
+
+int ft_trace_open(ft_sim *sim, const char *path, uint32_t levels) {
+    return sim->trace_open(path, levels);
+}
+void ft_trace_close(ft_sim *sim) { sim->trace_close(); }
+
+}  // extern "C"

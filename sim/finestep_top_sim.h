@@ -1,0 +1,79 @@
+/* C ABI around the Verilated finestep_top (the core behind its host interface), for
+ * bindgen. One ft_sim is one instance with its own clock, driven and observed at its
+ * pins: the inputs and outputs are packed into 64-bit words (finestep_model::top_pins
+ * mirrors the layout bit for bit). Power-on state is all zero; the caller drives rst. */
+#ifndef FINESTEP_TOP_SIM_H
+#define FINESTEP_TOP_SIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Packed inputs: bit 0 rst, 1 spi_cs_n, 2 spi_sck, 3 spi_mosi, 4 bus_cs_n, 5 bus_adv_n,
+ * 6 bus_rd_n, 7 bus_wr_n, 8 estop_pin, bits 16..31 bus_ad_in. */
+#define FT_IN_RST 0
+#define FT_IN_SPI_CS_N 1
+#define FT_IN_SPI_SCK 2
+#define FT_IN_SPI_MOSI 3
+#define FT_IN_BUS_CS_N 4
+#define FT_IN_BUS_ADV_N 5
+#define FT_IN_BUS_RD_N 6
+#define FT_IN_BUS_WR_N 7
+#define FT_IN_ESTOP 8
+#define FT_IN_BUS_AD0 16
+/* Packed outputs: bits 0..7 pin_a[i], 8..15 pin_b[i], 16..23 pin_en[i], 24 spi_miso,
+ * 25 spi_miso_oe, 26 irq, 27 bus_ad_oe, bits 32..47 bus_ad_out. */
+#define FT_OUT_PIN_A0 0
+#define FT_OUT_PIN_B0 8
+#define FT_OUT_PIN_EN0 16
+#define FT_OUT_SPI_MISO 24
+#define FT_OUT_SPI_MISO_OE 25
+#define FT_OUT_IRQ 26
+#define FT_OUT_BUS_AD_OE 27
+#define FT_OUT_BUS_AD0 32
+
+/* The outputs after the edge that ended cycle `cycle - 1`, recorded when they changed. */
+typedef struct ft_event {
+    uint64_t cycle;
+    uint64_t outputs;
+} ft_event;
+
+typedef struct ft_sim ft_sim;
+
+/* Build-time parameters of the Verilated top. */
+uint32_t ft_n_axes(void);
+uint32_t ft_p_width(void);
+uint32_t ft_timing_width(void);
+uint32_t ft_fifo_depth_log2(void);
+
+/* A top built without waveform support (the fast one). */
+ft_sim *ft_new(void);
+/* A top that can write waveforms (ft_trace_open); slower. */
+ft_sim *ft_new_traced(void);
+void ft_free(ft_sim *sim);
+
+/* Cycles run so far (edges since construction). */
+uint64_t ft_cycle(const ft_sim *sim);
+/* The packed outputs in the current cycle. */
+uint64_t ft_outputs(const ft_sim *sim);
+/* Runs up to `cycles` edges with the packed `inputs` held. After each edge whose
+ * outputs differ from the cycle before, an event is stored; stops early when
+ * `capacity` events are stored. Returns the edges run; *n_events the events stored. */
+uint64_t ft_run(ft_sim *sim, uint64_t inputs, uint64_t cycles, ft_event *events, size_t capacity,
+                size_t *n_events);
+
+/* Waveform tracing on a top from ft_new_traced: open a file (VCD, or FST when the
+ * crate was built with FST), dump every cycle until closed. Returns 0 on success, -1
+ * when the file cannot be opened or the top was made by ft_new. `levels`: 0 = ports
+ * only, 99 = everything. */
+int ft_trace_open(ft_sim *sim, const char *path, uint32_t levels);
+void ft_trace_close(ft_sim *sim);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
