@@ -187,69 +187,75 @@ module register_file #(
         status_word[FS_STATUS_IRQ_LSB]            = irq_reg;
     end
 
-    // The read value of every address, from the state of this cycle.
-    reg [31:0] read_value;
-    integer axis;
-    always @* begin
-        read_value = 32'd0;
-        case (bus_addr)
-            FS_ID_ADDR:       read_value = FS_ID_MAGIC_VALUE;
-            FS_VERSION_ADDR:  read_value = VERSION_WORD;
-            FS_CAPS_ADDR:     read_value = CAPS_WORD;
-            FS_CLOCK_HZ_ADDR: read_value = CLOCK_HZ;
-            FS_CONTROL_ADDR: begin
-                read_value[FS_CONTROL_RUN_LSB]               = run_reg;
-                read_value[FS_CONTROL_WATCHDOG_ENABLE_LSB]   = watchdog_enable_reg;
-                read_value[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB] = estop_active_high_reg;
+    // The read value of an address, from the state of this cycle. A function called only
+    // on a read, so a simulator evaluates this wide mux only when a read is served.
+    function [31:0] read_word(input [6:0] addr);
+        integer index;
+        reg [31:0] read_value;
+        begin
+            read_value = 32'd0;
+            case (addr)
+                FS_ID_ADDR:       read_value = FS_ID_MAGIC_VALUE;
+                FS_VERSION_ADDR:  read_value = VERSION_WORD;
+                FS_CAPS_ADDR:     read_value = CAPS_WORD;
+                FS_CLOCK_HZ_ADDR: read_value = CLOCK_HZ;
+                FS_CONTROL_ADDR: begin
+                    read_value[FS_CONTROL_RUN_LSB]               = run_reg;
+                    read_value[FS_CONTROL_WATCHDOG_ENABLE_LSB]   = watchdog_enable_reg;
+                    read_value[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB] = estop_active_high_reg;
+                end
+                FS_STATUS_ADDR: read_value = status_word;
+                FS_FIFO_LEVEL_ADDR: begin
+                    read_value[FS_FIFO_LEVEL_LEVEL_LSB +: FIFO_DEPTH_LOG2 + 1] = fifo_level;
+                    read_value[FS_FIFO_LEVEL_FREE_LSB +: FIFO_DEPTH_LOG2 + 1]  = fifo_free;
+                end
+                FS_FIFO_WATERMARK_ADDR:   read_value[15:0] = watermark_reg;
+                FS_START_LEVEL_ADDR:      read_value[15:0] = start_level_reg;
+                FS_PERIOD_CLOCKS_ADDR:    read_value[P_WIDTH-1:0] = period_reg;
+                FS_WATCHDOG_TIMEOUT_ADDR: read_value[WD_W-1:0] = watchdog_timeout_reg;
+                FS_ESTOP_FILTER_ADDR:     read_value[7:0] = estop_filter_reg;
+                FS_IRQ_STATUS_ADDR:       read_value[IRQ_W-1:0] = irq_status;
+                FS_IRQ_MASK_ADDR:         read_value[IRQ_W-1:0] = irq_mask_reg;
+                FS_TIMESTAMP_ADDR:        read_value = timestamp_reg;
+                FS_LATCH_TIME_ADDR:       read_value = latch_time_reg;
+                FS_PERIOD_COUNT_ADDR:     read_value = period_count_reg;
+                FS_UNDERRUN_COUNT_ADDR:       read_value[15:0] = underrun_count_reg;
+                FS_CRC_ERROR_COUNT_ADDR:      read_value[15:0] = crc_error_count_reg;
+                FS_FRAME_ERROR_COUNT_ADDR:    read_value[15:0] = frame_error_count_reg;
+                FS_PARALLEL_ERROR_COUNT_ADDR: read_value[15:0] = parallel_error_count_reg;
+                FS_REFUSED_RECORD_COUNT_ADDR: read_value[15:0] = refused_count_reg;
+                FS_AXIS_STATUS_ADDR: begin
+                    read_value[FS_AXIS_STATUS_RATE_ERROR_LSB +: N_AXES] = rate_error;
+                    read_value[FS_AXIS_STATUS_STEP_LOST_LSB +: N_AXES]  = step_lost;
+                end
+                FS_AXIS_ENABLE_ADDR: read_value[N_AXES-1:0] = axis_enable_reg;
+                default: ;
+            endcase
+            for (index = 0; index < N_AXES; index = index + 1) begin
+                if ({25'd0, addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE) begin
+                    read_value[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*index +: TIMING_W];
+                    read_value[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*index +: TIMING_W];
+                end
+                if ({25'd0, addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE) begin
+                    read_value[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*index +: TIMING_W];
+                    read_value[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*index +: TIMING_W];
+                end
+                if ({25'd0, addr} == {25'd0, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE) begin
+                    read_value[FS_AXIS_MODE_OUT_MODE_LSB +: 2] = out_mode_reg[2*index +: 2];
+                    read_value[FS_AXIS_MODE_INVERT_A_LSB]      = invert_reg[3*index];
+                    read_value[FS_AXIS_MODE_INVERT_B_LSB]      = invert_reg[3*index + 1];
+                    read_value[FS_AXIS_MODE_INVERT_EN_LSB]     = invert_reg[3*index + 2];
+                end
+                if ({25'd0, addr} == {25'd0, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE)
+                    read_value = position_latch_reg[32*index +: 32];
+                if ({25'd0, addr} == {25'd0, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE)
+                    read_value = record_inc_reg[32*index +: 32];
             end
-            FS_STATUS_ADDR: read_value = status_word;
-            FS_FIFO_LEVEL_ADDR: begin
-                read_value[FS_FIFO_LEVEL_LEVEL_LSB +: FIFO_DEPTH_LOG2 + 1] = fifo_level;
-                read_value[FS_FIFO_LEVEL_FREE_LSB +: FIFO_DEPTH_LOG2 + 1]  = fifo_free;
-            end
-            FS_FIFO_WATERMARK_ADDR:   read_value[15:0] = watermark_reg;
-            FS_START_LEVEL_ADDR:      read_value[15:0] = start_level_reg;
-            FS_PERIOD_CLOCKS_ADDR:    read_value[P_WIDTH-1:0] = period_reg;
-            FS_WATCHDOG_TIMEOUT_ADDR: read_value[WD_W-1:0] = watchdog_timeout_reg;
-            FS_ESTOP_FILTER_ADDR:     read_value[7:0] = estop_filter_reg;
-            FS_IRQ_STATUS_ADDR:       read_value[IRQ_W-1:0] = irq_status;
-            FS_IRQ_MASK_ADDR:         read_value[IRQ_W-1:0] = irq_mask_reg;
-            FS_TIMESTAMP_ADDR:        read_value = timestamp_reg;
-            FS_LATCH_TIME_ADDR:       read_value = latch_time_reg;
-            FS_PERIOD_COUNT_ADDR:     read_value = period_count_reg;
-            FS_UNDERRUN_COUNT_ADDR:       read_value[15:0] = underrun_count_reg;
-            FS_CRC_ERROR_COUNT_ADDR:      read_value[15:0] = crc_error_count_reg;
-            FS_FRAME_ERROR_COUNT_ADDR:    read_value[15:0] = frame_error_count_reg;
-            FS_PARALLEL_ERROR_COUNT_ADDR: read_value[15:0] = parallel_error_count_reg;
-            FS_REFUSED_RECORD_COUNT_ADDR: read_value[15:0] = refused_count_reg;
-            FS_AXIS_STATUS_ADDR: begin
-                read_value[FS_AXIS_STATUS_RATE_ERROR_LSB +: N_AXES] = rate_error;
-                read_value[FS_AXIS_STATUS_STEP_LOST_LSB +: N_AXES]  = step_lost;
-            end
-            FS_AXIS_ENABLE_ADDR: read_value[N_AXES-1:0] = axis_enable_reg;
-            default: ;
-        endcase
-        for (axis = 0; axis < N_AXES; axis = axis + 1) begin
-            if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + axis * FS_AXIS_TIMING_A_STRIDE) begin
-                read_value[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*axis +: TIMING_W];
-                read_value[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*axis +: TIMING_W];
-            end
-            if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + axis * FS_AXIS_TIMING_B_STRIDE) begin
-                read_value[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*axis +: TIMING_W];
-                read_value[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*axis +: TIMING_W];
-            end
-            if ({25'd0, bus_addr} == {25'd0, FS_AXIS_MODE_ADDR} + axis * FS_AXIS_MODE_STRIDE) begin
-                read_value[FS_AXIS_MODE_OUT_MODE_LSB +: 2] = out_mode_reg[2*axis +: 2];
-                read_value[FS_AXIS_MODE_INVERT_A_LSB]      = invert_reg[3*axis];
-                read_value[FS_AXIS_MODE_INVERT_B_LSB]      = invert_reg[3*axis + 1];
-                read_value[FS_AXIS_MODE_INVERT_EN_LSB]     = invert_reg[3*axis + 2];
-            end
-            if ({25'd0, bus_addr} == {25'd0, FS_POSITION_ADDR} + axis * FS_POSITION_STRIDE)
-                read_value = position_latch_reg[32*axis +: 32];
-            if ({25'd0, bus_addr} == {25'd0, FS_RECORD_INC_ADDR} + axis * FS_RECORD_INC_STRIDE)
-                read_value = record_inc_reg[32*axis +: 32];
+            read_word = read_value;
         end
-    end
+    endfunction
+
+    integer axis;
 
     wire push_refused = push_reg && (fifo_full || spi_fifo_in_use);
     wire [15:0] refused_now = (push_refused ? 16'd1 : 16'd0) + (spi_refused ? {8'd0, spi_refused_count} : 16'd0);
@@ -262,7 +268,7 @@ module register_file #(
             latch_time_reg     <= timestamp_reg;
         end
         irq_reg <= |(irq_status & irq_mask_reg);
-        if (read) rdata_reg <= read_value;
+        if (read) rdata_reg <= read_word(bus_addr);
 
         clear_errors_reg   <= 1'b0;
         clear_faults_reg   <= 1'b0;

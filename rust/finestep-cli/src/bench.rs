@@ -7,7 +7,7 @@ use finestep_cosim::{Harness, ModelPath};
 use finestep_model::{Core, CoreInputs, Event, Increment, PeriodRecord};
 use finestep_rtl_sys::Rtl;
 
-use crate::demo::{demo_axis, CLOCK_HZ};
+use crate::demo::{demo_axis_config, CLOCK_HZ};
 
 const PERIOD_CLOCKS: u32 = 50_000;
 const AXES: usize = 4;
@@ -29,7 +29,7 @@ fn stream(periods: u64) -> impl Iterator<Item = PeriodRecord> {
 fn inputs() -> CoreInputs {
     let mut inputs = CoreInputs { run: true, period_clocks: PERIOD_CLOCKS, rec_valid: true, ..Default::default() };
     for axis in inputs.axes.iter_mut().take(AXES) {
-        *axis = demo_axis();
+        *axis = demo_axis_config();
     }
     inputs
 }

@@ -5,13 +5,14 @@ use std::path::Path;
 use anyhow::Context;
 use plotters::prelude::*;
 
-/// One axis sampled at every period boundary, in steps.
+/// One axis: the commanded position at every period boundary, and the emitted one
+/// where it was sampled, in steps.
 #[derive(Default, Clone, Debug)]
 pub struct AxisTrace {
-    /// Commanded position (sum of the increments so far).
+    /// Commanded position (sum of the increments so far) at boundary `i`, time `i * T`.
     pub commanded: Vec<f64>,
-    /// Position the pulse train has reached.
-    pub emitted: Vec<f64>,
+    /// Position the pulse train had reached, as (time from boundary 0 in s, steps).
+    pub emitted: Vec<(f64, f64)>,
 }
 
 const FONT_FILE: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
@@ -33,7 +34,7 @@ pub fn plot_axes(path: &Path, traces: &[AxisTrace], names: &[&str], period_s: f6
     let t_end = periods as f64 * period_s;
     let time = |i: usize| i as f64 * period_s;
 
-    let (lo, hi) = traces.iter().flat_map(|t| t.commanded.iter().chain(&t.emitted)).fold(
+    let (lo, hi) = traces.iter().flat_map(|t| t.commanded.iter().chain(t.emitted.iter().map(|(_, v)| v))).fold(
         (0.0f64, 0.0f64),
         |(lo, hi), &v| (lo.min(v), hi.max(v)),
     );
@@ -52,14 +53,25 @@ pub fn plot_axes(path: &Path, traces: &[AxisTrace], names: &[&str], period_s: f6
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         let stride = (trace.emitted.len() / 150).max(1);
         chart.draw_series(
-            trace.emitted.iter().enumerate().step_by(stride).map(|(i, &v)| Circle::new((time(i), v), 2, colour.filled())),
+            trace.emitted.iter().step_by(stride).map(|&(t, v)| Circle::new((t, v), 2, colour.filled())),
         )?;
     }
     chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
 
     let rate = |v: &[f64]| -> Vec<f64> { v.windows(2).map(|w| (w[1] - w[0]) / period_s).collect() };
-    let rates: Vec<(Vec<f64>, Vec<f64>)> = traces.iter().map(|t| (rate(&t.commanded), rate(&t.emitted))).collect();
-    let (rlo, rhi) = rates.iter().flat_map(|(c, e)| c.iter().chain(e)).fold((0.0f64, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    // Emitted rate between samples: steps over the time between them, at the midpoint.
+    let sampled_rate = |v: &[(f64, f64)]| -> Vec<(f64, f64)> {
+        v.windows(2)
+            .filter(|w| w[1].0 > w[0].0)
+            .map(|w| ((w[0].0 + w[1].0) / 2.0, (w[1].1 - w[0].1) / (w[1].0 - w[0].0)))
+            .collect()
+    };
+    let rates: Vec<(Vec<f64>, Vec<(f64, f64)>)> =
+        traces.iter().map(|t| (rate(&t.commanded), sampled_rate(&t.emitted))).collect();
+    let (rlo, rhi) = rates
+        .iter()
+        .flat_map(|(c, e)| c.iter().chain(e.iter().map(|(_, v)| v)))
+        .fold((0.0f64, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
     let mut chart = ChartBuilder::on(&bottom)
         .caption("step rate per period: commanded (line) vs emitted (dots), steps/s", ("sans-serif", 20))
         .margin(10)
@@ -72,7 +84,7 @@ pub fn plot_axes(path: &Path, traces: &[AxisTrace], names: &[&str], period_s: f6
         chart.draw_series(LineSeries::new(commanded.iter().enumerate().map(|(i, &v)| (time(i + 1), v)), colour))?;
         let stride = (emitted.len() / 150).max(1);
         chart.draw_series(
-            emitted.iter().enumerate().step_by(stride).map(|(i, &v)| Circle::new((time(i + 1), v), 2, colour.filled())),
+            emitted.iter().step_by(stride).map(|&(t, v)| Circle::new((t, v), 2, colour.filled())),
         )?;
     }
     root.present().with_context(|| format!("writing {}", path.display()))?;

@@ -127,18 +127,24 @@ impl TopLockstep {
             expected,
             actual,
             inputs,
-            waveform: self.replay(cycle + WINDOW_AFTER),
+            waveform: self.failure_waveform(cycle + WINDOW_AFTER),
         }
     }
 
-    /// Replays the run on a traced RTL up to `until` and writes every signal.
-    fn replay(&self, until: u64) -> Result<PathBuf, String> {
+    fn failure_waveform(&self, until: u64) -> Result<PathBuf, String> {
         let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/cosim-failures");
         std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
         let extension = if finestep_rtl_sys::trace_is_fst() { "fst" } else { "vcd" };
         let path = dir.join(format!("{}.{extension}", self.name));
+        self.write_waveform(&path, TraceDepth::Everything, until)?;
+        Ok(path)
+    }
+
+    /// Replays the run so far on a traced RTL from power-on up to cycle `until` and
+    /// writes its waveform to `path`.
+    pub fn write_waveform(&self, path: &std::path::Path, depth: TraceDepth, until: u64) -> Result<(), String> {
         let mut rtl = RtlTop::new_traced();
-        rtl.trace_open(&path, TraceDepth::Everything).map_err(|e| e.to_string())?;
+        rtl.trace_open(path, depth).map_err(|e| e.to_string())?;
         let mut scratch = Vec::new();
         let mut ran = 0;
         for &(inputs, cycles) in &self.log {
@@ -151,7 +157,7 @@ impl TopLockstep {
             ran += cycles;
         }
         rtl.trace_close();
-        Ok(path)
+        Ok(())
     }
 }
 

@@ -338,6 +338,9 @@ pub struct Top {
     safety: SafetyMonitor,
     core: Core,
     cycle: u64,
+    /// The SPI frame layer committed a FIFO frame last cycle: the kick's flip-flop
+    /// (`kick <- granted write || wr_commit`) for the commit half.
+    committed_last_cycle: bool,
 }
 
 impl Top {
@@ -369,6 +372,7 @@ impl Top {
             safety,
             core: Core::new(params.core_params()),
             cycle: 0,
+            committed_last_cycle: false,
         })
     }
 
@@ -546,7 +550,8 @@ impl Top {
             *config = self.registers.axis_config(axis);
         }
         let mut safety_inputs = safety_config(&self.registers);
-        safety_inputs.kick = self.registers.kick() || spi_port.commit;
+        safety_inputs.kick = self.registers.kick() || self.committed_last_cycle;
+        self.committed_last_cycle = spi_port.commit;
         safety_inputs.clear_faults = self.registers.clear_faults();
         safety_inputs.estop_pin = inputs.estop_pin;
 

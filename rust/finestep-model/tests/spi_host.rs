@@ -315,3 +315,36 @@ fn bad_commands_and_counts_answer_bad_command() {
     }
     assert_eq!(bench.reg(regs::frame_error_count::ADDR), 6);
 }
+
+/// A FIFO flush (COMMAND.FLUSH_FIFO over the 8080 bus) in the middle of a FIFO frame:
+/// the frame answers FIFO_FLUSHED, nothing of it is queued, one frame error is counted.
+#[test]
+fn a_flush_during_a_fifo_frame_drops_it() {
+    let mut runner = finestep_testkit::runner("spi_flush_during_fifo_frame", 32);
+    let case = (prop::collection::vec(any_record(4), 2..6), 0.05..0.9f64);
+    runner
+        .run(&case, |(records, when)| {
+            let p = TopParams::default();
+            let mut bench = Bench::new(p);
+            let spi = SpiMaster::default();
+            let bus = ParallelMaster::default();
+            let spi_wave = spi.waveform(&fifo_frame(&records, p.n_axes), None);
+            // The flush lands while the records are being received (between the
+            // header's end and the CRC's start).
+            let header_end = spi_wave.samples[24];
+            let crc_start = spi_wave.samples[spi_wave.samples.len() - 24];
+            let start = header_end + ((crc_start - header_end - 40) as f64 * when) as usize;
+            let mut bus_wave = Waveform { pins: vec![(true, true, true, true, 0); start], samples: vec![] };
+            let flush = bus.waveform(&ParallelMaster::write32_accesses(regs::command::ADDR, regs::command::FLUSH_FIFO.set(0, 1)));
+            bus_wave.pins.extend(flush.pins);
+            let (miso, _) = run_waveforms(&mut bench, &spi_wave, &bus_wave);
+            bench.clock(SETTLE);
+            let rx = bits_to_bytes(&miso);
+            prop_assert_eq!(rx[rx.len() - 1], FIFO_FLUSHED);
+            prop_assert_eq!((bench.top.fifo().level(), bench.top.fifo().staged()), (0, 0));
+            prop_assert_eq!(bench.reg(regs::frame_error_count::ADDR), 1);
+            prop_assert_eq!(bench.reg(regs::crc_error_count::ADDR), 0);
+            Ok(())
+        })
+        .unwrap();
+}

@@ -340,11 +340,24 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
         // Where on the program the period ends, and how far from it.
         if emitted && !pieces.is_empty() {
             let from_piece = piece;
-            // The path moves on through the program in order: the first piece from the
-            // current one that the point is close enough to (a later piece can pass through
-            // the same point: a circle through a vertex).
+            // The path moves on through the program in order: the nearest piece close
+            // enough among the current one and the next three, else the first one close
+            // enough further on (never the nearest of many: a later piece can pass through
+            // the same point, a circle through a vertex).
+            let fits = |i: usize| {
+                let d = pieces[i].distance(&point, &present);
+                (d <= pieces[i].allowance + base_allowance).then_some(d)
+            };
+            let near = (piece + 3).min(pieces.len() - 1);
             let last = (piece + 64).min(pieces.len() - 1);
-            let found = (piece..=last).find(|&i| pieces[i].distance(&point, &present) <= pieces[i].allowance + base_allowance);
+            let found = (piece..=near)
+                .filter_map(|i| fits(i).map(|d| (i, d)))
+                .fold(None, |best: Option<(usize, f64)>, (i, d)| match best {
+                    Some((_, bd)) if bd <= d + 1e-9 => best,
+                    _ => Some((i, d)),
+                })
+                .map(|(i, _)| i)
+                .or_else(|| (near + 1..=last).find(|&i| fits(i).is_some()));
             let within = found.is_some();
             let best = found.unwrap_or(piece);
             let deviation = (best.saturating_sub(1)..=(best + 1).min(pieces.len() - 1))

@@ -236,6 +236,7 @@ fn access_path(access: Access) -> &'static str {
         Access::ReadOnly => "crate::Access::ReadOnly",
         Access::ReadWrite => "crate::Access::ReadWrite",
         Access::Pulse => "crate::Access::Pulse",
+        Access::WriteOnly => "crate::Access::WriteOnly",
         Access::WriteOneToClear => "crate::Access::WriteOneToClear",
     }
 }

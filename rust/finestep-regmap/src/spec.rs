@@ -31,25 +31,29 @@ pub enum Access {
     ReadWrite,
     /// `pulse`: write-only; writing 1 acts once, writing 0 does nothing; reads 0.
     Pulse,
+    /// `wo`: write-only data; every write acts once with the value written; reads 0.
+    WriteOnly,
     /// `w1c`: set by hardware (sticky), cleared by writing 1; reads the flag.
     WriteOneToClear,
 }
 
 impl Access {
     /// Every access type, in the order the legend lists them.
-    pub const ALL: [Access; 4] = [
+    pub const ALL: [Access; 5] = [
         Access::ReadOnly,
         Access::ReadWrite,
         Access::Pulse,
+        Access::WriteOnly,
         Access::WriteOneToClear,
     ];
 
-    /// The keyword the map file uses (`ro`, `rw`, `pulse`, `w1c`).
+    /// The keyword the map file uses (`ro`, `rw`, `pulse`, `wo`, `w1c`).
     pub const fn keyword(self) -> &'static str {
         match self {
             Access::ReadOnly => "ro",
             Access::ReadWrite => "rw",
             Access::Pulse => "pulse",
+            Access::WriteOnly => "wo",
             Access::WriteOneToClear => "w1c",
         }
     }
@@ -62,6 +66,7 @@ impl Access {
                 "read/write, holds what the host wrote; the reset column is its value after reset"
             }
             Access::Pulse => "write-only: writing 1 acts once, writing 0 does nothing; reads 0",
+            Access::WriteOnly => "write-only data: every write acts once with the value written; reads 0",
             Access::WriteOneToClear => {
                 "set by hardware (sticky), cleared by writing 1; reads the flag"
             }
@@ -161,13 +166,13 @@ impl FieldSpec {
     }
 
     /// What a read returns right after reset, when the map fixes it: the reset value of
-    /// an `rw` field, the `value` of an `ro` field, 0 for a `pulse` field. `None` for a
+    /// an `rw` field, the `value` of an `ro` field, 0 for a `pulse` or `wo` field. `None` for a
     /// hardware value (`ro` without `value`, `w1c`).
     pub fn value_after_reset(&self) -> Option<u32> {
         match self.access {
             Access::ReadWrite => self.reset,
             Access::ReadOnly => self.value,
-            Access::Pulse => Some(0),
+            Access::Pulse | Access::WriteOnly => Some(0),
             Access::WriteOneToClear => None,
         }
     }

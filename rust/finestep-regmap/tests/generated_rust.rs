@@ -135,7 +135,7 @@ fn reset_word_is_the_reset_and_fixed_values_put_together() {
             let after_reset = match info.access {
                 Access::ReadWrite => info.reset,
                 Access::ReadOnly => info.value,
-                Access::Pulse => Some(0),
+                Access::Pulse | Access::WriteOnly => Some(0),
                 Access::WriteOneToClear => None,
             };
             after_reset.map(|value| info.field.set(word, value))
