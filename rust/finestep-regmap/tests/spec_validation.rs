@@ -254,11 +254,11 @@ fn reset_and_value_only_where_they_belong() {
 
 #[test]
 fn unknown_access_type() {
-    let field = "  { name = \"F\", lsb = 0, width = 1, access = \"wo\", description = \"d\" }";
+    let field = "  { name = \"F\", lsb = 0, width = 1, access = \"rx\", description = \"d\" }";
     assert_single_problem(
         &map_with(&register("R", 0, field)),
         Place::field("R", "F"),
-        "unknown access `wo` (known: ro, rw, pulse, w1c)",
+        "unknown access `rx` (known: ro, rw, pulse, wo, w1c)",
     );
 }
 
