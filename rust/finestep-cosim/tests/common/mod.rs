@@ -26,6 +26,9 @@ pub enum Action {
     /// New `period_clocks` input (sampled before the next run starts); may exceed
     /// P_WIDTH bits, which the core masks off.
     Period(u32),
+    /// Hold `halt` for this many cycles, with `run` dropped as the top does or (flag
+    /// false) left as it is, then release it.
+    Halt(u64, bool),
 }
 
 /// A test case: the period and per-axis configuration, then the actions.
@@ -85,6 +88,7 @@ fn action(p: u32) -> impl Strategy<Value = Action> {
         1 => Just(Action::Clear),
         1 => (0..AXES, axis_config()).prop_map(|(axis, config)| Action::Configure(axis, config)),
         1 => period().prop_map(Action::Period),
+        1 => (prop_oneof![1u64..8, 1u64..300], any::<bool>()).prop_map(|(cycles, stop)| Action::Halt(cycles, stop)),
     ]
 }
 
@@ -131,6 +135,10 @@ pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness,
                 harness.idle(&clearing, 1)?;
             }
             Action::Configure(axis, config) => inputs.axes[*axis] = *config,
+            Action::Halt(cycles, stop) => {
+                let halted = CoreInputs { halt: true, run: inputs.run && !stop, rec_valid: false, ..inputs };
+                harness.idle(&halted, *cycles)?;
+            }
         }
     }
     // Drain: a few idle periods so every pending step reaches the pins.
