@@ -2,7 +2,7 @@
 CARGO ?= cargo
 export VERILATOR ?= verilator
 
-.PHONY: all setup demo test test-long lint formal bench cargo-test wheel-check clean
+.PHONY: all setup demo test test-long lint formal bench cargo-test wheel-check regmap clean
 
 all: test
 
@@ -31,6 +31,10 @@ formal: setup
 
 test-long: setup
 	FINESTEP_CASES=2000 $(CARGO) test --release --workspace
+
+# Regenerate docs/registers.md from hdl/registers.toml (cargo test fails while it is stale).
+regmap: setup
+	$(CARGO) run -q --release -p finestep-regmap -- markdown docs/registers.md
 
 bench: setup
 	$(CARGO) run --release -q -p finestep-cli -- bench

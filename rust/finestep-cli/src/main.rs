@@ -2,6 +2,7 @@
 //! or measure speed.
 
 mod bench;
+mod bench_top;
 mod demo;
 mod plot;
 mod run;
@@ -19,8 +20,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Seed 000's move (X/Z/C along a line, trapezoidal feed) through the Verilated RTL in
-    /// lockstep with the reference model; prints counts and writes a waveform and a plot.
+    /// Seed 000's move (X/Z/C along a line, trapezoidal feed) streamed over SPI into the
+    /// Verilated chip in lockstep with the reference model; prints the final positions and
+    /// writes a waveform and a plot.
     Demo {
         /// Where the waveform and the plot go.
         #[arg(long, default_value = "target/demo")]
@@ -64,7 +66,8 @@ fn main() -> anyhow::Result<()> {
             if host_only {
                 bench::front_end()
             } else {
-                bench::run(cycles)
+                bench::run(cycles)?;
+                bench_top::run(200)
             }
         }
     }
