@@ -24,26 +24,28 @@ fi
 
 synth() {
     local yosys=$1 family=$2 log
-    log=$(mktemp)
+    # Inside the working tree: YoWASP's WebAssembly sandbox sees only the current
+    # directory, so a log or an ABC temporary directory under /tmp would be lost.
+    mkdir -p build/lint build/tmp
+    log=build/lint/$(basename "$yosys")_$family.log
     # proc turns processes into cells; any $dlatch there is an inferred latch.
-    if ! "$yosys" -q -l "$log" -p "
+    if ! TMPDIR="$PWD/build/tmp" "$yosys" -q -l "$log" -p "
         read_verilog -defer -I$GEN ${SOURCES[*]}
         hierarchy -top $TOP
         proc
         select -assert-none t:\$dlatch t:\$adlatch t:\$dlatchsr
         synth_$family -top $TOP
         check -assert
-        stat" >/dev/null; then
-        cat "$log"
-        echo "lint: $yosys synth_$family failed"
+        stat" >/dev/null || ! grep -q "^End of script" "$log"; then
+        tail -20 "$log"
+        echo "lint: $yosys synth_$family failed (or stopped without finishing the script)"
         exit 1
     fi
     if grep -E "^Warning" "$log"; then
         echo "lint: $yosys synth_$family has warnings"
         exit 1
     fi
-    echo "lint: $("$yosys" -V | cut -d' ' -f1-2) synth_$family: no latches, $(grep -E '(SB_)?LUT4' "$log" | tail -1 | tr -s ' ')"
-    rm -f "$log"
+    echo "lint: $("$yosys" -V | cut -d' ' -f1-2) synth_$family: no latches, $(grep -E '(SB_)?LUT4' "$log" | tail -1 | tr -s ' ' | sed 's/^ //')"
 }
 for family in ice40 ecp5; do
     synth yosys "$family"

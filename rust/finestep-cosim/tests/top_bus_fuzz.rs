@@ -50,13 +50,13 @@ fn fail(e: BusError) -> TestCaseError {
 fn rw_register(addr: u8) -> Option<(u32, u32)> {
     let timing = 0x0FFF_0FFF;
     match addr {
-        0x08 => Some((0xFFFF, 0)),              // FIFO_WATERMARK
-        0x09 => Some((0xFFFF, 1)),              // START_LEVEL
-        0x0A => Some(((1 << 20) - 1, 50_000)),  // PERIOD_CLOCKS
+        0x08 => Some((0xFFFF, 0)),                // FIFO_WATERMARK
+        0x09 => Some((0xFFFF, 1)),                // START_LEVEL
+        0x0A => Some(((1 << 20) - 1, 50_000)),    // PERIOD_CLOCKS
         0x0B => Some(((1 << 24) - 1, 5_000_000)), // WATCHDOG_TIMEOUT
-        0x0C => Some((0xFF, 50)),               // ESTOP_FILTER
-        0x0E => Some((0x1F, 0)),                // IRQ_MASK
-        0x18 => Some((0xF, 0)),                 // AXIS_ENABLE: one bit per axis
+        0x0C => Some((0xFF, 50)),                 // ESTOP_FILTER
+        0x0E => Some((0x1F, 0)),                  // IRQ_MASK
+        0x18 => Some((0xF, 0)),                   // AXIS_ENABLE: one bit per axis
         0x20..=0x2F => match (addr - 0x20) % 4 {
             0 | 1 => Some((timing, 0x0001_0001)), // AXIS_TIMING_A/B
             2 => Some((0x1F, 0)),                 // AXIS_MODE
@@ -107,6 +107,10 @@ enum Op {
     /// One 8080 halfword read cut short: a read strobe of `rd` clocks, chip select
     /// released `early` clocks before it ends.
     ParReadAbort { addr: u8, half: u8, adv: u64, rd: u64, early: u64 },
+    /// An 8080 low half of `addr`, then `between` (0 nothing, 1 an aborted read of
+    /// `other`, 2 a valid SPI write of `spi_value` to `addr`, 3 a low half of `other`),
+    /// then the high half of `addr`, with short strobes.
+    ParTorn { addr: u8, other: u8, low: u16, high: u16, between: u8, spi_value: u32 },
     /// RECORD_INC[0..4] and RECORD_PUSH over the 8080 bus.
     ParPush(PeriodRecord),
     /// A full register dump over SPI, compared with the expectation.
@@ -180,6 +184,9 @@ fn par_op() -> impl Strategy<Value = Op> {
             Op::ParReadAbort { addr, half, adv, rd, early: early.min(rd - 1) }
         }),
         1 => record().prop_map(Op::ParPush),
+        2 => (safe_addr(), safe_addr(), any::<u16>(), any::<u16>(), 0u8..4, value()).prop_map(
+            |(addr, other, low, high, between, spi_value)| Op::ParTorn { addr, other, low, high, between, spi_value }
+        ),
     ]
 }
 
@@ -239,8 +246,10 @@ fn spi_outcome(bytes: &[u8], bits: usize, free: u32) -> Outcome {
                 let records = bytes[3..len - 2]
                     .chunks_exact(RECORD_BYTES)
                     .map(|r| {
-                        let raw: Vec<i32> =
-                            r[..4 * N_AXES].chunks_exact(4).map(|w| i32::from_be_bytes([w[0], w[1], w[2], w[3]])).collect();
+                        let raw: Vec<i32> = r[..4 * N_AXES]
+                            .chunks_exact(4)
+                            .map(|w| i32::from_be_bytes([w[0], w[1], w[2], w[3]]))
+                            .collect();
                         PeriodRecord::from_raw(&raw, r[4 * N_AXES])
                     })
                     .collect();
@@ -428,7 +437,14 @@ const RECOVERY: u64 = 5;
 
 /// A raw 8080 access: address phase of `adv` clocks, then a strobe (`write`: WR_n with
 /// `data`, else RD_n) of `strobe` clocks whose last `early` clocks have CS_n high.
-fn raw_parallel(host: &mut Host, halfword: u8, adv: u64, write: Option<u16>, strobe: u64, early: u64) -> Result<(), BusError> {
+fn raw_parallel(
+    host: &mut Host,
+    halfword: u8,
+    adv: u64,
+    write: Option<u16>,
+    strobe: u64,
+    early: u64,
+) -> Result<(), BusError> {
     let base = host.inputs();
     let target = host.target_mut();
     target.drive(bus_pins(base, true, true, false, false, u16::from(halfword)), adv)?;
@@ -531,6 +547,27 @@ fn run_op(spi: &mut Spi, expect: &mut Expect, op: &Op, index: usize) -> Result<(
             // The strobe started with CS_n low: a read, which drops a waiting low half.
             expect.low_half = None;
         }
+        Op::ParTorn { addr, other, low, high, between, spi_value } => {
+            raw_parallel(spi.link_mut(), addr << 1, 1, Some(*low), 2, 0).map_err(fail)?;
+            expect.parallel_write_half(*addr, 0, *low);
+            match between {
+                1 => {
+                    raw_parallel(spi.link_mut(), other << 1, 1, None, 2, 0).map_err(fail)?;
+                    expect.low_half = None;
+                }
+                2 => {
+                    spi.write(*addr, *spi_value).map_err(fail)?;
+                    expect.write(*addr, *spi_value);
+                }
+                3 => {
+                    raw_parallel(spi.link_mut(), other << 1, 1, Some(*high), 1, 0).map_err(fail)?;
+                    expect.parallel_write_half(*other, 0, *high);
+                }
+                _ => {}
+            }
+            raw_parallel(spi.link_mut(), addr << 1 | 1, 1, Some(*high), 1, 0).map_err(fail)?;
+            expect.parallel_write_half(*addr, 1, *high);
+        }
         Op::ParPush(record) => {
             let host = spi.link_mut();
             for axis in 0..N_AXES {
@@ -602,10 +639,8 @@ fn fuzz_case(ops: &[Op]) -> Result<(), TestCaseError> {
 
 #[test]
 fn bus_fuzz_corrupts_nothing() {
-    let mut runner = finestep_testkit::runner("bus_fuzz_corrupts_nothing", 48);
+    let mut runner = finestep_testkit::runner("bus_fuzz_corrupts_nothing", 400);
     let started = std::time::Instant::now();
-    runner
-        .run(&prop::collection::vec(op(), 4..40), |ops| fuzz_case(&ops))
-        .unwrap_or_else(|e| panic!("{e}"));
+    runner.run(&prop::collection::vec(op(), 4..40), |ops| fuzz_case(&ops)).unwrap_or_else(|e| panic!("{e}"));
     eprintln!("bus_fuzz_corrupts_nothing: {:.1} s", started.elapsed().as_secs_f64());
 }

@@ -12,7 +12,7 @@ use finestep_cosim::TopLockstep;
 use finestep_host::frame::{self, FrameResult};
 use finestep_host::pins::layout::{OUT_PIN_A0, OUT_PIN_B0, OUT_PIN_EN0};
 use finestep_host::regs::{
-    axis_status, command, position, control, crc_error_count, estop_filter, frame_error_count, parallel_error_count,
+    axis_status, command, control, crc_error_count, estop_filter, frame_error_count, parallel_error_count, position,
     record_inc, record_push, refused_record_count, start_level, status, underrun_count, watchdog_timeout,
 };
 use finestep_host::stream::wait_idle;

@@ -78,6 +78,9 @@ fn spi_stream_moves_exactly() {
         assert_eq!(positions.steps[axis], expected_steps(&records, axis), "axis {axis}");
     }
     assert_eq!(report.underruns, 0);
+    // Stopped, the latch follows the pins every clock; the read still settles.
+    machine.set_control(false, false, true).unwrap();
+    assert_eq!(machine.positions().unwrap().steps, positions.steps);
 }
 
 #[test]

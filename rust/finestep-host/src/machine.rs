@@ -167,18 +167,32 @@ impl<B: Bus> Machine<B> {
         Ok((fifo_level::LEVEL.get(word), fifo_level::FREE.get(word)))
     }
 
-    /// Every axis's position, all latched on the same clock. Reads LATCH_TIME before and
-    /// after and retries if a latch came in between (over SPI one read frame already
-    /// holds the latch; over the 8080 bus the reads are separate).
+    /// Every axis's position, all latched on the same clock. While running, the latch
+    /// moves only at period boundaries: LATCH_TIME is read before and after the
+    /// positions, and the read is retried if a boundary came in between (over SPI one read
+    /// frame already holds the latch; over the 8080 bus the reads are separate). While
+    /// not running, the latch follows the pulse train every clock: the positions are
+    /// returned once two reads agree and the core is still stopped, with the later
+    /// LATCH_TIME.
     pub fn positions(&mut self) -> Result<Positions, BusError> {
         let n = self.caps.n_axes;
+        let read = |bus: &mut B| -> Result<Vec<i32>, BusError> {
+            let mut words = vec![0u32; n];
+            bus.read(position::addr(0), &mut words)?;
+            Ok(words.into_iter().map(|w| w as i32).collect())
+        };
         for _ in 0..8 {
             let before = self.bus.read_one(latch_time::ADDR)?;
-            let mut words = vec![0u32; n];
-            self.bus.read(position::addr(0), &mut words)?;
+            let steps = read(&mut self.bus)?;
             let after = self.bus.read_one(latch_time::ADDR)?;
             if before == after {
-                return Ok(Positions { steps: words.into_iter().map(|w| w as i32).collect(), latch_time: after });
+                return Ok(Positions { steps, latch_time: after });
+            }
+            let running = status::RUNNING.get(self.bus.read_one(status::ADDR)?) != 0;
+            let again = read(&mut self.bus)?;
+            let latest = self.bus.read_one(latch_time::ADDR)?;
+            if !running && again == steps && status::RUNNING.get(self.bus.read_one(status::ADDR)?) == 0 {
+                return Ok(Positions { steps, latch_time: latest });
             }
         }
         Err(BusError::Protocol("positions kept changing during 8 attempts to read them".into()))
