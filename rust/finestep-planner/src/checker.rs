@@ -260,8 +260,17 @@ fn pieces(program: &Program, default_tolerance: f64) -> (Vec<Piece>, Vec<usize>)
     (out, stops)
 }
 
-/// Checks `records` as the plan of `program` on the machine `config` (module docs).
+/// Checks `records` as the plan of `program` on the machine `config` (module docs). The
+/// geometry the records must follow is the tool-centre path: the program after cutter
+/// compensation with the configuration's tool table (a program that cannot be
+/// compensated is reported as a configuration error naming its line).
 pub fn check_program(config: &MachineConfig, program: &Program, records: &[PeriodRecord]) -> Result<CheckReport, ConfigError> {
+    let compensated = crate::cutter_comp::compensate(program, &config.tool_table()).map_err(|e| ConfigError {
+        file: "<program>".into(),
+        key: format!("line {}", e.line),
+        reason: e.reason,
+    })?;
+    let program = &compensated;
     let machine = config.resolve()?;
     let period = machine.period_s;
     let present: [bool; 4] = machine.axes.map(|a| a.present);
@@ -340,23 +349,27 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
         // Where on the program the period ends, and how far from it.
         if emitted && !pieces.is_empty() {
             let from_piece = piece;
-            // The path moves on through the program in order: the nearest piece close
-            // enough among the current one and the next three, else the first one close
-            // enough further on (never the nearest of many: a later piece can pass through
-            // the same point, a circle through a vertex).
+            // The path moves on through the program in order: the current piece while the
+            // point is close enough to it, else the nearest close enough among the next
+            // three, else the first close enough further on (never the nearest of many: a
+            // later piece can pass through the same point, two circles crossing).
             let fits = |i: usize| {
                 let d = pieces[i].distance(&point, &present);
                 (d <= pieces[i].allowance + base_allowance).then_some(d)
             };
             let near = (piece + 3).min(pieces.len() - 1);
             let last = (piece + 64).min(pieces.len() - 1);
-            let found = (piece..=near)
-                .filter_map(|i| fits(i).map(|d| (i, d)))
-                .fold(None, |best: Option<(usize, f64)>, (i, d)| match best {
-                    Some((_, bd)) if bd <= d + 1e-9 => best,
-                    _ => Some((i, d)),
+            let found = fits(piece)
+                .map(|_| piece)
+                .or_else(|| {
+                    (piece + 1..=near)
+                        .filter_map(|i| fits(i).map(|d| (i, d)))
+                        .fold(None, |best: Option<(usize, f64)>, (i, d)| match best {
+                            Some((_, bd)) if bd <= d + 1e-9 => best,
+                            _ => Some((i, d)),
+                        })
+                        .map(|(i, _)| i)
                 })
-                .map(|(i, _)| i)
                 .or_else(|| (near + 1..=last).find(|&i| fits(i).is_some()));
             let within = found.is_some();
             let best = found.unwrap_or(piece);

@@ -110,6 +110,19 @@ pub struct MachineConfig {
     pub drive: DriveTiming,
     /// Axes by name (X, Y, Z, A); absent axes must not move.
     pub axes: BTreeMap<String, AxisLimits>,
+    /// The tool table: radii for cutter compensation (G41/G42 D, or the tool in the
+    /// spindle).
+    pub tools: Vec<ToolConfig>,
+}
+
+/// One tool of the tool table.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolConfig {
+    /// Tool number (T, and D in G41/G42).
+    pub number: u32,
+    /// Cutter radius, mm.
+    pub radius_mm: f64,
 }
 
 impl Default for MachineConfig {
@@ -136,6 +149,11 @@ impl Default for MachineConfig {
             lookahead_moves: 2000,
             drive: DriveTiming::default(),
             axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
+            tools: vec![
+                ToolConfig { number: 1, radius_mm: 3.0 },
+                ToolConfig { number: 2, radius_mm: 1.5 },
+                ToolConfig { number: 3, radius_mm: 0.5 },
+            ],
         }
     }
 }
@@ -210,6 +228,13 @@ impl MachineConfig {
         MachineConfig::from_toml_str(&text, &file)
     }
 
+    /// The tool table for cutter compensation.
+    pub fn tool_table(&self) -> crate::cutter_comp::ToolTable {
+        self.tools
+            .iter()
+            .fold(crate::cutter_comp::ToolTable::new(), |table, tool| table.with_radius_mm(tool.number, tool.radius_mm))
+    }
+
     /// Validates and converts to planner units (file name `<built-in>` in errors).
     pub fn resolve(&self) -> Result<Resolved, ConfigError> {
         self.resolve_in("<built-in>")
@@ -235,6 +260,14 @@ impl MachineConfig {
             ));
         }
         let period_clocks = clocks as u32;
+        for (index, tool) in self.tools.iter().enumerate() {
+            if !(tool.radius_mm.is_finite() && tool.radius_mm >= 0.0) {
+                return Err(fail(format!("tools[{index}].radius_mm"), format!("must be a finite radius >= 0, got {}", tool.radius_mm)));
+            }
+            if self.tools[..index].iter().any(|other| other.number == tool.number) {
+                return Err(fail(format!("tools[{index}].number"), format!("tool {} appears twice", tool.number)));
+            }
+        }
         positive("path_tolerance_mm", self.path_tolerance_mm)?;
         positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
         if !(2..=1_000_000).contains(&self.lookahead_moves) {

@@ -3,7 +3,8 @@
 //!
 //! # Corner blending and the path tolerance criterion
 //!
-//! Where two lines meet at a corner C turning by an angle phi in G64 with tolerance P, the
+//! Where two lines meet at a corner C turning by an angle phi, the first of them in G64
+//! with tolerance P (G64 without P: the configured `path_tolerance_mm`), the
 //! corner is replaced by the circle tangent to both lines whose midpoint is P from C:
 //! radius `R = P / (1/cos(phi/2) - 1)`, tangent points `t = R tan(phi/2)` before and
 //! after C. `t` is at most half of either line (so neighbouring blends never overlap),
@@ -194,6 +195,9 @@ pub(crate) fn round_to_steps(config: &Resolved, p: Vec4) -> Vec4 {
     }
     q
 }
+
+/// The smallest arc radius interpolated, in steps of either plane axis.
+pub const MIN_ARC_RADIUS_STEPS: f64 = 10.0;
 
 /// The signed angle from `start` to `end`, a full turn when they coincide.
 fn sweep_angle(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
@@ -404,6 +408,19 @@ fn arc_element(config: &Resolved, m: &Move) -> Result<Option<Element>, ProgramEr
     let r1 = (m.end[u] - cu).hypot(m.end[v] - cv);
     if r0.min(r1).is_nan() || r0.min(r1) <= 1e-9 || !r0.is_finite() || !r1.is_finite() {
         return Err(fail(format!("arc radius {} is too small to interpolate", r0.min(r1))));
+    }
+    // Rounding the ends to whole steps bends an arc of a few steps' radius out of shape
+    // (its angle moves by up to half a step over the radius): refuse those.
+    let (p0, _) = m.programmed;
+    let programmed_radius = (p0[u] - cu).hypot(p0[v] - cv);
+    for axis in [u, v] {
+        let steps = programmed_radius * config.axes[axis].steps_per_unit;
+        if steps < MIN_ARC_RADIUS_STEPS {
+            return Err(fail(format!(
+                "arc radius {programmed_radius} is only {steps:.1} steps of axis {}: at least {MIN_ARC_RADIUS_STEPS} are needed",
+                AXIS_NAMES[axis]
+            )));
+        }
     }
     let theta0 = (m.start[v] - cv).atan2(m.start[u] - cu);
     let theta1 = (m.end[v] - cv).atan2(m.end[u] - cu);

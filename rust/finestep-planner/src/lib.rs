@@ -30,6 +30,22 @@
 //! assert!(report.passed() && report.max_deviation <= 0.011);
 //! ```
 //!
+//! # Limits of this planner
+//!
+//! - Each axis's acceleration (and jerk) is split between speeding up along the path
+//!   (50 %, 40 % of the jerk) and turning (45 %; jerk shares in [`geometry`]), so a line
+//!   never uses more than half of an axis's acceleration.
+//! - Only line-line corners are blended; where a line meets an arc, or two arcs meet,
+//!   the junction speed comes from the tangent jump read over one period: full speed
+//!   where they are tangent, nearly a stop where they are not.
+//! - S-curve profiles bring the acceleration back to zero at every element junction,
+//!   and the jerk limit is also kept where the curvature jumps (a line entering an arc
+//!   or a blend): about `sqrt(0.25 J T R)` there, slow at the default jerk.
+//! - G61 stops exactly at the end of every move (LinuxCNC's G61.1); the path tolerance
+//!   at a corner is that of the move entering it. The feed applies to the length over
+//!   all four axes, A in degrees. Arcs need a radius of at least
+//!   [`geometry::MIN_ARC_RADIUS_STEPS`] steps.
+//!
 //! The single-move interpolators of seed 000 ([`interpolate_line`], [`interpolate_arc`])
 //! remain for the co-simulation tests that drive one move at a time:
 //!

@@ -3,13 +3,14 @@
 //! trapezoid or S-curve speed profile per element ([`crate::velocity`]) and time-division
 //! interpolation across element boundaries ([`crate::interpolate`]).
 //!
-//! Cutter radius compensation is not wired in yet: a program asking for G41/G42 is
-//! refused rather than cut uncompensated.
+//! Cutter radius compensation (G41/G42, [`crate::cutter_comp`]) runs first, on the
+//! canonical blocks, with the radii of the configuration's tool table.
 
 use finestep_gcode::Program;
 use finestep_model::PeriodRecord;
 
 use crate::config::{ConfigError, MachineConfig};
+use crate::cutter_comp::compensate;
 use crate::geometry::elements;
 use crate::interpolate::interpolate;
 use crate::lookahead::junction_speeds;
@@ -48,7 +49,9 @@ impl From<ConfigError> for ProgramError {
 /// Plan and interpolate `program` on the machine `config`, starting at rest at the origin.
 pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<PlannedProgram, ProgramError> {
     let resolved = config.resolve()?;
-    let path = elements(&resolved, program)?;
+    let compensated = compensate(program, &config.tool_table())
+        .map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
+    let path = elements(&resolved, &compensated)?;
     for e in &path.elements {
         if !(e.length.is_finite() && e.v_cap > 0.0 && e.v_cap.is_finite() && e.accel > 0.0 && e.jerk > 0.0) {
             return Err(ProgramError { line: e.line, reason: format!("no usable speed limits for this move ({e:?})") });
@@ -92,11 +95,38 @@ mod tests {
     }
 
     #[test]
-    fn compensation_is_refused() {
-        let program = finestep_gcode::parse_str("G64 P0.01\nG41 D1\nG1 X1 F100\n", "comp.ngc").unwrap();
-        let error = plan_program(&MachineConfig::default(), &program).unwrap_err();
-        assert_eq!(error.line, 2);
-        assert!(error.reason.contains("not wired"), "{error}");
+    fn compensation_offsets_the_path_by_the_tool_radius() {
+        // A 20 mm square cut counter-clockwise with the tool on the right of the path
+        // (G42), i.e. outside, with tool 1 (r = 3 mm): the tool centre reaches x = 23 mm,
+        // and leaves at the exit point.
+        let source = "G21 G90 G17 F1200\nG0 X-10 Y-10\nG42 D1\nG1 X0 Y0\nG1 X20\nG1 Y20\nG1 X0\nG1 Y0\nG40\nG1 X-10 Y-10\nM2\n";
+        let program = finestep_gcode::parse_str(source, "square.ngc").unwrap();
+        let config = MachineConfig::default();
+        let planned = plan_program(&config, &program).unwrap();
+        let (mut x, mut y, mut max_x, mut min_y) = (0i64, 0i64, i64::MIN, i64::MAX);
+        for record in &planned.records {
+            x += i64::from(record.inc[0].to_bits());
+            y += i64::from(record.inc[1].to_bits());
+            max_x = max_x.max(x);
+            min_y = min_y.min(y);
+        }
+        let steps = |mm: f64| (mm * 800.0) as i64 * 65536;
+        assert_eq!(max_x, steps(23.0));
+        assert_eq!(min_y, steps(-10.0).min(steps(-3.0)));
+        assert_eq!((x, y), (steps(-10.0), steps(-10.0)));
+        // The tool on the left of a counter-clockwise arc of r = 2 mm is inside it: gouge.
+        let inside = "G21 G90 G17 F600\nG0 X0 Y0\nG41 D1\nG1 X10 Y0\nG3 X10 Y4 R2\nG40\nG1 X0 Y0\n";
+        let error = plan_program(&config, &finestep_gcode::parse_str(inside, "pocket.ngc").unwrap()).unwrap_err();
+        assert_eq!(error.line, 5, "{error}");
+    }
+
+    #[test]
+    fn the_tool_table_comes_from_the_configuration() {
+        let config = MachineConfig::from_toml_str("[[tools]]\nnumber = 7\nradius_mm = 2.5\n", "t.toml").unwrap();
+        assert_eq!(config.tool_table().radius_mm(7), Some(2.5));
+        assert_eq!(config.tool_table().radius_mm(1), None);
+        let error = MachineConfig::from_toml_str("[[tools]]\nnumber = 7\nradius_mm = -1\n", "t.toml").unwrap_err();
+        assert_eq!(error.key, "tools[0].radius_mm");
     }
 
     #[test]

