@@ -47,7 +47,7 @@ fn drive(periods: u64, mut run_chunk: impl FnMut(&CoreInputs, &mut Vec<Event>) -
     cycles
 }
 
-fn report(what: &str, cycles: u64, seconds: f64) {
+pub(crate) fn report(what: &str, cycles: u64, seconds: f64) {
     println!(
         "  {what:<44} {:>7.2} M cycles/s  {:>9.0} periods/s  {:>7.3}x real time",
         cycles as f64 / seconds / 1e6,

@@ -11,7 +11,7 @@ use finestep_host::{AxisSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus};
 use finestep_model::top::Top;
 use finestep_model::{Increment, PeriodRecord};
 
-use crate::demo::CLOCK_HZ;
+use crate::bench::report;
 
 const PERIOD_CLOCKS: u32 = 50_000;
 const AXES: usize = 4;
@@ -54,15 +54,6 @@ fn streamed<T: PinTarget>(target: T, periods: usize, cycles: impl Fn(&T) -> u64)
         return Err(anyhow!("{} underruns while benchmarking", report.underruns));
     }
     Ok((cycles(machine.bus().link_mut().target()) - begin, started.elapsed().as_secs_f64()))
-}
-
-fn report(what: &str, cycles: u64, seconds: f64) {
-    println!(
-        "  {what:<44} {:>7.2} M cycles/s  {:>9.0} periods/s  {:>7.3}x real time",
-        cycles as f64 / seconds / 1e6,
-        cycles as f64 / f64::from(PERIOD_CLOCKS) / seconds,
-        cycles as f64 / CLOCK_HZ / seconds
-    );
 }
 
 /// Prints the chip-level figures for a move of `periods` periods of 1 ms.

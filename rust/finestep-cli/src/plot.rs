@@ -66,7 +66,8 @@ pub fn plot_axes(path: &Path, traces: &[AxisTrace], names: &[&str], period_s: f6
             .map(|w| ((w[0].0 + w[1].0) / 2.0, (w[1].1 - w[0].1) / (w[1].0 - w[0].0)))
             .collect()
     };
-    let rates: Vec<(Vec<f64>, Vec<(f64, f64)>)> =
+    type Rates = (Vec<f64>, Vec<(f64, f64)>);
+    let rates: Vec<Rates> =
         traces.iter().map(|t| (rate(&t.commanded), sampled_rate(&t.emitted))).collect();
     let (rlo, rhi) = rates
         .iter()

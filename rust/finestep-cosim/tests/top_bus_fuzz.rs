@@ -611,10 +611,10 @@ fn run_out(spi: &mut Spi, expect: &mut Expect) -> Result<(), TestCaseError> {
     wait_idle(spi, 2000, u64::from(RUN_PERIOD) * (u64::from(FIFO_DEPTH) + 8)).map_err(fail)?;
     spi.wait(4 * u64::from(RUN_PERIOD)).map_err(fail)?;
     let steps = spi_read(spi, position::ADDR, N_AXES)?;
-    for axis in 0..N_AXES {
+    for (axis, &got) in steps.iter().enumerate().take(N_AXES) {
         let total: i64 = expect.fifo.iter().map(|r| i64::from(r.inc[axis].to_bits())).sum();
         let want = ((total + (1 << 15)) >> 16) as i32;
-        prop_assert_eq!(steps[axis] as i32, want, "axis {} after running out {} records", axis, expect.level());
+        prop_assert_eq!(got as i32, want, "axis {} after running out {} records", axis, expect.level());
     }
     let word = spi.read_one(status::ADDR).map_err(fail)?;
     prop_assert_eq!(word & 0xFC0, 0, "no error while running out: STATUS {:#x}", word);

@@ -181,7 +181,7 @@ fn read<B: Bus>(machine: &mut Machine<B>, addr: u8) -> u32 {
 /// +-MAX_STEPS steps with a random fraction; `block_end` on the last one if asked.
 fn records(n: usize, seed: u64, block_end: bool) -> Vec<PeriodRecord> {
     let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    let span = (2 * MAX_STEPS << 16) as u64 + 1;
+    let span = ((2 * MAX_STEPS) << 16) as u64 + 1;
     (0..n)
         .map(|k| {
             let mut raw = [0i32; N_AXES];

@@ -58,6 +58,27 @@ pub enum TraceDepth {
     Everything,
 }
 
+/// Opens a waveform through a shim's `*_trace_open(path, levels)`; `maker` names the
+/// constructor that gives a traced model, for the error.
+pub(crate) fn open_trace(
+    path: &Path,
+    depth: TraceDepth,
+    maker: &str,
+    open: impl FnOnce(*const std::os::raw::c_char, u32) -> i32,
+) -> std::io::Result<()> {
+    let c_path = CString::new(path.to_string_lossy().as_bytes())
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
+    let levels = match depth {
+        TraceDepth::Ports => 0,
+        TraceDepth::Everything => 99,
+    };
+    if open(c_path.as_ptr(), levels) == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::other(format!("cannot open waveform {} (a model from {maker} is needed)", path.display())))
+    }
+}
+
 /// One Verilated core with its own clock. Not `Send`: a Verilated model belongs to the
 /// thread that made it.
 pub struct Rtl {
@@ -153,22 +174,10 @@ impl Rtl {
     /// Start writing a waveform (VCD, or FST with feature `fst`) of every following
     /// cycle. Only a core made by [`Rtl::new_traced`] can.
     pub fn trace_open(&mut self, path: &Path, depth: TraceDepth) -> std::io::Result<()> {
-        let c_path = CString::new(path.to_string_lossy().as_bytes())
-            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
-        // SAFETY: c_path is a valid NUL-terminated string for the call.
-        let levels = match depth {
-            TraceDepth::Ports => 0,
-            TraceDepth::Everything => 99,
-        };
-        let status = unsafe { ffi::fs_trace_open(self.sim.as_ptr(), c_path.as_ptr(), levels) };
-        if status == 0 {
-            Ok(())
-        } else {
-            Err(std::io::Error::other(format!(
-                "cannot open waveform {} (a core from Rtl::new_traced is needed)",
-                path.display()
-            )))
-        }
+        open_trace(path, depth, "Rtl::new_traced", |c_path, levels| {
+            // SAFETY: c_path is a valid NUL-terminated string for the call.
+            unsafe { ffi::fs_trace_open(self.sim.as_ptr(), c_path, levels) }
+        })
     }
 
     /// Flush and close the waveform, if one is open.

@@ -2,7 +2,6 @@
 //! observed at its pins as packed 64-bit words (layout in `sim/finestep_top_sim.h`,
 //! mirrored by `finestep_model::top_pins`).
 
-use std::ffi::CString;
 use std::marker::PhantomData;
 use std::path::Path;
 use std::ptr::NonNull;
@@ -106,22 +105,10 @@ impl RtlTop {
     /// Start writing a waveform of every following cycle (a top from
     /// [`RtlTop::new_traced`] only).
     pub fn trace_open(&mut self, path: &Path, depth: TraceDepth) -> std::io::Result<()> {
-        let c_path = CString::new(path.to_string_lossy().as_bytes())
-            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))?;
-        let levels = match depth {
-            TraceDepth::Ports => 0,
-            TraceDepth::Everything => 99,
-        };
-        // SAFETY: c_path is a valid NUL-terminated string for the call.
-        let status = unsafe { ffi::ft_trace_open(self.sim.as_ptr(), c_path.as_ptr(), levels) };
-        if status == 0 {
-            Ok(())
-        } else {
-            Err(std::io::Error::other(format!(
-                "cannot open waveform {} (a top from RtlTop::new_traced is needed)",
-                path.display()
-            )))
-        }
+        crate::open_trace(path, depth, "RtlTop::new_traced", |c_path, levels| {
+            // SAFETY: c_path is a valid NUL-terminated string for the call.
+            unsafe { ffi::ft_trace_open(self.sim.as_ptr(), c_path, levels) }
+        })
     }
 
     /// Flush and close the waveform, if one is open.
