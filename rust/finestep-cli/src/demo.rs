@@ -8,14 +8,15 @@ use std::path::Path;
 
 use anyhow::{anyhow, bail, Context};
 use finestep_cosim::{TopLockstep, TraceDepth};
-use finestep_host::regs::{fifo_level, latch_time, status, underrun_count};
-use finestep_host::{AxisSetup, Bus, Machine, PinHost, PinTiming, SpiBus};
+use finestep_host::AxisSetup;
 use finestep_model::limits::{AxisTiming, RateChecker};
 use finestep_model::PeriodRecord;
-use finestep_planner::{interpolate_line, LineMove, Machine as Kinematics};
+use finestep_planner::{interpolate_line, LineMove, Machine as Kinematics, MachineConfig};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::plot::{plot_axes, AxisTrace};
+use crate::run::run_program;
+use crate::spi_stream::{stream_over_spi, StreamSetup, BURST};
 
 /// The FPGA clock of the demo, Hz.
 pub const CLOCK_HZ: f64 = 50e6;
@@ -23,9 +24,6 @@ const AXIS_NAMES: [&str; 3] = ["X", "Z", "C"];
 const AXIS_UNITS: [&str; 3] = ["mm", "mm", "deg"];
 /// Periods traced into the waveform (the start of the move: direction set-up, first steps).
 const TRACED_PERIODS: u64 = 4;
-/// Records per SPI burst and the FIFO level at which motion starts.
-const BURST: usize = 32;
-const START_LEVEL: u16 = 16;
 
 /// Drive timing of the demo's drives, in clocks at 50 MHz: 2 us step, 2 us space,
 /// 5 us dir setup and hold.
@@ -45,10 +43,6 @@ pub fn demo_axis_config() -> finestep_model::AxisConfig {
         invert: 0,
         enable: true,
     }
-}
-
-fn bus_error(e: finestep_host::BusError) -> anyhow::Error {
-    anyhow!("{e}")
 }
 
 pub fn run(out: &Path) -> anyhow::Result<()> {
@@ -82,62 +76,12 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         records.len()
     );
     println!("  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock");
-
-    let mut host = PinHost::new(TopLockstep::new("demo"), PinTiming::default());
-    host.reset(4).map_err(bus_error)?;
-    let mut machine = Machine::connect(SpiBus::new(host, 4)).map_err(bus_error)?;
-    let caps = machine.caps();
-    println!("  core: {} axes, FIFO {} records, clock {} Hz", caps.n_axes, caps.fifo_depth, caps.clock_hz);
-    for axis in 0..AXIS_NAMES.len() {
-        machine.configure_axis(axis, &setup).map_err(bus_error)?;
-    }
-    machine.enable_axes(0b111).map_err(bus_error)?;
-    machine.set_period(period_clocks).map_err(bus_error)?;
-    machine.set_start_level(START_LEVEL).map_err(bus_error)?;
-    machine.clear_faults_and_errors().map_err(bus_error)?;
-
-    // Queue the first records, then start: the first period boundary after RUN takes
-    // record 0, and the position latch holds that boundary's time.
-    let mut pending = records.iter().copied().peekable();
-    let first: Vec<PeriodRecord> = pending.by_ref().take(2 * BURST).collect();
-    for burst in first.chunks(BURST) {
-        machine.bus().push_records(burst).map_err(bus_error)?;
-    }
-    machine.set_control(true, false, true).map_err(bus_error)?;
-    let t_first = f64::from(machine.bus().read_one(latch_time::ADDR).map_err(bus_error)?) / CLOCK_HZ;
-
+    let stream_setup = StreamSetup { period_clocks, axes: vec![setup; 3], clock_hz: CLOCK_HZ };
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} records queued {per_sec}")?);
-    progress.inc(first.len() as u64);
-    let mut samples: Vec<(f64, Vec<i32>)> = Vec::new();
-    let mut bursts = first.chunks(BURST).len() as u64;
-    let poll = u64::from(period_clocks) / 2;
-    let start_clock = machine.bus().link_mut().target().cycle();
-    loop {
-        let bus = machine.bus();
-        let level_word = bus.read_one(fifo_level::ADDR).map_err(bus_error)?;
-        let free = fifo_level::FREE.get(level_word) as usize;
-        let left = pending.len();
-        if left > 0 && (free >= BURST || (free >= left)) {
-            let burst: Vec<PeriodRecord> = pending.by_ref().take(free.min(BURST)).collect();
-            bus.push_records(&burst).map_err(bus_error)?;
-            bursts += 1;
-            progress.inc(burst.len() as u64);
-            continue;
-        }
-        let streaming = status::STREAMING.get(bus.read_one(status::ADDR).map_err(bus_error)?) != 0;
-        if left == 0 && fifo_level::LEVEL.get(level_word) == 0 && !streaming {
-            break;
-        }
-        bus.wait(poll).map_err(bus_error)?;
-        let positions = machine.positions().map_err(bus_error)?;
-        samples.push((f64::from(positions.latch_time) / CLOCK_HZ, positions.steps));
-    }
+    let (streamed, lockstep) =
+        stream_over_spi(TopLockstep::new("demo"), &stream_setup, &records, |queued| progress.set_position(queued as u64))?;
     progress.finish_and_clear();
-    machine.bus().wait(2 * u64::from(period_clocks)).map_err(bus_error)?;
-    let underruns = machine.bus().read_one(underrun_count::ADDR).map_err(bus_error)?;
-    let positions = machine.positions().map_err(bus_error)?;
-    let cycles = machine.bus().link_mut().target().cycle() - start_clock;
 
     println!("  axis   final steps   final position   commanded");
     let mut commanded = [0i64; 3];
@@ -147,7 +91,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         }
     }
     for axis in 0..AXIS_NAMES.len() {
-        let steps = positions.steps[axis];
+        let steps = streamed.positions[axis];
         let target = commanded[axis] as f64 / 65536.0;
         println!(
             "  {:<4} {:>13} {:>12.4} {:<3} {:>10.4} {}",
@@ -159,17 +103,16 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
             bail!("axis {} ended at {steps} steps, commanded {target}", AXIS_NAMES[axis]);
         }
     }
-    if underruns != 0 {
-        bail!("{underruns} FIFO underruns");
+    if streamed.underruns != 0 {
+        bail!("{} FIFO underruns", streamed.underruns);
     }
     println!(
-        "  {bursts} bursts, 0 underruns; bit-exact over {cycles} cycles ({:.3} s of machine time)",
-        cycles as f64 / CLOCK_HZ
+        "  {} bursts, 0 underruns; bit-exact over {} cycles ({:.3} s of machine time)",
+        streamed.bursts, streamed.cycles, streamed.cycles as f64 / CLOCK_HZ
     );
 
     let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });
-    let lockstep = machine.bus().link_mut().target();
-    let traced = start_clock + TRACED_PERIODS * u64::from(period_clocks);
+    let traced = lockstep.cycle() - streamed.cycles + TRACED_PERIODS * u64::from(period_clocks);
     lockstep.write_waveform(&waveform, TraceDepth::Ports, traced).map_err(|e| anyhow!(e))?;
 
     // Commanded positions at the period boundaries; emitted ones where the host sampled
@@ -182,14 +125,38 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
             trace.commanded.push(running[axis] as f64 / 65536.0);
         }
     }
-    for (t, steps) in &samples {
+    for (t, steps) in &streamed.samples {
         for (axis, trace) in traces.iter_mut().enumerate() {
-            trace.emitted.push((t - t_first, f64::from(steps[axis])));
+            trace.emitted.push((*t, f64::from(steps[axis])));
         }
     }
     let png = out.join("demo.png");
     plot_axes(&png, &traces, &AXIS_NAMES, kinematics.period_s)?;
     println!("  waveform of the ports, first {TRACED_PERIODS} periods: {}", waveform.display());
     println!("  plot: {}", png.display());
-    Ok(())
+
+    println!();
+    println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
+    let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
+    run_program(&program, "demo-part.ngc", false, &MachineConfig::default(), out)
 }
+
+/// The demo's part program: an outside contour cut with cutter compensation (tool 3,
+/// r = 0.5 mm), with a convex arc, a chamfer corner and square corners, blended (G64).
+const DEMO_PART: &str = "\
+( finestep demo part: an outside contour, compensated for tool 3, r = 0.5 mm )
+G21 G90 G17 G64 P0.01
+F6000
+G0 X-4 Y-4
+G42 D3
+G1 X0 Y0
+G1 X12
+G3 X16 Y4 R4
+G1 Y10
+G1 X8 Y14
+G1 X0
+G1 Y0
+G40
+G1 X-4 Y-4
+M2
+";

@@ -6,6 +6,7 @@ mod bench_top;
 mod demo;
 mod plot;
 mod run;
+mod spi_stream;
 
 use std::path::PathBuf;
 

@@ -1,17 +1,21 @@
 //! `finestep run FILE.ngc`: a part program through the planner, checked by the
-//! independent checker and plotted, then into the core, in lockstep co-simulation (RTL
-//! against the model) or through the model's fast path.
+//! independent checker and plotted, then into the chip: streamed over SPI by the host
+//! driver into the bus-level top, RTL in lockstep with the model, or through the model
+//! core's fast path.
 
 use std::path::Path;
 
 use anyhow::{bail, Context};
-use finestep_cosim::{Harness, ModelPath};
-use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams};
+use finestep_cosim::TopLockstep;
+use finestep_gcode::Program;
+use finestep_host::AxisSetup;
+use finestep_model::{Core, CoreInputs, CoreParams};
 use finestep_planner::config::AXIS_NAMES;
 use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, ProfileKind};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::plot::{plot_motion, plot_toolpath};
+use crate::spi_stream::{stream_over_spi, StreamSetup};
 
 const AXIS_UNITS: [&str; 4] = ["mm", "mm", "mm", "deg"];
 
@@ -54,27 +58,32 @@ pub fn run(file: &Path, fast: bool, config_path: Option<&Path>, profile: Option<
         Some("s-curve") => config.profile = ProfileKind::SCurve,
         _ => {}
     }
-    let resolved = config.resolve()?;
     let program = finestep_gcode::parse_file(file)?;
-    let planned = plan_program(&config, &program).map_err(|e| anyhow::anyhow!("{}:{}: {}", file.display(), e.line, e.reason))?;
+    run_program(&program, &file.display().to_string(), fast, &config, out)
+}
+
+/// Plans, checks, plots and runs `program` (named `name` in messages and plot files).
+pub fn run_program(program: &Program, name: &str, fast: bool, config: &MachineConfig, out: &Path) -> anyhow::Result<()> {
+    let resolved = config.resolve()?;
+    let planned = plan_program(config, program).map_err(|e| anyhow::anyhow!("{name}:{}: {}", e.line, e.reason))?;
     let records = &planned.records;
     for note in &planned.notes {
         println!("  note: {note}");
     }
     println!(
         "finestep run {}: {} elements, {} periods of {} ms: {:.3} s of machining ({:?} profile), {}",
-        file.display(),
+        name,
         planned.elements,
         records.len(),
         resolved.period_s * 1e3,
         records.len() as f64 * resolved.period_s,
         resolved.profile,
-        if fast { "model fast path" } else { "RTL in lockstep with the model, every pin every clock" }
+        if fast { "model fast path" } else { "streamed over SPI; RTL in lockstep with the model, every pin every clock" }
     );
-    let report = check_program(&config, &program, records)?;
+    let report = check_program(config, program, records)?;
     print_check(&report);
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
+    let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
     let toolpath = out.join(format!("{stem}-toolpath.png"));
     let motion = out.join(format!("{stem}-motion.png"));
     plot_toolpath(&toolpath, &report.samples)?;
@@ -82,25 +91,20 @@ pub fn run(file: &Path, fast: bool, config_path: Option<&Path>, profile: Option<
     println!("  plots: {} {}", toolpath.display(), motion.display());
 
     let period_clocks = resolved.period_clocks;
-    let mut inputs = CoreInputs { run: true, period_clocks, ..Default::default() };
-    for (axis, timing) in inputs.axes.iter_mut().zip(&resolved.timing) {
-        *axis = AxisConfig {
-            step_len: timing.step_len,
-            step_space: timing.step_space,
-            dir_setup: timing.dir_setup,
-            dir_hold: timing.dir_hold,
-            mode: 0,
-            invert: 0,
-            enable: true,
-        };
-    }
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} periods {per_sec} {msg}")?);
     let drain = 2 * u64::from(period_clocks);
     let (positions, cycles) = if fast {
+        let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
+        for (axis, timing) in inputs.axes.iter_mut().zip(&resolved.timing) {
+            axis.step_len = timing.step_len;
+            axis.step_space = timing.step_space;
+            axis.dir_setup = timing.dir_setup;
+            axis.dir_hold = timing.dir_hold;
+            axis.enable = true;
+        }
         let mut core = Core::new(CoreParams::default());
         let mut events = Vec::new();
-        inputs.rec_valid = true;
         for (index, record) in records.iter().enumerate() {
             inputs.record = *record;
             while !core.run_chunk_fast(&inputs, u64::MAX, &mut events).consumed {}
@@ -112,18 +116,33 @@ pub fn run(file: &Path, fast: bool, config_path: Option<&Path>, profile: Option<
         }
         inputs.rec_valid = false;
         core.run_chunk_fast(&inputs, drain, &mut events);
-        (core.outputs().positions, core.cycle())
+        (core.outputs().positions.map(|p| p as i32).to_vec(), core.cycle())
     } else {
-        let mut harness = Harness::new("run", ModelPath::PerClock);
-        for (index, record) in records.iter().enumerate() {
-            harness.feed(&mut inputs, [*record]).map_err(|m| anyhow::anyhow!("{m}"))?;
-            if index % 16 == 0 {
-                progress.set_position(index as u64);
-                progress.set_message(format!("line {}", planned.lines[index]));
+        let setup = StreamSetup {
+            period_clocks,
+            axes: resolved
+                .timing
+                .iter()
+                .map(|t| AxisSetup {
+                    step_len: t.step_len,
+                    step_space: t.step_space,
+                    dir_setup: t.dir_setup,
+                    dir_hold: t.dir_hold,
+                    ..AxisSetup::default()
+                })
+                .collect(),
+            clock_hz: config.clock_hz,
+        };
+        let (streamed, _) = stream_over_spi(TopLockstep::new(&stem), &setup, records, |queued| {
+            progress.set_position(queued as u64);
+            if let Some(line) = planned.lines.get(queued.saturating_sub(1)) {
+                progress.set_message(format!("line {line}"));
             }
+        })?;
+        if streamed.underruns != 0 {
+            bail!("{} FIFO underruns", streamed.underruns);
         }
-        harness.idle(&inputs, drain).map_err(|m| anyhow::anyhow!("{m}"))?;
-        (harness.outputs().positions, harness.cycle())
+        (streamed.positions, streamed.cycles)
     };
     progress.finish_and_clear();
 
@@ -131,7 +150,7 @@ pub fn run(file: &Path, fast: bool, config_path: Option<&Path>, profile: Option<
     let mut worst = 0i64;
     for axis in (0..4).filter(|&a| resolved.axes[a].present) {
         let scale = resolved.axes[axis].steps_per_unit;
-        let steps = i64::from(positions[axis] as i32);
+        let steps = i64::from(positions[axis]);
         let target = (planned.end[axis] * scale).round() as i64;
         worst = worst.max((steps - target).abs());
         println!(

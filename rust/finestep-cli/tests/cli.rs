@@ -37,11 +37,25 @@ fn bad_gcode_is_reported_with_file_line_and_column() {
 }
 
 #[test]
-fn compensation_is_refused_not_ignored() {
-    let path = scratch("comp.ngc", "G21 G17\nG41 D1\nG1 X10 F300\n");
+fn a_compensation_gouge_is_refused_by_line() {
+    // Tool 1 (r = 3 mm) on the inside of a 2 mm arc.
+    let path = scratch("gouge.ngc", "G21 G17 F600\nG41 D1\nG1 X10\nG3 X10 Y4 R2\nG40\nG1 X0 Y0\n");
     let (ok, text) = finestep(&["run", "--fast", &path]);
     assert!(!ok);
-    assert!(text.contains(&format!("{path}:2: cutter radius compensation")), "{text}");
+    assert!(text.contains(&format!("{path}:4: ")), "{text}");
+}
+
+#[test]
+fn a_short_program_streams_over_spi_into_the_chip_in_lockstep() {
+    let path = scratch("short.ngc", "G21 G90 G17 G64 P0.01 F6000\nG42 D3\nG1 X2 Y0\nG1 X2 Y2\nG40\nG1 X0 Y0\nM2\n");
+    let out = std::env::temp_dir().join(format!("finestep-cli-short-{}", std::process::id()));
+    let (ok, text) = finestep(&["run", "--out", &out.display().to_string(), &path]);
+    assert!(ok, "{text}");
+    assert!(text.contains("streamed over SPI; RTL in lockstep"), "{text}");
+    assert!(text.contains("bit-exact RTL against the model"), "{text}");
+    let finals: Vec<&str> = text.lines().skip_while(|l| !l.contains("final steps")).skip(1).take(4).collect();
+    assert_eq!(finals.len(), 4, "{text}");
+    assert!(finals.iter().all(|l| l.ends_with(" 0 steps")), "{text}");
 }
 
 #[test]

@@ -91,6 +91,11 @@ impl<B: Bus> Machine<B> {
         &mut self.bus
     }
 
+    /// The bus, giving up the machine.
+    pub fn into_bus(self) -> B {
+        self.bus
+    }
+
     /// Sets the step timing and output mode of `axis`.
     pub fn configure_axis(&mut self, axis: usize, setup: &AxisSetup) -> Result<(), BusError> {
         let limit = (1u32 << self.caps.timing_w) - 1;

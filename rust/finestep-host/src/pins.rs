@@ -116,6 +116,11 @@ impl<T: PinTarget> PinHost<T> {
         &mut self.target
     }
 
+    /// The target, giving up the host.
+    pub fn into_target(self) -> T {
+        self.target
+    }
+
     /// The packed inputs being driven.
     pub fn inputs(&self) -> u64 {
         self.inputs

@@ -37,6 +37,11 @@ impl<T: SpiTransfer> SpiBus<T> {
         &mut self.link
     }
 
+    /// The transport, giving up the bus.
+    pub fn into_link(self) -> T {
+        self.link
+    }
+
     /// Sets the axis count used to encode records.
     pub fn set_n_axes(&mut self, n_axes: usize) {
         self.n_axes = n_axes;
