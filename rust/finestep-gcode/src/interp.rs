@@ -383,12 +383,17 @@ impl State {
         }
 
         // Plane and distance modes.
-        if let Some((code, _)) = w.group(Group::Plane) {
-            self.plane = match code {
+        if let Some((code, column)) = w.group(Group::Plane) {
+            let plane = match code {
                 170 => Plane::Xy,
                 180 => Plane::Zx,
                 _ => Plane::Yz,
             };
+            // Compensation offsets in XY; another plane would cut an uncompensated path.
+            if plane != Plane::Xy && self.comp != CompSide::Off {
+                return Err(LineError::new(column, "plane change while cutter compensation is on (G40 first)"));
+            }
+            self.plane = plane;
         }
         if let Some((code, _)) = w.group(Group::Distance) {
             self.incremental = code == 910;
@@ -409,6 +414,9 @@ impl State {
                     column,
                     "cutter compensation is already on (G40 first)",
                 ));
+            }
+            if side != CompSide::Off && self.plane != Plane::Xy {
+                return Err(LineError::new(column, "cutter compensation is supported in G17 (XY) only"));
             }
             let tool = match w.param('D') {
                 Some((d, d_column)) => Some(as_u32(d).ok_or_else(|| {

@@ -518,3 +518,12 @@ fn hostile_input_is_an_error_not_a_panic() {
     );
     assert!(parse_str("", FILE).unwrap().blocks.is_empty());
 }
+
+#[test]
+fn compensation_only_in_the_xy_plane() {
+    let err = parse_str("G18\nG41 D1\n", "p.ngc").unwrap_err();
+    assert_eq!(err.to_string(), "p.ngc:2:1: cutter compensation is supported in G17 (XY) only");
+    let err = parse_str("G17 G41 D1\nG1 X1 F100\nG19\n", "p.ngc").unwrap_err();
+    assert_eq!(err.to_string(), "p.ngc:3:1: plane change while cutter compensation is on (G40 first)");
+    assert!(parse_str("G17 G41 D1\nG1 X1 F100\nG40\nG18\n", "p.ngc").is_ok());
+}

@@ -868,9 +868,10 @@ fn bad_programs_and_tables_are_errors_naming_the_line() {
         err("G41 D1\nG1 X5 F100\nG40\nG2 X7 Y0 I1 J0\n", 0.5),
         "line 4: the exit move after G40 must be a straight line (G0/G1), not an arc"
     );
+    // A plane change while compensating is refused by the front end already.
     assert_eq!(
-        err("G41 D1\nG1 X5 F100\nG18\nG2 X7 Z0 I1 K0\n", 0.5),
-        "line 4: cutter compensation works in the G17 (XY) plane only; this arc is in G18 (ZX)"
+        finestep_gcode::parse_str("G41 D1\nG1 X5 F100\nG18\nG2 X7 Z0 I1 K0\n", "t.ngc").unwrap_err().to_string(),
+        "t.ngc:3:1: plane change while cutter compensation is on (G40 first)"
     );
     assert_eq!(
         err("G41 D1\nG1 X5 F100\nT2 M6\n", 0.5),
