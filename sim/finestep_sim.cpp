@@ -10,14 +10,7 @@
 
 #include "Vfinestep_core.h"
 #include "Vfinestep_core_traced.h"
-#include "verilated.h"
-#if VM_TRACE_FST
-#include "verilated_fst_c.h"
-typedef VerilatedFstC TraceFile;
-#else
-#include "verilated_vcd_c.h"
-typedef VerilatedVcdC TraceFile;
-#endif
+#include "verilated_trace.h"
 
 #ifndef FS_N_AXES
 #error "FS_N_AXES, FS_P_WIDTH and FS_TIMING_W must match the Verilated parameters"
@@ -228,26 +221,10 @@ struct Sim final : fs_sim {
     }
 
     int trace_open(const char *path, uint32_t levels) override {
-        if (!TRACED) return -1;
-        trace_close();
-        trace.reset(new TraceFile);
-        // Verilator names top-level ports "TOP <port>": one level below TOP is the ports.
-        trace->dumpvars(static_cast<int>(levels) + 1, "TOP");
-        top->trace(trace.get(), 99);
-        trace->open(path);
-        if (!trace->isOpen()) {
-            trace.reset();
-            return -1;
-        }
-        return 0;
+        return finestep::open_trace<TRACED>(trace, *top, path, levels);
     }
 
-    void trace_close() override {
-        if (trace) {
-            trace->close();
-            trace.reset();
-        }
-    }
+    void trace_close() override { finestep::close_trace(trace); }
 };
 
 // Only the traced model has trace(); give the untraced one a stub so one template fits.

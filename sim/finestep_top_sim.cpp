@@ -6,14 +6,7 @@
 
 #include "Vfinestep_top.h"
 #include "Vfinestep_top_traced.h"
-#include "verilated.h"
-#if VM_TRACE_FST
-#include "verilated_fst_c.h"
-typedef VerilatedFstC TopTraceFile;
-#else
-#include "verilated_vcd_c.h"
-typedef VerilatedVcdC TopTraceFile;
-#endif
+#include "verilated_trace.h"
 
 #ifndef FT_N_AXES
 #error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W and FT_FIFO_DEPTH_LOG2 must match the Verilated parameters"
@@ -38,7 +31,7 @@ template <typename Model, bool TRACED>
 struct TopSim final : ft_sim {
     std::unique_ptr<VerilatedContext> context;
     std::unique_ptr<Model> top;
-    std::unique_ptr<TopTraceFile> trace;
+    std::unique_ptr<TraceFile> trace;
 
     TopSim() : context(new VerilatedContext) {
         if (TRACED) context->traceEverOn(true);
@@ -117,31 +110,16 @@ struct TopSim final : ft_sim {
     }
 
     int trace_open(const char *path, uint32_t levels) override {
-        if (!TRACED) return -1;
-        trace_close();
-        trace.reset(new TopTraceFile);
-        trace->dumpvars(static_cast<int>(levels) + 1, "TOP");
-        top->trace(trace.get(), 99);
-        trace->open(path);
-        if (!trace->isOpen()) {
-            trace.reset();
-            return -1;
-        }
-        return 0;
+        return finestep::open_trace<TRACED>(trace, *top, path, levels);
     }
 
-    void trace_close() override {
-        if (trace) {
-            trace->close();
-            trace.reset();
-        }
-    }
+    void trace_close() override { finestep::close_trace(trace); }
 };
 
 // Only the traced model has trace(); give the untraced one a stub so one template fits.
 struct FastTop : Vfinestep_top {
     using Vfinestep_top::Vfinestep_top;
-    void trace(TopTraceFile *, int) {}
+    void trace(TraceFile *, int) {}
 };
 
 }  // namespace

@@ -29,7 +29,7 @@ fn main() {
     println!("cargo:rerun-if-env-changed=VERILATOR_ROOT");
     // hdl/ holds only sources (a new module appears here); of sim/ only the shim counts.
     println!("cargo:rerun-if-changed={}", hdl.display());
-    for shim in ["finestep_sim.cpp", "finestep_sim.h", "finestep_top_sim.cpp", "finestep_top_sim.h"] {
+    for shim in ["finestep_sim.cpp", "finestep_sim.h", "finestep_top_sim.cpp", "finestep_top_sim.h", "verilated_trace.h"] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
     // The register map's Verilog constants, generated from the one source.

@@ -59,25 +59,11 @@ fn streamed<T: PinTarget>(target: T, periods: usize, cycles: impl Fn(&T) -> u64)
 /// Prints the chip-level figures for a move of `periods` periods of 1 ms.
 pub fn run(periods: usize) -> anyhow::Result<()> {
     println!("finestep bench, chip level: {AXES} axes, P = {PERIOD_CLOCKS} clocks, {periods} periods streamed over SPI at clk/8");
-    struct Counted<T> {
-        inner: T,
-        cycles: u64,
-    }
-    impl<T: PinTarget> PinTarget for Counted<T> {
-        fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), finestep_host::BusError> {
-            self.cycles += cycles;
-            self.inner.drive(inputs, cycles)
-        }
-        fn outputs(&self) -> u64 {
-            self.inner.outputs()
-        }
-    }
-    let (cycles, seconds) = streamed(Counted { inner: RtlPins::new(), cycles: 0 }, periods, |t| t.cycles)?;
+    let (cycles, seconds) = streamed(RtlPins::new(), periods, RtlPins::cycle)?;
     report("RTL top alone (Verilator), SPI-driven", cycles, seconds);
-    let (cycles, seconds) =
-        streamed(Counted { inner: ModelPins(Top::new(rtl_top_params())), cycles: 0 }, periods, |t| t.cycles)?;
+    let (cycles, seconds) = streamed(ModelPins(Top::new(rtl_top_params())), periods, ModelPins::cycle)?;
     report("model top alone, per clock, SPI-driven", cycles, seconds);
-    let (cycles, seconds) = streamed(TopLockstep::new("bench"), periods, |t| t.cycle())?;
+    let (cycles, seconds) = streamed(TopLockstep::new("bench"), periods, TopLockstep::cycle)?;
     report("lockstep RTL + model top, every pin compared", cycles, seconds);
     Ok(())
 }

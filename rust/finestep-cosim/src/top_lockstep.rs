@@ -197,6 +197,13 @@ impl PinTarget for TopLockstep {
 /// The reference model alone at its pins.
 pub struct ModelPins(pub Top);
 
+impl ModelPins {
+    /// Clock edges run since the model was made.
+    pub fn cycle(&self) -> u64 {
+        self.0.cycle()
+    }
+}
+
 impl PinTarget for ModelPins {
     fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
         let inputs = TopInputs::unpack(inputs);
@@ -221,6 +228,11 @@ impl RtlPins {
     /// A Verilated top at power-on.
     pub fn new() -> RtlPins {
         RtlPins { rtl: RtlTop::new(), scratch: Vec::new() }
+    }
+
+    /// Clock edges run since construction.
+    pub fn cycle(&self) -> u64 {
+        self.rtl.cycle()
     }
 }
 

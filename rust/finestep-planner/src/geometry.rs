@@ -324,6 +324,25 @@ pub const ARC_JERK_SHARE: f64 = 0.15;
 /// Share of each axis's jerk spent at a junction (tangent or curvature jump within a period).
 pub const JUNCTION_JERK_SHARE: f64 = 0.25;
 
+/// A new element of `shape` with its limits set by [`limit`].
+fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64, line: usize, feed: f64) -> Element {
+    let element = Element {
+        shape,
+        start,
+        end,
+        length,
+        line,
+        v_cap: 0.0,
+        accel: 0.0,
+        jerk: 0.0,
+        stop_after: false,
+        dwell_periods: 0,
+        dwell_line: 0,
+        block_end: false,
+    };
+    limit(config, element, feed)
+}
+
 /// Fills in the speed, acceleration and jerk limits of an element.
 fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
     let weights = axis_weights(&element.shape, element.length);
@@ -382,21 +401,7 @@ fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) 
         return None;
     }
     let shape = Shape::Line { dir: scale(1.0 / length, delta) };
-    let element = Element {
-        shape,
-        start,
-        end,
-        length,
-        line: m.line,
-        v_cap: 0.0,
-        accel: 0.0,
-        jerk: 0.0,
-        stop_after: false,
-        dwell_periods: 0,
-        dwell_line: 0,
-        block_end: false,
-    };
-    Some(limit(config, element, feed))
+    Some(limited(config, shape, start, end, length, m.line, feed))
 }
 
 /// The element of an arc move; `None` when rounding to steps left nothing to move.
@@ -457,21 +462,7 @@ fn arc_element(config: &Resolved, m: &Move) -> Result<Option<Element>, ProgramEr
         return Ok(None);
     }
     let shape = Shape::Arc { centre: c, e1, e2, r0, r1, sweep, rise };
-    let element = Element {
-        shape,
-        start: m.start,
-        end: m.end,
-        length,
-        line: m.line,
-        v_cap: 0.0,
-        accel: 0.0,
-        jerk: 0.0,
-        stop_after: false,
-        dwell_periods: 0,
-        dwell_line: 0,
-        block_end: false,
-    };
-    Ok(Some(limit(config, element, m.feed)))
+    Ok(Some(limited(config, shape, m.start, m.end, length, m.line, m.feed)))
 }
 
 /// The blend arc for the corner between lines `d1` then `d2` at `corner`, with the

@@ -1,0 +1,47 @@
+// Waveform support shared by the C shims: the trace file type the build chose (FST or
+// VCD) and opening/closing a trace on a Verilated model.
+#ifndef FINESTEP_VERILATED_TRACE_H
+#define FINESTEP_VERILATED_TRACE_H
+
+#include <cstdint>
+#include <memory>
+
+#include "verilated.h"
+#if VM_TRACE_FST
+#include "verilated_fst_c.h"
+typedef VerilatedFstC TraceFile;
+#else
+#include "verilated_vcd_c.h"
+typedef VerilatedVcdC TraceFile;
+#endif
+
+namespace finestep {
+
+inline void close_trace(std::unique_ptr<TraceFile> &trace) {
+    if (trace) {
+        trace->close();
+        trace.reset();
+    }
+}
+
+// Opens `path` on `model`, `levels` below the ports (0: ports only). Returns 0, or -1
+// when the model was built without tracing (TRACED false) or the file cannot be opened.
+template <bool TRACED, typename Model>
+int open_trace(std::unique_ptr<TraceFile> &trace, Model &model, const char *path, uint32_t levels) {
+    if (!TRACED) return -1;
+    close_trace(trace);
+    trace.reset(new TraceFile);
+    // Verilator names top-level ports "TOP <port>": one level below TOP is the ports.
+    trace->dumpvars(static_cast<int>(levels) + 1, "TOP");
+    model.trace(trace.get(), 99);
+    trace->open(path);
+    if (!trace->isOpen()) {
+        trace.reset();
+        return -1;
+    }
+    return 0;
+}
+
+}  // namespace finestep
+
+#endif
