@@ -4,7 +4,9 @@
 // CRC-checked frames, and the 8080/FSMC parallel bus) share one register bus into the
 // register file; period records reach the core through the position FIFO, gated by the
 // motion control (start threshold, underrun); the safety monitor (watchdog, E-stop)
-// halts the core, drops the enables and stops the run.
+// halts the core, drops the enables and stops the run. The feedback blocks count encoders
+// and gratings, latch them on the probe, and decode the hand wheel, whose jog generator
+// drives the core in place of the FIFO while RUN is 0.
 //
 // Every output is a flip-flop. rst must be held for at least 2 cycles.
 module finestep_top #(
@@ -15,7 +17,9 @@ module finestep_top #(
     parameter WD_W            = 24,
     parameter CLOCK_HZ        = 50000000,
     parameter HAS_SPI         = 1,
-    parameter HAS_PARALLEL    = 1
+    parameter HAS_PARALLEL    = 1,
+    parameter N_ENC           = 4,
+    parameter HAS_MPG         = 1
 ) (
     // clock, reset
     input  wire              clk,
@@ -36,6 +40,13 @@ module finestep_top #(
     output wire              bus_ad_oe,
     // machine
     input  wire              estop_pin,
+    // feedback (asynchronous)
+    input  wire [N_ENC-1:0]  enc_a,
+    input  wire [N_ENC-1:0]  enc_b,
+    input  wire [N_ENC-1:0]  enc_z,
+    input  wire              probe_pin,
+    input  wire              mpg_a,
+    input  wire              mpg_b,
     output wire              irq,
     output wire [N_AXES-1:0] pin_a,
     output wire [N_AXES-1:0] pin_b,
@@ -82,13 +93,54 @@ module finestep_top #(
     wire [7:0] spi_refused_count;
     wire [7:0] status_byte;
     wire       par_error;
-    // Motion
-    wire core_run = run_request && !halt;
-    wire rec_ready, rec_valid, gate, underrun, underrun_event;
+    // Feedback register bus and state
+    wire        bus_write;
+    wire [6:0]  bus_address;
+    wire [31:0] bus_write_data, feedback_rdata, timestamp;
+    wire        latch_now;
+    wire        jog_engaged, jog_stopping, jog_refused;
+    wire [15:0] jog_dropped;
+    wire [31:0] jog_remaining, jog_velocity;
+    wire [32*N_AXES-1:0] jog_inc;
+    // Motion: the FIFO runs on RUN, the core also while the jog is engaged.
+    wire fifo_run = run_request && !halt;
+    wire core_run = (run_request || jog_engaged) && !halt;
+    wire rec_ready, fifo_rec_valid, gate, underrun, underrun_event;
     wire boundary = core_run && rec_ready;
+    wire rec_valid = jog_engaged ? 1'b1 : fifo_rec_valid;
+    wire [32*N_AXES-1:0] rec_inc   = jog_engaged ? jog_inc : fifo_head[32*N_AXES-1:0];
+    wire [7:0]           rec_flags = jog_engaged ? 8'd0 : fifo_head[32*N_AXES +: 8];
     wire [32*N_AXES-1:0] position;
     wire [N_AXES-1:0]    rate_error, step_lost;
     wire record_error, block_end;
+
+    // Feedback configuration and state
+    wire [15:0]           enc_prescale, mpg_prescale;
+    wire [2*N_ENC-1:0]    enc_mode;
+    wire [N_ENC-1:0]      enc_z_active_high, enc_arm_index_latch, enc_arm_index_clear;
+    wire [4*N_ENC-1:0]    enc_filter;
+    wire                  probe_active_high, probe_arm;
+    wire [3:0]            probe_filter, mpg_filter;
+    wire                  jog_enable, jog_follow;
+    wire [2:0]            jog_axis;
+    wire [1:0]            jog_multiplier;
+    wire [31:0]           jog_scale;
+    wire [30:0]           jog_vmax, jog_accel;
+    wire [15:0]           jog_window;
+    wire [32*N_ENC-1:0]   enc_count, enc_edge_time, enc_index_latch, enc_probe_latch;
+    wire [16*N_ENC-1:0]   enc_illegal_count;
+    wire [N_ENC-1:0]      enc_illegal, enc_index_seen, enc_latch_armed, enc_clear_armed;
+    wire [N_ENC-1:0]      enc_a_level, enc_b_level, enc_z_level;
+    wire                  probe_armed, probe_seen, probe_active;
+    wire [31:0]           probe_time;
+    wire [32*N_AXES-1:0]  probe_position;
+    wire [31:0]           mpg_count, mpg_detents;
+    wire                  mpg_illegal, mpg_a_level, mpg_b_level;
+    wire [15:0]           mpg_illegal_count;
+    wire                  feedback_error = (|enc_illegal) || mpg_illegal;
+    wire                  run_write_one, clear_counters;
+
+    wire                  fifo_pop_request;
 
     // The halt's rising edge empties the FIFO: its records belong to the motion that
     // was stopped.
@@ -167,18 +219,22 @@ module finestep_top #(
 
     register_file #(
         .N_AXES(N_AXES), .P_WIDTH(P_WIDTH), .TIMING_W(TIMING_W), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
-        .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL)
+        .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
+        .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),
         .par_req(par_req), .par_we(par_we), .par_addr(par_addr), .par_wdata(par_wdata), .par_grant(par_grant),
         .rdata(rdata),
+        .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
+        .feedback_rdata(feedback_rdata),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
         .step_len(step_len), .step_space(step_space), .dir_setup(dir_setup), .dir_hold(dir_hold),
         .out_mode(out_mode), .invert(invert),
-        .clear_errors(clear_errors), .clear_faults(clear_faults), .flush_cmd(flush_cmd), .kick(kick),
+        .clear_errors(clear_errors), .clear_faults(clear_faults), .clear_counters(clear_counters),
+        .run_write_one(run_write_one), .flush_cmd(flush_cmd), .kick(kick),
         .core_run(core_run), .gate(gate), .halt(halt), .fault_estop(fault_estop),
         .fault_watchdog(fault_watchdog), .estop_active(estop_active),
         .underrun(underrun), .underrun_event(underrun_event), .record_error(record_error),
@@ -188,6 +244,8 @@ module finestep_top #(
         .spi_refused(spi_refused), .spi_refused_count(spi_refused_count),
         .spi_fifo_in_use(spi_fifo_busy || spi_wr_en || spi_wr_commit || spi_wr_abort),
         .spi_fifo_commit(spi_wr_commit), .par_error(par_error),
+        .feedback_error(feedback_error), .jog_engaged(jog_engaged), .jog_refused(jog_refused),
+        .timestamp(timestamp), .latch_now(latch_now),
         .push_write(push_write), .push_data(push_data),
         .status_byte(status_byte), .irq(irq)
     );
@@ -223,10 +281,10 @@ module finestep_top #(
         .LEVEL_W(LEVEL_W)
     ) motion (
         .clk(clk), .rst(rst),
-        .core_run(core_run), .start_level(start_level), .clear_errors(clear_errors),
+        .core_run(fifo_run), .start_level(start_level), .clear_errors(clear_errors),
         .fifo_level(fifo_level), .fifo_valid(fifo_valid), .head_block_end(fifo_head[32*N_AXES]),
-        .fifo_pop(fifo_pop),
-        .rec_ready(rec_ready), .rec_valid(rec_valid),
+        .fifo_pop(fifo_pop_request),
+        .rec_ready(rec_ready), .rec_valid(fifo_rec_valid),
         .gate(gate), .underrun(underrun), .underrun_event(underrun_event)
     );
 
@@ -241,11 +299,98 @@ module finestep_top #(
         .step_len(step_len), .step_space(step_space), .dir_setup(dir_setup), .dir_hold(dir_hold),
         .out_mode(out_mode), .invert(invert),
         .rec_valid(rec_valid), .rec_ready(rec_ready),
-        .rec_inc(fifo_head[32*N_AXES-1:0]), .rec_flags(fifo_head[32*N_AXES +: 8]),
+        .rec_inc(rec_inc), .rec_flags(rec_flags),
         .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
         .position(position), .rate_error(rate_error), .step_lost(step_lost),
         .record_error(record_error), .block_end(block_end)
     );
+
+    // While the jog is engaged the FIFO is not popped (RUN is 0 then, so its gate is shut).
+    assign fifo_pop = fifo_pop_request && !jog_engaged;
+
+    feedback_registers #(
+        .N_ENC(N_ENC), .N_AXES(N_AXES), .HAS_MPG(HAS_MPG)
+    ) feedback_regs (
+        .clk(clk), .rst(rst),
+        .write(bus_write), .addr(bus_address), .wdata(bus_write_data), .rdata(feedback_rdata),
+        .halt(halt),
+        .enc_prescale(enc_prescale), .enc_mode(enc_mode), .enc_z_active_high(enc_z_active_high),
+        .enc_filter(enc_filter), .enc_arm_index_latch(enc_arm_index_latch),
+        .enc_arm_index_clear(enc_arm_index_clear),
+        .probe_active_high(probe_active_high), .probe_filter(probe_filter), .probe_arm(probe_arm),
+        .mpg_prescale(mpg_prescale), .mpg_filter(mpg_filter),
+        .jog_enable(jog_enable), .jog_axis(jog_axis), .jog_multiplier(jog_multiplier),
+        .jog_follow(jog_follow), .jog_scale(jog_scale), .jog_vmax(jog_vmax), .jog_accel(jog_accel),
+        .jog_window(jog_window),
+        .enc_count(enc_count), .enc_edge_time(enc_edge_time), .enc_index_latch(enc_index_latch),
+        .enc_probe_latch(enc_probe_latch), .enc_illegal_count(enc_illegal_count),
+        .enc_illegal(enc_illegal), .enc_index_seen(enc_index_seen), .enc_latch_armed(enc_latch_armed),
+        .enc_clear_armed(enc_clear_armed), .enc_a(enc_a_level), .enc_b(enc_b_level), .enc_z(enc_z_level),
+        .probe_armed(probe_armed), .probe_seen(probe_seen), .probe_active(probe_active),
+        .probe_time(probe_time), .probe_position(probe_position),
+        .mpg_count(mpg_count), .mpg_detents(mpg_detents), .mpg_illegal(mpg_illegal),
+        .mpg_illegal_count(mpg_illegal_count), .mpg_a(mpg_a_level), .mpg_b(mpg_b_level),
+        .jog_engaged(jog_engaged), .jog_stopping(jog_stopping), .jog_refused(jog_refused),
+        .jog_dropped(jog_dropped), .jog_remaining(jog_remaining), .jog_velocity(jog_velocity)
+    );
+
+    encoder_bank #(
+        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(4)
+    ) encoders (
+        .clk(clk), .rst(rst),
+        .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
+        .prescale(enc_prescale), .mode(enc_mode), .z_active_high(enc_z_active_high),
+        .filter_len(enc_filter), .probe_active_high(probe_active_high), .probe_filter_len(probe_filter),
+        .arm_index_latch(enc_arm_index_latch), .arm_index_clear(enc_arm_index_clear),
+        .probe_arm(probe_arm), .clear_errors(clear_errors), .clear_counters(clear_counters),
+        .timestamp(timestamp), .position(position), .latch_now(latch_now),
+        .count_latched(enc_count), .edge_time_latched(enc_edge_time),
+        .index_latch(enc_index_latch), .probe_latch(enc_probe_latch),
+        .illegal_count(enc_illegal_count), .illegal(enc_illegal), .index_seen(enc_index_seen),
+        .index_latch_armed(enc_latch_armed), .index_clear_armed(enc_clear_armed),
+        .a_level(enc_a_level), .b_level(enc_b_level), .z_level(enc_z_level),
+        .probe_armed(probe_armed), .probe_seen(probe_seen), .probe_active(probe_active),
+        .probe_time(probe_time), .probe_position(probe_position)
+    );
+
+    generate
+        if (HAS_MPG != 0) begin : mpg
+            hand_wheel #(.FILTER_W(4)) wheel (
+                .clk(clk), .rst(rst), .mpg_a(mpg_a), .mpg_b(mpg_b),
+                .prescale(mpg_prescale), .filter_len(mpg_filter),
+                .clear_errors(clear_errors), .clear_counters(clear_counters),
+                .count(mpg_count), .detents(mpg_detents), .illegal(mpg_illegal),
+                .illegal_count(mpg_illegal_count), .a_level(mpg_a_level), .b_level(mpg_b_level)
+            );
+            jog_generator #(.N_AXES(N_AXES), .P_WIDTH(P_WIDTH)) jog (
+                .clk(clk), .rst(rst),
+                .enable(jog_enable), .axis_select(jog_axis), .multiplier(jog_multiplier),
+                .follow(jog_follow), .scale(jog_scale), .vmax(jog_vmax), .accel(jog_accel),
+                .window(jog_window), .period_clocks(period_clocks),
+                .run(run_request), .run_write_one(run_write_one), .halt(halt), .rec_ready(rec_ready),
+                .clear_errors(clear_errors), .clear_counters(clear_counters), .detents(mpg_detents),
+                .rec_inc(jog_inc), .engaged(jog_engaged), .stopping(jog_stopping), .refused(jog_refused),
+                .dropped(jog_dropped), .remaining(jog_remaining), .velocity(jog_velocity)
+            );
+        end else begin : no_mpg
+            wire unused_mpg = &{1'b0, mpg_a, mpg_b, mpg_prescale, mpg_filter, jog_enable, jog_axis,
+                                jog_multiplier, jog_follow, jog_scale, jog_vmax, jog_accel, jog_window,
+                                run_write_one};
+            assign mpg_count = 32'd0;
+            assign mpg_detents = 32'd0;
+            assign mpg_illegal = 1'b0;
+            assign mpg_illegal_count = 16'd0;
+            assign mpg_a_level = 1'b0;
+            assign mpg_b_level = 1'b0;
+            assign jog_inc = {32*N_AXES{1'b0}};
+            assign jog_engaged = 1'b0;
+            assign jog_stopping = 1'b0;
+            assign jog_refused = 1'b0;
+            assign jog_dropped = 16'd0;
+            assign jog_remaining = 32'd0;
+            assign jog_velocity = 32'd0;
+        end
+    endgenerate
 
     wire unused_top = &{1'b0, fifo_overflow_unused};
 

@@ -4,7 +4,8 @@
 // filters, decoded x4, x2, x1 or as step/dir into a 32-bit count; an A/B change in the
 // same cycle is an illegal transition (flagged and counted, never counted as motion);
 // one-shot latch-on-index and clear-on-index; the count snapshotted by the shared probe;
-// the timestamp of the last counted edge for velocity estimation.
+// the timestamp of the last counted edge for velocity estimation. Nothing is decoded
+// until the filters have adopted the pins' levels at their first sample (`live`).
 //
 // Latency: a pin change is counted 2 clocks plus the filter length in samples later.
 module quadrature_channel #(
@@ -26,6 +27,7 @@ module quadrature_channel #(
     input  wire                arm_index_latch,
     input  wire                arm_index_clear,
     input  wire                clear_errors,
+    input  wire                clear_counters,
     // shared
     input  wire                probe_event,     // snapshot the count now
     input  wire [31:0]         timestamp,
@@ -38,7 +40,10 @@ module quadrature_channel #(
     output wire [31:0]         probe_latch,
     output wire [31:0]         edge_time,
     output wire                illegal,
-    output wire [15:0]         illegal_count
+    output wire [15:0]         illegal_count,
+    output wire                a_level,
+    output wire                b_level,
+    output wire                z_level_active   // the index after polarity
 );
 
     localparam [1:0] MODE_X4 = 2'd0;
@@ -46,17 +51,23 @@ module quadrature_channel #(
     localparam [1:0] MODE_X1 = 2'd2;
     localparam [1:0] MODE_STEP_DIR = 2'd3;
 
-    wire a, b, z_level;
+    // The three filters share the sample strobe, so they are primed on the same clock.
+    wire a, b, z_level, primed, primed_b_unused, primed_z_unused;
     input_filter #(.FILTER_W(FILTER_W)) filter_a (
-        .clk(clk), .rst(rst), .filter_len(filter_len), .sample(sample), .pin(enc_a), .level(a)
+        .clk(clk), .rst(rst), .filter_len(filter_len), .sample(sample), .pin(enc_a), .level(a),
+        .primed(primed)
     );
     input_filter #(.FILTER_W(FILTER_W)) filter_b (
-        .clk(clk), .rst(rst), .filter_len(filter_len), .sample(sample), .pin(enc_b), .level(b)
+        .clk(clk), .rst(rst), .filter_len(filter_len), .sample(sample), .pin(enc_b), .level(b),
+        .primed(primed_b_unused)
     );
     input_filter #(.FILTER_W(FILTER_W)) filter_z (
-        .clk(clk), .rst(rst), .filter_len(filter_len), .sample(sample), .pin(enc_z), .level(z_level)
+        .clk(clk), .rst(rst), .filter_len(filter_len), .sample(sample), .pin(enc_z), .level(z_level),
+        .primed(primed_z_unused)
     );
+    wire unused_primed = &{1'b0, primed_b_unused, primed_z_unused};
 
+    reg        live_reg;
     reg        a_prev_reg, b_prev_reg, z_prev_reg;
     reg [31:0] count_reg;
     reg [31:0] index_latch_reg;
@@ -73,7 +84,7 @@ module quadrature_channel #(
     wire db      = (b != b_prev_reg);
     wire forward = (da && (a != b)) || (db && (a == b));
     wire step_dir = (mode == MODE_STEP_DIR);
-    wire both    = da && db && !step_dir;
+    wire both    = live_reg && da && db && !step_dir;
 
     // The count change this cycle: +1, -1 or none.
     reg step, step_up;
@@ -92,12 +103,14 @@ module quadrature_channel #(
                 step_up = b;
             end
         endcase
+        step = step && live_reg;
     end
 
-    wire index_event = z && !z_prev_reg;
+    wire index_event = live_reg && z && !z_prev_reg;
     wire [31:0] counted = step ? (step_up ? count_reg + 32'd1 : count_reg - 32'd1) : count_reg;
 
     always @(posedge clk) begin
+        live_reg   <= primed;
         a_prev_reg <= a;
         b_prev_reg <= b;
         z_prev_reg <= z;
@@ -105,12 +118,9 @@ module quadrature_channel #(
         count_reg <= (index_event && clear_armed_reg) ? 32'd0 : counted;
         if (step) edge_time_reg <= timestamp;
 
-        if (index_event && latch_armed_reg) begin
-            index_latch_reg <= count_reg;
-            index_seen_reg  <= 1'b1;
-        end else if (clear_errors) begin
-            index_seen_reg <= 1'b0;
-        end
+        if (index_event && latch_armed_reg) index_latch_reg <= count_reg;
+        if (arm_index_latch) index_seen_reg <= 1'b0;
+        else if (index_event && latch_armed_reg) index_seen_reg <= 1'b1;
         if (arm_index_latch) latch_armed_reg <= 1'b1;
         else if (index_event) latch_armed_reg <= 1'b0;
         if (arm_index_clear) clear_armed_reg <= 1'b1;
@@ -118,15 +128,13 @@ module quadrature_channel #(
 
         if (probe_event) probe_latch_reg <= count_reg;
 
-        if (both) begin
-            illegal_reg <= 1'b1;
-            if (illegal_count_reg != 16'hFFFF) illegal_count_reg <= illegal_count_reg + 16'd1;
-        end else if (clear_errors) begin
-            illegal_reg       <= 1'b0;
-            illegal_count_reg <= 16'd0;
-        end
+        if (both) illegal_reg <= 1'b1;
+        else if (clear_errors) illegal_reg <= 1'b0;
+        if (clear_counters) illegal_count_reg <= 16'd0;
+        else if (both && illegal_count_reg != 16'hFFFF) illegal_count_reg <= illegal_count_reg + 16'd1;
 
         if (rst) begin
+            live_reg          <= 1'b0;
             a_prev_reg        <= 1'b0;
             b_prev_reg        <= 1'b0;
             z_prev_reg        <= 1'b0;
@@ -151,6 +159,9 @@ module quadrature_channel #(
     assign edge_time         = edge_time_reg;
     assign illegal           = illegal_reg;
     assign illegal_count     = illegal_count_reg;
+    assign a_level           = a;
+    assign b_level           = b;
+    assign z_level_active    = z;
 
 `ifdef FORMAL
     // The count moves by at most one per clock, never on an illegal transition, and in
@@ -171,12 +182,19 @@ module quadrature_channel #(
         cover ($past(step) && $past(step, 2) && $past(step, 3) && $past(step, 4) && count_reg == 32'd4);
         cover (illegal_reg);
     end
-    // In x4, without illegal transitions, count mod 4 is the phase (both 0 after reset).
+    // In x4, without illegal transitions, count mod 4 follows the phase from the phase
+    // the pins had when decoding went live (the count was 0 then).
     reg f_clean;
-    always @(posedge clk) f_clean <= rst ? 1'b1 : (f_clean && !both);
+    reg [1:0] f_phase0;
+    always @(posedge clk) begin
+        f_clean <= rst ? 1'b1 : (f_clean && !both);
+        if (rst) f_phase0 <= 2'd0;
+        else if (!live_reg) f_phase0 <= {b, a ^ b};
+    end
     always @(*) if (f_past_valid && !rst) begin
         assert (!clear_armed_reg);
-        if (mode == MODE_X4 && f_clean) assert (count_reg[1:0] == f_phase);
+        if (!live_reg) assert (count_reg == 32'd0 && !illegal_reg);
+        if (mode == MODE_X4 && f_clean && live_reg) assert (count_reg[1:0] == f_phase - f_phase0);
     end
 `endif
 

@@ -3,7 +3,9 @@
 // Register file: the host-visible registers of hdl/registers.toml (addresses and field
 // positions come from the generated finestep_regs.vh), the register-bus arbiter for the
 // two host links (SPI first), error counters, the interrupt, the per-period position
-// latch and the RECORD_PUSH path into the position FIFO.
+// latch and the RECORD_PUSH path into the position FIFO. The feedback blocks' registers
+// live in feedback_registers on the same arbitrated bus; their read value comes in as
+// `feedback_rdata`.
 //
 // Latency: a write granted in cycle n takes effect at the edge ending n (its command
 // pulses, push and watchdog kick are high in n+1); a read granted in n returns rdata in
@@ -16,7 +18,9 @@ module register_file #(
     parameter WD_W            = 24,
     parameter CLOCK_HZ        = 50000000,
     parameter HAS_SPI         = 1,
-    parameter HAS_PARALLEL    = 1
+    parameter HAS_PARALLEL    = 1,
+    parameter N_ENC           = 4,
+    parameter HAS_MPG         = 1
 ) (
     // clock, reset
     input  wire                         clk,
@@ -34,6 +38,11 @@ module register_file #(
     input  wire [31:0]                  par_wdata,
     output wire                         par_grant,
     output wire [31:0]                  rdata,
+    // the arbitrated bus, for feedback_registers
+    output wire                         bus_write,
+    output wire [6:0]                   bus_address,
+    output wire [31:0]                  bus_write_data,
+    input  wire [31:0]                  feedback_rdata,
     // configuration out
     output wire                         run,
     output wire                         watchdog_enable,
@@ -52,6 +61,8 @@ module register_file #(
     // command pulses and the watchdog kick
     output wire                         clear_errors,
     output wire                         clear_faults,
+    output wire                         clear_counters,
+    output wire                         run_write_one,   // a write of CONTROL with RUN = 1 is served
     output wire                         flush_cmd,
     output wire                         kick,
     // machine state in
@@ -81,6 +92,12 @@ module register_file #(
     input  wire                         spi_fifo_in_use,
     input  wire                         spi_fifo_commit,
     input  wire                         par_error,
+    // feedback state
+    input  wire                         feedback_error,
+    input  wire                         jog_engaged,
+    input  wire                         jog_refused,
+    output wire [31:0]                  timestamp,
+    output wire                         latch_now,
     // RECORD_PUSH into the FIFO (write and commit together)
     output wire                         push_write,
     output wire [32*N_AXES+7:0]         push_data,
@@ -97,6 +114,8 @@ module register_file #(
                                      (FS_MAP_VERSION_MINOR << FS_VERSION_MINOR_LSB) |
                                      (FS_MAP_VERSION_PATCH << FS_VERSION_PATCH_LSB);
     localparam [31:0] CAPS_WORD = (N_AXES << FS_CAPS_N_AXES_LSB) |
+                                  (N_ENC << FS_CAPS_N_ENC_LSB) |
+                                  ((HAS_MPG != 0 ? 1 : 0) << FS_CAPS_HAS_MPG_LSB) |
                                   (FIFO_DEPTH_LOG2 << FS_CAPS_FIFO_DEPTH_LOG2_LSB) |
                                   (P_WIDTH << FS_CAPS_P_WIDTH_LSB) |
                                   (TIMING_W << FS_CAPS_TIMING_W_LSB) |
@@ -158,7 +177,8 @@ module register_file #(
 
     wire any_rate_error = |rate_error;
     wire any_step_lost  = |step_lost;
-    wire any_error = underrun || overflow_reg || record_error || any_rate_error || any_step_lost || bus_error_reg;
+    wire any_error = underrun || overflow_reg || record_error || any_rate_error || any_step_lost || bus_error_reg ||
+                     feedback_error || jog_refused;
     wire fifo_low  = ({{(15-FIFO_DEPTH_LOG2){1'b0}}, fifo_level} < watermark_reg);
     wire [IRQ_W-1:0] irq_status;
     assign irq_status[FS_IRQ_STATUS_FIFO_LOW_LSB]  = fifo_low;
@@ -185,6 +205,9 @@ module register_file #(
         status_word[FS_STATUS_STEP_LOST_LSB]      = any_step_lost;
         status_word[FS_STATUS_BUS_ERROR_LSB]      = bus_error_reg;
         status_word[FS_STATUS_IRQ_LSB]            = irq_reg;
+        status_word[FS_STATUS_FEEDBACK_ERROR_LSB] = feedback_error;
+        status_word[FS_STATUS_JOG_ENGAGED_LSB]    = jog_engaged;
+        status_word[FS_STATUS_JOG_REFUSED_LSB]    = jog_refused;
     end
 
     // The read value of an address, from the state of this cycle. A function called only
@@ -263,12 +286,12 @@ module register_file #(
     always @(posedge clk) begin
         timestamp_reg <= timestamp_reg + 32'd1;
         if (boundary) period_count_reg <= period_count_reg + 32'd1;
-        if (!latch_hold && (boundary || !core_run)) begin
+        if (latch_now) begin
             position_latch_reg <= position;
             latch_time_reg     <= timestamp_reg;
         end
         irq_reg <= |(irq_status & irq_mask_reg);
-        if (read) rdata_reg <= read_word(bus_addr);
+        if (read) rdata_reg <= read_word(bus_addr) | feedback_rdata;
 
         clear_errors_reg   <= 1'b0;
         clear_faults_reg   <= 1'b0;
@@ -322,8 +345,8 @@ module register_file #(
                     record_inc_reg[32*axis +: 32] <= bus_wdata;
             end
         end
-        // A halt wins over a write of RUN.
-        if (halt) run_reg <= 1'b0;
+        // A halt wins over a write of RUN; so does the jog while it drives the core.
+        if (halt || jog_engaged) run_reg <= 1'b0;
 
         // Sticky interrupt sources: set wins over a write-1-to-clear.
         if (boundary) irq_period_reg <= 1'b1;
@@ -393,6 +416,13 @@ module register_file #(
         end
     end
 
+    assign latch_now         = !latch_hold && (boundary || !core_run);
+    assign clear_counters    = clear_counters_reg;
+    assign run_write_one     = write && (bus_addr == FS_CONTROL_ADDR) && bus_wdata[FS_CONTROL_RUN_LSB];
+    assign timestamp         = timestamp_reg;
+    assign bus_write         = write;
+    assign bus_address       = bus_addr;
+    assign bus_write_data    = bus_wdata;
     assign spi_grant         = grant_spi;
     assign par_grant         = grant_par;
     assign rdata             = rdata_reg;
@@ -435,7 +465,7 @@ module register_file #(
         if (push_write) assert (push_reg && !fifo_full && !spi_fifo_in_use);
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
-        if ($past(halt)) assert (!run_reg);
+        if ($past(halt) || $past(jog_engaged)) assert (!run_reg);
         assert (kick_reg == $past(write || spi_fifo_commit));
         if ($past(push_refused)) assert (overflow_reg);
         if ($past(overflow_reg) && !$past(clear_errors_reg)) assert (overflow_reg);

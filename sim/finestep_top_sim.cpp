@@ -9,7 +9,7 @@
 #include "verilated_trace.h"
 
 #ifndef FT_N_AXES
-#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W and FT_FIFO_DEPTH_LOG2 must match the Verilated parameters"
+#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W, FT_FIFO_DEPTH_LOG2, FT_N_ENC and FT_HAS_MPG must match the Verilated parameters"
 #endif
 
 struct ft_sim {
@@ -26,6 +26,8 @@ struct ft_sim {
 namespace {
 
 inline uint64_t bit(uint64_t word, unsigned index) { return (word >> index) & 1; }
+
+constexpr uint8_t enc_mask = static_cast<uint8_t>((1u << FT_N_ENC) - 1);
 
 template <typename Model, bool TRACED>
 struct TopSim final : ft_sim {
@@ -62,6 +64,12 @@ struct TopSim final : ft_sim {
         top->bus_wr_n = bit(in, FT_IN_BUS_WR_N);
         top->estop_pin = bit(in, FT_IN_ESTOP);
         top->bus_ad_in = static_cast<uint16_t>(in >> FT_IN_BUS_AD0);
+        top->enc_a = static_cast<uint8_t>(in >> FT_IN_ENC_A0) & enc_mask;
+        top->enc_b = static_cast<uint8_t>(in >> FT_IN_ENC_B0) & enc_mask;
+        top->enc_z = static_cast<uint8_t>(in >> FT_IN_ENC_Z0) & enc_mask;
+        top->probe_pin = bit(in, FT_IN_PROBE);
+        top->mpg_a = bit(in, FT_IN_MPG_A);
+        top->mpg_b = bit(in, FT_IN_MPG_B);
         top->eval();  // settle on the new inputs, clock low
     }
 
@@ -130,6 +138,8 @@ uint32_t ft_n_axes(void) { return FT_N_AXES; }
 uint32_t ft_p_width(void) { return FT_P_WIDTH; }
 uint32_t ft_timing_width(void) { return FT_TIMING_W; }
 uint32_t ft_fifo_depth_log2(void) { return FT_FIFO_DEPTH_LOG2; }
+uint32_t ft_n_enc(void) { return FT_N_ENC; }
+uint32_t ft_has_mpg(void) { return FT_HAS_MPG; }
 
 ft_sim *ft_new(void) { return new TopSim<FastTop, false>; }
 ft_sim *ft_new_traced(void) { return new TopSim<Vfinestep_top_traced, true>; }

@@ -13,7 +13,8 @@ extern "C" {
 #endif
 
 /* Packed inputs: bit 0 rst, 1 spi_cs_n, 2 spi_sck, 3 spi_mosi, 4 bus_cs_n, 5 bus_adv_n,
- * 6 bus_rd_n, 7 bus_wr_n, 8 estop_pin, bits 16..31 bus_ad_in. */
+ * 6 bus_rd_n, 7 bus_wr_n, 8 estop_pin, bits 16..31 bus_ad_in, 32..39 enc_a[c],
+ * 40..47 enc_b[c], 48..55 enc_z[c], 56 probe_pin, 57 mpg_a, 58 mpg_b. */
 #define FT_IN_RST 0
 #define FT_IN_SPI_CS_N 1
 #define FT_IN_SPI_SCK 2
@@ -24,6 +25,12 @@ extern "C" {
 #define FT_IN_BUS_WR_N 7
 #define FT_IN_ESTOP 8
 #define FT_IN_BUS_AD0 16
+#define FT_IN_ENC_A0 32
+#define FT_IN_ENC_B0 40
+#define FT_IN_ENC_Z0 48
+#define FT_IN_PROBE 56
+#define FT_IN_MPG_A 57
+#define FT_IN_MPG_B 58
 /* Packed outputs: bits 0..7 pin_a[i], 8..15 pin_b[i], 16..23 pin_en[i], 24 spi_miso,
  * 25 spi_miso_oe, 26 irq, 27 bus_ad_oe, bits 32..47 bus_ad_out. */
 #define FT_OUT_PIN_A0 0
@@ -48,6 +55,8 @@ uint32_t ft_n_axes(void);
 uint32_t ft_p_width(void);
 uint32_t ft_timing_width(void);
 uint32_t ft_fifo_depth_log2(void);
+uint32_t ft_n_enc(void);
+uint32_t ft_has_mpg(void);
 
 /* A top built without waveform support (the fast one). */
 ft_sim *ft_new(void);

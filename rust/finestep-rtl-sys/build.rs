@@ -15,6 +15,8 @@ const N_AXES: u32 = 4;
 const P_WIDTH: u32 = 20;
 const TIMING_W: u32 = 12;
 const FIFO_DEPTH_LOG2: u32 = 8;
+const N_ENC: u32 = 4;
+const HAS_MPG: u32 = 1;
 
 fn main() {
     let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap());
@@ -66,7 +68,9 @@ fn main() {
         .define("FT_N_AXES", N_AXES.to_string().as_str())
         .define("FT_P_WIDTH", P_WIDTH.to_string().as_str())
         .define("FT_TIMING_W", TIMING_W.to_string().as_str())
-        .define("FT_FIFO_DEPTH_LOG2", FIFO_DEPTH_LOG2.to_string().as_str());
+        .define("FT_FIFO_DEPTH_LOG2", FIFO_DEPTH_LOG2.to_string().as_str())
+        .define("FT_N_ENC", N_ENC.to_string().as_str())
+        .define("FT_HAS_MPG", HAS_MPG.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -161,6 +165,8 @@ fn verilate(
         .arg(format!("-GP_WIDTH={P_WIDTH}"))
         .arg(format!("-GTIMING_W={TIMING_W}"))
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={FIFO_DEPTH_LOG2}")))
+        .args((top == "finestep_top").then(|| format!("-GN_ENC={N_ENC}")))
+        .args((top == "finestep_top").then(|| format!("-GHAS_MPG={HAS_MPG}")))
         .args(sources)
         .status()
         .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));

@@ -19,6 +19,10 @@ pub struct TopBuild {
     pub timing_width: u32,
     /// The position FIFO holds `2^fifo_depth_log2` records.
     pub fifo_depth_log2: u32,
+    /// Encoder channels.
+    pub n_enc: usize,
+    /// The hand wheel and the jog generator are built.
+    pub has_mpg: bool,
 }
 
 /// The build parameters of the Verilated top.
@@ -30,6 +34,8 @@ pub fn top_build() -> TopBuild {
             p_width: ffi::ft_p_width(),
             timing_width: ffi::ft_timing_width(),
             fifo_depth_log2: ffi::ft_fifo_depth_log2(),
+            n_enc: ffi::ft_n_enc() as usize,
+            has_mpg: ffi::ft_has_mpg() != 0,
         }
     }
 }
