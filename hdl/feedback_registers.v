@@ -97,7 +97,7 @@ module feedback_registers #(
 
     localparam MPG = (HAS_MPG != 0);
 
-    integer c;
+    integer w, r;   // loop indices, one per process
 
     always @(posedge clk) begin
         enc_arm_latch_reg <= {N_ENC{1'b0}};
@@ -127,13 +127,13 @@ module feedback_registers #(
                 FS_JOG_WINDOW_ADDR: jog_window_reg <= wdata[FS_JOG_WINDOW_STEPS_LSB +: 16];
                 default: ;
             endcase
-            for (c = 0; c < N_ENC; c = c + 1) begin
-                if ({25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + c * FS_ENC_CONTROL_STRIDE) begin
-                    enc_mode_reg[2*c +: 2]       <= wdata[FS_ENC_CONTROL_MODE_LSB +: 2];
-                    enc_z_active_high_reg[c]     <= wdata[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB];
-                    enc_filter_reg[4*c +: 4]     <= wdata[FS_ENC_CONTROL_FILTER_LSB +: 4];
-                    enc_arm_latch_reg[c]         <= wdata[FS_ENC_CONTROL_ARM_INDEX_LATCH_LSB];
-                    enc_arm_clear_reg[c]         <= wdata[FS_ENC_CONTROL_ARM_INDEX_CLEAR_LSB];
+            for (w = 0; w < N_ENC; w = w + 1) begin
+                if ({25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + w * FS_ENC_CONTROL_STRIDE) begin
+                    enc_mode_reg[2*w +: 2]       <= wdata[FS_ENC_CONTROL_MODE_LSB +: 2];
+                    enc_z_active_high_reg[w]     <= wdata[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB];
+                    enc_filter_reg[4*w +: 4]     <= wdata[FS_ENC_CONTROL_FILTER_LSB +: 4];
+                    enc_arm_latch_reg[w]         <= wdata[FS_ENC_CONTROL_ARM_INDEX_LATCH_LSB];
+                    enc_arm_clear_reg[w]         <= wdata[FS_ENC_CONTROL_ARM_INDEX_CLEAR_LSB];
                 end
             end
         end
@@ -214,34 +214,34 @@ module feedback_registers #(
                 default: ;
             endcase
         end
-        for (c = 0; c < N_ENC; c = c + 1) begin
-            if ({25'd0, addr} == {25'd0, FS_ENC_COUNT_ADDR} + c * FS_ENC_COUNT_STRIDE)
-                rdata = enc_count[32*c +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_INDEX_LATCH_ADDR} + c * FS_ENC_INDEX_LATCH_STRIDE)
-                rdata = enc_index_latch[32*c +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_PROBE_LATCH_ADDR} + c * FS_ENC_PROBE_LATCH_STRIDE)
-                rdata = enc_probe_latch[32*c +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_EDGE_TIME_ADDR} + c * FS_ENC_EDGE_TIME_STRIDE)
-                rdata = enc_edge_time[32*c +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + c * FS_ENC_CONTROL_STRIDE) begin
-                rdata[FS_ENC_CONTROL_MODE_LSB +: 2]       = enc_mode_reg[2*c +: 2];
-                rdata[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB]   = enc_z_active_high_reg[c];
-                rdata[FS_ENC_CONTROL_FILTER_LSB +: 4]     = enc_filter_reg[4*c +: 4];
+        for (r = 0; r < N_ENC; r = r + 1) begin
+            if ({25'd0, addr} == {25'd0, FS_ENC_COUNT_ADDR} + r * FS_ENC_COUNT_STRIDE)
+                rdata = enc_count[32*r +: 32];
+            if ({25'd0, addr} == {25'd0, FS_ENC_INDEX_LATCH_ADDR} + r * FS_ENC_INDEX_LATCH_STRIDE)
+                rdata = enc_index_latch[32*r +: 32];
+            if ({25'd0, addr} == {25'd0, FS_ENC_PROBE_LATCH_ADDR} + r * FS_ENC_PROBE_LATCH_STRIDE)
+                rdata = enc_probe_latch[32*r +: 32];
+            if ({25'd0, addr} == {25'd0, FS_ENC_EDGE_TIME_ADDR} + r * FS_ENC_EDGE_TIME_STRIDE)
+                rdata = enc_edge_time[32*r +: 32];
+            if ({25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + r * FS_ENC_CONTROL_STRIDE) begin
+                rdata[FS_ENC_CONTROL_MODE_LSB +: 2]       = enc_mode_reg[2*r +: 2];
+                rdata[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB]   = enc_z_active_high_reg[r];
+                rdata[FS_ENC_CONTROL_FILTER_LSB +: 4]     = enc_filter_reg[4*r +: 4];
             end
-            if ({25'd0, addr} == {25'd0, FS_ENC_STATUS_ADDR} + c * FS_ENC_STATUS_STRIDE) begin
-                rdata[FS_ENC_STATUS_ILLEGAL_COUNT_LSB +: 16] = enc_illegal_count[16*c +: 16];
-                rdata[FS_ENC_STATUS_ILLEGAL_LSB]             = enc_illegal[c];
-                rdata[FS_ENC_STATUS_INDEX_SEEN_LSB]          = enc_index_seen[c];
-                rdata[FS_ENC_STATUS_LATCH_ARMED_LSB]         = enc_latch_armed[c];
-                rdata[FS_ENC_STATUS_CLEAR_ARMED_LSB]         = enc_clear_armed[c];
-                rdata[FS_ENC_STATUS_A_LSB]                   = enc_a[c];
-                rdata[FS_ENC_STATUS_B_LSB]                   = enc_b[c];
-                rdata[FS_ENC_STATUS_Z_LSB]                   = enc_z[c];
+            if ({25'd0, addr} == {25'd0, FS_ENC_STATUS_ADDR} + r * FS_ENC_STATUS_STRIDE) begin
+                rdata[FS_ENC_STATUS_ILLEGAL_COUNT_LSB +: 16] = enc_illegal_count[16*r +: 16];
+                rdata[FS_ENC_STATUS_ILLEGAL_LSB]             = enc_illegal[r];
+                rdata[FS_ENC_STATUS_INDEX_SEEN_LSB]          = enc_index_seen[r];
+                rdata[FS_ENC_STATUS_LATCH_ARMED_LSB]         = enc_latch_armed[r];
+                rdata[FS_ENC_STATUS_CLEAR_ARMED_LSB]         = enc_clear_armed[r];
+                rdata[FS_ENC_STATUS_A_LSB]                   = enc_a[r];
+                rdata[FS_ENC_STATUS_B_LSB]                   = enc_b[r];
+                rdata[FS_ENC_STATUS_Z_LSB]                   = enc_z[r];
             end
         end
-        for (c = 0; c < N_AXES; c = c + 1) begin
-            if ({25'd0, addr} == {25'd0, FS_PROBE_POSITION_ADDR} + c * FS_PROBE_POSITION_STRIDE)
-                rdata = probe_position[32*c +: 32];
+        for (r = 0; r < N_AXES; r = r + 1) begin
+            if ({25'd0, addr} == {25'd0, FS_PROBE_POSITION_ADDR} + r * FS_PROBE_POSITION_STRIDE)
+                rdata = probe_position[32*r +: 32];
         end
     end
 
