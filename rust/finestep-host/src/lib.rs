@@ -7,11 +7,13 @@
 //! - Transports: [`PinHost`] drives a simulated core at its pins ([`PinTarget`]: the
 //!   Verilated RTL, the reference model, or both in lockstep) with the SPI and 8080
 //!   timing of the README; [`spidev::Spidev`] a real board over Linux spidev.
-//! - [`Machine`]: identity check, configuration, faults, run, coherent positions.
+//! - [`Machine`]: identity check, configuration, faults, run, coherent positions; its
+//!   [`feedback`] side: encoders, probe, hand wheel, jog, velocity estimation.
 //! - [`stream`]: keeps the FIFO fed from an iterator of period records.
 
 #![warn(missing_docs)]
 
+pub mod feedback;
 pub mod frame;
 pub mod machine;
 pub mod parallel;
@@ -22,6 +24,10 @@ pub mod spidev;
 pub mod stream;
 
 pub use finestep_regmap::regs;
+pub use feedback::{
+    CountMode, EncoderSetup, FeedbackError, FeedbackSnapshot, HandWheelState, JogMultiplier, JogSetup, JogState,
+    ProbeHit, VelocityEstimator,
+};
 pub use machine::{AxisSetup, Caps, Machine, Positions};
 pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};

@@ -6,6 +6,7 @@ use crate::regs::{
     latch_time, period_clocks, position, start_level, status, version,
 };
 use crate::{Bus, BusError};
+use finestep_model::limits::AxisTiming;
 
 /// What the core was built with (`CAPS`, `CLOCK_HZ`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -20,6 +21,10 @@ pub struct Caps {
     pub timing_w: u32,
     /// The core clock in Hz.
     pub clock_hz: u32,
+    /// Encoder channels.
+    pub n_enc: usize,
+    /// The hand wheel and the jog generator are built.
+    pub has_mpg: bool,
 }
 
 /// Step timing and output mode of one axis, in core clocks.
@@ -50,8 +55,13 @@ pub struct Positions {
 
 /// A finestep core behind a bus.
 pub struct Machine<B> {
-    bus: B,
-    caps: Caps,
+    pub(crate) bus: B,
+    pub(crate) caps: Caps,
+    /// The step timing last written per axis (reset values until then), for the jog's
+    /// rated-rate check.
+    pub(crate) timings: Vec<AxisTiming>,
+    /// The period last written (the reset value until then).
+    pub(crate) period_clocks: u32,
 }
 
 impl<B: Bus> Machine<B> {
@@ -77,8 +87,21 @@ impl<B: Bus> Machine<B> {
             p_width: caps::P_WIDTH.get(caps_word),
             timing_w: caps::TIMING_W.get(caps_word),
             clock_hz: clock,
+            n_enc: caps::N_ENC.get(caps_word) as usize,
+            has_mpg: caps::HAS_MPG.get(caps_word) != 0,
         };
-        Ok(Machine { bus, caps })
+        let reset_timing = AxisTiming {
+            step_len: axis_timing_a::STEP_LEN_RESET,
+            step_space: axis_timing_a::STEP_SPACE_RESET,
+            dir_setup: axis_timing_b::DIR_SETUP_RESET,
+            dir_hold: axis_timing_b::DIR_HOLD_RESET,
+        };
+        Ok(Machine {
+            bus,
+            caps,
+            timings: vec![reset_timing; caps.n_axes],
+            period_clocks: period_clocks::CLOCKS_RESET,
+        })
     }
 
     /// The capabilities read at connection.
@@ -123,7 +146,14 @@ impl<B: Bus> Machine<B> {
         );
         self.bus.write(axis_timing_a::addr(axis), a)?;
         self.bus.write(axis_timing_b::addr(axis), b)?;
-        self.bus.write(axis_mode::addr(axis), mode)
+        self.bus.write(axis_mode::addr(axis), mode)?;
+        self.timings[axis] = AxisTiming {
+            step_len: setup.step_len,
+            step_space: setup.step_space,
+            dir_setup: setup.dir_setup,
+            dir_hold: setup.dir_hold,
+        };
+        Ok(())
     }
 
     /// Drive enables, bit `i` for axis `i`.
@@ -133,7 +163,10 @@ impl<B: Bus> Machine<B> {
 
     /// The interpolation period in clocks (taken when a run starts).
     pub fn set_period(&mut self, clocks: u32) -> Result<(), BusError> {
-        self.bus.write(period_clocks::ADDR, period_clocks::CLOCKS.set(0, clocks & period_clocks::CLOCKS.max()))
+        let clocks = clocks & period_clocks::CLOCKS.max() & ((1u64 << self.caps.p_width) - 1) as u32;
+        self.bus.write(period_clocks::ADDR, period_clocks::CLOCKS.set(0, clocks))?;
+        self.period_clocks = clocks;
+        Ok(())
     }
 
     /// The FIFO level at which streaming starts.

@@ -1,0 +1,461 @@
+//! The feedback side of a [`Machine`]: encoder and grating counters, the probe, the hand
+//! wheel and the jog, at the level a machine builder thinks in, plus velocity estimation
+//! from the counters' edge timestamps.
+
+use finestep_model::limits::{max_increment, AxisTiming};
+use finestep_model::Increment;
+
+use crate::regs::{
+    command, enc_control, enc_count, enc_edge_time, enc_index_latch, enc_prescale, enc_probe_latch,
+    enc_status, jog_accel, jog_control, jog_remaining, jog_scale, jog_status, jog_velocity, jog_vmax,
+    jog_window, latch_time, mpg_control, mpg_count, mpg_detents, mpg_status, position, probe_control,
+    probe_position, probe_status, probe_time,
+};
+use crate::{Bus, BusError, Machine};
+
+/// How a channel decodes its A/B inputs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum CountMode {
+    /// Every edge of A and B (4 counts per quadrature cycle).
+    #[default]
+    X4,
+    /// Every edge of A.
+    X2,
+    /// Rising edges of A going forward, falling going backward.
+    X1,
+    /// A is a step input, B the direction.
+    StepDir,
+}
+
+/// Configuration of one encoder channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EncoderSetup {
+    /// Decoding.
+    pub mode: CountMode,
+    /// The index input is active high.
+    pub z_active_high: bool,
+    /// Samples of the other level before a filtered input changes (0 acts as 1, at most 15).
+    pub filter: u8,
+}
+
+impl Default for EncoderSetup {
+    /// The reset state: x4, index active high, the shortest filter.
+    fn default() -> Self {
+        EncoderSetup { mode: CountMode::X4, z_active_high: true, filter: 1 }
+    }
+}
+
+/// Every axis's step position and every channel's count and last edge time, all latched
+/// on one clock.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FeedbackSnapshot {
+    /// Steps per axis.
+    pub steps: Vec<i32>,
+    /// Counts per encoder channel.
+    pub counts: Vec<i32>,
+    /// `TIMESTAMP` of each channel's last count change.
+    pub edge_times: Vec<u32>,
+    /// `TIMESTAMP` of the latch.
+    pub latch_time: u32,
+}
+
+/// What a probe event latched.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ProbeHit {
+    /// Counts per encoder channel at the event.
+    pub counts: Vec<i32>,
+    /// Steps per axis at the event.
+    pub steps: Vec<i32>,
+    /// `TIMESTAMP` of the event.
+    pub time: u32,
+}
+
+/// The hand wheel's counters and health.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct HandWheelState {
+    /// Edges counted x4.
+    pub edges: i32,
+    /// Detents of 4 edges.
+    pub detents: i32,
+    /// Sticky: an illegal transition was seen.
+    pub illegal: bool,
+    /// Illegal transitions counted (saturating).
+    pub illegal_count: u16,
+}
+
+/// Jog multiplier: travel per detent is `scale` times this.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum JogMultiplier {
+    /// x1.
+    #[default]
+    X1,
+    /// x10.
+    X10,
+    /// x100.
+    X100,
+}
+
+/// Configuration of the hand-wheel jog.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JogSetup {
+    /// The axis moved.
+    pub axis: usize,
+    /// Detent multiplier.
+    pub multiplier: JogMultiplier,
+    /// Follow every detent, later if need be (true), or drop detents beyond `window`.
+    pub follow: bool,
+    /// Axis travel per detent at x1, in steps (negative reverses the wheel).
+    pub scale: Increment,
+    /// Velocity limit in steps per period.
+    pub vmax: Increment,
+    /// Acceleration limit: the largest change of the increment per period, steps.
+    pub accel: Increment,
+    /// Drop mode's largest target distance, whole steps.
+    pub window: u16,
+}
+
+/// The jog's state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct JogState {
+    /// The jog drives the core.
+    pub engaged: bool,
+    /// Decelerating to disengage.
+    pub stopping: bool,
+    /// Sticky: a jog and a FIFO run were both requested, or the jog could not engage.
+    pub refused: bool,
+    /// Detents dropped in drop mode.
+    pub dropped: u16,
+    /// Target minus commanded position, whole steps (floor).
+    pub remaining: i32,
+    /// The current increment, steps per period.
+    pub velocity: Increment,
+}
+
+/// Why a feedback request was refused before anything was written.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum FeedbackError {
+    /// The channel does not exist in this core.
+    #[error("encoder channel {0}: the core has {1} channels")]
+    Channel(usize, usize),
+    /// The axis does not exist in this core.
+    #[error("axis {0}: the core has {1} axes")]
+    Axis(usize, usize),
+    /// The core was built without the hand wheel.
+    #[error("the core has no hand wheel")]
+    NoHandWheel,
+    /// A filter length over 15 samples.
+    #[error("filter length {0} exceeds 15 samples")]
+    Filter(u8),
+    /// The jog's velocity limit is over the axis's rated rate while reversing.
+    #[error("jog vmax {vmax} steps/period exceeds the axis's rated rate {max} (reversing, P = {period} clocks)")]
+    Rate {
+        /// Requested limit.
+        vmax: Increment,
+        /// Largest allowed.
+        max: Increment,
+        /// The period in clocks.
+        period: u32,
+    },
+    /// A negative or zero limit where a positive one is needed.
+    #[error("jog {0} must be positive")]
+    Limit(&'static str),
+    /// The jog needs a period of at least 128 clocks.
+    #[error("the jog needs PERIOD_CLOCKS >= 128, it is {0}")]
+    Period(u32),
+}
+
+impl From<FeedbackError> for BusError {
+    fn from(e: FeedbackError) -> Self {
+        BusError::Protocol(e.to_string())
+    }
+}
+
+impl<B: Bus> Machine<B> {
+    fn check_channel(&self, channel: usize) -> Result<(), FeedbackError> {
+        if channel >= self.caps.n_enc {
+            return Err(FeedbackError::Channel(channel, self.caps.n_enc));
+        }
+        Ok(())
+    }
+
+    /// The encoders' and the probe's sampling: every `prescale + 1` clocks.
+    pub fn set_encoder_prescale(&mut self, prescale: u16) -> Result<(), BusError> {
+        self.bus.write(enc_prescale::ADDR, enc_prescale::PRESCALE.set(0, u32::from(prescale)))
+    }
+
+    fn encoder_control_word(setup: &EncoderSetup) -> u32 {
+        let mode = match setup.mode {
+            CountMode::X4 => 0,
+            CountMode::X2 => 1,
+            CountMode::X1 => 2,
+            CountMode::StepDir => 3,
+        };
+        let word = enc_control::MODE.set(0, mode);
+        let word = enc_control::Z_ACTIVE_HIGH.set(word, setup.z_active_high.into());
+        enc_control::FILTER.set(word, u32::from(setup.filter))
+    }
+
+    /// Configures encoder channel `channel`.
+    pub fn configure_encoder(&mut self, channel: usize, setup: &EncoderSetup) -> Result<(), BusError> {
+        self.check_channel(channel)?;
+        if setup.filter > 15 {
+            return Err(FeedbackError::Filter(setup.filter).into());
+        }
+        self.bus.write(enc_control::addr(channel), Self::encoder_control_word(setup))
+    }
+
+    /// Arms channel `channel`'s index: latch the count at the next index event, and/or
+    /// zero it then. `setup` is written again with the arms (the register holds both).
+    pub fn arm_index(&mut self, channel: usize, setup: &EncoderSetup, latch: bool, clear: bool) -> Result<(), BusError> {
+        self.check_channel(channel)?;
+        let word = Self::encoder_control_word(setup);
+        let word = enc_control::ARM_INDEX_LATCH.set(word, latch.into());
+        let word = enc_control::ARM_INDEX_CLEAR.set(word, clear.into());
+        self.bus.write(enc_control::addr(channel), word)
+    }
+
+    /// The count latched at channel `channel`'s last armed index event, if one came
+    /// since the last arming.
+    pub fn index_latch(&mut self, channel: usize) -> Result<Option<i32>, BusError> {
+        self.check_channel(channel)?;
+        let status = self.bus.read_one(enc_status::addr(channel))?;
+        if enc_status::INDEX_SEEN.get(status) == 0 {
+            return Ok(None);
+        }
+        Ok(Some(self.bus.read_one(enc_index_latch::addr(channel))? as i32))
+    }
+
+    /// Illegal transitions of channel `channel`: the sticky flag and the count.
+    pub fn encoder_errors(&mut self, channel: usize) -> Result<(bool, u16), BusError> {
+        self.check_channel(channel)?;
+        let status = self.bus.read_one(enc_status::addr(channel))?;
+        Ok((enc_status::ILLEGAL.get(status) != 0, enc_status::ILLEGAL_COUNT.get(status) as u16))
+    }
+
+    /// Positions, counts and edge times, all from one clock. The latch moves at period
+    /// boundaries while running and every clock while stopped; as for
+    /// [`Machine::positions`], LATCH_TIME is read around the data and the read retried
+    /// when it moved (over SPI, one read frame holds the latch for its whole length).
+    pub fn feedback(&mut self) -> Result<FeedbackSnapshot, BusError> {
+        let (n_axes, n_enc) = (self.caps.n_axes, self.caps.n_enc);
+        for _ in 0..16 {
+            let before = self.bus.read_one(latch_time::ADDR)?;
+            let mut steps = vec![0u32; n_axes];
+            self.bus.read(position::addr(0), &mut steps)?;
+            let mut counts = vec![0u32; n_enc];
+            self.bus.read(enc_count::addr(0), &mut counts)?;
+            let mut edge_times = vec![0u32; n_enc];
+            self.bus.read(enc_edge_time::addr(0), &mut edge_times)?;
+            let after = self.bus.read_one(latch_time::ADDR)?;
+            if before == after {
+                return Ok(FeedbackSnapshot {
+                    steps: steps.into_iter().map(|w| w as i32).collect(),
+                    counts: counts.into_iter().map(|w| w as i32).collect(),
+                    edge_times,
+                    latch_time: after,
+                });
+            }
+        }
+        Err(BusError::Protocol("the latch kept moving during 16 attempts to read the feedback".into()))
+    }
+
+    /// Configures the probe (polarity, filter) and arms it for one event.
+    pub fn arm_probe(&mut self, active_high: bool, filter: u8) -> Result<(), BusError> {
+        if filter > 15 {
+            return Err(FeedbackError::Filter(filter).into());
+        }
+        let word = probe_control::ACTIVE_HIGH.set(0, active_high.into());
+        let word = probe_control::FILTER.set(word, u32::from(filter));
+        self.bus.write(probe_control::ADDR, probe_control::ARM.set(word, 1))
+    }
+
+    /// What the last probe event latched, if one came since the probe was armed.
+    pub fn probe_hit(&mut self) -> Result<Option<ProbeHit>, BusError> {
+        let status = self.bus.read_one(probe_status::ADDR)?;
+        if probe_status::SEEN.get(status) == 0 {
+            return Ok(None);
+        }
+        let mut counts = vec![0u32; self.caps.n_enc];
+        self.bus.read(enc_probe_latch::addr(0), &mut counts)?;
+        let mut steps = vec![0u32; self.caps.n_axes];
+        self.bus.read(probe_position::addr(0), &mut steps)?;
+        let time = self.bus.read_one(probe_time::ADDR)?;
+        Ok(Some(ProbeHit {
+            counts: counts.into_iter().map(|w| w as i32).collect(),
+            steps: steps.into_iter().map(|w| w as i32).collect(),
+            time,
+        }))
+    }
+
+    fn check_hand_wheel(&self) -> Result<(), FeedbackError> {
+        if !self.caps.has_mpg {
+            return Err(FeedbackError::NoHandWheel);
+        }
+        Ok(())
+    }
+
+    /// The hand wheel's filter: sampled every `prescale + 1` clocks, `filter` samples.
+    pub fn configure_hand_wheel(&mut self, prescale: u16, filter: u8) -> Result<(), BusError> {
+        self.check_hand_wheel()?;
+        if filter > 15 {
+            return Err(FeedbackError::Filter(filter).into());
+        }
+        let word = mpg_control::PRESCALE.set(0, u32::from(prescale));
+        self.bus.write(mpg_control::ADDR, mpg_control::FILTER.set(word, u32::from(filter)))
+    }
+
+    /// The hand wheel's counters.
+    pub fn hand_wheel(&mut self) -> Result<HandWheelState, BusError> {
+        self.check_hand_wheel()?;
+        let status = self.bus.read_one(mpg_status::ADDR)?;
+        let mut words = [0u32; 2];
+        debug_assert_eq!(mpg_detents::ADDR, mpg_count::ADDR + 1);
+        self.bus.read(mpg_count::ADDR, &mut words)?;
+        Ok(HandWheelState {
+            edges: words[0] as i32,
+            detents: words[1] as i32,
+            illegal: mpg_status::ILLEGAL.get(status) != 0,
+            illegal_count: mpg_status::ILLEGAL_COUNT.get(status) as u16,
+        })
+    }
+
+    /// Writes the jog's configuration (without enabling it). Refuses a velocity limit
+    /// over the axis's rated rate while reversing (the jog reverses whenever the wheel
+    /// does), with the step timing and period this driver last wrote.
+    pub fn configure_jog(&mut self, setup: &JogSetup) -> Result<(), BusError> {
+        self.check_hand_wheel()?;
+        if setup.axis >= self.caps.n_axes {
+            return Err(FeedbackError::Axis(setup.axis, self.caps.n_axes).into());
+        }
+        if setup.vmax <= 0 {
+            return Err(FeedbackError::Limit("vmax").into());
+        }
+        if setup.accel <= 0 {
+            return Err(FeedbackError::Limit("accel").into());
+        }
+        if self.period_clocks < 128 {
+            return Err(FeedbackError::Period(self.period_clocks).into());
+        }
+        let timing: AxisTiming = self.timings[setup.axis];
+        let max = max_increment(&timing, self.period_clocks, true);
+        if setup.vmax > max {
+            return Err(FeedbackError::Rate { vmax: setup.vmax, max, period: self.period_clocks }.into());
+        }
+        self.bus.write(jog_scale::ADDR, setup.scale.to_bits() as u32)?;
+        self.bus.write(jog_vmax::ADDR, setup.vmax.to_bits() as u32)?;
+        self.bus.write(jog_accel::ADDR, setup.accel.to_bits() as u32)?;
+        self.bus.write(jog_window::ADDR, jog_window::STEPS.set(0, u32::from(setup.window)))?;
+        self.bus.write(jog_control::ADDR, Self::jog_control_word(setup, false))?;
+        Ok(())
+    }
+
+    fn jog_control_word(setup: &JogSetup, enable: bool) -> u32 {
+        let multiplier = match setup.multiplier {
+            JogMultiplier::X1 => 0,
+            JogMultiplier::X10 => 1,
+            JogMultiplier::X100 => 2,
+        };
+        let word = jog_control::ENABLE.set(0, enable.into());
+        let word = jog_control::AXIS.set(word, setup.axis as u32);
+        let word = jog_control::MULTIPLIER.set(word, multiplier);
+        jog_control::FOLLOW.set(word, setup.follow.into())
+    }
+
+    /// Engages (true) or stops (false) the jog with `setup` (as written by
+    /// [`Machine::configure_jog`]). The core must not be running from the FIFO.
+    pub fn enable_jog(&mut self, setup: &JogSetup, enable: bool) -> Result<(), BusError> {
+        self.check_hand_wheel()?;
+        self.bus.write(jog_control::ADDR, Self::jog_control_word(setup, enable))
+    }
+
+    /// The jog's state.
+    pub fn jog(&mut self) -> Result<JogState, BusError> {
+        self.check_hand_wheel()?;
+        let mut words = [0u32; 3];
+        debug_assert_eq!((jog_remaining::ADDR, jog_velocity::ADDR), (jog_status::ADDR + 1, jog_status::ADDR + 2));
+        self.bus.read(jog_status::ADDR, &mut words)?;
+        let [status, remaining, velocity] = words;
+        Ok(JogState {
+            engaged: jog_status::ENGAGED.get(status) != 0,
+            stopping: jog_status::STOPPING.get(status) != 0,
+            refused: jog_status::REFUSED.get(status) != 0,
+            dropped: jog_status::DROPPED.get(status) as u16,
+            remaining: remaining as i32,
+            velocity: Increment::from_bits(velocity as i32),
+        })
+    }
+
+    /// Zeroes every error counter (also the encoders' and the hand wheel's).
+    pub fn clear_counters(&mut self) -> Result<(), BusError> {
+        self.command(command::CLEAR_COUNTERS.set(0, 1))
+    }
+}
+
+/// Velocity of one encoder channel from successive [`FeedbackSnapshot`]s, in counts per
+/// clock, the way hostmot2's encoder does it: over the counts that changed between two
+/// snapshots, divided by the time between their last edges (not between the reads), so
+/// a slow encoder is not quantised to whole counts per sample; when no count changed,
+/// the speed is at most one count over the time since the last edge, and the estimate
+/// decays toward zero as that bound does.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VelocityEstimator {
+    last: Option<(i32, u32)>,
+    velocity: f64,
+}
+
+impl VelocityEstimator {
+    /// A new estimator: zero until two snapshots with movement between them.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Takes channel values `count`, `edge_time` latched at `latch_time`; returns the
+    /// velocity in counts per clock.
+    pub fn update(&mut self, count: i32, edge_time: u32, latch_time: u32) -> f64 {
+        match self.last {
+            Some((last_count, last_edge)) if count != last_count => {
+                let dt = edge_time.wrapping_sub(last_edge).max(1);
+                self.velocity = f64::from(count.wrapping_sub(last_count)) / f64::from(dt);
+                self.last = Some((count, edge_time));
+            }
+            Some((_, last_edge)) => {
+                // No edge since the last one: |v| <= 1 count / (time since that edge).
+                let since = latch_time.wrapping_sub(last_edge).max(1);
+                let bound = 1.0 / f64::from(since);
+                if self.velocity.abs() > bound {
+                    self.velocity = bound.copysign(self.velocity);
+                }
+            }
+            None => self.last = Some((count, edge_time)),
+        }
+        self.velocity
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn velocity_from_edge_times_is_exact_for_a_constant_rate() {
+        // One count every 250 clocks, sampled every 1000 clocks at awkward phases.
+        let mut est = VelocityEstimator::new();
+        let mut v = 0.0;
+        for k in 1..20u32 {
+            let latch = 1000 * k + 37;
+            let count = (latch / 250) as i32;
+            let edge = count as u32 * 250;
+            v = est.update(count, edge, latch);
+        }
+        assert!((v - 1.0 / 250.0).abs() < 1e-12, "{v}");
+    }
+
+    #[test]
+    fn velocity_decays_when_the_encoder_stops() {
+        let mut est = VelocityEstimator::new();
+        est.update(0, 0, 10);
+        assert!((est.update(10, 1000, 1010) - 0.01).abs() < 1e-12);
+        let later = est.update(10, 1000, 1_000_000);
+        assert!(later > 0.0 && later <= 1.0 / 999_000.0 + 1e-15, "{later}");
+    }
+}
