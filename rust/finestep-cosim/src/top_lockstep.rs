@@ -161,14 +161,17 @@ impl TopLockstep {
     }
 }
 
-impl PinTarget for TopLockstep {
-    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+impl TopLockstep {
+    fn log_inputs(&mut self, inputs: u64, cycles: u64) {
         match self.log.last_mut() {
             Some((last, run)) if *last == inputs => *run += cycles,
             _ => self.log.push((inputs, cycles)),
         }
-        self.events.clear();
-        self.rtl.run(inputs, cycles, &mut self.events);
+    }
+
+    /// Steps the model `cycles` times with `inputs` and compares it on every cycle with
+    /// the RTL's outputs, which changed only at `self.events`.
+    fn compare_model(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
         let model_inputs = TopInputs::unpack(inputs);
         let mut rtl_outputs = self.outputs;
         let mut next_event = 0;
@@ -187,6 +190,28 @@ impl PinTarget for TopLockstep {
         self.cycle += cycles;
         self.outputs = rtl_outputs;
         Ok(())
+    }
+}
+
+impl PinTarget for TopLockstep {
+    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+        self.log_inputs(inputs, cycles);
+        self.events.clear();
+        self.rtl.run(inputs, cycles, &mut self.events);
+        self.compare_model(inputs, cycles)
+    }
+
+    fn drive_to_change(&mut self, inputs: u64, cycles: u64) -> Result<u64, BusError> {
+        // The RTL finds the first change; the model runs as many cycles, compared on each.
+        let ran = self.rtl.run_to_change(inputs, cycles);
+        self.log_inputs(inputs, ran);
+        self.events.clear();
+        let outputs = self.rtl.outputs();
+        if outputs != self.outputs {
+            self.events.push(PinEvent { cycle: self.cycle + ran, outputs });
+        }
+        self.compare_model(inputs, ran)?;
+        Ok(ran)
     }
 
     fn outputs(&self) -> u64 {
@@ -247,6 +272,10 @@ impl PinTarget for RtlPins {
         self.rtl.run(inputs, cycles, &mut self.scratch);
         self.scratch.clear();
         Ok(())
+    }
+
+    fn drive_to_change(&mut self, inputs: u64, cycles: u64) -> Result<u64, BusError> {
+        Ok(self.rtl.run_to_change(inputs, cycles))
     }
 
     fn outputs(&self) -> u64 {

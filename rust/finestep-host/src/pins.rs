@@ -58,6 +58,19 @@ pub trait PinTarget {
     fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError>;
     /// The packed outputs in the current cycle.
     fn outputs(&self) -> u64;
+    /// Runs up to `cycles` clock edges with `inputs` held, stopping right after the first
+    /// edge that changes the outputs; returns the edges run. A closed loop (a drive and
+    /// its encoder) uses it to see every output change on its cycle.
+    fn drive_to_change(&mut self, inputs: u64, cycles: u64) -> Result<u64, BusError> {
+        let before = self.outputs();
+        for ran in 1..=cycles {
+            self.drive(inputs, 1)?;
+            if self.outputs() != before {
+                return Ok(ran);
+            }
+        }
+        Ok(cycles)
+    }
 }
 
 /// Host-side timing in core clocks (defaults: the fastest the README allows).

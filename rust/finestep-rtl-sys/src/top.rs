@@ -108,6 +108,15 @@ impl RtlTop {
         }
     }
 
+    /// Up to `cycles` edges with the packed `inputs` held, stopping right after the first
+    /// edge that changes the outputs. Returns the edges run.
+    pub fn run_to_change(&mut self, inputs: u64, cycles: u64) -> u64 {
+        let mut event = ffi::ft_event::default();
+        let mut stored = 0usize;
+        // SAFETY: room for exactly one event.
+        unsafe { ffi::ft_run(self.sim.as_ptr(), inputs, cycles, &mut event, 1, &mut stored) }
+    }
+
     /// Start writing a waveform of every following cycle (a top from
     /// [`RtlTop::new_traced`] only).
     pub fn trace_open(&mut self, path: &Path, depth: TraceDepth) -> std::io::Result<()> {
