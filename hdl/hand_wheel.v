@@ -53,9 +53,48 @@ module hand_wheel #(
     wire unused_hand_wheel = &{1'b0, index_latch_unused, probe_latch_unused, edge_time_unused,
                                index_seen_unused, latch_armed_unused, clear_armed_unused, z_unused};
 
-    wire [31:0] shifted = count + 32'd2;
-    wire        unused_fraction = &{1'b0, shifted[1:0]};
-    assign detents = {{2{shifted[31]}}, shifted[31:2]};
+    // count moves by at most one a clock, so its low bits going 1 -> 2 or 2 -> 1 is
+    // crossing a detent boundary; a counter of those wraps with the count, where
+    // floor((count + 2) / 4) of the 32-bit count would jump at the wrap.
+    reg  [1:0]  count_low_prev_reg;
+    reg  [31:0] detents_prev_reg;
+    wire        detent_up   = (count_low_prev_reg == 2'd1) && (count[1:0] == 2'd2);
+    wire        detent_down = (count_low_prev_reg == 2'd2) && (count[1:0] == 2'd1);
+    assign detents = detent_up ? detents_prev_reg + 32'd1 :
+                     detent_down ? detents_prev_reg - 32'd1 : detents_prev_reg;
+    always @(posedge clk) begin
+        count_low_prev_reg <= count[1:0];
+        detents_prev_reg   <= detents;
+        if (rst) begin
+            count_low_prev_reg <= 2'd0;
+            detents_prev_reg   <= 32'd0;
+        end
+    end
+
+`ifdef FORMAL
+    // The detent count moves by at most one per clock (the jog follows it detent by
+    // detent) and is floor((count + 2) / 4) of the count (the quotient's low 30 bits:
+    // both wrap).
+    reg f_past_valid;
+    reg [31:0] f_prev_count;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) begin
+        f_past_valid <= 1'b1;
+        f_prev_count <= rst ? 32'd0 : count;
+    end
+    wire [31:0] f_prev_plus2 = f_prev_count + 32'd2;
+    wire [31:0] f_plus2      = count + 32'd2;
+    always @(*) if (f_past_valid && !rst) begin
+        assert (count_low_prev_reg == f_prev_count[1:0]);
+        assert (detents_prev_reg[29:0] == f_prev_plus2[31:2]);
+        assert (detents[29:0] == f_plus2[31:2]);
+    end
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        assert (detents == $past(detents) || detents == $past(detents) + 32'd1 || detents == $past(detents) - 32'd1);
+        cover (detents == 32'd2);
+    end
+`endif
 
 endmodule
 

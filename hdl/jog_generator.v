@@ -151,6 +151,36 @@ module jog_generator #(
     assign dropped   = dropped_reg;
     assign remaining = remaining_full[47:16];
     wire unused_jog = &{1'b0, remaining_full[15:0]};
+
+`ifdef FORMAL
+    // Arbitration and bookkeeping: the jog engages only when asked, with RUN low, not
+    // halted and a usable period and axis; a halt leaves it disengaged at rest; the
+    // target moves by exactly one detent's travel and only on a followed detent; a
+    // dropped detent is counted; a disengaged jog offers zero increments.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+    reg  [47:0] f_prev_target;
+    always @(posedge clk) f_prev_target <= target_reg;
+    wire [47:0] f_move = target_reg - f_prev_target;
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if (engaged_reg && !$past(engaged_reg))
+            assert ($past(enable) && !$past(run) && !$past(halt) && $past(period_ok) && $past(axis_ok));
+        if ($past(halt)) assert (!engaged_reg && vel_reg == 32'd0 && next_vel_reg == 32'd0 && cmd_reg == 48'd0);
+        if ($past(enable && run)) assert (refused_reg);
+        if (!$past(engage) && !$past(halt) && target_reg != $past(target_reg))
+            assert ($past(detent_now) && (f_move == $past(detent_travel) || f_move == -$past(detent_travel)));
+        if (!$past(engage) && !$past(halt) && !$past(clear_counters) && $past(detent_now) && !$past(follow) &&
+            !$past(in_window))
+            assert (dropped_reg == $past(dropped_reg) + 16'd1 && target_reg == $past(target_reg));
+        if (!$past(boundary) && !$past(engage) && !$past(halt)) assert (cmd_reg == $past(cmd_reg) && vel_reg == $past(vel_reg));
+        if ($past(boundary) && !$past(engage) && !$past(halt)) assert (vel_reg == $past(next_vel_reg));
+        cover (engaged_reg && target_reg != 48'd0);
+        cover ($past(engaged_reg) && !engaged_reg && !$past(halt));
+    end
+    always @(*) if (f_past_valid && !rst && !engaged_reg) assert (rec_inc == {32*N_AXES{1'b0}} || next_vel_reg != 32'd0);
+`endif
     assign velocity  = vel_reg;
 
 

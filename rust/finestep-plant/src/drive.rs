@@ -88,7 +88,7 @@ struct Anchor {
 #[derive(Clone, Debug)]
 pub struct Drive {
     config: DriveConfig,
-    /// Error decay per cycle, `1 - 1/tau` (0 for an ideal drive).
+    /// Error decay per cycle, `1 - 1/tau` (unused by an ideal drive).
     r: f64,
     now: u64,
     last_input: u64,
@@ -200,7 +200,10 @@ impl Drive {
         self.current = Anchor {
             cycle: at,
             commanded: self.current.commanded + delta,
-            error: if self.r == 0.0 { 0.0 } else { error + delta as f64 },
+            error: match self.config.mechanics {
+                Mechanics::Ideal => 0.0,
+                Mechanics::Lag { .. } => error + delta as f64,
+            },
         };
         self.rest = self.rest_cycle();
     }
