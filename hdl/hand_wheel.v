@@ -92,7 +92,8 @@ module hand_wheel #(
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (detents == $past(detents) || detents == $past(detents) + 32'd1 || detents == $past(detents) - 32'd1);
-        cover (detents == 32'd2);
+        cover (detents == 32'd1);
+        cover (detents == 32'hFFFF_FFFF);
     end
 `endif
 

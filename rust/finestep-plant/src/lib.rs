@@ -219,7 +219,7 @@ impl CountsPerStep {
     /// floor((steps * num - ceil(q)) / den)`, all integers.
     pub(crate) fn count(self, steps: i64, lag: f64) -> i64 {
         let p = i128::from(steps) * i128::from(self.num);
-        let q = (lag * f64::from(self.num)).floor() as i128;
+        let q = (lag * f64::from(self.num)).ceil() as i128;
         (p - q).div_euclid(i128::from(self.den)) as i64
     }
 
