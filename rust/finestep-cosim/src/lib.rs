@@ -18,6 +18,7 @@
 //! ```
 
 mod mismatch;
+pub mod plant_loop;
 pub mod top_lockstep;
 
 use std::collections::VecDeque;
@@ -28,6 +29,7 @@ pub use finestep_rtl_sys::TraceDepth;
 use finestep_rtl_sys::Rtl;
 
 pub use mismatch::{describe_difference, Mismatch};
+pub use plant_loop::PlantLoop;
 pub use top_lockstep::{rtl_top_params, ModelPins, RtlPins, TopLockstep, TopMismatch};
 
 /// Which model path runs against the RTL.

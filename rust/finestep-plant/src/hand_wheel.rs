@@ -324,14 +324,33 @@ mod tests {
                 let mut x4 = X4::new(a, b, 0);
                 let mut last_edge = 0;
                 let mut edges = 0;
+                // The raw pins: only the pin of the latest edge may differ from the
+                // ideal state, only within the bounce window, toggling 1 + 2 * extra
+                // times per edge.
+                let phase = i64::from(config.rest_phase);
+                let mut edge_pin = None;
+                let (mut raw, mut toggles, mut moves) = (w.levels(), 0u64, 0u64);
                 for n in 0..=end {
                     w.advance_to(n);
                     if w.edges() != edges {
                         prop_assert_eq!((w.edges() - edges).abs(), 1);
+                        let (a0, _) = crate::quadrature(edges + phase);
+                        let (a1, _) = crate::quadrature(w.edges() + phase);
+                        edge_pin = Some(if a0 != a1 { 0 } else { 1 });
                         edges = w.edges();
                         last_edge = n;
+                        moves += 1;
                     }
                     let (a, b) = w.levels();
+                    toggles += u64::from(a != raw.0) + u64::from(b != raw.1);
+                    raw = (a, b);
+                    let (ia, ib) = crate::quadrature(edges + phase);
+                    for (pin, (level, ideal)) in [(a, ia), (b, ib)].into_iter().enumerate() {
+                        if level != ideal {
+                            prop_assert_eq!(edge_pin, Some(pin), "cycle {}: pin {} bounces", n, pin);
+                            prop_assert!(n <= last_edge + within, "cycle {}: bounce after the window", n);
+                        }
+                    }
                     let (fa, fb) = filter.sample(n, [a, b]);
                     x4.sample(fa, fb);
                     prop_assert_eq!(x4.illegal, 0, "illegal transition in cycle {}", n);
@@ -341,6 +360,8 @@ mod tests {
                         prop_assert_eq!(x4.count, w.edges(), "cycle {}, still since {}", n, last_edge);
                     }
                 }
+                let extra = config.bounce.map_or(0, |b| u64::from(b.extra));
+                prop_assert_eq!(toggles, moves * (1 + 2 * extra));
                 let net: i64 = script.iter().map(|s| s.0).sum();
                 prop_assert_eq!(w.detents(), net);
                 prop_assert_eq!(w.edges(), 4 * net);
