@@ -5,23 +5,20 @@
 //! host, the feedback pins from the plant, and the plant sees every step-pin change of
 //! the chip on the cycle it happens.
 
-use finestep_host::pins::layout::{OUT_PIN_A0, OUT_PIN_B0};
+use finestep_host::pins::layout::{
+    HOST_INPUTS, IN_ENC_A0, IN_ENC_B0, IN_ENC_Z0, IN_MPG_A, IN_MPG_B, IN_PROBE, OUT_PIN_A0, OUT_PIN_B0,
+};
 use finestep_host::{BusError, PinTarget};
-use finestep_model::top::top_pins;
 use finestep_plant::{Plant, PlantPins};
-
-/// The host's part of the packed inputs (bits 0..31: reset, SPI, 8080, E-stop); the
-/// feedback pins above it belong to the plant.
-const HOST_INPUTS: u64 = 0xFFFF_FFFF;
 
 /// Packs the plant's pins into the chip's input word.
 pub fn pack_plant_pins(pins: &PlantPins) -> u64 {
-    u64::from(pins.enc_a) << top_pins::IN_ENC_A0
-        | u64::from(pins.enc_b) << top_pins::IN_ENC_B0
-        | u64::from(pins.enc_z) << top_pins::IN_ENC_Z0
-        | u64::from(pins.probe) << top_pins::IN_PROBE
-        | u64::from(pins.mpg_a) << top_pins::IN_MPG_A
-        | u64::from(pins.mpg_b) << top_pins::IN_MPG_B
+    u64::from(pins.enc_a) << IN_ENC_A0
+        | u64::from(pins.enc_b) << IN_ENC_B0
+        | u64::from(pins.enc_z) << IN_ENC_Z0
+        | u64::from(pins.probe) << IN_PROBE
+        | u64::from(pins.mpg_a) << IN_MPG_A
+        | u64::from(pins.mpg_b) << IN_MPG_B
 }
 
 /// A chip with a plant on its pins.

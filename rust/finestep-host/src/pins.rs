@@ -27,6 +27,21 @@ pub mod layout {
     pub const IN_ESTOP: u32 = 8;
     /// Input: lowest bit of the 16-bit multiplexed address/data bus.
     pub const IN_BUS_AD0: u32 = 16;
+    /// Input: encoder A of channel `c` is bit `IN_ENC_A0 + c`.
+    pub const IN_ENC_A0: u32 = 32;
+    /// Input: encoder B of channel `c`.
+    pub const IN_ENC_B0: u32 = 40;
+    /// Input: encoder index Z of channel `c`.
+    pub const IN_ENC_Z0: u32 = 48;
+    /// Input: the probe.
+    pub const IN_PROBE: u32 = 56;
+    /// Input: hand wheel A.
+    pub const IN_MPG_A: u32 = 57;
+    /// Input: hand wheel B.
+    pub const IN_MPG_B: u32 = 58;
+    /// The inputs a host drives (bits 0..31); the feedback pins above come from the
+    /// machine.
+    pub const HOST_INPUTS: u64 = 0xFFFF_FFFF;
     /// Output: pin A of axis `i` is bit `OUT_PIN_A0 + i`.
     pub const OUT_PIN_A0: u32 = 0;
     /// Output: pin B of axis `i`.

@@ -33,6 +33,11 @@ impl<T: SpiTransfer> SpiBus<T> {
     }
 
     /// The transport.
+    pub fn link(&self) -> &T {
+        &self.link
+    }
+
+    /// The transport, mutably.
     pub fn link_mut(&mut self) -> &mut T {
         &mut self.link
     }
