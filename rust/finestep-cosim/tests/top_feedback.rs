@@ -4,10 +4,13 @@
 
 use finestep_cosim::{PlantLoop, TopLockstep};
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
-use finestep_host::{AxisSetup, Bus, EncoderSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus};
-use finestep_model::PeriodRecord;
+use finestep_host::{
+    AxisSetup, Bus, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus,
+};
+use finestep_model::{Increment, PeriodRecord};
 use finestep_plant::{
-    ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Mechanics, Plant, PlantConfig,
+    Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, HandWheelConfig, Mechanics, Plant,
+    PlantConfig,
 };
 
 type Chip<T> = Machine<SpiBus<PinHost<PlantLoop<T>>>>;
@@ -78,4 +81,58 @@ fn rtl_encoders_follow_the_plant() {
         assert_eq!(i64::from(snapshot.counts[c]), ideal, "channel {c}: {snapshot:?}");
         assert_eq!(machine.encoder_errors(c).unwrap(), (false, 0));
     }
+}
+
+fn wheel_plant() -> Plant {
+    Plant::new(
+        PlantConfig {
+            drives: vec![DriveConfig::default(); 2],
+            channels: vec![],
+            probe: None,
+            hand_wheel: Some(HandWheelConfig { rest_phase: 0, bounce: Some(Bounce { extra: 2, within: 20 }) }),
+        },
+        2,
+    )
+    .unwrap()
+}
+
+fn jog_setup() -> JogSetup {
+    JogSetup {
+        axis: 0,
+        multiplier: JogMultiplier::X10,
+        follow: true,
+        scale: Increment::from_num(1),
+        vmax: Increment::from_num(4),
+        accel: Increment::from_num(0.25),
+        window: 100,
+    }
+}
+
+#[test]
+fn rtl_jog_follows_the_wheel() {
+    let mut machine = connect(finestep_cosim::RtlPins::new(), wheel_plant());
+    let axis = AxisSetup { step_len: 20, step_space: 20, dir_setup: 10, dir_hold: 10, ..AxisSetup::default() };
+    machine.configure_axis(0, &axis).unwrap();
+    machine.enable_axes(0x1).unwrap();
+    machine.set_period(2000).unwrap();
+    machine.clear_faults_and_errors().unwrap();
+    machine.configure_hand_wheel(9, 3).unwrap();
+    let setup = jog_setup();
+    machine.configure_jog(&setup).unwrap();
+    machine.enable_jog(&setup, true).unwrap();
+    machine.bus().wait(100).unwrap();
+    assert!(machine.jog().unwrap().engaged, "{:?}", machine.jog().unwrap());
+    machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().unwrap().turn(7, 400).unwrap();
+    machine.bus().wait(300_000).unwrap();
+    let jog = machine.jog().unwrap();
+    assert_eq!(machine.hand_wheel().unwrap().detents, 7);
+    assert_eq!((jog.remaining, jog.velocity), (0, Increment::ZERO), "{jog:?}");
+    assert_eq!(machine.positions().unwrap().steps[0], 70);
+    machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().unwrap().turn(-3, 400).unwrap();
+    machine.bus().wait(300_000).unwrap();
+    assert_eq!(machine.positions().unwrap().steps[0], 40);
+    assert_eq!(machine.bus().link().target().plant().drive(0).commanded(), 40);
+    machine.enable_jog(&setup, false).unwrap();
+    machine.bus().wait(10_000).unwrap();
+    assert!(!machine.jog().unwrap().engaged);
 }
