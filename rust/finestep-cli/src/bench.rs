@@ -27,7 +27,12 @@ fn stream(periods: u64) -> impl Iterator<Item = PeriodRecord> {
 }
 
 fn inputs() -> CoreInputs {
-    let mut inputs = CoreInputs { run: true, period_clocks: PERIOD_CLOCKS, rec_valid: true, ..Default::default() };
+    let mut inputs = CoreInputs {
+        run: true,
+        period_clocks: PERIOD_CLOCKS,
+        rec_valid: true,
+        ..Default::default()
+    };
     for axis in inputs.axes.iter_mut().take(AXES) {
         *axis = demo_axis_config();
     }
@@ -63,7 +68,12 @@ pub fn cam_program(moves: usize) -> String {
     for i in 0..moves {
         let t = i as f64 * 0.01;
         let r = 20.0 + 5.0 * (7.0 * t).sin();
-        text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * i as f64 % 5.0));
+        text.push_str(&format!(
+            "G1 X{:.4} Y{:.4} Z{:.4}\n",
+            r * t.cos(),
+            r * t.sin(),
+            -0.001 * i as f64 % 5.0
+        ));
     }
     text
 }
@@ -76,15 +86,24 @@ pub fn front_end() -> anyhow::Result<()> {
     let start = Instant::now();
     let program = finestep_gcode::parse_str(&text, "cam.ngc")?;
     let parse_s = start.elapsed().as_secs_f64();
-    println!("  {:<44} {:>7.2} M lines/s", "parse G-code (100 000 short G1 segments)", (MOVES + 2) as f64 / parse_s / 1e6);
+    println!(
+        "  {:<44} {:>7.2} M lines/s",
+        "parse G-code (100 000 short G1 segments)",
+        (MOVES + 2) as f64 / parse_s / 1e6
+    );
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
-        let config = MachineConfig { profile, ..MachineConfig::default() }.resolve()?;
+        let config = MachineConfig {
+            profile,
+            ..MachineConfig::default()
+        }
+        .resolve()?;
         let start = Instant::now();
         let path = geometry::elements(&config, &program).map_err(|e| anyhow::anyhow!("{e}"))?;
         let speeds = lookahead::junction_speeds(&config, &path.elements);
         let plan_s = start.elapsed().as_secs_f64();
         let start = Instant::now();
-        let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
         let interpolate_s = start.elapsed().as_secs_f64();
         let periods = out.records.len() as f64;
         let name = format!("{profile:?}");
@@ -118,27 +137,42 @@ pub fn run(cycles: u64) -> anyhow::Result<()> {
 
     let mut rtl = Rtl::new();
     let start = Instant::now();
-    let n = drive(periods, |inputs, events| rtl.run_chunk(inputs, limit, events).cycles);
-    report("RTL alone (Verilator, event capture)", n, start.elapsed().as_secs_f64());
+    let n = drive(periods, |inputs, events| {
+        rtl.run_chunk(inputs, limit, events).cycles
+    });
+    report(
+        "RTL alone (Verilator, event capture)",
+        n,
+        start.elapsed().as_secs_f64(),
+    );
 
     let mut model = Core::new(finestep_rtl_sys::params());
     let start = Instant::now();
-    let n = drive(periods, |inputs, events| model.run_chunk(inputs, limit, events).cycles);
+    let n = drive(periods, |inputs, events| {
+        model.run_chunk(inputs, limit, events).cycles
+    });
     report("model per-clock step()", n, start.elapsed().as_secs_f64());
 
     let mut model = Core::new(finestep_rtl_sys::params());
     let start = Instant::now();
-    let n = drive(periods * 20, |inputs, events| model.run_chunk_fast(inputs, limit, events).cycles);
+    let n = drive(periods * 20, |inputs, events| {
+        model.run_chunk_fast(inputs, limit, events).cycles
+    });
     report("model fast path", n, start.elapsed().as_secs_f64());
 
     for (what, path) in [
-        ("lockstep RTL + model per-clock, compared", ModelPath::PerClock),
+        (
+            "lockstep RTL + model per-clock, compared",
+            ModelPath::PerClock,
+        ),
         ("lockstep RTL + model fast path, compared", ModelPath::Fast),
     ] {
         let mut harness = Harness::new("bench", path);
         let start = Instant::now();
         let mut inputs = inputs();
-        harness.feed(&mut inputs, stream(periods)).map_err(|m| anyhow::anyhow!("{m}"))?;
+        harness
+            .feed(&mut inputs, stream(periods))
+            .map_err(|m| anyhow::anyhow!("{m}"))?;
         report(what, harness.cycle(), start.elapsed().as_secs_f64());
     }
     front_end()

@@ -28,7 +28,14 @@ const TRACED_PERIODS: u64 = 4;
 /// Drive timing of the demo's drives, in clocks at 50 MHz: 2 us step, 2 us space,
 /// 5 us dir setup and hold.
 pub fn demo_axis() -> AxisSetup {
-    AxisSetup { step_len: 100, step_space: 100, dir_setup: 250, dir_hold: 250, out_mode: 0, invert: 0 }
+    AxisSetup {
+        step_len: 100,
+        step_space: 100,
+        dir_setup: 250,
+        dir_hold: 250,
+        out_mode: 0,
+        invert: 0,
+    }
 }
 
 /// The same drive timing as the core's axis configuration (for the core-level bench).
@@ -58,11 +65,19 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     let records = interpolate_line(&kinematics, &line)?;
     let period_clocks = (kinematics.period_s * CLOCK_HZ).round() as u32;
     let setup = demo_axis();
-    let timing = AxisTiming { step_len: setup.step_len, step_space: setup.step_space, dir_setup: setup.dir_setup, dir_hold: setup.dir_hold };
+    let timing = AxisTiming {
+        step_len: setup.step_len,
+        step_space: setup.step_space,
+        dir_setup: setup.dir_setup,
+        dir_hold: setup.dir_hold,
+    };
     let mut checker = RateChecker::new(period_clocks, &[timing; 3]);
     for (index, record) in records.iter().enumerate() {
         if let Err((axis, why)) = checker.check(record) {
-            bail!("period {index}: axis {}: {why}", AXIS_NAMES.get(axis).unwrap_or(&"?"));
+            bail!(
+                "period {index}: axis {}: {why}",
+                AXIS_NAMES.get(axis).unwrap_or(&"?")
+            );
         }
     }
 
@@ -75,12 +90,23 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         "  {} period records streamed over SPI (SCK = clk/8, bursts of {BURST}, CRC-checked frames) into the FIFO;",
         records.len()
     );
-    println!("  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock");
-    let stream_setup = StreamSetup { period_clocks, axes: vec![setup; 3], clock_hz: CLOCK_HZ };
-    let progress = ProgressBar::new(records.len() as u64)
-        .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} records queued {per_sec}")?);
-    let (streamed, lockstep) =
-        stream_over_spi(TopLockstep::new("demo"), &stream_setup, &records, |queued| progress.set_position(queued as u64))?;
+    println!(
+        "  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock"
+    );
+    let stream_setup = StreamSetup {
+        period_clocks,
+        axes: vec![setup; 3],
+        clock_hz: CLOCK_HZ,
+    };
+    let progress = ProgressBar::new(records.len() as u64).with_style(ProgressStyle::with_template(
+        "  {bar:40} {pos}/{len} records queued {per_sec}",
+    )?);
+    let (streamed, lockstep) = stream_over_spi(
+        TopLockstep::new("demo"),
+        &stream_setup,
+        &records,
+        |queued| progress.set_position(queued as u64),
+    )?;
     progress.finish_and_clear();
 
     println!("  axis   final steps   final position   commanded");
@@ -95,12 +121,18 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         let target = commanded[axis] as f64 / 65536.0;
         println!(
             "  {:<4} {:>13} {:>12.4} {:<3} {:>10.4} {}",
-            AXIS_NAMES[axis], steps,
-            f64::from(steps) / kinematics.steps_per_unit[axis], AXIS_UNITS[axis],
-            target / kinematics.steps_per_unit[axis], AXIS_UNITS[axis]
+            AXIS_NAMES[axis],
+            steps,
+            f64::from(steps) / kinematics.steps_per_unit[axis],
+            AXIS_UNITS[axis],
+            target / kinematics.steps_per_unit[axis],
+            AXIS_UNITS[axis]
         );
         if f64::from(steps) != target {
-            bail!("axis {} ended at {steps} steps, commanded {target}", AXIS_NAMES[axis]);
+            bail!(
+                "axis {} ended at {steps} steps, commanded {target}",
+                AXIS_NAMES[axis]
+            );
         }
     }
     if streamed.underruns != 0 {
@@ -108,16 +140,26 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     }
     println!(
         "  {} bursts, 0 underruns; bit-exact over {} cycles ({:.3} s of machine time)",
-        streamed.bursts, streamed.cycles, streamed.cycles as f64 / CLOCK_HZ
+        streamed.bursts,
+        streamed.cycles,
+        streamed.cycles as f64 / CLOCK_HZ
     );
 
-    let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });
+    let waveform = out.join(if finestep_rtl_sys::trace_is_fst() {
+        "demo.fst"
+    } else {
+        "demo.vcd"
+    });
     let traced = lockstep.cycle() - streamed.cycles + TRACED_PERIODS * u64::from(period_clocks);
-    lockstep.write_waveform(&waveform, TraceDepth::Ports, traced).map_err(|e| anyhow!(e))?;
+    lockstep
+        .write_waveform(&waveform, TraceDepth::Ports, traced)
+        .map_err(|e| anyhow!(e))?;
 
     // Commanded positions at the period boundaries; emitted ones where the host sampled
     // the latched POSITION registers.
-    let mut traces: Vec<AxisTrace> = (0..AXIS_NAMES.len()).map(|_| AxisTrace::default()).collect();
+    let mut traces: Vec<AxisTrace> = (0..AXIS_NAMES.len())
+        .map(|_| AxisTrace::default())
+        .collect();
     let mut running = [0i64; 3];
     for record in std::iter::once(PeriodRecord::default()).chain(records.iter().copied()) {
         for (axis, trace) in traces.iter_mut().enumerate() {
@@ -132,13 +174,23 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     }
     let png = out.join("demo.png");
     plot_axes(&png, &traces, &AXIS_NAMES, kinematics.period_s)?;
-    println!("  waveform of the ports, first {TRACED_PERIODS} periods: {}", waveform.display());
+    println!(
+        "  waveform of the ports, first {TRACED_PERIODS} periods: {}",
+        waveform.display()
+    );
     println!("  plot: {}", png.display());
 
     println!();
     println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
     let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
-    run_program(&program, "demo-part.ngc", false, &MachineConfig::default(), out)
+    run_program(
+        &program,
+        "demo-part.ngc",
+        false,
+        &MachineConfig::default(),
+        out,
+    )?;
+    crate::demo_feedback::run()
 }
 
 /// The demo's part program: an outside contour cut with cutter compensation (tool 3,
