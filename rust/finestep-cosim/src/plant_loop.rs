@@ -2,11 +2,11 @@
 //! [`Plant`] (drives, encoders and gratings, a probe, a hand wheel) on the feedback pins
 //! of any [`PinTarget`] (the lockstep pair, the RTL or the model alone) and is itself a
 //! `PinTarget`, so the host driver runs on it unchanged: the host's pins come from the
-//! host, the feedback pins from the plant, and the plant sees every step-pin change of
-//! the chip on the cycle it happens.
+//! host, the feedback pins from the plant (ORed with any the caller drives itself), and
+//! the plant sees every step-pin change of the chip on the cycle it happens.
 
 use finestep_host::pins::layout::{
-    HOST_INPUTS, IN_ENC_A0, IN_ENC_B0, IN_ENC_Z0, IN_MPG_A, IN_MPG_B, IN_PROBE, OUT_PIN_A0, OUT_PIN_B0,
+    IN_ENC_A0, IN_ENC_B0, IN_ENC_Z0, IN_MPG_A, IN_MPG_B, IN_PROBE, OUT_PIN_A0, OUT_PIN_B0,
 };
 use finestep_host::{BusError, PinTarget};
 use finestep_plant::{Plant, PlantPins};
@@ -80,7 +80,7 @@ impl<T: PinTarget> PinTarget for PlantLoop<T> {
             // The plant's pins hold until its next change; the chip runs to that or to its
             // own next output change, whichever comes first.
             let until = self.plant.next_change().map_or(end, |t| t.min(end));
-            let pins = inputs & HOST_INPUTS | pack_plant_pins(&self.plant.pins());
+            let pins = inputs | pack_plant_pins(&self.plant.pins());
             let ran = self.target.drive_to_change(pins, until - self.cycle)?;
             self.cycle += ran;
             self.plant.advance_to(self.cycle);

@@ -1,138 +1,423 @@
-//! The feedback blocks at the chip's pins with the plant in the loop: streamed motion
-//! drives lagging axes whose encoders and gratings feed the counters back; the hand wheel
-//! moves an axis through the jog; faults outside the filter's specification are flagged.
+//! The feedback blocks at the chip's pins with the plant in the loop, RTL and model in
+//! lockstep: streamed motion drives lagging axes whose encoders and gratings feed the
+//! counters back; the probe latches them all on one clock; the hand wheel moves an axis
+//! through the jog within its limits; the jog and a FIFO run exclude each other; faults
+//! outside the filter's specification are flagged, never silent.
 
 use finestep_cosim::{PlantLoop, TopLockstep};
+use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0};
+use finestep_host::regs::{control, fifo_level, jog_control, jog_velocity, period_count, probe_status, status};
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{
-    AxisSetup, Bus, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus,
+    AxisSetup, Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming,
+    SpiBus,
 };
 use finestep_model::{Increment, PeriodRecord};
 use finestep_plant::{
-    Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, HandWheelConfig, Mechanics, Plant,
-    PlantConfig,
+    Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Faults, Glitches, HandWheelConfig,
+    Mechanics, Plant, PlantConfig, ProbeConfig,
 };
+use proptest::prelude::*;
+use proptest::test_runner::TestCaseError;
 
-type Chip<T> = Machine<SpiBus<PinHost<PlantLoop<T>>>>;
+type Chip = Machine<SpiBus<PinHost<PlantLoop<TopLockstep>>>>;
 
-fn connect<T: PinTarget>(target: T, plant: Plant) -> Chip<T> {
-    let mut host = PinHost::new(PlantLoop::new(target, plant), PinTiming::default());
+const PERIOD: u32 = 2000;
+
+fn connect(name: &str, plant: Plant) -> Chip {
+    let mut host = PinHost::new(PlantLoop::new(TopLockstep::new(name), plant), PinTiming::default());
     host.reset(4).unwrap();
     host.idle(8).unwrap();
-    Machine::connect(SpiBus::new(host, 4)).unwrap()
-}
-
-fn start<B: Bus>(machine: &mut Machine<B>, period: u32) {
+    let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
     let axis = AxisSetup { step_len: 20, step_space: 20, dir_setup: 10, dir_hold: 10, ..AxisSetup::default() };
     for i in 0..machine.caps().n_axes {
         machine.configure_axis(i, &axis).unwrap();
     }
     machine.enable_axes(0xF).unwrap();
-    machine.set_period(period).unwrap();
+    machine.set_period(PERIOD).unwrap();
     machine.set_start_level(4).unwrap();
     machine.clear_faults_and_errors().unwrap();
+    machine
+}
+
+fn plant_of(machine: &Chip) -> &Plant {
+    machine.bus_ref().link().target().plant()
+}
+
+/// Streams `records` and waits until the drives are at rest.
+fn run_records(machine: &mut Chip, records: Vec<PeriodRecord>, settle: u64) {
     machine.set_control(true, false, true).unwrap();
-}
-
-fn two_axis_plant(tau: u64) -> Plant {
-    let mechanics = if tau == 0 { Mechanics::Ideal } else { Mechanics::Lag { tau } };
-    let drive = DriveConfig { mechanics, ..DriveConfig::default() };
-    Plant::new(
-        PlantConfig {
-            drives: vec![drive, drive],
-            channels: vec![
-                ChannelConfig { axis: 0, encoder: EncoderConfig::rotary(CountsPerStep::integer(4).unwrap(), 2000, 7) },
-                ChannelConfig {
-                    axis: 1,
-                    encoder: EncoderConfig::linear_grating(CountsPerStep::new(5, 2).unwrap(), None),
-                },
-            ],
-            probe: None,
-            hand_wheel: None,
-        },
-        1,
-    )
-    .unwrap()
-}
-
-fn run_moves<T: PinTarget>(machine: &mut Chip<T>) {
-    let records: Vec<PeriodRecord> = (0..40)
-        .map(|k| {
-            let flags = if k == 39 { 1 } else { 0 };
-            PeriodRecord::from_raw(&[3 << 15, -(5 << 14), 0, 0], flags)
-        })
-        .collect();
     stream(machine.bus(), records, StreamConfig::default()).unwrap();
-    wait_idle(machine.bus(), 1000, 400_000).unwrap();
-    machine.bus().wait(20_000).unwrap();
+    wait_idle(machine.bus(), 1000, 10_000_000).unwrap();
+    machine.bus().wait(settle).unwrap();
 }
 
-#[test]
-fn rtl_encoders_follow_the_plant() {
-    let mut machine = connect(finestep_cosim::RtlPins::new(), two_axis_plant(300));
-    start(&mut machine, 2000);
-    machine.configure_encoder(1, &EncoderSetup { filter: 3, ..EncoderSetup::default() }).unwrap();
-    run_moves(&mut machine);
+fn lagging(tau: u64) -> DriveConfig {
+    let mechanics = if tau == 0 { Mechanics::Ideal } else { Mechanics::Lag { tau } };
+    DriveConfig { mechanics, ..DriveConfig::default() }
+}
+
+/// Channel 0 a motor encoder on axis 0, channel 1 a grating on axis 1, with `faults`.
+fn encoder_plant(tau: u64, resolution: [CountsPerStep; 2], faults: Faults, seed: u64) -> Plant {
+    let mut motor = EncoderConfig::rotary(resolution[0], 4000, 3);
+    motor.faults = faults;
+    let mut grating = EncoderConfig::linear_grating(resolution[1], None);
+    grating.faults = faults;
+    let channels = vec![ChannelConfig { axis: 0, encoder: motor }, ChannelConfig { axis: 1, encoder: grating }];
+    Plant::new(PlantConfig { drives: vec![lagging(tau); 2], channels, probe: None, hand_wheel: None }, seed).unwrap()
+}
+
+fn moves(increments: &[(i32, i32)]) -> Vec<PeriodRecord> {
+    let n = increments.len();
+    increments
+        .iter()
+        .enumerate()
+        .map(|(k, &(x, z))| PeriodRecord::from_raw(&[x, z, 0, 0], u8::from(k + 1 == n)))
+        .collect()
+}
+
+/// One random case within the filter's specification: the count equals the plant's.
+#[derive(Clone, Debug)]
+struct CleanCase {
+    resolution: [(u32, u32); 2],
+    filter: u8,
+    prescale: u16,
+    tau: u64,
+    jitter: u64,
+    glitch: bool,
+    increments: Vec<(i32, i32)>,
+    seed: u64,
+}
+
+fn clean_case() -> impl Strategy<Value = CleanCase> {
+    let resolution = (1u32..=8, 1u32..=3);
+    (
+        [resolution.clone(), resolution],
+        1u8..=4,
+        0u16..=2,
+        500u64..3000,
+        0u64..=8,
+        any::<bool>(),
+        prop::collection::vec((-(2i32 << 16)..=(2 << 16), -(2i32 << 16)..=(2 << 16)), 5..40),
+        any::<u64>(),
+    )
+        .prop_map(|(resolution, filter, prescale, tau, jitter, glitch, increments, seed)| CleanCase {
+            resolution,
+            filter,
+            prescale,
+            tau,
+            jitter,
+            glitch,
+            increments,
+            seed,
+        })
+}
+
+fn clean_run(case: &CleanCase) -> Result<(), TestCaseError> {
+    // A glitch covers fewer samples than the filter needs: at most (filter - 2) sample
+    // periods plus one clock (none with a filter of one sample).
+    let longest_glitch = (u64::from(case.filter.max(1)) - 1).saturating_sub(1) * (u64::from(case.prescale) + 1) + 1;
+    let glitches = (case.glitch && case.filter >= 2).then_some(Glitches {
+        a: true,
+        b: true,
+        z: false,
+        shorter_than: longest_glitch + 1,
+        mean_interval: 5000,
+    });
+    let faults = Faults { jitter: case.jitter, glitches, ..Faults::default() };
+    let resolution = case.resolution.map(|(n, d)| CountsPerStep::new(n, d).unwrap());
+    let plant = encoder_plant(case.tau, resolution, faults, case.seed);
+    let mut machine = connect("encoders_count_the_plant_exactly", plant);
+    machine.set_encoder_prescale(case.prescale).unwrap();
+    for channel in 0..2 {
+        let setup = EncoderSetup { filter: case.filter, ..EncoderSetup::default() };
+        machine.configure_encoder(channel, &setup).unwrap();
+    }
+    run_records(&mut machine, moves(&case.increments), 40 * case.tau);
     let snapshot = machine.feedback().unwrap();
-    assert_eq!(&snapshot.steps[..2], &[60, -50]);
-    eprintln!("{snapshot:?}");
-    for c in 0..2 {
-        let ideal = machine.bus().link().target().plant().encoder(c).ideal_count();
-        assert_eq!(i64::from(snapshot.counts[c]), ideal, "channel {c}: {snapshot:?}");
-        assert_eq!(machine.encoder_errors(c).unwrap(), (false, 0));
+    for channel in 0..2 {
+        let encoder = plant_of(&machine).encoder(channel);
+        prop_assert!(encoder.faults().overspeed == 0, "the case is outside the filter's rate: {:?}", encoder.faults());
+        let ideal = encoder.ideal_count();
+        prop_assert_eq!(i64::from(snapshot.counts[channel]), ideal, "channel {}", channel);
+        prop_assert_eq!(machine.encoder_errors(channel).unwrap(), (false, 0));
+    }
+    Ok(())
+}
+
+/// Random motion through lagging drives, with edge jitter and glitches shorter than the
+/// filter: both channels read exactly the plant's count, every case, no error flagged.
+#[test]
+fn encoders_count_the_plant_exactly() {
+    let mut runner = finestep_testkit::runner("encoders_count_the_plant_exactly", 12);
+    runner.run(&clean_case(), |case| clean_run(&case)).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Missing edges and glitches longer than the filter: a count that differs from the
+/// plant's always comes with the ILLEGAL flag (or an edge still held back by the fault).
+#[test]
+fn faults_beyond_the_filter_are_flagged() {
+    let mut runner = finestep_testkit::runner("faults_beyond_the_filter_are_flagged", 8);
+    let case = (any::<u64>(), 2u32..12, any::<bool>());
+    runner
+        .run(&case, |(seed, missing_one_in, long_glitches)| {
+            let glitches = long_glitches.then_some(Glitches {
+                a: true,
+                b: true,
+                z: false,
+                shorter_than: 40,
+                mean_interval: 3000,
+            });
+            let faults = Faults { missing_one_in: Some(missing_one_in), glitches, ..Faults::default() };
+            let resolution = [CountsPerStep::integer(4).unwrap(), CountsPerStep::new(5, 2).unwrap()];
+            let plant = encoder_plant(800, resolution, faults, seed);
+            let mut machine = connect("faults_beyond_the_filter_are_flagged", plant);
+            let increments: Vec<(i32, i32)> = (0..30).map(|k| if k < 15 { (3 << 15, -(1 << 16)) } else { (-(1 << 16), 1 << 15) }).collect();
+            run_records(&mut machine, moves(&increments), 40 * 800);
+            let snapshot = machine.feedback().unwrap();
+            for channel in 0..2 {
+                let encoder = plant_of(&machine).encoder(channel);
+                let log = encoder.faults();
+                prop_assert!(log.missing_edges + log.glitches > 0, "no fault injected: {log:?}");
+                let held = encoder.levels() != encoder.ideal_levels();
+                let ideal = encoder.ideal_count();
+                let exact = i64::from(snapshot.counts[channel]) == ideal;
+                let (illegal, _) = machine.encoder_errors(channel).unwrap();
+                prop_assert!(exact || illegal || held, "channel {channel}: silent miscount {snapshot:?} vs {ideal}");
+            }
+            Ok(())
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Quadrature driven straight at the pins at the rated rates of the filter table: every
+/// state lasting `clocks` clocks, forward then back, counted exactly.
+#[test]
+fn rated_count_rates() {
+    for (filter, prescale, clocks) in [(1u8, 0u16, 4u64), (3, 0, 8), (15, 0, 17), (2, 3, 9)] {
+        let plant = Plant::new(PlantConfig::default(), 0).unwrap();
+        let mut machine = connect("rated_count_rates", plant);
+        machine.set_encoder_prescale(prescale).unwrap();
+        machine.configure_encoder(2, &EncoderSetup { filter, ..EncoderSetup::default() }).unwrap();
+        let host_pins = machine.bus().link().inputs();
+        // (A, B) in the forward order 00 -> 10 -> 11 -> 01, channel 2.
+        let states = [(0u64, 0u64), (1, 0), (1, 1), (0, 1)];
+        let drive = |machine: &mut Chip, phase: usize| {
+            let (a, b) = states[phase % 4];
+            let pins = host_pins | a << (IN_ENC_A0 + 2) | b << (IN_ENC_B0 + 2);
+            machine.bus().link_mut().target_mut().drive(pins, clocks).unwrap();
+        };
+        for phase in 0..=1000 {
+            drive(&mut machine, phase);
+        }
+        machine.bus().wait(100).unwrap();
+        assert_eq!(machine.feedback().unwrap().counts[2], 1000, "filter {filter}, prescale {prescale}, {clocks} clocks");
+        for phase in (0..1000).rev() {
+            drive(&mut machine, phase);
+        }
+        machine.bus().wait(100).unwrap();
+        assert_eq!(machine.feedback().unwrap().counts[2], 0);
+        assert_eq!(machine.encoder_errors(2).unwrap(), (false, 0));
     }
 }
 
-fn wheel_plant() -> Plant {
+/// The index of a rotary encoder latches and then clears the count, one-shot each.
+#[test]
+fn index_latches_and_clears() {
+    let resolution = [CountsPerStep::integer(4).unwrap(), CountsPerStep::integer(1).unwrap()];
+    // 400 counts a revolution, index at count 37 of each.
+    let mut plant_config = PlantConfig {
+        drives: vec![lagging(400); 2],
+        channels: vec![ChannelConfig { axis: 0, encoder: EncoderConfig::rotary(resolution[0], 400, 37) }],
+        probe: None,
+        hand_wheel: None,
+    };
+    plant_config.channels.push(ChannelConfig { axis: 1, encoder: EncoderConfig::linear_grating(resolution[1], None) });
+    let mut machine = connect("index_latches_and_clears", Plant::new(plant_config, 5).unwrap());
+    let setup = EncoderSetup { mode: CountMode::X4, z_active_high: true, filter: 2 };
+    machine.configure_encoder(0, &setup).unwrap();
+    machine.arm_index(0, &setup, true, false).unwrap();
+    assert_eq!(machine.index_latch(0).unwrap(), None);
+    // 100 steps = 400 counts: one index on the way, at count 37.
+    run_records(&mut machine, moves(&vec![(1 << 16, 0); 100]), 20_000);
+    // Z rises with the A/B edge into count 37; the latch holds the count before that edge.
+    assert_eq!(machine.index_latch(0).unwrap(), Some(36));
+    assert_eq!(machine.feedback().unwrap().counts[0], 400);
+    // Clear at the next index (count 437 on the plant): the count restarts there.
+    machine.arm_index(0, &setup, false, true).unwrap();
+    run_records(&mut machine, moves(&vec![(1 << 16, 0); 100]), 20_000);
+    let ideal = plant_of(&machine).encoder(0).ideal_count();
+    assert_eq!(i64::from(machine.feedback().unwrap().counts[0]), ideal - 437);
+    assert_eq!(machine.encoder_errors(0).unwrap(), (false, 0));
+}
+
+/// A probe touch latches every channel, every axis and the time on one clock.
+#[test]
+fn probe_latches_everything_on_one_clock() {
+    let plant_config = PlantConfig {
+        drives: vec![lagging(300); 2],
+        channels: vec![
+            ChannelConfig { axis: 0, encoder: EncoderConfig::linear_grating(CountsPerStep::integer(2).unwrap(), None) },
+            ChannelConfig { axis: 1, encoder: EncoderConfig::linear_grating(CountsPerStep::integer(4).unwrap(), None) },
+        ],
+        probe: Some(ProbeConfig {
+            axis: 1,
+            counts_per_step: CountsPerStep::integer(1).unwrap(),
+            touching: vec![50..=60],
+            active_high: false,
+        }),
+        hand_wheel: None,
+    };
+    let mut machine = connect("probe_latches_everything_on_one_clock", Plant::new(plant_config, 9).unwrap());
+    machine.arm_probe(false, 2).unwrap();
+    run_records(&mut machine, moves(&vec![(1 << 15, 1 << 16); 100]), 20_000);
+    let hit = machine.probe_hit().unwrap().expect("the probe touched at Z = 50 steps");
+    // Z reached 50 steps (200 grating counts) through a lag, a 2-sample filter and the
+    // synchronisers: the grating had counted at most a few counts more.
+    assert!((200..=204).contains(&hit.counts[1]), "{hit:?}");
+    assert!((hit.counts[0] - hit.counts[1] / 4).abs() <= 2, "X at half Z's speed and half its resolution: {hit:?}");
+    assert!(hit.steps[1] >= 50 && hit.steps[1] <= 55, "{hit:?}");
+    // One event per arming.
+    assert_eq!(probe_status::ARMED.get(machine.bus().read_one(probe_status::ADDR).unwrap()), 0);
+}
+
+fn wheel_plant(bounce: u64) -> Plant {
     Plant::new(
         PlantConfig {
             drives: vec![DriveConfig::default(); 2],
             channels: vec![],
             probe: None,
-            hand_wheel: Some(HandWheelConfig { rest_phase: 0, bounce: Some(Bounce { extra: 2, within: 20 }) }),
+            hand_wheel: Some(HandWheelConfig { rest_phase: 2, bounce: Some(Bounce { extra: 2, within: bounce }) }),
         },
         2,
     )
     .unwrap()
 }
 
-fn jog_setup() -> JogSetup {
+fn jog_setup(follow: bool) -> JogSetup {
     JogSetup {
         axis: 0,
         multiplier: JogMultiplier::X10,
-        follow: true,
+        follow,
         scale: Increment::from_num(1),
         vmax: Increment::from_num(4),
         accel: Increment::from_num(0.25),
-        window: 100,
+        window: 30,
     }
 }
 
+fn turn(machine: &mut Chip, detents: i64, cycles_per_edge: u64) {
+    let wheel = machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().unwrap();
+    wheel.turn(detents, cycles_per_edge).unwrap();
+}
+
+/// Polls the jog's velocity every period while waiting `periods` periods; checks the
+/// limits between consecutive periods. Returns the largest speed seen.
+fn watch_jog(machine: &mut Chip, setup: &JogSetup, periods: u32) -> Increment {
+    let mut last: Option<(u32, i32)> = None;
+    let mut peak = Increment::ZERO;
+    for _ in 0..periods {
+        let count = machine.bus().read_one(period_count::ADDR).unwrap();
+        let velocity = machine.bus().read_one(jog_velocity::ADDR).unwrap() as i32;
+        if machine.bus().read_one(period_count::ADDR).unwrap() != count {
+            continue; // a boundary came between the reads
+        }
+        assert!(Increment::from_bits(velocity).abs() <= setup.vmax, "velocity {velocity:#x}");
+        if let Some((last_count, last_velocity)) = last {
+            if count == last_count.wrapping_add(1) {
+                let change = (i64::from(velocity) - i64::from(last_velocity)).abs();
+                assert!(change <= i64::from(setup.accel.to_bits()), "acceleration {change:#x} in one period");
+            }
+        }
+        peak = peak.max(Increment::from_bits(velocity).abs());
+        last = Some((count, velocity));
+        machine.bus().wait(u64::from(PERIOD) / 2).unwrap();
+    }
+    peak
+}
+
+/// The jog follows a bouncing wheel within its limits and lands on every detent, both
+/// ways; the drive's commanded position is the chip's.
 #[test]
-fn rtl_jog_follows_the_wheel() {
-    let mut machine = connect(finestep_cosim::RtlPins::new(), wheel_plant());
-    let axis = AxisSetup { step_len: 20, step_space: 20, dir_setup: 10, dir_hold: 10, ..AxisSetup::default() };
-    machine.configure_axis(0, &axis).unwrap();
-    machine.enable_axes(0x1).unwrap();
-    machine.set_period(2000).unwrap();
-    machine.clear_faults_and_errors().unwrap();
+fn jog_follows_the_wheel_within_its_limits() {
+    let mut machine = connect("jog_follows_the_wheel_within_its_limits", wheel_plant(20));
     machine.configure_hand_wheel(9, 3).unwrap();
-    let setup = jog_setup();
+    let setup = jog_setup(true);
     machine.configure_jog(&setup).unwrap();
     machine.enable_jog(&setup, true).unwrap();
-    machine.bus().wait(100).unwrap();
-    assert!(machine.jog().unwrap().engaged, "{:?}", machine.jog().unwrap());
-    machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().unwrap().turn(7, 400).unwrap();
-    machine.bus().wait(300_000).unwrap();
-    let jog = machine.jog().unwrap();
+    turn(&mut machine, 7, 400);
+    let peak = watch_jog(&mut machine, &setup, 90);
+    // 70 steps: the braking bound sqrt(2 A e) - A stays just under the limit mid-way.
+    assert!(peak > setup.vmax * 3 / 4 && peak <= setup.vmax, "peak {peak}");
     assert_eq!(machine.hand_wheel().unwrap().detents, 7);
-    assert_eq!((jog.remaining, jog.velocity), (0, Increment::ZERO), "{jog:?}");
+    let jog = machine.jog().unwrap();
+    assert_eq!((jog.remaining, jog.velocity, jog.dropped), (0, Increment::ZERO, 0), "{jog:?}");
     assert_eq!(machine.positions().unwrap().steps[0], 70);
-    machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().unwrap().turn(-3, 400).unwrap();
-    machine.bus().wait(300_000).unwrap();
+    turn(&mut machine, -3, 400);
+    watch_jog(&mut machine, &setup, 60);
     assert_eq!(machine.positions().unwrap().steps[0], 40);
-    assert_eq!(machine.bus().link().target().plant().drive(0).commanded(), 40);
+    assert_eq!(plant_of(&machine).drive(0).commanded(), 40);
     machine.enable_jog(&setup, false).unwrap();
     machine.bus().wait(10_000).unwrap();
     assert!(!machine.jog().unwrap().engaged);
+    assert_eq!(machine.hand_wheel().unwrap().illegal_count, 0);
+}
+
+/// In drop mode a wheel spun faster than the axis can follow loses the detents beyond the
+/// window, counted, and the axis lands on the detents it kept.
+#[test]
+fn jog_drops_what_it_cannot_follow() {
+    let mut machine = connect("jog_drops_what_it_cannot_follow", wheel_plant(20));
+    machine.configure_hand_wheel(9, 3).unwrap();
+    let setup = jog_setup(false);
+    machine.configure_jog(&setup).unwrap();
+    machine.enable_jog(&setup, true).unwrap();
+    turn(&mut machine, 12, 150);
+    watch_jog(&mut machine, &setup, 120);
+    let jog = machine.jog().unwrap();
+    assert!(jog.dropped > 0, "{jog:?}");
+    let kept = 12 - i32::from(jog.dropped);
+    assert_eq!(machine.positions().unwrap().steps[0], 10 * kept);
+    assert_eq!(jog.remaining, 0);
+}
+
+/// The jog and a FIFO run never drive the core together: RUN is refused while the jog
+/// is engaged, the jog while RUN is set; both set the sticky flag; a halt stops the jog.
+#[test]
+fn jog_and_run_exclude_each_other() {
+    let mut machine = connect("jog_and_run_exclude_each_other", wheel_plant(20));
+    let setup = jog_setup(true);
+    machine.configure_jog(&setup).unwrap();
+    machine.bus().push_records(&moves(&[(1 << 16, 0); 8])).unwrap();
+    machine.enable_jog(&setup, true).unwrap();
+    machine.bus().wait(100).unwrap();
+    assert!(machine.jog().unwrap().engaged);
+    machine.set_control(true, false, true).unwrap();
+    machine.bus().wait(3 * u64::from(PERIOD)).unwrap();
+    assert_eq!(control::RUN.get(machine.bus().read_one(control::ADDR).unwrap()), 0, "RUN refused");
+    let status_word = machine.status().unwrap();
+    assert_eq!(status::JOG_REFUSED.get(status_word), 1);
+    assert_eq!(status::RUNNING.get(status_word), 1, "the jog runs the core");
+    assert_eq!(fifo_level::LEVEL.get(machine.bus().read_one(fifo_level::ADDR).unwrap()), 8, "no record consumed");
+    machine.enable_jog(&setup, false).unwrap();
+    machine.bus().wait(3 * u64::from(PERIOD)).unwrap();
+    assert!(!machine.jog().unwrap().engaged);
+    machine.clear_faults_and_errors().unwrap();
+    machine.set_control(true, false, true).unwrap();
+    machine.enable_jog(&setup, true).unwrap();
+    machine.bus().wait(3 * u64::from(PERIOD)).unwrap();
+    let jog = machine.jog().unwrap();
+    assert!(!jog.engaged && jog.refused, "{jog:?}");
+    wait_idle(machine.bus(), 1000, 1_000_000).unwrap();
+    assert_eq!(machine.positions().unwrap().steps[0], 8);
+    // A halt (E-stop) clears ENABLE and disengages.
+    machine.set_control(false, false, true).unwrap();
+    machine.clear_faults_and_errors().unwrap();
+    machine.enable_jog(&setup, true).unwrap();
+    machine.bus().wait(100).unwrap();
+    assert!(machine.jog().unwrap().engaged);
+    machine.bus().link_mut().set_estop_pin(true);
+    machine.bus().wait(300).unwrap();
+    assert!(!machine.jog().unwrap().engaged);
+    assert_eq!(jog_control::ENABLE.get(machine.bus().read_one(jog_control::ADDR).unwrap()), 0);
 }

@@ -9,7 +9,7 @@ use crate::regs::{
     command, enc_control, enc_count, enc_edge_time, enc_index_latch, enc_prescale, enc_probe_latch,
     enc_status, jog_accel, jog_control, jog_remaining, jog_scale, jog_status, jog_velocity, jog_vmax,
     jog_window, latch_time, mpg_control, mpg_count, mpg_detents, mpg_status, position, probe_control,
-    probe_position, probe_status, probe_time,
+    probe_position, probe_status, probe_time, status,
 };
 use crate::{Bus, BusError, Machine};
 
@@ -238,22 +238,37 @@ impl<B: Bus> Machine<B> {
     /// when it moved (over SPI, one read frame holds the latch for its whole length).
     pub fn feedback(&mut self) -> Result<FeedbackSnapshot, BusError> {
         let (n_axes, n_enc) = (self.caps.n_axes, self.caps.n_enc);
+        let read = |bus: &mut B| -> Result<(Vec<u32>, Vec<u32>, Vec<u32>), BusError> {
+            let mut steps = vec![0u32; n_axes];
+            bus.read(position::addr(0), &mut steps)?;
+            let mut counts = vec![0u32; n_enc];
+            bus.read(enc_count::addr(0), &mut counts)?;
+            let mut edge_times = vec![0u32; n_enc];
+            bus.read(enc_edge_time::addr(0), &mut edge_times)?;
+            Ok((steps, counts, edge_times))
+        };
+        let snapshot = |(steps, counts, edge_times): (Vec<u32>, Vec<u32>, Vec<u32>), latch_time| FeedbackSnapshot {
+            steps: steps.into_iter().map(|w| w as i32).collect(),
+            counts: counts.into_iter().map(|w| w as i32).collect(),
+            edge_times,
+            latch_time,
+        };
         for _ in 0..16 {
             let before = self.bus.read_one(latch_time::ADDR)?;
-            let mut steps = vec![0u32; n_axes];
-            self.bus.read(position::addr(0), &mut steps)?;
-            let mut counts = vec![0u32; n_enc];
-            self.bus.read(enc_count::addr(0), &mut counts)?;
-            let mut edge_times = vec![0u32; n_enc];
-            self.bus.read(enc_edge_time::addr(0), &mut edge_times)?;
+            let first = read(&mut self.bus)?;
             let after = self.bus.read_one(latch_time::ADDR)?;
             if before == after {
-                return Ok(FeedbackSnapshot {
-                    steps: steps.into_iter().map(|w| w as i32).collect(),
-                    counts: counts.into_iter().map(|w| w as i32).collect(),
-                    edge_times,
-                    latch_time: after,
-                });
+                return Ok(snapshot(first, after));
+            }
+            // Stopped, the latch follows every clock: two equal reads with the core still
+            // stopped describe its state.
+            let running = |bus: &mut B| -> Result<bool, BusError> { Ok(status::RUNNING.get(bus.read_one(status::ADDR)?) != 0) };
+            if !running(&mut self.bus)? {
+                let again = read(&mut self.bus)?;
+                let latest = self.bus.read_one(latch_time::ADDR)?;
+                if again == first && !running(&mut self.bus)? {
+                    return Ok(snapshot(again, latest));
+                }
             }
         }
         Err(BusError::Protocol("the latch kept moving during 16 attempts to read the feedback".into()))

@@ -114,6 +114,11 @@ impl<B: Bus> Machine<B> {
         &mut self.bus
     }
 
+    /// The bus, to look at (e.g. a simulated target's state).
+    pub fn bus_ref(&self) -> &B {
+        &self.bus
+    }
+
     /// The bus, giving up the machine.
     pub fn into_bus(self) -> B {
         self.bus
