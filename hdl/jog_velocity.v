@@ -4,10 +4,10 @@
 // period boundary (a period is thousands of clocks, so a shift-add multiplier and a
 // digit-by-digit square root cost a few hundred flip-flops instead of a wide multiplier):
 //   e = target - cmd
-//   stopping:                 v' = clamp(0, vel - A, vel + A)
-//   |e| <= VM, |e - vel| <= A: v' = e                      (arrive exactly)
-//   else u = max(isqrt(2 A min(|e|, 2^40 - 1)) - A, 0)      (fastest speed that can stop)
-//        v' = clamp(sign(e) min(VM, u), vel - A, vel + A)
+//   stopping:                        v' = clamp(0, vel - A, vel + A)
+//   |e| <= min(VM, A), |e - vel| <= A: v' = e               (the last step, brakeable)
+//   else u = max(isqrt(2 A min(|e|, 2^40 - 1)) - A, min(|e|, A))
+//        v' = clamp(sign(e) min(VM, u), vel - A, vel + A)   (fastest speed that can stop)
 // Inputs are sampled in the cycle after `restart`; `result_valid` is high in cycle 80
 // after it, with `result`. A new `restart` or `drop` drops the computation in flight.
 module jog_velocity (
@@ -63,7 +63,9 @@ module jog_velocity (
     wire signed [34:0] vel_s   = {{3{vel_reg[31]}}, vel_reg};
     wire signed [34:0] accel_s = {4'd0, accel_reg};
     wire signed [36:0] u_full  = $signed({1'b0, root_reg}) - $signed({6'd0, accel_reg});
-    wire        [35:0] u       = u_full[36] ? 36'd0 : u_full[35:0];
+    wire        [47:0] e_abs   = e_reg[47] ? -e_reg : e_reg;
+    wire        [30:0] e_or_a  = (e_abs < {17'd0, accel_reg}) ? e_abs[30:0] : accel_reg;   // min(|e|, A)
+    wire        [35:0] u       = (u_full < $signed({6'd0, e_or_a})) ? {5'd0, e_or_a} : u_full[35:0];
     wire        [30:0] speed   = (u > {5'd0, vmax_reg}) ? vmax_reg : u[30:0];
     wire        e_neg   = e_reg[47];
     wire        e_zero  = (e_reg == 48'd0);
@@ -73,9 +75,8 @@ module jog_velocity (
     wire signed [34:0] lo      = vel_s - accel_s;
     wire signed [34:0] hi      = vel_s + accel_s;
     wire signed [34:0] clamped = (desired < lo) ? lo : (desired > hi) ? hi : desired;
-    wire [47:0] e_abs   = e_neg ? -e_reg : e_reg;
-    wire        e_small = (e_abs <= {17'd0, vmax_reg});
-    // With |e| <= VM < 2^31 the low 35 bits of e are e itself.
+    wire        e_small = (e_abs <= {17'd0, vmax_reg}) && (e_abs <= {17'd0, accel_reg});
+    // With |e| <= min(VM, A) < 2^31 the low 35 bits of e are e itself.
     wire signed [34:0] e_s       = e_reg[34:0];
     wire signed [34:0] e_minus_v = e_s - vel_s;
     wire        arrive  = enable_reg && e_small &&

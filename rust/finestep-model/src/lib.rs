@@ -22,6 +22,12 @@
 //! register map `finestep_regmap`, counters, interrupt, position latch, FIFO write
 //! port), [`position_fifo`], [`motion_control`], [`safety_monitor`] and the core.
 //!
+//! The feedback blocks: [`input_filter`] (sampling prescaler, synchroniser and glitch
+//! filter), [`quadrature_channel`] (decoder, counter, index and probe snapshots),
+//! [`encoder_bank`] (the channels and the probe on one prescaler), [`hand_wheel`] (the
+//! MPG) and [`jog_generator`] (moves an axis after the wheel through the core), all in
+//! the top.
+//!
 //! # Example
 //!
 //! Move axis 0 by 2.5 steps in one period of 1000 clocks, then let the pulses drain:
@@ -53,12 +59,17 @@ pub mod config;
 pub mod crc16_byte;
 pub mod core;
 pub mod dda_axis;
+pub mod encoder_bank;
 pub mod fast;
+pub mod hand_wheel;
+pub mod input_filter;
+pub mod jog_generator;
 pub mod limits;
 pub mod motion_control;
 pub mod parallel_bus_slave;
 pub mod period_timer;
 pub mod position_fifo;
+pub mod quadrature_channel;
 pub mod record;
 pub mod register_file;
 pub mod safety_monitor;

@@ -11,13 +11,20 @@
 //!
 //! Latency: a request granted in cycle `n` is served at the edge ending `n`: a read's
 //! value (from the state of cycle `n`) is in `rdata` in `n+1`; a write's `rw` bits hold
-//! from `n+1`, and its pulses (`COMMAND`, `RECORD_PUSH`, the watchdog kick) are high in
-//! `n+1` only.
+//! from `n+1`, and its pulses (`COMMAND`, `RECORD_PUSH`, the encoder and probe arms, the
+//! watchdog kick) are high in `n+1` only.
+//!
+//! The feedback registers (encoders, probe, hand wheel, jog) read the blocks' state
+//! through [`FeedbackStatus`]; their settings are `rw` bits here like any other.
 
 use finestep_regmap::regs;
 use finestep_regmap::{Access, Field};
 
+use crate::encoder_bank::{ChannelConfig, EncoderBankStatus, ProbeConfig, MAX_CHANNELS};
+use crate::hand_wheel::HandWheelStatus;
+use crate::jog_generator::{JogInputs, JogStatus};
 use crate::position_fifo::FifoInputs;
+use crate::quadrature_channel::DecodeMode;
 use crate::record::PeriodRecord;
 use crate::spi_frame::{SpiFifoPort, SpiFrameEvents};
 use crate::top::TopParams;
@@ -58,7 +65,8 @@ pub fn arbitrate(spi: Option<BusRequest>, parallel: Option<BusRequest>) -> Optio
 /// The hardware values a register read shows, from the other blocks in one cycle.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct HardwareStatus {
-    /// `core_run = CONTROL.RUN && !halt`.
+    /// The core's run, `(CONTROL.RUN || jog engaged) && !halt` (`STATUS.RUNNING`; the
+    /// boundary, the position latch and `PERIOD` follow it).
     pub core_run: bool,
     /// Motion control's gate (`STATUS.STREAMING`).
     pub gate: bool,
@@ -82,6 +90,33 @@ pub struct HardwareStatus {
     pub fifo_level: usize,
     /// The FIFO's free room: depth - committed - staged.
     pub fifo_free: usize,
+    /// The encoders, probe, hand wheel and jog.
+    pub feedback: FeedbackStatus,
+}
+
+/// The feedback blocks' register view in one cycle (all 0 for blocks not built).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FeedbackStatus {
+    /// The encoder channels and the probe.
+    pub encoders: EncoderBankStatus,
+    /// The hand wheel.
+    pub hand_wheel: HandWheelStatus,
+    /// The jog generator.
+    pub jog: JogStatus,
+}
+
+impl FeedbackStatus {
+    /// `STATUS.FEEDBACK_ERROR`: some channel's or the hand wheel's `ILLEGAL`.
+    pub fn feedback_error(&self) -> bool {
+        self.encoders.any_illegal() || self.hand_wheel.illegal
+    }
+}
+
+/// Whether `POSITION` (and with it `LATCH_TIME`, `ENC_COUNT`, `ENC_EDGE_TIME`) is latched
+/// at this edge: `!latch_hold && (boundary || !running)`, with `running` the core's run.
+pub fn position_latch(core_run: bool, rec_ready: bool, latch_hold: bool) -> bool {
+    // `boundary || !running` with `boundary = running && rec_ready`.
+    !latch_hold && (rec_ready || !core_run)
 }
 
 /// Everything the register file sees in one cycle besides its own state.
@@ -125,6 +160,12 @@ pub struct RegisterFile {
     push: bool,
     push_flags: u8,
     kick: bool,
+    /// `ENC_CONTROL.ARM_INDEX_LATCH` pulses, bit `c` for channel `c`.
+    arm_index_latch: u8,
+    /// `ENC_CONTROL.ARM_INDEX_CLEAR` pulses.
+    arm_index_clear: u8,
+    /// `PROBE_CONTROL.ARM` pulse.
+    probe_arm: bool,
     timestamp: u32,
     latch_time: u32,
     period_count: u32,
@@ -142,15 +183,15 @@ pub struct RegisterFile {
     halt_prev: bool,
 }
 
-/// Axis `i` of the per-axis register array at `base` with `stride`, if `addr` is one of
-/// its first `n_axes` elements.
-fn axis_index(addr: u8, base: u8, stride: u8, n_axes: usize) -> Option<usize> {
+/// Element `i` of the register array at `base` with `stride`, if `addr` is one of its
+/// first `count` elements (the axes or channels this build has).
+fn element_index(addr: u8, base: u8, stride: u8, count: usize) -> Option<usize> {
     let offset = addr.checked_sub(base)?;
     if offset % stride != 0 {
         return None;
     }
     let index = usize::from(offset / stride);
-    (index < n_axes).then_some(index)
+    (index < count).then_some(index)
 }
 
 /// `field` narrowed to its low `width` bits (no narrower than it is).
@@ -167,14 +208,44 @@ const PER_AXIS_ARRAYS: [u8; 5] = [
     regs::record_inc::ADDR,
 ];
 
+/// The register arrays with one element per encoder channel.
+const PER_CHANNEL_ARRAYS: [u8; 6] = [
+    regs::enc_count::ADDR,
+    regs::enc_index_latch::ADDR,
+    regs::enc_probe_latch::ADDR,
+    regs::enc_edge_time::ADDR,
+    regs::enc_control::ADDR,
+    regs::enc_status::ADDR,
+];
+
+/// The registers of the hand wheel and the jog: absent, reading 0, without `HAS_MPG`.
+const HAND_WHEEL_REGISTERS: [u8; 12] = [
+    regs::mpg_status::ADDR,
+    regs::mpg_count::ADDR,
+    regs::mpg_detents::ADDR,
+    regs::mpg_control::ADDR,
+    regs::jog_control::ADDR,
+    regs::jog_scale::ADDR,
+    regs::jog_vmax::ADDR,
+    regs::jog_accel::ADDR,
+    regs::jog_window::ADDR,
+    regs::jog_status::ADDR,
+    regs::jog_remaining::ADDR,
+    regs::jog_velocity::ADDR,
+];
+
 /// The `rw` bits this build implements, per address, and their reset values.
 fn implemented_rw(params: &TopParams) -> ([u32; ADDRESSES], [u32; ADDRESSES]) {
     let mut mask = [0u32; ADDRESSES];
     let mut reset = [0u32; ADDRESSES];
     for register in regs::REGISTERS {
         let per_axis = PER_AXIS_ARRAYS.contains(&register.addr);
+        let per_channel = PER_CHANNEL_ARRAYS.contains(&register.addr);
+        if !params.has_mpg && HAND_WHEEL_REGISTERS.contains(&register.addr) {
+            continue;
+        }
         for index in 0..register.count() {
-            if per_axis && index >= params.n_axes {
+            if (per_axis && index >= params.n_axes) || (per_channel && index >= params.n_enc) {
                 continue;
             }
             let Some(addr) = register.addr_of(index) else { continue };
@@ -211,6 +282,9 @@ impl RegisterFile {
             push: false,
             push_flags: 0,
             kick: false,
+            arm_index_latch: 0,
+            arm_index_clear: 0,
+            probe_arm: false,
             timestamp: 0,
             latch_time: 0,
             period_count: 0,
@@ -328,6 +402,86 @@ impl RegisterFile {
         self.clear_faults
     }
 
+    /// `clear_counters` pulse, high in this cycle.
+    pub fn clear_counters(&self) -> bool {
+        self.clear_counters
+    }
+
+    /// `TIMESTAMP` in this cycle.
+    pub fn timestamp(&self) -> u32 {
+        self.timestamp
+    }
+
+    /// `ENC_PRESCALE`.
+    pub fn enc_prescale(&self) -> u16 {
+        self.rw_field(regs::enc_prescale::ADDR, regs::enc_prescale::PRESCALE) as u16
+    }
+
+    /// Channel `c`'s `ENC_CONTROL` settings and this cycle's arm pulses (all 0 for a
+    /// channel this build does not have).
+    pub fn encoder_config(&self, c: usize) -> ChannelConfig {
+        if c >= self.params.n_enc.min(MAX_CHANNELS) {
+            return ChannelConfig::default();
+        }
+        use regs::enc_control as e;
+        let word = self.rw[usize::from(e::addr(c))];
+        ChannelConfig {
+            mode: DecodeMode::from_bits(e::MODE.get(word)),
+            z_active_high: e::Z_ACTIVE_HIGH.get(word) != 0,
+            filter: e::FILTER.get(word) as u8,
+            arm_index_latch: self.arm_index_latch >> c & 1 != 0,
+            arm_index_clear: self.arm_index_clear >> c & 1 != 0,
+        }
+    }
+
+    /// Every channel's [`Self::encoder_config`].
+    pub fn encoder_configs(&self) -> [ChannelConfig; MAX_CHANNELS] {
+        std::array::from_fn(|c| self.encoder_config(c))
+    }
+
+    /// `PROBE_CONTROL` and this cycle's `ARM` pulse.
+    pub fn probe_config(&self) -> ProbeConfig {
+        use regs::probe_control as p;
+        let word = self.rw[usize::from(p::ADDR)];
+        ProbeConfig { active_high: p::ACTIVE_HIGH.get(word) != 0, filter: p::FILTER.get(word) as u8, arm: self.probe_arm }
+    }
+
+    /// `MPG_CONTROL`: `(PRESCALE, FILTER)`.
+    pub fn mpg_control(&self) -> (u16, u8) {
+        use regs::mpg_control as m;
+        let word = self.rw[usize::from(m::ADDR)];
+        (m::PRESCALE.get(word) as u16, m::FILTER.get(word) as u8)
+    }
+
+    /// `JOG_CONTROL.ENABLE`.
+    pub fn jog_enable(&self) -> bool {
+        self.rw_field(regs::jog_control::ADDR, regs::jog_control::ENABLE) != 0
+    }
+
+    /// The jog's settings (`JOG_CONTROL`, `JOG_SCALE`, `JOG_VMAX`, `JOG_ACCEL`,
+    /// `JOG_WINDOW`) and `CONTROL.RUN`, `PERIOD_CLOCKS`, `N_AXES`, the pulses; the top
+    /// fills in the rest.
+    pub fn jog_inputs(&self) -> JogInputs {
+        use regs::jog_control as j;
+        let control = self.rw[usize::from(j::ADDR)];
+        JogInputs {
+            enable: j::ENABLE.get(control) != 0,
+            axis: j::AXIS.get(control) as u8,
+            multiplier: j::MULTIPLIER.get(control) as u8,
+            follow: j::FOLLOW.get(control) != 0,
+            scale: self.rw_field(regs::jog_scale::ADDR, regs::jog_scale::STEPS) as i32,
+            vmax: self.rw_field(regs::jog_vmax::ADDR, regs::jog_vmax::STEPS),
+            accel: self.rw_field(regs::jog_accel::ADDR, regs::jog_accel::STEPS),
+            window: self.rw_field(regs::jog_window::ADDR, regs::jog_window::STEPS) as u16,
+            run: self.run(),
+            period_clocks: self.period_clocks(),
+            n_axes: self.params.n_axes,
+            clear_errors: self.clear_errors,
+            clear_counters: self.clear_counters,
+            ..JogInputs::default()
+        }
+    }
+
     /// `kick` pulse (a register write was served last cycle), high in this cycle.
     pub fn kick(&self) -> bool {
         self.kick
@@ -388,6 +542,9 @@ impl RegisterFile {
             (s::STEP_LOST, hw.step_lost != 0),
             (s::BUS_ERROR, self.bus_error),
             (s::IRQ, self.irq),
+            (s::FEEDBACK_ERROR, hw.feedback.feedback_error()),
+            (s::JOG_ENGAGED, hw.feedback.jog.engaged),
+            (s::JOG_REFUSED, hw.feedback.jog.refused),
         ];
         bits.iter().fold(0, |word, &(field, bit)| field.set(word, u32::from(bit)))
     }
@@ -396,7 +553,17 @@ impl RegisterFile {
     fn any_error(&self, hw: &HardwareStatus) -> bool {
         use regs::status as s;
         let status = self.status(hw);
-        [s::UNDERRUN, s::OVERFLOW, s::RECORD_ERROR, s::RATE_ERROR, s::STEP_LOST, s::BUS_ERROR]
+        let errors = [
+            s::UNDERRUN,
+            s::OVERFLOW,
+            s::RECORD_ERROR,
+            s::RATE_ERROR,
+            s::STEP_LOST,
+            s::BUS_ERROR,
+            s::FEEDBACK_ERROR,
+            s::JOG_REFUSED,
+        ];
+        errors
             .iter()
             .any(|field| field.get(status) != 0)
     }
@@ -434,12 +601,13 @@ impl RegisterFile {
                 use regs::caps as c;
                 [
                     (c::N_AXES, n as u32),
-                    (c::N_ENC, 0),
+                    (c::N_ENC, p.n_enc as u32),
                     (c::FIFO_DEPTH_LOG2, p.fifo_depth_log2),
                     (c::P_WIDTH, p.p_width),
                     (c::TIMING_W, p.timing_w),
                     (c::HAS_SPI, u32::from(p.has_spi)),
                     (c::HAS_PARALLEL, u32::from(p.has_parallel)),
+                    (c::HAS_MPG, u32::from(p.has_mpg)),
                 ]
                 .iter()
                 .fold(0, |word, &(field, value)| field.set(word, value & field.max()))
@@ -469,12 +637,84 @@ impl RegisterFile {
                 use regs::axis_status as a;
                 a::STEP_LOST.set(a::RATE_ERROR.set(0, axes_mask(hw.rate_error)), axes_mask(hw.step_lost))
             }
-            _ => match axis_index(addr, regs::position::ADDR, regs::position::STRIDE, n) {
+            _ => match element_index(addr, regs::position::ADDR, regs::position::STRIDE, n) {
                 Some(axis) => regs::position::STEPS.set(0, self.positions[axis]),
-                None => 0,
+                None => self.read_feedback(addr, &hw.feedback),
             },
         };
         stored | hardware
+    }
+
+    /// The read value of a feedback register's hardware fields (0 for other addresses).
+    fn read_feedback(&self, addr: u8, fb: &FeedbackStatus) -> u32 {
+        let p = &self.params;
+        let enc = &fb.encoders;
+        let wheel = &fb.hand_wheel;
+        let jog = &fb.jog;
+        let flags = |bits: &[(Field, u32)]| bits.iter().fold(0, |word, &(field, value)| field.set(word, value));
+        if !p.has_mpg && HAND_WHEEL_REGISTERS.contains(&addr) {
+            return 0;
+        }
+        match addr {
+            regs::mpg_status::ADDR => {
+                use regs::mpg_status as m;
+                flags(&[
+                    (m::ILLEGAL_COUNT, wheel.illegal_count.into()),
+                    (m::ILLEGAL, wheel.illegal.into()),
+                    (m::A, wheel.a.into()),
+                    (m::B, wheel.b.into()),
+                ])
+            }
+            regs::probe_status::ADDR => {
+                use regs::probe_status as s;
+                flags(&[(s::ARMED, enc.probe_armed.into()), (s::SEEN, enc.probe_seen.into()), (s::ACTIVE, enc.probe_active.into())])
+            }
+            regs::probe_time::ADDR => regs::probe_time::CLOCKS.set(0, enc.probe_time),
+            regs::mpg_count::ADDR => regs::mpg_count::EDGES.set(0, wheel.count),
+            regs::mpg_detents::ADDR => regs::mpg_detents::DETENTS.set(0, wheel.detents as u32),
+            regs::jog_status::ADDR => {
+                use regs::jog_status as j;
+                flags(&[
+                    (j::ENGAGED, jog.engaged.into()),
+                    (j::STOPPING, jog.stopping.into()),
+                    (j::REFUSED, jog.refused.into()),
+                    (j::DROPPED, jog.dropped.into()),
+                ])
+            }
+            regs::jog_remaining::ADDR => regs::jog_remaining::STEPS.set(0, jog.remaining),
+            regs::jog_velocity::ADDR => regs::jog_velocity::STEPS.set(0, jog.velocity),
+            _ => {
+                let n_enc = p.n_enc.min(MAX_CHANNELS);
+                let channel = |base: u8, stride: u8| element_index(addr, base, stride, n_enc).map(|c| &enc.channels[c]);
+                if let Some(ch) = channel(regs::enc_count::ADDR, regs::enc_count::STRIDE) {
+                    regs::enc_count::VALUE.set(0, ch.count)
+                } else if let Some(ch) = channel(regs::enc_index_latch::ADDR, regs::enc_index_latch::STRIDE) {
+                    regs::enc_index_latch::VALUE.set(0, ch.index_latch)
+                } else if let Some(ch) = channel(regs::enc_probe_latch::ADDR, regs::enc_probe_latch::STRIDE) {
+                    regs::enc_probe_latch::VALUE.set(0, ch.probe_latch)
+                } else if let Some(ch) = channel(regs::enc_edge_time::ADDR, regs::enc_edge_time::STRIDE) {
+                    regs::enc_edge_time::CLOCKS.set(0, ch.edge_time)
+                } else if let Some(ch) = channel(regs::enc_status::ADDR, regs::enc_status::STRIDE) {
+                    use regs::enc_status as s;
+                    flags(&[
+                        (s::ILLEGAL_COUNT, ch.illegal_count.into()),
+                        (s::ILLEGAL, ch.illegal.into()),
+                        (s::INDEX_SEEN, ch.index_seen.into()),
+                        (s::LATCH_ARMED, ch.latch_armed.into()),
+                        (s::CLEAR_ARMED, ch.clear_armed.into()),
+                        (s::A, ch.a.into()),
+                        (s::B, ch.b.into()),
+                        (s::Z, ch.z.into()),
+                    ])
+                } else if let Some(axis) =
+                    element_index(addr, regs::probe_position::ADDR, regs::probe_position::STRIDE, p.n_axes)
+                {
+                    regs::probe_position::STEPS.set(0, enc.probe_positions[axis])
+                } else {
+                    0
+                }
+            }
+        }
     }
 
     /// One rising clock edge.
@@ -492,6 +732,9 @@ impl RegisterFile {
         self.clear_counters = false;
         self.push = false;
         self.kick = false;
+        self.arm_index_latch = 0;
+        self.arm_index_clear = 0;
+        self.probe_arm = false;
 
         let mut irq_clear = 0;
         match inp.served {
@@ -514,17 +757,30 @@ impl RegisterFile {
                         self.push = true;
                         self.push_flags = regs::record_push::FLAGS.get(wdata) as u8;
                     }
-                    _ => {}
+                    regs::probe_control::ADDR => self.probe_arm = regs::probe_control::ARM.get(wdata) != 0,
+                    _ => {
+                        use regs::enc_control as e;
+                        let n_enc = self.params.n_enc.min(MAX_CHANNELS);
+                        if let Some(c) = element_index(addr, e::ADDR, e::STRIDE, n_enc) {
+                            self.arm_index_latch = (e::ARM_INDEX_LATCH.get(wdata) as u8) << c;
+                            self.arm_index_clear = (e::ARM_INDEX_CLEAR.get(wdata) as u8) << c;
+                        }
+                    }
                 }
             }
             None => {}
         }
-        if hw.halt {
+        // The jog and a FIFO run never both drive the core: RUN stays 0 while engaged.
+        if hw.halt || hw.feedback.jog.engaged {
             let control = usize::from(regs::control::ADDR);
             self.rw[control] = regs::control::RUN.set(self.rw[control], 0);
         }
+        if hw.halt {
+            let jog = usize::from(regs::jog_control::ADDR);
+            self.rw[jog] = regs::jog_control::ENABLE.set(self.rw[jog], 0);
+        }
 
-        if !inp.latch_hold && (boundary || !hw.core_run) {
+        if position_latch(hw.core_run, inp.rec_ready, inp.latch_hold) {
             self.positions = inp.positions;
             self.latch_time = self.timestamp;
         }
@@ -587,5 +843,52 @@ mod tests {
         assert!(!rf.run(), "halt wins over the write");
         rf.step(&write(regs::control::ADDR, 1));
         assert!(rf.run());
+    }
+
+    #[test]
+    fn arm_pulses_last_one_cycle_and_the_jog_holds_run_at_zero() {
+        let mut rf = RegisterFile::new(&TopParams::default());
+        let arm = regs::enc_control::ARM_INDEX_CLEAR.set(regs::enc_control::reset_word(), 1);
+        rf.step(&write(regs::enc_control::addr(3), arm));
+        let config = rf.encoder_config(3);
+        assert!(config.arm_index_clear && !config.arm_index_latch && config.z_active_high);
+        assert!(!rf.encoder_config(2).arm_index_clear, "only the channel written");
+        assert_eq!(rf.read(regs::enc_control::addr(3), &HardwareStatus::default()), regs::enc_control::reset_word());
+        rf.step(&write(regs::probe_control::ADDR, regs::probe_control::ARM.mask()));
+        assert!(rf.probe_config().arm && !rf.encoder_config(3).arm_index_clear);
+        rf.step(&RegisterFileInputs::default());
+        assert!(!rf.probe_config().arm);
+
+        let engaged = HardwareStatus {
+            feedback: FeedbackStatus {
+                jog: JogStatus { engaged: true, ..Default::default() },
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        rf.step(&RegisterFileInputs { hw: engaged, ..write(regs::control::ADDR, 1) });
+        assert!(!rf.run(), "RUN is forced to 0 while the jog is engaged");
+        let status = rf.read(regs::status::ADDR, &engaged);
+        assert_eq!(regs::status::JOG_ENGAGED.get(status), 1);
+        rf.step(&write(regs::jog_control::ADDR, regs::jog_control::ENABLE.mask()));
+        assert!(rf.jog_enable());
+        let halted = HardwareStatus { halt: true, ..Default::default() };
+        rf.step(&RegisterFileInputs { hw: halted, ..Default::default() });
+        assert!(!rf.jog_enable(), "halt clears ENABLE");
+    }
+
+    #[test]
+    fn absent_channels_and_hand_wheel_read_zero_and_keep_nothing() {
+        let params = TopParams { n_enc: 1, has_mpg: false, ..TopParams::default() };
+        let mut rf = RegisterFile::new(&params);
+        let hw = HardwareStatus::default();
+        assert_eq!(rf.read(regs::enc_control::addr(0), &hw), regs::enc_control::reset_word());
+        assert_eq!(rf.read(regs::enc_control::addr(1), &hw), 0);
+        assert_eq!(rf.read(regs::mpg_control::ADDR, &hw), 0);
+        rf.step(&write(regs::jog_control::ADDR, u32::MAX));
+        assert!(!rf.jog_enable());
+        assert_eq!(rf.read(regs::jog_control::ADDR, &hw), 0);
+        let caps = rf.read(regs::caps::ADDR, &hw);
+        assert_eq!((regs::caps::N_ENC.get(caps), regs::caps::HAS_MPG.get(caps)), (1, 0));
     }
 }

@@ -1,6 +1,11 @@
 //! `finestep_top`: the host-interface top. Two host links (SPI and 8080/FSMC) on one
 //! register bus, the register file, the position FIFO, motion control, the safety
-//! monitor and [`Core`], composed cycle by cycle.
+//! monitor, [`Core`], and the feedback blocks (the [`EncoderBank`] with the probe, the
+//! [`HandWheel`] and the [`JogGenerator`]), composed cycle by cycle.
+//!
+//! The core runs while `(CONTROL.RUN || jog engaged) && !halt`; motion control sees
+//! `CONTROL.RUN && !halt` only. While the jog is engaged the core takes the jog's
+//! records and the FIFO is not popped.
 //!
 //! [`Top::step`] is one clock edge with the pins of [`TopInputs`]; [`Top::outputs`] are
 //! the pins of the current cycle, a function of the state only. Every block computes its
@@ -24,10 +29,15 @@ use finestep_regmap::regs;
 
 use crate::config::CoreParams;
 use crate::core::Core;
+use crate::encoder_bank::{EncoderBank, EncoderBankInputs, MAX_CHANNELS};
+use crate::hand_wheel::{HandWheel, HandWheelInputs};
+use crate::jog_generator::JogGenerator;
 use crate::motion_control::{MotionControl, MotionInputs};
 use crate::parallel_bus_slave::{ParallelBusSlave, ParallelPins};
 use crate::position_fifo::PositionFifo;
-use crate::register_file::{arbitrate, Grant, HardwareStatus, RegisterFile, RegisterFileInputs};
+use crate::register_file::{
+    arbitrate, position_latch, FeedbackStatus, Grant, HardwareStatus, RegisterFile, RegisterFileInputs, ADDRESSES,
+};
 use crate::safety_monitor::{SafetyInputs, SafetyMonitor};
 use crate::spi_frame::{SpiFrame, SpiFrameInputs};
 use crate::spi_slave_phy::{SpiPins, SpiSlavePhy};
@@ -55,11 +65,15 @@ pub struct TopParams {
     pub has_spi: bool,
     /// `HAS_PARALLEL`: the 8080/FSMC slave is built.
     pub has_parallel: bool,
+    /// `N_ENC`: encoder channels, 0 ..= [`MAX_CHANNELS`].
+    pub n_enc: usize,
+    /// `HAS_MPG`: the hand wheel and the jog generator are built.
+    pub has_mpg: bool,
 }
 
 impl Default for TopParams {
     /// The defaults of the Verilog: 4 axes, `P_WIDTH = 20`, `TIMING_W = 12`, 256 records,
-    /// `WD_W = 24`, 50 MHz, both host links.
+    /// `WD_W = 24`, 50 MHz, both host links, 4 encoder channels and the hand wheel.
     fn default() -> Self {
         TopParams {
             n_axes: 4,
@@ -70,6 +84,8 @@ impl Default for TopParams {
             clock_hz: 50_000_000,
             has_spi: true,
             has_parallel: true,
+            n_enc: MAX_CHANNELS,
+            has_mpg: true,
         }
     }
 }
@@ -92,6 +108,9 @@ pub enum TopParamsError {
     /// `wd_w` is 0 or wider than `WATCHDOG_TIMEOUT`.
     #[error("wd_w = {0} is outside 1..={max}", max = regs::watchdog_timeout::CLOCKS.width)]
     WatchdogWidth(u32),
+    /// `n_enc` is above [`MAX_CHANNELS`].
+    #[error("n_enc = {0} is outside 0..={MAX_CHANNELS}")]
+    Encoders(usize),
 }
 
 /// The deepest FIFO whose full level still fits `FIFO_LEVEL.LEVEL`.
@@ -115,6 +134,9 @@ impl TopParams {
         }
         if !within(self.wd_w, regs::watchdog_timeout::CLOCKS.width) {
             return Err(TopParamsError::WatchdogWidth(self.wd_w));
+        }
+        if self.n_enc > MAX_CHANNELS {
+            return Err(TopParamsError::Encoders(self.n_enc));
         }
         Ok(())
     }
@@ -149,6 +171,18 @@ pub mod top_pins {
         pub const ESTOP_PIN: u32 = 8;
         /// Lowest bit of `bus_ad_in[15:0]` (bits 16..=31).
         pub const BUS_AD_IN: u32 = 16;
+        /// Lowest bit of `enc_a[c]` (bits 32..=39, bit `32 + c` for channel `c`).
+        pub const ENC_A: u32 = 32;
+        /// Lowest bit of `enc_b[c]` (bits 40..=47).
+        pub const ENC_B: u32 = 40;
+        /// Lowest bit of `enc_z[c]` (bits 48..=55).
+        pub const ENC_Z: u32 = 48;
+        /// `probe_pin`.
+        pub const PROBE_PIN: u32 = 56;
+        /// `mpg_a`.
+        pub const MPG_A: u32 = 57;
+        /// `mpg_b`.
+        pub const MPG_B: u32 = 58;
     }
 
     /// Bits of [`TopOutputs::pack`](super::TopOutputs::pack).
@@ -201,12 +235,25 @@ pub struct TopInputs {
     pub bus_ad_in: u16,
     /// The E-stop input; its active level is `CONTROL.ESTOP_ACTIVE_HIGH`.
     pub estop_pin: bool,
+    /// Encoder A pins, bit `c` for channel `c` (bits at and above `N_ENC` ignored).
+    pub enc_a: u8,
+    /// Encoder B pins.
+    pub enc_b: u8,
+    /// Encoder index pins.
+    pub enc_z: u8,
+    /// The probe input; its active level is `PROBE_CONTROL.ACTIVE_HIGH`.
+    pub probe_pin: bool,
+    /// Hand wheel A.
+    pub mpg_a: bool,
+    /// Hand wheel B.
+    pub mpg_b: bool,
 }
 
 impl Default for TopInputs {
     /// Idle pins: not in reset, chip selects and strobes high, SCK and MOSI low,
     /// `bus_ad_in` 0, and `estop_pin` 0, which is *released* for the reset polarity
-    /// (`CONTROL.ESTOP_ACTIVE_HIGH = 1`).
+    /// (`CONTROL.ESTOP_ACTIVE_HIGH = 1`); the feedback pins 0 (index and probe inactive
+    /// for their reset polarities).
     fn default() -> Self {
         TopInputs {
             rst: false,
@@ -219,6 +266,12 @@ impl Default for TopInputs {
             bus_wr_n: true,
             bus_ad_in: 0,
             estop_pin: false,
+            enc_a: 0,
+            enc_b: 0,
+            enc_z: 0,
+            probe_pin: false,
+            mpg_a: false,
+            mpg_b: false,
         }
     }
 }
@@ -237,6 +290,12 @@ impl TopInputs {
             | u64::from(self.bus_wr_n) << i::BUS_WR_N
             | u64::from(self.estop_pin) << i::ESTOP_PIN
             | u64::from(self.bus_ad_in) << i::BUS_AD_IN
+            | u64::from(self.enc_a) << i::ENC_A
+            | u64::from(self.enc_b) << i::ENC_B
+            | u64::from(self.enc_z) << i::ENC_Z
+            | u64::from(self.probe_pin) << i::PROBE_PIN
+            | u64::from(self.mpg_a) << i::MPG_A
+            | u64::from(self.mpg_b) << i::MPG_B
     }
 
     /// The pins from one word (bits not in [`top_pins::input`] are ignored).
@@ -254,6 +313,12 @@ impl TopInputs {
             bus_wr_n: bit(i::BUS_WR_N),
             bus_ad_in: (word >> i::BUS_AD_IN) as u16,
             estop_pin: bit(i::ESTOP_PIN),
+            enc_a: (word >> i::ENC_A) as u8,
+            enc_b: (word >> i::ENC_B) as u8,
+            enc_z: (word >> i::ENC_Z) as u8,
+            probe_pin: bit(i::PROBE_PIN),
+            mpg_a: bit(i::MPG_A),
+            mpg_b: bit(i::MPG_B),
         }
     }
 }
@@ -337,6 +402,9 @@ pub struct Top {
     fifo: PositionFifo,
     safety: SafetyMonitor,
     core: Core,
+    encoders: EncoderBank,
+    hand_wheel: HandWheel,
+    jog: JogGenerator,
     cycle: u64,
     /// The SPI frame layer committed a FIFO frame last cycle: the kick's flip-flop
     /// (`kick <- granted write || wr_commit`) for the commit half.
@@ -371,6 +439,9 @@ impl Top {
             fifo: PositionFifo::new(params.fifo_depth_log2),
             safety,
             core: Core::new(params.core_params()),
+            encoders: EncoderBank::new(params.n_enc),
+            hand_wheel: HandWheel::default(),
+            jog: JogGenerator::default(),
             cycle: 0,
             committed_last_cycle: false,
         })
@@ -432,13 +503,33 @@ impl Top {
         &self.parallel
     }
 
+    /// The encoder channels and the probe.
+    pub fn encoders(&self) -> &EncoderBank {
+        &self.encoders
+    }
+
+    /// The hand wheel (stays in reset without `HAS_MPG`).
+    pub fn hand_wheel(&self) -> &HandWheel {
+        &self.hand_wheel
+    }
+
+    /// The jog generator (stays in reset without `HAS_MPG`).
+    pub fn jog(&self) -> &JogGenerator {
+        &self.jog
+    }
+
     /// `halt`: the safety monitor stops the machine.
     pub fn halt(&self) -> bool {
         self.safety.halt()
     }
 
-    /// `core_run = CONTROL.RUN && !halt`.
+    /// The core's run, `(CONTROL.RUN || jog engaged) && !halt` (`STATUS.RUNNING`).
     pub fn core_run(&self) -> bool {
+        (self.registers.run() || self.jog.engaged()) && !self.halt()
+    }
+
+    /// Motion control's run, `CONTROL.RUN && !halt`: the FIFO streams only then.
+    pub fn motion_run(&self) -> bool {
         self.registers.run() && !self.halt()
     }
 
@@ -491,6 +582,20 @@ impl Top {
             step_lost,
             fifo_level: self.fifo.level(),
             fifo_free: self.fifo.depth() - self.fifo.level() - self.fifo.staged(),
+            feedback: self.feedback_status(),
+        }
+    }
+
+    /// The feedback blocks' register view in this cycle.
+    fn feedback_status(&self) -> FeedbackStatus {
+        let encoders = self.encoders.status(&self.registers.encoder_configs(), &self.registers.probe_config());
+        if !self.params.has_mpg {
+            return FeedbackStatus { encoders, ..FeedbackStatus::default() };
+        }
+        FeedbackStatus {
+            encoders,
+            hand_wheel: self.hand_wheel.status(),
+            jog: self.jog.status(self.registers.jog_enable()),
         }
     }
 
@@ -526,23 +631,25 @@ impl Top {
         // The FIFO's write port and read side.
         let spi_port = self.spi_frame.fifo_port();
         let head = self.fifo.head().copied();
+        let engaged = self.jog.engaged();
         let motion_inputs = MotionInputs {
-            core_run: hw.core_run,
+            core_run: self.motion_run(),
             rec_ready: core_out.rec_ready(),
             head: head.as_ref(),
             level: self.fifo.level(),
             start_level: self.registers.start_level(),
             clear_errors: self.registers.clear_errors(),
         };
-        let pop = self.motion.pop(&motion_inputs);
+        // While the jog drives the core the FIFO waits.
+        let pop = !engaged && self.motion.pop(&motion_inputs);
         let (fifo_inputs, push_refused) = self.registers.fifo_port(&spi_port, self.fifo.full(), halt, pop);
 
         let mut core_inputs = CoreInputs {
             run: hw.core_run,
             period_clocks: self.registers.period_clocks(),
             clear_errors: self.registers.clear_errors(),
-            rec_valid: self.motion.rec_valid(&motion_inputs),
-            record: head.unwrap_or_default(),
+            rec_valid: if engaged { self.jog.rec_valid() } else { self.motion.rec_valid(&motion_inputs) },
+            record: if engaged { self.jog.record() } else { head.unwrap_or_default() },
             halt,
             ..CoreInputs::default()
         };
@@ -594,6 +701,46 @@ impl Top {
             parallel_error = self.parallel.step(&pins, granted, rdata);
         }
 
+        // The feedback blocks.
+        let timestamp = self.registers.timestamp();
+        let clear_errors = self.registers.clear_errors();
+        let clear_counters = self.registers.clear_counters();
+        self.encoders.step(&EncoderBankInputs {
+            enc_a: inputs.enc_a,
+            enc_b: inputs.enc_b,
+            enc_z: inputs.enc_z,
+            probe_pin: inputs.probe_pin,
+            prescale: self.registers.enc_prescale(),
+            channels: self.registers.encoder_configs(),
+            probe: self.registers.probe_config(),
+            clear_errors,
+            clear_counters,
+            timestamp,
+            positions: core_out.positions,
+            latch: position_latch(hw.core_run, core_out.rec_ready(), latch_hold),
+        });
+        if p.has_mpg {
+            let (prescale, filter) = self.registers.mpg_control();
+            let detents = self.hand_wheel.detents();
+            self.hand_wheel.step(&HandWheelInputs {
+                mpg_a: inputs.mpg_a,
+                mpg_b: inputs.mpg_b,
+                prescale,
+                filter,
+                clear_errors,
+                clear_counters,
+            });
+            let run_written = matches!(served, Some(r) if r.write
+                && r.addr & (ADDRESSES - 1) as u8 == regs::control::ADDR
+                && regs::control::RUN.get(r.wdata) != 0);
+            let mut jog_inputs = self.registers.jog_inputs();
+            jog_inputs.halt = halt;
+            jog_inputs.detents = detents;
+            jog_inputs.rec_ready = core_out.rec_ready();
+            jog_inputs.run_written = run_written;
+            self.jog.step(&jog_inputs);
+        }
+
         let underrun = self.motion.step(&motion_inputs);
         self.registers.step(&RegisterFileInputs {
             served,
@@ -635,6 +782,10 @@ mod tests {
         let word = inputs.pack();
         assert_eq!(word, 1 | 0b10 | 0b1000 | 0b1111_0000 | 1 << 8 | 0xBEEF << 16);
         assert_eq!(TopInputs::unpack(word), inputs);
+        let feedback = TopInputs { enc_a: 0x81, enc_b: 0x02, enc_z: 0x40, probe_pin: true, mpg_b: true, ..TopInputs::default() };
+        let word = feedback.pack() & !TopInputs::default().pack();
+        assert_eq!(word, 0x81 << 32 | 0x02 << 40 | 0x40 << 48 | 1 << 56 | 1 << 58);
+        assert_eq!(TopInputs::unpack(feedback.pack()), feedback);
         let outputs = TopOutputs { pin_a: 0x81, pin_en: 0x0F, irq: true, bus_ad_out: 0x1234, ..TopOutputs::default() };
         assert_eq!(outputs.pack(), 0x81 | 0x0F << 16 | 1 << 26 | 0x1234 << 32);
         assert_eq!(TopOutputs::unpack(outputs.pack()), outputs);
@@ -649,6 +800,8 @@ mod tests {
         assert_eq!(bad(TopParams { timing_w: 17, ..d }), TopParamsError::TimingWidth(17));
         assert_eq!(bad(TopParams { fifo_depth_log2: 16, ..d }), TopParamsError::FifoDepth(16));
         assert_eq!(bad(TopParams { wd_w: 0, ..d }), TopParamsError::WatchdogWidth(0));
+        assert_eq!(bad(TopParams { n_enc: 5, ..d }), TopParamsError::Encoders(5));
+        assert!(Top::try_new(TopParams { n_enc: 0, has_mpg: false, ..d }).is_ok());
         assert!(std::panic::catch_unwind(|| Top::new(TopParams { n_axes: 9, ..d })).is_err());
     }
 
@@ -666,6 +819,7 @@ mod tests {
         let caps = top.register(regs::caps::ADDR);
         assert_eq!(regs::caps::N_AXES.get(caps), 4);
         assert_eq!(regs::caps::P_WIDTH.get(caps), 20);
+        assert_eq!((regs::caps::N_ENC.get(caps), regs::caps::HAS_MPG.get(caps)), (4, 1));
         assert_eq!(top.outputs(), TopOutputs::default());
     }
 }

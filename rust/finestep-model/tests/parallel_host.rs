@@ -33,10 +33,8 @@ fn register_writes_read_back_as_stored() {
             for (index, value) in writes {
                 let addr = addrs[index.index(addrs.len())];
                 bus.write32(&mut bench, addr, value);
-                let mut stored = value & rw_mask(addr, &p).unwrap();
-                if addr == regs::control::ADDR {
-                    stored = regs::control::RUN.set(stored, 0); // halted since reset
-                }
+                // Halted all along (E-stop fault from reset): RUN and the jog's ENABLE are forced to 0.
+                let stored = halted_write(addr, value & rw_mask(addr, &p).unwrap());
                 expected[usize::from(addr)] = stored;
                 prop_assert_eq!(bus.read32(&mut bench, addr), stored, "register {:#04x}", addr);
             }

@@ -4,6 +4,7 @@
 
 mod host;
 
+use finestep_model::encoder_bank::MAX_CHANNELS;
 use finestep_model::top::TopParams;
 use finestep_model::{PeriodRecord, MAX_AXES};
 use finestep_regmap::regs;
@@ -11,16 +12,18 @@ use host::*;
 use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
-    (1..=MAX_AXES, prop_oneof![Just(20u32), 1..=24u32], prop_oneof![Just(12u32), 1..=16u32], 2..=8u32, 1..=24u32).prop_map(
-        |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w)| TopParams {
+    let feedback = (prop_oneof![Just(MAX_CHANNELS), 0..=MAX_CHANNELS], prop_oneof![Just(true), any::<bool>()]);
+    (1..=MAX_AXES, prop_oneof![Just(20u32), 1..=24u32], prop_oneof![Just(12u32), 1..=16u32], 2..=8u32, 1..=24u32, feedback)
+        .prop_map(|(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg))| TopParams {
             n_axes,
             p_width,
             timing_w,
             fifo_depth_log2,
             wd_w,
+            n_enc,
+            has_mpg,
             ..TopParams::default()
-        },
-    )
+        })
 }
 
 fn master() -> impl Strategy<Value = SpiMaster> {
@@ -62,11 +65,8 @@ fn register_writes_read_back_as_stored() {
                 let addr = addrs[index.index(addrs.len())];
                 let (_, result) = spi.write(&mut bench, addr, value);
                 prop_assert_eq!(result, ACK);
-                let mut stored = value & rw_mask(addr, &p).unwrap();
-                if addr == regs::control::ADDR {
-                    // Halted all along (E-stop fault from reset): RUN is forced to 0.
-                    stored = regs::control::RUN.set(stored, 0);
-                }
+                // Halted all along (E-stop fault from reset): RUN and the jog's ENABLE are forced to 0.
+                let stored = halted_write(addr, value & rw_mask(addr, &p).unwrap());
                 expected[usize::from(addr)] = stored;
                 let (_, words) = spi.read(&mut bench, addr, count);
                 for (k, word) in words.iter().enumerate() {
@@ -83,6 +83,8 @@ fn register_writes_read_back_as_stored() {
             prop_assert_eq!(regs::caps::N_AXES.get(words[2]) as usize, p.n_axes);
             prop_assert_eq!(regs::caps::FIFO_DEPTH_LOG2.get(words[2]), p.fifo_depth_log2);
             prop_assert_eq!(regs::caps::TIMING_W.get(words[2]), p.timing_w);
+            prop_assert_eq!(regs::caps::N_ENC.get(words[2]) as usize, p.n_enc);
+            prop_assert_eq!(regs::caps::HAS_MPG.get(words[2]), u32::from(p.has_mpg));
             Ok(())
         })
         .unwrap();
@@ -215,10 +217,8 @@ impl Frame {
     fn applied_to(&self, before: &Observable, p: &TopParams) -> Observable {
         let mut after = before.clone();
         if let Some((addr, value)) = self.write_target(p) {
-            let mut stored = value & rw_mask(addr, p).unwrap();
-            if addr == regs::control::ADDR {
-                stored = regs::control::RUN.set(stored, 0);
-            }
+            // Halted all along (E-stop fault from reset): RUN and the jog's ENABLE are forced to 0.
+            let stored = halted_write(addr, value & rw_mask(addr, p).unwrap());
             for slot in after.registers.iter_mut().filter(|(a, _)| *a == addr) {
                 slot.1 = stored;
             }

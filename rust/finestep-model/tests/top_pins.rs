@@ -4,12 +4,14 @@
 mod host;
 
 use finestep_model::top::{Top, TopInputs, TopOutputs, TopParams};
+use finestep_model::encoder_bank::MAX_CHANNELS;
 use finestep_model::MAX_AXES;
 use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
-    (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, any::<bool>(), any::<bool>()).prop_map(
-        |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, has_spi, has_parallel)| TopParams {
+    let links = (any::<bool>(), any::<bool>(), 0..=MAX_CHANNELS, any::<bool>());
+    (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links).prop_map(
+        |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (has_spi, has_parallel, n_enc, has_mpg))| TopParams {
             n_axes,
             p_width,
             timing_w,
@@ -18,6 +20,8 @@ fn params() -> impl Strategy<Value = TopParams> {
             clock_hz: 1,
             has_spi,
             has_parallel,
+            n_enc,
+            has_mpg,
         },
     )
 }

@@ -57,12 +57,16 @@ pub struct Bench {
     pub since_reset: u64,
     /// When set, every cycle's [`Sample`] is appended.
     pub trace: Option<Vec<Sample>>,
+    /// When set, every cycle the drive pins A and B of axis `c` are wired to encoder
+    /// channel `c`'s A and B (an encoder reading back a quadrature axis).
+    pub loopback: bool,
 }
 
 impl Bench {
     /// A top held in reset for 2 cycles with idle pins.
     pub fn new(params: TopParams) -> Bench {
-        let mut bench = Bench { top: Top::new(params), pins: TopInputs::default(), since_reset: 0, trace: None };
+        let mut bench =
+            Bench { top: Top::new(params), pins: TopInputs::default(), since_reset: 0, trace: None, loopback: false };
         bench.reset();
         bench
     }
@@ -83,6 +87,11 @@ impl Bench {
                 if let Some(trace) = self.trace.as_mut() {
                     trace.push(sample);
                 }
+            }
+            if self.loopback {
+                let out = self.top.outputs();
+                self.pins.enc_a = out.pin_a;
+                self.pins.enc_b = out.pin_b;
             }
             self.top.step(&self.pins);
             self.since_reset += 1;
@@ -414,6 +423,8 @@ pub fn rw_mask(addr: u8, p: &TopParams) -> Option<u32> {
         (offset % stride == 0 && usize::from(offset / stride) < MAX_AXES).then_some(usize::from(offset / stride))
     };
     let axis_mask = |axis: usize, mask: u32| if axis < p.n_axes { mask } else { 0 };
+    // The hand wheel's and the jog's registers read 0 without HAS_MPG.
+    let mpg = |mask: u32| if p.has_mpg { mask } else { 0 };
     let timing = low(p.timing_w) | low(p.timing_w) << 16;
     match addr {
         regs::control::ADDR => Some(
@@ -426,7 +437,26 @@ pub fn rw_mask(addr: u8, p: &TopParams) -> Option<u32> {
         regs::estop_filter::ADDR => Some(regs::estop_filter::SAMPLES.mask()),
         regs::irq_mask::ADDR => Some(regs::irq_mask::MASK.mask()),
         regs::axis_enable::ADDR => Some(low(p.n_axes as u32)),
+        regs::enc_prescale::ADDR => Some(regs::enc_prescale::PRESCALE.mask()),
+        regs::probe_control::ADDR => {
+            Some(regs::probe_control::ACTIVE_HIGH.mask() | regs::probe_control::FILTER.mask())
+        }
+        regs::mpg_control::ADDR => Some(mpg(regs::mpg_control::PRESCALE.mask() | regs::mpg_control::FILTER.mask())),
+        regs::jog_control::ADDR => {
+            use regs::jog_control as j;
+            Some(mpg(j::ENABLE.mask() | j::AXIS.mask() | j::MULTIPLIER.mask() | j::FOLLOW.mask()))
+        }
+        regs::jog_scale::ADDR => Some(mpg(regs::jog_scale::STEPS.mask())),
+        regs::jog_vmax::ADDR => Some(mpg(regs::jog_vmax::STEPS.mask())),
+        regs::jog_accel::ADDR => Some(mpg(regs::jog_accel::STEPS.mask())),
+        regs::jog_window::ADDR => Some(mpg(regs::jog_window::STEPS.mask())),
         _ => {
+            let channel = addr.checked_sub(regs::enc_control::ADDR).map(usize::from);
+            if let Some(c) = channel.filter(|&c| c < regs::enc_control::COUNT) {
+                use regs::enc_control as e;
+                let mask = e::MODE.mask() | e::Z_ACTIVE_HIGH.mask() | e::FILTER.mask();
+                return Some(if c < p.n_enc { mask } else { 0 });
+            }
             if let Some(axis) = per_axis(regs::axis_timing_a::ADDR, regs::axis_timing_a::STRIDE) {
                 return Some(axis_mask(axis, timing));
             }
@@ -443,6 +473,16 @@ pub fn rw_mask(addr: u8, p: &TopParams) -> Option<u32> {
             }
             None
         }
+    }
+}
+
+/// What a write of `stored` to `addr` leaves while the machine is halted: `halt` forces
+/// `CONTROL.RUN` and `JOG_CONTROL.ENABLE` to 0 over a write.
+pub fn halted_write(addr: u8, stored: u32) -> u32 {
+    match addr {
+        regs::control::ADDR => regs::control::RUN.set(stored, 0),
+        regs::jog_control::ADDR => regs::jog_control::ENABLE.set(stored, 0),
+        _ => stored,
     }
 }
 

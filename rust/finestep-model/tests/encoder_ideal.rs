@@ -1,0 +1,250 @@
+//! The encoder channels against the ideal position of the waveform driving them.
+//!
+//! A quadrature encoder at absolute position `p` (quarter cycles; phase `p mod 4` is
+//! (A,B) = 00, 10, 11, 01, A leading B forward) has crossed, since position `p0`:
+//! x4: `p - p0` edges; x2: the edges of A, at the half-integers `k + 1/2` with `k` even,
+//! `floor((p + 1) / 2) - floor((p0 + 1) / 2)`; x1: the edges of A while B is low, at
+//! `k + 1/2` with `k = 0 mod 4`, `floor((p + 3) / 4) - floor((p0 + 3) / 4)`. A step/dir
+//! source has made the signed number of its step pulses. The README's rate claim: a
+//! state that lasts at least `max(FILTER, 1) * (PRESCALE + 1)` clocks passes the filter
+//! (the extra clock it quotes is margin for A/B skew, which these waveforms include by
+//! varying the state lengths from that minimum). So:
+//! - (a) such waveforms are counted exactly, edge for edge and in order, in every mode;
+//! - (b) glitches of at most `max(FILTER, 1) - 1` samples, on A, B or both, change nothing;
+//! - (c) A and B changing in the same clock is flagged and counted, and never moves the
+//!   count; the legal moves around it still count exactly.
+//!
+//! Every cycle the count moves by at most one, and `edge_time` is the `TIMESTAMP` of
+//! the cycle whose decoding moved it.
+
+use finestep_model::encoder_bank::{ChannelConfig, EncoderBank, EncoderBankInputs, ProbeConfig, MAX_CHANNELS};
+use finestep_model::quadrature_channel::DecodeMode;
+use proptest::prelude::*;
+
+/// Pin levels `(a, b)` at absolute quadrature position `p`.
+fn levels(p: i64) -> (bool, bool) {
+    [(false, false), (true, false), (true, true), (false, true)][p.rem_euclid(4) as usize]
+}
+
+/// The ideal count of a quadrature decoder at absolute position `p` (0 at `p = 0`).
+fn ideal(mode: DecodeMode, p: i64) -> i64 {
+    match mode {
+        DecodeMode::X4 => p,
+        DecodeMode::X2 => (p + 1).div_euclid(2),
+        DecodeMode::X1 => (p + 3).div_euclid(4),
+        DecodeMode::StepDir => unreachable!("step/dir has no quadrature position"),
+    }
+}
+
+/// A stretch of constant pin levels.
+#[derive(Clone, Copy, Debug)]
+struct Segment {
+    clocks: u64,
+    a: bool,
+    b: bool,
+}
+
+/// What a run of a waveform through one channel gave.
+#[derive(Debug)]
+struct Observed {
+    /// The count after every cycle, consecutive repeats removed, as signed numbers.
+    counts: Vec<i64>,
+    illegal: bool,
+    illegal_count: u16,
+}
+
+fn dedup(mut values: Vec<i64>) -> Vec<i64> {
+    values.dedup();
+    values
+}
+
+/// Runs `segments` on channel `channel` of a fresh bank and checks the per-cycle rules.
+fn run(segments: &[Segment], channel: usize, mode: DecodeMode, filter: u8, prescale: u16) -> Result<Observed, TestCaseError> {
+    let mut bank = EncoderBank::new(MAX_CHANNELS);
+    let config = ChannelConfig { mode, z_active_high: true, filter, ..ChannelConfig::default() };
+    let mut inputs = EncoderBankInputs {
+        prescale,
+        channels: [config; MAX_CHANNELS],
+        probe: ProbeConfig { active_high: true, filter: 1, arm: false },
+        ..EncoderBankInputs::default()
+    };
+    let mut counts = vec![0];
+    let mut timestamp = 0u32;
+    for segment in segments {
+        inputs.enc_a = u8::from(segment.a) << channel;
+        inputs.enc_b = u8::from(segment.b) << channel;
+        for _ in 0..segment.clocks {
+            let before = *bank.channel(channel);
+            inputs.timestamp = timestamp;
+            bank.step(&inputs);
+            let after = bank.channel(channel);
+            let moved = after.count().wrapping_sub(before.count()) as i32;
+            prop_assert!(moved.abs() <= 1, "the count moved by {} in cycle {}", moved, timestamp);
+            if moved != 0 {
+                prop_assert_eq!(after.edge_time(), timestamp, "edge_time of the cycle that counted");
+            } else {
+                prop_assert_eq!(after.edge_time(), before.edge_time(), "edge_time moved without a count");
+            }
+            counts.push(i64::from(after.count() as i32));
+            timestamp += 1;
+        }
+    }
+    for other in (0..MAX_CHANNELS).filter(|&c| c != channel) {
+        prop_assert_eq!(bank.channel(other).count(), 0, "idle channel {} counted", other);
+    }
+    let ch = bank.channel(channel);
+    Ok(Observed { counts: dedup(counts), illegal: ch.illegal(), illegal_count: ch.illegal_count() })
+}
+
+/// Settings of one case: mode, `FILTER`, `PRESCALE`, channel.
+fn settings(modes: &'static [DecodeMode], filters: std::ops::RangeInclusive<u8>) -> impl Strategy<Value = (DecodeMode, u8, u16, usize)> {
+    (prop::sample::select(modes), filters, prop_oneof![Just(0u16), 0..=5u16], 0..MAX_CHANNELS)
+}
+
+/// The shortest state that passes the filter: `max(FILTER, 1) * (PRESCALE + 1)` clocks.
+fn min_state(filter: u8, prescale: u16) -> u64 {
+    u64::from(filter.max(1)) * (u64::from(prescale) + 1)
+}
+
+const QUADRATURE: &[DecodeMode] = &[DecodeMode::X4, DecodeMode::X2, DecodeMode::X1];
+
+/// The first change of a pin must come after cycle 0, whose levels the first sample
+/// adopts; long enough at the end for the last state to be counted.
+fn start_and_end(p0: i64, rest: u64, min: u64) -> (Segment, Segment) {
+    let (a, b) = levels(p0);
+    (Segment { clocks: 1 + rest, a, b }, Segment { clocks: 2 * min + 8, a, b })
+}
+
+#[test]
+fn clean_quadrature_counts_exactly_in_every_mode() {
+    let mut runner = finestep_testkit::runner("clean_quadrature_counts_exactly_in_every_mode", 256);
+    let moves = prop::collection::vec((any::<bool>(), 0..=3u64), 1..150);
+    let case = (settings(QUADRATURE, 0..=15), 0..4i64, 0..20u64, moves);
+    runner
+        .run(&case, |((mode, filter, prescale, channel), p0, rest, moves)| {
+            let min = min_state(filter, prescale);
+            let (start, _) = start_and_end(p0, rest, min);
+            let mut segments = vec![start];
+            let mut p = p0;
+            let mut expected = vec![0];
+            for &(forward, extra) in &moves {
+                p += if forward { 1 } else { -1 };
+                let (a, b) = levels(p);
+                segments.push(Segment { clocks: min + extra, a, b });
+                expected.push(ideal(mode, p) - ideal(mode, p0));
+            }
+            segments.push(start_and_end(p, 0, min).1);
+            let observed = run(&segments, channel, mode, filter, prescale)?;
+            prop_assert_eq!(observed.counts, dedup(expected));
+            prop_assert!(!observed.illegal && observed.illegal_count == 0);
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn step_dir_counts_every_step_pulse() {
+    let mut runner = finestep_testkit::runner("step_dir_counts_every_step_pulse", 128);
+    let steps = prop::collection::vec((any::<bool>(), 0..=3u64, 0..=3u64, 0..=3u64), 1..100);
+    let case = (settings(&[DecodeMode::StepDir], 0..=15), any::<bool>(), 0..20u64, steps);
+    runner
+        .run(&case, |((mode, filter, prescale, channel), dir0, rest, steps)| {
+            let min = min_state(filter, prescale);
+            let mut segments = vec![Segment { clocks: 1 + rest, a: false, b: dir0 }];
+            let mut dir = dir0;
+            let mut position = 0;
+            let mut expected = vec![0];
+            for &(up, setup, high, low) in &steps {
+                if up != dir {
+                    dir = up;
+                    segments.push(Segment { clocks: min + setup, a: false, b: dir });
+                }
+                segments.push(Segment { clocks: min + high, a: true, b: dir });
+                segments.push(Segment { clocks: min + low, a: false, b: dir });
+                position += if up { 1 } else { -1 };
+                expected.push(position);
+            }
+            segments.push(Segment { clocks: 2 * min + 8, a: false, b: dir });
+            let observed = run(&segments, channel, mode, filter, prescale)?;
+            prop_assert_eq!(observed.counts, expected);
+            prop_assert!(!observed.illegal, "no illegal transitions in step/dir");
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn glitches_shorter_than_the_filter_never_count() {
+    let mut runner = finestep_testkit::runner("glitches_shorter_than_the_filter_never_count", 192);
+    // Per move: direction, extra clocks, and glitches (which pins: 1 A, 2 B, 3 both;
+    // length and gap as fractions of their ranges).
+    let glitch = (1..=3u8, any::<prop::sample::Index>(), any::<prop::sample::Index>());
+    let moves = prop::collection::vec((prop_oneof![Just(0i64), Just(1), Just(-1)], 0..=3u64, prop::collection::vec(glitch, 0..4)), 1..80);
+    let case = (settings(QUADRATURE, 2..=15), 0..4i64, 0..20u64, moves);
+    runner
+        .run(&case, |((mode, filter, prescale, channel), p0, rest, moves)| {
+            let min = min_state(filter, prescale);
+            let period = u64::from(prescale) + 1;
+            // At most FILTER - 1 samples: any (FILTER - 1) * (PRESCALE + 1) clocks.
+            let longest = u64::from(filter - 1) * period;
+            let (start, _) = start_and_end(p0, rest, min);
+            let mut segments = vec![start];
+            let mut p = p0;
+            let mut expected = vec![0];
+            for (step, extra, glitches) in &moves {
+                p += step;
+                let (a, b) = levels(p);
+                segments.push(Segment { clocks: min + extra, a, b });
+                for &(pins, length, gap) in glitches {
+                    let clocks = 1 + length.index(longest as usize) as u64;
+                    segments.push(Segment { clocks, a: a ^ (pins & 1 != 0), b: b ^ (pins & 2 != 0) });
+                    // At least one clean sample before anything else happens.
+                    segments.push(Segment { clocks: period + gap.index(period as usize) as u64, a, b });
+                }
+                expected.push(ideal(mode, p) - ideal(mode, p0));
+            }
+            segments.push(start_and_end(p, 0, min).1);
+            let observed = run(&segments, channel, mode, filter, prescale)?;
+            prop_assert_eq!(observed.counts, dedup(expected));
+            prop_assert!(!observed.illegal, "a glitch of both pins reached the decoder");
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn both_pins_changing_in_one_clock_is_illegal_and_never_counts() {
+    let mut runner = finestep_testkit::runner("both_pins_changing_in_one_clock_is_illegal_and_never_counts", 192);
+    // Moves of -1, +1 or 2 (both pins at once), with extra clocks.
+    let moves = prop::collection::vec((prop_oneof![3 => Just(1i64), 3 => Just(-1), 1 => Just(2)], 0..=3u64), 1..120);
+    let case = (settings(QUADRATURE, 0..=15), 0..4i64, 0..20u64, moves);
+    runner
+        .run(&case, |((mode, filter, prescale, channel), p0, rest, moves)| {
+            let min = min_state(filter, prescale);
+            let (start, _) = start_and_end(p0, rest, min);
+            let mut segments = vec![start];
+            let mut p = p0;
+            let mut count = 0;
+            let mut expected = vec![0];
+            let mut jumps = 0u16;
+            for &(step, extra) in &moves {
+                let old = p;
+                p += step;
+                if step.abs() == 2 {
+                    jumps += 1;
+                } else {
+                    count += ideal(mode, p) - ideal(mode, old);
+                }
+                let (a, b) = levels(p);
+                segments.push(Segment { clocks: min + extra, a, b });
+                expected.push(count);
+            }
+            segments.push(start_and_end(p, 0, min).1);
+            let observed = run(&segments, channel, mode, filter, prescale)?;
+            prop_assert_eq!(observed.counts, dedup(expected));
+            prop_assert_eq!(observed.illegal_count, jumps);
+            prop_assert_eq!(observed.illegal, jumps > 0);
+            Ok(())
+        })
+        .unwrap();
+}
