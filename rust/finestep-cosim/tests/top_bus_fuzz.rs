@@ -21,7 +21,7 @@ use finestep_host::frame::{self, FRAME_CRC};
 use finestep_host::pins::layout::{IN_BUS_AD0, IN_BUS_ADV_N, IN_BUS_CS_N, IN_BUS_RD_N, IN_BUS_WR_N};
 use finestep_host::regs::{
     axis_enable, axis_mode, axis_timing_a, axis_timing_b, command, control, fifo_level, id, period_clocks, position,
-    start_level, status,
+    start_level, status, enc_control, enc_status,
 };
 use finestep_host::stream::wait_idle;
 use finestep_host::{Bus, BusError, PinHost, PinTarget, PinTiming, SpiBus, SpiTransfer};
@@ -46,7 +46,8 @@ fn fail(e: BusError) -> TestCaseError {
 
 /// The bits of each `rw` register that store (docs/registers.md, with the widths of
 /// this build: N_AXES = 4, TIMING_W = 12, P_WIDTH = 20, WD_W = 24), and its reset value.
-/// CONTROL is rw too but never written by the fuzzer (it would run or halt the machine).
+/// CONTROL is rw too but never written by the fuzzer (it would run or halt the machine),
+/// nor are PROBE_CONTROL (its ARM) and JOG_CONTROL (its ENABLE, cleared by the halt).
 fn rw_register(addr: u8) -> Option<(u32, u32)> {
     let timing = 0x0FFF_0FFF;
     match addr {
@@ -63,6 +64,13 @@ fn rw_register(addr: u8) -> Option<(u32, u32)> {
             _ => None,
         },
         0x48..=0x4B => Some((u32::MAX, 0)), // RECORD_INC[0..4]
+        0x51 => Some((0xFFFF, 0)),                // ENC_PRESCALE
+        0x57 => Some((0xF_FFFF, 4 << 16 | 499)),  // MPG_CONTROL
+        0x59 => Some((u32::MAX, 1 << 16)),        // JOG_SCALE
+        0x5A => Some((0x7FFF_FFFF, 1 << 16)),     // JOG_VMAX
+        0x5B => Some((0x7FFF_FFFF, 4096)),        // JOG_ACCEL
+        0x5C => Some((0xFFFF, 1000)),             // JOG_WINDOW
+        0x70..=0x73 => Some((0xF7, 0x14)),        // ENC_CONTROL: mode, index polarity, filter
         _ => None,
     }
 }
@@ -72,7 +80,7 @@ fn rw_register(addr: u8) -> Option<(u32, u32)> {
 /// arrays' elements of absent axes, must change nothing.
 fn safe_addr() -> impl Strategy<Value = u8> {
     let rw: Vec<u8> = (0u8..0x80).filter(|&a| rw_register(a).is_some()).collect();
-    let all: Vec<u8> = (0u8..0x80).filter(|&a| !matches!(a, 0x04 | 0x05 | 0x50)).collect();
+    let all: Vec<u8> = (0u8..0x80).filter(|&a| !matches!(a, 0x04 | 0x05 | 0x50 | 0x52 | 0x58)).collect();
     prop_oneof![3 => prop::sample::select(rw), 1 => prop::sample::select(all)]
 }
 
@@ -278,6 +286,10 @@ struct Expect {
     refused: u32,
     /// The 8080 slave's low half waiting for its high half: (register, data).
     low_half: Option<(u8, u16)>,
+    /// ENC_STATUS of each channel but its Z bit: INDEX_SEEN and the arms. The index pin
+    /// stays low, so the only index event is the one a switch to active-low polarity
+    /// makes (z after polarity rises).
+    enc_arms: [u32; 4],
 }
 
 impl Expect {
@@ -299,6 +311,7 @@ impl Expect {
             parallel_errors: 0,
             refused: 0,
             low_half: None,
+            enc_arms: [0; 4],
         }
     }
 
@@ -317,6 +330,7 @@ impl Expect {
 
     /// A register write that reached the register bus (either master).
     fn write(&mut self, addr: u8, value: u32) {
+        let old_z_active_high = enc_control::Z_ACTIVE_HIGH.get(self.rw[usize::from(addr)]) != 0;
         if let Some((mask, _)) = rw_register(addr) {
             self.rw[usize::from(addr)] = value & mask;
         }
@@ -337,6 +351,22 @@ impl Expect {
                     self.refused = 0;
                 }
                 assert_eq!(value & command::CLEAR_FAULTS.mask(), 0, "the fuzzer keeps the machine halted");
+            }
+            0x70..=0x73 => {
+                // The rw part is stored above; `old` is what was there before.
+                let status = &mut self.enc_arms[usize::from(addr - 0x70)];
+                let (seen, latch, clear) = (enc_status::INDEX_SEEN, enc_status::LATCH_ARMED, enc_status::CLEAR_ARMED);
+                if old_z_active_high && enc_control::Z_ACTIVE_HIGH.get(value) == 0 {
+                    // The event, in the cycle after the write, takes the arms held before.
+                    let was_armed = latch.get(*status);
+                    *status = seen.set(latch.set(clear.set(*status, 0), 0), seen.get(*status) | was_armed);
+                }
+                if enc_control::ARM_INDEX_LATCH.get(value) != 0 {
+                    *status = seen.set(latch.set(*status, 1), 0);
+                }
+                if enc_control::ARM_INDEX_CLEAR.get(value) != 0 {
+                    *status = clear.set(*status, 1);
+                }
             }
             0x50 => {
                 let raw: Vec<i32> = (0..N_AXES).map(|i| self.rw[0x48 + i] as i32).collect();
@@ -411,6 +441,12 @@ impl Expect {
             0x14 => self.frame_errors & 0xFFFF,
             0x15 => self.parallel_errors & 0xFFFF,
             0x16 => self.refused & 0xFFFF,
+            // PROBE_CONTROL at reset: active high, filter 1; ENC_STATUS: the arms.
+            0x52 => 0x11,
+            0x74..=0x77 => {
+                let z = enc_control::Z_ACTIVE_HIGH.get(self.rw[usize::from(addr - 4)]) ^ 1;
+                enc_status::Z.set(self.enc_arms[usize::from(addr - 0x74)], z)
+            }
             a if rw_register(a).is_some() => self.rw[usize::from(a)],
             // COMMAND, PERIOD_COUNT, UNDERRUN_COUNT, AXIS_STATUS, POSITION,
             // RECORD_PUSH, absent axes, unmapped: 0 (nothing ran).
