@@ -97,7 +97,11 @@ fn a_few_constants_by_hand() {
     assert_eq!(constants["FS_AXIS_MODE_COUNT"], integer(8u32));
     assert_eq!(constants["FS_AXIS_MODE_STRIDE"], integer(4u32));
     assert_eq!(constants["FS_ADDR_WIDTH"], integer(7u32));
-    assert_eq!(constants["FS_MAP_VERSION_MINOR"], integer(2u32));
+    assert_eq!(constants["FS_MAP_VERSION_MINOR"], integer(3u32));
+    assert_eq!(constants["FS_ENC_COUNT_ADDR"], sized(7, 0x60u8));
+    assert_eq!(constants["FS_ENC_COUNT_COUNT"], integer(4u32));
+    assert_eq!(constants["FS_MPG_CONTROL_PRESCALE_RESET"], sized(16, 499u32));
+    assert_eq!(constants["FS_JOG_VMAX_STEPS_WIDTH"], integer(31u32));
 }
 
 #[test]
