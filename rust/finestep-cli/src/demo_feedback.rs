@@ -123,9 +123,9 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
     let line = LineMove {
         from_mm: vec![0.0, 0.0],
         to_mm: vec![0.0, 10.0],
-        feed_mm_s: 20.0,
+        feed_mm_s: 40.0,
         start_speed_mm_s: 0.5,
-        accel_mm_s2: 200.0,
+        accel_mm_s2: 400.0,
     };
     let records: Vec<PeriodRecord> = interpolate_line(&kinematics, &line)?;
     // The host keeps the FIFO topped up and polls the probe between bursts.
@@ -145,7 +145,7 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
     }
     machine.arm_probe(true, 2).map_err(bus)?;
     machine.set_control(true, false, true).map_err(bus)?;
-    println!("  grating pass: Z 0 -> 10 mm at 20 mm/s, {} periods of 2 ms; probe hits:", records.len());
+    println!("  grating pass: Z 0 -> 10 mm at 40 mm/s, {} periods of 2 ms; probe hits:", records.len());
     println!("    mark   time ms   Z steps   Z by steps mm   Z grating mm   lag um   X grating um");
     let mut hits = Vec::new();
     let budget = records.len() as u64 * 100_000 + 20_000_000;
@@ -234,9 +234,9 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
     );
     // (detents, rate, multiplier, follow): the last turn asks for 40 mm/s in drop mode.
     let turns: [(i64, u64, JogMultiplier, bool); 4] = [
-        (25, 100, JogMultiplier::X10, true),
-        (-10, 100, JogMultiplier::X10, true),
-        (3, 50, JogMultiplier::X100, true),
+        (12, 200, JogMultiplier::X10, true),
+        (-5, 200, JogMultiplier::X10, true),
+        (3, 100, JogMultiplier::X100, true),
         (-4, 400, JogMultiplier::X100, false),
     ];
     let mut target = 0i64;
