@@ -421,3 +421,65 @@ fn jog_and_run_exclude_each_other() {
     assert!(!machine.jog().unwrap().engaged);
     assert_eq!(jog_control::ENABLE.get(machine.bus().read_one(jog_control::ADDR).unwrap()), 0);
 }
+
+/// Random jog settings and wheel turns, RTL and model in lockstep (the RTL's multiplier
+/// and square root against the model's exact integer arithmetic, every period): the
+/// axis comes to rest within the continuous-time bound and ends exactly on the detents.
+#[test]
+fn random_jogs_land_exactly() {
+    let mut runner = finestep_testkit::runner("random_jogs_land_exactly", 6);
+    let case = (
+        (1i32 << 14)..=(8 << 16),
+        (1i32 << 10)..=(1 << 16),
+        -(2i32 << 16)..=(2 << 16),
+        any::<bool>(),
+        prop::collection::vec((-6i64..=6, 150u64..=900), 1..4),
+    );
+    runner
+        .run(&case, |(vmax, accel, scale, x10, turns)| {
+            let scale = if scale == 0 { 1 << 16 } else { scale };
+            let (multiplier, factor) = if x10 { (JogMultiplier::X10, 10) } else { (JogMultiplier::X1, 1) };
+            let setup = JogSetup {
+                axis: 0,
+                multiplier,
+                follow: true,
+                scale: Increment::from_bits(scale),
+                vmax: Increment::from_bits(vmax),
+                accel: Increment::from_bits(accel),
+                window: 100,
+            };
+            let mut machine = connect("random_jogs_land_exactly", wheel_plant(20));
+            machine.configure_hand_wheel(9, 3).unwrap();
+            machine.configure_jog(&setup).unwrap();
+            machine.enable_jog(&setup, true).unwrap();
+            let mut target = 0i64;
+            for (detents, per_edge) in turns {
+                turn(&mut machine, detents, per_edge);
+                let distance = (detents * factor * i64::from(scale)).unsigned_abs() as f64;
+                target += detents * factor * i64::from(scale);
+                // The continuous-time bound, the wheel's own time and a margin, in periods.
+                let bound = 2.0 * (distance / f64::from(accel)).sqrt()
+                    + distance / f64::from(vmax)
+                    + (4 * detents.unsigned_abs() * per_edge) as f64 / f64::from(PERIOD)
+                    + 10.0;
+                let mut periods = 0.0;
+                loop {
+                    machine.bus().wait(5 * u64::from(PERIOD)).unwrap();
+                    periods += 5.0;
+                    let jog = machine.jog().unwrap();
+                    let plant_loop = machine.bus_ref().link().target();
+                    let wheel_done = plant_loop.plant().hand_wheel().unwrap().script_end() <= plant_loop.cycle();
+                    if wheel_done && jog.velocity == Increment::ZERO && jog.remaining == 0 {
+                        break;
+                    }
+                    prop_assert!(periods <= bound + 10.0, "not at rest after {} periods (bound {}): {:?}", periods, bound, jog);
+                }
+            }
+            // Position in steps: the DDA rounds the commanded position half up.
+            let expected = ((target + (1 << 15)) >> 16) as i32;
+            prop_assert_eq!(machine.positions().unwrap().steps[0], expected);
+            prop_assert_eq!(plant_of(&machine).drive(0).commanded(), i64::from(expected));
+            Ok(())
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+}
