@@ -2,7 +2,8 @@
 CARGO ?= cargo
 export VERILATOR ?= verilator
 
-.PHONY: all setup demo test test-long lint formal bench cargo-test wheel-check regmap clean
+.PHONY: all setup demo test test-long lint formal bench cargo-test wheel-check regmap clean \
+        bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report
 
 all: test
 
@@ -35,6 +36,33 @@ test-long: setup
 # Regenerate docs/registers.md from hdl/registers.toml (cargo test fails while it is stale).
 regmap: setup
 	$(CARGO) run -q --release -p finestep-regmap -- markdown docs/registers.md
+
+# Bitstreams with the open tools from PyPI (outputs under build/bitstream/, never
+# committed); each fails unless nextpnr meets the constrained clock. Not part of `make test`.
+bitstream-ecp5: setup
+	@./scripts/bitstream.sh ecp5
+
+bitstream-ice40: setup
+	@./scripts/bitstream.sh ice40-hx8k
+	@./scripts/bitstream.sh ice40-up5k
+
+# The MachXO2-1200 in the CPLD configuration (does not fit yet: fails with the overflow),
+# then the same flow on a MachXO3LF-6900 (place, route, timing; no packer database).
+bitstream-machxo2: setup
+	@./scripts/bitstream.sh machxo3-6900
+	@./scripts/bitstream.sh machxo2-1200
+
+# Quartus projects for Cyclone IV E and MAX II under build/quartus/, checked with Yosys synth_intel.
+quartus: setup
+	@./scripts/quartus.sh
+
+# The Lattice Diamond project for the XP2 under build/diamond/.
+diamond: setup
+	@./scripts/diamond.sh
+
+# docs/resources.md: resources per block and for the whole core, Fmax per open target.
+report: setup
+	@./scripts/report.sh
 
 bench: setup
 	$(CARGO) run --release -q -p finestep-cli -- bench

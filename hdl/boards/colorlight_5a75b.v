@@ -1,0 +1,88 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Board top for the Colorlight 5A-75B v8.0 (Lattice ECP5 LFE5U-25F-6BG256C), the board
+// LiteX-CNC users run: the 25 MHz oscillator through the ECP5 PLL to CLOCK_HZ, the reset
+// button and the PLL lock through board_reset, and finestep_top with its SPI link, 4
+// axes, 4 encoder channels, the probe and the hand wheel. Pins: constraints/colorlight_5a75b_v8.lpf.
+//
+// No logic of its own beyond the MISO tri-state and the LED (lit while out of reset).
+module colorlight_5a75b #(
+    parameter N_AXES          = 4,
+    parameter N_ENC           = 4,
+    parameter HAS_MPG         = 1,
+    parameter FIFO_DEPTH_LOG2 = 8
+) (
+    // clock, reset
+    input  wire              clk25,      // 25 MHz oscillator
+    input  wire              button_n,   // KEY+, active low
+    output wire              led_n,      // DATA_LED-, active low
+    // SPI to the host
+    input  wire              spi_cs_n,
+    input  wire              spi_sck,
+    input  wire              spi_mosi,
+    output wire              spi_miso,
+    output wire              irq,
+    // machine
+    input  wire              estop_pin,
+    input  wire              probe_pin,
+    input  wire              mpg_a,
+    input  wire              mpg_b,
+    input  wire [N_ENC-1:0]  enc_a,
+    input  wire [N_ENC-1:0]  enc_b,
+    input  wire [N_ENC-1:0]  enc_z,
+    output wire [N_AXES-1:0] pin_a,
+    output wire [N_AXES-1:0] pin_b,
+    output wire [N_AXES-1:0] pin_en
+);
+
+    // 25 MHz * CLKFB_DIV / CLKI_DIV; VCO = CLOCK_HZ * CLKOP_DIV = 600 MHz (400-800 MHz).
+    localparam CLOCK_HZ  = 100000000;
+    localparam CLKI_DIV  = 1;
+    localparam CLKFB_DIV = 4;
+    localparam CLKOP_DIV = 6;
+
+    wire clk, pll_locked, rst;
+    wire miso, miso_oe;
+    wire [15:0] bus_ad_out_unused;
+    wire bus_ad_oe_unused;
+
+    (* FREQUENCY_PIN_CLKI = "25", FREQUENCY_PIN_CLKOP = "100" *)
+    EHXPLLL #(
+        .PLLRST_ENA("DISABLED"), .INTFB_WAKE("DISABLED"), .STDBY_ENABLE("DISABLED"),
+        .DPHASE_SOURCE("DISABLED"), .OUTDIVIDER_MUXA("DIVA"), .OUTDIVIDER_MUXB("DIVB"),
+        .OUTDIVIDER_MUXC("DIVC"), .OUTDIVIDER_MUXD("DIVD"),
+        .CLKI_DIV(CLKI_DIV), .CLKFB_DIV(CLKFB_DIV), .FEEDBK_PATH("CLKOP"),
+        .CLKOP_ENABLE("ENABLED"), .CLKOP_DIV(CLKOP_DIV), .CLKOP_CPHASE(CLKOP_DIV - 1),
+        .CLKOP_FPHASE(0)
+    ) pll (
+        .CLKI(clk25), .CLKFB(clk), .CLKOP(clk), .LOCK(pll_locked),
+        .RST(1'b0), .STDBY(1'b0),
+        .PHASESEL0(1'b0), .PHASESEL1(1'b0), .PHASEDIR(1'b1), .PHASESTEP(1'b1),
+        .PHASELOADREG(1'b1), .PLLWAKESYNC(1'b0), .ENCLKOP(1'b0)
+    );
+
+    board_reset reset (
+        .clk(clk), .button_n(button_n), .locked(pll_locked), .rst(rst)
+    );
+
+    finestep_top #(
+        .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
+        .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
+    ) chip (
+        .clk(clk), .rst(rst),
+        .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),
+        .spi_miso(miso), .spi_miso_oe(miso_oe),
+        .bus_cs_n(1'b1), .bus_adv_n(1'b1), .bus_rd_n(1'b1), .bus_wr_n(1'b1),
+        .bus_ad_in(16'd0), .bus_ad_out(bus_ad_out_unused), .bus_ad_oe(bus_ad_oe_unused),
+        .estop_pin(estop_pin),
+        .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
+        .mpg_a(mpg_a), .mpg_b(mpg_b),
+        .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
+    );
+
+    assign spi_miso = miso_oe ? miso : 1'bz;
+    assign led_n = rst;
+
+endmodule
+
+`default_nettype wire

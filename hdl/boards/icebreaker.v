@@ -1,0 +1,84 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Board top for the 1BitSquared iCEBreaker (iCE40UP5K-SG48): the 12 MHz oscillator on
+// pin 35 through the iCE40 PLL to 24 MHz, the user button and the PLL lock through
+// board_reset, and finestep_top with its SPI link, 2 axes, 1 encoder channel and the
+// probe on the three PMODs. Pins: constraints/icebreaker.pcf.
+//
+// A reduced configuration: the UP5K has 5280 logic cells. The full core needs about
+// 7600 SB_LUT4s (docs/resources.md); 4 axes with 1 encoder and no hand wheel still take
+// 5812 logic cells and 3 axes (4913) do not place, so N_AXES = 2, N_ENC = 1, HAS_MPG = 0
+// (3990 cells). The pins of axes 2 and 3 and of the hand wheel stay on the board, unused.
+module icebreaker #(
+    parameter N_AXES          = 2,
+    parameter N_ENC           = 1,
+    parameter HAS_MPG         = 0,
+    parameter FIFO_DEPTH_LOG2 = 8
+) (
+    // clock, reset
+    input  wire              clk12,      // 12 MHz oscillator, a PLL pad
+    input  wire              button_n,   // user button BTN_N, active low
+    output wire              led_n,      // green LED, lit while out of reset
+    // SPI to the host
+    input  wire              spi_cs_n,
+    input  wire              spi_sck,
+    input  wire              spi_mosi,
+    output wire              spi_miso,
+    output wire              irq,
+    // machine
+    input  wire              estop_pin,
+    input  wire              probe_pin,
+    input  wire              mpg_a,
+    input  wire              mpg_b,
+    input  wire [N_ENC-1:0]  enc_a,
+    input  wire [N_ENC-1:0]  enc_b,
+    input  wire [N_ENC-1:0]  enc_z,
+    output wire [N_AXES-1:0] pin_a,
+    output wire [N_AXES-1:0] pin_b,
+    output wire [N_AXES-1:0] pin_en
+);
+
+    // 12 MHz * (DIVF + 1) / 2**DIVQ = 24 MHz (icepll -i 12 -o 24); VCO 768 MHz.
+    localparam CLOCK_HZ = 24000000;
+
+    wire clk, pll_locked, rst;
+    wire miso, miso_oe;
+    wire [15:0] bus_ad_out_unused;
+    wire bus_ad_oe_unused;
+
+    SB_PLL40_PAD #(
+        .FEEDBACK_PATH("SIMPLE"),
+        .DIVR(4'd0),
+        .DIVF(7'd63),
+        .DIVQ(3'd5),
+        .FILTER_RANGE(3'd1)
+    ) pll (
+        .PACKAGEPIN(clk12), .PLLOUTGLOBAL(clk), .LOCK(pll_locked),
+        .RESETB(1'b1), .BYPASS(1'b0)
+    );
+
+    board_reset reset (
+        .clk(clk), .button_n(button_n), .locked(pll_locked), .rst(rst)
+    );
+
+    finestep_top #(
+        .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
+        .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
+    ) chip (
+        .clk(clk), .rst(rst),
+        .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),
+        .spi_miso(miso), .spi_miso_oe(miso_oe),
+        .bus_cs_n(1'b1), .bus_adv_n(1'b1), .bus_rd_n(1'b1), .bus_wr_n(1'b1),
+        .bus_ad_in(16'd0), .bus_ad_out(bus_ad_out_unused), .bus_ad_oe(bus_ad_oe_unused),
+        .estop_pin(estop_pin),
+        .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
+        .mpg_a(mpg_a), .mpg_b(mpg_b),
+        .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
+    );
+
+    assign spi_miso = miso_oe ? miso : 1'bz;
+    assign led_n = rst;
+
+endmodule
+
+`default_nettype wire

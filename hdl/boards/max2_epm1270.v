@@ -1,0 +1,70 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Board top for an Altera MAX II EPM1270T144C5 CPLD in the reduced CPLD configuration:
+// 4 axes, 2 encoder channels, the probe, the hand wheel and jog, the 8080/FSMC bus to
+// the host (no SPI) and a 4-record FIFO, at the board's 50 MHz oscillator (MAX II has
+// no PLL). Reset: power-on and the reset key through board_reset. Pins and timing:
+// constraints/max2_epm1270.qsf and .sdc (Quartus project constraints/max2_epm1270.qpf).
+//
+// This configuration does not fit the 1270 logic elements yet (docs/resources.md gives
+// the figure); the project is written so that it builds as soon as the core does.
+module max2_epm1270 #(
+    parameter N_AXES          = 4,
+    parameter N_ENC           = 2,
+    parameter HAS_MPG         = 1,
+    parameter FIFO_DEPTH_LOG2 = 2
+) (
+    // clock, reset
+    input  wire              clk50,      // 50 MHz oscillator
+    input  wire              reset_n,    // reset key, active low
+    // 8080/FSMC bus to the host
+    input  wire              bus_cs_n,
+    input  wire              bus_adv_n,
+    input  wire              bus_rd_n,
+    input  wire              bus_wr_n,
+    inout  wire [15:0]       bus_ad,
+    output wire              irq,
+    // machine
+    input  wire              estop_pin,
+    input  wire              probe_pin,
+    input  wire              mpg_a,
+    input  wire              mpg_b,
+    input  wire [N_ENC-1:0]  enc_a,
+    input  wire [N_ENC-1:0]  enc_b,
+    input  wire [N_ENC-1:0]  enc_z,
+    output wire [N_AXES-1:0] pin_a,
+    output wire [N_AXES-1:0] pin_b,
+    output wire [N_AXES-1:0] pin_en
+);
+
+    localparam CLOCK_HZ = 50000000;
+
+    wire rst;
+    wire [15:0] bus_ad_out;
+    wire bus_ad_oe;
+    wire spi_miso_unused, spi_miso_oe_unused;
+
+    board_reset reset (
+        .clk(clk50), .button_n(reset_n), .locked(1'b1), .rst(rst)
+    );
+
+    finestep_top #(
+        .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
+        .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
+    ) chip (
+        .clk(clk50), .rst(rst),
+        .spi_cs_n(1'b1), .spi_sck(1'b0), .spi_mosi(1'b0),
+        .spi_miso(spi_miso_unused), .spi_miso_oe(spi_miso_oe_unused),
+        .bus_cs_n(bus_cs_n), .bus_adv_n(bus_adv_n), .bus_rd_n(bus_rd_n), .bus_wr_n(bus_wr_n),
+        .bus_ad_in(bus_ad), .bus_ad_out(bus_ad_out), .bus_ad_oe(bus_ad_oe),
+        .estop_pin(estop_pin),
+        .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
+        .mpg_a(mpg_a), .mpg_b(mpg_b),
+        .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
+    );
+
+    assign bus_ad = bus_ad_oe ? bus_ad_out : 16'bz;
+
+endmodule
+
+`default_nettype wire
