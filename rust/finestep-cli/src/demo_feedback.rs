@@ -7,6 +7,7 @@
 //! - a hand-wheel jog: the wheel (100 detents a turn, contact bounce) is turned in
 //!   bursts at x10 and x100; the FPGA's jog generator moves X after it within its
 //!   velocity and acceleration limits and lands on every detent exactly.
+//!
 //! The chip is the Verilated RTL in lockstep with the reference model, every pin on
 //! every clock; the host driver talks to it over SPI at its pins.
 
@@ -77,7 +78,7 @@ fn plant() -> anyhow::Result<Plant> {
             }),
         }),
     };
-    Ok(Plant::new(config, 0x000F_EED)?)
+    Ok(Plant::new(config, 0xFEED)?)
 }
 
 fn connect<T: PinTarget>(target: T) -> anyhow::Result<Chip<T>> {

@@ -170,6 +170,9 @@ impl From<FeedbackError> for BusError {
     }
 }
 
+/// POSITION, ENC_COUNT and ENC_EDGE_TIME words as read.
+type RawFeedback = (Vec<u32>, Vec<u32>, Vec<u32>);
+
 impl<B: Bus> Machine<B> {
     fn check_channel(&self, channel: usize) -> Result<(), FeedbackError> {
         if channel >= self.caps.n_enc {
@@ -238,7 +241,7 @@ impl<B: Bus> Machine<B> {
     /// when it moved (over SPI, one read frame holds the latch for its whole length).
     pub fn feedback(&mut self) -> Result<FeedbackSnapshot, BusError> {
         let (n_axes, n_enc) = (self.caps.n_axes, self.caps.n_enc);
-        let read = |bus: &mut B| -> Result<(Vec<u32>, Vec<u32>, Vec<u32>), BusError> {
+        let read = |bus: &mut B| -> Result<RawFeedback, BusError> {
             let mut steps = vec![0u32; n_axes];
             bus.read(position::addr(0), &mut steps)?;
             let mut counts = vec![0u32; n_enc];
@@ -247,7 +250,7 @@ impl<B: Bus> Machine<B> {
             bus.read(enc_edge_time::addr(0), &mut edge_times)?;
             Ok((steps, counts, edge_times))
         };
-        let snapshot = |(steps, counts, edge_times): (Vec<u32>, Vec<u32>, Vec<u32>), latch_time| FeedbackSnapshot {
+        let snapshot = |(steps, counts, edge_times): RawFeedback, latch_time| FeedbackSnapshot {
             steps: steps.into_iter().map(|w| w as i32).collect(),
             counts: counts.into_iter().map(|w| w as i32).collect(),
             edge_times,

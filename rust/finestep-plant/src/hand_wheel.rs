@@ -285,9 +285,9 @@ mod tests {
         }
 
         fn sample(&mut self, n: u64, pins: [bool; 2]) -> (bool, bool) {
-            for i in 0..2 {
-                if pins[i] != self.candidate[i] {
-                    self.candidate[i] = pins[i];
+            for (i, &pin) in pins.iter().enumerate() {
+                if pin != self.candidate[i] {
+                    self.candidate[i] = pin;
                     self.since[i] = n;
                 }
                 if n + 1 - self.since[i] >= self.hold {

@@ -241,6 +241,9 @@ impl Plant {
 
 #[cfg(test)]
 mod tests {
+    /// A test input at a cycle: a core pin word, or a hand-wheel turn (detents, cycles per edge).
+    type TimedInput = (u64, Option<u64>, Option<(i64, u64)>);
+
     use super::*;
     use crate::testutil::{step_pins, StepPlan, X4};
     use crate::{CountsPerStep, Faults, Glitches, Mechanics};
@@ -318,11 +321,11 @@ mod tests {
                 let pins = core_pins(&plans);
                 let end = pins.last().map_or(0, |p| p.0).max(3000) + 40 * tau + 4 * 30 * 12;
                 // Inputs: core pin words and hand wheel turns, in cycle order.
-                let mut inputs: Vec<(u64, Option<u64>, Option<(i64, u64)>)> =
+                let mut inputs: Vec<TimedInput> =
                     pins.iter().map(|&(t, w)| (t, Some(w), None)).collect();
                 inputs.extend(turns.iter().map(|&(t, d, cpe)| (t, None, Some((d, cpe)))));
                 inputs.sort_by_key(|i| (i.0, i.1.is_none()));
-                let apply = |plant: &mut Plant, input: &(u64, Option<u64>, Option<(i64, u64)>)| {
+                let apply = |plant: &mut Plant, input: &TimedInput| {
                     if let Some(w) = input.1 {
                         plant.set_core_pins(input.0, w);
                     }

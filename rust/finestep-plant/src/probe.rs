@@ -150,6 +150,8 @@ mod tests {
     use crate::{Drive, DriveConfig};
 
     #[test]
+    // `3..=2` is deliberate: an empty contact range must touch nowhere.
+    #[allow(clippy::reversed_empty_ranges)]
     fn pin_follows_the_surface() {
         let config = ProbeConfig {
             axis: 0,
@@ -164,7 +166,7 @@ mod tests {
         for n in 0..200 {
             probe.advance_to(n, stepper.drive());
             let predicted = probe.next_change(stepper.drive());
-            if n > 0 && probe.touching() != seen.last().map_or(false, |s: &(u64, i64, bool)| s.2) {
+            if n > 0 && probe.touching() != seen.last().is_some_and(|s: &(u64, i64, bool)| s.2) {
                 seen.push((n, probe.count(), probe.touching()));
             }
             stepper.input(n);
