@@ -103,12 +103,8 @@ module jog_generator #(
         if (disengage) engaged_reg <= 1'b0;
 
         if (engage) begin
-            engaged_reg  <= 1'b1;
-            axis_reg     <= axis_select;
-            target_reg   <= 48'd0;
-            cmd_reg      <= 48'd0;
-            vel_reg      <= 32'd0;
-            next_vel_reg <= 32'd0;
+            engaged_reg <= 1'b1;
+            axis_reg    <= axis_select;
         end
 
         if ((enable && run) || (enable && !engaged_reg && (!period_ok || !axis_ok)) ||
@@ -117,8 +113,9 @@ module jog_generator #(
         else if (clear_errors)
             refused_reg <= 1'b0;
 
-        if (halt) begin
-            engaged_reg  <= 1'b0;
+        if (halt) engaged_reg <= 1'b0;
+        // Engaging starts from rest at position 0; a halt leaves the jog there.
+        if (engage || halt) begin
             target_reg   <= 48'd0;
             cmd_reg      <= 48'd0;
             vel_reg      <= 32'd0;

@@ -248,11 +248,7 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
             machine.enable_jog(&setup, true).map_err(bus)?;
         }
         let dropped_before = machine.jog().map_err(bus)?.dropped;
-        let factor = match multiplier {
-            JogMultiplier::X1 => 1,
-            JogMultiplier::X10 => 10,
-            JogMultiplier::X100 => 100,
-        };
+        let factor = multiplier.factor();
         let per_edge = HandWheel::cycles_per_edge(CLOCK_HZ as u64, rate);
         let wheel = machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().expect("the plant has a wheel");
         wheel.turn(detents, per_edge)?;

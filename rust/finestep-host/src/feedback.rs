@@ -8,8 +8,8 @@ use finestep_model::Increment;
 use crate::regs::{
     command, enc_control, enc_count, enc_edge_time, enc_index_latch, enc_prescale, enc_probe_latch,
     enc_status, jog_accel, jog_control, jog_remaining, jog_scale, jog_status, jog_velocity, jog_vmax,
-    jog_window, latch_time, mpg_control, mpg_count, mpg_detents, mpg_status, position, probe_control,
-    probe_position, probe_status, probe_time, status,
+    jog_window, mpg_control, mpg_count, mpg_detents, mpg_status, position, probe_control,
+    probe_position, probe_status, probe_time,
 };
 use crate::{Bus, BusError, Machine};
 
@@ -95,6 +95,17 @@ pub enum JogMultiplier {
     X100,
 }
 
+impl JogMultiplier {
+    /// Travel per detent, in units of `JogSetup::scale`.
+    pub fn factor(self) -> i64 {
+        match self {
+            JogMultiplier::X1 => 1,
+            JogMultiplier::X10 => 10,
+            JogMultiplier::X100 => 100,
+        }
+    }
+}
+
 /// Configuration of the hand-wheel jog.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JogSetup {
@@ -170,9 +181,6 @@ impl From<FeedbackError> for BusError {
     }
 }
 
-/// POSITION, ENC_COUNT and ENC_EDGE_TIME words as read.
-type RawFeedback = (Vec<u32>, Vec<u32>, Vec<u32>);
-
 impl<B: Bus> Machine<B> {
     fn check_channel(&self, channel: usize) -> Result<(), FeedbackError> {
         if channel >= self.caps.n_enc {
@@ -241,7 +249,7 @@ impl<B: Bus> Machine<B> {
     /// when it moved (over SPI, one read frame holds the latch for its whole length).
     pub fn feedback(&mut self) -> Result<FeedbackSnapshot, BusError> {
         let (n_axes, n_enc) = (self.caps.n_axes, self.caps.n_enc);
-        let read = |bus: &mut B| -> Result<RawFeedback, BusError> {
+        let ((steps, counts, edge_times), latch_time) = self.read_latched(16, "feedback", |bus| {
             let mut steps = vec![0u32; n_axes];
             bus.read(position::addr(0), &mut steps)?;
             let mut counts = vec![0u32; n_enc];
@@ -249,32 +257,13 @@ impl<B: Bus> Machine<B> {
             let mut edge_times = vec![0u32; n_enc];
             bus.read(enc_edge_time::addr(0), &mut edge_times)?;
             Ok((steps, counts, edge_times))
-        };
-        let snapshot = |(steps, counts, edge_times): RawFeedback, latch_time| FeedbackSnapshot {
+        })?;
+        Ok(FeedbackSnapshot {
             steps: steps.into_iter().map(|w| w as i32).collect(),
             counts: counts.into_iter().map(|w| w as i32).collect(),
             edge_times,
             latch_time,
-        };
-        for _ in 0..16 {
-            let before = self.bus.read_one(latch_time::ADDR)?;
-            let first = read(&mut self.bus)?;
-            let after = self.bus.read_one(latch_time::ADDR)?;
-            if before == after {
-                return Ok(snapshot(first, after));
-            }
-            // Stopped, the latch follows every clock: two equal reads with the core still
-            // stopped describe its state.
-            let running = |bus: &mut B| -> Result<bool, BusError> { Ok(status::RUNNING.get(bus.read_one(status::ADDR)?) != 0) };
-            if !running(&mut self.bus)? {
-                let again = read(&mut self.bus)?;
-                let latest = self.bus.read_one(latch_time::ADDR)?;
-                if again == first && !running(&mut self.bus)? {
-                    return Ok(snapshot(again, latest));
-                }
-            }
-        }
-        Err(BusError::Protocol("the latch kept moving during 16 attempts to read the feedback".into()))
+        })
     }
 
     /// Configures the probe (polarity, filter) and arms it for one event.

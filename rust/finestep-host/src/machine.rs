@@ -219,25 +219,41 @@ impl<B: Bus> Machine<B> {
     /// LATCH_TIME.
     pub fn positions(&mut self) -> Result<Positions, BusError> {
         let n = self.caps.n_axes;
-        let read = |bus: &mut B| -> Result<Vec<i32>, BusError> {
+        let (steps, latch_time) = self.read_latched(8, "positions", |bus| {
             let mut words = vec![0u32; n];
             bus.read(position::addr(0), &mut words)?;
-            Ok(words.into_iter().map(|w| w as i32).collect())
-        };
-        for _ in 0..8 {
+            Ok(words.into_iter().map(|w| w as i32).collect::<Vec<i32>>())
+        })?;
+        Ok(Positions { steps, latch_time })
+    }
+
+    /// Reads registers that the position latch takes on one clock (`read`), coherently,
+    /// with the LATCH_TIME they belong to: LATCH_TIME is read before and after, and the
+    /// read is retried if the latch moved in between. A stopped core latches every clock:
+    /// then two equal reads with the core still stopped describe its state, with the
+    /// later LATCH_TIME. Gives up after `attempts`, naming `what`.
+    pub(crate) fn read_latched<T: PartialEq>(
+        &mut self,
+        attempts: usize,
+        what: &str,
+        read: impl Fn(&mut B) -> Result<T, BusError>,
+    ) -> Result<(T, u32), BusError> {
+        let running = |bus: &mut B| -> Result<bool, BusError> { Ok(status::RUNNING.get(bus.read_one(status::ADDR)?) != 0) };
+        for _ in 0..attempts {
             let before = self.bus.read_one(latch_time::ADDR)?;
-            let steps = read(&mut self.bus)?;
+            let first = read(&mut self.bus)?;
             let after = self.bus.read_one(latch_time::ADDR)?;
             if before == after {
-                return Ok(Positions { steps, latch_time: after });
+                return Ok((first, after));
             }
-            let running = status::RUNNING.get(self.bus.read_one(status::ADDR)?) != 0;
-            let again = read(&mut self.bus)?;
-            let latest = self.bus.read_one(latch_time::ADDR)?;
-            if !running && again == steps && status::RUNNING.get(self.bus.read_one(status::ADDR)?) == 0 {
-                return Ok(Positions { steps, latch_time: latest });
+            if !running(&mut self.bus)? {
+                let again = read(&mut self.bus)?;
+                let latest = self.bus.read_one(latch_time::ADDR)?;
+                if again == first && !running(&mut self.bus)? {
+                    return Ok((again, latest));
+                }
             }
         }
-        Err(BusError::Protocol("positions kept changing during 8 attempts to read them".into()))
+        Err(BusError::Protocol(format!("the latch kept moving during {attempts} attempts to read the {what}")))
     }
 }

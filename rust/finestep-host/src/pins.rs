@@ -39,9 +39,6 @@ pub mod layout {
     pub const IN_MPG_A: u32 = 57;
     /// Input: hand wheel B.
     pub const IN_MPG_B: u32 = 58;
-    /// The inputs a host drives (bits 0..31); the feedback pins above come from the
-    /// machine.
-    pub const HOST_INPUTS: u64 = 0xFFFF_FFFF;
     /// Output: pin A of axis `i` is bit `OUT_PIN_A0 + i`.
     pub const OUT_PIN_A0: u32 = 0;
     /// Output: pin B of axis `i`.
