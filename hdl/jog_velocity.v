@@ -21,8 +21,7 @@ module jog_velocity (
     input  wire        restart,
     input  wire        drop,
     // operands, sampled in the cycle after restart
-    input  wire [47:0] target,
-    input  wire [47:0] cmd,
+    input  wire [47:0] distance,    // e = target - cmd
     input  wire [31:0] vel,
     input  wire        enable,
     input  wire [30:0] vmax,
@@ -98,7 +97,7 @@ module jog_velocity (
     always @(posedge clk) begin
         if (busy_reg) step_reg <= step_reg + 7'd1;
         if (busy_reg && step_reg == SAMPLE_AT) begin
-            e_reg      <= target - cmd;
+            e_reg      <= distance;
             vel_reg    <= vel;
             enable_reg <= enable;
             vmax_reg   <= vmax;

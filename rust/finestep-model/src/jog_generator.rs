@@ -165,6 +165,13 @@ pub struct JogGenerator {
     comp_age: u32,
     /// The computation's result, taken from the state of `b + 1`.
     comp_result: i32,
+    /// `m * JOG_SCALE` and `JOG_WINDOW * 65536` of the previous cycle (the first of the
+    /// two registers the detent configuration passes).
+    travel_cfg: i64,
+    window_cfg: i64,
+    /// The travel and window a detent uses: the configuration of two cycles before.
+    travel: i64,
+    window: i64,
 }
 
 impl JogGenerator {
@@ -267,10 +274,9 @@ impl JogGenerator {
 
             // Follow: a detent moves the target, or is dropped in drop mode.
             if en && delta != 0 {
-                let step = i64::from(delta.signum()) * multiplier(inp.multiplier.into()) * i64::from(inp.scale);
+                let step = i64::from(delta.signum()) * self.travel;
                 let cand = wrap48(self.target + step);
-                let window = i64::from(inp.window) << 16;
-                if inp.follow || wrap48(cand - self.cmd).abs() <= window {
+                if inp.follow || wrap48(cand - self.cmd).abs() <= self.window {
                     self.target = cand;
                 } else {
                     dropped = true;
@@ -298,6 +304,10 @@ impl JogGenerator {
         }
 
         self.dropped = if inp.clear_counters { 0 } else { self.dropped.wrapping_add(u16::from(dropped)) };
+        self.travel = self.travel_cfg;
+        self.window = self.window_cfg;
+        self.travel_cfg = multiplier(inp.multiplier.into()) * i64::from(inp.scale);
+        self.window_cfg = i64::from(inp.window) << 16;
     }
 
     /// `target, cmd, vel, next_vel <- 0`, the computation dropped.
@@ -362,6 +372,24 @@ mod tests {
     }
 
     #[test]
+    fn a_detent_uses_the_configuration_of_two_cycles_before() {
+        let mut jog = JogGenerator::default();
+        let mut inp = engaged_inputs();
+        jog.step(&inp);
+        jog.step(&inp);
+        inp.multiplier = 1; // x10, written now: the next detent still moves x1
+        inp.detents = 1;
+        jog.step(&inp);
+        assert_eq!(jog.target(), 65536);
+        inp.detents = 2;
+        jog.step(&inp);
+        assert_eq!(jog.target(), 2 * 65536, "one cycle after the write: still x1");
+        inp.detents = 3;
+        jog.step(&inp);
+        assert_eq!(jog.target(), 12 * 65536, "two cycles after: x10");
+    }
+
+    #[test]
     fn engages_only_when_allowed_and_refuses_otherwise() {
         let mut jog = JogGenerator::default();
         let short = JogInputs { period_clocks: 127, ..engaged_inputs() };
@@ -381,6 +409,7 @@ mod tests {
         let mut jog = JogGenerator::default();
         let mut inp = engaged_inputs();
         jog.step(&inp);
+        jog.step(&inp); // the configuration reaches the detents two cycles after it is set
         inp.detents = 1;
         jog.step(&inp);
         inp.rec_ready = true;

@@ -225,6 +225,7 @@ fn land(vmax: u32, accel: u32, e: i32, period: u32, limit: usize) -> Result<(Vec
     let mut h = Harness::new(inputs(&c), period);
     let mut books = Books::default();
     h.step(0);
+    h.step(0); // the detent configuration takes two cycles to reach the detents
     h.step(1);
     prop_assert_eq!(h.jog.target(), i64::from(e));
     while books.records.len() < limit {
@@ -321,7 +322,7 @@ fn every_fixed_target_is_reached() {
 fn first_spec_counterexample_arrive_overshoots() {
     let (records, jog) = land(65536, 4096, 8193, 200, 50).unwrap();
     // Now: up at A, then the floor min(|e|, A) and the last step of 1.
-    assert_eq!(&records[..5], &[0, 4096, 4096, 1, 0]);
+    assert_eq!(&records[..4], &[4096, 4096, 1, 0], "{records:?}");
     assert_eq!(jog.cmd(), 8193);
 }
 
@@ -332,7 +333,7 @@ fn first_spec_counterexample_arrive_overshoots() {
 #[test]
 fn first_spec_counterexample_slow_jog_never_arrives() {
     let (records, jog) = land(1000, 4096, 1500, 200, 100).unwrap();
-    assert_eq!(&records[..4], &[0, 1000, 500, 0]);
+    assert_eq!(&records[..3], &[1000, 500, 0], "{records:?}");
     assert_eq!((jog.cmd(), jog.target()), (1500, 1500));
 }
 
