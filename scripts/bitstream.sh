@@ -72,7 +72,7 @@ case $target in
         pnr_args=(--up5k --package sg48 --pcf constraints/icebreaker.pcf)
         pnr_out=(--asc) ; pnr_ext=asc
         pack=yowasp-icepack ; bit_ext=bin
-        target_mhz=24 ;;
+        target_mhz=20 ;;
     machxo2-1200)
         default_seed=1
         top=machxo2_1200

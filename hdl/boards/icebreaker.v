@@ -1,7 +1,7 @@
 `timescale 1ns / 1ps
 `default_nettype none
 // Board top for the 1BitSquared iCEBreaker (iCE40UP5K-SG48): the 12 MHz oscillator on
-// pin 35 through the iCE40 PLL to 24 MHz, the user button and the PLL lock through
+// pin 35 through the iCE40 PLL to 20.25 MHz, the user button and the PLL lock through
 // board_reset, and finestep_top with its SPI link, 2 axes, 1 encoder channel and the
 // probe on the three PMODs. Pins: constraints/icebreaker.pcf.
 //
@@ -38,8 +38,9 @@ module icebreaker #(
     output wire [N_AXES-1:0] pin_en
 );
 
-    // 12 MHz * (DIVF + 1) / 2**DIVQ = 24 MHz (icepll -i 12 -o 24); VCO 768 MHz.
-    localparam CLOCK_HZ = 24000000;
+    // 12 MHz * (DIVF + 1) / 2**DIVQ = 20.25 MHz (icepll -i 12 -o 20.25); VCO 648 MHz.
+    // The UP5K is the slow iCE40: 24 MHz left the placer no margin.
+    localparam CLOCK_HZ = 20250000;
 
     wire clk, pll_locked, rst;
     wire miso, miso_oe;
@@ -49,7 +50,7 @@ module icebreaker #(
     SB_PLL40_PAD #(
         .FEEDBACK_PATH("SIMPLE"),
         .DIVR(4'd0),
-        .DIVF(7'd63),
+        .DIVF(7'd53),
         .DIVQ(3'd5),
         .FILTER_RANGE(3'd1)
     ) pll (
