@@ -53,11 +53,16 @@ module dda_axis #(
             wire [31:0] unused_inc_top = {{SUM_W{1'b0}}, inc[31:SUM_W]};
         end
     endgenerate
-    wire signed [SUM_W-1:0] sum = $signed({2'b00, acc_reg}) + $signed(inc_resized);
-    wire wrap_up   = (sum >= modulus);
+    // acc + d, acc + d - M and acc + d + M side by side (each a three-input sum: one
+    // carry chain), then a choice: no carry chain waits for another.
+    wire signed [SUM_W-1:0] acc_wide = $signed({2'b00, acc_reg});
+    wire signed [SUM_W-1:0] sum       = acc_wide + $signed(inc_resized);
+    wire signed [SUM_W-1:0] sum_minus = acc_wide + $signed(inc_resized) - modulus;
+    wire signed [SUM_W-1:0] sum_plus  = acc_wide + $signed(inc_resized) + modulus;
+    wire wrap_up   = !sum_minus[SUM_W-1];   // acc + d >= M
     wire wrap_down = sum[SUM_W-1];
     wire signed [SUM_W-1:0] sum_wrapped =
-        wrap_up ? (sum - modulus) : (wrap_down ? (sum + modulus) : sum);
+        wrap_up ? sum_minus : (wrap_down ? sum_plus : sum);
     // The wrapped sum is in [0, M): its sign and carry bits are always zero.
     wire [1:0] unused_wrapped_top = sum_wrapped[SUM_W-1:ACC_W];
 

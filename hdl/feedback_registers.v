@@ -98,6 +98,7 @@ module feedback_registers #(
     localparam MPG = (HAS_MPG != 0);
 
     integer w, r;   // loop indices, one per process
+    reg [31:0] enc_control_word, enc_status_word;   // one channel's ENC_CONTROL and ENC_STATUS
 
     always @(posedge clk) begin
         enc_arm_latch_reg <= {N_ENC{1'b0}};
@@ -214,34 +215,38 @@ module feedback_registers #(
                 default: ;
             endcase
         end
+        // The per-channel arrays and the probe positions: an OR of masked words (the map
+        // keeps addresses distinct), a shallow tree where a chain of overriding ifs would
+        // be one 2:1 multiplexer per register in series.
         for (r = 0; r < N_ENC; r = r + 1) begin
-            if ({25'd0, addr} == {25'd0, FS_ENC_COUNT_ADDR} + r * FS_ENC_COUNT_STRIDE)
-                rdata = enc_count[32*r +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_INDEX_LATCH_ADDR} + r * FS_ENC_INDEX_LATCH_STRIDE)
-                rdata = enc_index_latch[32*r +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_PROBE_LATCH_ADDR} + r * FS_ENC_PROBE_LATCH_STRIDE)
-                rdata = enc_probe_latch[32*r +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_EDGE_TIME_ADDR} + r * FS_ENC_EDGE_TIME_STRIDE)
-                rdata = enc_edge_time[32*r +: 32];
-            if ({25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + r * FS_ENC_CONTROL_STRIDE) begin
-                rdata[FS_ENC_CONTROL_MODE_LSB +: 2]       = enc_mode_reg[2*r +: 2];
-                rdata[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB]   = enc_z_active_high_reg[r];
-                rdata[FS_ENC_CONTROL_FILTER_LSB +: 4]     = enc_filter_reg[4*r +: 4];
-            end
-            if ({25'd0, addr} == {25'd0, FS_ENC_STATUS_ADDR} + r * FS_ENC_STATUS_STRIDE) begin
-                rdata[FS_ENC_STATUS_ILLEGAL_COUNT_LSB +: 16] = enc_illegal_count[16*r +: 16];
-                rdata[FS_ENC_STATUS_ILLEGAL_LSB]             = enc_illegal[r];
-                rdata[FS_ENC_STATUS_INDEX_SEEN_LSB]          = enc_index_seen[r];
-                rdata[FS_ENC_STATUS_LATCH_ARMED_LSB]         = enc_latch_armed[r];
-                rdata[FS_ENC_STATUS_CLEAR_ARMED_LSB]         = enc_clear_armed[r];
-                rdata[FS_ENC_STATUS_A_LSB]                   = enc_a[r];
-                rdata[FS_ENC_STATUS_B_LSB]                   = enc_b[r];
-                rdata[FS_ENC_STATUS_Z_LSB]                   = enc_z[r];
-            end
+            enc_control_word = 32'd0;
+            enc_control_word[FS_ENC_CONTROL_MODE_LSB +: 2]     = enc_mode_reg[2*r +: 2];
+            enc_control_word[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB] = enc_z_active_high_reg[r];
+            enc_control_word[FS_ENC_CONTROL_FILTER_LSB +: 4]   = enc_filter_reg[4*r +: 4];
+            enc_status_word = 32'd0;
+            enc_status_word[FS_ENC_STATUS_ILLEGAL_COUNT_LSB +: 16] = enc_illegal_count[16*r +: 16];
+            enc_status_word[FS_ENC_STATUS_ILLEGAL_LSB]             = enc_illegal[r];
+            enc_status_word[FS_ENC_STATUS_INDEX_SEEN_LSB]          = enc_index_seen[r];
+            enc_status_word[FS_ENC_STATUS_LATCH_ARMED_LSB]         = enc_latch_armed[r];
+            enc_status_word[FS_ENC_STATUS_CLEAR_ARMED_LSB]         = enc_clear_armed[r];
+            enc_status_word[FS_ENC_STATUS_A_LSB]                   = enc_a[r];
+            enc_status_word[FS_ENC_STATUS_B_LSB]                   = enc_b[r];
+            enc_status_word[FS_ENC_STATUS_Z_LSB]                   = enc_z[r];
+            rdata = rdata
+                | ({32{{25'd0, addr} == {25'd0, FS_ENC_COUNT_ADDR} + r * FS_ENC_COUNT_STRIDE}} & enc_count[32*r +: 32])
+                | ({32{{25'd0, addr} == {25'd0, FS_ENC_INDEX_LATCH_ADDR} + r * FS_ENC_INDEX_LATCH_STRIDE}} &
+                   enc_index_latch[32*r +: 32])
+                | ({32{{25'd0, addr} == {25'd0, FS_ENC_PROBE_LATCH_ADDR} + r * FS_ENC_PROBE_LATCH_STRIDE}} &
+                   enc_probe_latch[32*r +: 32])
+                | ({32{{25'd0, addr} == {25'd0, FS_ENC_EDGE_TIME_ADDR} + r * FS_ENC_EDGE_TIME_STRIDE}} &
+                   enc_edge_time[32*r +: 32])
+                | ({32{{25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + r * FS_ENC_CONTROL_STRIDE}} & enc_control_word)
+                | ({32{{25'd0, addr} == {25'd0, FS_ENC_STATUS_ADDR} + r * FS_ENC_STATUS_STRIDE}} & enc_status_word);
         end
         for (r = 0; r < N_AXES; r = r + 1) begin
-            if ({25'd0, addr} == {25'd0, FS_PROBE_POSITION_ADDR} + r * FS_PROBE_POSITION_STRIDE)
-                rdata = probe_position[32*r +: 32];
+            rdata = rdata
+                | ({32{{25'd0, addr} == {25'd0, FS_PROBE_POSITION_ADDR} + r * FS_PROBE_POSITION_STRIDE}} &
+                   probe_position[32*r +: 32]);
         end
     end
 

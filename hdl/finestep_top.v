@@ -55,7 +55,6 @@ module finestep_top #(
 
     localparam REC_W   = 32 * N_AXES + 8;
     localparam LEVEL_W = FIFO_DEPTH_LOG2 + 1;
-    localparam [LEVEL_W-1:0] FIFO_DEPTH = 1 << FIFO_DEPTH_LOG2;
 
     // Register bus
     wire        spi_req, spi_we, spi_grant;
@@ -87,7 +86,7 @@ module finestep_top #(
     wire               fifo_valid, fifo_pop, fifo_full, fifo_overflow_unused;
     wire [REC_W-1:0]   fifo_head;
     wire [LEVEL_W-1:0] fifo_level, fifo_staged;
-    wire [LEVEL_W-1:0] fifo_free = FIFO_DEPTH - fifo_level - fifo_staged;
+    wire [LEVEL_W-1:0] fifo_free;
     // SPI frame layer events
     wire       latch_hold, spi_crc_error, spi_frame_error, spi_refused;
     wire [7:0] spi_refused_count;
@@ -274,7 +273,8 @@ module finestep_top #(
         .wr_commit(spi_wr_commit || push_write),
         .wr_abort(spi_wr_abort),
         .rd_valid(fifo_valid), .rd_pop(fifo_pop), .rd_data(fifo_head),
-        .level(fifo_level), .staged(fifo_staged), .full(fifo_full), .overflow(fifo_overflow_unused)
+        .level(fifo_level), .staged(fifo_staged), .free(fifo_free), .full(fifo_full),
+        .overflow(fifo_overflow_unused)
     );
 
     motion_control #(

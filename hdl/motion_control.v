@@ -80,7 +80,8 @@ module motion_control #(
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
-    always @(*) assume (fifo_valid == (fifo_level != {LEVEL_W{1'b0}}));
+    // The FIFO shows a record only when it holds one (a committed record may not be readable yet).
+    always @(*) if (fifo_valid) assume (fifo_level != {LEVEL_W{1'b0}});
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($rose(gate_reg)) assert ($past(reached) && !$past(underrun_reg) && $past(core_run));
         if ($past(!core_run)) assert (!gate_reg && at_rest_reg);

@@ -4,19 +4,27 @@
 // interpolation and the period timer (seed 000's position-control buffer, PMAC's rotary
 // buffer). First-word-fall-through: the head record is on rd_data whenever rd_valid.
 //
-// The storage is a simple dual-port RAM with a registered read, so it infers block RAM;
-// the read address looks one entry ahead on a pop, and a write to the entry being read
-// is forwarded, so rd_data is valid in the cycle after the write that fills an empty
-// FIFO. A write to a full FIFO is refused (nothing is overwritten) and sets the sticky
-// overflow; a pop of an empty FIFO does nothing.
+// The store is a simple dual-port RAM with a registered read, so it infers block RAM;
+// the read address looks one entry ahead on an internal pop, and a write to the entry
+// being read is forwarded. In front of it sits an output register (out stage) that holds
+// the head record: the RAM's read data only ever goes (through the forwarding mux) to
+// that register, never into the consumer's logic. The out stage is loaded from the store
+// whenever the store has a committed record and the out stage is empty or popped by
+// rd_pop in this cycle, so a pop with another committed record behind the head keeps
+// rd_valid high (no bubble). A write to a full FIFO is refused (nothing is overwritten)
+// and sets the sticky overflow; a pop of an empty FIFO does nothing.
 //
 // Writes are staged: they enter the RAM behind the committed records and become
 // readable (and count in level) only at wr_commit; wr_abort drops every staged record.
 // A bus slave writes a frame's records as they arrive and commits them only when the
 // frame's CRC checks, so a corrupted or aborted frame never reaches the period timer.
+// level and full count the record in the out stage: the capacity is exactly DEPTH.
 //
-// Latency: write to rd_valid 1 clock. Invariants: level == written - read, level <= DEPTH,
-// and rd_data is the oldest unread record whenever rd_valid.
+// Latency: write (with commit) to rd_valid 2 clocks when the FIFO is empty. With L the
+// committed records (out stage included) and v = rd_valid before an edge, and
+// pop = rd_pop && v && !flush: after the edge rd_valid = !flush && (pop ? L >= 2 :
+// (v || L >= 1)). Invariants: level == written - read, level + staged <= DEPTH, and
+// rd_data is the oldest unread record whenever rd_valid.
 module position_fifo #(
     parameter WIDTH      = 136,
     parameter DEPTH_LOG2 = 8
@@ -24,7 +32,7 @@ module position_fifo #(
     // clock, reset
     input  wire                clk,
     input  wire                rst,
-    input  wire                flush,          // empty the FIFO (pointers only)
+    input  wire                flush,          // empty the FIFO (pointers and out stage)
     input  wire                clear_errors,
     // write side
     input  wire                wr_en,          // stage a record
@@ -36,8 +44,9 @@ module position_fifo #(
     input  wire                rd_pop,
     output wire [WIDTH-1:0]    rd_data,
     // status
-    output wire [DEPTH_LOG2:0] level,          // committed records
+    output wire [DEPTH_LOG2:0] level,          // committed records (out stage included)
     output wire [DEPTH_LOG2:0] staged,         // records written but not yet committed
+    output wire [DEPTH_LOG2:0] free,           // DEPTH - committed - staged, from a register
     output wire                full,           // committed + staged == DEPTH
     output wire                overflow
 );
@@ -49,24 +58,32 @@ module position_fifo #(
     reg [DEPTH_LOG2-1:0] wr_ptr_reg;      // end of the committed records
     reg [DEPTH_LOG2-1:0] stage_ptr_reg;   // end of the staged records
     reg [DEPTH_LOG2-1:0] rd_ptr_reg;
-    reg [DEPTH_LOG2:0]   level_reg;
+    reg [DEPTH_LOG2:0]   level_reg;          // committed records, out stage included
+    reg [DEPTH_LOG2:0]   level_int_reg;      // committed records in the RAM
     reg [DEPTH_LOG2:0]   staged_reg;
     reg [WIDTH-1:0]      ram_q_reg;          // the RAM's registered read port
     reg [WIDTH-1:0]      bypass_reg;         // a record written into the head slot
     reg                  use_bypass_reg;
+    reg                  out_valid_reg;      // the out stage holds the head record
+    reg [WIDTH-1:0]      out_data_reg;
     reg                  overflow_reg;
 
-    wire not_empty = (level_reg != {(DEPTH_LOG2+1){1'b0}});
-    wire [DEPTH_LOG2:0] occupied = level_reg + staged_reg;
-    wire is_full   = (occupied == LEVEL_FULL);
+    wire [DEPTH_LOG2:0] zero = {(DEPTH_LOG2+1){1'b0}};
+    wire [DEPTH_LOG2:0] one  = {{DEPTH_LOG2{1'b0}}, 1'b1};
+    wire int_valid = (level_int_reg != zero);
+    // free_reg == DEPTH - level - staged, kept by its own updates so that the space a bus
+    // slave checks comes from a register, not from two subtractions.
+    reg  [DEPTH_LOG2:0] free_reg;
+    wire is_full   = (free_reg == zero);
     wire write     = wr_en && !is_full && !flush;
-    wire pop       = rd_pop && not_empty && !flush;
+    wire pop       = rd_pop && out_valid_reg && !flush;                  // the out stage
+    wire pop_int   = int_valid && (!out_valid_reg || pop) && !flush;     // the RAM, into the out stage
     wire commit    = wr_commit && !wr_abort && !flush;
     wire [DEPTH_LOG2:0] staged_now = staged_reg + {{DEPTH_LOG2{1'b0}}, write};
-    wire [DEPTH_LOG2:0] one = {{DEPTH_LOG2{1'b0}}, 1'b1};
+    wire [DEPTH_LOG2:0] added      = commit ? staged_now : zero;
 
-    // The head after this edge: the next entry on a pop, else the same one.
-    wire [DEPTH_LOG2-1:0] head_addr = pop ? rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1} : rd_ptr_reg;
+    // The RAM's head after this edge: the next entry on an internal pop, else the same one.
+    wire [DEPTH_LOG2-1:0] head_addr = pop_int ? rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1} : rd_ptr_reg;
     // The head entry is being written now exactly when it is the slot written.
     wire head_written = write && (head_addr == stage_ptr_reg);
 
@@ -81,30 +98,41 @@ module position_fifo #(
         bypass_reg     <= wr_data;
         use_bypass_reg <= head_written;
     end
-    wire [WIDTH-1:0] head = use_bypass_reg ? bypass_reg : ram_q_reg;
+    wire [WIDTH-1:0] head_int = use_bypass_reg ? bypass_reg : ram_q_reg;
+
+    // The out stage: RAM -> forwarding mux -> this register, nothing else.
+    always @(posedge clk) begin
+        if (pop_int) out_data_reg <= head_int;
+    end
 
     always @(posedge clk) begin
         if (flush) begin
             wr_ptr_reg    <= {DEPTH_LOG2{1'b0}};
             stage_ptr_reg <= {DEPTH_LOG2{1'b0}};
             rd_ptr_reg    <= {DEPTH_LOG2{1'b0}};
-            level_reg     <= {(DEPTH_LOG2+1){1'b0}};
-            staged_reg    <= {(DEPTH_LOG2+1){1'b0}};
+            level_reg     <= zero;
+            level_int_reg <= zero;
+            staged_reg    <= zero;
+            out_valid_reg <= 1'b0;
+            free_reg      <= LEVEL_FULL;
         end else begin
-            if (pop) rd_ptr_reg <= rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
+            // A write takes a slot, a pop frees one, an abort frees the staged ones
+            // (this cycle's write included); a commit moves records, freeing none.
+            free_reg <= free_reg - (write ? one : zero) + (pop ? one : zero) + (wr_abort ? staged_now : zero);
+            if (pop_int) rd_ptr_reg <= rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
+            out_valid_reg <= pop_int || (out_valid_reg && !pop);
+            level_reg     <= level_reg + added - (pop ? one : zero);
+            level_int_reg <= level_int_reg + added - (pop_int ? one : zero);
             if (wr_abort) begin
                 stage_ptr_reg <= wr_ptr_reg;
-                staged_reg    <= {(DEPTH_LOG2+1){1'b0}};
-                level_reg     <= level_reg - (pop ? one : {(DEPTH_LOG2+1){1'b0}});
+                staged_reg    <= zero;
             end else if (commit) begin
                 wr_ptr_reg    <= stage_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, write};
                 stage_ptr_reg <= stage_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, write};
-                staged_reg    <= {(DEPTH_LOG2+1){1'b0}};
-                level_reg     <= level_reg + staged_now - (pop ? one : {(DEPTH_LOG2+1){1'b0}});
+                staged_reg    <= zero;
             end else begin
                 stage_ptr_reg <= stage_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, write};
                 staged_reg    <= staged_now;
-                level_reg     <= level_reg - (pop ? one : {(DEPTH_LOG2+1){1'b0}});
             end
         end
 
@@ -115,24 +143,30 @@ module position_fifo #(
             wr_ptr_reg    <= {DEPTH_LOG2{1'b0}};
             stage_ptr_reg <= {DEPTH_LOG2{1'b0}};
             rd_ptr_reg    <= {DEPTH_LOG2{1'b0}};
-            level_reg     <= {(DEPTH_LOG2+1){1'b0}};
-            staged_reg    <= {(DEPTH_LOG2+1){1'b0}};
+            level_reg     <= zero;
+            level_int_reg <= zero;
+            staged_reg    <= zero;
+            out_valid_reg <= 1'b0;
+            free_reg      <= LEVEL_FULL;
             overflow_reg  <= 1'b0;
         end
     end
 
-    assign rd_valid = not_empty;
-    assign rd_data  = head;
+    assign rd_valid = out_valid_reg;
+    assign rd_data  = out_data_reg;
     assign level    = level_reg;
     assign staged   = staged_reg;
+    assign free     = free_reg;
     assign full     = is_full;
     assign overflow = overflow_reg;
 
 `ifdef FORMAL
     // Never overwrites, never reads empty, the levels are always right, staged records
-    // are invisible until committed and gone after an abort, and records come out in the
-    // order they went in: an arbitrary record written at an arbitrary time is the head
-    // exactly when everything committed before it has been popped.
+    // are invisible until committed and gone after an abort, rd_valid follows the latency
+    // rule of the header, the out stage holds the record it took from the RAM, and records
+    // come out in the order they went in: an arbitrary record written at an arbitrary time
+    // passes through the out stage unchanged and is rd_data exactly when everything
+    // committed before it has been popped.
     reg f_past_valid;
     initial f_past_valid = 1'b0;
     initial assume (rst);
@@ -140,16 +174,23 @@ module position_fifo #(
 
     wire [DEPTH_LOG2-1:0] f_used   = wr_ptr_reg - rd_ptr_reg;
     wire [DEPTH_LOG2-1:0] f_staged = stage_ptr_reg - wr_ptr_reg;
+    // The out stage's shadow: the RAM's oldest committed entry, as the spec says, when
+    // it was moved (not the forwarding path's idea of it).
+    reg [WIDTH-1:0] f_out_shadow;
+    always @(posedge clk) if (pop_int) f_out_shadow <= mem[rd_ptr_reg];
     always @(*) if (f_past_valid && !rst) begin
+        assert (free_reg == LEVEL_FULL - level_reg - staged_reg);
         assert ({1'b0, level_reg} + {1'b0, staged_reg} <= {1'b0, LEVEL_FULL});
-        assert (f_used == level_reg[DEPTH_LOG2-1:0] && f_staged == staged_reg[DEPTH_LOG2-1:0]);
-        if (not_empty) assert (head == mem[rd_ptr_reg]);
+        assert ({1'b0, level_reg} == {1'b0, level_int_reg} + {{(DEPTH_LOG2+1){1'b0}}, out_valid_reg});
+        assert (f_used == level_int_reg[DEPTH_LOG2-1:0] && f_staged == staged_reg[DEPTH_LOG2-1:0]);
+        if (int_valid) assert (head_int == mem[rd_ptr_reg]);
+        if (out_valid_reg) assert (out_data_reg == f_out_shadow);
     end
 
     // Track one record: f_tag is written when chosen, then must come out unchanged.
     (* anyconst *) reg [WIDTH-1:0] f_tag;
     (* anyseq *) reg f_choose;
-    reg f_armed, f_inside, f_committed;
+    reg f_armed, f_inside, f_committed, f_out;
     reg [DEPTH_LOG2-1:0] f_slot;
     wire f_take = write && !f_armed && (wr_data == f_tag) && f_choose;
     always @(posedge clk) begin
@@ -157,6 +198,7 @@ module position_fifo #(
             f_armed     <= 1'b0;
             f_inside    <= 1'b0;
             f_committed <= 1'b0;
+            f_out       <= 1'b0;
         end else begin
             if (f_take) begin
                 f_armed  <= 1'b1;
@@ -166,20 +208,30 @@ module position_fifo #(
             end else if (f_inside && !f_committed) begin
                 if (wr_abort) f_inside <= 1'b0;
                 else if (commit) f_committed <= 1'b1;
-            end else if (f_inside && f_committed && pop && rd_ptr_reg == f_slot) begin
+            end else if (f_inside && f_committed && !f_out && pop_int && rd_ptr_reg == f_slot) begin
+                f_out <= 1'b1;
+            end else if (f_inside && f_out && pop) begin
                 f_inside <= 1'b0;
+                f_out    <= 1'b0;
             end
         end
     end
-    wire [DEPTH_LOG2-1:0] f_ahead = f_slot - rd_ptr_reg;   // committed records in front of it
+    wire [DEPTH_LOG2-1:0] f_ahead = f_slot - rd_ptr_reg;   // committed records in front of it in the RAM
     wire [DEPTH_LOG2-1:0] f_behind_commit = f_slot - wr_ptr_reg;
-    always @(*) if (f_past_valid && !rst && f_inside) begin
-        assert (mem[f_slot] == f_tag);
-        if (f_committed) begin
-            assert ({1'b0, f_ahead} < level_reg);
-            if (f_ahead == {DEPTH_LOG2{1'b0}}) assert (rd_valid && rd_data == f_tag);
-        end else begin
-            assert ({1'b0, f_behind_commit} < staged_reg);
+    always @(*) if (f_past_valid && !rst) begin
+        if (f_inside) assert (f_armed);
+        if (f_out) assert (f_inside && f_committed);
+        if (f_inside && f_out) begin
+            assert (rd_valid && rd_data == f_tag);
+        end else if (f_inside) begin
+            assert (mem[f_slot] == f_tag);
+            if (f_committed) begin
+                // Behind the out stage and the f_ahead records in the RAM.
+                assert ({1'b0, f_ahead} < level_int_reg);
+                if (f_ahead == {DEPTH_LOG2{1'b0}}) assert (head_int == f_tag);
+            end else begin
+                assert ({1'b0, f_behind_commit} < staged_reg);
+            end
         end
     end
 
@@ -188,11 +240,19 @@ module position_fifo #(
         // Only a commit makes records readable.
         if (!$past(commit)) assert (level_reg <= $past(level_reg) || $past(flush));
         if ($past(wr_abort) && !$past(flush)) assert (staged_reg == 0);
-        if ($past(rd_pop) && !$past(not_empty)) assert (rd_ptr_reg == $past(rd_ptr_reg) || $past(flush));
+        // An empty FIFO (or store) is never popped.
+        if (!$past(int_valid)) assert (rd_ptr_reg == $past(rd_ptr_reg) || $past(flush));
+        if ($past(rd_pop) && !$past(rd_valid) && !$past(flush)) assert (level_reg >= $past(level_reg));
+        // The latency rule: records committed at an edge do not count at that edge.
+        assert (rd_valid == (!$past(flush) && ($past(pop) ? ($past(level_reg) >= 2)
+                                                          : ($past(rd_valid) || $past(level_reg) >= 1))));
         cover (is_full && staged_reg != 0 && level_reg != 0);
         cover (f_armed && !f_inside && f_committed);
         cover ($past(write && pop && commit && level_reg == 1));
         cover ($past(wr_abort && staged_reg == 2));
+        // Write to rd_valid 2 clocks into an empty FIFO; a pop with a record behind it.
+        cover (rd_valid && !$past(rd_valid) && $past(commit && level_reg == 0, 2));
+        cover ($past(pop && level_reg == 2) && rd_valid && f_out);
     end
 `endif
 

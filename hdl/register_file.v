@@ -215,6 +215,7 @@ module register_file #(
     function [31:0] read_word(input [6:0] addr);
         integer index;
         reg [31:0] read_value;
+        reg [31:0] timing_a_word, timing_b_word, mode_word;   // one axis's
         begin
             read_value = 32'd0;
             case (addr)
@@ -254,25 +255,28 @@ module register_file #(
                 FS_AXIS_ENABLE_ADDR: read_value[N_AXES-1:0] = axis_enable_reg;
                 default: ;
             endcase
+            // The per-axis arrays: an OR of masked words (the map keeps addresses distinct),
+            // a shallow tree where overriding ifs would put a multiplexer per register in series.
             for (index = 0; index < N_AXES; index = index + 1) begin
-                if ({25'd0, addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE) begin
-                    read_value[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*index +: TIMING_W];
-                    read_value[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*index +: TIMING_W];
-                end
-                if ({25'd0, addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE) begin
-                    read_value[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*index +: TIMING_W];
-                    read_value[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*index +: TIMING_W];
-                end
-                if ({25'd0, addr} == {25'd0, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE) begin
-                    read_value[FS_AXIS_MODE_OUT_MODE_LSB +: 2] = out_mode_reg[2*index +: 2];
-                    read_value[FS_AXIS_MODE_INVERT_A_LSB]      = invert_reg[3*index];
-                    read_value[FS_AXIS_MODE_INVERT_B_LSB]      = invert_reg[3*index + 1];
-                    read_value[FS_AXIS_MODE_INVERT_EN_LSB]     = invert_reg[3*index + 2];
-                end
-                if ({25'd0, addr} == {25'd0, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE)
-                    read_value = position_latch_reg[32*index +: 32];
-                if ({25'd0, addr} == {25'd0, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE)
-                    read_value = record_inc_reg[32*index +: 32];
+                timing_a_word = 32'd0;
+                timing_a_word[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*index +: TIMING_W];
+                timing_a_word[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*index +: TIMING_W];
+                timing_b_word = 32'd0;
+                timing_b_word[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*index +: TIMING_W];
+                timing_b_word[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*index +: TIMING_W];
+                mode_word = 32'd0;
+                mode_word[FS_AXIS_MODE_OUT_MODE_LSB +: 2] = out_mode_reg[2*index +: 2];
+                mode_word[FS_AXIS_MODE_INVERT_A_LSB]      = invert_reg[3*index];
+                mode_word[FS_AXIS_MODE_INVERT_B_LSB]      = invert_reg[3*index + 1];
+                mode_word[FS_AXIS_MODE_INVERT_EN_LSB]     = invert_reg[3*index + 2];
+                read_value = read_value
+                    | ({32{{25'd0, addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
+                    | ({32{{25'd0, addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
+                    | ({32{{25'd0, addr} == {25'd0, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word)
+                    | ({32{{25'd0, addr} == {25'd0, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE}} &
+                       position_latch_reg[32*index +: 32])
+                    | ({32{{25'd0, addr} == {25'd0, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE}} &
+                       record_inc_reg[32*index +: 32]);
             end
             read_word = read_value;
         end

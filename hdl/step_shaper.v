@@ -63,11 +63,26 @@ module step_shaper #(
     reg                     pin_b_reg;
     reg                     pin_en_reg;
 
-    // e = pending + request, one bit wider so it cannot overflow.
-    wire signed [PEND_W:0] request = req_valid ? (req_negative ? -9'sd1 : 9'sd1) : 9'sd0;
-    wire signed [PEND_W:0] wanted  = {pending_reg[PEND_W-1], pending_reg} + request;
-    wire want_step    = (wanted != 9'sd0);
-    wire want_forward = !wanted[PEND_W];
+    // The spec's arithmetic is e = pending + request (pending in [-127, 127], request in
+    // {-1, 0, +1}), then pending <- e - issued, saturated at +-127. Here it is decoded
+    // from a few constant compares of pending instead, and the new pending chosen from
+    // pending + {-2 .. 2} computed in parallel, so that no carry chain waits for the
+    // request or the rise (the formal section checks it against the spec's sums).
+    wire               req_up    = req_valid && !req_negative;
+    wire               req_down  = req_valid && req_negative;
+    wire               p_neg     = pending_reg[PEND_W-1];
+    wire               p_is_m2   = (pending_reg == -8'sd2);
+    wire               p_is_m1   = (pending_reg == -8'sd1);
+    wire               p_is_0    = (pending_reg == 8'sd0);
+    wire               p_is_1    = (pending_reg == 8'sd1);
+    wire               p_is_2    = (pending_reg == 8'sd2);
+    wire               p_is_max  = (pending_reg == PEND_MAX);
+    wire               p_is_min  = (pending_reg == -PEND_MAX);
+    // e != 0; e >= 0; |e| >= 2.
+    wire want_step    = req_up ? !p_is_m1 : (req_down ? !p_is_1 : !p_is_0);
+    wire want_forward = req_up ? (!p_neg || p_is_m1) : (req_down ? (!p_neg && !p_is_0) : !p_neg);
+    wire far          = req_up ? !(p_is_m2 || p_is_m1 || p_is_0) :
+                        (req_down ? !(p_is_0 || p_is_1 || p_is_2) : !(p_is_m1 || p_is_0 || p_is_1));
     wire dir_matches  = (want_forward == dir_reg);
 
     wire fall       = level_reg && (cnt_reg >= step_len);
@@ -75,11 +90,28 @@ module step_shaper #(
                       (cnt_reg >= step_space) && (dcnt_reg >= dir_setup);
     wire dir_change = !halt && !level_reg && want_step && !dir_matches && (cnt_reg >= dir_hold);
 
-    wire signed [PEND_W:0] issued  = rise ? (dir_reg ? 9'sd1 : -9'sd1) : 9'sd0;
-    wire signed [PEND_W:0] left    = wanted - issued;
-    wire clamp_high = !halt && (left > 9'sd127);
-    wire clamp_low  = !halt && (left < -9'sd127);
-    wire behind     = !halt && ((wanted > 9'sd1) || (wanted < -9'sd1));
+    // pending + request - issued: the change is one of -2 .. 2.
+    wire issue_up   = rise && dir_reg;
+    wire issue_down = rise && !dir_reg;
+    wire change_p2  = req_up && issue_down;
+    wire change_m2  = req_down && issue_up;
+    wire change_p1  = (req_up && !rise) || (!req_valid && issue_down);
+    wire change_m1  = (req_down && !rise) || (!req_valid && issue_up);
+    wire signed [PEND_W-1:0] pending_p2 = pending_reg + 8'sd2;
+    wire signed [PEND_W-1:0] pending_p1 = pending_reg + 8'sd1;
+    wire signed [PEND_W-1:0] pending_m1 = pending_reg - 8'sd1;
+    wire signed [PEND_W-1:0] pending_m2 = pending_reg - 8'sd2;
+    wire clamp_high = !halt && p_is_max && change_p1;   // 127 + 1 (a +2 needs e < 0)
+    wire clamp_low  = !halt && p_is_min && change_m1;   // -127 - 1 (a -2 needs e > 0)
+    wire behind     = !halt && far;
+    wire signed [PEND_W-1:0] pending_next =
+        halt       ? {PEND_W{1'b0}} :
+        clamp_high ? PEND_MAX :
+        clamp_low  ? -PEND_MAX :
+        change_p2  ? pending_p2 :
+        change_p1  ? pending_p1 :
+        change_m1  ? pending_m1 :
+        change_m2  ? pending_m2 : pending_reg;
 
     // Pin functions of the current state, registered into the pins.
     reg a_now, b_now;
@@ -118,10 +150,7 @@ module step_shaper #(
             dcnt_reg <= dcnt_reg + COUNT_ONE;
         end
 
-        if (halt) pending_reg <= {PEND_W{1'b0}};
-        else if (clamp_high) pending_reg <= PEND_MAX;
-        else if (clamp_low) pending_reg <= -PEND_MAX;
-        else pending_reg <= left[PEND_W-1:0];
+        pending_reg <= pending_next;
 
         if (rise) begin
             position_reg <= dir_reg ? position_reg + 32'd1 : position_reg - 32'd1;
@@ -173,6 +202,26 @@ module step_shaper #(
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
 
+    // The decoded arithmetic against the spec's: e = pending + request, pending <- e -
+    // issued saturated at +-127, behind when |e| > 1.
+    wire signed [PEND_W:0] f_request = req_valid ? (req_negative ? -9'sd1 : 9'sd1) : 9'sd0;
+    wire signed [PEND_W:0] f_wanted  = {pending_reg[PEND_W-1], pending_reg} + f_request;
+    wire signed [PEND_W:0] f_issued  = rise ? (dir_reg ? 9'sd1 : -9'sd1) : 9'sd0;
+    wire signed [PEND_W:0] f_left    = f_wanted - f_issued;
+    wire f_rise = !halt && !level_reg && (f_wanted != 9'sd0) && (!f_wanted[PEND_W] == dir_reg) &&
+                  (cnt_reg >= step_space) && (dcnt_reg >= dir_setup);
+    wire f_dir_change = !halt && !level_reg && (f_wanted != 9'sd0) && (!f_wanted[PEND_W] != dir_reg) &&
+                        (cnt_reg >= dir_hold);
+    wire [PEND_W-1:0] f_pending_next = halt ? {PEND_W{1'b0}} : (f_left > 9'sd127) ? PEND_MAX :
+                                       (f_left < -9'sd127) ? -PEND_MAX : f_left[PEND_W-1:0];
+    always @(*) if (f_past_valid && !rst) begin
+        assert (pending_reg != 8'h80);
+        assert (rise == f_rise && dir_change == f_dir_change);
+        assert (clamp_high == (!halt && f_left > 9'sd127) && clamp_low == (!halt && f_left < -9'sd127));
+        assert (behind == (!halt && (f_wanted > 9'sd1 || f_wanted < -9'sd1)));
+        assert (pending_next == f_pending_next);
+    end
+
     // Timing settings are configuration: constant during the proof.
     always @(posedge clk) if (f_past_valid) begin
         assume ($stable(step_len) && $stable(step_space) && $stable(dir_setup) && $stable(dir_hold));
@@ -185,7 +234,7 @@ module step_shaper #(
         f_dir_age <= dir_change ? {{(F_TW-1){1'b0}}, 1'b1} : ((f_dir_age == F_MAX) ? F_MAX : f_dir_age + 1'b1);
         // A halt drops the pending steps: what was requested becomes what was issued.
         f_net     <= halt ? position_reg
-                          : f_net + {{31{request[PEND_W]}}, request[0]};
+                          : f_net + {{31{f_request[PEND_W]}}, f_request[0]};
         f_clamped <= f_clamped || clamp_high || clamp_low;
         if (rst) begin
             f_high    <= {{(F_TW-1){1'b0}}, 1'b1};

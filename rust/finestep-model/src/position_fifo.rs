@@ -1,12 +1,21 @@
 //! `position_fifo`: the buffer of period records between the host and the period timer.
 //!
-//! First-word-fall-through: the head record is readable whenever the FIFO holds a
-//! committed record. Writes are staged and become readable only at a commit; an abort
-//! drops them (a bus frame whose CRC fails never reaches the period timer). A write when
+//! First-word-fall-through: while `rd_valid`, the head record (the oldest committed one)
+//! is readable. Writes are staged and become readable only at a commit; an abort drops
+//! them (a bus frame whose CRC fails never reaches the period timer). A write when
 //! committed + staged records fill the FIFO is refused and sets the sticky `overflow`; a
-//! pop of an empty FIFO does nothing; `flush` empties it and wins over everything else. The block is proven in `make formal`
-//! (never overwrites, never reads empty, level right, order kept); the co-simulation of
-//! it comes with the host-interface top that instantiates it.
+//! pop while `rd_valid` is low does nothing; `flush` empties it and wins over everything
+//! else.
+//!
+//! `rd_valid` lags the commits (the RTL's output register): with `L` the committed
+//! records and `v = rd_valid` before an edge, and `pop = rd_pop && v && !flush`, after
+//! the edge `rd_valid = !flush && (pop ? L >= 2 : (v || L >= 1))`. Records committed at
+//! an edge do not count at that edge, so a record committed into an empty FIFO is
+//! readable in the second cycle after its commit; a pop with another committed record
+//! behind the head keeps `rd_valid` high. `level` counts every committed record, readable
+//! or not. The block is proven in `make formal` (never overwrites, never reads empty,
+//! level right, order kept, the `rd_valid` rule); the co-simulation of it comes with the
+//! host-interface top that instantiates it.
 
 use std::collections::VecDeque;
 
@@ -36,16 +45,18 @@ pub struct PositionFifo {
     staged: Vec<PeriodRecord>,
     depth: usize,
     overflow: bool,
+    /// `rd_valid`: the head is readable.
+    valid: bool,
 }
 
 impl PositionFifo {
     /// An empty FIFO of `2^depth_log2` records (the RTL's `DEPTH_LOG2`).
     pub fn new(depth_log2: u32) -> Self {
         let depth = 1usize << depth_log2;
-        PositionFifo { entries: VecDeque::with_capacity(depth), staged: Vec::new(), depth, overflow: false }
+        PositionFifo { entries: VecDeque::with_capacity(depth), staged: Vec::new(), depth, overflow: false, valid: false }
     }
 
-    /// Committed records (`level`).
+    /// Committed records (`level`), readable or not yet.
     pub fn level(&self) -> usize {
         self.entries.len()
     }
@@ -75,21 +86,35 @@ impl PositionFifo {
         self.entries.iter()
     }
 
-    /// The head record (`rd_data` while `rd_valid`).
+    /// `rd_valid`: the head record is readable (and a pop takes it).
+    pub fn rd_valid(&self) -> bool {
+        self.valid
+    }
+
+    /// The head record (`rd_data`) while `rd_valid`, else `None`.
     pub fn head(&self) -> Option<&PeriodRecord> {
-        self.entries.front()
+        if self.valid {
+            self.entries.front()
+        } else {
+            None
+        }
     }
 
     /// One rising clock edge. Fullness and emptiness are those before the edge: a write
     /// to a full FIFO is refused even when the head is popped in the same cycle.
     pub fn step(&mut self, inputs: &FifoInputs) {
         let refused = inputs.write.is_some() && self.full() && !inputs.flush;
+        let committed = self.entries.len();
+        let pop = inputs.pop && self.valid && !inputs.flush;
+        // Counted before this edge's commit: a record becomes readable one edge after
+        // the one that commits it at the earliest.
+        self.valid = !inputs.flush && if pop { committed >= 2 } else { self.valid || committed >= 1 };
         if inputs.flush {
             self.entries.clear();
             self.staged.clear();
         } else {
             let was_full = self.full();
-            if inputs.pop {
+            if pop {
                 self.entries.pop_front();
             }
             if let (Some(record), false) = (inputs.write, was_full) {
@@ -187,10 +212,39 @@ mod tests {
     }
 
     #[test]
+    fn readable_in_the_second_cycle_after_the_commit_and_no_bubble_on_a_pop() {
+        let pop = FifoInputs { pop: true, ..Default::default() };
+        let idle = FifoInputs::default();
+        let mut fifo = PositionFifo::new(2);
+        fifo.step(&write(0));
+        // Committed and counted, not readable yet; a pop now does nothing.
+        assert_eq!((fifo.level(), fifo.rd_valid(), fifo.head()), (1, false, None));
+        fifo.step(&FifoInputs { write: Some(record(1)), commit: true, pop: true, ..Default::default() });
+        assert_eq!((fifo.level(), fifo.head()), (2, Some(&record(0))), "the second cycle after the commit");
+        // A pop with a record behind the head (committed a cycle ago): no bubble.
+        fifo.step(&pop);
+        assert_eq!((fifo.level(), fifo.head()), (1, Some(&record(1))));
+        // The last record popped while another is committed: that one waits a cycle.
+        fifo.step(&FifoInputs { pop: true, ..write(2) });
+        assert_eq!((fifo.level(), fifo.head()), (1, None));
+        fifo.step(&idle);
+        assert_eq!((fifo.level(), fifo.head()), (1, Some(&record(2))));
+        fifo.step(&pop);
+        assert_eq!((fifo.level(), fifo.rd_valid()), (0, false));
+        // A flush in the cycle after a commit: nothing becomes readable.
+        fifo.step(&write(3));
+        fifo.step(&FifoInputs { flush: true, ..Default::default() });
+        fifo.step(&idle);
+        assert_eq!((fifo.level(), fifo.rd_valid()), (0, false));
+    }
+
+    #[test]
     fn flush_wins() {
         let mut fifo = PositionFifo::new(3);
         fifo.step(&write(1));
-        fifo.step(&FifoInputs { flush: true, write: Some(record(2)), pop: true, ..Default::default() });
-        assert_eq!((fifo.level(), fifo.overflow()), (0, false));
+        fifo.step(&write(2));
+        assert!(fifo.rd_valid());
+        fifo.step(&FifoInputs { flush: true, write: Some(record(3)), commit: true, pop: true, ..Default::default() });
+        assert_eq!((fifo.level(), fifo.staged(), fifo.rd_valid(), fifo.overflow()), (0, 0, false, false));
     }
 }
