@@ -93,9 +93,15 @@ module jog_generator #(
     wire        follows    = detent_now && (follow || in_window);
 
     // rem after this cycle: minus the record taken at a boundary, plus a followed detent.
-    wire [47:0] taken       = boundary ? {{16{next_vel_reg[31]}}, next_vel_reg} : 48'd0;
-    wire [47:0] rem_kept    = rem_reg - taken;
-    wire [47:0] rem_moved   = rem_kept + (det_up ? travel_reg : travel_neg_reg);
+    // The four outcomes are summed side by side from registers (the three-input one is a
+    // carry-save layer and one chain) and chosen by the boundary and the window check.
+    wire [47:0] vel_wide    = {{16{next_vel_reg[31]}}, next_vel_reg};
+    wire [47:0] travel_sel  = det_up ? travel_reg : travel_neg_reg;
+    wire [47:0] rem_taken   = rem_reg - vel_wide;
+    wire [47:0] rem_stepped = rem_reg + travel_sel;
+    wire [47:0] rem_both    = rem_reg - vel_wide + travel_sel;
+    wire [47:0] rem_kept    = boundary ? rem_taken : rem_reg;
+    wire [47:0] rem_moved   = boundary ? rem_both : rem_stepped;
 
     wire        result_valid;
     wire [31:0] result;
@@ -207,7 +213,7 @@ module jog_generator #(
     end
     wire [47:0] f_cand_gap  = rem_reg + (det_up ? travel_reg : -travel_reg);
     wire [47:0] f_gap_abs   = f_cand_gap[47] ? -f_cand_gap : f_cand_gap;
-    wire [47:0] f_taken     = {{16{next_vel_reg[31]}}, next_vel_reg};
+    wire [47:0] f_taken     = vel_wide;
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if (f_age == 2'd2) begin
             assert (travel_reg == f_travel_2);

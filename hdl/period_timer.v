@@ -48,8 +48,11 @@ module period_timer #(
     reg                 cur_end_reg;
     reg                 block_end_reg;
     reg                 record_error_reg;
+    // active && remaining == 0, kept as a register: the boundary fans out across the
+    // chip (FIFO pop, jog, latches), so it starts at a flip-flop, not a 20-bit compare.
+    reg                 boundary_reg;
 
-    wire boundary = active_reg && (remaining_reg == {P_WIDTH{1'b0}});
+    wire boundary = boundary_reg;
     wire [P_WIDTH-1:0] period_sampled =
         (period_clocks == {P_WIDTH{1'b0}}) ? {{(P_WIDTH-1){1'b0}}, 1'b1} : period_clocks;
 
@@ -83,19 +86,23 @@ module period_timer #(
 
         if (!run) begin
             active_reg    <= 1'b0;
+            boundary_reg  <= 1'b0;
             remaining_reg <= {P_WIDTH{1'b0}};
             inc_reg       <= {32*N_AXES{1'b0}};
             cur_end_reg   <= 1'b0;
             p_act_reg     <= period_sampled;
             p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else if (!active_reg) begin
-            active_reg <= 1'b1;
-            p_act_reg  <= period_sampled;
+            active_reg   <= 1'b1;
+            boundary_reg <= 1'b1;           // remaining is 0 while stopped
+            p_act_reg    <= period_sampled;
             p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else if (!boundary) begin
             remaining_reg <= remaining_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            boundary_reg  <= (remaining_reg == {{(P_WIDTH-1){1'b0}}, 1'b1});
         end else begin
-            remaining_reg <= p_act_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            remaining_reg <= p_act_minus_one_reg;
+            boundary_reg  <= (p_act_minus_one_reg == {P_WIDTH{1'b0}});
             if (take_record && record_ok) begin
                 inc_reg     <= rec_inc;
                 cur_end_reg <= rec_flags[FLAG_BLOCK_END];
@@ -107,6 +114,7 @@ module period_timer #(
 
         if (rst) begin
             active_reg       <= 1'b0;
+            boundary_reg     <= 1'b0;
             remaining_reg    <= {P_WIDTH{1'b0}};
             p_act_reg        <= {{(P_WIDTH-1){1'b0}}, 1'b1};
             p_act_minus_one_reg <= {P_WIDTH{1'b0}};
@@ -151,6 +159,7 @@ module period_timer #(
     end
     always @(*) if (f_past_valid && !rst) begin
         assert (p_act_minus_one_reg == p_act_reg - {{(P_WIDTH-1){1'b0}}, 1'b1});
+        assert (boundary_reg == (active_reg && remaining_reg == {P_WIDTH{1'b0}}));
         assert (record_ok == f_record_ok);
         assert (p_act_reg != {P_WIDTH{1'b0}});
         assert (remaining_reg < p_act_reg);
