@@ -48,6 +48,7 @@ module safety_monitor #(
     reg [WD_W-1:0]     watchdog_count_reg;
     reg                fault_estop_reg;
     reg                fault_watchdog_reg;
+    reg                halt_reg;          // fault_estop || fault_watchdog, from its own flip-flop
 
     wire [FILTER_W-1:0] filter_length = (estop_filter == {FILTER_W{1'b0}}) ? FILTER_ONE : estop_filter;
     wire sample_differs = (estop_sync_reg[1] != estop_level_reg);
@@ -69,6 +70,8 @@ module safety_monitor #(
         else if (clear_faults) fault_estop_reg <= 1'b0;
         if (expired) fault_watchdog_reg <= 1'b1;
         else if (clear_faults) fault_watchdog_reg <= 1'b0;
+        // The halt fans out to every axis: it leaves a flip-flop, not a gate behind two.
+        halt_reg <= estop_now || expired || (!clear_faults && (fault_estop_reg || fault_watchdog_reg));
 
         if (rst) begin
             // The machine starts halted, E-stop taken as active: the host clears the
@@ -79,13 +82,14 @@ module safety_monitor #(
             watchdog_count_reg <= watchdog_timeout;
             fault_estop_reg    <= 1'b1;
             fault_watchdog_reg <= 1'b0;
+            halt_reg           <= 1'b1;
         end
     end
 
     assign estop_active   = estop_now;
     assign fault_estop    = fault_estop_reg;
     assign fault_watchdog = fault_watchdog_reg;
-    assign halt           = fault_estop_reg || fault_watchdog_reg;
+    assign halt           = halt_reg;
 
 `ifdef FORMAL
     // An E-stop held for 3 + FILTER clocks always halts; a pulse of fewer than FILTER
@@ -96,6 +100,7 @@ module safety_monitor #(
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
+    always @(*) if (f_past_valid) assert (halt_reg == (fault_estop_reg || fault_watchdog_reg));
     always @(posedge clk) if (f_past_valid) begin
         assume ($stable(estop_active_high) && $stable(estop_filter) && $stable(watchdog_timeout) && $stable(watchdog_enable));
     end
