@@ -89,7 +89,7 @@ module jog_generator #(
     wire [48:0] down_under = rem_49 + down_under_reg;
     wire        in_window  = det_up ? (up_over[48] && !up_under[48]) : (down_over[48] && !down_under[48]);
     wire unused_sums = &{1'b0, up_over[47:0], up_under[47:0], down_over[47:0], down_under[47:0]};
-    wire        detent_now = engaged_reg && enable && (det_up || det_down);
+    wire        detent_now = engaged_reg && enable && !halt && (det_up || det_down);   // a halt wins
     wire        follows    = detent_now && (follow || in_window);
 
     // rem after this cycle: minus the record taken at a boundary, plus a followed detent.
@@ -202,20 +202,17 @@ module jog_generator #(
     always @(*) if (f_past_valid) assume (f_det_step == 32'd0 || f_det_step == 32'd1 || f_det_step == 32'hFFFF_FFFF);
     // The configuration the detents use: two cycles behind, consistent.
     reg  [47:0] f_travel_1, f_travel_2, f_window_1, f_window_2;
-    reg  [1:0]  f_age;              // cycles since reset, up to 2: f_travel_2 is known
-    initial f_age = 2'd0;
     always @(posedge clk) begin
-        f_age      <= rst ? 2'd0 : (f_age == 2'd2) ? 2'd2 : f_age + 2'd1;
         f_travel_1 <= rst ? 48'd0 : detent_travel;
-        f_travel_2 <= f_travel_1;
+        f_travel_2 <= rst ? 48'd0 : f_travel_1;
         f_window_1 <= rst ? 48'd0 : {16'd0, window, 16'd0};
-        f_window_2 <= f_window_1;
+        f_window_2 <= rst ? 48'd0 : f_window_1;
     end
     wire [47:0] f_cand_gap  = rem_reg + (det_up ? travel_reg : -travel_reg);
     wire [47:0] f_gap_abs   = f_cand_gap[47] ? -f_cand_gap : f_cand_gap;
     wire [47:0] f_taken     = vel_wide;
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
-        if (f_age == 2'd2) begin
+        begin
             assert (travel_reg == f_travel_2);
             assert (travel_neg_reg == -f_travel_2);
             assert (up_over_reg == {f_travel_2[47], f_travel_2} - {1'b0, f_window_2} - 49'd1);
@@ -227,12 +224,13 @@ module jog_generator #(
         if (engaged_reg && !$past(engaged_reg))
             assert ($past(enable) && !$past(run) && !$past(halt) && $past(period_ok) && $past(axis_ok));
         if ($past(halt)) assert (!engaged_reg && vel_reg == 32'd0 && next_vel_reg == 32'd0 && rem_reg == 48'd0);
+        if ($past(halt) && !$past(clear_counters)) assert (dropped_reg == $past(dropped_reg));
         if ($past(enable && run)) assert (refused_reg);
         if (!$past(engage) && !$past(halt))
             assert (rem_reg == $past(rem_reg) - ($past(boundary) ? $past(f_taken) : 48'd0) +
                     (!$past(follows) ? 48'd0 : $past(det_up) ? $past(travel_reg) : -$past(travel_reg)));
-        if ($past(f_age == 2'd2) && $past(follows)) assert ($past(detent_now) && ($past(follow) || $past(f_gap_abs) <= $past(f_window_2)));
-        if ($past(f_age == 2'd2) && !$past(engage) && !$past(halt) && !$past(clear_counters) && $past(detent_now) && !$past(follow) &&
+        if ($past(follows)) assert ($past(detent_now) && ($past(follow) || $past(f_gap_abs) <= $past(f_window_2)));
+        if (!$past(engage) && !$past(halt) && !$past(clear_counters) && $past(detent_now) && !$past(follow) &&
             !($past(f_gap_abs) <= $past(f_window_2)))
             assert (dropped_reg == $past(dropped_reg) + 16'd1);
         if ($past(boundary) && !$past(engage) && !$past(halt)) assert (vel_reg == $past(next_vel_reg));

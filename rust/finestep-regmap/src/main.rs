@@ -64,10 +64,16 @@ fn run(cli: Cli) -> anyhow::Result<()> {
     }
 }
 
-/// Writes `text` to `path`, creating its directory.
+/// Writes `text` to `path`, creating its directory. The text goes to a file beside it
+/// first and is renamed into place, so a flow reading `path` while another regenerates
+/// it (the FPGA flows run side by side) never sees it half written.
 fn write(path: &Path, text: String) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|dir| !dir.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    std::fs::write(path, text).with_context(|| format!("cannot write {}", path.display()))
+    let mut staging = path.as_os_str().to_owned();
+    staging.push(format!(".{}.tmp", std::process::id()));
+    let staging = Path::new(&staging);
+    std::fs::write(staging, text).with_context(|| format!("cannot write {}", staging.display()))?;
+    std::fs::rename(staging, path).with_context(|| format!("cannot rename {} to {}", staging.display(), path.display()))
 }
