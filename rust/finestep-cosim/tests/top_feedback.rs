@@ -422,6 +422,37 @@ fn jog_and_run_exclude_each_other() {
     assert_eq!(jog_control::ENABLE.get(machine.bus().read_one(jog_control::ADDR).unwrap()), 0);
 }
 
+/// A halt in the very cycle of a detent counts nothing, in the RTL as in the model (a
+/// review found the RTL counting it as dropped): a clean wheel turning fast in drop mode
+/// with no window, so that every detent is dropped, and the E-stop asserted at every
+/// offset within one detent's 32 clocks, RTL and model in lockstep on every pin
+/// (the DROPPED read goes out on MISO).
+#[test]
+fn a_halt_on_a_detent_counts_nothing() {
+    let clean_wheel = || {
+        let config = PlantConfig {
+            drives: vec![DriveConfig::default(); 2],
+            channels: vec![],
+            probe: None,
+            hand_wheel: Some(HandWheelConfig { rest_phase: 2, bounce: None }),
+        };
+        Plant::new(config, 2).unwrap()
+    };
+    for offset in 0..32 {
+        let mut machine = connect(&format!("a_halt_on_a_detent_counts_nothing_{offset}"), clean_wheel());
+        machine.configure_hand_wheel(0, 1).unwrap();
+        let setup = JogSetup { window: 0, ..jog_setup(false) };
+        machine.configure_jog(&setup).unwrap();
+        machine.enable_jog(&setup, true).unwrap();
+        turn(&mut machine, 1000, 8);
+        machine.bus().wait(400 + offset).unwrap();
+        machine.bus().link_mut().set_estop_pin(true);
+        machine.bus().wait(100).unwrap();
+        let jog = machine.jog().unwrap();
+        assert!(!jog.engaged && jog.dropped > 0, "offset {offset}: {jog:?}");
+    }
+}
+
 /// Random jog settings and wheel turns, RTL and model in lockstep (the RTL's multiplier
 /// and square root against the model's exact integer arithmetic, every period): the
 /// axis comes to rest within the continuous-time bound and ends exactly on the detents.
