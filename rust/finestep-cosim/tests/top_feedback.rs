@@ -494,14 +494,24 @@ fn random_jogs_land_exactly() {
                     + (4 * detents.unsigned_abs() * per_edge) as f64 / f64::from(PERIOD)
                     + 10.0;
                 let mut periods = 0.0;
+                // At rest: two looks five periods apart with no velocity, nothing left (in
+                // whole steps) and the same position. One look is not enough: the jog can
+                // pass through velocity 0 with a fraction of a step still to go.
+                let mut still_at: Option<i32> = None;
                 loop {
                     machine.bus().wait(5 * u64::from(PERIOD)).unwrap();
                     periods += 5.0;
                     let jog = machine.jog().unwrap();
                     let plant_loop = machine.bus_ref().link().target();
                     let wheel_done = plant_loop.plant().hand_wheel().unwrap().script_end() <= plant_loop.cycle();
+                    let position = machine.positions().unwrap().steps[0];
                     if wheel_done && jog.velocity == Increment::ZERO && jog.remaining == 0 {
-                        break;
+                        if still_at == Some(position) {
+                            break;
+                        }
+                        still_at = Some(position);
+                    } else {
+                        still_at = None;
                     }
                     prop_assert!(periods <= bound + 10.0, "not at rest after {} periods (bound {}): {:?}", periods, bound, jog);
                 }
