@@ -394,9 +394,13 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
                 ));
             }
             piece = best;
-            // Feed over the pieces the period ran on.
-            let next_fits = best + 1 < pieces.len() && pieces[best + 1].distance(&point, &present) <= pieces[best + 1].allowance + base_allowance;
-            let feed = pieces[from_piece.min(best)..=if next_fits { best + 1 } else { best }].iter().map(|p| p.feed).fold(0.0, f64::max);
+            // Feed over the pieces the period may have run on: from where it began to the
+            // furthest of the next three the point is close enough to. With a large G64
+            // tolerance the tracker stays on a piece the path has already left (an
+            // unblended arc-line vertex passed 0.6 mm back), so that piece's feed alone
+            // would be the wrong bound.
+            let furthest_fit = (best..=(best + 3).min(pieces.len() - 1)).rev().find(|&i| fits(i).is_some()).unwrap_or(best);
+            let feed = pieces[from_piece.min(best)..=furthest_fit].iter().map(|p| p.feed).fold(0.0, f64::max);
             let speed_allowance = (0..4).filter(|&a| present[a]).map(|a| tolerance[a][0]).sum::<f64>();
             if feed.is_finite() {
                 report.max_feed_ratio = report.max_feed_ratio.max(path[0] / feed);

@@ -343,3 +343,25 @@ fn random_machines_plan_or_refuse_and_pass_the_checker() {
     eprintln!("parse refused, machine refused, plan refused, planned: {outcomes:?}");
     assert!(outcomes[3] * 3 >= outcomes.iter().sum::<usize>(), "too few random machines planned: {outcomes:?}");
 }
+
+/// Found by `random_machines_plan_or_refuse_and_pass_the_checker` (seed
+/// 0x518c8ebb5bb86689): with G64 at a 0.6 mm tolerance the path leaves an unblended
+/// arc-line vertex along the line, still within 0.6 mm of the slow arc before it, at the
+/// line's own (faster) feed. The checker once held it to the arc's feed.
+#[test]
+fn a_wide_tolerance_does_not_hold_the_path_to_the_feed_of_a_piece_it_has_left() {
+    let text = "G21 G90 G64 P0.0298\nG64\nG17 G2 X1.9601 Y0.4113 Z-0.3155 I1.8158 J-3.7770 F2560\n\
+                G19 G2 Y-5.1184 Z-0.4112 J-2.7064 K-3.4238 F653\nG18 G2 Z-0.4448 X1.7948 K-3.8363 I0.6940 F4277\n\
+                G1 X7.5300 Y-22.1560 Z0.1762 F5388\n";
+    let axes = [(10.0, 1.0, 10.0), (103.27111664583514, 5.14359212472905, 9485.10179970263), (67.32091576884115, 250.7183319349355, 6239.239604336582), (10.0, 1.0, 10.0)];
+    let mut config = MachineConfig { period_ms: 0.25, path_tolerance_mm: 0.6063654021146841, chord_tolerance_mm: 0.0001, lookahead_moves: 2, ..config(ProfileKind::Trapezoid) };
+    for (limits, (steps, velocity, accel)) in config.axes.values_mut().zip(axes) {
+        *limits = finestep_planner::config::AxisLimits { steps_per_unit: steps, max_velocity: velocity, max_acceleration: accel, max_jerk: 1000.0 };
+    }
+    let (planned, report) = plan_and_check("wide_tolerance.ngc", &parse("wide_tolerance.ngc", text), &config);
+    // The line's own limit (X at 5.14 mm/s, a third of its direction) lets it pass the arc's
+    // 10.9 mm/s feed: the case is only a test while it does.
+    let fastest = speeds(&planned, &config).into_iter().fold(0.0, f64::max);
+    assert!(fastest > 653.0 / 60.0 * 1.2, "{fastest}");
+    assert!(report.max_feed_ratio <= 1.0 + 1e-6, "{}", report.max_feed_ratio);
+}

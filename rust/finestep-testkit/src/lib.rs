@@ -10,15 +10,19 @@
 //! runner.run(&(0u32..10), |x| { prop_assert!(x < 10); Ok(()) }).unwrap();
 //! ```
 //!
-//! `FINESTEP_CASES` overrides the number of cases (used by `make test-long`).
+//! Under CI (the `CI` variable set, as `.ci/run` does) an unset `FINESTEP_SEED` gives a
+//! fixed seed per test, so the gate is reproducible; elsewhere each run explores a fresh
+//! seed. `FINESTEP_CASES` overrides the number of cases (used by `make test-long`).
 
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
-/// The seed for this run: `FINESTEP_SEED` if set (decimal or 0x-hex), else fresh.
-pub fn seed() -> u64 {
+/// The seed for `test`: `FINESTEP_SEED` if set (decimal or 0x-hex), else under CI one
+/// fixed by the test's name, else fresh.
+pub fn seed(test: &str) -> u64 {
     match std::env::var("FINESTEP_SEED") {
         Ok(text) => parse_seed(&text)
             .unwrap_or_else(|| panic!("FINESTEP_SEED={text:?} is not a decimal or 0x-hex u64")),
+        Err(_) if std::env::var_os("CI").is_some_and(|v| !v.is_empty()) => fixed_seed(test),
         Err(_) => {
             use std::hash::{BuildHasher, Hasher};
             let mut hasher = std::collections::hash_map::RandomState::new().build_hasher();
@@ -31,6 +35,11 @@ pub fn seed() -> u64 {
             hasher.finish()
         }
     }
+}
+
+/// FNV-1a of the test's name: stable across Rust versions, unlike `DefaultHasher`.
+fn fixed_seed(test: &str) -> u64 {
+    test.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
 fn parse_seed(text: &str) -> Option<u64> {
@@ -51,7 +60,7 @@ pub fn cases(default_cases: u32) -> u32 {
 
 /// A proptest runner seeded from [`seed`], printing `test`'s seed and how to rerun it.
 pub fn runner(test: &str, default_cases: u32) -> TestRunner {
-    let seed = seed();
+    let seed = seed(test);
     eprintln!("{test}: FINESTEP_SEED={seed:#x} (rerun with this to reproduce)");
     let mut bytes = [0u8; 32];
     for (i, chunk) in bytes.chunks_mut(8).enumerate() {
@@ -74,5 +83,12 @@ mod tests {
         assert_eq!(parse_seed("42"), Some(42));
         assert_eq!(parse_seed(" 0x2a "), Some(42));
         assert_eq!(parse_seed("forty-two"), None);
+    }
+
+    #[test]
+    fn fixed_seeds_differ_by_test() {
+        assert_eq!(fixed_seed(""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fixed_seed("a"), 0xaf63_dc4c_8601_ec8c);
+        assert_ne!(fixed_seed("jogs"), fixed_seed("arcs"));
     }
 }
