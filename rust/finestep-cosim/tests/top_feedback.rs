@@ -495,8 +495,11 @@ fn random_jogs_land_exactly() {
                     + 10.0;
                 let mut periods = 0.0;
                 // At rest: two looks five periods apart with no velocity, nothing left (in
-                // whole steps) and the same position. One look is not enough: the jog can
-                // pass through velocity 0 with a fraction of a step still to go.
+                // whole steps) and the same position. One look is not enough: the position
+                // latch skips a boundary that falls inside an SPI read frame, so right after
+                // the jog status frames the latched position can be two boundaries old, from
+                // before the last record's steps (seed 0x85509cf4abf74563: LATCH_TIME
+                // 202291 read at cycle 205064, position -161 there, -162 at 203839).
                 let mut still_at: Option<i32> = None;
                 loop {
                     machine.bus().wait(5 * u64::from(PERIOD)).unwrap();
