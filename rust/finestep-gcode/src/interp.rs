@@ -3,7 +3,7 @@
 
 use crate::error::LineError;
 use crate::lexer::Word;
-use crate::{BlockKind, CompSide, PathControl, Plane, Point, SpindleRotation};
+use crate::{nurbs_knots, BlockKind, CompSide, NurbsPoint, PathControl, Plane, Point, SpindleRotation};
 
 /// Millimetres per inch.
 const MM_PER_INCH: f64 = 25.4;
@@ -21,6 +21,23 @@ const ZERO_MM: f64 = 1e-9;
 /// A G code in tenths: G90.1 is 901.
 type Code = u32;
 
+/// G5.2 (open a NURBS block) and G5.3 (close it), in tenths.
+const G5_2: Code = 52;
+const G5_3: Code = 53;
+/// LinuxCNC's default NURBS order (quadratic).
+const NURBS_DEFAULT_ORDER: u32 = 3;
+/// The highest NURBS order accepted.
+const NURBS_MAX_ORDER: u32 = 16;
+
+/// A NURBS block between its G5.2 and G5.3.
+#[derive(Debug, Clone)]
+struct OpenNurbs {
+    /// Where the G5.2 word stands (line, column), for an unclosed block.
+    opened_at: (usize, usize),
+    points: Vec<NurbsPoint>,
+    order: u32,
+}
+
 /// The modal state between blocks.
 #[derive(Debug, Clone)]
 pub(crate) struct State {
@@ -37,6 +54,9 @@ pub(crate) struct State {
     mist: bool,
     flood: bool,
     tool: u32,
+    nurbs: Option<OpenNurbs>,
+    /// The 1-based source line being executed (set by the caller).
+    pub(crate) line: usize,
 }
 
 impl Default for State {
@@ -57,6 +77,8 @@ impl Default for State {
             mist: false,
             flood: false,
             tool: 0,
+            nurbs: None,
+            line: 0,
         }
     }
 }
@@ -83,7 +105,7 @@ const GROUPS: usize = 12;
 fn g_group(code: Code) -> Option<Group> {
     Some(match code {
         40 => Group::NonModal,
-        0 | 10 | 20 | 30 => Group::Motion,
+        0 | 10 | 20 | 30 | G5_2 | G5_3 => Group::Motion,
         170 | 180 | 190 => Group::Plane,
         900 | 910 => Group::Distance,
         901 | 911 => Group::ArcDistance,
@@ -118,7 +140,7 @@ fn as_u32(value: f64) -> Option<u32> {
 }
 
 /// The parameter letters a block may carry once each (besides G, M and N).
-const PARAMS: &str = "ADFIJKPRSTXYZ";
+const PARAMS: &str = "ADFIJKLPRSTXYZ";
 const AXES: [char; 4] = ['X', 'Y', 'Z', 'A'];
 
 /// The words of one block, sorted by meaning.
@@ -245,10 +267,18 @@ impl State {
         }
     }
 
+    /// Where the NURBS block still open was opened (line, column of its G5.2).
+    pub(crate) fn open_nurbs(&self) -> Option<(usize, usize)> {
+        self.nurbs.as_ref().map(|n| n.opened_at)
+    }
+
     /// Executes one block in LinuxCNC's order, except that G20/G21 act first so that
     /// every number of the block is read in the block's new units.
     pub(crate) fn execute(&mut self, words: &[Word]) -> Result<Executed, LineError> {
         let w = sort_words(words)?;
+        if self.nurbs.is_some() && !w.has(Group::Motion, G5_3) {
+            return self.nurbs_point_line(words, &w);
+        }
         let mut kinds = Vec::new();
 
         // Units.
@@ -283,17 +313,23 @@ impl State {
                 }
             }
         }
+        if let Some((_, column)) = w.param('L') {
+            if !w.has(Group::Motion, G5_2) {
+                return Err(LineError::new(column, "L word with no G5.2 to use it"));
+            }
+        }
         if let Some((_, column)) = w.param('P') {
             let users = [
                 w.group(Group::NonModal).is_some(),
                 w.has(Group::Path, 640),
                 arc_move,
+                w.has(Group::Motion, G5_2),
             ];
             match users.iter().filter(|&&u| u).count() {
                 0 => {
                     return Err(LineError::new(
                         column,
-                        "P word with no G4, G64, G2 or G3 to use it",
+                        "P word with no G4, G64, G2, G3 or G5.2 to use it",
                     ))
                 }
                 1 => {}
@@ -446,10 +482,19 @@ impl State {
         }
 
         // Motion.
-        if let Some((code, _)) = w.group(Group::Motion) {
-            self.motion = Some(code);
+        match w.group(Group::Motion) {
+            Some((G5_2, column)) => {
+                self.open_nurbs_block(&w, column)?;
+                self.motion = None;
+            }
+            Some((G5_3, column)) => {
+                kinds.push(self.close_nurbs_block(&w, column)?);
+                self.motion = None;
+            }
+            Some((code, _)) => self.motion = Some(code),
+            None => {}
         }
-        if let (Some(code), Some(column)) = (self.motion, first_axis) {
+        if let (Some(code), Some(column), None) = (self.motion, first_axis, &self.nurbs) {
             let to = self.target(&w)?;
             let feed = || match self.feed_mm_per_min {
                 Some(f) if f > 0.0 => Ok(f),
@@ -496,6 +541,135 @@ impl State {
             }
         }
         Ok(Executed { n: w.n, kinds, end })
+    }
+
+    /// A line inside an open NURBS block: `X- Y- <P->` adds a control point; nothing
+    /// else may stand there.
+    fn nurbs_point_line(&mut self, words: &[Word], w: &Words) -> Result<Executed, LineError> {
+        for word in words {
+            let message = match word.letter {
+                'N' | 'X' | 'Y' | 'P' => continue,
+                'Z' | 'A' => format!("axis {} inside a NURBS block: only X and Y move in a NURBS (G17)", word.letter),
+                'G' => format!(
+                    "G{} inside a NURBS block: only X, Y and P words until G5.3 closes it",
+                    word.value
+                ),
+                letter => format!("{letter} word inside a NURBS block: only X, Y and P words until G5.3 closes it"),
+            };
+            return Err(LineError::new(word.column, message));
+        }
+        match (w.param('X'), w.param('Y')) {
+            (Some(_), Some(_)) => {
+                let (x, y) = self.nurbs_target(w)?;
+                let weight = nurbs_weight(w)?;
+                let nurbs = self.nurbs.as_mut().expect("open NURBS");
+                nurbs.points.push(NurbsPoint { x_mm: x, y_mm: y, weight });
+            }
+            (Some((_, column)), None) | (None, Some((_, column))) => {
+                return Err(LineError::new(column, "a NURBS control point needs both X and Y"));
+            }
+            (None, None) => {
+                if let Some((_, column)) = w.param('P') {
+                    return Err(LineError::new(
+                        column,
+                        "P without X and Y sets only the first control point's weight (on the G5.2 line)",
+                    ));
+                }
+            }
+        }
+        Ok(Executed { n: w.n, kinds: Vec::new(), end: false })
+    }
+
+    /// A control point's X and Y in mm: absolute, or in G91 relative to the start of the
+    /// NURBS (the current position, which LinuxCNC updates only at G5.3).
+    fn nurbs_target(&self, w: &Words) -> Result<(f64, f64), LineError> {
+        let to = self.target(w)?;
+        Ok((to[0], to[1]))
+    }
+
+    /// G5.2: opens a NURBS block at the current position (LinuxCNC's first control point).
+    fn open_nurbs_block(&mut self, w: &Words, column: usize) -> Result<(), LineError> {
+        if self.plane != Plane::Xy {
+            return Err(LineError::new(column, "G5.2 NURBS is supported in the G17 (XY) plane only"));
+        }
+        if self.comp != CompSide::Off {
+            return Err(LineError::new(
+                column,
+                "G5.2 with cutter compensation on: a NURBS is not offset (G40 first)",
+            ));
+        }
+        if !self.feed_mm_per_min.is_some_and(|f| f > 0.0) {
+            return Err(LineError::new(column, "G5.2 with no feed rate"));
+        }
+        for letter in ['Z', 'A'] {
+            if let Some((_, c)) = w.param(letter) {
+                return Err(LineError::new(c, format!("axis {letter} in a NURBS: only X and Y move in a NURBS (G17)")));
+            }
+        }
+        let order = match w.param('L') {
+            None => NURBS_DEFAULT_ORDER,
+            Some((l, c)) => match as_u32(l) {
+                Some(k) if (2..=NURBS_MAX_ORDER).contains(&k) => k,
+                _ => {
+                    return Err(LineError::new(
+                        c,
+                        format!("NURBS order L must be an integer from 2 to {NURBS_MAX_ORDER}"),
+                    ))
+                }
+            },
+        };
+        let weight = nurbs_weight(w)?;
+        let start = NurbsPoint { x_mm: self.position[0], y_mm: self.position[1], weight: 1.0 };
+        let mut nurbs = OpenNurbs { opened_at: (self.line, column), points: vec![start], order };
+        match (w.param('X'), w.param('Y')) {
+            (Some(_), Some(_)) => {
+                let (x, y) = self.nurbs_target(w)?;
+                nurbs.points.push(NurbsPoint { x_mm: x, y_mm: y, weight });
+            }
+            (Some((_, c)), None) | (None, Some((_, c))) => {
+                return Err(LineError::new(c, "a NURBS control point needs both X and Y"));
+            }
+            // `G5.2 P-` alone: the weight of the first control point.
+            (None, None) => nurbs.points[0].weight = weight,
+        }
+        self.nurbs = Some(nurbs);
+        Ok(())
+    }
+
+    /// G5.3: closes the NURBS block and emits it.
+    fn close_nurbs_block(&mut self, w: &Words, column: usize) -> Result<BlockKind, LineError> {
+        for letter in AXES {
+            if let Some((_, c)) = w.param(letter) {
+                return Err(LineError::new(c, "G5.3 takes no axis words (control points go on the lines before it)"));
+            }
+        }
+        let nurbs = self.nurbs.take().ok_or_else(|| LineError::new(column, "G5.3 without G5.2 first"))?;
+        let count = nurbs.points.len();
+        if count < nurbs.order as usize {
+            return Err(LineError::new(
+                column,
+                format!(
+                    "a NURBS of order {} needs at least {} control points, this one has {count}",
+                    nurbs.order, nurbs.order
+                ),
+            ));
+        }
+        let feed_mm_per_min = match self.feed_mm_per_min {
+            Some(f) if f > 0.0 => f,
+            _ => return Err(LineError::new(column, "G5.3 with no feed rate")),
+        };
+        let last = nurbs.points[count - 1];
+        let mut to = self.position;
+        to[0] = last.x_mm;
+        to[1] = last.y_mm;
+        self.position = to;
+        Ok(BlockKind::Nurbs {
+            to: Point::from_array(to),
+            knots: nurbs_knots(count, nurbs.order as usize),
+            control_points: nurbs.points,
+            order: nurbs.order,
+            feed_mm_per_min,
+        })
     }
 
     /// The block's end point, absolute, in mm (and degrees for A).
@@ -620,6 +794,15 @@ impl State {
             None => 0,
         };
         Ok((centre, extra_turns))
+    }
+}
+
+/// The weight `P` of a NURBS control point: 1 when left out, else positive.
+fn nurbs_weight(w: &Words) -> Result<f64, LineError> {
+    match w.param('P') {
+        None => Ok(1.0),
+        Some((p, _)) if p > 0.0 => Ok(p),
+        Some((_, c)) => Err(LineError::new(c, "NURBS weight P must be positive")),
     }
 }
 

@@ -27,9 +27,10 @@
 //!   `;`. `N` line number (integer, first word). A leading `/` (block delete) is
 //!   ignored and the block runs. A line holding only `%` opens the program if it is the
 //!   first non-blank line; any later `%` line ends it. Lines after M2/M30 are not read.
-//! - G0 G1 G2 G3 G4 G17 G18 G19 G20 G21 G40 G41 G42 G61 G64 G90 G91 G90.1 G91.1;
-//!   M0 M2 M3 M4 M5 M6 M7 M8 M9 M30; F S T D P R I J K; axes X Y Z A. Anything else is
-//!   an error (`unsupported G-code G33`, `unknown word Q`).
+//! - G0 G1 G2 G3 G4 G5.2 G5.3 G17 G18 G19 G20 G21 G40 G41 G42 G61 G64 G90 G91 G90.1
+//!   G91.1; M0 M2 M3 M4 M5 M6 M7 M8 M9 M30; F S T D P R I J K L; axes X Y Z A. Anything
+//!   else is an error (`unsupported G-code G33`, `unknown word Q`).
+//! - NURBS blocks (G5.2 ... G5.3, G17 only): see [`BlockKind::Nurbs`].
 //! - Start state: G17 G21 G90 G91.1 G40 G64, no motion mode, at the origin, no feed
 //!   rate, spindle off at 0 rpm, coolant off, tool 0.
 //!
@@ -115,10 +116,39 @@ pub enum SpindleRotation {
     CounterClockwise,
 }
 
+/// One control point of a NURBS: its position in the XY plane and its weight.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NurbsPoint {
+    /// X in mm.
+    pub x_mm: f64,
+    /// Y in mm.
+    pub y_mm: f64,
+    /// Weight (positive).
+    pub weight: f64,
+}
+
+/// The clamped uniform knot vector LinuxCNC gives a NURBS of `count` control points
+/// and order `order` (`count >= order >= 1`): `order` zeros, then 1, 2, ...,
+/// `count - order`, then `order` times `count - order + 1` (`count + order` knots).
+pub fn nurbs_knots(count: usize, order: usize) -> Vec<f64> {
+    let last = (count - order + 1) as f64;
+    (0..count + order)
+        .map(|i| {
+            if i < order {
+                0.0
+            } else if i < count {
+                (i + 1 - order) as f64
+            } else {
+                last
+            }
+        })
+        .collect()
+}
+
 /// One canonical operation. A source block may give several, in LinuxCNC's order of
 /// execution: tool select, tool change, spindle, coolant, dwell, cutter compensation,
 /// path control, motion, stop.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum BlockKind {
     /// G0: a rapid move to `to`.
     Rapid {
@@ -150,6 +180,34 @@ pub enum BlockKind {
         clockwise: bool,
         /// Full turns in addition to the programmed arc: `P` minus 1, else 0.
         extra_turns: u32,
+        /// Feed rate in mm/min.
+        feed_mm_per_min: f64,
+    },
+    /// G5.2 ... G5.3: a NURBS curve in the XY plane (G17) from the previous end point
+    /// to `to`, emitted on the G5.3 line.
+    ///
+    /// As in LinuxCNC, the first control point is always the current position (the
+    /// previous end point): the `X Y` of the `G5.2` line is the *second* control point.
+    /// `G5.2 P-` without `X Y` sets the weight of that first point; `G5.2 X- Y- P- L-`
+    /// sets the second point and its weight; each following line `X- Y- <P->` adds a
+    /// control point; `G5.3` ends the block. Weights default to 1 and must be positive;
+    /// the order `L` defaults to 3 (quadratic). The knots are LinuxCNC's clamped uniform
+    /// vector ([`nurbs_knots`]), so the curve starts at the current position and ends
+    /// at the last control point, tangent to the control polygon at both ends. In G91
+    /// every control point is relative to the start of the NURBS (LinuxCNC updates the
+    /// current position only at G5.3). Z and A do not move. Differences from LinuxCNC:
+    /// `L2` gives order 2 (LinuxCNC silently keeps 3 for `L` below 4), and a weight left
+    /// out on a later line is 1 (as LinuxCNC's documentation says; its interpreter
+    /// refuses it).
+    Nurbs {
+        /// End point: the last control point, with the start's Z and A.
+        to: Point,
+        /// Control points, the first being the start point.
+        control_points: Vec<NurbsPoint>,
+        /// Order k (degree k - 1), at least 2 and at most the number of control points.
+        order: u32,
+        /// Knot vector, `control_points.len() + order` values ([`nurbs_knots`]).
+        knots: Vec<f64>,
         /// Feed rate in mm/min.
         feed_mm_per_min: f64,
     },
@@ -198,7 +256,7 @@ pub enum BlockKind {
 }
 
 /// One canonical operation and where it came from.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Block {
     /// 1-based source line.
     pub line: usize,
@@ -222,6 +280,7 @@ pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
     let mut seen_content = false;
     for (index, raw) in source.split('\n').enumerate() {
         let line = index + 1;
+        state.line = line;
         let text = raw.strip_suffix('\r').unwrap_or(raw);
         let located = |e: error::LineError| GcodeError::Parse {
             file: file_name.to_string(),
@@ -250,6 +309,14 @@ pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
         if executed.end {
             break;
         }
+    }
+    if let Some((line, column)) = state.open_nurbs() {
+        return Err(GcodeError::Parse {
+            file: file_name.to_string(),
+            line,
+            column,
+            message: "the program ends inside the NURBS block opened here (G5.3 missing)".into(),
+        });
     }
     Ok(Program { blocks })
 }

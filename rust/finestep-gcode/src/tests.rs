@@ -67,7 +67,7 @@ fn rapid_and_linear_with_lines_and_numbers() {
     let got: Vec<_> = program
         .blocks
         .iter()
-        .map(|b| (b.line, b.n, b.kind))
+        .map(|b| (b.line, b.n, b.kind.clone()))
         .collect();
     assert_eq!(
         got,
@@ -414,7 +414,7 @@ fn every_error_message_with_its_place() {
         ("R1", "1:1: R word with no G2 or G3 to use it"),
         (
             "G0 X1 P1",
-            "1:7: P word with no G4, G64, G2 or G3 to use it",
+            "1:7: P word with no G4, G64, G2, G3 or G5.2 to use it",
         ),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         (
@@ -526,4 +526,101 @@ fn compensation_only_in_the_xy_plane() {
     let err = parse_str("G17 G41 D1\nG1 X1 F100\nG19\n", "p.ngc").unwrap_err();
     assert_eq!(err.to_string(), "p.ngc:3:1: plane change while cutter compensation is on (G40 first)");
     assert!(parse_str("G17 G41 D1\nG1 X1 F100\nG40\nG18\n", "p.ngc").is_ok());
+}
+
+/// The single NURBS of a program: control points (x, y, w), order, knots, feed, end.
+fn nurbs(source: &str) -> (Vec<(f64, f64, f64)>, u32, Vec<f64>, f64, Point) {
+    let found: Vec<_> = parse(source)
+        .into_iter()
+        .filter_map(|k| match k {
+            BlockKind::Nurbs { to, control_points, order, knots, feed_mm_per_min } => Some((
+                control_points.iter().map(|c| (c.x_mm, c.y_mm, c.weight)).collect(),
+                order,
+                knots,
+                feed_mm_per_min,
+                to,
+            )),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(found.len(), 1, "{source:?}");
+    found.into_iter().next().unwrap()
+}
+
+#[test]
+fn nurbs_blocks_follow_linuxcnc() {
+    // LinuxCNC's documented example: the current position is the first control point,
+    // `G5.2 P1 L3` sets its weight and the order, the default order is 3.
+    let (points, order, knots, feed, to) = nurbs(
+        "G0 X0 Y0 Z2\nF10\nG5.2 P1 L3\n X0 Y1 P1\n X2 Y2 P1\n X2 Y0 P1\n X0 Y0 P2\nG5.3\nM2\n",
+    );
+    assert_eq!(
+        points,
+        vec![(0.0, 0.0, 1.0), (0.0, 1.0, 1.0), (2.0, 2.0, 1.0), (2.0, 0.0, 1.0), (0.0, 0.0, 2.0)]
+    );
+    assert_eq!(order, 3);
+    assert_eq!(knots, vec![0.0, 0.0, 0.0, 1.0, 2.0, 3.0, 3.0, 3.0]);
+    assert_eq!(feed, 10.0);
+    assert!(close(to, p(0.0, 0.0, 2.0, 0.0)));
+    // X Y on the G5.2 line is the second control point; weights default to 1; G20 and
+    // G91 (relative to the NURBS's start) apply; the block comes on the G5.3 line.
+    let source = "G0 X1 Y1\nG20 G91 F1\nG5.2 X1 Y0 P0.5 L4\nX1 Y1\nX0 Y1 P2\nG5.3\nG1 X0.1\n";
+    let (points, order, knots, feed, to) = nurbs(source);
+    let i = 25.4;
+    assert_eq!(
+        points,
+        vec![(1.0, 1.0, 1.0), (1.0 + i, 1.0, 0.5), (1.0 + i, 1.0 + i, 1.0), (1.0, 1.0 + i, 2.0)]
+    );
+    assert_eq!((order, knots, feed), (4, vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0], i));
+    assert!(close(to, p(1.0, 1.0 + i, 0.0, 0.0)));
+    let program = parse_str(source, FILE).unwrap();
+    assert_eq!(program.blocks.iter().map(|b| b.line).collect::<Vec<_>>(), vec![1, 6, 7]);
+    let BlockKind::Linear { to, .. } = program.blocks[2].kind else { panic!() };
+    assert!(close(to, p(1.0 + 0.1 * i, 1.0 + i, 0.0, 0.0)));
+    // Order 2 is the control polygon; N words, comments and blank lines may stand inside.
+    let (points, order, knots, ..) =
+        nurbs("F600\nG5.2 X1 Y0 L2\n\n(corner)\nN30 X1 Y1\nG5.3 M2\n");
+    assert_eq!((points.len(), order), (3, 2));
+    assert_eq!(knots, vec![0.0, 0.0, 1.0, 2.0, 2.0]);
+    assert_eq!(nurbs_knots(7, 3), vec![0.0, 0.0, 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.0, 5.0]);
+    // No motion mode after G5.3 (LinuxCNC's motion mode -1).
+    assert_eq!(
+        err("F600\nG5.2 X1 Y0\nX1 Y1\nG5.3\nX2\n"),
+        "t.ngc:5:1: axis word with no motion mode (G0, G1, G2 or G3) to use it"
+    );
+}
+
+#[test]
+fn nurbs_errors_with_their_place() {
+    let cases: &[(&str, &str)] = &[
+        ("F600\nG5.2 X1 Y0\nX1 Y1\nG5.3 X3\n", "4:6: G5.3 takes no axis words (control points go on the lines before it)"),
+        ("F600\nG5.3\n", "2:1: G5.3 without G5.2 first"),
+        ("F600\nG5.2 X1 Y0\nG5.3\n", "3:1: a NURBS of order 3 needs at least 3 control points, this one has 2"),
+        ("F600\nG5.2 X1 Y0 L4\nX2 Y2\nG5.3\n", "4:1: a NURBS of order 4 needs at least 4 control points, this one has 3"),
+        ("F600\nG5.2 X1 Y0 P0\n", "2:12: NURBS weight P must be positive"),
+        ("F600\nG5.2 X1 Y0\nX2 Y1 P-1\n", "3:7: NURBS weight P must be positive"),
+        ("F600\nG5.2 X1 Y0 L1\n", "2:12: NURBS order L must be an integer from 2 to 16"),
+        ("F600\nG5.2 X1 Y0 L2.5\n", "2:12: NURBS order L must be an integer from 2 to 16"),
+        ("F600\nG5.2 X1\n", "2:6: a NURBS control point needs both X and Y"),
+        ("F600\nG5.2 X1 Y1\nY2\n", "3:1: a NURBS control point needs both X and Y"),
+        ("F600\nG5.2 X1 Y1\nP2\n", "3:1: P without X and Y sets only the first control point's weight (on the G5.2 line)"),
+        ("F600\nG5.2 X1 Y1 Z1\n", "2:12: axis Z in a NURBS: only X and Y move in a NURBS (G17)"),
+        ("F600\nG5.2 X1 Y1\nX2 Y2 A3\n", "3:7: axis A inside a NURBS block: only X and Y move in a NURBS (G17)"),
+        ("F600\nG5.2 X1 Y1\nG1 X2 Y2\n", "3:1: G1 inside a NURBS block: only X, Y and P words until G5.3 closes it"),
+        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.2 X3 Y3\n", "4:1: G5.2 inside a NURBS block: only X, Y and P words until G5.3 closes it"),
+        ("F600\nG5.2 X1 Y1\nX2 Y2 F100\n", "3:7: F word inside a NURBS block: only X, Y and P words until G5.3 closes it"),
+        ("F600\nG5.2 X1 Y1\nX2 Y2\nM2\n", "4:1: M word inside a NURBS block: only X, Y and P words until G5.3 closes it"),
+        ("G18 F600\nG5.2 X1 Y1\n", "2:1: G5.2 NURBS is supported in the G17 (XY) plane only"),
+        ("F600\nG41 D1\nG5.2 X1 Y1\n", "3:1: G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"),
+        ("G5.2 X1 Y1\n", "1:1: G5.2 with no feed rate"),
+        ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2 to use it"),
+        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n", "4:6: P word with no G4, G64, G2, G3 or G5.2 to use it"),
+        // The program ends inside the block: the error points at its G5.2.
+        ("F600\nG0 X1\n G5.2 X1 Y1\nX2 Y2\nX3 Y1\n", "3:2: the program ends inside the NURBS block opened here (G5.3 missing)"),
+        ("F600\nG5.2 X1 Y1 M2\n", "2:1: the program ends inside the NURBS block opened here (G5.3 missing)"),
+        ("%\nF600\nG5.2 X1 Y1\nX2 Y2\n%\nX9 Y9\nG5.3\n", "3:1: the program ends inside the NURBS block opened here (G5.3 missing)"),
+    ];
+    for (source, expected) in cases {
+        assert_eq!(err(source), format!("{FILE}:{expected}"), "{source:?}");
+    }
 }

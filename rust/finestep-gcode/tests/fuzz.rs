@@ -217,7 +217,7 @@ fn arc_centre_and_radius_forms_agree() {
             let centre = |source: &str| -> Result<[f64; 3], TestCaseError> {
                 let program =
                     parse_str(source, "arc.ngc").map_err(|e| TestCaseError::fail(e.to_string()))?;
-                match program.blocks.last().map(|b| b.kind) {
+                match program.blocks.last().map(|b| b.kind.clone()) {
                     Some(BlockKind::Arc { centre, .. }) => {
                         Ok([centre.x_mm, centre.y_mm, centre.z_mm])
                     }

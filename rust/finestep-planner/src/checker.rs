@@ -16,7 +16,11 @@
 //!   when every axis is within its own);
 //! - every period boundary within the allowed distance of the programmed path: the
 //!   G64 tolerance P of a neighbouring corner (0 in G61), plus the chord tolerance,
-//!   plus half a step per axis (vertices are rounded to whole steps); chord midpoints too;
+//!   plus half a step per axis (vertices are rounded to whole steps); chord midpoints too.
+//!   A NURBS is evaluated here from its own definition, the Cox-de Boor recursion of
+//!   the rational basis functions (the planner uses de Boor's algorithm on homogeneous
+//!   points), and the distance to it is found by dense sampling and a golden-section
+//!   refinement around the nearest sample;
 //! - the position exactly (in Q16.16 steps) on every exact stop and the program end;
 //! - every record within the drive's rated rate (the model's `RateChecker`).
 //!
@@ -29,6 +33,7 @@
 //! The limits are asserted with these added, and a relative 1e-9 for floating point.
 
 use std::f64::consts::TAU;
+use std::rc::Rc;
 
 use finestep_gcode::{BlockKind, PathControl, Plane, Program};
 use finestep_model::limits::RateChecker;
@@ -100,14 +105,123 @@ impl CheckReport {
 /// signed sweep.
 type ArcGeometry = ((usize, usize), (f64, f64), f64, f64, f64);
 
+/// Samples of a NURBS per knot span for the distance search.
+const CURVE_SAMPLES_PER_SPAN: usize = 48;
+
+/// A NURBS as the checker reads it: control points `(x, y, w)`, knots, order, and the
+/// curve sampled densely as `(parameter, point)`.
+#[derive(Debug)]
+struct CheckCurve {
+    points: Vec<(f64, f64, f64)>,
+    knots: Vec<f64>,
+    order: usize,
+    samples: Vec<(f64, [f64; 2])>,
+}
+
+impl CheckCurve {
+    fn new(points: Vec<(f64, f64, f64)>, knots: Vec<f64>, order: usize) -> CheckCurve {
+        let mut curve = CheckCurve { points, knots, order, samples: Vec::new() };
+        let n = curve.points.len();
+        for i in order - 1..n {
+            let (a, b) = (curve.knots[i], curve.knots[i + 1]);
+            if b > a {
+                for j in 0..CURVE_SAMPLES_PER_SPAN {
+                    let u = a + (b - a) * j as f64 / CURVE_SAMPLES_PER_SPAN as f64;
+                    curve.samples.push((u, curve.point(u)));
+                }
+            }
+        }
+        let end = curve.knots[n];
+        curve.samples.push((end, curve.point(end)));
+        curve
+    }
+
+    /// The basis functions N_{i,order}(u) for every control point, by the Cox-de Boor
+    /// recursion (0/0 taken as 0; the end of the domain belongs to the last span).
+    fn basis(&self, u: f64) -> Vec<f64> {
+        let t = &self.knots;
+        let n = self.points.len();
+        let end = t[n];
+        let mut last_span = n - 1;
+        while t[last_span] >= end {
+            last_span -= 1;
+        }
+        let mut b: Vec<f64> = (0..t.len() - 1)
+            .map(|i| {
+                let inside = t[i] <= u && u < t[i + 1];
+                if inside || (u >= end && i == last_span) {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        for k in 2..=self.order {
+            b = (0..t.len() - k)
+                .map(|i| {
+                    let left = if t[i + k - 1] > t[i] { (u - t[i]) / (t[i + k - 1] - t[i]) * b[i] } else { 0.0 };
+                    let right = if t[i + k] > t[i + 1] { (t[i + k] - u) / (t[i + k] - t[i + 1]) * b[i + 1] } else { 0.0 };
+                    left + right
+                })
+                .collect();
+        }
+        b
+    }
+
+    fn point(&self, u: f64) -> [f64; 2] {
+        let b = self.basis(u);
+        let (mut x, mut y, mut w) = (0.0, 0.0, 0.0);
+        for (n, &(px, py, pw)) in b.iter().zip(&self.points) {
+            x += n * pw * px;
+            y += n * pw * py;
+            w += n * pw;
+        }
+        [x / w, y / w]
+    }
+
+    /// The smallest distance in the plane from `(qx, qy)` to the curve (an upper bound:
+    /// the distance to a point of the curve near the nearest sample).
+    fn distance(&self, qx: f64, qy: f64) -> f64 {
+        let d = |p: [f64; 2]| (p[0] - qx).hypot(p[1] - qy);
+        let (nearest, best) = self
+            .samples
+            .iter()
+            .enumerate()
+            .map(|(i, &(_, p))| (i, d(p)))
+            .fold((0, f64::INFINITY), |acc, x| if x.1 < acc.1 { x } else { acc });
+        let mut lo = self.samples[nearest.saturating_sub(1)].0;
+        let mut hi = self.samples[(nearest + 1).min(self.samples.len() - 1)].0;
+        // Golden-section search on the distance over the two sample intervals around it.
+        let g = 0.5 * (5f64.sqrt() - 1.0);
+        let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
+        let (mut fa, mut fb) = (d(self.point(a)), d(self.point(b)));
+        for _ in 0..60 {
+            if fa < fb {
+                hi = b;
+                (b, fb) = (a, fa);
+                a = hi - g * (hi - lo);
+                fa = d(self.point(a));
+            } else {
+                lo = a;
+                (a, fa) = (b, fb);
+                b = lo + g * (hi - lo);
+                fb = d(self.point(b));
+            }
+        }
+        best.min(fa).min(fb)
+    }
+}
+
 /// A programmed piece of path as the checker understands it.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Piece {
     line: usize,
     start: [f64; 4],
     end: [f64; 4],
     /// Plane axes, centre, start radius, start angle, signed sweep for arcs.
     arc: Option<ArcGeometry>,
+    /// The curve of a NURBS (in XY; Z and A stay at the start's).
+    nurbs: Option<Rc<CheckCurve>>,
     feed: f64,
     /// G64 tolerance of its mode (0 in G61): the corner at its end.
     own_tolerance: f64,
@@ -133,6 +247,11 @@ impl Piece {
     /// Distance from `q` to the piece.
     fn distance(&self, q: &[f64; 4], present: &[bool; 4]) -> f64 {
         let dist = |p: [f64; 4]| -> f64 { (0..4).filter(|&a| present[a]).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>().sqrt() };
+        if let Some(curve) = &self.nurbs {
+            let planar = curve.distance(q[0], q[1]);
+            let off: f64 = (2..4).filter(|&a| present[a]).map(|a| (q[a] - self.start[a]).powi(2)).sum();
+            return (planar * planar + off).sqrt();
+        }
         match self.arc {
             None => {
                 let mut along = 0.0;
@@ -211,7 +330,13 @@ fn pieces(program: &Program, default_tolerance: f64) -> (Vec<Piece>, Vec<usize>)
         }
     };
     for block in &program.blocks {
+        let mut nurbs = None;
         let (to, feed, arc) = match block.kind {
+            BlockKind::Nurbs { to, ref control_points, order, ref knots, feed_mm_per_min } => {
+                let points = control_points.iter().map(|c| (c.x_mm, c.y_mm, c.weight)).collect();
+                nurbs = Some(Rc::new(CheckCurve::new(points, knots.clone(), order as usize)));
+                (to, feed_mm_per_min / 60.0, None)
+            }
             BlockKind::Rapid { to } => (to, f64::INFINITY, None),
             BlockKind::Linear { to, feed_mm_per_min } => (to, feed_mm_per_min / 60.0, None),
             BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
@@ -244,7 +369,7 @@ fn pieces(program: &Program, default_tolerance: f64) -> (Vec<Piece>, Vec<usize>)
             _ => continue,
         };
         let to = [to.x_mm, to.y_mm, to.z_mm, to.a_deg];
-        if arc.is_none() && to == at {
+        if arc.is_none() && nurbs.is_none() && to == at {
             continue;
         }
         // The corner at a piece's end is blended in the piece's own mode; the corner at
@@ -252,7 +377,7 @@ fn pieces(program: &Program, default_tolerance: f64) -> (Vec<Piece>, Vec<usize>)
         let before = out.last().filter(|p| !p.stops).map_or(0.0, |p| p.own_tolerance);
         let own_tolerance = tolerance.unwrap_or(0.0);
         let allowance = own_tolerance.max(before);
-        out.push(Piece { line: block.line, start: at, end: to, arc, feed, own_tolerance, allowance, stops: tolerance.is_none() });
+        out.push(Piece { line: block.line, start: at, end: to, arc, nurbs, feed, own_tolerance, allowance, stops: tolerance.is_none() });
         at = to;
     }
     mark_stop(&mut out);

@@ -410,6 +410,18 @@ impl Compensator<'_> {
             BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. } => {
                 self.motion(block)
             }
+            BlockKind::Nurbs { to, feed_mm_per_min, .. } => {
+                if self.comp_on() {
+                    return Err(CompError {
+                        line: block.line,
+                        reason: "NURBS (G5.2) with cutter compensation on: a NURBS is not offset (G40 and its exit move first)".into(),
+                    });
+                }
+                self.programmed = to;
+                self.last_feed = Some(feed_mm_per_min);
+                self.out.push(block.clone());
+                Ok(())
+            }
             BlockKind::ToolChange { tool } => {
                 if let Mode::Stopping { .. } = self.mode {
                     return Err(CompError {
@@ -424,20 +436,20 @@ impl Compensator<'_> {
                     });
                 }
                 self.spindle_tool = tool;
-                self.out.push(*block);
+                self.out.push(block.clone());
                 Ok(())
             }
             BlockKind::End => {
                 self.flush();
-                self.out.push(*block);
+                self.out.push(block.clone());
                 Ok(())
             }
             _ => {
                 match &mut self.mode {
                     Mode::On { current, .. } | Mode::Stopping { current, .. } => {
-                        current.deferred.push(*block)
+                        current.deferred.push(block.clone())
                     }
-                    Mode::Off | Mode::Starting { .. } => self.out.push(*block),
+                    Mode::Off | Mode::Starting { .. } => self.out.push(block.clone()),
                 }
                 Ok(())
             }
@@ -536,7 +548,7 @@ impl Compensator<'_> {
         }
         let (side, radius) = match self.mode {
             Mode::Off => {
-                self.out.push(*block);
+                self.out.push(block.clone());
                 return Ok(());
             }
             Mode::Starting { side, radius }
@@ -546,15 +558,15 @@ impl Compensator<'_> {
         if radius == 0.0 {
             // A zero radius offsets nothing (the mode stays Starting): the path is the
             // programmed one.
-            self.out.push(*block);
+            self.out.push(block.clone());
             return Ok(());
         }
         if !planar {
             match &mut self.mode {
                 Mode::On { current, .. } | Mode::Stopping { current, .. } => {
-                    current.deferred.push(*block)
+                    current.deferred.push(block.clone())
                 }
-                _ => self.out.push(*block),
+                _ => self.out.push(block.clone()),
             }
             return Ok(());
         }
@@ -608,7 +620,7 @@ impl Compensator<'_> {
                 self.join_and_emit(*current, exit, side, radius, feed_before)?;
                 // The exit line (its start possibly cut back, which does not change the
                 // line) ends exactly on the programmed point.
-                self.out.push(*block);
+                self.out.push(block.clone());
             }
         }
         Ok(())

@@ -16,10 +16,12 @@
 //! [`crate::lookahead`].
 
 use std::f64::consts::TAU;
+use std::sync::Arc;
 
 use finestep_gcode::{BlockKind, CompSide, PathControl, Plane, Point, Program};
 
 use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
+use crate::nurbs::{parameter_at, NurbsCurve};
 use crate::program::ProgramError;
 
 /// A point or direction over the four record slots X, Y, Z, A.
@@ -42,7 +44,7 @@ pub(crate) fn scale(k: f64, a: Vec4) -> Vec4 {
 }
 
 /// The shape of one element.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Shape {
     /// A straight line from the element's start along a unit direction.
     Line {
@@ -67,10 +69,20 @@ pub enum Shape {
         /// Motion of the axes outside the plane over the whole arc.
         rise: Vec4,
     },
+    /// The part `u0..=u1` (within one knot span) of a NURBS curve in XY
+    /// ([`crate::nurbs`]), interpolated along the curve itself.
+    Nurbs {
+        /// The whole curve, shared by its sub-pieces.
+        curve: Arc<NurbsCurve>,
+        /// Parameter at the start.
+        u0: f64,
+        /// Parameter at the end.
+        u1: f64,
+    },
 }
 
 /// One piece of the path with its own speed limits.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Element {
     /// Shape.
     pub shape: Shape,
@@ -107,6 +119,7 @@ impl Element {
         }
         match self.shape {
             Shape::Line { dir } => add_scaled(self.start, s, dir),
+            Shape::Nurbs { ref curve, u0, u1 } => curve.point(parameter_at(curve, u0, u1, self.length, s)),
             Shape::Arc { centre, e1, e2, r0, r1, sweep, rise } => {
                 let f = s / self.length;
                 let r = r0 + f * (r1 - r0);
@@ -124,6 +137,11 @@ impl Element {
     pub fn tangent(&self, at_end: bool) -> Vec4 {
         match self.shape {
             Shape::Line { dir } => dir,
+            Shape::Nurbs { ref curve, u0, u1 } => {
+                let d = curve.derivatives(if at_end { u1 } else { u0 });
+                let speed = d.speed();
+                [d.first[0] / speed, d.first[1] / speed, 0.0, 0.0]
+            }
             Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
                 let f: f64 = if at_end { 1.0 } else { 0.0 };
                 let r = r0 + f * (r1 - r0);
@@ -142,6 +160,15 @@ impl Element {
     pub fn curvature(&self, at_end: bool) -> Vec4 {
         match self.shape {
             Shape::Line { .. } => [0.0; 4],
+            Shape::Nurbs { ref curve, u0, u1 } => {
+                // (C'' - (C''.T) T) / |C'|^2
+                let d = curve.derivatives(if at_end { u1 } else { u0 });
+                let speed = d.speed();
+                let t = [d.first[0] / speed, d.first[1] / speed];
+                let along = d.second[0] * t[0] + d.second[1] * t[1];
+                let k = [0, 1].map(|c| (d.second[c] - along * t[c]) / (speed * speed));
+                [k[0], k[1], 0.0, 0.0]
+            }
             Shape::Arc { e1, e2, sweep, .. } => {
                 let (planar, r) = self.planar_fraction_and_radius();
                 let f: f64 = if at_end { 1.0 } else { 0.0 };
@@ -155,7 +182,7 @@ impl Element {
     /// For arcs: the share of the speed in the plane, and the smaller radius.
     fn planar_fraction_and_radius(&self) -> (f64, f64) {
         match self.shape {
-            Shape::Line { .. } => (0.0, f64::INFINITY),
+            Shape::Line { .. } | Shape::Nurbs { .. } => (0.0, f64::INFINITY),
             Shape::Arc { r0, r1, sweep, .. } => {
                 let planar = (r0.max(r1) * sweep.abs() / self.length).min(1.0);
                 (planar, r0.min(r1))
@@ -165,8 +192,10 @@ impl Element {
 }
 
 /// A programmed move before blending, vertices rounded to whole steps.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Move {
+    /// The curve of a NURBS move (its end control points on whole steps).
+    nurbs: Option<Arc<NurbsCurve>>,
     line: usize,
     start: Vec4,
     end: Vec4,
@@ -229,7 +258,14 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
     let mut leading_dwell = 0u64;
     for block in &program.blocks {
         let fail = |reason: String| ProgramError { line: block.line, reason };
+        let mut nurbs: Option<Vec<(f64, f64, f64)>> = None;
+        let mut nurbs_shape: (usize, &[f64]) = (0, &[]);
         let (to, feed, arc) = match block.kind {
+            BlockKind::Nurbs { to, ref control_points, order, ref knots, feed_mm_per_min } => {
+                nurbs = Some(control_points.iter().map(|c| (c.x_mm, c.y_mm, c.weight)).collect());
+                nurbs_shape = (order as usize, knots);
+                (coords(&to), feed_mm_per_min / 60.0, None)
+            }
             BlockKind::Rapid { to } => (coords(&to), f64::INFINITY, None),
             BlockKind::Linear { to, feed_mm_per_min } => (coords(&to), feed_mm_per_min / 60.0, None),
             BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
@@ -285,11 +321,38 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
                 return Err(fail(format!("axis {} endpoint {} is outside the core's 32-bit step position", AXIS_NAMES[a], to[a])));
             }
         }
-        if arc.is_none() && to == at {
+        let curve = match nurbs {
+            Some(mut points) => {
+                // The first control point is where the tool is (on whole steps), the last
+                // the rounded end: the curve moves by at most half a step per axis.
+                for (x, y, _) in &points {
+                    for (a, value) in [(0usize, *x), (1, *y)] {
+                        let axis = &config.axes[a];
+                        if !axis.present && value != at[a] {
+                            return Err(fail(format!("axis {} moves but is not configured", AXIS_NAMES[a])));
+                        }
+                        let steps = (value * axis.steps_per_unit).abs();
+                        if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
+                            return Err(fail(format!("NURBS control point {AXIS_NAMES}{value} is outside the core's 32-bit step position", AXIS_NAMES = AXIS_NAMES[a])));
+                        }
+                    }
+                }
+                let n = points.len();
+                points[0].0 = at[0];
+                points[0].1 = at[1];
+                points[n - 1].0 = to[0];
+                points[n - 1].1 = to[1];
+                let (order, knots) = nurbs_shape;
+                let curve = NurbsCurve::new(&points, order.saturating_sub(1), knots, at).map_err(&fail)?;
+                Some(Arc::new(curve))
+            }
+            None => None,
+        };
+        if arc.is_none() && curve.is_none() && to == at {
             continue; // nothing to do; keeps neighbouring corners blendable
         }
         // G61 stops at the end of every move.
-        out.push(Move { line: block.line, start: at, end: to, feed, arc, programmed, blend, stop_after: blend.is_none(), dwell_periods: 0, dwell_line: 0 });
+        out.push(Move { nurbs: curve, line: block.line, start: at, end: to, feed, arc, programmed, blend, stop_after: blend.is_none(), dwell_periods: 0, dwell_line: 0 });
         at = to;
     }
     if let Some(last) = out.last_mut() {
@@ -303,6 +366,7 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
 fn axis_weights(shape: &Shape, length: f64) -> Vec4 {
     match *shape {
         Shape::Line { dir } => dir.map(f64::abs),
+        Shape::Nurbs { .. } => [1.0, 1.0, 0.0, 0.0], // sub-pieces get their limits in `nurbs`
         Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
             let planar = (r0.max(r1) * sweep.abs() / length).min(1.0);
             let radial = (r1 - r0).abs() / length;
@@ -514,6 +578,18 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
         if let Some(b) = pending_blend.take() {
             out.push(b);
         }
+        if let Some(curve) = &m.nurbs {
+            let mut pieces = crate::nurbs::pieces(config, Arc::clone(curve), m.feed, m.line)
+                .map_err(|reason| ProgramError { line: m.line, reason })?;
+            let last = pieces.last_mut().expect("a NURBS has a piece");
+            last.block_end = true;
+            last.stop_after = m.stop_after;
+            last.dwell_periods = m.dwell_periods;
+            last.dwell_line = m.dwell_line;
+            out.extend(pieces);
+            start = m.end;
+            continue;
+        }
         if m.arc.is_some() {
             if let Some(mut e) = arc_element(config, m)? {
                 e.block_end = true;
@@ -530,7 +606,7 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
             continue;
         }
         // A line: blend into the next line when both are lines and the mode allows.
-        let next = moves.get(index + 1).filter(|n| n.arc.is_none());
+        let next = moves.get(index + 1).filter(|n| n.arc.is_none() && n.nurbs.is_none());
         let mut end_here = m.end;
         if let (Some(tolerance), Some(n)) = (m.blend, next) {
             let d1 = sub(m.end, m.start);

@@ -6,13 +6,18 @@
 //! are on whole steps already), so the increments sum exactly to it, and the next move
 //! starts with the next period. Every record is checked against the drive's rated rate
 //! ([`RateChecker`]) before it is emitted.
+//!
+//! NURBS sub-pieces are interpolated directly: a [`NurbsCursor`] carries the curve
+//! parameter from period to period and steps it by the arc length the profile asks
+//! for (second-order Taylor step and Newton correction, [`crate::nurbs`]).
 
 use finestep_model::limits::RateChecker;
 use finestep_model::{Increment, PeriodRecord};
 
 use crate::config::{Resolved, AXIS_NAMES};
-use crate::geometry::{Element, Vec4};
+use crate::geometry::{Element, Shape, Vec4};
 use crate::lookahead::element_limits;
+use crate::nurbs::NurbsCursor;
 use crate::path::FLAG_BLOCK_END;
 use crate::program::ProgramError;
 use crate::velocity::Profile;
@@ -105,6 +110,7 @@ pub fn interpolate(config: &Resolved, elements: &[Element], speeds: &[f64], lead
     }
     let mut profile = profile_of(0);
     let mut t = 0.0;
+    let mut cursor = NurbsCursor::new(usize::MAX, 0.0);
     'periods: loop {
         t += period;
         let mut flags = 0;
@@ -136,7 +142,21 @@ pub fn interpolate(config: &Resolved, elements: &[Element], speeds: &[f64], lead
             profile = profile_of(index);
         }
         let element = &elements[index];
-        let grid = emitter.grid(element.position(profile.distance_at(t)));
+        let s = profile.distance_at(t);
+        let point = match element.shape {
+            Shape::Nurbs { ref curve, u0, u1 } => {
+                if cursor.element != index {
+                    cursor = NurbsCursor::new(index, u0);
+                }
+                if s >= element.length {
+                    element.end
+                } else {
+                    curve.point(cursor.advance(curve, u1, s))
+                }
+            }
+            _ => element.position(s),
+        };
+        let grid = emitter.grid(point);
         emitter.emit(grid, flags, element.line)?;
     }
     Ok(emitter.out)

@@ -69,6 +69,7 @@ pub mod geometry;
 pub mod interpolate;
 pub mod linear;
 pub mod lookahead;
+pub mod nurbs;
 pub mod path;
 pub mod profile;
 pub mod program;
