@@ -81,7 +81,7 @@ case $target in
         pnr_args=(--device LCMXO2-1200HC-4TG100C --lpf constraints/machxo2_1200.lpf --lpf-allow-unconstrained)
         pnr_out=(--textcfg) ; pnr_ext=config
         pack=yowasp-xo2pack ; bit_ext=bit
-        target_mhz=26 ;;
+        target_mhz=28 ;;        # the oscillator's 26.6 MHz + 5 %
     machxo3-6900)
         default_seed=1
         top=machxo3_6900
@@ -92,7 +92,7 @@ case $target in
         # The packer's database (prjtrellis, in yowasp-nextpnr-machxo2) holds MachXO2
         # only: place, route and timing, no bitstream.
         pack="" ; bit_ext=bit
-        target_mhz=26 ;;
+        target_mhz=28 ;;
     *) usage ;;
 esac
 

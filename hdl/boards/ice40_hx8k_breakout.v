@@ -2,12 +2,12 @@
 `default_nettype none
 // Board top for the Lattice iCE40-HX8K breakout board (iCE40HX8K-CT256): the 12 MHz
 // oscillator through the iCE40 PLL to 50.25 MHz, power-on and external reset and the
-// PLL lock through board_reset, and finestep_top with its SPI link, 4 axes, 4 encoder
+// PLL lock through board_reset, and finestep_top with its SPI link, 4 axes, 2 encoder
 // channels and the probe. Pins: constraints/ice40_hx8k_breakout.pcf.
 //
-// HAS_MPG is 0 here: the full core (hand wheel and jog too) needs about 7600 SB_LUT4s
-// and does not fit the 7680 logic cells with its carries and flip-flops
-// (docs/resources.md); the hand wheel pins stay on the board, unused.
+// N_ENC is 2 and HAS_MPG 0 here: the full core (4 channels, hand wheel and jog) packs
+// into about 11 250 logic cells and does not fit the 7680 (docs/resources.md); the pins
+// of channels 2 and 3 and of the hand wheel stay constrained, unused.
 module ice40_hx8k_breakout #(
     parameter N_AXES          = 4,
     parameter N_ENC           = 2,
