@@ -178,6 +178,8 @@ fn the_jog_keeps_its_limits_and_books_every_record_and_detent() {
                 prop_assert!(h.jog.engaged(), "the jog disengaged while enabled");
                 Ok(edge)
             };
+            // The detent configuration reaches the detents two cycles after it is set.
+            check(&mut h, detents, &mut books)?;
             check(&mut h, detents, &mut books)?;
             for (gap, up) in wheel {
                 for _ in 1..gap {
