@@ -4,14 +4,17 @@
 // records (every axis's Q16.16 increment for one period + flags) enter through a
 // valid/ready port; the period timer loads one per period on the same clock for all
 // axes; a DDA per axis spreads each increment over the period; a step shaper per axis
-// turns the step requests into drive-timed step/dir, up/down or quadrature pins.
+// turns the step requests into drive-timed step/dir, up/down or quadrature pins. The
+// gantry block may give one axis (the slave) the requests of another (the master),
+// corrected from two encoder channels (see gantry_sync).
 //
 // Latency from an increment taking effect to the first pin edge: 3 clocks.
 // Every output is a flip-flop or a function of flip-flops only.
 module finestep_core #(
     parameter N_AXES   = 4,
     parameter P_WIDTH  = 20,
-    parameter TIMING_W = 12
+    parameter TIMING_W = 12,
+    parameter HAS_GANTRY = 1     // 0: no gantry block (its outputs read 0, every axis its own)
 ) (
     // clock, reset
     input  wire                       clk,
@@ -29,6 +32,17 @@ module finestep_core #(
     input  wire [TIMING_W*N_AXES-1:0] dir_hold,
     input  wire [2*N_AXES-1:0]        out_mode,
     input  wire [3*N_AXES-1:0]        invert,
+    // gantry synchronisation (see gantry_sync)
+    input  wire                       gantry_enable,
+    input  wire                       gantry_sync_mode,
+    input  wire [2:0]                 gantry_master,
+    input  wire [2:0]                 gantry_slave,
+    input  wire [23:0]                gantry_tick,
+    input  wire [15:0]                gantry_deadband,
+    input  wire [15:0]                gantry_limit,
+    input  wire [31:0]                enc_master,
+    input  wire [31:0]                enc_slave,
+    input  wire                       clear_counters,
     // period record port
     input  wire                       rec_valid,
     output wire                       rec_ready,
@@ -43,7 +57,12 @@ module finestep_core #(
     output wire [N_AXES-1:0]          rate_error,
     output wire [N_AXES-1:0]          step_lost,
     output wire                       record_error,
-    output wire                       block_end
+    output wire                       block_end,
+    output wire                       gantry_engaged,
+    output wire                       gantry_alarm,
+    output wire                       gantry_refused,
+    output wire [31:0]                gantry_error,
+    output wire [15:0]                gantry_corrections
 );
 
     wire                 timer_active;
@@ -72,11 +91,64 @@ module finestep_core #(
         .record_error(record_error)
     );
 
+    wire [N_AXES-1:0] dda_req_valid;
+    wire [N_AXES-1:0] dda_req_negative;
+    wire              slave_req_valid, slave_req_negative;
+    wire [2:0]        slave_axis;
+
+    generate
+        if (HAS_GANTRY) begin : with_gantry
+            gantry_sync #(
+                .N_AXES(N_AXES),
+                .TICK_W(24)
+            ) gantry (
+                .clk(clk),
+                .rst(rst),
+                .enable(gantry_enable),
+                .sync(gantry_sync_mode),
+                .master(gantry_master),
+                .slave(gantry_slave),
+                .tick_clocks(gantry_tick),
+                .deadband(gantry_deadband),
+                .limit(gantry_limit),
+                .enc_master(enc_master),
+                .enc_slave(enc_slave),
+                .req_valid(dda_req_valid),
+                .req_negative(dda_req_negative),
+                .halt(halt),
+                .clear_errors(clear_errors),
+                .clear_counters(clear_counters),
+                .slave_req_valid(slave_req_valid),
+                .slave_req_negative(slave_req_negative),
+                .engaged(gantry_engaged),
+                .slave_axis(slave_axis),
+                .alarm(gantry_alarm),
+                .refused(gantry_refused),
+                .error(gantry_error),
+                .corrections(gantry_corrections)
+            );
+        end else begin : without_gantry
+            assign slave_req_valid    = 1'b0;
+            assign slave_req_negative = 1'b0;
+            assign slave_axis         = 3'd0;
+            assign gantry_engaged     = 1'b0;
+            assign gantry_alarm       = 1'b0;
+            assign gantry_refused     = 1'b0;
+            assign gantry_error       = 32'd0;
+            assign gantry_corrections = 16'd0;
+            wire unused_gantry = &{1'b0, gantry_enable, gantry_sync_mode, gantry_master, gantry_slave,
+                                   gantry_tick, gantry_deadband, gantry_limit, enc_master, enc_slave,
+                                   clear_counters};
+        end
+    endgenerate
+
     genvar i;
     generate
         for (i = 0; i < N_AXES; i = i + 1) begin : axis
-            wire req_valid;
-            wire req_negative;
+            // The gantry's slave takes the gantry's request, every other axis its DDA's.
+            wire is_slave     = gantry_engaged && (slave_axis == i);
+            wire req_valid    = is_slave ? slave_req_valid : dda_req_valid[i];
+            wire req_negative = is_slave ? slave_req_negative : dda_req_negative[i];
 
             dda_axis #(
                 .P_WIDTH(P_WIDTH)
@@ -87,8 +159,8 @@ module finestep_core #(
                 .period_clocks(period_clocks),
                 .p_active(p_active),
                 .inc(inc[32*i +: 32]),
-                .req_valid(req_valid),
-                .req_negative(req_negative)
+                .req_valid(dda_req_valid[i]),
+                .req_negative(dda_req_negative[i])
             );
 
             step_shaper #(

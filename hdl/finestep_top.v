@@ -288,21 +288,33 @@ module finestep_top #(
         .gate(gate), .underrun(underrun), .underrun_event(underrun_event)
     );
 
+    wire        gantry_engaged_unused, gantry_alarm_unused, gantry_refused_unused;
+    wire [31:0] gantry_error_unused;
+    wire [15:0] gantry_corrections_unused;
+
     finestep_core #(
         .N_AXES(N_AXES),
         .P_WIDTH(P_WIDTH),
-        .TIMING_W(TIMING_W)
+        .TIMING_W(TIMING_W),
+        .HAS_GANTRY(0)    // not in the register map yet
     ) core (
         .clk(clk), .rst(rst),
         .run(core_run), .period_clocks(period_clocks), .clear_errors(clear_errors), .halt(halt),
         .axis_enable(axis_enable),
         .step_len(step_len), .step_space(step_space), .dir_setup(dir_setup), .dir_hold(dir_hold),
         .out_mode(out_mode), .invert(invert),
+        // The gantry's registers and channel selection are not in the map yet: built without it.
+        .gantry_enable(1'b0), .gantry_sync_mode(1'b0), .gantry_master(3'd0), .gantry_slave(3'd0),
+        .gantry_tick(24'd0), .gantry_deadband(16'd0), .gantry_limit(16'd0),
+        .enc_master(32'd0), .enc_slave(32'd0), .clear_counters(1'b0),
         .rec_valid(rec_valid), .rec_ready(rec_ready),
         .rec_inc(rec_inc), .rec_flags(rec_flags),
         .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
         .position(position), .rate_error(rate_error), .step_lost(step_lost),
-        .record_error(record_error), .block_end(block_end)
+        .record_error(record_error), .block_end(block_end),
+        .gantry_engaged(gantry_engaged_unused), .gantry_alarm(gantry_alarm_unused),
+        .gantry_refused(gantry_refused_unused), .gantry_error(gantry_error_unused),
+        .gantry_corrections(gantry_corrections_unused)
     );
 
     // While the jog is engaged the FIFO is not popped (RUN is 0 then, so its gate is shut).
@@ -392,7 +404,8 @@ module finestep_top #(
         end
     endgenerate
 
-    wire unused_top = &{1'b0, fifo_overflow_unused};
+    wire unused_top = &{1'b0, fifo_overflow_unused, gantry_engaged_unused, gantry_alarm_unused,
+                        gantry_refused_unused, gantry_error_unused, gantry_corrections_unused};
 
 endmodule
 

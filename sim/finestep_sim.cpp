@@ -59,15 +59,18 @@ uint64_t get_bits(const VlWide<W> &port, unsigned lsb, unsigned width) {
 // The output ports as Verilator holds them: compared every cycle, packed only on change.
 struct RawOutputs {
     uint32_t positions[FS_N_AXES];
+    uint32_t gantry_error;
+    uint16_t gantry_corrections;
+    uint8_t gantry_flags;
     uint8_t pin_a, pin_b, pin_en, rate_error, step_lost, flags;
-    uint8_t padding[2];  // explicit, so memcmp sees no indeterminate bytes
+    uint8_t padding[3];  // explicit, so memcmp sees no indeterminate bytes
 
     bool operator!=(const RawOutputs &other) const {
         return std::memcmp(this, &other, sizeof *this) != 0;
     }
 };
 
-static_assert(sizeof(RawOutputs) == 4 * FS_N_AXES + 8, "RawOutputs must have no implicit padding");
+static_assert(sizeof(RawOutputs) == 4 * FS_N_AXES + 16, "RawOutputs must have no implicit padding");
 
 }  // namespace
 
@@ -114,6 +117,16 @@ struct Sim final : fs_sim {
         top->rec_valid = in.rec_valid & 1;
         top->rec_flags = in.rec_flags;
         put_bits(top->period_clocks, 0, FS_P_WIDTH, in.period_clocks);
+        top->gantry_enable = in.gantry.enable & 1;
+        top->gantry_sync_mode = in.gantry.sync & 1;
+        top->gantry_master = in.gantry.master & 7;
+        top->gantry_slave = in.gantry.slave & 7;
+        top->gantry_tick = in.gantry.tick & 0xFFFFFF;
+        top->gantry_deadband = in.gantry.deadband;
+        top->gantry_limit = in.gantry.limit;
+        top->enc_master = in.gantry.enc_master;
+        top->enc_slave = in.gantry.enc_slave;
+        top->clear_counters = in.gantry.clear_counters & 1;
         for (unsigned i = 0; i < FS_N_AXES; ++i) {
             const fs_axis_config &axis = in.axes[i];
             put_bits(top->rec_inc, 32 * i, 32, static_cast<uint32_t>(in.rec_inc[i]));
@@ -142,7 +155,11 @@ struct Sim final : fs_sim {
 
     RawOutputs read_raw() const {
         RawOutputs now{};
-        now.padding[0] = now.padding[1] = 0;
+        now.padding[0] = now.padding[1] = now.padding[2] = 0;
+        now.gantry_error = top->gantry_error;
+        now.gantry_corrections = top->gantry_corrections;
+        now.gantry_flags = (top->gantry_engaged & 1) | ((top->gantry_alarm & 1) << 1) |
+                           ((top->gantry_refused & 1) << 2);
         for (unsigned i = 0; i < FS_N_AXES; ++i)
             now.positions[i] = static_cast<uint32_t>(get_bits(top->position, 32 * i, 32));
         now.pin_a = top->pin_a;
@@ -169,6 +186,9 @@ struct Sim final : fs_sim {
         pins |= static_cast<uint64_t>((raw.flags >> 1) & 1) << FS_BIT_RECORD_ERROR;
         pins |= static_cast<uint64_t>((raw.flags >> 2) & 1) << FS_BIT_BLOCK_END;
         out.pins = pins;
+        out.gantry_error = raw.gantry_error;
+        out.gantry_corrections = raw.gantry_corrections;
+        out.gantry_flags = raw.gantry_flags;
         return out;
     }
 

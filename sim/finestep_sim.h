@@ -33,6 +33,20 @@ typedef struct fs_axis_config {
     uint8_t enable;
 } fs_axis_config;
 
+/* Gantry synchronisation (finestep_core's gantry_* ports, see gantry_sync). */
+typedef struct fs_gantry {
+    uint8_t enable;
+    uint8_t sync;
+    uint8_t master;
+    uint8_t slave;
+    uint32_t tick;
+    uint16_t deadband;
+    uint16_t limit;
+    uint32_t enc_master;
+    uint32_t enc_slave;
+    uint8_t clear_counters;
+} fs_gantry;
+
 typedef struct fs_inputs {
     uint8_t run;
     uint8_t clear_errors;
@@ -42,11 +56,16 @@ typedef struct fs_inputs {
     uint32_t period_clocks;
     int32_t rec_inc[FS_MAX_AXES];
     fs_axis_config axes[FS_MAX_AXES];
+    fs_gantry gantry;
 } fs_inputs;
 
+/* gantry_flags: bit 0 engaged, 1 alarm, 2 refused. */
 typedef struct fs_outputs {
     uint64_t pins;
     uint32_t positions[FS_MAX_AXES];
+    uint32_t gantry_error;
+    uint16_t gantry_corrections;
+    uint8_t gantry_flags;
 } fs_outputs;
 
 /* The outputs after the edge that ended cycle `cycle - 1`, recorded when they changed. */

@@ -93,6 +93,12 @@ pub fn describe_difference(expected: &CoreOutputs, actual: &CoreOutputs) -> Vec<
             ));
         }
     }
+    let gantry = [
+        ("gantry_error", u64::from(expected.gantry_error), u64::from(actual.gantry_error)),
+        ("gantry_corrections", u64::from(expected.gantry_corrections), u64::from(actual.gantry_corrections)),
+        ("gantry_flags", u64::from(expected.gantry_flags), u64::from(actual.gantry_flags)),
+    ];
+    out.extend(gantry.into_iter().filter(|(_, e, a)| e != a).map(|(name, e, a)| (name.to_string(), e, a)));
     out
 }
 

@@ -24,7 +24,7 @@ fn scenario() -> Scenario {
         actions.push(Action::Feed(record, false));
     }
     actions.push(Action::Idle(300));
-    Scenario { period_clocks: 200, axes, actions }
+    Scenario { period_clocks: 200, axes, gantry: Default::default(), actions }
 }
 
 #[test]

@@ -141,6 +141,37 @@ pub struct CoreInputs {
     /// high step level still lasts its full `L`. It goes to the step shapers only: the
     /// period timer and DDAs follow `run`, which `finestep_top` holds low while halted.
     pub halt: bool,
+    /// The gantry pair's inputs (`gantry_sync`).
+    pub gantry: GantryInputs,
+}
+
+/// The inputs of the gantry synchronisation (`gantry_sync`): one master and one slave
+/// axis, the two channel counts, and the correction settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct GantryInputs {
+    /// `enable`: engage the pair (refused when `master`/`slave` are not valid); 0
+    /// disengages it.
+    pub enable: bool,
+    /// `sync`: 0 forward (the slave copies the master's requests), 1 synchronised
+    /// (plus one correction step per tick when the error passes the deadband).
+    pub sync: bool,
+    /// `master`: the master axis (3 bits), sampled at engagement.
+    pub master: u8,
+    /// `slave`: the slave axis (3 bits), sampled at engagement.
+    pub slave: u8,
+    /// `tick`: clocks between correction decisions (`TICK_W = 24` bits used; 0 acts as 1).
+    pub tick: u32,
+    /// `deadband`: the error, in counts, within which no correction is made.
+    pub deadband: u16,
+    /// `limit`: the error, in counts, past which `alarm` is set.
+    pub limit: u16,
+    /// `enc_master`: the count of the master side's channel (wraps).
+    pub enc_master: u32,
+    /// `enc_slave`: the count of the slave side's channel (wraps).
+    pub enc_slave: u32,
+    /// `clear_counters`: zeroes the `corrections` counter (wins over a correction in the
+    /// same cycle).
+    pub clear_counters: bool,
 }
 
 /// One axis's settings masked to the port widths, as the blocks use them.

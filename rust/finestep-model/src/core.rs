@@ -1,5 +1,6 @@
-//! `finestep_core`: the composition of one [`PeriodTimer`], and per axis one
-//! [`DdaAxis`] and one [`StepShaper`], with the packed outputs.
+//! `finestep_core`: the composition of one [`PeriodTimer`], per axis one [`DdaAxis`]
+//! and one [`StepShaper`], and the [`GantrySync`] between the DDAs and the shapers, with
+//! the packed outputs.
 //!
 //! Latency: a DDA update in cycle `n` gives `req` in `n+1`, the earliest rise decision
 //! in `n+1` (level and `position` in `n+2`) and the pin edge in `n+3`. Every output is a
@@ -7,6 +8,7 @@
 
 use crate::config::{AxisSettings, CoreInputs, CoreParams, ParamsError};
 use crate::dda_axis::{DdaAxis, ONE_STEP};
+use crate::gantry_sync::{GantryContext, GantrySync};
 use crate::period_timer::{PeriodTimer, TimerInputs};
 use crate::step_shaper::StepShaper;
 use crate::MAX_AXES;
@@ -52,6 +54,13 @@ pub struct CoreOutputs {
     pub pins: u64,
     /// Each axis's `position` (two's complement steps); 0 for axes at and above `n_axes`.
     pub positions: [u32; MAX_AXES],
+    /// The gantry's `error` (two's complement counts).
+    pub gantry_error: u32,
+    /// The gantry's `corrections` (net corrections applied, wrapping).
+    pub gantry_corrections: u16,
+    /// The gantry's flags: bit 0 `engaged`, bit 1 `alarm`, bit 2 `refused` (see
+    /// [`crate::gantry_sync::flags`]).
+    pub gantry_flags: u8,
 }
 
 impl CoreOutputs {
@@ -133,6 +142,7 @@ pub struct Core {
     pub(crate) timer: PeriodTimer,
     pub(crate) dda: [DdaAxis; MAX_AXES],
     pub(crate) shaper: [StepShaper; MAX_AXES],
+    pub(crate) gantry: GantrySync,
     pub(crate) cycle: u64,
 }
 
@@ -159,6 +169,7 @@ impl Core {
             timer: PeriodTimer::default(),
             dda: [DdaAxis::default(); MAX_AXES],
             shaper: [StepShaper::new(counter_max); MAX_AXES],
+            gantry: GantrySync::default(),
             cycle: 0,
         })
     }
@@ -199,6 +210,11 @@ impl Core {
         &self.shaper[axis]
     }
 
+    /// The gantry synchronisation's state.
+    pub fn gantry(&self) -> &GantrySync {
+        &self.gantry
+    }
+
     /// The outputs in the current cycle (a function of the state only).
     pub fn outputs(&self) -> CoreOutputs {
         let mut out = CoreOutputs::default();
@@ -211,6 +227,9 @@ impl Core {
         out.pins |= u64::from(self.timer.rec_ready()) << pins::REC_READY
             | u64::from(self.timer.record_error) << pins::RECORD_ERROR
             | u64::from(self.timer.block_end) << pins::BLOCK_END;
+        out.gantry_error = self.gantry.error;
+        out.gantry_corrections = self.gantry.corrections;
+        out.gantry_flags = self.gantry.flags();
         out
     }
 
@@ -256,6 +275,12 @@ impl Core {
         let n = self.params.n_axes;
         let m = i64::from(self.timer.p_act) * ONE_STEP;
         let mut changed = false;
+        // The DDA requests of this cycle, and the gantry's choice among them.
+        let mut reqs = [0i8; MAX_AXES];
+        for (r, dda) in reqs.iter_mut().zip(&self.dda[..n]) {
+            *r = dda.req;
+        }
+        let gantry = self.gantry;
         let axes = self.shaper[..n]
             .iter_mut()
             .zip(&mut self.dda[..n])
@@ -264,9 +289,19 @@ impl Core {
         // The DDAs hold their phase at M/2 until the period timer is running.
         let running = inputs.run && self.timer.active;
         for (i, ((shaper, dda), &d)) in axes {
-            changed |= shaper.step(dda.req, &axis(i), self.counter_max, inputs.clear_errors);
+            let r = gantry.shaper_request(i, &reqs);
+            changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
             dda.step(running, period, d, m);
         }
+        changed |= self.gantry.step(
+            &inputs.gantry,
+            &GantryContext {
+                n_axes: n,
+                master_req: reqs[gantry.master()],
+                halt: inputs.halt,
+                clear_errors: inputs.clear_errors,
+            },
+        );
         let timer_before = self.timer.output_bits();
         self.timer.step(&TimerInputs {
             run: inputs.run,
@@ -427,6 +462,48 @@ mod tests {
         );
         assert_eq!(events.len(), 2, "rec_ready rises, then falls");
         assert!(events[0].outputs.rec_ready() && !events[1].outputs.rec_ready());
+    }
+
+    #[test]
+    fn a_correction_reaches_the_slave_shaper_the_cycle_after_its_tick() {
+        let mut core = Core::new(CoreParams::default());
+        let mut inp = inputs(false, 10);
+        inp.gantry = crate::GantryInputs {
+            master: 0,
+            slave: 3,
+            sync: true,
+            tick: 5,
+            deadband: 2,
+            limit: 100,
+            ..crate::GantryInputs::default()
+        };
+        for _ in 0..4 {
+            core.step(&inp);
+        }
+        // Engaged at the edge of cycle e = 4; the count moves in the same cycle.
+        let e = core.cycle();
+        inp.gantry.enable = true;
+        inp.gantry.enc_master = 8;
+        let mut first = None;
+        for _ in 0..20 {
+            core.step(&inp);
+            let out = core.outputs();
+            assert_eq!(out.gantry_error, if core.cycle() >= e + 2 { 8 } else { 0 });
+            if out.position(3) != 0 && first.is_none() {
+                first = Some(core.cycle());
+            }
+        }
+        // Ticks in e + 5, e + 10, ...: the tick at t = e + 5 sees error 8 > 2, the
+        // slave's shaper takes the +1 in t + 1, and its position counts it in t + 2.
+        assert_eq!(first, Some(e + 7));
+        let out = core.outputs();
+        // Without a plant the error stays: one step per tick, the ticks of e + 5, e + 10
+        // and e + 15 applied by cycle e + 20 (that of e + 20 in e + 21).
+        assert_eq!(
+            (out.position(0), out.position(3), out.gantry_corrections),
+            (0, 3, 3)
+        );
+        assert_eq!(out.gantry_flags, crate::gantry_sync::flags::ENGAGED);
     }
 
     #[test]

@@ -12,11 +12,17 @@
 //! time wraps first for `j = ceil((M - acc) / d) - 1`, for `d < 0` for
 //! `j = floor(acc / |d|)`), and per axis the clocks until the shaper's counters reach
 //! the threshold of its next decision (while `halt`, only a fall is decided, and a cycle
-//! with `pending != 0` is not quiet since the edge drops it). Every other cycle is run by the per-clock
+//! with `pending != 0` is not quiet since the edge drops it), and the clocks to the
+//! gantry's next tick. The gantry is quiet when its edge (with no DDA request, which a
+//! quiet cycle has) would leave its state unchanged but for `tick_cnt` counting, and
+//! this cycle is not a tick: then its next cycle is the same but for `tick_cnt`, so the
+//! run lasts until the tick (`corr != 0` is never quiet: it is applied or dropped; a
+//! count change is not, `diff` follows it). Every other cycle is run by the per-clock
 //! [`Core::step`], so the cost is O(output changes + requests + periods), not O(cycles).
 
 use crate::core::{ChunkEnd, Core, Event, Settings};
 use crate::dda_axis::{HALF_STEP, ONE_STEP};
+use crate::gantry_sync::GantryContext;
 use crate::CoreInputs;
 
 impl Core {
@@ -62,7 +68,10 @@ impl Core {
         if t.block_end || (t.record_error && clear) {
             return 0;
         }
-        let mut quiet = u64::MAX;
+        let mut quiet = self.gantry_quiet_cycles(inputs);
+        if quiet == 0 {
+            return 0;
+        }
         if !inputs.run {
             // Stopped: quiet once the edge changes nothing in the timer and DDAs.
             if t.active || t.remaining != 0 || !idle || t.p_act != set.period {
@@ -71,7 +80,7 @@ impl Core {
         } else if !t.active {
             return 0;
         } else if t.remaining >= 2 {
-            quiet = u64::from(t.remaining - 1);
+            quiet = quiet.min(u64::from(t.remaining - 1));
         } else if t.remaining == 1 {
             // rec_ready rises at this edge.
             return 0;
@@ -131,6 +140,30 @@ impl Core {
         quiet
     }
 
+    /// How many cycles from the current one on the gantry is quiet (given no DDA
+    /// request, which [`Self::quiet_cycles`] checks): its edge changes nothing but
+    /// `tick_cnt` counting, up to the cycle before its next tick.
+    fn gantry_quiet_cycles(&self, inputs: &CoreInputs) -> u64 {
+        let g = &self.gantry;
+        if g.corr != 0 {
+            return 0;
+        }
+        let mut next = *g;
+        next.step(
+            &inputs.gantry,
+            &GantryContext {
+                n_axes: self.params.n_axes,
+                master_req: 0,
+                halt: inputs.halt,
+                clear_errors: inputs.clear_errors,
+            },
+        );
+        if next != g.counted() {
+            return 0;
+        }
+        g.cycles_to_tick(inputs.gantry.tick)
+    }
+
     /// Advances `k` quiet cycles (as found by [`Self::quiet_cycles`]) at once.
     fn skip_quiet(&mut self, k: u64, inputs: &CoreInputs) {
         let n = self.params.n_axes;
@@ -151,6 +184,7 @@ impl Core {
             sh.cnt = u64::from(sh.cnt).saturating_add(k).min(max) as u32;
             sh.dcnt = u64::from(sh.dcnt).saturating_add(k).min(max) as u32;
         }
+        self.gantry.skip(k);
         self.cycle = self.cycle.wrapping_add(k);
     }
 }

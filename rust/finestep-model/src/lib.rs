@@ -8,7 +8,8 @@
 //! implementation of the specification in the repository's README ("Specification of
 //! the core"), against which the Verilog is checked bit for bit in co-simulation.
 //!
-//! Modules mirror the HDL blocks: [`period_timer`], [`dda_axis`], [`step_shaper`], and
+//! Modules mirror the HDL blocks: [`period_timer`], [`dda_axis`], [`step_shaper`],
+//! [`gantry_sync`] (a slave axis following a master, with encoder corrections) and
 //! [`core`](mod@core) (`finestep_core`, their composition). [`Core::step`] is one clock
 //! edge and is the definition; [`Core::run_chunk`] runs many edges with the same inputs
 //! and reports output changes, and [`Core::run_chunk_fast`] gives the same results by
@@ -61,6 +62,7 @@ pub mod core;
 pub mod dda_axis;
 pub mod encoder_bank;
 pub mod fast;
+pub mod gantry_sync;
 pub mod hand_wheel;
 pub mod input_filter;
 pub mod jog_generator;
@@ -78,8 +80,9 @@ pub mod spi_slave_phy;
 pub mod step_shaper;
 pub mod top;
 
-pub use crate::config::{AxisConfig, CoreInputs, CoreParams, ParamsError};
+pub use crate::config::{AxisConfig, CoreInputs, CoreParams, GantryInputs, ParamsError};
 pub use crate::core::{pins, ChunkEnd, Core, CoreOutputs, Event};
+pub use crate::gantry_sync::GantrySync;
 pub use crate::limits::{AxisTiming, RateChecker, RateError};
 pub use crate::record::PeriodRecord;
 pub use crate::top::{top_pins, Top, TopInputs, TopOutputs, TopParams, TopParamsError};

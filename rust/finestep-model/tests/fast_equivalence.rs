@@ -1,9 +1,12 @@
 //! `run_chunk_fast` against the per-clock `run_chunk` (the definition, itself checked
 //! against a literal loop of `step` and `outputs`): for random parameters, settings and
-//! chunk sequences, identical events, chunk ends and states.
+//! chunk sequences, identical events, chunk ends and states, with the gantry pair
+//! engaging, disengaging and being refused mid-run and its channel counts changing
+//! between chunks.
 
 use finestep_model::{
-    AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, Event, Increment, PeriodRecord, MAX_AXES,
+    AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, Event, GantryInputs, Increment,
+    PeriodRecord, MAX_AXES,
 };
 use proptest::prelude::*;
 
@@ -23,6 +26,17 @@ struct Chunk {
     incs: [(u8, u32); MAX_AXES],
     flags: u8,
     max_cycles: u64,
+    gantry: GantryChunk,
+}
+
+/// The gantry inputs of one chunk.
+#[derive(Clone, Debug)]
+struct GantryChunk {
+    /// New settings (`enc_*` and `clear_counters` ignored), else the previous ones.
+    settings: Option<GantryInputs>,
+    /// How the channel counts move before the chunk (see `counts`).
+    counts: Option<(u8, i32, i32)>,
+    clear_counters: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -90,6 +104,68 @@ fn max_cycles() -> impl Strategy<Value = u64> {
     ]
 }
 
+fn gantry_settings() -> impl Strategy<Value = GantryInputs> {
+    (
+        prop::bool::weighted(0.7),
+        prop::bool::weighted(0.7),
+        prop_oneof![4 => (0..4u8, 0..4u8), 1 => (any::<u8>(), any::<u8>())],
+        prop_oneof![
+            2 => Just(0u32),
+            2 => Just(1u32),
+            3 => 2..20u32,
+            3 => 20..3000u32,
+            1 => any::<u32>(),
+        ],
+        prop_oneof![3 => 0..4u16, 1 => any::<u16>()],
+        prop_oneof![3 => 0..40u16, 1 => any::<u16>()],
+    )
+        .prop_map(
+            |(enable, sync, (master, slave), tick, deadband, limit)| GantryInputs {
+                enable,
+                sync,
+                master,
+                slave,
+                tick,
+                deadband,
+                limit,
+                ..GantryInputs::default()
+            },
+        )
+}
+
+fn gantry_chunk() -> impl Strategy<Value = GantryChunk> {
+    (
+        prop::option::weighted(0.15, gantry_settings()),
+        prop::option::weighted(0.5, (0..3u8, -6..6i32, any::<i32>())),
+        prop::bool::weighted(0.05),
+    )
+        .prop_map(|(settings, counts, clear_counters)| GantryChunk {
+            settings,
+            counts,
+            clear_counters,
+        })
+}
+
+/// The channel counts for a chunk: a small random move of each, both following their
+/// axis's position (`2 * position`, the slave's less a disturbance `dx`), or anything.
+fn counts(core: &Core, g: &mut GantryInputs, (kind, dx, x): (u8, i32, i32)) {
+    let pos = |axis: u8| core.outputs().positions[usize::from(axis & 7)];
+    match kind {
+        0 => {
+            g.enc_master = g.enc_master.wrapping_add_signed(dx);
+            g.enc_slave = g.enc_slave.wrapping_add_signed(x % 7);
+        }
+        1 => {
+            g.enc_master = pos(g.master).wrapping_mul(2);
+            g.enc_slave = pos(g.slave).wrapping_mul(2).wrapping_add_signed(-dx);
+        }
+        _ => {
+            g.enc_master = x as u32;
+            g.enc_slave = dx as u32;
+        }
+    }
+}
+
 fn chunk() -> impl Strategy<Value = Chunk> {
     (
         (prop::bool::weighted(0.85), prop::bool::weighted(0.12)),
@@ -99,10 +175,19 @@ fn chunk() -> impl Strategy<Value = Chunk> {
         prop::bool::weighted(0.75),
         prop::array::uniform8((0..8u8, any::<u32>())),
         any::<u8>(),
-        max_cycles(),
+        (max_cycles(), gantry_chunk()),
     )
         .prop_map(
-            |((run, halt), period, clear_errors, axis, rec_valid, incs, flags, max_cycles)| Chunk {
+            |(
+                (run, halt),
+                period,
+                clear_errors,
+                axis,
+                rec_valid,
+                incs,
+                flags,
+                (max_cycles, gantry),
+            )| Chunk {
                 run,
                 halt,
                 period,
@@ -112,6 +197,7 @@ fn chunk() -> impl Strategy<Value = Chunk> {
                 incs,
                 flags,
                 max_cycles,
+                gantry,
             },
         )
 }
@@ -231,6 +317,17 @@ fn fast_path_is_identical_to_per_clock() {
                     *slot = increment(kind, x, p);
                 }
                 inputs.record.flags = chunk.flags;
+                if let Some(g) = chunk.gantry.settings {
+                    inputs.gantry = GantryInputs {
+                        enc_master: inputs.gantry.enc_master,
+                        enc_slave: inputs.gantry.enc_slave,
+                        ..g
+                    };
+                }
+                if let Some(c) = chunk.gantry.counts {
+                    counts(&slow, &mut inputs.gantry, c);
+                }
+                inputs.gantry.clear_counters = chunk.gantry.clear_counters;
                 let max = chunk.max_cycles.min(budget);
                 ev_slow.clear();
                 ev_fast.clear();

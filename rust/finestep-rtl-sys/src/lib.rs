@@ -202,6 +202,18 @@ fn inputs_to(inputs: &CoreInputs) -> ffi::fs_inputs {
         rec_valid: inputs.rec_valid as u8,
         rec_flags: inputs.record.flags,
         period_clocks: inputs.period_clocks,
+        gantry: ffi::fs_gantry {
+            enable: inputs.gantry.enable as u8,
+            sync: inputs.gantry.sync as u8,
+            master: inputs.gantry.master,
+            slave: inputs.gantry.slave,
+            tick: inputs.gantry.tick,
+            deadband: inputs.gantry.deadband,
+            limit: inputs.gantry.limit,
+            enc_master: inputs.gantry.enc_master,
+            enc_slave: inputs.gantry.enc_slave,
+            clear_counters: inputs.gantry.clear_counters as u8,
+        },
         ..Default::default()
     };
     for i in 0..MAX_AXES {
@@ -221,5 +233,11 @@ fn inputs_to(inputs: &CoreInputs) -> ffi::fs_inputs {
 }
 
 fn outputs_from(raw: &ffi::fs_outputs) -> CoreOutputs {
-    CoreOutputs { pins: raw.pins, positions: raw.positions }
+    CoreOutputs {
+        pins: raw.pins,
+        positions: raw.positions,
+        gantry_error: raw.gantry_error,
+        gantry_corrections: raw.gantry_corrections,
+        gantry_flags: raw.gantry_flags,
+    }
 }

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use finestep_cosim::{Harness, Mismatch, ModelPath};
-use finestep_model::{AxisConfig, CoreInputs, Increment, PeriodRecord, MAX_AXES};
+use finestep_model::{AxisConfig, CoreInputs, GantryInputs, Increment, PeriodRecord, MAX_AXES};
 use proptest::prelude::*;
 
 /// Axes of the Verilated core.
@@ -29,6 +29,13 @@ pub enum Action {
     /// Hold `halt` for this many cycles, with `run` dropped as the top does or (flag
     /// false) left as it is, then release it.
     Halt(u64, bool),
+    /// New gantry configuration (the encoder counts and clear_counters are kept).
+    Gantry(GantryInputs),
+    /// The two gantry channels' counts move by these amounts (wrapping), as a machine's
+    /// encoders would between two looks.
+    Counts(i32, i32),
+    /// Pulse the gantry's clear_counters for one cycle.
+    ClearCounters,
 }
 
 /// A test case: the period and per-axis configuration, then the actions.
@@ -36,6 +43,7 @@ pub enum Action {
 pub struct Scenario {
     pub period_clocks: u32,
     pub axes: [AxisConfig; AXES],
+    pub gantry: GantryInputs,
     pub actions: Vec<Action>,
 }
 
@@ -80,6 +88,31 @@ fn period() -> impl Strategy<Value = u32> {
     prop_oneof![1 => 0u32..4, 4 => 4u32..64, 2 => 64u32..600, 1 => (0u32..64).prop_map(|p| (1 << 20) | p)]
 }
 
+/// Gantry settings: mostly a valid pair, short ticks so corrections come often, small
+/// deadbands and limits so that both the corrections and the alarm happen.
+pub fn gantry() -> impl Strategy<Value = GantryInputs> {
+    let axis = prop_oneof![8 => 0u8..AXES as u8, 1 => 0u8..8];
+    let tick = prop_oneof![3 => 0u32..40, 1 => 0u32..2000, 1 => any::<u32>()];
+    let small = prop_oneof![3 => 0u16..8, 1 => any::<u16>()];
+    (any::<bool>(), any::<bool>(), axis.clone(), axis, tick, small.clone(), small).prop_map(
+        |(enable, sync, master, slave, tick, deadband, limit)| GantryInputs {
+            enable,
+            sync,
+            master,
+            slave,
+            tick,
+            deadband,
+            limit,
+            ..Default::default()
+        },
+    )
+}
+
+fn counts() -> impl Strategy<Value = Action> {
+    let delta = prop_oneof![4 => -8i32..8, 1 => -5000i32..5000, 1 => any::<i32>()];
+    (delta.clone(), delta).prop_map(|(m, s)| Action::Counts(m, s))
+}
+
 fn action(p: u32) -> impl Strategy<Value = Action> {
     prop_oneof![
         12 => (record(p), proptest::bool::weighted(0.1)).prop_map(|(r, clear)| Action::Feed(r, clear)),
@@ -89,16 +122,24 @@ fn action(p: u32) -> impl Strategy<Value = Action> {
         1 => (0..AXES, axis_config()).prop_map(|(axis, config)| Action::Configure(axis, config)),
         1 => period().prop_map(Action::Period),
         1 => (prop_oneof![1u64..8, 1u64..300], any::<bool>()).prop_map(|(cycles, stop)| Action::Halt(cycles, stop)),
+        1 => gantry().prop_map(Action::Gantry),
+        3 => counts(),
+        1 => Just(Action::ClearCounters),
     ]
 }
 
 /// Random scenarios with short periods (so each case is a few thousand cycles).
 pub fn scenario(max_actions: usize) -> impl Strategy<Value = Scenario> {
     period().prop_flat_map(move |p| {
-        (proptest::collection::vec(axis_config(), AXES), proptest::collection::vec(action(effective(p)), 1..max_actions))
-            .prop_map(move |(axes, actions)| Scenario {
+        (
+            proptest::collection::vec(axis_config(), AXES),
+            prop_oneof![2 => Just(GantryInputs::default()), 1 => gantry()],
+            proptest::collection::vec(action(effective(p)), 1..max_actions),
+        )
+            .prop_map(move |(axes, gantry, actions)| Scenario {
                 period_clocks: p,
                 axes: axes.try_into().unwrap(),
+                gantry,
                 actions,
             })
     })
@@ -107,7 +148,7 @@ pub fn scenario(max_actions: usize) -> impl Strategy<Value = Scenario> {
 /// Play a scenario on RTL and model side by side; the first difference is an error.
 pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
     let mut harness = Harness::new(name, path);
-    let mut inputs = CoreInputs { run: true, period_clocks: scenario.period_clocks, ..Default::default() };
+    let mut inputs = CoreInputs { run: true, period_clocks: scenario.period_clocks, gantry: scenario.gantry, ..Default::default() };
     inputs.axes[..AXES].copy_from_slice(&scenario.axes);
     for action in &scenario.actions {
         match action {
@@ -138,6 +179,17 @@ pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness,
             Action::Halt(cycles, stop) => {
                 let halted = CoreInputs { halt: true, run: inputs.run && !stop, rec_valid: false, ..inputs };
                 harness.idle(&halted, *cycles)?;
+            }
+            Action::Gantry(config) => {
+                inputs.gantry = GantryInputs { enc_master: inputs.gantry.enc_master, enc_slave: inputs.gantry.enc_slave, ..*config };
+            }
+            Action::Counts(master, slave) => {
+                inputs.gantry.enc_master = inputs.gantry.enc_master.wrapping_add(*master as u32);
+                inputs.gantry.enc_slave = inputs.gantry.enc_slave.wrapping_add(*slave as u32);
+            }
+            Action::ClearCounters => {
+                let clearing = CoreInputs { gantry: GantryInputs { clear_counters: true, ..inputs.gantry }, ..inputs };
+                harness.idle(&clearing, 1)?;
             }
         }
     }

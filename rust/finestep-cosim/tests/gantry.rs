@@ -1,0 +1,113 @@
+//! The gantry block in a closed loop, RTL and model in lockstep on every pin and every
+//! gantry output each clock: axis 0 (master) and axis 1 (slave) drive two sides of one
+//! gantry; each side's encoder counts 4 per step of its motor; the slave's motor loses
+//! steps (a stall) and synchronised mode puts them back, forward mode does not, and a
+//! racking past the limit raises the alarm.
+
+use finestep_cosim::{Harness, ModelPath};
+use finestep_model::{AxisConfig, CoreInputs, GantryInputs, Increment, PeriodRecord};
+
+const PERIOD: u32 = 200;
+const COUNTS_PER_STEP: i64 = 4;
+const MASTER: usize = 0;
+const SLAVE: usize = 1;
+
+struct Outcome {
+    master: i64,
+    slave: i64,
+    corrections: i16,
+    error: i32,
+    alarm: bool,
+}
+
+/// Streams `periods` records moving the master at `speed` steps per period; the slave's
+/// motor loses `lost` steps at period `at`. The encoders are read once per period (the
+/// counts the chip sees lag the motors by up to a period, as a slow feedback path would).
+fn run(path: ModelPath, sync: bool, lost: i64, at: usize, periods: usize, limit: u16) -> Outcome {
+    let mut harness = Harness::new("gantry", path);
+    let axis = AxisConfig { step_len: 2, step_space: 2, dir_setup: 2, dir_hold: 2, mode: 0, invert: 0, enable: true };
+    let mut inputs = CoreInputs { run: true, period_clocks: PERIOD, ..Default::default() };
+    inputs.axes[MASTER] = axis;
+    inputs.axes[SLAVE] = axis;
+    inputs.gantry = GantryInputs {
+        enable: true,
+        sync,
+        master: MASTER as u8,
+        slave: SLAVE as u8,
+        tick: 2 * PERIOD, // a correction at most every other period
+        deadband: (COUNTS_PER_STEP / 2) as u16,
+        limit,
+        ..Default::default()
+    };
+    let mut record = PeriodRecord::default();
+    record.inc[MASTER] = Increment::from_num(0.75);
+    let mut slave_loss = 0i64;
+    for period in 0..periods {
+        if period == at {
+            slave_loss = lost;
+        }
+        let positions = harness.outputs().positions;
+        let master = i64::from(positions[MASTER] as i32);
+        let slave = i64::from(positions[SLAVE] as i32) - slave_loss;
+        inputs.gantry.enc_master = (COUNTS_PER_STEP * master) as u32;
+        inputs.gantry.enc_slave = (COUNTS_PER_STEP * slave) as u32;
+        harness.feed(&mut inputs, [record]).unwrap_or_else(|m| panic!("{m}"));
+    }
+    // Hold still long enough for the last corrections (one per tick) to land.
+    record.inc[MASTER] = Increment::ZERO;
+    for _ in 0..(4 * lost.unsigned_abs() as usize + 20) {
+        let positions = harness.outputs().positions;
+        inputs.gantry.enc_master = (COUNTS_PER_STEP * i64::from(positions[MASTER] as i32)) as u32;
+        inputs.gantry.enc_slave = (COUNTS_PER_STEP * (i64::from(positions[SLAVE] as i32) - slave_loss)) as u32;
+        harness.feed(&mut inputs, [record]).unwrap_or_else(|m| panic!("{m}"));
+    }
+    let out = harness.outputs();
+    Outcome {
+        master: i64::from(out.positions[MASTER] as i32),
+        slave: i64::from(out.positions[SLAVE] as i32),
+        corrections: out.gantry_corrections as i16,
+        error: out.gantry_error as i32,
+        alarm: out.gantry_flags & 2 != 0,
+    }
+}
+
+#[test]
+fn synchronised_mode_puts_back_the_steps_the_slave_lost() {
+    for path in [ModelPath::PerClock, ModelPath::Fast] {
+        for lost in [5, -7] {
+            let out = run(path, true, lost, 100, 300, 1000);
+            assert_eq!(out.master, (300.0 * 0.75f64).round() as i64, "{path:?}");
+            // The slave commanded `lost` more steps than the master: its motor is square.
+            assert_eq!(out.slave, out.master + lost, "{path:?} lost {lost}");
+            assert_eq!(i64::from(out.corrections), lost, "{path:?}");
+            assert!(out.error.unsigned_abs() <= 2, "{path:?}: error {}", out.error);
+            assert!(!out.alarm);
+        }
+    }
+}
+
+#[test]
+fn forward_mode_copies_the_master_and_leaves_the_error() {
+    for path in [ModelPath::PerClock, ModelPath::Fast] {
+        let out = run(path, false, 5, 100, 200, 1000);
+        assert_eq!(out.slave, out.master, "{path:?}: a plain copy");
+        assert_eq!(out.corrections, 0);
+        assert_eq!(i64::from(out.error), 5 * COUNTS_PER_STEP, "{path:?}");
+        assert!(!out.alarm);
+    }
+}
+
+#[test]
+fn racking_past_the_limit_raises_the_alarm() {
+    for path in [ModelPath::PerClock, ModelPath::Fast] {
+        // 60 steps lost: 240 counts against a limit of 100, in forward mode (nothing
+        // corrects it) and in synchronised mode (the corrections come too slowly to stop
+        // the alarm, which is sticky).
+        for sync in [false, true] {
+            let out = run(path, sync, 60, 50, 120, 100);
+            assert!(out.alarm, "{path:?} sync {sync}");
+        }
+        let out = run(path, false, 20, 50, 120, 100);
+        assert!(!out.alarm, "{path:?}: 80 counts is within the limit");
+    }
+}

@@ -1,0 +1,742 @@
+//! `gantry_sync`: two motors on one gantry axis. The **slave** axis's step shaper gets
+//! the **master** axis's DDA requests instead of its own DDA's, plus (in synchronised
+//! mode) one correction step per tick from the difference of two channel counts, one
+//! on each side of the gantry.
+//!
+//! A correction inserts a slave request where the master has none, or deletes a master
+//! request of the opposite sign; it waits while the master requests in its own
+//! direction. Forward mode copies the master's requests unchanged. In both modes the
+//! difference is measured against the one at engagement and `alarm` set past `limit`.
+//!
+//! Latency: a count change in cycle `n` reaches `diff` in `n+1`, `error` in `n+2` and
+//! `alarm` in `n+3`; a tick in cycle `t` decides from `error` of cycle `t`, and the
+//! correction reaches the slave's shaper in `t+1`. Every output, the slave's request
+//! included, is a function of the state (the DDA requests are DDA state).
+//!
+//! Invariants: `corr == 0` while not engaged, and `tick_cnt == 0` while not engaged; at
+//! most one correction is applied per tick.
+
+use crate::config::GantryInputs;
+
+/// `TICK_W`: width of the `tick` input and of `tick_cnt`, in bits.
+pub const TICK_W: u32 = 24;
+/// All ones in the low [`TICK_W`] bits.
+const TICK_MASK: u32 = (1 << TICK_W) - 1;
+/// Width mask of the `master` and `slave` inputs (3 bits: axes 0..=7).
+const AXIS_MASK: u8 = 0b111;
+
+/// Bits of [`GantrySync::flags`] (and of `CoreOutputs::gantry_flags`).
+pub mod flags {
+    /// The pair is engaged.
+    pub const ENGAGED: u8 = 1 << 0;
+    /// Sticky: `|error|` passed `limit` while engaged.
+    pub const ALARM: u8 = 1 << 1;
+    /// Sticky: an engagement was refused (`master`/`slave` not valid).
+    pub const REFUSED: u8 = 1 << 2;
+}
+
+/// State of the gantry synchronisation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct GantrySync {
+    pub(crate) engaged: bool,
+    /// The master axis, sampled at engagement.
+    pub(crate) m: u8,
+    /// The slave axis, sampled at engagement.
+    pub(crate) s: u8,
+    /// `enc_master - enc_slave` of the cycle before.
+    pub(crate) diff: u32,
+    /// `diff` at engagement.
+    pub(crate) offset: u32,
+    /// `diff - offset` of the cycle before while engaged, else 0.
+    pub(crate) error: u32,
+    /// Cycles since the last tick (`TICK_W` bits, wraps).
+    pub(crate) tick_cnt: u32,
+    /// The correction waiting to be applied: -1, 0 or +1.
+    pub(crate) corr: i8,
+    /// Net applied corrections (wraps).
+    pub(crate) corrections: u16,
+    pub(crate) alarm: bool,
+    pub(crate) refused: bool,
+}
+
+/// The gantry block's other inputs in a cycle (from the core).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct GantryContext {
+    /// `N_AXES`, for the `valid` check.
+    pub(crate) n_axes: usize,
+    /// `r[m]`: the master's DDA request in this cycle (with `m` the state's).
+    pub(crate) master_req: i8,
+    /// The core's `halt`.
+    pub(crate) halt: bool,
+    /// The core's `clear_errors`.
+    pub(crate) clear_errors: bool,
+}
+
+impl GantrySync {
+    /// The pair is engaged: the slave's shaper takes [`Self::slave_request`].
+    pub fn engaged(&self) -> bool {
+        self.engaged
+    }
+
+    /// The master axis (sampled at engagement).
+    pub fn master(&self) -> usize {
+        usize::from(self.m)
+    }
+
+    /// The slave axis (sampled at engagement).
+    pub fn slave(&self) -> usize {
+        usize::from(self.s)
+    }
+
+    /// `diff`: `enc_master - enc_slave` as registered (wraps).
+    pub fn diff(&self) -> u32 {
+        self.diff
+    }
+
+    /// `offset`: `diff` at engagement.
+    pub fn offset(&self) -> u32 {
+        self.offset
+    }
+
+    /// `error`: `diff - offset` (two's complement counts); 0 while not engaged.
+    pub fn error(&self) -> u32 {
+        self.error
+    }
+
+    /// Cycles since the last tick.
+    pub fn tick_cnt(&self) -> u32 {
+        self.tick_cnt
+    }
+
+    /// The correction waiting to be applied: -1, 0 or +1.
+    pub fn corr(&self) -> i8 {
+        self.corr
+    }
+
+    /// Net corrections applied (wraps at 16 bits).
+    pub fn corrections(&self) -> u16 {
+        self.corrections
+    }
+
+    /// Sticky: `|error|` passed `limit` while engaged.
+    pub fn alarm(&self) -> bool {
+        self.alarm
+    }
+
+    /// Sticky: an engagement was refused.
+    pub fn refused(&self) -> bool {
+        self.refused
+    }
+
+    /// `engaged`, `alarm` and `refused` packed as in [`flags`].
+    pub fn flags(&self) -> u8 {
+        (u8::from(self.engaged) * flags::ENGAGED)
+            | (u8::from(self.alarm) * flags::ALARM)
+            | (u8::from(self.refused) * flags::REFUSED)
+    }
+
+    /// The request the engaged pair gives the slave's shaper when the master's DDA
+    /// requests `r` in this cycle: `r` without a correction or while the correction
+    /// waits (`corr == r`), the correction where the master has none (a step inserted),
+    /// 0 where they cancel (a master step deleted).
+    #[inline]
+    pub fn slave_request(&self, r: i8) -> i8 {
+        let c = self.corr;
+        if c == 0 {
+            r
+        } else if r == 0 {
+            c
+        } else if c == -r {
+            0
+        } else {
+            r
+        }
+    }
+
+    /// The request-selection rule: the request the step shaper of `axis` takes in this
+    /// cycle, given every axis's DDA request `reqs` of this cycle: the gantry's
+    /// [`Self::slave_request`] when engaged and `axis` is the slave, else its own DDA's.
+    #[inline]
+    pub fn shaper_request(&self, axis: usize, reqs: &[i8]) -> i8 {
+        if self.engaged && axis == self.slave() {
+            self.slave_request(reqs[self.master()])
+        } else {
+            reqs[axis]
+        }
+    }
+
+    /// Whether the correction is applied in this cycle (with `r` the master's request).
+    #[inline]
+    fn applied(&self, r: i8, halt: bool) -> bool {
+        self.engaged && self.corr != 0 && r != self.corr && !halt
+    }
+
+    /// The next `tick_cnt` in a cycle without engagement or disengagement, and whether
+    /// this cycle is a tick.
+    #[inline]
+    fn tick(&self, tick: u32) -> (bool, u32) {
+        if !self.engaged {
+            return (false, self.tick_cnt);
+        }
+        let period = (tick & TICK_MASK).max(1);
+        if self.tick_cnt >= period - 1 {
+            (true, 0)
+        } else {
+            (false, (self.tick_cnt + 1) & TICK_MASK)
+        }
+    }
+
+    /// Cycles from this one to the next tick (0: this cycle is one) with `tick` held;
+    /// `u64::MAX` while not engaged (no tick comes).
+    pub(crate) fn cycles_to_tick(&self, tick: u32) -> u64 {
+        if !self.engaged {
+            return u64::MAX;
+        }
+        let period = (tick & TICK_MASK).max(1);
+        u64::from((period - 1).saturating_sub(self.tick_cnt))
+    }
+
+    /// Advances `tick_cnt` over `k` cycles that are not ticks and change nothing else.
+    pub(crate) fn skip(&mut self, k: u64) {
+        if self.engaged {
+            self.tick_cnt = (u64::from(self.tick_cnt) + k) as u32 & TICK_MASK;
+        }
+    }
+
+    /// The state after this cycle's edge with the same inputs, except that `tick_cnt`
+    /// counts (the state a quiet cycle leads to).
+    pub(crate) fn counted(&self) -> GantrySync {
+        GantrySync {
+            tick_cnt: if self.engaged {
+                (self.tick_cnt + 1) & TICK_MASK
+            } else {
+                self.tick_cnt
+            },
+            ..*self
+        }
+    }
+
+    /// The outputs together, to see whether they changed.
+    #[inline]
+    fn output_bits(&self) -> (u32, u16, u8) {
+        (self.error, self.corrections, self.flags())
+    }
+
+    /// One rising edge. Returns whether an output (`error`, `corrections`, the flags)
+    /// changed.
+    #[inline]
+    pub(crate) fn step(&mut self, inp: &GantryInputs, ctx: &GantryContext) -> bool {
+        let before = self.output_bits();
+        let master = inp.master & AXIS_MASK;
+        let slave = inp.slave & AXIS_MASK;
+        let valid =
+            master != slave && usize::from(master) < ctx.n_axes && usize::from(slave) < ctx.n_axes;
+        let engage = !self.engaged && inp.enable && valid;
+        let disengage = self.engaged && !inp.enable;
+        let clear = ctx.clear_errors;
+        let applied = self.applied(ctx.master_req, ctx.halt);
+        let (tick, tick_cnt) = self.tick(inp.tick);
+
+        let error = self.error as i32;
+        let deadband = i64::from(inp.deadband);
+        let decision = if i64::from(error) > deadband {
+            1
+        } else if i64::from(error) < -deadband {
+            -1
+        } else {
+            0
+        };
+        let corr = if engage || disengage || ctx.halt || !self.engaged || !inp.sync {
+            0
+        } else if tick {
+            decision
+        } else if applied {
+            0
+        } else {
+            self.corr
+        };
+
+        let next = GantrySync {
+            engaged: (self.engaged || engage) && !disengage,
+            m: if engage { master } else { self.m },
+            s: if engage { slave } else { self.s },
+            diff: inp.enc_master.wrapping_sub(inp.enc_slave),
+            offset: if engage { self.diff } else { self.offset },
+            error: if self.engaged {
+                self.diff.wrapping_sub(self.offset)
+            } else {
+                0
+            },
+            tick_cnt: if engage || disengage { 0 } else { tick_cnt },
+            corr,
+            corrections: if inp.clear_counters {
+                0
+            } else if applied {
+                self.corrections.wrapping_add_signed(i16::from(self.corr))
+            } else {
+                self.corrections
+            },
+            alarm: (self.engaged && error.unsigned_abs() > u32::from(inp.limit))
+                || (self.alarm && !clear),
+            refused: (inp.enable && !valid && !self.engaged) || (self.refused && !clear),
+        };
+        *self = next;
+        self.output_bits() != before
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const N: usize = 4;
+
+    fn ctx(master_req: i8) -> GantryContext {
+        GantryContext {
+            n_axes: N,
+            master_req,
+            halt: false,
+            clear_errors: false,
+        }
+    }
+
+    fn inputs(master: u8, slave: u8) -> GantryInputs {
+        GantryInputs {
+            enable: true,
+            sync: true,
+            master,
+            slave,
+            tick: 4,
+            deadband: 2,
+            limit: 100,
+            ..GantryInputs::default()
+        }
+    }
+
+    /// An engaged pair (master 0, slave 1) with zero counts, `error` settled at 0.
+    fn engaged(inp: &GantryInputs) -> GantrySync {
+        let mut g = GantrySync::default();
+        g.step(inp, &ctx(0));
+        assert!(g.engaged());
+        g
+    }
+
+    #[test]
+    fn engages_with_valid_axes_and_refuses_others() {
+        let mut g = GantrySync::default();
+        let mut inp = inputs(2, 3);
+        inp.enable = false;
+        g.step(&inp, &ctx(0));
+        assert_eq!(g.flags(), 0, "not enabled: nothing");
+        for (master, slave) in [(1, 1), (4, 0), (0, 4), (7, 7), (8, 0)] {
+            let mut g = GantrySync::default();
+            g.step(&inputs(master, slave), &ctx(0));
+            assert_eq!(g.flags(), flags::REFUSED, "master {master} slave {slave}");
+        }
+        // 8 + 3 masks to 3: the inputs are 3 bits wide.
+        g.step(&inputs(2, 8 + 3), &ctx(0));
+        assert_eq!(g.flags(), flags::ENGAGED);
+        assert_eq!(
+            (g.master(), g.slave(), g.tick_cnt(), g.corr()),
+            (2, 3, 0, 0)
+        );
+        // While engaged a new master/slave (even an invalid one) has no effect.
+        g.step(&inputs(3, 3), &ctx(0));
+        assert_eq!((g.flags(), g.master(), g.slave()), (flags::ENGAGED, 2, 3));
+    }
+
+    #[test]
+    fn refused_and_alarm_clear_with_clear_errors_set_wins() {
+        let mut g = GantrySync::default();
+        g.step(&inputs(1, 1), &ctx(0));
+        assert!(g.refused());
+        let clearing = GantryContext {
+            clear_errors: true,
+            ..ctx(0)
+        };
+        g.step(&inputs(1, 1), &clearing);
+        assert!(g.refused(), "set in the clearing cycle: stays set");
+        g.step(&GantryInputs::default(), &clearing);
+        assert!(!g.refused());
+        // Alarm: error 5 > limit 3.
+        let mut inp = inputs(0, 1);
+        inp.limit = 3;
+        let mut g = engaged(&inp);
+        inp.enc_master = 5;
+        for _ in 0..3 {
+            g.step(&inp, &ctx(0));
+        }
+        assert!(g.alarm());
+        g.step(&inp, &clearing);
+        assert!(g.alarm(), "|error| still past the limit: set wins");
+        inp.enc_master = 3;
+        g.step(&inp, &ctx(0)); // diff 3
+        g.step(&inp, &ctx(0)); // error 3 (alarm decided from error 5)
+        g.step(&inp, &clearing);
+        assert!(!g.alarm(), "|error| = 3 is not past 3: cleared");
+    }
+
+    #[test]
+    fn disengages_and_zeroes_corr_and_tick() {
+        let inp = inputs(0, 1);
+        let mut g = engaged(&inp);
+        g.step(&inp, &ctx(0));
+        g.corr = 1;
+        assert_eq!(g.tick_cnt(), 1);
+        let off = GantryInputs {
+            enable: false,
+            ..inp
+        };
+        g.step(&off, &ctx(0));
+        assert!(!g.engaged());
+        assert_eq!((g.corr(), g.tick_cnt()), (0, 0));
+        assert_eq!(g.corrections(), 1, "applied in the last engaged cycle");
+        assert_eq!(g.shaper_request(1, &[1, -1, 0, 0]), -1, "own DDA again");
+        // Not engaged: tick_cnt does not count.
+        g.step(&off, &ctx(0));
+        assert_eq!(g.tick_cnt(), 0);
+    }
+
+    #[test]
+    fn offset_captures_diff_at_engagement() {
+        let mut g = GantrySync::default();
+        let mut inp = inputs(0, 1);
+        inp.enable = false;
+        inp.enc_master = 1000;
+        inp.enc_slave = 10;
+        g.step(&inp, &ctx(0)); // diff 990
+        inp.enable = true;
+        inp.enc_master = 2000; // diff input 1990, register still 990
+        g.step(&inp, &ctx(0));
+        assert_eq!(
+            (g.engaged(), g.offset(), g.diff(), g.error()),
+            (true, 990, 1990, 0)
+        );
+        g.step(&inp, &ctx(0));
+        assert_eq!(g.error(), 1000, "diff 1990 - offset 990");
+        // Wrapping: a channel through 0.
+        inp.enc_slave = u32::MAX - 4; // diff 2005 (wrapped)
+        g.step(&inp, &ctx(0));
+        g.step(&inp, &ctx(0));
+        assert_eq!(g.error(), 1015);
+    }
+
+    #[test]
+    fn count_reaches_diff_error_alarm_in_n1_n2_n3() {
+        let mut inp = inputs(0, 1);
+        inp.limit = 0;
+        let mut g = engaged(&inp);
+        for _ in 0..3 {
+            g.step(&inp, &ctx(0));
+        }
+        assert_eq!((g.diff(), g.error(), g.alarm()), (0, 0, false));
+        // Cycle n: the count changes.
+        inp.enc_slave = 1;
+        g.step(&inp, &ctx(0));
+        assert_eq!(
+            (g.diff(), g.error(), g.alarm()),
+            (u32::MAX, 0, false),
+            "n+1"
+        );
+        g.step(&inp, &ctx(0));
+        assert_eq!((g.error(), g.alarm()), (u32::MAX, false), "n+2");
+        g.step(&inp, &ctx(0));
+        assert!(g.alarm(), "n+3");
+    }
+
+    #[test]
+    fn alarm_takes_the_unsigned_magnitude() {
+        let mut inp = inputs(0, 1);
+        inp.limit = u16::MAX;
+        let mut g = engaged(&inp);
+        g.error = 0x8000_0000; // -2^31: |error| = 2^31, not -2^31
+        inp.enc_master = 0x8000_0000; // keeps it there
+        g.diff = 0x8000_0000;
+        g.step(&inp, &ctx(0));
+        assert!(g.alarm());
+        let mut g = engaged(&inp);
+        g.error = (-i32::from(u16::MAX)) as u32;
+        g.diff = g.error;
+        inp.enc_master = g.error;
+        g.step(&inp, &ctx(0));
+        assert!(!g.alarm(), "|error| = limit is not past it");
+        g.error = (-i32::from(u16::MAX) - 1) as u32;
+        g.step(&inp, &ctx(0));
+        assert!(g.alarm());
+        // Not engaged: no alarm.
+        let mut g = GantrySync {
+            error: 0x8000_0000,
+            ..GantrySync::default()
+        };
+        g.step(&GantryInputs::default(), &ctx(0));
+        assert!(!g.alarm());
+    }
+
+    /// Tick cycles (as indices from the first engaged cycle) over `cycles` cycles.
+    fn ticks(tick: u32, cycles: usize) -> Vec<usize> {
+        let mut inp = inputs(0, 1);
+        inp.tick = tick;
+        let mut g = engaged(&inp);
+        (0..cycles)
+            .filter(|_| {
+                let (is_tick, _) = g.tick(inp.tick);
+                assert_eq!(is_tick, g.cycles_to_tick(inp.tick) == 0);
+                g.step(&inp, &ctx(0));
+                is_tick
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ticks_every_max_tick_1_cycles() {
+        assert_eq!(ticks(0, 4), [0, 1, 2, 3], "0 acts as 1");
+        assert_eq!(ticks(1, 4), [0, 1, 2, 3]);
+        assert_eq!(ticks(3, 10), [2, 5, 8]);
+        assert_eq!(ticks(1 << 24 | 2, 6), [1, 3, 5], "24 bits used");
+        let mut g = GantrySync {
+            engaged: true,
+            tick_cnt: TICK_MASK,
+            ..GantrySync::default()
+        };
+        assert_eq!(g.cycles_to_tick(5), 0, "past the tick (lowered while engaged): at once");
+        g.step(
+            &GantryInputs {
+                enable: true,
+                tick: 5,
+                ..GantryInputs::default()
+            },
+            &ctx(0),
+        );
+        assert_eq!(g.tick_cnt(), 0);
+    }
+
+    #[test]
+    fn the_four_request_cases_and_the_counter() {
+        let g = |corr| GantrySync {
+            engaged: true,
+            m: 2,
+            s: 0,
+            corr,
+            ..GantrySync::default()
+        };
+        let reqs = |r| [5, 6, r, 7];
+        // (corr, master request) -> slave request, applied.
+        let cases = [
+            (0, 1, 1, false),
+            (0, -1, -1, false),
+            (0, 0, 0, false),
+            (1, 0, 1, true),
+            (-1, 0, -1, true),
+            (1, -1, 0, true),
+            (-1, 1, 0, true),
+            (1, 1, 1, false),
+            (-1, -1, -1, false),
+        ];
+        for (corr, r, want, applied) in cases {
+            let g = g(corr);
+            assert_eq!(g.shaper_request(0, &reqs(r)), want, "corr {corr} r {r}");
+            assert_eq!(g.shaper_request(1, &reqs(r)), 6, "other axes: own DDA");
+            assert_eq!(g.shaper_request(2, &reqs(r)), r, "the master: own DDA");
+            assert_eq!(g.applied(r, false), applied);
+            let mut next = g;
+            let inp = GantryInputs {
+                enable: true,
+                sync: true,
+                tick: 100,
+                ..GantryInputs::default()
+            };
+            next.step(&inp, &ctx(r));
+            let counted = i16::from(corr) * i16::from(applied);
+            assert_eq!(next.corrections(), counted as u16);
+            assert_eq!(
+                next.corr(),
+                if applied { 0 } else { corr },
+                "waits until applied"
+            );
+        }
+        // Not engaged: the slave's own request.
+        let off = GantrySync {
+            engaged: false,
+            ..g(1)
+        };
+        assert_eq!(off.shaper_request(0, &reqs(1)), 5);
+        // The counter wraps both ways.
+        let mut w = GantrySync {
+            corrections: u16::MAX,
+            ..g(1)
+        };
+        let inp = GantryInputs {
+            enable: true,
+            sync: true,
+            tick: 100,
+            ..GantryInputs::default()
+        };
+        w.step(&inp, &ctx(0));
+        assert_eq!(w.corrections(), 0);
+        w.corr = -1;
+        w.step(&inp, &ctx(0));
+        assert_eq!(w.corrections(), u16::MAX);
+    }
+
+    #[test]
+    fn tick_decides_from_error_with_a_signed_unsigned_compare() {
+        for (error, deadband, want) in [
+            (3, 2, 1),
+            (2, 2, 0),
+            (-2, 2, 0),
+            (-3, 2, -1),
+            (i32::MIN, u16::MAX, -1),
+            (i32::MAX, u16::MAX, 1),
+            (-65535, u16::MAX, 0),
+            (-65536, u16::MAX, -1),
+            (1, 0, 1),
+            (0, 0, 0),
+        ] {
+            let mut g = GantrySync {
+                engaged: true,
+                s: 1,
+                error: error as u32,
+                diff: error as u32,
+                ..GantrySync::default()
+            };
+            let inp = GantryInputs {
+                enable: true,
+                sync: true,
+                slave: 1,
+                tick: 1,
+                deadband,
+                limit: u16::MAX,
+                enc_master: error as u32,
+                ..GantryInputs::default()
+            };
+            g.step(&inp, &ctx(0));
+            assert_eq!(g.corr(), want, "error {error} deadband {deadband}");
+        }
+    }
+
+    #[test]
+    fn a_tick_when_a_correction_is_applied_counts_it_and_loads_the_next() {
+        let mut inp = inputs(0, 1);
+        inp.tick = 3;
+        let mut g = engaged(&inp);
+        g.error = 10;
+        g.diff = 10;
+        inp.enc_master = 10;
+        g.corr = 1;
+        g.tick_cnt = 1; // not a tick: applied, corr cleared
+        g.step(&inp, &ctx(0));
+        assert_eq!((g.corr(), g.corrections(), g.tick_cnt()), (0, 1, 2));
+        g.corr = 1; // now a tick with an applied correction
+        g.step(&inp, &ctx(0));
+        assert_eq!((g.corr(), g.corrections(), g.tick_cnt()), (1, 2, 0));
+        // A tick while the correction waits (master in its direction): not applied, new
+        // decision loaded.
+        g.tick_cnt = 2;
+        g.step(&inp, &ctx(1));
+        assert_eq!((g.corr(), g.corrections()), (1, 2));
+        // Waiting across cycles: at most one correction per tick.
+        let mut applied = 0;
+        for r in [1, 1, 0, 0, 0, 0] {
+            let before = g.corrections();
+            g.step(&inp, &ctx(r));
+            applied += g.corrections() - before;
+        }
+        assert_eq!(
+            applied, 2,
+            "the waiting one at the tick of cycle 2, that tick's in cycle 3"
+        );
+    }
+
+    #[test]
+    fn halt_forward_mode_and_disengaged_zero_the_correction() {
+        let mut inp = inputs(0, 1);
+        inp.tick = 1;
+        let base = {
+            let mut g = engaged(&inp);
+            g.error = 10;
+            g.diff = 10;
+            g
+        };
+        inp.enc_master = 10;
+        let mut g = base;
+        g.step(&inp, &ctx(0));
+        assert_eq!(g.corr(), 1, "synchronised: +1 at the tick");
+        let mut halted = base;
+        halted.corr = 1;
+        halted.step(
+            &inp,
+            &GantryContext {
+                halt: true,
+                ..ctx(0)
+            },
+        );
+        assert_eq!(halted.corr(), 0, "halt: no correction");
+        assert_eq!(halted.corrections(), 0, "halted: the shaper drops it, so it does not count");
+        let mut forward = base;
+        forward.step(&GantryInputs { sync: false, ..inp }, &ctx(0));
+        assert_eq!(
+            (forward.corr(), forward.error()),
+            (0, 10),
+            "forward: measured, not corrected"
+        );
+    }
+
+    #[test]
+    fn forward_mode_copies_the_master_exactly() {
+        let inp = GantryInputs {
+            sync: false,
+            tick: 1,
+            enc_master: 1000,
+            ..inputs(3, 0)
+        };
+        let mut g = engaged(&inp);
+        let mut reqs = [0i8; N];
+        for k in 0..200u32 {
+            reqs[3] = [0, 1, -1, 1, 0, 0, -1][(k % 7) as usize];
+            reqs[0] = -reqs[3];
+            assert_eq!(g.shaper_request(0, &reqs), reqs[3]);
+            g.step(&inp, &ctx(reqs[3]));
+            assert_eq!(g.corr(), 0);
+        }
+        assert!(
+            g.error() == 1000 && g.alarm(),
+            "the error is still measured"
+        );
+        assert_eq!(g.corrections(), 0);
+    }
+
+    #[test]
+    fn clear_counters_wins_over_an_applied_correction() {
+        let inp = inputs(0, 1);
+        let mut g = engaged(&inp);
+        g.corrections = 7;
+        g.corr = -1;
+        g.step(
+            &GantryInputs {
+                clear_counters: true,
+                ..inp
+            },
+            &ctx(0),
+        );
+        assert_eq!((g.corrections(), g.corr()), (0, 0));
+        // clear_errors does not touch the counter; clear_counters not the flags.
+        g.refused = true;
+        g.step(
+            &GantryInputs {
+                clear_counters: true,
+                ..inp
+            },
+            &ctx(0),
+        );
+        assert!(g.refused());
+        g.corrections = 7;
+        g.step(
+            &inp,
+            &GantryContext {
+                clear_errors: true,
+                ..ctx(0)
+            },
+        );
+        assert_eq!((g.corrections(), g.refused()), (7, false));
+    }
+}
