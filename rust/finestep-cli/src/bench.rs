@@ -78,6 +78,66 @@ pub fn cam_program(moves: usize) -> String {
     text
 }
 
+/// A chain of `blocks` cubic NURBS (G5.2 L4, seven control points each, weights 0.5 to
+/// 2) along a wave, each leaving its end along the direction it arrived in (tangent).
+pub fn nurbs_program(blocks: usize) -> String {
+    let mut text = String::from("G21 G90 G17 G64 P0.01\nF3000\nG1 X1 Y0\n");
+    let (mut x, mut y, mut dy) = (1.0f64, 0.0f64, 0.0f64);
+    for b in 0..blocks {
+        text.push_str("G5.2 L4\n");
+        for i in 1..=6 {
+            let (nx, ny) = if i == 1 {
+                (x + 1.0, y + dy)
+            } else {
+                (x + 1.0, 4.0 * ((b * 6 + i) as f64 * 0.7).sin())
+            };
+            let weight = 1.25 + 0.75 * ((b + i) as f64).cos();
+            text.push_str(&format!("X{nx:.4} Y{ny:.4} P{weight:.3}\n"));
+            dy = ny - y;
+            (x, y) = (nx, ny);
+        }
+        text.push_str("G5.3\n");
+    }
+    text.push_str("M2\n");
+    text
+}
+
+/// Plan and interpolate throughput on a chain of NURBS, per profile.
+fn nurbs_figures() -> anyhow::Result<()> {
+    use finestep_planner::{geometry, interpolate, lookahead, MachineConfig, ProfileKind};
+    const BLOCKS: usize = 500;
+    let program = finestep_gcode::parse_str(&nurbs_program(BLOCKS), "nurbs.ngc")?;
+    for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
+        let config = MachineConfig {
+            profile,
+            ..MachineConfig::default()
+        }
+        .resolve()?;
+        let start = Instant::now();
+        let path = geometry::elements(&config, &program).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let speeds = lookahead::junction_speeds(&config, &path.elements);
+        let plan_s = start.elapsed().as_secs_f64();
+        let start = Instant::now();
+        let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let interpolate_s = start.elapsed().as_secs_f64();
+        let periods = out.records.len() as f64;
+        println!(
+            "  {:<44} {:>7.0} NURBS/s   ({} sub-pieces)",
+            format!("plan NURBS: sub-pieces, look-ahead ({profile:?})"),
+            BLOCKS as f64 / plan_s,
+            path.elements.len()
+        );
+        println!(
+            "  {:<44} {:>7.2} M periods/s  ({:.1} s of machining)",
+            format!("interpolate NURBS directly ({profile:?})"),
+            periods / interpolate_s / 1e6,
+            periods * config.period_s
+        );
+    }
+    Ok(())
+}
+
 /// Parse, plan and interpolate throughput on a 100 000-segment program, per profile.
 pub fn front_end() -> anyhow::Result<()> {
     use finestep_planner::{geometry, interpolate, lookahead, MachineConfig, ProfileKind};
@@ -127,7 +187,7 @@ pub fn front_end() -> anyhow::Result<()> {
             periods * config.period_s
         );
     }
-    Ok(())
+    nurbs_figures()
 }
 
 pub fn run(cycles: u64) -> anyhow::Result<()> {

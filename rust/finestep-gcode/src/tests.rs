@@ -528,8 +528,11 @@ fn compensation_only_in_the_xy_plane() {
     assert!(parse_str("G17 G41 D1\nG1 X1 F100\nG40\nG18\n", "p.ngc").is_ok());
 }
 
-/// The single NURBS of a program: control points (x, y, w), order, knots, feed, end.
-fn nurbs(source: &str) -> (Vec<(f64, f64, f64)>, u32, Vec<f64>, f64, Point) {
+/// A NURBS as the tests read it: control points (x, y, w), order, knots, feed, end.
+type NurbsParts = (Vec<(f64, f64, f64)>, u32, Vec<f64>, f64, Point);
+
+/// The single NURBS of a program.
+fn nurbs(source: &str) -> NurbsParts {
     let found: Vec<_> = parse(source)
         .into_iter()
         .filter_map(|k| match k {

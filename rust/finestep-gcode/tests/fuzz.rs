@@ -63,13 +63,14 @@ fn random_bytes_never_panic() {
 fn token() -> impl Strategy<Value = String> {
     let fixed = prop::sample::select(vec![
         "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42",
-        "G61", "G64", "G90", "G91", "G90.1", "G91.1", "G33", "M0", "M2", "M3", "M4", "M5", "M6",
+        "G61", "G64", "G90", "G91", "G90.1", "G91.1", "G5.2", "G5.3", "L", "G33", "M0", "M2", "M3",
+        "M4", "M5", "M6",
         "M7", "M8", "M9", "M30", "F", "S", "T", "D", "P", "R", "I", "J", "K", "X", "Y", "Z", "A",
         "N", "Q", "B", "-", "+", ".", " ", "\t", "(", ")", "(c)", ";", "\n", "\r\n", "%", "/", "#",
         "[", "0", "1", "5", "9", "1e5", "é", "\u{fffd}",
     ])
     .prop_map(str::to_string);
-    let letter = prop::sample::select("GMFSTDPRIJKXYZAN".chars().collect::<Vec<_>>());
+    let letter = prop::sample::select("GMFSTDPRIJKLXYZAN".chars().collect::<Vec<_>>());
     let word = (letter, -1000.0f64..1000.0).prop_map(|(l, v)| format!("{l}{v:.3}"));
     let huge = (0usize..40).prop_map(|n| format!("X{}", "9".repeat(n * 20)));
     prop_oneof![4 => fixed, 4 => word, 1 => huge]
@@ -239,6 +240,67 @@ fn arc_centre_and_radius_forms_agree() {
                     b,
                     want
                 );
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+/// A random NURBS block means the same absolute in mm, incremental in mm (every control
+/// point relative to the NURBS's start, as in LinuxCNC) and absolute in inches: the same
+/// control points, weights, order and LinuxCNC knots, the current position first.
+#[test]
+fn nurbs_notations_agree() {
+    let mut runner = finestep_testkit::runner("nurbs_notations_agree", 300);
+    let point = (proptest::array::uniform2(-5000i32..5000), 1u32..5000);
+    let block = (proptest::array::uniform2(-5000i32..5000), 2u32..6, proptest::collection::vec(point, 1..12));
+    runner
+        .run(&block, |(start, order, points)| {
+            let mm = |v: i32| f64::from(v) * 0.00254;
+            let mut sources = [
+                format!("G21 G90 F100\nG0 X{:.5} Y{:.5}\nG5.2 L{order}\n", mm(start[0]), mm(start[1])),
+                format!("G21 G90 F100\nG0 X{:.5} Y{:.5}\nG91\nG5.2 L{order}\n", mm(start[0]), mm(start[1])),
+                format!("G20 G90 F3.937\nG0 X{:.4} Y{:.4}\nG5.2 L{order}\n", f64::from(start[0]) / 1e4, f64::from(start[1]) / 1e4),
+            ];
+            for (p, w) in &points {
+                let weight = f64::from(*w) / 1000.0;
+                sources[0] += &format!("X{:.5} Y{:.5} P{weight}\n", mm(p[0]), mm(p[1]));
+                sources[1] += &format!("X{:.5} Y{:.5} P{weight}\n", mm(p[0] - start[0]), mm(p[1] - start[1]));
+                sources[2] += &format!("X{:.4} Y{:.4} P{weight}\n", f64::from(p[0]) / 1e4, f64::from(p[1]) / 1e4);
+            }
+            let mut found = Vec::new();
+            for source in &mut sources {
+                source.push_str("G5.3\nM2\n");
+                match parse_str(source, "n.ngc") {
+                    Ok(program) => {
+                        let nurbs: Vec<_> = program
+                            .blocks
+                            .iter()
+                            .filter_map(|b| match &b.kind {
+                                BlockKind::Nurbs { control_points, order, knots, .. } => Some((control_points.clone(), *order, knots.clone())),
+                                _ => None,
+                            })
+                            .collect();
+                        prop_assert_eq!(nurbs.len(), 1);
+                        found.push(nurbs[0].clone());
+                    }
+                    Err(e) => {
+                        // Only too few control points for the order, at the G5.3.
+                        prop_assert!(points.len() + 1 < order as usize, "{e}\n{source}");
+                        prop_assert!(e.to_string().contains("control points"), "{e}");
+                        return Ok(());
+                    }
+                }
+            }
+            let (first, order_found, knots) = &found[0];
+            prop_assert_eq!(*order_found, order);
+            prop_assert_eq!(knots, &finestep_gcode::nurbs_knots(points.len() + 1, order as usize));
+            prop_assert_eq!(first.len(), points.len() + 1);
+            prop_assert!((first[0].x_mm - mm(start[0])).abs() < 1e-9 && (first[0].y_mm - mm(start[1])).abs() < 1e-9);
+            for (other, ..) in &found[1..] {
+                for (a, b) in first.iter().zip(other) {
+                    prop_assert!((a.x_mm - b.x_mm).abs() < 1e-6 && (a.y_mm - b.y_mm).abs() < 1e-6 && a.weight == b.weight, "{a:?} vs {b:?}");
+                }
             }
             Ok(())
         })

@@ -21,7 +21,9 @@
 //!   the rational basis functions (the planner uses de Boor's algorithm on homogeneous
 //!   points), and the distance to it is found by dense sampling and a golden-section
 //!   refinement around the nearest sample;
-//! - the position exactly (in Q16.16 steps) on every exact stop and the program end;
+//! - the position exactly (in Q16.16 steps) on every exact stop and the program end (a
+//!   stop counts once the machine has moved since the previous one, unless its piece
+//!   needs no motion: a program returning to its start has not ended before it begins);
 //! - every record within the drive's rated rate (the model's `RateChecker`).
 //!
 //! # Quantisation tolerance
@@ -105,8 +107,10 @@ impl CheckReport {
 /// signed sweep.
 type ArcGeometry = ((usize, usize), (f64, f64), f64, f64, f64);
 
-/// Samples of a NURBS per knot span for the distance search.
-const CURVE_SAMPLES_PER_SPAN: usize = 48;
+/// Samples of a NURBS per knot span for the distance search, before refinement.
+const CURVE_SAMPLES_PER_SPAN: usize = 16;
+/// Chords per bounding box of the distance search.
+const CHORDS_PER_BOX: usize = 32;
 
 /// A NURBS as the checker reads it: control points `(x, y, w)`, knots, order, and the
 /// curve sampled densely as `(parameter, point)`.
@@ -116,24 +120,62 @@ struct CheckCurve {
     knots: Vec<f64>,
     order: usize,
     samples: Vec<(f64, [f64; 2])>,
+    /// The largest sag of a chord between samples (at its middle parameter).
+    sag: f64,
+    /// Blocks of consecutive chords: first and last sample, and their bounding box
+    /// (min x, min y, max x, max y).
+    boxes: Vec<(usize, usize, [f64; 4])>,
 }
 
 impl CheckCurve {
     fn new(points: Vec<(f64, f64, f64)>, knots: Vec<f64>, order: usize) -> CheckCurve {
-        let mut curve = CheckCurve { points, knots, order, samples: Vec::new() };
+        let mut curve = CheckCurve { points, knots, order, samples: Vec::new(), sag: 0.0, boxes: Vec::new() };
         let n = curve.points.len();
+        let mut params = Vec::new();
         for i in order - 1..n {
             let (a, b) = (curve.knots[i], curve.knots[i + 1]);
             if b > a {
-                for j in 0..CURVE_SAMPLES_PER_SPAN {
-                    let u = a + (b - a) * j as f64 / CURVE_SAMPLES_PER_SPAN as f64;
-                    curve.samples.push((u, curve.point(u)));
-                }
+                params.extend((0..CURVE_SAMPLES_PER_SPAN).map(|j| a + (b - a) * j as f64 / CURVE_SAMPLES_PER_SPAN as f64));
             }
         }
-        let end = curve.knots[n];
-        curve.samples.push((end, curve.point(end)));
+        params.push(curve.knots[n]);
+        let coarse: Vec<(f64, [f64; 2])> = params.iter().map(|&u| (u, curve.point(u))).collect();
+        let size: f64 = coarse.windows(2).map(|w| (w[1].1[0] - w[0].1[0]).hypot(w[1].1[1] - w[0].1[1])).sum();
+        let finest = (size / 256.0).max(1e-6);
+        // Bisect where a chord is long or sags (weights bunch the parameter up), so the
+        // chords follow the curve closely everywhere.
+        curve.samples.push(coarse[0]);
+        for w in coarse.windows(2) {
+            curve.refine(w[0], w[1], finest, 0);
+        }
+        // Bounding boxes of blocks of chords, for the distance search.
+        let last = curve.samples.len() - 1;
+        let mut j = 0;
+        while j < last {
+            let end = (j + CHORDS_PER_BOX).min(last);
+            let mut bbox = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+            for &(_, p) in &curve.samples[j..=end] {
+                bbox = [bbox[0].min(p[0]), bbox[1].min(p[1]), bbox[2].max(p[0]), bbox[3].max(p[1])];
+            }
+            curve.boxes.push((j, end, bbox));
+            j = end;
+        }
         curve
+    }
+
+    /// Appends the samples after `a` up to `b`, bisecting until chords are short and flat.
+    fn refine(&mut self, a: (f64, [f64; 2]), b: (f64, [f64; 2]), finest: f64, depth: u32) {
+        let chord = (b.1[0] - a.1[0]).hypot(b.1[1] - a.1[1]);
+        let um = 0.5 * (a.0 + b.0);
+        let m = self.point(um);
+        let sag = (m[0] - 0.5 * (a.1[0] + b.1[0])).hypot(m[1] - 0.5 * (a.1[1] + b.1[1]));
+        if depth < 24 && (chord > finest || sag > 1e-3 * finest) {
+            self.refine(a, (um, m), finest, depth + 1);
+            self.refine((um, m), b, finest, depth + 1);
+        } else {
+            self.sag = self.sag.max(sag);
+            self.samples.push(b);
+        }
     }
 
     /// The basis functions N_{i,order}(u) for every control point, by the Cox-de Boor
@@ -179,36 +221,53 @@ impl CheckCurve {
         [x / w, y / w]
     }
 
-    /// The smallest distance in the plane from `(qx, qy)` to the curve (an upper bound:
-    /// the distance to a point of the curve near the nearest sample).
+    /// The smallest distance in the plane from `(qx, qy)` to the curve: on every chord
+    /// between samples that comes within the largest sag of the nearest chord, a
+    /// golden-section search on the parameter, finished by the distance to the chord of
+    /// the last bracket (which errs low by at most its sag, far below a nanometre).
     fn distance(&self, qx: f64, qy: f64) -> f64 {
         let d = |p: [f64; 2]| (p[0] - qx).hypot(p[1] - qy);
-        let (nearest, best) = self
-            .samples
-            .iter()
-            .enumerate()
-            .map(|(i, &(_, p))| (i, d(p)))
-            .fold((0, f64::INFINITY), |acc, x| if x.1 < acc.1 { x } else { acc });
-        let mut lo = self.samples[nearest.saturating_sub(1)].0;
-        let mut hi = self.samples[(nearest + 1).min(self.samples.len() - 1)].0;
-        // Golden-section search on the distance over the two sample intervals around it.
-        let g = 0.5 * (5f64.sqrt() - 1.0);
-        let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
-        let (mut fa, mut fb) = (d(self.point(a)), d(self.point(b)));
-        for _ in 0..60 {
-            if fa < fb {
-                hi = b;
-                (b, fb) = (a, fa);
-                a = hi - g * (hi - lo);
-                fa = d(self.point(a));
-            } else {
-                lo = a;
-                (a, fa) = (b, fb);
-                b = lo + g * (hi - lo);
-                fb = d(self.point(b));
+        let segment = |p: [f64; 2], q: [f64; 2]| {
+            let (ex, ey) = (q[0] - p[0], q[1] - p[1]);
+            let len2 = ex * ex + ey * ey;
+            let f = if len2 > 0.0 { (((qx - p[0]) * ex + (qy - p[1]) * ey) / len2).clamp(0.0, 1.0) } else { 0.0 };
+            (p[0] + f * ex - qx).hypot(p[1] + f * ey - qy)
+        };
+        // Chords in the boxes that may hold the nearest one: a box whose distance exceeds
+        // the nearest sample of any box cannot.
+        let box_distance = |b: &[f64; 4]| (b[0] - qx).max(qx - b[2]).max(0.0).hypot((b[1] - qy).max(qy - b[3]).max(0.0));
+        let upper = self.boxes.iter().map(|&(j, _, _)| d(self.samples[j].1)).fold(d(self.samples[self.samples.len() - 1].1), f64::min);
+        let mut chords: Vec<(usize, f64)> = Vec::new();
+        for &(j0, j1, ref b) in &self.boxes {
+            if box_distance(b) <= upper {
+                chords.extend((j0..j1).map(|j| (j, segment(self.samples[j].1, self.samples[j + 1].1))));
             }
         }
-        best.min(fa).min(fb)
+        let best = chords.iter().map(|c| c.1).fold(f64::INFINITY, f64::min);
+        let reach = best + 2.0 * self.sag + 1e-9;
+        let mut result = f64::INFINITY;
+        for &(j, _) in chords.iter().filter(|c| c.1 <= reach) {
+            let (mut lo, mut hi) = (self.samples[j].0, self.samples[j + 1].0);
+            let g = 0.5 * (5f64.sqrt() - 1.0);
+            let (mut a, mut b) = (hi - g * (hi - lo), lo + g * (hi - lo));
+            let (mut fa, mut fb) = (d(self.point(a)), d(self.point(b)));
+            for _ in 0..20 {
+                if fa < fb {
+                    hi = b;
+                    (b, fb) = (a, fa);
+                    a = hi - g * (hi - lo);
+                    fa = d(self.point(a));
+                } else {
+                    lo = a;
+                    (a, fa) = (b, fb);
+                    b = lo + g * (hi - lo);
+                    fb = d(self.point(b));
+                }
+            }
+            let last = segment(self.point(lo), self.point(hi));
+            result = result.min(fa).min(fb).min(last).min(d(self.samples[j].1)).min(d(self.samples[j + 1].1));
+        }
+        result
     }
 }
 
@@ -229,6 +288,9 @@ struct Piece {
     allowance: f64,
     /// Stops exactly at its end.
     stops: bool,
+    /// Everything it describes lies within half a step per axis of its start: the
+    /// machine need not move for it.
+    still: bool,
 }
 
 impl Piece {
@@ -320,7 +382,7 @@ fn arc_sweep(theta0: f64, theta1: f64, clockwise: bool, extra_turns: u32) -> f64
 }
 
 /// The programmed path, rounded nowhere: the checker measures against the program.
-fn pieces(program: &Program, default_tolerance: f64) -> (Vec<Piece>, Vec<usize>) {
+fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<Piece>, Vec<usize>) {
     let mut out: Vec<Piece> = Vec::new();
     let mut at = [0.0; 4];
     let mut tolerance = Some(default_tolerance);
@@ -377,7 +439,11 @@ fn pieces(program: &Program, default_tolerance: f64) -> (Vec<Piece>, Vec<usize>)
         let before = out.last().filter(|p| !p.stops).map_or(0.0, |p| p.own_tolerance);
         let own_tolerance = tolerance.unwrap_or(0.0);
         let allowance = own_tolerance.max(before);
-        out.push(Piece { line: block.line, start: at, end: to, arc, nurbs, feed, own_tolerance, allowance, stops: tolerance.is_none() });
+        let within = |p: [f64; 4]| (0..4).all(|a| ((p[a] - at[a]) * scale[a]).abs() <= 0.5);
+        let still = within(to)
+            && arc.is_none_or(|(_, _, r0, _, _)| r0 * scale[0].max(scale[1]).max(scale[2]) <= 0.5)
+            && nurbs.as_ref().is_none_or(|c| c.points.iter().all(|&(x, y, _)| within([x, y, at[2], at[3]])));
+        out.push(Piece { line: block.line, start: at, end: to, arc, nurbs, feed, own_tolerance, allowance, stops: tolerance.is_none(), still });
         at = to;
     }
     mark_stop(&mut out);
@@ -402,7 +468,7 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
     let scale: [f64; 4] = machine.axes.map(|a| a.steps_per_unit);
     let mut report = CheckReport { periods: records.len(), period_s: period, axis_present: present, ..CheckReport::default() };
     let scurve = machine.profile == ProfileKind::SCurve;
-    let (pieces, stops) = pieces(program, machine.path_tolerance_mm);
+    let (pieces, stops) = pieces(program, machine.path_tolerance_mm, &scale);
 
     let mut tolerance = [[0.0; 3]; 4];
     for a in 0..4 {
@@ -426,6 +492,7 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
     let mut previous_point = [0.0f64; 4];
     let mut piece = 0usize;
     let mut next_stop = 0usize;
+    let mut moved = false;
     // Two rest periods after the end: the machine stops there.
     let rest = [PeriodRecord::default(); 2];
     for (k, record) in records.iter().chain(rest.iter()).enumerate() {
@@ -539,13 +606,19 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
                 report.violate(format!("exact stop at the end of line {} was passed without stopping on it", pieces[stops[next_stop]].line));
                 next_stop += 1;
             }
-            if let Some(&stop) = stops.get(next_stop) {
+            // A stop is reached on its point after the machine has moved since the last
+            // one (a program returning to its start is not at its end before it begins),
+            // unless its piece asks for no motion.
+            moved |= record.inc.iter().any(|d| d.to_bits() != 0);
+            while let Some(&stop) = stops.get(next_stop) {
                 let target: [i64; 4] = std::array::from_fn(|a| ((pieces[stop].end[a] * scale[a]).round() as i64) << 16);
-                if (0..4).all(|a| !present[a] || raw[a] == target[a]) {
-                    report.exact_stops += 1;
-                    next_stop += 1;
-                    piece = (stop + 1).min(pieces.len() - 1);
+                if !((moved || pieces[stop].still) && (0..4).all(|a| !present[a] || raw[a] == target[a])) {
+                    break;
                 }
+                report.exact_stops += 1;
+                next_stop += 1;
+                moved = false;
+                piece = (stop + 1).min(pieces.len() - 1);
             }
         }
         report.samples.push(Sample { position: point, speed: path[0], acceleration: path[1], jerk: path[2] });

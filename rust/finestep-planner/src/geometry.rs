@@ -1,5 +1,8 @@
 //! The path as the planner follows it: programmed lines and arcs, vertices rounded to
-//! whole steps, and (in G64) line-line corners replaced by blend arcs.
+//! whole steps, and (in G64) line-line corners replaced by blend arcs. A NURBS
+//! (G5.2/G5.3) becomes [`Shape::Nurbs`] sub-pieces of the curve itself, its first and
+//! last control points on whole steps, with limits from its curvature
+//! ([`crate::nurbs`]); it is not blended with its neighbours.
 //!
 //! # Corner blending and the path tolerance criterion
 //!
@@ -138,7 +141,7 @@ impl Element {
         match self.shape {
             Shape::Line { dir } => dir,
             Shape::Nurbs { ref curve, u0, u1 } => {
-                let d = curve.derivatives(if at_end { u1 } else { u0 });
+                let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
                 let speed = d.speed();
                 [d.first[0] / speed, d.first[1] / speed, 0.0, 0.0]
             }
@@ -162,7 +165,7 @@ impl Element {
             Shape::Line { .. } => [0.0; 4],
             Shape::Nurbs { ref curve, u0, u1 } => {
                 // (C'' - (C''.T) T) / |C'|^2
-                let d = curve.derivatives(if at_end { u1 } else { u0 });
+                let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
                 let speed = d.speed();
                 let t = [d.first[0] / speed, d.first[1] / speed];
                 let along = d.second[0] * t[0] + d.second[1] * t[1];
@@ -342,9 +345,16 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
                 points[0].1 = at[1];
                 points[n - 1].0 = to[0];
                 points[n - 1].1 = to[1];
-                let (order, knots) = nurbs_shape;
-                let curve = NurbsCurve::new(&points, order.saturating_sub(1), knots, at).map_err(&fail)?;
-                Some(Arc::new(curve))
+                // A curve whose control points all lie within half a step (per axis) of its
+                // ends is no curve on this machine: it moves as a line (or not at all).
+                let near = |x: f64, y: f64, q: Vec4| (0..2).all(|a| ((if a == 0 { x } else { y } - q[a]) * config.axes[a].steps_per_unit).abs() <= 0.5);
+                if points.iter().all(|&(x, y, _)| near(x, y, at) || near(x, y, to)) {
+                    None
+                } else {
+                    let (order, knots) = nurbs_shape;
+                    let curve = NurbsCurve::new(&points, order.saturating_sub(1), knots, at).map_err(&fail)?;
+                    Some(Arc::new(curve))
+                }
             }
             None => None,
         };

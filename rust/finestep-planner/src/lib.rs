@@ -8,6 +8,8 @@
 //! 2. [`geometry`]: programmed lines and arcs with vertices on whole steps; in G64 each
 //!    line-line corner becomes a blend arc within the path tolerance P; per-axis limits
 //!    projected onto each element's direction give its speed, acceleration and jerk caps.
+//!    A NURBS (G5.2/G5.3) becomes sub-pieces of the true curve with their own caps from
+//!    its curvature ([`nurbs`]).
 //! 3. [`lookahead`]: junction speeds from the corner criterion, backward and forward
 //!    passes over a window of at least `lookahead_moves` moves.
 //! 4. [`velocity`]: per element a trapezoid or S-curve profile, acceleration and
@@ -15,7 +17,8 @@
 //! 5. [`interpolate`]: seed 000's time-division interpolation, a period straddling
 //!    elements where the path flows on, positions quantised to the Q16.16 grid from their
 //!    exact values so the increments sum exactly to every exact stop and the end; every
-//!    record checked against the drive's rated rate before it is emitted.
+//!    record checked against the drive's rated rate before it is emitted. On a NURBS the
+//!    curve parameter is stepped directly every period ([`nurbs::NurbsCursor`]).
 //!
 //! [`checker`] checks the result independently, from the records and the program alone.
 //!
@@ -45,6 +48,11 @@
 //!   at a corner is that of the move entering it. The feed applies to the length over
 //!   all four axes, A in degrees. Arcs need a radius of at least
 //!   [`geometry::MIN_ARC_RADIUS_STEPS`] steps.
+//! - NURBS are not blended with their neighbours (their junctions take the junction
+//!   criterion), are never offset by cutter compensation (refused), and a NURBS with a
+//!   cusp (the curve stopping and turning back) is refused. A NURBS is many elements
+//!   (one or more per knot span), so the look-ahead window, counted in elements, sees
+//!   fewer programmed blocks ahead on NURBS than on lines.
 //!
 //! The single-move interpolators of seed 000 ([`interpolate_line`], [`interpolate_arc`])
 //! remain for the co-simulation tests that drive one move at a time:

@@ -26,7 +26,8 @@
 //! The passes run over a window of `4 * lookahead_moves` elements (a programmed move
 //! is at most two elements: its line and the blend after it) ending at rest, and commit
 //! the first half. Every committed element therefore saw at least `lookahead_moves`
-//! programmed moves ahead of it; the committed speeds stay feasible when the window
+//! programmed moves ahead of it (lines and arcs; a NURBS is one element or more per
+//! knot span, [`crate::nurbs`], so on NURBS the window reaches fewer blocks ahead); the committed speeds stay feasible when the window
 //! moves on, because a later window end only allows higher speeds.
 
 use crate::config::{ProfileKind, Resolved};

@@ -185,7 +185,7 @@ fn moves(program: &Program) -> Vec<BlockKind> {
     program
         .blocks
         .iter()
-        .map(|b| b.kind)
+        .map(|b| b.kind.clone())
         .filter(|k| {
             matches!(
                 k,
@@ -827,8 +827,8 @@ fn zero_radius_leaves_the_path_as_programmed() {
     let without_comp: Vec<Block> = program
         .blocks
         .iter()
-        .copied()
         .filter(|b| !matches!(b.kind, BlockKind::CutterComp { .. }))
+        .cloned()
         .collect();
     assert_eq!(out.blocks, without_comp);
 }
@@ -895,7 +895,7 @@ fn bad_programs_and_tables_are_errors_naming_the_line() {
 #[test]
 fn a_program_ending_with_compensation_on_ends_at_the_offset_point() {
     let out = run("G0 X-5\nG41 D1\nG1 X0 Y0 F100\nG1 X10\nG4 P1\nM2\n", 1.0).unwrap();
-    let kinds: Vec<BlockKind> = out.blocks.iter().map(|b| b.kind).collect();
+    let kinds: Vec<BlockKind> = out.blocks.iter().map(|b| b.kind.clone()).collect();
     let n = kinds.len();
     assert!(matches!(kinds[n - 1], BlockKind::End));
     assert!(matches!(kinds[n - 2], BlockKind::Dwell { .. }));
@@ -1144,7 +1144,7 @@ fn outside_of_convex_shapes_is_at_the_tool_radius_and_as_long_as_steiner_says() 
                     "{length} vs {full}"
                 );
                 // The path ends exactly where the program does.
-                let Some(BlockKind::Linear { to, .. }) = program.blocks.last().map(|b| b.kind)
+                let Some(BlockKind::Linear { to, .. }) = program.blocks.last().map(|b| b.kind.clone())
                 else {
                     unreachable!()
                 };
