@@ -113,6 +113,7 @@ module finestep_core #(
                 .limit(gantry_limit),
                 .enc_master(enc_master),
                 .enc_slave(enc_slave),
+                .inc(inc),
                 .req_valid(dda_req_valid),
                 .req_negative(dda_req_negative),
                 .halt(halt),

@@ -8,6 +8,12 @@
 // the slave's shaper, so every slave pulse keeps the slave axis's drive timing. The
 // difference is measured in both modes; an alarm (sticky) flags it past a limit.
 //
+// A correction against the master's motion deletes a master step rather than reversing
+// the slave (seed 001's deletion); one with the motion, or at rest, inserts a step.
+// Engagement waits until both axes have no increment (at rest), so the offset is taken
+// square and no speed changes under way; the alarm stops the corrections (and the top
+// halts on it): a dead or mirrored channel cannot run the slave away.
+//
 // The core selects: the shaper of axis slave_axis takes slave_req_* while engaged.
 // Latency: a count change in cycle n is in diff at n+1, error at n+2, alarm at n+3; a
 // correction decided at a tick in cycle t can reach the slave's shaper in t+1.
@@ -31,7 +37,8 @@ module gantry_sync #(
     // feedback: the two channels' counts
     input  wire [31:0]       enc_master,
     input  wire [31:0]       enc_slave,
-    // every axis's DDA step request
+    // every axis's increment in this period and DDA step request
+    input  wire [32*N_AXES-1:0] inc,
     input  wire [N_AXES-1:0] req_valid,
     input  wire [N_AXES-1:0] req_negative,
     // commands
@@ -65,9 +72,13 @@ module gantry_sync #(
     reg              alarm_reg;
     reg              refused_reg;
 
-    wire [3:0] n_axes = N_AXES;
+    wire [3:0] n_axes = N_AXES[3:0];    // N_AXES <= 8
     wire config_valid = (master != slave) && ({1'b0, master} < n_axes) && ({1'b0, slave} < n_axes);
-    wire engage       = !engaged_reg && enable && config_valid;
+    // Increments of all eight possible axes (0 above N_AXES).
+    wire [255:0] inc_all     = {{(256-32*N_AXES){1'b0}}, inc};
+    wire [31:0]  master_inc  = inc_all[32*master_reg +: 32];
+    wire at_rest = (inc_all[32*master +: 32] == 32'd0) && (inc_all[32*slave +: 32] == 32'd0);
+    wire engage       = !engaged_reg && enable && config_valid && at_rest;
     wire disengage    = engaged_reg && !enable;
 
     wire [TICK_W-1:0] tick_last = (tick_clocks == {TICK_W{1'b0}}) ? {TICK_W{1'b0}} : tick_clocks - TICK_ONE;
@@ -86,12 +97,18 @@ module gantry_sync #(
     wire [7:0] negative_all = {{(8-N_AXES){1'b0}}, req_negative};
     wire master_valid    = valid_all[master_reg];
     wire master_negative = negative_all[master_reg];
-    // The correction goes into the request unless the master requests a step in its own
-    // direction; it counts as applied unless halted (the halted shaper drops requests).
-    wire takes   = corr_valid_reg && !(master_valid && (master_negative == corr_negative_reg));
+    // The correction goes into the request (synchronised, enabled, no alarm) as a
+    // deletion of a master request against it, or as an insertion in a cycle without a
+    // master request unless the master moves against it (then it waits to delete); it
+    // counts as applied unless halted (the halted shaper drops every request).
+    wire moving_up   = (master_inc != 32'd0) && !master_inc[31];
+    wire moving_down = master_inc[31];
+    wire against     = corr_negative_reg ? moving_up : moving_down;
+    wire takes   = corr_valid_reg && sync && enable && !alarm_reg &&
+                   (master_valid ? (master_negative != corr_negative_reg) : !against);
     wire applied = takes && !halt;
-    assign slave_req_valid    = corr_valid_reg ? (!master_valid || !takes) : master_valid;
-    assign slave_req_negative = (corr_valid_reg && !master_valid) ? corr_negative_reg : master_negative;
+    assign slave_req_valid    = takes ? !master_valid : master_valid;
+    assign slave_req_negative = (takes && !master_valid) ? corr_negative_reg : master_negative;
 
     always @(posedge clk) begin
         diff_reg  <= enc_master - enc_slave;
@@ -101,7 +118,7 @@ module gantry_sync #(
             engaged_reg <= 1'b1;
             master_reg  <= master;
             slave_reg   <= slave;
-            offset_reg  <= diff_reg;
+            offset_reg  <= enc_master - enc_slave;   // this cycle's difference
         end else if (disengage) begin
             engaged_reg <= 1'b0;
         end
@@ -109,7 +126,7 @@ module gantry_sync #(
         if (!engaged_reg || disengage || tick) tick_cnt_reg <= {TICK_W{1'b0}};
         else tick_cnt_reg <= tick_cnt_reg + TICK_ONE;
 
-        if (halt || !engaged_reg || disengage || !sync) begin
+        if (halt || alarm_reg || !engaged_reg || disengage || !sync) begin
             corr_valid_reg <= 1'b0;
         end else if (tick) begin
             corr_valid_reg    <= ahead || behind;
@@ -159,13 +176,15 @@ module gantry_sync #(
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
 
-    wire signed [2:0] f_master_step = master_valid ? (master_negative ? -3'sd1 : 3'sd1) : 3'sd0;
+    wire [7:0] f_valid_all = {{(8-N_AXES){1'b0}}, req_valid};
+    wire [7:0] f_neg_all   = {{(8-N_AXES){1'b0}}, req_negative};
+    wire signed [2:0] f_master_step = f_valid_all[master_reg] ? (f_neg_all[master_reg] ? -3'sd1 : 3'sd1) : 3'sd0;
     wire signed [2:0] f_corr        = corr_valid_reg ? (corr_negative_reg ? -3'sd1 : 3'sd1) : 3'sd0;
     wire signed [2:0] f_slave_step  = slave_req_valid ? (slave_req_negative ? -3'sd1 : 3'sd1) : 3'sd0;
     reg  [1:0]  f_applied_since_tick;
     reg  [15:0] f_net;                 // corrections applied since the last clear
     always @(posedge clk) begin
-        if (rst || tick) f_applied_since_tick <= {1'b0, applied && !tick};
+        if (rst || tick) f_applied_since_tick <= 2'd0;
         else if (applied && f_applied_since_tick != 2'd3) f_applied_since_tick <= f_applied_since_tick + 2'd1;
         if (rst || clear_counters) f_net <= 16'd0;
         else if (applied) f_net <= f_net + {{14{f_corr[2]}}, f_corr[1:0]};
@@ -178,6 +197,9 @@ module gantry_sync #(
         if (!engaged_reg) assert (tick_cnt_reg == {TICK_W{1'b0}} && !corr_valid_reg);
         assert (f_applied_since_tick <= 2'd1);
         if (f_applied_since_tick != 2'd0) assert (!corr_valid_reg);   // until the next tick
+        // An inserted step never goes against the master's motion: that is a deletion.
+        if (takes && !master_valid) assert (!(f_corr < 0 && moving_up) && !(f_corr > 0 && moving_down));
+        if (takes) assert (sync && enable && !alarm_reg);
         assert (corrections_reg == f_net);
     end
 
@@ -186,7 +208,17 @@ module gantry_sync #(
         assert (error_reg == ($past(engaged_reg) ? $past(diff_reg) - $past(offset_reg) : 32'd0));
         if ($past(engaged_reg) && $past(error_mag) > {16'd0, $past(limit)}) assert (alarm_reg);
         if (!$past(engaged_reg) && !$past(clear_errors)) assert (alarm_reg == $past(alarm_reg));
-        if ($past(engage)) assert (engaged_reg && offset_reg == $past(diff_reg));
+        if ($past(engage)) assert (engaged_reg && offset_reg == $past(enc_master) - $past(enc_slave));
+        // Engaged only from rest.
+        if (engaged_reg && !$past(engaged_reg))
+            assert ($past(inc_all[32*master +: 32]) == 32'd0 && $past(inc_all[32*slave +: 32]) == 32'd0);
+        // No correction survives a halt, an alarm, forward mode or disengagement.
+        if ($past(halt || alarm_reg || !sync || !engaged_reg || !enable)) assert (!corr_valid_reg);
+        // At a tick the decision is the error's sign outside the deadband (computed apart).
+        if ($past(tick && sync && enable && !halt && !alarm_reg))
+            assert (corr_valid_reg == ($signed($past(error_reg)) > $signed({1'b0, $past(deadband)})
+                                       || $signed($past(error_reg)) < -$signed({1'b0, $past(deadband)}))
+                    && (!corr_valid_reg || corr_negative_reg == $past(error_reg[31])));
         // A correction is only decided at a tick, towards the error's sign.
         if (corr_valid_reg && !$past(corr_valid_reg)) begin
             assert ($past(tick) && $past(sync) && !$past(halt));

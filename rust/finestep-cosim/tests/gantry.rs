@@ -1,8 +1,9 @@
 //! The gantry block in a closed loop, RTL and model in lockstep on every pin and every
 //! gantry output each clock: axis 0 (master) and axis 1 (slave) drive two sides of one
 //! gantry; each side's encoder counts 4 per step of its motor; the slave's motor loses
-//! steps (a stall) and synchronised mode puts them back, forward mode does not, and a
-//! racking past the limit raises the alarm.
+//! steps (a stall) and synchronised mode puts them back (deleting master steps rather than
+//! reversing the slave), forward mode does not, and a racking past the limit raises the
+//! alarm.
 
 use finestep_cosim::{Harness, ModelPath};
 use finestep_model::{AxisConfig, CoreInputs, GantryInputs, Increment, PeriodRecord};
@@ -15,6 +16,8 @@ const SLAVE: usize = 1;
 struct Outcome {
     master: i64,
     slave: i64,
+    /// Step pulses the slave's pin A made (every direction).
+    slave_pulses: u64,
     corrections: i16,
     error: i32,
     alarm: bool,
@@ -65,6 +68,7 @@ fn run(path: ModelPath, sync: bool, lost: i64, at: usize, periods: usize, limit:
     Outcome {
         master: i64::from(out.positions[MASTER] as i32),
         slave: i64::from(out.positions[SLAVE] as i32),
+        slave_pulses: harness.pulses()[SLAVE],
         corrections: out.gantry_corrections as i16,
         error: out.gantry_error as i32,
         alarm: out.gantry_flags & 2 != 0,
@@ -80,6 +84,10 @@ fn synchronised_mode_puts_back_the_steps_the_slave_lost() {
             // The slave commanded `lost` more steps than the master: its motor is square.
             assert_eq!(out.slave, out.master + lost, "{path:?} lost {lost}");
             assert_eq!(i64::from(out.corrections), lost, "{path:?}");
+            // The master only moves forward and every correction lands while it moves:
+            // those against it delete master steps, those with it add steps, so the
+            // slave never reverses (each of its pulses is a step forward).
+            assert_eq!(out.slave_pulses as i64, out.slave, "{path:?} lost {lost}: the slave reversed");
             assert!(out.error.unsigned_abs() <= 2, "{path:?}: error {}", out.error);
             assert!(!out.alarm);
         }

@@ -281,6 +281,7 @@ impl Core {
             *r = dda.req;
         }
         let gantry = self.gantry;
+        let increments = self.timer.inc;
         let axes = self.shaper[..n]
             .iter_mut()
             .zip(&mut self.dda[..n])
@@ -289,7 +290,7 @@ impl Core {
         // The DDAs hold their phase at M/2 until the period timer is running.
         let running = inputs.run && self.timer.active;
         for (i, ((shaper, dda), &d)) in axes {
-            let r = gantry.shaper_request(i, &reqs);
+            let r = gantry.shaper_request(i, &reqs, &increments, &inputs.gantry);
             changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
             dda.step(running, period, d, m);
         }
@@ -298,6 +299,7 @@ impl Core {
             &GantryContext {
                 n_axes: n,
                 master_req: reqs[gantry.master()],
+                inc: increments,
                 halt: inputs.halt,
                 clear_errors: inputs.clear_errors,
             },
@@ -480,15 +482,18 @@ mod tests {
         for _ in 0..4 {
             core.step(&inp);
         }
-        // Engaged at the edge of cycle e = 4; the count moves in the same cycle.
+        // Engaged at the edge of cycle e = 4 (square at counts 0); the count moves in the
+        // next cycle, reaches diff one edge later and error one more.
         let e = core.cycle();
         inp.gantry.enable = true;
-        inp.gantry.enc_master = 8;
         let mut first = None;
-        for _ in 0..20 {
+        for k in 0..20 {
+            if k == 1 {
+                inp.gantry.enc_master = 8;
+            }
             core.step(&inp);
             let out = core.outputs();
-            assert_eq!(out.gantry_error, if core.cycle() >= e + 2 { 8 } else { 0 });
+            assert_eq!(out.gantry_error, if core.cycle() >= e + 3 { 8 } else { 0 });
             if out.position(3) != 0 && first.is_none() {
                 first = Some(core.cycle());
             }

@@ -154,6 +154,7 @@ impl Core {
             &GantryContext {
                 n_axes: self.params.n_axes,
                 master_req: 0,
+                inc: self.timer.inc,
                 halt: inputs.halt,
                 clear_errors: inputs.clear_errors,
             },

@@ -5,13 +5,17 @@
 //!
 //! A correction inserts a slave request where the master has none, or deletes a master
 //! request of the opposite sign; it waits while the master requests in its own
-//! direction. Forward mode copies the master's requests unchanged. In both modes the
-//! difference is measured against the one at engagement and `alarm` set past `limit`.
+//! direction, and against the master's motion it waits to delete (the slave never
+//! reverses while the master moves). Forward mode copies the master's requests
+//! unchanged. In both modes the difference is measured against the one at engagement
+//! (which waits for both axes at rest) and `alarm` set past `limit`; the alarm stops
+//! the corrections.
 //!
 //! Latency: a count change in cycle `n` reaches `diff` in `n+1`, `error` in `n+2` and
 //! `alarm` in `n+3`; a tick in cycle `t` decides from `error` of cycle `t`, and the
 //! correction reaches the slave's shaper in `t+1`. Every output, the slave's request
-//! included, is a function of the state (the DDA requests are DDA state).
+//! included, is a function of the state (the DDA requests and the increments are DDA and
+//! period-timer state) and of the `sync` and `enable` inputs.
 //!
 //! Invariants: `corr == 0` while not engaged, and `tick_cnt == 0` while not engaged; at
 //! most one correction is applied per tick.
@@ -66,6 +70,8 @@ pub(crate) struct GantryContext {
     pub(crate) n_axes: usize,
     /// `r[m]`: the master's DDA request in this cycle (with `m` the state's).
     pub(crate) master_req: i8,
+    /// Every axis's increment in this period (the period timer's), 0 above `N_AXES`.
+    pub(crate) inc: [i32; crate::MAX_AXES],
     /// The core's `halt`.
     pub(crate) halt: bool,
     /// The core's `clear_errors`.
@@ -93,7 +99,7 @@ impl GantrySync {
         self.diff
     }
 
-    /// `offset`: `diff` at engagement.
+    /// `offset`: `enc_master - enc_slave` in the engaging cycle.
     pub fn offset(&self) -> u32 {
         self.offset
     }
@@ -135,40 +141,49 @@ impl GantrySync {
             | (u8::from(self.refused) * flags::REFUSED)
     }
 
-    /// The request the engaged pair gives the slave's shaper when the master's DDA
-    /// requests `r` in this cycle: `r` without a correction or while the correction
-    /// waits (`corr == r`), the correction where the master has none (a step inserted),
-    /// 0 where they cancel (a master step deleted).
+    /// Whether the correction goes into the slave's request in this cycle, with `r` the
+    /// master's request, `d` the master's increment and this cycle's `sync` and
+    /// `enable`: synchronised, enabled and no alarm; then as a deletion (`r == -corr`),
+    /// or as an insertion (`r == 0`) unless the master moves against it (`d` of the
+    /// other sign: the correction waits to delete a master step instead).
     #[inline]
-    pub fn slave_request(&self, r: i8) -> i8 {
+    pub fn takes(&self, r: i8, d: i32, sync: bool, enable: bool) -> bool {
         let c = self.corr;
-        if c == 0 {
-            r
-        } else if r == 0 {
-            c
-        } else if c == -r {
-            0
+        let against = (c < 0 && d > 0) || (c > 0 && d < 0);
+        self.engaged && c != 0 && sync && enable && !self.alarm && if r != 0 { r == -c } else { !against }
+    }
+
+    /// The request the engaged pair gives the slave's shaper when the master's DDA
+    /// requests `r` in this cycle (see [`Self::takes`] for `d`, `sync`, `enable`):
+    /// `r + corr` when the correction goes in (a step inserted, or a master step
+    /// deleted), else `r`.
+    #[inline]
+    pub fn slave_request(&self, r: i8, d: i32, sync: bool, enable: bool) -> i8 {
+        if self.takes(r, d, sync, enable) {
+            r + self.corr
         } else {
             r
         }
     }
 
     /// The request-selection rule: the request the step shaper of `axis` takes in this
-    /// cycle, given every axis's DDA request `reqs` of this cycle: the gantry's
-    /// [`Self::slave_request`] when engaged and `axis` is the slave, else its own DDA's.
+    /// cycle, given every axis's DDA request `reqs` and increment `inc` of this cycle:
+    /// the gantry's [`Self::slave_request`] when engaged and `axis` is the slave, else
+    /// its own DDA's.
     #[inline]
-    pub fn shaper_request(&self, axis: usize, reqs: &[i8]) -> i8 {
+    pub fn shaper_request(&self, axis: usize, reqs: &[i8], inc: &[i32], inp: &GantryInputs) -> i8 {
         if self.engaged && axis == self.slave() {
-            self.slave_request(reqs[self.master()])
+            self.slave_request(reqs[self.master()], inc[self.master()], inp.sync, inp.enable)
         } else {
             reqs[axis]
         }
     }
 
-    /// Whether the correction is applied in this cycle (with `r` the master's request).
+    /// Whether the correction is applied in this cycle: it goes in and the core is not
+    /// halted (a halted shaper drops every request).
     #[inline]
-    fn applied(&self, r: i8, halt: bool) -> bool {
-        self.engaged && self.corr != 0 && r != self.corr && !halt
+    fn applied(&self, r: i8, d: i32, inp: &GantryInputs, halt: bool) -> bool {
+        self.takes(r, d, inp.sync, inp.enable) && !halt
     }
 
     /// The next `tick_cnt` in a cycle without engagement or disengagement, and whether
@@ -231,10 +246,11 @@ impl GantrySync {
         let slave = inp.slave & AXIS_MASK;
         let valid =
             master != slave && usize::from(master) < ctx.n_axes && usize::from(slave) < ctx.n_axes;
-        let engage = !self.engaged && inp.enable && valid;
+        let at_rest = ctx.inc[usize::from(master)] == 0 && ctx.inc[usize::from(slave)] == 0;
+        let engage = !self.engaged && inp.enable && valid && at_rest;
         let disengage = self.engaged && !inp.enable;
         let clear = ctx.clear_errors;
-        let applied = self.applied(ctx.master_req, ctx.halt);
+        let applied = self.applied(ctx.master_req, ctx.inc[self.master()], inp, ctx.halt);
         let (tick, tick_cnt) = self.tick(inp.tick);
 
         let error = self.error as i32;
@@ -246,7 +262,7 @@ impl GantrySync {
         } else {
             0
         };
-        let corr = if engage || disengage || ctx.halt || !self.engaged || !inp.sync {
+        let corr = if engage || disengage || ctx.halt || self.alarm || !self.engaged || !inp.sync {
             0
         } else if tick {
             decision
@@ -261,7 +277,7 @@ impl GantrySync {
             m: if engage { master } else { self.m },
             s: if engage { slave } else { self.s },
             diff: inp.enc_master.wrapping_sub(inp.enc_slave),
-            offset: if engage { self.diff } else { self.offset },
+            offset: if engage { inp.enc_master.wrapping_sub(inp.enc_slave) } else { self.offset },
             error: if self.engaged {
                 self.diff.wrapping_sub(self.offset)
             } else {
@@ -295,10 +311,26 @@ mod tests {
         GantryContext {
             n_axes: N,
             master_req,
+            inc: [0; crate::MAX_AXES],
             halt: false,
             clear_errors: false,
         }
     }
+
+    /// Enabled and synchronised, the rest default.
+    const ON: GantryInputs = GantryInputs {
+        enable: true,
+        sync: true,
+        master: 0,
+        slave: 0,
+        tick: 0,
+        deadband: 0,
+        limit: 0,
+        enc_master: 0,
+        enc_slave: 0,
+        clear_counters: false,
+    };
+    const REST: [i32; crate::MAX_AXES] = [0; crate::MAX_AXES];
 
     fn inputs(master: u8, slave: u8) -> GantryInputs {
         GantryInputs {
@@ -314,9 +346,10 @@ mod tests {
     }
 
     /// An engaged pair (master 0, slave 1) with zero counts, `error` settled at 0.
+    /// Engaged square at counts 0 (the offset is 0), with `inp`'s settings.
     fn engaged(inp: &GantryInputs) -> GantrySync {
         let mut g = GantrySync::default();
-        g.step(inp, &ctx(0));
+        g.step(&GantryInputs { enc_master: 0, enc_slave: 0, ..*inp }, &ctx(0));
         assert!(g.engaged());
         g
     }
@@ -390,15 +423,15 @@ mod tests {
         g.step(&off, &ctx(0));
         assert!(!g.engaged());
         assert_eq!((g.corr(), g.tick_cnt()), (0, 0));
-        assert_eq!(g.corrections(), 1, "applied in the last engaged cycle");
-        assert_eq!(g.shaper_request(1, &[1, -1, 0, 0]), -1, "own DDA again");
+        assert_eq!(g.corrections(), 0, "the disengaging cycle passes the master's request unchanged");
+        assert_eq!(g.shaper_request(1, &[1, -1, 0, 0], &REST, &off), -1, "own DDA again");
         // Not engaged: tick_cnt does not count.
         g.step(&off, &ctx(0));
         assert_eq!(g.tick_cnt(), 0);
     }
 
     #[test]
-    fn offset_captures_diff_at_engagement() {
+    fn offset_takes_the_counts_of_the_engaging_cycle() {
         let mut g = GantrySync::default();
         let mut inp = inputs(0, 1);
         inp.enable = false;
@@ -406,19 +439,19 @@ mod tests {
         inp.enc_slave = 10;
         g.step(&inp, &ctx(0)); // diff 990
         inp.enable = true;
-        inp.enc_master = 2000; // diff input 1990, register still 990
+        inp.enc_master = 2000; // this cycle's difference 1990 (the register still 990)
         g.step(&inp, &ctx(0));
         assert_eq!(
             (g.engaged(), g.offset(), g.diff(), g.error()),
-            (true, 990, 1990, 0)
+            (true, 1990, 1990, 0)
         );
         g.step(&inp, &ctx(0));
-        assert_eq!(g.error(), 1000, "diff 1990 - offset 990");
+        assert_eq!(g.error(), 0, "square from the engaging cycle on");
         // Wrapping: a channel through 0.
         inp.enc_slave = u32::MAX - 4; // diff 2005 (wrapped)
         g.step(&inp, &ctx(0));
         g.step(&inp, &ctx(0));
-        assert_eq!(g.error(), 1015);
+        assert_eq!(g.error(), 15);
     }
 
     #[test]
@@ -534,10 +567,10 @@ mod tests {
         ];
         for (corr, r, want, applied) in cases {
             let g = g(corr);
-            assert_eq!(g.shaper_request(0, &reqs(r)), want, "corr {corr} r {r}");
-            assert_eq!(g.shaper_request(1, &reqs(r)), 6, "other axes: own DDA");
-            assert_eq!(g.shaper_request(2, &reqs(r)), r, "the master: own DDA");
-            assert_eq!(g.applied(r, false), applied);
+            assert_eq!(g.shaper_request(0, &reqs(r), &REST, &ON), want, "corr {corr} r {r}");
+            assert_eq!(g.shaper_request(1, &reqs(r), &REST, &ON), 6, "other axes: own DDA");
+            assert_eq!(g.shaper_request(2, &reqs(r), &REST, &ON), r, "the master: own DDA");
+            assert_eq!(g.applied(r, 0, &ON, false), applied);
             let mut next = g;
             let inp = GantryInputs {
                 enable: true,
@@ -559,7 +592,7 @@ mod tests {
             engaged: false,
             ..g(1)
         };
-        assert_eq!(off.shaper_request(0, &reqs(1)), 5);
+        assert_eq!(off.shaper_request(0, &reqs(1), &REST, &ON), 5);
         // The counter wraps both ways.
         let mut w = GantrySync {
             corrections: u16::MAX,
@@ -694,7 +727,7 @@ mod tests {
         for k in 0..200u32 {
             reqs[3] = [0, 1, -1, 1, 0, 0, -1][(k % 7) as usize];
             reqs[0] = -reqs[3];
-            assert_eq!(g.shaper_request(0, &reqs), reqs[3]);
+            assert_eq!(g.shaper_request(0, &reqs, &REST, &inp), reqs[3]);
             g.step(&inp, &ctx(reqs[3]));
             assert_eq!(g.corr(), 0);
         }
@@ -738,5 +771,45 @@ mod tests {
             },
         );
         assert_eq!((g.corrections(), g.refused()), (7, false));
+    }
+
+    #[test]
+    fn against_the_motion_a_correction_deletes_a_master_step_instead_of_reversing() {
+        // Master axis 2 moving up (increment > 0), slave axis 0 ahead: corr = -1.
+        let g = GantrySync { engaged: true, m: 2, s: 0, corr: -1, ..GantrySync::default() };
+        let mut inc = REST;
+        inc[2] = 1000;
+        assert!(!g.takes(0, inc[2], true, true), "no reverse step while the master moves up");
+        assert_eq!(g.shaper_request(0, &[0, 0, 0, 0], &inc, &ON), 0);
+        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &ON), 0, "the next master step is deleted");
+        assert!(g.takes(1, inc[2], true, true));
+        // With the motion (corr = +1 while moving up): inserted between master steps.
+        let with = GantrySync { corr: 1, ..g };
+        assert_eq!(with.shaper_request(0, &[0, 0, 0, 0], &inc, &ON), 1);
+        // At rest either way is an insertion.
+        assert_eq!(g.shaper_request(0, &[0, 0, 0, 0], &REST, &ON), -1);
+        // Forward mode, a disabled pair or an alarm: the master's request unchanged.
+        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &GantryInputs { sync: false, ..ON }), 1);
+        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &GantryInputs { enable: false, ..ON }), 1);
+        let alarmed = GantrySync { alarm: true, ..g };
+        assert_eq!(alarmed.shaper_request(0, &[0, 0, 1, 0], &inc, &ON), 1);
+    }
+
+    #[test]
+    fn the_alarm_stops_the_corrections_and_engagement_waits_for_rest() {
+        let inp = GantryInputs { master: 1, slave: 0, tick: 1, enc_master: 400, enc_slave: 100, ..ON };
+        // Engagement waits while either axis has an increment; the offset is this cycle's.
+        let mut g = GantrySync::default();
+        let mut moving = ctx(0);
+        moving.inc[0] = -5;
+        g.step(&inp, &moving);
+        assert!(!g.engaged() && !g.refused(), "waits, not refused");
+        g.step(&inp, &ctx(0));
+        assert!(g.engaged());
+        assert_eq!(g.offset, 300, "the counts of the engaging cycle");
+        // An alarm: no correction is decided or applied while it is set.
+        let mut alarmed = GantrySync { alarm: true, error: 50, corr: 1, ..g };
+        alarmed.step(&GantryInputs { limit: 1000, ..inp }, &ctx(0));
+        assert_eq!((alarmed.corr(), alarmed.corrections()), (0, 0));
     }
 }
