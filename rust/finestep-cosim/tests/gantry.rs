@@ -119,3 +119,56 @@ fn racking_past_the_limit_raises_the_alarm() {
         assert!(!out.alarm, "{path:?}: 80 counts is within the limit");
     }
 }
+
+/// The arithmetic's edge values through RTL and model in lockstep (random stimulus
+/// rarely reaches them): counts wrapping through 0, an error of -65 535 against a
+/// deadband of 65 534 (a correction; the compare is 33 bits wide) and the widest limit
+/// (65 535: no alarm), -65 536 (alarm), and -2^31 (|error| = 2^31 as an unsigned value).
+#[test]
+fn edge_values_of_the_error_agree() {
+    for path in [ModelPath::PerClock, ModelPath::Fast] {
+        let mut harness = Harness::new("gantry_edges", path);
+        let mut inputs = CoreInputs { run: true, period_clocks: PERIOD, ..Default::default() };
+        inputs.axes[MASTER].enable = true;
+        inputs.axes[SLAVE].enable = true;
+        inputs.gantry = GantryInputs {
+            enable: true,
+            sync: true,
+            master: MASTER as u8,
+            slave: SLAVE as u8,
+            tick: 7,
+            deadband: u16::MAX - 1,
+            limit: u16::MAX,
+            enc_master: 5,
+            enc_slave: 5,
+            ..Default::default()
+        };
+        let step = |harness: &mut Harness, inputs: &CoreInputs, cycles: u64| {
+            harness.idle(inputs, cycles).unwrap_or_else(|m| panic!("{m}"));
+            harness.outputs()
+        };
+        let out = step(&mut harness, &inputs, 4);
+        assert_eq!((out.gantry_flags & 1, out.gantry_error), (1, 0), "{path:?}: engaged square");
+        // Through 0: the slave's channel wraps below 0 as the master's stays: error 6.
+        inputs.gantry.enc_slave = u32::MAX;
+        let out = step(&mut harness, &inputs, 4);
+        assert_eq!(out.gantry_error, 6, "{path:?}");
+        // -65 535 against a deadband of 65 534: -1 decided at the next tick and applied
+        // at rest (an inserted step), counted; |error| is not past the limit 65 535.
+        inputs.gantry.enc_slave = inputs.gantry.enc_master.wrapping_add(65_535);
+        let out = step(&mut harness, &inputs, 20);
+        assert_eq!(out.gantry_error as i32, -65_535, "{path:?}");
+        // Open loop (the counts stay): a -1 at each tick since.
+        assert!((out.gantry_corrections as i16) < 0, "{path:?}: corrected");
+        assert_eq!(out.gantry_flags & 2, 0, "{path:?}: within the limit");
+        inputs.gantry.enc_slave = inputs.gantry.enc_master.wrapping_add(65_536);
+        let out = step(&mut harness, &inputs, 6);
+        assert_eq!(out.gantry_flags & 2, 2, "{path:?}: 65 536 is past the limit 65 535");
+        // -2^31: |error| = 2^31 as an unsigned value.
+        inputs.gantry.clear_counters = true;
+        inputs.gantry.enc_slave = inputs.gantry.enc_master.wrapping_add(1 << 31);
+        let out = step(&mut harness, &inputs, 12);
+        assert_eq!(out.gantry_error, 1 << 31, "{path:?}");
+        assert_eq!((out.gantry_flags & 2, out.gantry_corrections), (2, 0), "{path:?}: alarm, nothing corrected");
+    }
+}
