@@ -59,6 +59,13 @@ module gantry_sync #(
 
     localparam [TICK_W-1:0] TICK_ONE = {{(TICK_W-1){1'b0}}, 1'b1};
 
+    // Axis numbers are 3 bits: more than 8 axes cannot be told apart (elaboration fails).
+    generate
+        if (N_AXES > 8 || N_AXES < 1) begin : n_axes_must_be_1_to_8
+            gantry_sync_n_axes_must_be_1_to_8 unsupported ();
+        end
+    endgenerate
+
     reg              engaged_reg;
     reg [2:0]        master_reg;
     reg [2:0]        slave_reg;
