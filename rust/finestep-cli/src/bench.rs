@@ -102,37 +102,52 @@ pub fn nurbs_program(blocks: usize) -> String {
     text
 }
 
+/// One program planned and interpolated with the default machine and `profile`, timed.
+struct Timed {
+    elements: usize,
+    plan_s: f64,
+    interpolate_s: f64,
+    periods: f64,
+    period_s: f64,
+}
+
+fn plan_timed(profile: finestep_planner::ProfileKind, program: &finestep_gcode::Program) -> anyhow::Result<Timed> {
+    use finestep_planner::{geometry, interpolate, lookahead, MachineConfig};
+    let config = MachineConfig { profile, ..MachineConfig::default() }.resolve()?;
+    let start = Instant::now();
+    let path = geometry::elements(&config, program).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let speeds = lookahead::junction_speeds(&config, &path.elements);
+    let plan_s = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(Timed {
+        elements: path.elements.len(),
+        plan_s,
+        interpolate_s: start.elapsed().as_secs_f64(),
+        periods: out.records.len() as f64,
+        period_s: config.period_s,
+    })
+}
+
 /// Plan and interpolate throughput on a chain of NURBS, per profile.
 fn nurbs_figures() -> anyhow::Result<()> {
-    use finestep_planner::{geometry, interpolate, lookahead, MachineConfig, ProfileKind};
+    use finestep_planner::ProfileKind;
     const BLOCKS: usize = 500;
     let program = finestep_gcode::parse_str(&nurbs_program(BLOCKS), "nurbs.ngc")?;
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
-        let config = MachineConfig {
-            profile,
-            ..MachineConfig::default()
-        }
-        .resolve()?;
-        let start = Instant::now();
-        let path = geometry::elements(&config, &program).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let speeds = lookahead::junction_speeds(&config, &path.elements);
-        let plan_s = start.elapsed().as_secs_f64();
-        let start = Instant::now();
-        let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        let interpolate_s = start.elapsed().as_secs_f64();
-        let periods = out.records.len() as f64;
+        let Timed { elements, plan_s, interpolate_s, periods, period_s } = plan_timed(profile, &program)?;
         println!(
             "  {:<44} {:>7.0} NURBS/s   ({} sub-pieces)",
             format!("plan NURBS: sub-pieces, look-ahead ({profile:?})"),
             BLOCKS as f64 / plan_s,
-            path.elements.len()
+            elements
         );
         println!(
             "  {:<44} {:>7.2} M periods/s  ({:.1} s of machining)",
             format!("interpolate NURBS directly ({profile:?})"),
             periods / interpolate_s / 1e6,
-            periods * config.period_s
+            periods * period_s
         );
     }
     Ok(())
@@ -140,7 +155,7 @@ fn nurbs_figures() -> anyhow::Result<()> {
 
 /// Parse, plan and interpolate throughput on a 100 000-segment program, per profile.
 pub fn front_end() -> anyhow::Result<()> {
-    use finestep_planner::{geometry, interpolate, lookahead, MachineConfig, ProfileKind};
+    use finestep_planner::ProfileKind;
     const MOVES: usize = 100_000;
     let text = cam_program(MOVES);
     let start = Instant::now();
@@ -152,26 +167,13 @@ pub fn front_end() -> anyhow::Result<()> {
         (MOVES + 2) as f64 / parse_s / 1e6
     );
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
-        let config = MachineConfig {
-            profile,
-            ..MachineConfig::default()
-        }
-        .resolve()?;
-        let start = Instant::now();
-        let path = geometry::elements(&config, &program).map_err(|e| anyhow::anyhow!("{e}"))?;
-        let speeds = lookahead::junction_speeds(&config, &path.elements);
-        let plan_s = start.elapsed().as_secs_f64();
-        let start = Instant::now();
-        let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        let interpolate_s = start.elapsed().as_secs_f64();
-        let periods = out.records.len() as f64;
+        let Timed { elements, plan_s, interpolate_s, periods, period_s } = plan_timed(profile, &program)?;
         let name = format!("{profile:?}");
         println!(
             "  {:<44} {:>7.0} k moves/s  ({} elements with blends)",
             format!("plan: path, blends, look-ahead ({name})"),
             MOVES as f64 / plan_s / 1e3,
-            path.elements.len()
+            elements
         );
         println!(
             "  {:<44} {:>7.0} k moves/s  {:>9.2} M periods/s",
@@ -184,7 +186,7 @@ pub fn front_end() -> anyhow::Result<()> {
             format!("plan + interpolate ({name})"),
             MOVES as f64 / (plan_s + interpolate_s) / 1e3,
             periods / (plan_s + interpolate_s) / 1e6,
-            periods * config.period_s
+            periods * period_s
         );
     }
     nurbs_figures()

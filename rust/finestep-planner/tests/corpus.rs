@@ -2,46 +2,13 @@
 //! here, and random programs, planned with both profiles and checked by the independent
 //! checker ([`finestep_planner::checker`]), plus each program's own expected properties.
 
-use std::path::PathBuf;
-
 use finestep_gcode::Program;
-use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, PlannedProgram, ProfileKind};
+mod common;
+
+use finestep_planner::{check_program, plan_program, MachineConfig, PlannedProgram, ProfileKind};
 use proptest::prelude::*;
 
-const PROFILES: [ProfileKind; 2] = [ProfileKind::Trapezoid, ProfileKind::SCurve];
-
-fn programs_dir() -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"))
-}
-
-fn config(profile: ProfileKind) -> MachineConfig {
-    MachineConfig { profile, ..MachineConfig::default() }
-}
-
-fn parse(name: &str, source: &str) -> Program {
-    finestep_gcode::parse_str(source, name).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Plans and checks `program`, failing with the checker's findings.
-fn plan_and_check(name: &str, program: &Program, config: &MachineConfig) -> (PlannedProgram, CheckReport) {
-    let planned = plan_program(config, program).unwrap_or_else(|e| panic!("{name} ({:?}): {e}", config.profile));
-    let report = check_program(config, program, &planned.records).unwrap();
-    assert!(
-        report.passed(),
-        "{name} ({:?}): {} violations, the first: {:#?}",
-        config.profile,
-        report.violation_count,
-        report.violations
-    );
-    assert_eq!(report.endpoint_error_steps, [0.0; 4], "{name}");
-    (planned, report)
-}
-
-fn read(name: &str) -> Program {
-    let path = programs_dir().join(name);
-    let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    parse(name, &source)
-}
+use common::{config, parse, plan_and_check, programs_dir, read, PROFILES};
 
 /// Path speed in each period, from the increments, units/s.
 fn speeds(planned: &PlannedProgram, config: &MachineConfig) -> Vec<f64> {

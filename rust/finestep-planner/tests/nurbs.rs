@@ -3,33 +3,18 @@
 //! the committed NURBS programs, and random curves on random machines, every plan
 //! passed by the independent checker.
 
+mod common;
+
 use finestep_gcode::Program;
 use finestep_planner::nurbs::NurbsCurve;
-use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, PlannedProgram, ProfileKind};
+use finestep_planner::{check_program, plan_program, MachineConfig, PlannedProgram, ProfileKind};
 use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::ToPrimitive;
 use proptest::prelude::*;
 
-const PROFILES: [ProfileKind; 2] = [ProfileKind::Trapezoid, ProfileKind::SCurve];
+use common::{config, parse, plan_and_check, read, PROFILES};
 
-fn config(profile: ProfileKind) -> MachineConfig {
-    MachineConfig { profile, ..MachineConfig::default() }
-}
-
-fn parse(name: &str, source: &str) -> Program {
-    finestep_gcode::parse_str(source, name).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn plan_and_check(name: &str, program: &Program, config: &MachineConfig) -> (PlannedProgram, CheckReport) {
-    let planned = plan_program(config, program).unwrap_or_else(|e| panic!("{name} ({:?}): {e}", config.profile));
-    let report = check_program(config, program, &planned.records).unwrap();
-    assert!(report.passed(), "{name} ({:?}): {} violations, the first: {:#?}", config.profile, report.violation_count, report.violations);
-    assert_eq!(report.endpoint_error_steps, [0.0; 4], "{name}");
-    (planned, report)
-}
-
-/// Positions (mm) at the end of every period, and path speeds (mm/s) over each.
 fn positions_and_speeds(planned: &PlannedProgram, config: &MachineConfig) -> (Vec<[f64; 2]>, Vec<f64>) {
     let resolved = config.resolve().unwrap();
     let scale = [resolved.axes[0].steps_per_unit, resolved.axes[1].steps_per_unit];
@@ -431,12 +416,6 @@ fn random_nurbs_on_random_machines_plan_or_refuse_and_pass_the_checker() {
 
 // ---------------------------------------------------------------------------------
 // The committed NURBS programs (the corpus test plans and checks them too).
-
-fn read(name: &str) -> Program {
-    let path = std::path::PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs")).join(name);
-    let source = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    parse(name, &source)
-}
 
 #[test]
 fn a_circle_of_four_nurbs_runs_round_at_the_feed() {
