@@ -2,7 +2,7 @@
 CARGO ?= cargo
 export VERILATOR ?= verilator
 
-.PHONY: all setup demo test test-long lint formal flows bench cargo-test wheel-check regmap clean \
+.PHONY: all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
         bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report
 
 all: test
@@ -15,6 +15,10 @@ demo: setup
 
 test: setup lint cargo-test wheel-check formal flows
 	@echo "make test: all passed"
+
+# Before a commit: fmt, clippy, Verilator lint and the unit tests (a few minutes warm).
+check: setup
+	@./scripts/check.sh
 
 lint: setup
 	@./scripts/lint.sh

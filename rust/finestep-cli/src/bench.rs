@@ -27,12 +27,7 @@ fn stream(periods: u64) -> impl Iterator<Item = PeriodRecord> {
 }
 
 fn inputs() -> CoreInputs {
-    let mut inputs = CoreInputs {
-        run: true,
-        period_clocks: PERIOD_CLOCKS,
-        rec_valid: true,
-        ..Default::default()
-    };
+    let mut inputs = CoreInputs { run: true, period_clocks: PERIOD_CLOCKS, rec_valid: true, ..Default::default() };
     for axis in inputs.axes.iter_mut().take(AXES) {
         *axis = demo_axis_config();
     }
@@ -68,12 +63,7 @@ pub fn cam_program(moves: usize) -> String {
     for i in 0..moves {
         let t = i as f64 * 0.01;
         let r = 20.0 + 5.0 * (7.0 * t).sin();
-        text.push_str(&format!(
-            "G1 X{:.4} Y{:.4} Z{:.4}\n",
-            r * t.cos(),
-            r * t.sin(),
-            -0.001 * i as f64 % 5.0
-        ));
+        text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * i as f64 % 5.0));
     }
     text
 }
@@ -86,11 +76,7 @@ pub fn nurbs_program(blocks: usize) -> String {
     for b in 0..blocks {
         text.push_str("G5.2 L4\n");
         for i in 1..=6 {
-            let (nx, ny) = if i == 1 {
-                (x + 1.0, y + dy)
-            } else {
-                (x + 1.0, 4.0 * ((b * 6 + i) as f64 * 0.7).sin())
-            };
+            let (nx, ny) = if i == 1 { (x + 1.0, y + dy) } else { (x + 1.0, 4.0 * ((b * 6 + i) as f64 * 0.7).sin()) };
             let weight = 1.25 + 0.75 * ((b + i) as f64).cos();
             text.push_str(&format!("X{nx:.4} Y{ny:.4} P{weight:.3}\n"));
             dy = ny - y;
@@ -199,42 +185,27 @@ pub fn run(cycles: u64) -> anyhow::Result<()> {
 
     let mut rtl = Rtl::new();
     let start = Instant::now();
-    let n = drive(periods, |inputs, events| {
-        rtl.run_chunk(inputs, limit, events).cycles
-    });
-    report(
-        "RTL alone (Verilator, event capture)",
-        n,
-        start.elapsed().as_secs_f64(),
-    );
+    let n = drive(periods, |inputs, events| rtl.run_chunk(inputs, limit, events).cycles);
+    report("RTL alone (Verilator, event capture)", n, start.elapsed().as_secs_f64());
 
     let mut model = Core::new(finestep_rtl_sys::params());
     let start = Instant::now();
-    let n = drive(periods, |inputs, events| {
-        model.run_chunk(inputs, limit, events).cycles
-    });
+    let n = drive(periods, |inputs, events| model.run_chunk(inputs, limit, events).cycles);
     report("model per-clock step()", n, start.elapsed().as_secs_f64());
 
     let mut model = Core::new(finestep_rtl_sys::params());
     let start = Instant::now();
-    let n = drive(periods * 20, |inputs, events| {
-        model.run_chunk_fast(inputs, limit, events).cycles
-    });
+    let n = drive(periods * 20, |inputs, events| model.run_chunk_fast(inputs, limit, events).cycles);
     report("model fast path", n, start.elapsed().as_secs_f64());
 
     for (what, path) in [
-        (
-            "lockstep RTL + model per-clock, compared",
-            ModelPath::PerClock,
-        ),
+        ("lockstep RTL + model per-clock, compared", ModelPath::PerClock),
         ("lockstep RTL + model fast path, compared", ModelPath::Fast),
     ] {
         let mut harness = Harness::new("bench", path);
         let start = Instant::now();
         let mut inputs = inputs();
-        harness
-            .feed(&mut inputs, stream(periods))
-            .map_err(|m| anyhow::anyhow!("{m}"))?;
+        harness.feed(&mut inputs, stream(periods)).map_err(|m| anyhow::anyhow!("{m}"))?;
         report(what, harness.cycle(), start.elapsed().as_secs_f64());
     }
     front_end()

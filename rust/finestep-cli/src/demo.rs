@@ -28,14 +28,7 @@ const TRACED_PERIODS: u64 = 4;
 /// Drive timing of the demo's drives, in clocks at 50 MHz: 2 us step, 2 us space,
 /// 5 us dir setup and hold.
 pub fn demo_axis() -> AxisSetup {
-    AxisSetup {
-        step_len: 100,
-        step_space: 100,
-        dir_setup: 250,
-        dir_hold: 250,
-        out_mode: 0,
-        invert: 0,
-    }
+    AxisSetup { step_len: 100, step_space: 100, dir_setup: 250, dir_hold: 250, out_mode: 0, invert: 0 }
 }
 
 /// The same drive timing as the core's axis configuration (for the core-level bench).
@@ -74,39 +67,31 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     let mut checker = RateChecker::new(period_clocks, &[timing; 3]);
     for (index, record) in records.iter().enumerate() {
         if let Err((axis, why)) = checker.check(record) {
-            bail!(
-                "period {index}: axis {}: {why}",
-                AXIS_NAMES.get(axis).unwrap_or(&"?")
-            );
+            bail!("period {index}: axis {}: {why}", AXIS_NAMES.get(axis).unwrap_or(&"?"));
         }
     }
 
     println!(
         "finestep demo: seed 000 line X {:+} mm, Z {:+} mm, C {:+} deg at {} mm/s, T = {} ms, P = {} clocks at {} MHz",
-        line.to_mm[0], line.to_mm[1], line.to_mm[2], line.feed_mm_s,
-        kinematics.period_s * 1e3, period_clocks, CLOCK_HZ / 1e6
+        line.to_mm[0],
+        line.to_mm[1],
+        line.to_mm[2],
+        line.feed_mm_s,
+        kinematics.period_s * 1e3,
+        period_clocks,
+        CLOCK_HZ / 1e6
     );
     println!(
         "  {} period records streamed over SPI (SCK = clk/8, bursts of {BURST}, CRC-checked frames) into the FIFO;",
         records.len()
     );
-    println!(
-        "  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock"
-    );
-    let stream_setup = StreamSetup {
-        period_clocks,
-        axes: vec![setup; 3],
-        clock_hz: CLOCK_HZ,
-    };
-    let progress = ProgressBar::new(records.len() as u64).with_style(ProgressStyle::with_template(
-        "  {bar:40} {pos}/{len} records queued {per_sec}",
-    )?);
-    let (streamed, lockstep) = stream_over_spi(
-        TopLockstep::new("demo"),
-        &stream_setup,
-        &records,
-        |queued| progress.set_position(queued as u64),
-    )?;
+    println!("  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock");
+    let stream_setup = StreamSetup { period_clocks, axes: vec![setup; 3], clock_hz: CLOCK_HZ };
+    let progress = ProgressBar::new(records.len() as u64)
+        .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} records queued {per_sec}")?);
+    let (streamed, lockstep) = stream_over_spi(TopLockstep::new("demo"), &stream_setup, &records, |queued| {
+        progress.set_position(queued as u64)
+    })?;
     progress.finish_and_clear();
 
     println!("  axis   final steps   final position   commanded");
@@ -129,10 +114,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
             AXIS_UNITS[axis]
         );
         if f64::from(steps) != target {
-            bail!(
-                "axis {} ended at {steps} steps, commanded {target}",
-                AXIS_NAMES[axis]
-            );
+            bail!("axis {} ended at {steps} steps, commanded {target}", AXIS_NAMES[axis]);
         }
     }
     if streamed.underruns != 0 {
@@ -145,21 +127,13 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         streamed.cycles as f64 / CLOCK_HZ
     );
 
-    let waveform = out.join(if finestep_rtl_sys::trace_is_fst() {
-        "demo.fst"
-    } else {
-        "demo.vcd"
-    });
+    let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });
     let traced = lockstep.cycle() - streamed.cycles + TRACED_PERIODS * u64::from(period_clocks);
-    lockstep
-        .write_waveform(&waveform, TraceDepth::Ports, traced)
-        .map_err(|e| anyhow!(e))?;
+    lockstep.write_waveform(&waveform, TraceDepth::Ports, traced).map_err(|e| anyhow!(e))?;
 
     // Commanded positions at the period boundaries; emitted ones where the host sampled
     // the latched POSITION registers.
-    let mut traces: Vec<AxisTrace> = (0..AXIS_NAMES.len())
-        .map(|_| AxisTrace::default())
-        .collect();
+    let mut traces: Vec<AxisTrace> = (0..AXIS_NAMES.len()).map(|_| AxisTrace::default()).collect();
     let mut running = [0i64; 3];
     for record in std::iter::once(PeriodRecord::default()).chain(records.iter().copied()) {
         for (axis, trace) in traces.iter_mut().enumerate() {
@@ -174,22 +148,13 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     }
     let png = out.join("demo.png");
     plot_axes(&png, &traces, &AXIS_NAMES, kinematics.period_s)?;
-    println!(
-        "  waveform of the ports, first {TRACED_PERIODS} periods: {}",
-        waveform.display()
-    );
+    println!("  waveform of the ports, first {TRACED_PERIODS} periods: {}", waveform.display());
     println!("  plot: {}", png.display());
 
     println!();
     println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
     let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
-    run_program(
-        &program,
-        "demo-part.ngc",
-        false,
-        &MachineConfig::default(),
-        out,
-    )?;
+    run_program(&program, "demo-part.ngc", false, &MachineConfig::default(), out)?;
     crate::demo_feedback::run()
 }
 

@@ -14,14 +14,13 @@
 use anyhow::{anyhow, bail};
 use finestep_cosim::{PlantLoop, TopLockstep};
 use finestep_host::{
-    Bus, BusError, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming,
-    SpiBus,
+    Bus, BusError, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus,
 };
 use finestep_model::{Increment, PeriodRecord};
 use finestep_planner::{interpolate_line, LineMove, Machine as Kinematics};
 use finestep_plant::{
-    Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, HandWheel, HandWheelConfig,
-    Mechanics, Plant, PlantConfig, ProbeConfig,
+    Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, HandWheel, HandWheelConfig, Mechanics, Plant,
+    PlantConfig, ProbeConfig,
 };
 
 use crate::demo::{demo_axis, CLOCK_HZ};
@@ -42,12 +41,7 @@ fn bus(e: BusError) -> anyhow::Error {
 }
 
 fn plant() -> anyhow::Result<Plant> {
-    let drive = DriveConfig {
-        mechanics: Mechanics::Lag {
-            tau: DRIVE_TAU_CLOCKS,
-        },
-        ..DriveConfig::default()
-    };
+    let drive = DriveConfig { mechanics: Mechanics::Lag { tau: DRIVE_TAU_CLOCKS }, ..DriveConfig::default() };
     let marks = MARKS_MM.iter().map(|z| {
         let steps = (z * STEPS_PER_MM[1]).round() as i64;
         steps..=steps + 20
@@ -55,14 +49,8 @@ fn plant() -> anyhow::Result<Plant> {
     let config = PlantConfig {
         drives: vec![drive, drive],
         channels: vec![
-            ChannelConfig {
-                axis: 0,
-                encoder: EncoderConfig::linear_grating(CountsPerStep::integer(1)?, None),
-            },
-            ChannelConfig {
-                axis: 1,
-                encoder: EncoderConfig::linear_grating(CountsPerStep::integer(5)?, None),
-            },
+            ChannelConfig { axis: 0, encoder: EncoderConfig::linear_grating(CountsPerStep::integer(1)?, None) },
+            ChannelConfig { axis: 1, encoder: EncoderConfig::linear_grating(CountsPerStep::integer(5)?, None) },
         ],
         probe: Some(ProbeConfig {
             axis: 1,
@@ -70,13 +58,7 @@ fn plant() -> anyhow::Result<Plant> {
             touching: marks.collect(),
             active_high: true,
         }),
-        hand_wheel: Some(HandWheelConfig {
-            rest_phase: 0,
-            bounce: Some(Bounce {
-                extra: 3,
-                within: 2_000,
-            }),
-        }),
+        hand_wheel: Some(HandWheelConfig { rest_phase: 0, bounce: Some(Bounce { extra: 3, within: 2_000 }) }),
     };
     Ok(Plant::new(config, 0xFEED)?)
 }
@@ -93,15 +75,7 @@ fn connect<T: PinTarget>(target: T) -> anyhow::Result<Chip<T>> {
     machine.set_period(100_000).map_err(bus)?; // 2 ms
     machine.clear_faults_and_errors().map_err(bus)?;
     for channel in 0..2 {
-        machine
-            .configure_encoder(
-                channel,
-                &EncoderSetup {
-                    filter: 3,
-                    ..EncoderSetup::default()
-                },
-            )
-            .map_err(bus)?;
+        machine.configure_encoder(channel, &EncoderSetup { filter: 3, ..EncoderSetup::default() }).map_err(bus)?;
     }
     // 20 us of contact bounce: sample every 10 us, 4 samples.
     machine.configure_hand_wheel(499, 4).map_err(bus)?;
@@ -191,13 +165,7 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
     // The lag decays as exp(-t / tau): after 30 tau it is below 2^-32 steps, at rest.
     machine.bus().wait(30 * DRIVE_TAU_CLOCKS).map_err(bus)?;
     let snapshot = machine.feedback().map_err(bus)?;
-    let ideal = machine
-        .bus()
-        .link()
-        .target()
-        .plant()
-        .encoder(1)
-        .ideal_count();
+    let ideal = machine.bus().link().target().plant().encoder(1).ideal_count();
     println!(
         "    at rest: Z {} steps = {:.4} mm, grating {} counts = {:.4} mm (the plant's ideal count: {ideal})",
         snapshot.steps[1],
@@ -206,10 +174,7 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
         f64::from(snapshot.counts[1]) / GRATING_COUNTS_PER_MM[1]
     );
     if i64::from(snapshot.counts[1]) != ideal {
-        bail!(
-            "Z grating reads {}, the plant is at {ideal}",
-            snapshot.counts[1]
-        );
+        bail!("Z grating reads {}, the plant is at {ideal}", snapshot.counts[1]);
     }
     machine.set_control(false, false, true).map_err(bus)?;
     Ok(())
@@ -224,7 +189,7 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
         scale: Increment::from_num(1),   // 1 um of X per detent at x1
         vmax: Increment::from_num(20),   // 10 mm/s
         accel: Increment::from_num(0.4), // 100 mm/s^2
-        window: 200, // drop mode: at most 0.2 mm behind the wheel
+        window: 200,                     // drop mode: at most 0.2 mm behind the wheel
     };
     machine.configure_jog(&setup).map_err(bus)?;
     machine.enable_jog(&setup, true).map_err(bus)?;
@@ -280,10 +245,7 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
             peak.to_num::<f64>() / STEPS_PER_MM[0] / 0.002
         );
         if i64::from(at) != target {
-            bail!(
-                "X at {at} steps after turn {}, the wheel asks for {target}",
-                index + 1
-            );
+            bail!("X at {at} steps after turn {}, the wheel asks for {target}", index + 1);
         }
         if wheel.illegal {
             bail!("the hand wheel's filter let contact bounce through");

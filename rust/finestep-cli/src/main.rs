@@ -14,11 +14,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(
-    name = "finestep",
-    version,
-    about = "finestep CNC motion core: co-simulation demo and benchmarks"
-)]
+#[command(name = "finestep", version, about = "finestep CNC motion core: co-simulation demo and benchmarks")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -67,13 +63,9 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Demo { out } => demo::run(&out),
-        Command::Run {
-            file,
-            fast,
-            config,
-            profile,
-            out,
-        } => run::run(&file, fast, config.as_deref(), profile.as_deref(), &out),
+        Command::Run { file, fast, config, profile, out } => {
+            run::run(&file, fast, config.as_deref(), profile.as_deref(), &out)
+        }
         Command::Bench { cycles, host_only } => {
             if host_only {
                 bench::front_end()

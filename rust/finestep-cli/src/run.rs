@@ -20,19 +20,14 @@ use crate::spi_stream::{stream_over_spi, StreamSetup};
 const AXIS_UNITS: [&str; 4] = ["mm", "mm", "mm", "deg"];
 
 fn print_check(report: &CheckReport) {
-    println!("  axis  max velocity / limit        max acceleration / limit     max jerk / limit  (units/s, /s^2, /s^3)");
+    println!(
+        "  axis  max velocity / limit        max acceleration / limit     max jerk / limit  (units/s, /s^2, /s^3)"
+    );
     for a in (0..4).filter(|&a| report.axis_present[a]) {
         let [v, acc, j] = report.axis_max[a];
         let [lv, la, lj] = report.axis_limit[a];
-        let jerk_limit = if lj.is_finite() {
-            format!("{lj:.0}")
-        } else {
-            "- (trapezoid)".to_string()
-        };
-        println!(
-            "  {:<4} {v:>10.3} / {lv:<12.3} {acc:>12.2} / {la:<12.1} {j:>12.0} / {jerk_limit}",
-            AXIS_NAMES[a]
-        );
+        let jerk_limit = if lj.is_finite() { format!("{lj:.0}") } else { "- (trapezoid)".to_string() };
+        println!("  {:<4} {v:>10.3} / {lv:<12.3} {acc:>12.2} / {la:<12.1} {j:>12.0} / {jerk_limit}", AXIS_NAMES[a]);
     }
     println!(
         "  path: max speed {:.3}, at most {:.1} % of the programmed feed; max acceleration {:.1}, max jerk {:.0}",
@@ -48,10 +43,7 @@ fn print_check(report: &CheckReport) {
     if report.passed() {
         println!("  checker: every limit held (quantisation tolerance: 2^-17 steps per position)");
     } else {
-        println!(
-            "  checker: {} violations; the first:",
-            report.violation_count
-        );
+        println!("  checker: {} violations; the first:", report.violation_count);
         for v in &report.violations {
             println!("    {v}");
         }
@@ -87,8 +79,7 @@ pub fn run_program(
     out: &Path,
 ) -> anyhow::Result<()> {
     let resolved = config.resolve()?;
-    let planned = plan_program(config, program)
-        .map_err(|e| anyhow::anyhow!("{name}:{}: {}", e.line, e.reason))?;
+    let planned = plan_program(config, program).map_err(|e| anyhow::anyhow!("{name}:{}: {}", e.line, e.reason))?;
     let records = &planned.records;
     for note in &planned.notes {
         println!("  note: {note}");
@@ -101,15 +92,16 @@ pub fn run_program(
         resolved.period_s * 1e3,
         records.len() as f64 * resolved.period_s,
         resolved.profile,
-        if fast { "model fast path" } else { "streamed over SPI; RTL in lockstep with the model, every pin every clock" }
+        if fast {
+            "model fast path"
+        } else {
+            "streamed over SPI; RTL in lockstep with the model, every pin every clock"
+        }
     );
     let report = check_program(config, program, records)?;
     print_check(&report);
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let stem = Path::new(name)
-        .file_stem()
-        .map(|s| s.to_string_lossy().to_string())
-        .unwrap_or_else(|| "run".into());
+    let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
     let toolpath = out.join(format!("{stem}-toolpath.png"));
     let motion = out.join(format!("{stem}-motion.png"));
     plot_toolpath(&toolpath, &report.samples)?;
@@ -117,17 +109,11 @@ pub fn run_program(
     println!("  plots: {} {}", toolpath.display(), motion.display());
 
     let period_clocks = resolved.period_clocks;
-    let progress = ProgressBar::new(records.len() as u64).with_style(ProgressStyle::with_template(
-        "  {bar:40} {pos}/{len} periods {per_sec} {msg}",
-    )?);
+    let progress = ProgressBar::new(records.len() as u64)
+        .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} periods {per_sec} {msg}")?);
     let drain = 2 * u64::from(period_clocks);
     let (positions, cycles) = if fast {
-        let mut inputs = CoreInputs {
-            run: true,
-            period_clocks,
-            rec_valid: true,
-            ..Default::default()
-        };
+        let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
         for (axis, timing) in inputs.axes.iter_mut().zip(&resolved.timing) {
             axis.step_len = timing.step_len;
             axis.step_space = timing.step_space;
@@ -148,10 +134,7 @@ pub fn run_program(
         }
         inputs.rec_valid = false;
         core.run_chunk_fast(&inputs, drain, &mut events);
-        (
-            core.outputs().positions.map(|p| p as i32).to_vec(),
-            core.cycle(),
-        )
+        (core.outputs().positions.map(|p| p as i32).to_vec(), core.cycle())
     } else {
         let setup = StreamSetup {
             period_clocks,
@@ -199,14 +182,7 @@ pub fn run_program(
             steps - target
         );
     }
-    println!(
-        "  {cycles} clock cycles{}",
-        if fast {
-            ""
-        } else {
-            ", bit-exact RTL against the model"
-        }
-    );
+    println!("  {cycles} clock cycles{}", if fast { "" } else { ", bit-exact RTL against the model" });
     if worst != 0 {
         bail!("the pulse train ended {worst} steps from the programmed end");
     }

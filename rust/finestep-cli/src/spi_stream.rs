@@ -52,20 +52,12 @@ pub fn stream_over_spi<T: PinTarget>(
     let mut machine = Machine::connect(SpiBus::new(host, 4)).map_err(bus_error)?;
     let caps = machine.caps();
     if setup.axes.len() > caps.n_axes {
-        bail!(
-            "{} axes configured, the core has {}",
-            setup.axes.len(),
-            caps.n_axes
-        );
+        bail!("{} axes configured, the core has {}", setup.axes.len(), caps.n_axes);
     }
     for (axis, axis_setup) in setup.axes.iter().enumerate() {
-        machine
-            .configure_axis(axis, axis_setup)
-            .map_err(bus_error)?;
+        machine.configure_axis(axis, axis_setup).map_err(bus_error)?;
     }
-    machine
-        .enable_axes((1 << setup.axes.len()) - 1)
-        .map_err(bus_error)?;
+    machine.enable_axes((1 << setup.axes.len()) - 1).map_err(bus_error)?;
     machine.set_period(setup.period_clocks).map_err(bus_error)?;
     machine.set_start_level(1).map_err(bus_error)?;
     machine.clear_faults_and_errors().map_err(bus_error)?;
@@ -82,34 +74,24 @@ pub fn stream_over_spi<T: PinTarget>(
     progress(queued);
     let before_run = machine.positions().map_err(bus_error)?.latch_time;
     machine.set_control(true, false, true).map_err(bus_error)?;
-    let first_boundary = machine
-        .bus()
-        .read_one(latch_time::ADDR)
-        .map_err(bus_error)?;
+    let first_boundary = machine.bus().read_one(latch_time::ADDR).map_err(bus_error)?;
     let seconds = |clock: u32| f64::from(clock.wrapping_sub(first_boundary)) / setup.clock_hz;
 
     let mut samples = Vec::new();
     let poll = u64::from(setup.period_clocks) / 2;
     loop {
-        let level_word = machine
-            .bus()
-            .read_one(fifo_level::ADDR)
-            .map_err(bus_error)?;
+        let level_word = machine.bus().read_one(fifo_level::ADDR).map_err(bus_error)?;
         let free = fifo_level::FREE.get(level_word) as usize;
         let left = records.len() - queued;
         if left > 0 && (free >= BURST || free >= left) {
             let take = free.min(BURST).min(left);
-            machine
-                .bus()
-                .push_records(&records[queued..queued + take])
-                .map_err(bus_error)?;
+            machine.bus().push_records(&records[queued..queued + take]).map_err(bus_error)?;
             queued += take;
             bursts += 1;
             progress(queued);
             continue;
         }
-        let streaming =
-            status::STREAMING.get(machine.bus().read_one(status::ADDR).map_err(bus_error)?) != 0;
+        let streaming = status::STREAMING.get(machine.bus().read_one(status::ADDR).map_err(bus_error)?) != 0;
         if left == 0 && fifo_level::LEVEL.get(level_word) == 0 && !streaming {
             break;
         }
@@ -117,25 +99,10 @@ pub fn stream_over_spi<T: PinTarget>(
         let positions = machine.positions().map_err(bus_error)?;
         samples.push((seconds(positions.latch_time), positions.steps));
     }
-    machine
-        .bus()
-        .wait(2 * u64::from(setup.period_clocks))
-        .map_err(bus_error)?;
-    let underruns = machine
-        .bus()
-        .read_one(underrun_count::ADDR)
-        .map_err(bus_error)?;
+    machine.bus().wait(2 * u64::from(setup.period_clocks)).map_err(bus_error)?;
+    let underruns = machine.bus().read_one(underrun_count::ADDR).map_err(bus_error)?;
     let end = machine.positions().map_err(bus_error)?;
     let cycles = u64::from(end.latch_time.wrapping_sub(before_run));
     let target = machine.into_bus().into_link().into_target();
-    Ok((
-        Streamed {
-            positions: end.steps,
-            cycles,
-            bursts,
-            underruns,
-            samples,
-        },
-        target,
-    ))
+    Ok((Streamed { positions: end.steps, cycles, bursts, underruns, samples }, target))
 }

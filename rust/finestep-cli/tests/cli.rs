@@ -4,20 +4,13 @@ use std::path::PathBuf;
 use std::process::Command;
 
 fn finestep(args: &[&str]) -> (bool, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_finestep"))
-        .args(args)
-        .output()
-        .expect("run finestep");
-    let text = String::from_utf8_lossy(&output.stdout).to_string()
-        + &String::from_utf8_lossy(&output.stderr);
+    let output = Command::new(env!("CARGO_BIN_EXE_finestep")).args(args).output().expect("run finestep");
+    let text = String::from_utf8_lossy(&output.stdout).to_string() + &String::from_utf8_lossy(&output.stderr);
     (output.status.success(), text)
 }
 
 fn program(name: &str) -> String {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"))
-        .join(name)
-        .display()
-        .to_string()
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs")).join(name).display().to_string()
 }
 
 fn scratch(name: &str, text: &str) -> String {
@@ -32,10 +25,7 @@ fn scratch(name: &str, text: &str) -> String {
 fn a_contour_runs_to_its_exact_end_on_the_fast_path() {
     let (ok, text) = finestep(&["run", "--fast", &program("contour.ngc")]);
     assert!(ok, "{text}");
-    assert!(
-        text.contains("A            9000      90.0000 deg      90.0000 deg    0 steps"),
-        "{text}"
-    );
+    assert!(text.contains("A            9000      90.0000 deg      90.0000 deg    0 steps"), "{text}");
 }
 
 #[test]
@@ -43,19 +33,13 @@ fn bad_gcode_is_reported_with_file_line_and_column() {
     let path = scratch("bad.ngc", "G21\nG1 X1 F100\nG2 X2 Y0\n");
     let (ok, text) = finestep(&["run", "--fast", &path]);
     assert!(!ok);
-    assert!(
-        text.contains(&format!("{path}:3:1: G2 without I/J/K or R")),
-        "{text}"
-    );
+    assert!(text.contains(&format!("{path}:3:1: G2 without I/J/K or R")), "{text}");
 }
 
 #[test]
 fn a_compensation_gouge_is_refused_by_line() {
     // Tool 1 (r = 3 mm) on the inside of a 2 mm arc.
-    let path = scratch(
-        "gouge.ngc",
-        "G21 G17 F600\nG41 D1\nG1 X10\nG3 X10 Y4 R2\nG40\nG1 X0 Y0\n",
-    );
+    let path = scratch("gouge.ngc", "G21 G17 F600\nG41 D1\nG1 X10\nG3 X10 Y4 R2\nG40\nG1 X0 Y0\n");
     let (ok, text) = finestep(&["run", "--fast", &path]);
     assert!(!ok);
     assert!(text.contains(&format!("{path}:4: ")), "{text}");
@@ -63,24 +47,13 @@ fn a_compensation_gouge_is_refused_by_line() {
 
 #[test]
 fn a_short_program_streams_over_spi_into_the_chip_in_lockstep() {
-    let path = scratch(
-        "short.ngc",
-        "G21 G90 G17 G64 P0.01 F6000\nG42 D3\nG1 X2 Y0\nG1 X2 Y2\nG40\nG1 X0 Y0\nM2\n",
-    );
+    let path = scratch("short.ngc", "G21 G90 G17 G64 P0.01 F6000\nG42 D3\nG1 X2 Y0\nG1 X2 Y2\nG40\nG1 X0 Y0\nM2\n");
     let out = std::env::temp_dir().join(format!("finestep-cli-short-{}", std::process::id()));
     let (ok, text) = finestep(&["run", "--out", &out.display().to_string(), &path]);
     assert!(ok, "{text}");
-    assert!(
-        text.contains("streamed over SPI; RTL in lockstep"),
-        "{text}"
-    );
+    assert!(text.contains("streamed over SPI; RTL in lockstep"), "{text}");
     assert!(text.contains("bit-exact RTL against the model"), "{text}");
-    let finals: Vec<&str> = text
-        .lines()
-        .skip_while(|l| !l.contains("final steps"))
-        .skip(1)
-        .take(4)
-        .collect();
+    let finals: Vec<&str> = text.lines().skip_while(|l| !l.contains("final steps")).skip(1).take(4).collect();
     assert_eq!(finals.len(), 4, "{text}");
     assert!(finals.iter().all(|l| l.ends_with(" 0 steps")), "{text}");
 }
@@ -89,21 +62,11 @@ fn a_short_program_streams_over_spi_into_the_chip_in_lockstep() {
 fn run_reports_the_checker_and_writes_plots() {
     let out = std::env::temp_dir().join(format!("finestep-cli-plots-{}", std::process::id()));
     let config = scratch("machine.toml", "profile = \"s-curve\"\n[axes.X]\nsteps_per_unit = 800\n[axes.Y]\n[axes.Z]\nsteps_per_unit = 400\nmax_velocity = 50\nmax_acceleration = 500\nmax_jerk = 50000\n");
-    let (ok, text) = finestep(&[
-        "run",
-        "--fast",
-        "--config",
-        &config,
-        "--out",
-        &out.display().to_string(),
-        &program("corners.ngc"),
-    ]);
+    let (ok, text) =
+        finestep(&["run", "--fast", "--config", &config, "--out", &out.display().to_string(), &program("corners.ngc")]);
     // corners.ngc turns A at the end: a machine without A refuses it by line.
     assert!(!ok);
-    assert!(
-        text.contains("corners.ngc:65: axis A moves but is not configured"),
-        "{text}"
-    );
+    assert!(text.contains("corners.ngc:65: axis A moves but is not configured"), "{text}");
     let (ok, text) = finestep(&[
         "run",
         "--fast",
@@ -119,28 +82,14 @@ fn run_reports_the_checker_and_writes_plots() {
     assert!(text.contains("max path deviation 0.02"), "{text}");
     for plot in ["corners-toolpath.png", "corners-motion.png"] {
         let bytes = std::fs::read(out.join(plot)).unwrap();
-        assert!(
-            bytes.len() > 10_000 && bytes.starts_with(b"\x89PNG"),
-            "{plot}"
-        );
+        assert!(bytes.len() > 10_000 && bytes.starts_with(b"\x89PNG"), "{plot}");
     }
 }
 
 #[test]
 fn a_bad_configuration_names_the_file_and_the_key() {
     let config = scratch("bad.toml", "[axes.Y]\nmax_jerk = 0\n");
-    let (ok, text) = finestep(&[
-        "run",
-        "--fast",
-        "--config",
-        &config,
-        &program("contour.ngc"),
-    ]);
+    let (ok, text) = finestep(&["run", "--fast", "--config", &config, &program("contour.ngc")]);
     assert!(!ok);
-    assert!(
-        text.contains(&format!(
-            "{config}: axes.Y.max_jerk: must be a positive finite number, got 0"
-        )),
-        "{text}"
-    );
+    assert!(text.contains(&format!("{config}: axes.Y.max_jerk: must be a positive finite number, got 0")), "{text}");
 }

@@ -25,8 +25,8 @@ use std::collections::VecDeque;
 use std::path::PathBuf;
 
 use finestep_model::{pins, ChunkEnd, Core, CoreInputs, CoreOutputs, Event, PeriodRecord, MAX_AXES};
-pub use finestep_rtl_sys::TraceDepth;
 use finestep_rtl_sys::Rtl;
+pub use finestep_rtl_sys::TraceDepth;
 
 pub use mismatch::{describe_difference, Mismatch};
 pub use plant_loop::PlantLoop;
@@ -144,10 +144,7 @@ impl Harness {
             ModelPath::Fast => self.model.run_chunk_fast(inputs, max_cycles, &mut self.model_events),
         };
         self.log.push((*inputs, rtl_end.cycles.max(model_end.cycles)));
-        if rtl_end != model_end
-            || self.rtl_events != self.model_events
-            || self.rtl.outputs() != self.model.outputs()
-        {
+        if rtl_end != model_end || self.rtl_events != self.model_events || self.rtl.outputs() != self.model.outputs() {
             return Err(Box::new(self.report(start_cycle, before, rtl_end, model_end)));
         }
         let mut previous = self.outputs.pins;

@@ -52,13 +52,7 @@ impl fmt::Display for TopMismatch {
         writeln!(f, "{}: RTL and model differ at the pins in cycle {}", self.test, self.cycle)?;
         let differ = self.expected ^ self.actual;
         for bit in (0..64).filter(|b| differ >> b & 1 != 0) {
-            writeln!(
-                f,
-                "  {}: model {}, RTL {}",
-                output_name(bit),
-                self.expected >> bit & 1,
-                self.actual >> bit & 1
-            )?;
+            writeln!(f, "  {}: model {}, RTL {}", output_name(bit), self.expected >> bit & 1, self.actual >> bit & 1)?;
         }
         writeln!(f, "  inputs {:?}", TopInputs::unpack(self.inputs))?;
         match &self.waveform {

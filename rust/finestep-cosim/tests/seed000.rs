@@ -39,7 +39,12 @@ fn run_line(line: &LineMove, path: ModelPath) -> Result<(), TestCaseError> {
         let emitted = harness.outputs().positions;
         for axis in 0..3 {
             let error = f64::from(emitted[axis] as i32) - commanded[axis] as f64 / 65536.0;
-            prop_assert!(error.abs() <= 1.0, "axis {axis}: emitted {} vs commanded {}", emitted[axis] as i32, commanded[axis] as f64 / 65536.0);
+            prop_assert!(
+                error.abs() <= 1.0,
+                "axis {axis}: emitted {} vs commanded {}",
+                emitted[axis] as i32,
+                commanded[axis] as f64 / 65536.0
+            );
             commanded[axis] += i64::from(record.inc[axis].to_bits());
         }
     }

@@ -53,6 +53,9 @@ fn waveform_of_a_run_is_written() {
         assert!(bytes.len() > 100, "FST file of {} bytes", bytes.len());
     } else {
         let text = String::from_utf8_lossy(&bytes);
-        assert!(text.contains("$var") && text.contains("pin_a") && text.contains("#800"), "VCD lacks signals or cycles");
+        assert!(
+            text.contains("$var") && text.contains("pin_a") && text.contains("#800"),
+            "VCD lacks signals or cycles"
+        );
     }
 }

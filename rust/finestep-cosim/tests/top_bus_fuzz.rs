@@ -20,8 +20,8 @@ use finestep_cosim::TopLockstep;
 use finestep_host::frame::{self, FRAME_CRC};
 use finestep_host::pins::layout::{IN_BUS_AD0, IN_BUS_ADV_N, IN_BUS_CS_N, IN_BUS_RD_N, IN_BUS_WR_N};
 use finestep_host::regs::{
-    axis_enable, axis_mode, axis_timing_a, axis_timing_b, command, control, fifo_level, id, period_clocks, position,
-    start_level, status, enc_control, enc_status,
+    axis_enable, axis_mode, axis_timing_a, axis_timing_b, command, control, enc_control, enc_status, fifo_level, id,
+    period_clocks, position, start_level, status,
 };
 use finestep_host::stream::wait_idle;
 use finestep_host::{Bus, BusError, PinHost, PinTarget, PinTiming, SpiBus, SpiTransfer};
@@ -63,14 +63,14 @@ fn rw_register(addr: u8) -> Option<(u32, u32)> {
             2 => Some((0x1F, 0)),                 // AXIS_MODE
             _ => None,
         },
-        0x48..=0x4B => Some((u32::MAX, 0)), // RECORD_INC[0..4]
-        0x51 => Some((0xFFFF, 0)),                // ENC_PRESCALE
-        0x57 => Some((0xF_FFFF, 4 << 16 | 499)),  // MPG_CONTROL
-        0x59 => Some((u32::MAX, 1 << 16)),        // JOG_SCALE
-        0x5A => Some((0x7FFF_FFFF, 1 << 16)),     // JOG_VMAX
-        0x5B => Some((0x7FFF_FFFF, 4096)),        // JOG_ACCEL
-        0x5C => Some((0xFFFF, 1000)),             // JOG_WINDOW
-        0x70..=0x73 => Some((0xF7, 0x14)),        // ENC_CONTROL: mode, index polarity, filter
+        0x48..=0x4B => Some((u32::MAX, 0)),      // RECORD_INC[0..4]
+        0x51 => Some((0xFFFF, 0)),               // ENC_PRESCALE
+        0x57 => Some((0xF_FFFF, 4 << 16 | 499)), // MPG_CONTROL
+        0x59 => Some((u32::MAX, 1 << 16)),       // JOG_SCALE
+        0x5A => Some((0x7FFF_FFFF, 1 << 16)),    // JOG_VMAX
+        0x5B => Some((0x7FFF_FFFF, 4096)),       // JOG_ACCEL
+        0x5C => Some((0xFFFF, 1000)),            // JOG_WINDOW
+        0x70..=0x73 => Some((0xF7, 0x14)),       // ENC_CONTROL: mode, index polarity, filter
         _ => None,
     }
 }

@@ -9,13 +9,12 @@ use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0};
 use finestep_host::regs::{control, fifo_level, jog_control, jog_velocity, period_count, probe_status, status};
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{
-    AxisSetup, Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming,
-    SpiBus,
+    AxisSetup, Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus,
 };
 use finestep_model::{Increment, PeriodRecord};
 use finestep_plant::{
-    Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Faults, Glitches, HandWheelConfig,
-    Mechanics, Plant, PlantConfig, ProbeConfig,
+    Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Faults, Glitches, HandWheelConfig, Mechanics,
+    Plant, PlantConfig, ProbeConfig,
 };
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
@@ -161,18 +160,14 @@ fn faults_beyond_the_filter_are_flagged() {
     let case = (any::<u64>(), 2u32..12, any::<bool>());
     runner
         .run(&case, |(seed, missing_one_in, long_glitches)| {
-            let glitches = long_glitches.then_some(Glitches {
-                a: true,
-                b: true,
-                z: false,
-                shorter_than: 40,
-                mean_interval: 3000,
-            });
+            let glitches =
+                long_glitches.then_some(Glitches { a: true, b: true, z: false, shorter_than: 40, mean_interval: 3000 });
             let faults = Faults { missing_one_in: Some(missing_one_in), glitches, ..Faults::default() };
             let resolution = [CountsPerStep::integer(4).unwrap(), CountsPerStep::new(5, 2).unwrap()];
             let plant = encoder_plant(800, resolution, faults, seed);
             let mut machine = connect("faults_beyond_the_filter_are_flagged", plant);
-            let increments: Vec<(i32, i32)> = (0..30).map(|k| if k < 15 { (3 << 15, -(1 << 16)) } else { (-(1 << 16), 1 << 15) }).collect();
+            let increments: Vec<(i32, i32)> =
+                (0..30).map(|k| if k < 15 { (3 << 15, -(1 << 16)) } else { (-(1 << 16), 1 << 15) }).collect();
             run_records(&mut machine, moves(&increments), 40 * 800);
             let snapshot = machine.feedback().unwrap();
             for channel in 0..2 {
@@ -211,7 +206,11 @@ fn rated_count_rates() {
             drive(&mut machine, phase);
         }
         machine.bus().wait(100).unwrap();
-        assert_eq!(machine.feedback().unwrap().counts[2], 1000, "filter {filter}, prescale {prescale}, {clocks} clocks");
+        assert_eq!(
+            machine.feedback().unwrap().counts[2],
+            1000,
+            "filter {filter}, prescale {prescale}, {clocks} clocks"
+        );
         for phase in (0..1000).rev() {
             drive(&mut machine, phase);
         }
@@ -516,7 +515,13 @@ fn random_jogs_land_exactly() {
                     } else {
                         still_at = None;
                     }
-                    prop_assert!(periods <= bound + 10.0, "not at rest after {} periods (bound {}): {:?}", periods, bound, jog);
+                    prop_assert!(
+                        periods <= bound + 10.0,
+                        "not at rest after {} periods (bound {}): {:?}",
+                        periods,
+                        bound,
+                        jog
+                    );
                 }
             }
             // Position in steps: the DDA rounds the commanded position half up.

@@ -96,4 +96,3 @@ fn parallel_stream_moves_exactly() {
         assert_eq!(positions.steps[axis], expected_steps(&records, axis), "axis {axis}");
     }
 }
-

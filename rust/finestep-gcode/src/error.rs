@@ -61,9 +61,6 @@ pub(crate) struct LineError {
 
 impl LineError {
     pub(crate) fn new(column: usize, message: impl fmt::Display) -> Self {
-        LineError {
-            column,
-            message: message.to_string(),
-        }
+        LineError { column, message: message.to_string() }
     }
 }

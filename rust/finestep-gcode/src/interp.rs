@@ -172,25 +172,16 @@ fn letter_index(letter: char) -> usize {
 fn sort_words(words: &[Word]) -> Result<Words, LineError> {
     let mut out = Words::default();
     for (index, word) in words.iter().enumerate() {
-        let Word {
-            letter,
-            value,
-            column,
-        } = *word;
+        let Word { letter, value, column } = *word;
         let coded = match letter {
             'N' => {
                 if out.n.is_some() {
                     return Err(LineError::new(column, "word N appears twice"));
                 }
                 if index != 0 {
-                    return Err(LineError::new(
-                        column,
-                        "N word must come first in the block",
-                    ));
+                    return Err(LineError::new(column, "N word must come first in the block"));
                 }
-                let n = as_u32(value).ok_or_else(|| {
-                    LineError::new(column, "N word must be a non-negative integer")
-                })?;
+                let n = as_u32(value).ok_or_else(|| LineError::new(column, "N word must be a non-negative integer"))?;
                 out.n = Some(n);
                 continue;
             }
@@ -198,13 +189,11 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 let tenths = value * 10.0;
                 let code = (tenths.round() == tenths).then(|| as_u32(tenths)).flatten();
                 let group = code.and_then(|c| g_group(c).map(|g| (c, g)));
-                group
-                    .ok_or_else(|| LineError::new(column, format!("unsupported G-code G{value}")))?
+                group.ok_or_else(|| LineError::new(column, format!("unsupported G-code G{value}")))?
             }
             'M' => {
                 let group = as_u32(value).and_then(|c| m_group(c).map(|g| (c * 10, g)));
-                group
-                    .ok_or_else(|| LineError::new(column, format!("unsupported M-code M{value}")))?
+                group.ok_or_else(|| LineError::new(column, format!("unsupported M-code M{value}")))?
             }
             l if PARAMS.contains(l) => {
                 let slot = &mut out.params[letter_index(l)];
@@ -221,11 +210,7 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
         match *slot {
             None => *slot = Some((code, column)),
             // M7 and M8 together turn both coolants on, as in LinuxCNC.
-            Some((other, _))
-                if group == Group::Coolant
-                    && other + code == 150
-                    && out.mist_and_flood.is_none() =>
-            {
+            Some((other, _)) if group == Group::Coolant && other + code == 150 && out.mist_and_flood.is_none() => {
                 out.mist_and_flood = Some(column);
             }
             Some((other, _)) => {
@@ -238,11 +223,7 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 };
                 return Err(LineError::new(
                     column,
-                    format!(
-                        "{} and {} are in the same modal group",
-                        name(other),
-                        name(code)
-                    ),
+                    format!("{} and {} are in the same modal group", name(other), name(code)),
                 ));
             }
         }
@@ -288,11 +269,7 @@ impl State {
 
         // What will move, to check that every parameter word has a user.
         let motion = w.group(Group::Motion).map(|(c, _)| c).or(self.motion);
-        let first_axis = AXES
-            .iter()
-            .filter_map(|&l| w.param(l))
-            .map(|(_, c)| c)
-            .min();
+        let first_axis = AXES.iter().filter_map(|&l| w.param(l)).map(|(_, c)| c).min();
         let motion_column = w.group(Group::Motion).map(|(_, c)| c).or(first_axis);
         let arc_mode = matches!(motion, Some(20 | 30));
         let arc_move = arc_mode && first_axis.is_some();
@@ -300,16 +277,10 @@ impl State {
             if let Some((_, column)) = w.param(letter) {
                 if arc_mode && !arc_move {
                     let name = g_name(motion.unwrap_or(20));
-                    return Err(LineError::new(
-                        motion_column.unwrap_or(column),
-                        format!("{name} with no axis words"),
-                    ));
+                    return Err(LineError::new(motion_column.unwrap_or(column), format!("{name} with no axis words")));
                 }
                 if !arc_move {
-                    return Err(LineError::new(
-                        column,
-                        format!("{letter} word with no G2 or G3 to use it"),
-                    ));
+                    return Err(LineError::new(column, format!("{letter} word with no G2 or G3 to use it")));
                 }
             }
         }
@@ -319,41 +290,21 @@ impl State {
             }
         }
         if let Some((_, column)) = w.param('P') {
-            let users = [
-                w.group(Group::NonModal).is_some(),
-                w.has(Group::Path, 640),
-                arc_move,
-                w.has(Group::Motion, G5_2),
-            ];
+            let users =
+                [w.group(Group::NonModal).is_some(), w.has(Group::Path, 640), arc_move, w.has(Group::Motion, G5_2)];
             match users.iter().filter(|&&u| u).count() {
-                0 => {
-                    return Err(LineError::new(
-                        column,
-                        "P word with no G4, G64, G2, G3 or G5.2 to use it",
-                    ))
-                }
+                0 => return Err(LineError::new(column, "P word with no G4, G64, G2, G3 or G5.2 to use it")),
                 1 => {}
-                _ => {
-                    return Err(LineError::new(
-                        column,
-                        "P word is used by more than one code",
-                    ))
-                }
+                _ => return Err(LineError::new(column, "P word is used by more than one code")),
             }
         }
         if let Some((_, column)) = w.param('D') {
             if !(w.has(Group::Comp, 410) || w.has(Group::Comp, 420)) {
-                return Err(LineError::new(
-                    column,
-                    "D word with no G41 or G42 to use it",
-                ));
+                return Err(LineError::new(column, "D word with no G41 or G42 to use it"));
             }
         }
         if let (Some(column), None) = (first_axis, motion) {
-            return Err(LineError::new(
-                column,
-                "axis word with no motion mode (G0, G1, G2 or G3) to use it",
-            ));
+            return Err(LineError::new(column, "axis word with no motion mode (G0, G1, G2 or G3) to use it"));
         }
 
         // Feed, speed, tool selection.
@@ -370,8 +321,7 @@ impl State {
             self.rpm = s;
         }
         if let Some((t, column)) = w.param('T') {
-            self.tool = as_u32(t)
-                .ok_or_else(|| LineError::new(column, "T word must be a non-negative integer"))?;
+            self.tool = as_u32(t).ok_or_else(|| LineError::new(column, "T word must be a non-negative integer"))?;
             kinds.push(BlockKind::ToolSelect { tool: self.tool });
         }
         if w.group(Group::ToolChange).is_some() {
@@ -387,10 +337,7 @@ impl State {
             };
         }
         if w.group(Group::Spindle).is_some() || w.param('S').is_some() {
-            kinds.push(BlockKind::Spindle {
-                rotation: self.rotation,
-                rpm: self.rpm,
-            });
+            kinds.push(BlockKind::Spindle { rotation: self.rotation, rpm: self.rpm });
         }
         if let Some((code, _)) = w.group(Group::Coolant) {
             match code {
@@ -401,17 +348,12 @@ impl State {
             if w.mist_and_flood.is_some() {
                 (self.mist, self.flood) = (true, true);
             }
-            kinds.push(BlockKind::Coolant {
-                mist: self.mist,
-                flood: self.flood,
-            });
+            kinds.push(BlockKind::Coolant { mist: self.mist, flood: self.flood });
         }
 
         // Dwell.
         if let Some((_, column)) = w.group(Group::NonModal) {
-            let (p, p_column) = w
-                .param('P')
-                .ok_or_else(|| LineError::new(column, "G4 with no P word"))?;
+            let (p, p_column) = w.param('P').ok_or_else(|| LineError::new(column, "G4 with no P word"))?;
             if p < 0.0 {
                 return Err(LineError::new(p_column, "negative dwell time"));
             }
@@ -446,18 +388,15 @@ impl State {
                 _ => CompSide::Off,
             };
             if side != CompSide::Off && self.comp != CompSide::Off {
-                return Err(LineError::new(
-                    column,
-                    "cutter compensation is already on (G40 first)",
-                ));
+                return Err(LineError::new(column, "cutter compensation is already on (G40 first)"));
             }
             if side != CompSide::Off && self.plane != Plane::Xy {
                 return Err(LineError::new(column, "cutter compensation is supported in G17 (XY) only"));
             }
             let tool = match w.param('D') {
-                Some((d, d_column)) => Some(as_u32(d).ok_or_else(|| {
-                    LineError::new(d_column, "D word must be a non-negative integer")
-                })?),
+                Some((d, d_column)) => {
+                    Some(as_u32(d).ok_or_else(|| LineError::new(d_column, "D word must be a non-negative integer"))?)
+                }
                 None => None,
             };
             self.comp = side;
@@ -470,9 +409,7 @@ impl State {
                 PathControl::ExactPath
             } else {
                 let tolerance_mm = match w.param('P') {
-                    Some((p, p_column)) if p < 0.0 => {
-                        return Err(LineError::new(p_column, "negative path tolerance"))
-                    }
+                    Some((p, p_column)) if p < 0.0 => return Err(LineError::new(p_column, "negative path tolerance")),
                     Some((p, _)) => Some(self.length_mm(p)),
                     None => None,
                 };
@@ -498,24 +435,15 @@ impl State {
             let to = self.target(&w)?;
             let feed = || match self.feed_mm_per_min {
                 Some(f) if f > 0.0 => Ok(f),
-                _ => Err(LineError::new(
-                    column_of(&w, column),
-                    format!("{} with no feed rate", g_name(code)),
-                )),
+                _ => Err(LineError::new(column_of(&w, column), format!("{} with no feed rate", g_name(code)))),
             };
             let kind = match code {
-                0 => BlockKind::Rapid {
-                    to: Point::from_array(to),
-                },
-                10 => BlockKind::Linear {
-                    to: Point::from_array(to),
-                    feed_mm_per_min: feed()?,
-                },
+                0 => BlockKind::Rapid { to: Point::from_array(to) },
+                10 => BlockKind::Linear { to: Point::from_array(to), feed_mm_per_min: feed()? },
                 _ => {
                     let feed_mm_per_min = feed()?;
                     let clockwise = code == 20;
-                    let (centre, extra_turns) =
-                        self.arc_centre(&w, to, g_name(code), column_of(&w, column))?;
+                    let (centre, extra_turns) = self.arc_centre(&w, to, g_name(code), column_of(&w, column))?;
                     BlockKind::Arc {
                         to: Point::from_array(to),
                         centre: Point::from_array(centre),
@@ -550,10 +478,7 @@ impl State {
             let message = match word.letter {
                 'N' | 'X' | 'Y' | 'P' => continue,
                 'Z' | 'A' => format!("axis {} inside a NURBS block: only X and Y move in a NURBS (G17)", word.letter),
-                'G' => format!(
-                    "G{} inside a NURBS block: only X, Y and P words until G5.3 closes it",
-                    word.value
-                ),
+                'G' => format!("G{} inside a NURBS block: only X, Y and P words until G5.3 closes it", word.value),
                 letter => format!("{letter} word inside a NURBS block: only X, Y and P words until G5.3 closes it"),
             };
             return Err(LineError::new(word.column, message));
@@ -593,10 +518,7 @@ impl State {
             return Err(LineError::new(column, "G5.2 NURBS is supported in the G17 (XY) plane only"));
         }
         if self.comp != CompSide::Off {
-            return Err(LineError::new(
-                column,
-                "G5.2 with cutter compensation on: a NURBS is not offset (G40 first)",
-            ));
+            return Err(LineError::new(column, "G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"));
         }
         if !self.feed_mm_per_min.is_some_and(|f| f > 0.0) {
             return Err(LineError::new(column, "G5.2 with no feed rate"));
@@ -677,16 +599,8 @@ impl State {
         let mut to = self.position;
         for (axis, &letter) in AXES.iter().enumerate() {
             if let Some((value, column)) = w.param(letter) {
-                let value = if letter == 'A' {
-                    value
-                } else {
-                    self.length_mm(value)
-                };
-                to[axis] = if self.incremental {
-                    to[axis] + value
-                } else {
-                    value
-                };
+                let value = if letter == 'A' { value } else { self.length_mm(value) };
+                to[axis] = if self.incremental { to[axis] + value } else { value };
                 if to[axis].abs() > MAX_POSITION {
                     return Err(LineError::new(column, "position out of range"));
                 }
@@ -696,13 +610,7 @@ impl State {
     }
 
     /// The centre of an arc from the current position to `to`, and its extra turns.
-    fn arc_centre(
-        &self,
-        w: &Words,
-        to: [f64; 4],
-        name: String,
-        column: usize,
-    ) -> Result<([f64; 4], u32), LineError> {
+    fn arc_centre(&self, w: &Words, to: [f64; 4], name: String, column: usize) -> Result<([f64; 4], u32), LineError> {
         let from = self.position;
         // In-plane axes (p, q) and normal, right-handed; the centre-offset letters of
         // p and q, and the letter of the normal axis.
@@ -712,10 +620,7 @@ impl State {
             Plane::Yz => (1, 2, ['J', 'K', 'I'], 19),
         };
         if let Some((_, c)) = w.param(ln) {
-            return Err(LineError::new(
-                c,
-                format!("{ln} word not allowed for an arc in the G{plane_code} plane"),
-            ));
+            return Err(LineError::new(c, format!("{ln} word not allowed for an arc in the G{plane_code} plane")));
         }
         let ijk = w.param(lp).or(w.param(lq));
         let r = w.param('R');
@@ -730,11 +635,7 @@ impl State {
             (Some(_), None) => {
                 for (axis, letter) in [(p, lp), (q, lq)] {
                     let offset = w.param(letter).map_or(0.0, |(v, _)| self.length_mm(v));
-                    centre[axis] = if self.arc_incremental {
-                        from[axis] + offset
-                    } else {
-                        offset
-                    };
+                    centre[axis] = if self.arc_incremental { from[axis] + offset } else { offset };
                 }
                 let radius = |point: [f64; 4]| (point[p] - centre[p]).hypot(point[q] - centre[q]);
                 let (r_start, r_end) = (radius(from), radius(to));
@@ -742,9 +643,7 @@ impl State {
                     return Err(LineError::new(column, "arc radius is zero"));
                 }
                 let differs = (r_end - r_start).abs();
-                if !(differs <= ARC_ABSOLUTE_TOLERANCE_MM
-                    || differs <= ARC_RELATIVE_TOLERANCE * r_start)
-                {
+                if !(differs <= ARC_ABSOLUTE_TOLERANCE_MM || differs <= ARC_RELATIVE_TOLERANCE * r_start) {
                     return Err(LineError::new(
                         column,
                         format!("arc end not on circle: radius differs by {differs:.3} mm"),
@@ -756,19 +655,13 @@ impl State {
                 let (dp, dq) = (to[p] - from[p], to[q] - from[q]);
                 let chord = dp.hypot(dq);
                 if chord <= ZERO_MM {
-                    return Err(LineError::new(
-                        r_column,
-                        "R-form arc needs an end point different from its start",
-                    ));
+                    return Err(LineError::new(r_column, "R-form arc needs an end point different from its start"));
                 }
                 let half = chord / 2.0;
                 if half - r.abs() > ARC_ABSOLUTE_TOLERANCE_MM {
                     return Err(LineError::new(
                         r_column,
-                        format!(
-                            "arc radius {:.3} mm is less than half the chord {half:.3} mm",
-                            r.abs()
-                        ),
+                        format!("arc radius {:.3} mm is less than half the chord {half:.3} mm", r.abs()),
                     ));
                 }
                 // The centre is on the chord's bisector, at distance h; on the right of
@@ -784,12 +677,7 @@ impl State {
         let extra_turns = match w.param('P') {
             Some((turns, c)) => match as_u32(turns) {
                 Some(t) if t >= 1 => t - 1,
-                _ => {
-                    return Err(LineError::new(
-                        c,
-                        format!("P word for {name} must be a positive integer"),
-                    ))
-                }
+                _ => return Err(LineError::new(c, format!("P word for {name} must be a positive integer"))),
             },
             None => 0,
         };

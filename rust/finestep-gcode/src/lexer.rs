@@ -51,19 +51,10 @@ pub(crate) fn lex_line(line: &str) -> Result<Vec<Word>, LineError> {
                 let letter = c.to_ascii_uppercase();
                 i += 1;
                 let value = lex_number(&chars, &mut i, letter, column)?;
-                words.push(Word {
-                    letter,
-                    value,
-                    column,
-                });
+                words.push(Word { letter, value, column });
             }
             '#' => return Err(LineError::new(i + 1, "parameters (#) are not supported")),
-            '[' => {
-                return Err(LineError::new(
-                    i + 1,
-                    "expressions ([...]) are not supported",
-                ))
-            }
+            '[' => return Err(LineError::new(i + 1, "expressions ([...]) are not supported")),
             c => return Err(LineError::new(i + 1, format!("unexpected character {c:?}"))),
         }
     }
@@ -83,12 +74,7 @@ fn skip_comment(chars: &[char], open: usize) -> Result<usize, LineError> {
 }
 
 /// Lexes the number after a word's letter, with blanks allowed anywhere in it.
-fn lex_number(
-    chars: &[char],
-    i: &mut usize,
-    letter: char,
-    column: usize,
-) -> Result<f64, LineError> {
+fn lex_number(chars: &[char], i: &mut usize, letter: char, column: usize) -> Result<f64, LineError> {
     let mut text = String::new();
     skip_blanks(chars, i);
     if let Some(&sign) = chars.get(*i).filter(|&&c| c == '+' || c == '-') {
@@ -109,23 +95,14 @@ fn lex_number(
         *i += 1;
     }
     if digits == 0 && points == 0 && text.is_empty() {
-        return Err(LineError::new(
-            column,
-            format!("missing value for word {letter}"),
-        ));
+        return Err(LineError::new(column, format!("missing value for word {letter}")));
     }
     if digits == 0 || points > 1 {
-        return Err(LineError::new(
-            column,
-            format!("bad number for word {letter}"),
-        ));
+        return Err(LineError::new(column, format!("bad number for word {letter}")));
     }
     match text.parse::<f64>() {
         Ok(value) if value.is_finite() && value.abs() <= MAX_NUMBER => Ok(value),
-        _ => Err(LineError::new(
-            column,
-            format!("number out of range for word {letter}"),
-        )),
+        _ => Err(LineError::new(column, format!("number out of range for word {letter}"))),
     }
 }
 
@@ -134,20 +111,13 @@ mod tests {
     use super::*;
 
     fn words(line: &str) -> Vec<(char, f64, usize)> {
-        lex_line(line)
-            .unwrap()
-            .into_iter()
-            .map(|w| (w.letter, w.value, w.column))
-            .collect()
+        lex_line(line).unwrap().into_iter().map(|w| (w.letter, w.value, w.column)).collect()
     }
 
     #[test]
     fn spaces_anywhere_and_lower_case() {
         assert_eq!(words("G 1 x 1 0 . 5"), vec![('G', 1.0, 1), ('X', 10.5, 5)]);
-        assert_eq!(
-            words("g1x-.5Y+2."),
-            vec![('G', 1.0, 1), ('X', -0.5, 3), ('Y', 2.0, 7)]
-        );
+        assert_eq!(words("g1x-.5Y+2."), vec![('G', 1.0, 1), ('X', -0.5, 3), ('Y', 2.0, 7)]);
         assert_eq!(words("X - 5"), vec![('X', -5.0, 1)]);
         assert_eq!(words("\tG0\t"), vec![('G', 0.0, 2)]);
         // No exponent: `e5` is a word of its own (refused later as unknown).
@@ -156,10 +126,7 @@ mod tests {
 
     #[test]
     fn comments_block_delete_and_blank() {
-        assert_eq!(
-            words("(hello) G0 (x) X1 ; G1 X2 (unclosed"),
-            vec![('G', 0.0, 9), ('X', 1.0, 16)]
-        );
+        assert_eq!(words("(hello) G0 (x) X1 ; G1 X2 (unclosed"), vec![('G', 0.0, 9), ('X', 1.0, 16)]);
         assert_eq!(words(" / G0"), vec![('G', 0.0, 4)]);
         assert_eq!(words(""), vec![]);
         assert_eq!(words("   ; only comment"), vec![]);
@@ -174,32 +141,14 @@ mod tests {
         assert_eq!(err("G1 X-"), LineError::new(4, "bad number for word X"));
         assert_eq!(err("G1 X."), LineError::new(4, "bad number for word X"));
         assert_eq!(err("G1 X1.2.3"), LineError::new(4, "bad number for word X"));
-        assert_eq!(
-            err("G1 #1=2"),
-            LineError::new(4, "parameters (#) are not supported")
-        );
-        assert_eq!(
-            err("G1 X1 [1]"),
-            LineError::new(7, "expressions ([...]) are not supported")
-        );
+        assert_eq!(err("G1 #1=2"), LineError::new(4, "parameters (#) are not supported"));
+        assert_eq!(err("G1 X1 [1]"), LineError::new(7, "expressions ([...]) are not supported"));
         assert_eq!(err("G1 X#1"), LineError::new(4, "missing value for word X"));
-        assert_eq!(
-            err("G1 X1 *"),
-            LineError::new(7, "unexpected character '*'")
-        );
-        assert_eq!(
-            err("G1 X1 %"),
-            LineError::new(7, "unexpected character '%'")
-        );
-        assert_eq!(
-            err("G1 X1000000001"),
-            LineError::new(4, "number out of range for word X")
-        );
+        assert_eq!(err("G1 X1 *"), LineError::new(7, "unexpected character '*'"));
+        assert_eq!(err("G1 X1 %"), LineError::new(7, "unexpected character '%'"));
+        assert_eq!(err("G1 X1000000001"), LineError::new(4, "number out of range for word X"));
         let huge = format!("X1{}", "0".repeat(400));
-        assert_eq!(
-            err(&huge),
-            LineError::new(1, "number out of range for word X")
-        );
+        assert_eq!(err(&huge), LineError::new(1, "number out of range for word X"));
     }
 
     #[test]

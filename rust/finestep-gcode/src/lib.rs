@@ -60,12 +60,7 @@ pub struct Point {
 
 impl Point {
     fn from_array([x_mm, y_mm, z_mm, a_deg]: [f64; 4]) -> Self {
-        Point {
-            x_mm,
-            y_mm,
-            z_mm,
-            a_deg,
-        }
+        Point { x_mm, y_mm, z_mm, a_deg }
     }
 }
 
@@ -301,11 +296,7 @@ pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
         }
         seen_content = true;
         let executed = state.execute(&words).map_err(located)?;
-        blocks.extend(executed.kinds.into_iter().map(|kind| Block {
-            line,
-            n: executed.n,
-            kind,
-        }));
+        blocks.extend(executed.kinds.into_iter().map(|kind| Block { line, n: executed.n, kind }));
         if executed.end {
             break;
         }
@@ -331,10 +322,7 @@ pub fn parse_bytes(source: &[u8], file_name: &str) -> Result<Program, GcodeError
 pub fn parse_file(path: impl AsRef<Path>) -> Result<Program, GcodeError> {
     let path = path.as_ref();
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| GcodeError::Io {
-        file: file.clone(),
-        source,
-    })?;
+    let bytes = std::fs::read(path).map_err(|source| GcodeError::Io { file: file.clone(), source })?;
     parse_bytes(&bytes, &file)
 }
 

@@ -19,21 +19,11 @@ fn err(source: &str) -> String {
 }
 
 fn p(x_mm: f64, y_mm: f64, z_mm: f64, a_deg: f64) -> Point {
-    Point {
-        x_mm,
-        y_mm,
-        z_mm,
-        a_deg,
-    }
+    Point { x_mm, y_mm, z_mm, a_deg }
 }
 
 fn close(a: Point, b: Point) -> bool {
-    let d = [
-        a.x_mm - b.x_mm,
-        a.y_mm - b.y_mm,
-        a.z_mm - b.z_mm,
-        a.a_deg - b.a_deg,
-    ];
+    let d = [a.x_mm - b.x_mm, a.y_mm - b.y_mm, a.z_mm - b.z_mm, a.a_deg - b.a_deg];
     d.iter().all(|v| v.abs() < 1e-9)
 }
 
@@ -42,14 +32,9 @@ fn arc(source: &str) -> (Point, Point, Plane, bool, u32, f64) {
     let arcs: Vec<_> = parse(source)
         .into_iter()
         .filter_map(|k| match k {
-            BlockKind::Arc {
-                to,
-                centre,
-                plane,
-                clockwise,
-                extra_turns,
-                feed_mm_per_min,
-            } => Some((to, centre, plane, clockwise, extra_turns, feed_mm_per_min)),
+            BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
+                Some((to, centre, plane, clockwise, extra_turns, feed_mm_per_min))
+            }
             _ => None,
         })
         .collect();
@@ -59,62 +44,24 @@ fn arc(source: &str) -> (Point, Point, Plane, bool, u32, f64) {
 
 #[test]
 fn rapid_and_linear_with_lines_and_numbers() {
-    let program = parse_str(
-        "%\n\nN10 G0 X1 Y2 Z3 A90\nn20 g1 x4 f100\n(comment)\nY5\n%\nG0 X99\n",
-        FILE,
-    )
-    .unwrap();
-    let got: Vec<_> = program
-        .blocks
-        .iter()
-        .map(|b| (b.line, b.n, b.kind.clone()))
-        .collect();
+    let program = parse_str("%\n\nN10 G0 X1 Y2 Z3 A90\nn20 g1 x4 f100\n(comment)\nY5\n%\nG0 X99\n", FILE).unwrap();
+    let got: Vec<_> = program.blocks.iter().map(|b| (b.line, b.n, b.kind.clone())).collect();
     assert_eq!(
         got,
         vec![
-            (
-                3,
-                Some(10),
-                BlockKind::Rapid {
-                    to: p(1.0, 2.0, 3.0, 90.0)
-                }
-            ),
-            (
-                4,
-                Some(20),
-                BlockKind::Linear {
-                    to: p(4.0, 2.0, 3.0, 90.0),
-                    feed_mm_per_min: 100.0
-                }
-            ),
-            (
-                6,
-                None,
-                BlockKind::Linear {
-                    to: p(4.0, 5.0, 3.0, 90.0),
-                    feed_mm_per_min: 100.0
-                }
-            ),
+            (3, Some(10), BlockKind::Rapid { to: p(1.0, 2.0, 3.0, 90.0) }),
+            (4, Some(20), BlockKind::Linear { to: p(4.0, 2.0, 3.0, 90.0), feed_mm_per_min: 100.0 }),
+            (6, None, BlockKind::Linear { to: p(4.0, 5.0, 3.0, 90.0), feed_mm_per_min: 100.0 }),
         ]
     );
 }
 
 #[test]
 fn percent_later_ends_the_program_and_m2_stops_reading() {
-    assert_eq!(
-        parse("G0 X1\n%\nG0 X2 Q1\n"),
-        vec![BlockKind::Rapid {
-            to: p(1.0, 0.0, 0.0, 0.0)
-        }]
-    );
+    assert_eq!(parse("G0 X1\n%\nG0 X2 Q1\n"), vec![BlockKind::Rapid { to: p(1.0, 0.0, 0.0, 0.0) }]);
     assert_eq!(
         parse("G0 X1 M2\nthis is not G-code\n"),
-        vec![
-            BlockKind::Rapid {
-                to: p(1.0, 0.0, 0.0, 0.0)
-            },
-            BlockKind::End
-        ]
+        vec![BlockKind::Rapid { to: p(1.0, 0.0, 0.0, 0.0) }, BlockKind::End]
     );
     assert_eq!(parse("M30\nQ"), vec![BlockKind::End]);
     assert_eq!(parse("M0"), vec![BlockKind::Pause]);
@@ -125,25 +72,15 @@ fn spaces_case_crlf_and_block_delete() {
     assert_eq!(
         parse("g 1 x 1 0 . 5 f 6 0\r\n/G0 Y-2\r\n"),
         vec![
-            BlockKind::Linear {
-                to: p(10.5, 0.0, 0.0, 0.0),
-                feed_mm_per_min: 60.0
-            },
-            BlockKind::Rapid {
-                to: p(10.5, -2.0, 0.0, 0.0)
-            },
+            BlockKind::Linear { to: p(10.5, 0.0, 0.0, 0.0), feed_mm_per_min: 60.0 },
+            BlockKind::Rapid { to: p(10.5, -2.0, 0.0, 0.0) },
         ]
     );
 }
 
 #[test]
 fn modal_motion_without_axes_sets_the_mode_only() {
-    assert_eq!(
-        parse("G1 F100\nG0\nX1\n"),
-        vec![BlockKind::Rapid {
-            to: p(1.0, 0.0, 0.0, 0.0)
-        }]
-    );
+    assert_eq!(parse("G1 F100\nG0\nX1\n"), vec![BlockKind::Rapid { to: p(1.0, 0.0, 0.0, 0.0) }]);
 }
 
 #[test]
@@ -151,28 +88,14 @@ fn units_convert_to_mm_and_a_stays_in_degrees() {
     assert_eq!(
         parse("G20 G0 X1 A10\nG1 Y2 F10\nG21 G1 Z3\n"),
         vec![
-            BlockKind::Rapid {
-                to: p(25.4, 0.0, 0.0, 10.0)
-            },
-            BlockKind::Linear {
-                to: p(25.4, 50.8, 0.0, 10.0),
-                feed_mm_per_min: 254.0
-            },
+            BlockKind::Rapid { to: p(25.4, 0.0, 0.0, 10.0) },
+            BlockKind::Linear { to: p(25.4, 50.8, 0.0, 10.0), feed_mm_per_min: 254.0 },
             // F keeps its mm/min value across a unit change.
-            BlockKind::Linear {
-                to: p(25.4, 50.8, 3.0, 10.0),
-                feed_mm_per_min: 254.0
-            },
+            BlockKind::Linear { to: p(25.4, 50.8, 3.0, 10.0), feed_mm_per_min: 254.0 },
         ]
     );
     // G20 acts on the whole block, also on F given before it.
-    assert_eq!(
-        parse("F1 G20 G1 X1"),
-        vec![BlockKind::Linear {
-            to: p(25.4, 0.0, 0.0, 0.0),
-            feed_mm_per_min: 25.4
-        }]
-    );
+    assert_eq!(parse("F1 G20 G1 X1"), vec![BlockKind::Linear { to: p(25.4, 0.0, 0.0, 0.0), feed_mm_per_min: 25.4 }]);
 }
 
 #[test]
@@ -180,21 +103,11 @@ fn incremental_distances_resolve_to_absolute() {
     assert_eq!(
         parse("G0 X1 Y1 A5\nG91 G0 X1 A-10\nG0 X1 Y-3\nG90 G0 X0\nG91 G20 G0 Z1"),
         vec![
-            BlockKind::Rapid {
-                to: p(1.0, 1.0, 0.0, 5.0)
-            },
-            BlockKind::Rapid {
-                to: p(2.0, 1.0, 0.0, -5.0)
-            },
-            BlockKind::Rapid {
-                to: p(3.0, -2.0, 0.0, -5.0)
-            },
-            BlockKind::Rapid {
-                to: p(0.0, -2.0, 0.0, -5.0)
-            },
-            BlockKind::Rapid {
-                to: p(0.0, -2.0, 25.4, -5.0)
-            },
+            BlockKind::Rapid { to: p(1.0, 1.0, 0.0, 5.0) },
+            BlockKind::Rapid { to: p(2.0, 1.0, 0.0, -5.0) },
+            BlockKind::Rapid { to: p(3.0, -2.0, 0.0, -5.0) },
+            BlockKind::Rapid { to: p(0.0, -2.0, 0.0, -5.0) },
+            BlockKind::Rapid { to: p(0.0, -2.0, 25.4, -5.0) },
         ]
     );
 }
@@ -237,24 +150,12 @@ fn one_block_runs_in_linuxcnc_order() {
         vec![
             BlockKind::ToolSelect { tool: 2 },
             BlockKind::ToolChange { tool: 2 },
-            BlockKind::Spindle {
-                rotation: SpindleRotation::Clockwise,
-                rpm: 500.0
-            },
-            BlockKind::Coolant {
-                mist: false,
-                flood: true
-            },
+            BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 500.0 },
+            BlockKind::Coolant { mist: false, flood: true },
             BlockKind::Dwell { seconds: 1.0 },
-            BlockKind::CutterComp {
-                side: CompSide::Left,
-                tool: Some(1)
-            },
+            BlockKind::CutterComp { side: CompSide::Left, tool: Some(1) },
             BlockKind::PathControl(PathControl::ExactPath),
-            BlockKind::Linear {
-                to: p(1.0, 0.0, 0.0, 0.0),
-                feed_mm_per_min: 100.0
-            },
+            BlockKind::Linear { to: p(1.0, 0.0, 0.0, 0.0), feed_mm_per_min: 100.0 },
             BlockKind::End,
         ]
     );
@@ -265,10 +166,7 @@ fn arcs_centre_form_in_all_planes_with_helix() {
     // G17: quarter circle from (10,0) to (0,10) counter-clockwise round the origin,
     // Z rising 5 (helix), A turning.
     let (to, centre, plane, cw, turns, feed) = arc("G0 X10\nG3 X0 Y10 Z5 A30 I-10 J0 F50");
-    assert_eq!(
-        (to, plane, cw, turns, feed),
-        (p(0.0, 10.0, 5.0, 30.0), Plane::Xy, false, 0, 50.0)
-    );
+    assert_eq!((to, plane, cw, turns, feed), (p(0.0, 10.0, 5.0, 30.0), Plane::Xy, false, 0, 50.0));
     assert!(close(centre, p(0.0, 0.0, 0.0, 0.0)), "{centre:?}");
     // G18: Z-X plane, normal Y helix.
     let (to, centre, plane, cw, _, _) = arc("G18 G0 Z10\nG2 Z0 X10 Y-3 K-10 F50");
@@ -328,14 +226,8 @@ fn arc_end_tolerance_is_linuxcnc_s() {
     arc("G0 X1\nG3 X-1.0015 I-1 F1");
     // 0.05 mm off a 100 mm radius: within 0.1 %.
     arc("G0 X100\nG3 X-100.05 I-100 F1");
-    assert_eq!(
-        err("G0 X100\nG3 X-100.2 I-100 F1"),
-        "t.ngc:2:1: arc end not on circle: radius differs by 0.200 mm"
-    );
-    assert_eq!(
-        err("G0 X10\nG2 X-10.012 I-10 F1"),
-        "t.ngc:2:1: arc end not on circle: radius differs by 0.012 mm"
-    );
+    assert_eq!(err("G0 X100\nG3 X-100.2 I-100 F1"), "t.ngc:2:1: arc end not on circle: radius differs by 0.200 mm");
+    assert_eq!(err("G0 X10\nG2 X-10.012 I-10 F1"), "t.ngc:2:1: arc end not on circle: radius differs by 0.012 mm");
 }
 
 #[test]
@@ -345,10 +237,7 @@ fn file_api_and_io_errors() {
     let file = dir.join("part.ngc");
     std::fs::write(&file, b"G0 X1 (\xff in a comment)\nG0 \xff\n").unwrap();
     let e = parse_file(&file).unwrap_err();
-    assert_eq!(
-        e.to_string(),
-        format!("{}:2:4: unexpected character '\u{fffd}'", file.display())
-    );
+    assert_eq!(e.to_string(), format!("{}:2:4: unexpected character '\u{fffd}'", file.display()));
     assert_eq!((e.line(), e.column()), (Some(2), Some(4)));
     std::fs::write(&file, "G0 X1\n").unwrap();
     assert_eq!(parse_file(&file).unwrap().blocks.len(), 1);
@@ -356,9 +245,7 @@ fn file_api_and_io_errors() {
     let e = parse_file(dir.join("missing.ngc")).unwrap_err();
     assert!(matches!(e, GcodeError::Io { .. }));
     assert_eq!((e.line(), e.column()), (None, None));
-    assert!(e
-        .to_string()
-        .starts_with(&format!("{}: ", dir.join("missing.ngc").display())));
+    assert!(e.to_string().starts_with(&format!("{}: ", dir.join("missing.ngc").display())));
 }
 
 #[test]
@@ -389,10 +276,7 @@ fn every_error_message_with_its_place() {
         ("G0 G1 X1", "1:4: G0 and G1 are in the same modal group"),
         ("G1 G1 X1 F1", "1:4: G1 and G1 are in the same modal group"),
         ("G17 G18", "1:5: G17 and G18 are in the same modal group"),
-        (
-            "G90.1 G91.1",
-            "1:7: G90.1 and G91.1 are in the same modal group",
-        ),
+        ("G90.1 G91.1", "1:7: G90.1 and G91.1 are in the same modal group"),
         ("G20 G21", "1:5: G20 and G21 are in the same modal group"),
         ("G41 G40", "1:5: G41 and G40 are in the same modal group"),
         ("G61 G64", "1:5: G61 and G64 are in the same modal group"),
@@ -402,25 +286,13 @@ fn every_error_message_with_its_place() {
         ("M0 M2", "1:4: M0 and M2 are in the same modal group"),
         ("M6 M6", "1:4: M6 and M6 are in the same modal group"),
         // Words with nothing to use them.
-        (
-            "X1",
-            "1:1: axis word with no motion mode (G0, G1, G2 or G3) to use it",
-        ),
-        (
-            "F100 Y2 X1",
-            "1:6: axis word with no motion mode (G0, G1, G2 or G3) to use it",
-        ),
+        ("X1", "1:1: axis word with no motion mode (G0, G1, G2 or G3) to use it"),
+        ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2 or G3) to use it"),
         ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
         ("R1", "1:1: R word with no G2 or G3 to use it"),
-        (
-            "G0 X1 P1",
-            "1:7: P word with no G4, G64, G2, G3 or G5.2 to use it",
-        ),
+        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3 or G5.2 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
-        (
-            "G4 P1 G2 X1 I1 F1",
-            "1:4: P word is used by more than one code",
-        ),
+        ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
         ("G40 D1", "1:5: D word with no G41 or G42 to use it"),
         ("D1", "1:1: D word with no G41 or G42 to use it"),
         ("F1 G2 I1", "1:4: G2 with no axis words"),
@@ -434,14 +306,8 @@ fn every_error_message_with_its_place() {
         ("G4", "1:1: G4 with no P word"),
         ("G4 P-1", "1:4: negative dwell time"),
         ("G64 P-0.1", "1:5: negative path tolerance"),
-        (
-            "G41\nG42",
-            "2:1: cutter compensation is already on (G40 first)",
-        ),
-        (
-            "G91 G0 X1000000000\nX1000000000\nX1000000000\nG20 X1000000000",
-            "4:5: position out of range",
-        ),
+        ("G41\nG42", "2:1: cutter compensation is already on (G40 first)"),
+        ("G91 G0 X1000000000\nX1000000000\nX1000000000\nG20 X1000000000", "4:5: position out of range"),
         // Feed.
         ("G1 X1", "1:1: G1 with no feed rate"),
         ("G1 F0\n X1", "2:2: G1 with no feed rate"),
@@ -451,43 +317,16 @@ fn every_error_message_with_its_place() {
         ("F1 G2 X1", "1:4: G2 without I/J/K or R"),
         ("F1 G3 X1 Y1 I1\n Y2", "2:2: G3 without I/J/K or R"),
         ("F1 G2 X2 I1 R1", "1:13: G2 with both R and I/J/K"),
-        (
-            "F1 G2 X2 I1 K1",
-            "1:13: K word not allowed for an arc in the G17 plane",
-        ),
-        (
-            "F1 G18 G2 X2 I1 J1",
-            "1:17: J word not allowed for an arc in the G18 plane",
-        ),
-        (
-            "F1 G19 G2 Y2 I1 J1",
-            "1:14: I word not allowed for an arc in the G19 plane",
-        ),
+        ("F1 G2 X2 I1 K1", "1:13: K word not allowed for an arc in the G17 plane"),
+        ("F1 G18 G2 X2 I1 J1", "1:17: J word not allowed for an arc in the G18 plane"),
+        ("F1 G19 G2 Y2 I1 J1", "1:14: I word not allowed for an arc in the G19 plane"),
         ("F1 G2 X2 J0", "1:4: arc radius is zero"),
-        (
-            "F1 G2 X2 I1 P0",
-            "1:13: P word for G2 must be a positive integer",
-        ),
-        (
-            "F1 G2 X2 I1 P1.5",
-            "1:13: P word for G2 must be a positive integer",
-        ),
-        (
-            "F1 G2 X0 R1",
-            "1:10: R-form arc needs an end point different from its start",
-        ),
-        (
-            "F1 G2 X2 Y0 R0.99",
-            "1:13: arc radius 0.990 mm is less than half the chord 1.000 mm",
-        ),
-        (
-            "F1 G3 X2 R-0.5",
-            "1:10: arc radius 0.500 mm is less than half the chord 1.000 mm",
-        ),
-        (
-            "G0 X10\nF1 G2 X-10.012 I-10",
-            "2:4: arc end not on circle: radius differs by 0.012 mm",
-        ),
+        ("F1 G2 X2 I1 P0", "1:13: P word for G2 must be a positive integer"),
+        ("F1 G2 X2 I1 P1.5", "1:13: P word for G2 must be a positive integer"),
+        ("F1 G2 X0 R1", "1:10: R-form arc needs an end point different from its start"),
+        ("F1 G2 X2 Y0 R0.99", "1:13: arc radius 0.990 mm is less than half the chord 1.000 mm"),
+        ("F1 G3 X2 R-0.5", "1:10: arc radius 0.500 mm is less than half the chord 1.000 mm"),
+        ("G0 X10\nF1 G2 X-10.012 I-10", "2:4: arc end not on circle: radius differs by 0.012 mm"),
     ];
     for (source, expected) in cases {
         assert_eq!(err(source), format!("t.ngc:{expected}"), "{source:?}");
@@ -508,14 +347,8 @@ fn hostile_input_is_an_error_not_a_panic() {
     assert_eq!(err(&long), "t.ngc:1:7: word X appears twice");
     let digits = format!("G0 X{}", "9".repeat(10_000));
     assert_eq!(err(&digits), "t.ngc:1:4: number out of range for word X");
-    assert_eq!(
-        err("T99999999999"),
-        "t.ngc:1:1: number out of range for word T"
-    );
-    assert_eq!(
-        err("T4294967296"),
-        "t.ngc:1:1: number out of range for word T"
-    );
+    assert_eq!(err("T99999999999"), "t.ngc:1:1: number out of range for word T");
+    assert_eq!(err("T4294967296"), "t.ngc:1:1: number out of range for word T");
     assert!(parse_str("", FILE).unwrap().blocks.is_empty());
 }
 
@@ -554,13 +387,9 @@ fn nurbs(source: &str) -> NurbsParts {
 fn nurbs_blocks_follow_linuxcnc() {
     // LinuxCNC's documented example: the current position is the first control point,
     // `G5.2 P1 L3` sets its weight and the order, the default order is 3.
-    let (points, order, knots, feed, to) = nurbs(
-        "G0 X0 Y0 Z2\nF10\nG5.2 P1 L3\n X0 Y1 P1\n X2 Y2 P1\n X2 Y0 P1\n X0 Y0 P2\nG5.3\nM2\n",
-    );
-    assert_eq!(
-        points,
-        vec![(0.0, 0.0, 1.0), (0.0, 1.0, 1.0), (2.0, 2.0, 1.0), (2.0, 0.0, 1.0), (0.0, 0.0, 2.0)]
-    );
+    let (points, order, knots, feed, to) =
+        nurbs("G0 X0 Y0 Z2\nF10\nG5.2 P1 L3\n X0 Y1 P1\n X2 Y2 P1\n X2 Y0 P1\n X0 Y0 P2\nG5.3\nM2\n");
+    assert_eq!(points, vec![(0.0, 0.0, 1.0), (0.0, 1.0, 1.0), (2.0, 2.0, 1.0), (2.0, 0.0, 1.0), (0.0, 0.0, 2.0)]);
     assert_eq!(order, 3);
     assert_eq!(knots, vec![0.0, 0.0, 0.0, 1.0, 2.0, 3.0, 3.0, 3.0]);
     assert_eq!(feed, 10.0);
@@ -570,10 +399,7 @@ fn nurbs_blocks_follow_linuxcnc() {
     let source = "G0 X1 Y1\nG20 G91 F1\nG5.2 X1 Y0 P0.5 L4\nX1 Y1\nX0 Y1 P2\nG5.3\nG1 X0.1\n";
     let (points, order, knots, feed, to) = nurbs(source);
     let i = 25.4;
-    assert_eq!(
-        points,
-        vec![(1.0, 1.0, 1.0), (1.0 + i, 1.0, 0.5), (1.0 + i, 1.0 + i, 1.0), (1.0, 1.0 + i, 2.0)]
-    );
+    assert_eq!(points, vec![(1.0, 1.0, 1.0), (1.0 + i, 1.0, 0.5), (1.0 + i, 1.0 + i, 1.0), (1.0, 1.0 + i, 2.0)]);
     assert_eq!((order, knots, feed), (4, vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0], i));
     assert!(close(to, p(1.0, 1.0 + i, 0.0, 0.0)));
     let program = parse_str(source, FILE).unwrap();
@@ -581,8 +407,7 @@ fn nurbs_blocks_follow_linuxcnc() {
     let BlockKind::Linear { to, .. } = program.blocks[2].kind else { panic!() };
     assert!(close(to, p(1.0 + 0.1 * i, 1.0 + i, 0.0, 0.0)));
     // Order 2 is the control polygon; N words, comments and blank lines may stand inside.
-    let (points, order, knots, ..) =
-        nurbs("F600\nG5.2 X1 Y0 L2\n\n(corner)\nN30 X1 Y1\nG5.3 M2\n");
+    let (points, order, knots, ..) = nurbs("F600\nG5.2 X1 Y0 L2\n\n(corner)\nN30 X1 Y1\nG5.3 M2\n");
     assert_eq!((points.len(), order), (3, 2));
     assert_eq!(knots, vec![0.0, 0.0, 1.0, 2.0, 2.0]);
     assert_eq!(nurbs_knots(7, 3), vec![0.0, 0.0, 0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 5.0, 5.0]);
@@ -596,32 +421,56 @@ fn nurbs_blocks_follow_linuxcnc() {
 #[test]
 fn nurbs_errors_with_their_place() {
     let cases: &[(&str, &str)] = &[
-        ("F600\nG5.2 X1 Y0\nX1 Y1\nG5.3 X3\n", "4:6: G5.3 takes no axis words (control points go on the lines before it)"),
+        (
+            "F600\nG5.2 X1 Y0\nX1 Y1\nG5.3 X3\n",
+            "4:6: G5.3 takes no axis words (control points go on the lines before it)",
+        ),
         ("F600\nG5.3\n", "2:1: G5.3 without G5.2 first"),
         ("F600\nG5.2 X1 Y0\nG5.3\n", "3:1: a NURBS of order 3 needs at least 3 control points, this one has 2"),
-        ("F600\nG5.2 X1 Y0 L4\nX2 Y2\nG5.3\n", "4:1: a NURBS of order 4 needs at least 4 control points, this one has 3"),
+        (
+            "F600\nG5.2 X1 Y0 L4\nX2 Y2\nG5.3\n",
+            "4:1: a NURBS of order 4 needs at least 4 control points, this one has 3",
+        ),
         ("F600\nG5.2 X1 Y0 P0\n", "2:12: NURBS weight P must be positive"),
         ("F600\nG5.2 X1 Y0\nX2 Y1 P-1\n", "3:7: NURBS weight P must be positive"),
         ("F600\nG5.2 X1 Y0 L1\n", "2:12: NURBS order L must be an integer from 2 to 16"),
         ("F600\nG5.2 X1 Y0 L2.5\n", "2:12: NURBS order L must be an integer from 2 to 16"),
         ("F600\nG5.2 X1\n", "2:6: a NURBS control point needs both X and Y"),
         ("F600\nG5.2 X1 Y1\nY2\n", "3:1: a NURBS control point needs both X and Y"),
-        ("F600\nG5.2 X1 Y1\nP2\n", "3:1: P without X and Y sets only the first control point's weight (on the G5.2 line)"),
+        (
+            "F600\nG5.2 X1 Y1\nP2\n",
+            "3:1: P without X and Y sets only the first control point's weight (on the G5.2 line)",
+        ),
         ("F600\nG5.2 X1 Y1 Z1\n", "2:12: axis Z in a NURBS: only X and Y move in a NURBS (G17)"),
         ("F600\nG5.2 X1 Y1\nX2 Y2 A3\n", "3:7: axis A inside a NURBS block: only X and Y move in a NURBS (G17)"),
         ("F600\nG5.2 X1 Y1\nG1 X2 Y2\n", "3:1: G1 inside a NURBS block: only X, Y and P words until G5.3 closes it"),
-        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.2 X3 Y3\n", "4:1: G5.2 inside a NURBS block: only X, Y and P words until G5.3 closes it"),
-        ("F600\nG5.2 X1 Y1\nX2 Y2 F100\n", "3:7: F word inside a NURBS block: only X, Y and P words until G5.3 closes it"),
-        ("F600\nG5.2 X1 Y1\nX2 Y2\nM2\n", "4:1: M word inside a NURBS block: only X, Y and P words until G5.3 closes it"),
+        (
+            "F600\nG5.2 X1 Y1\nX2 Y2\nG5.2 X3 Y3\n",
+            "4:1: G5.2 inside a NURBS block: only X, Y and P words until G5.3 closes it",
+        ),
+        (
+            "F600\nG5.2 X1 Y1\nX2 Y2 F100\n",
+            "3:7: F word inside a NURBS block: only X, Y and P words until G5.3 closes it",
+        ),
+        (
+            "F600\nG5.2 X1 Y1\nX2 Y2\nM2\n",
+            "4:1: M word inside a NURBS block: only X, Y and P words until G5.3 closes it",
+        ),
         ("G18 F600\nG5.2 X1 Y1\n", "2:1: G5.2 NURBS is supported in the G17 (XY) plane only"),
         ("F600\nG41 D1\nG5.2 X1 Y1\n", "3:1: G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"),
         ("G5.2 X1 Y1\n", "1:1: G5.2 with no feed rate"),
         ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2 to use it"),
         ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n", "4:6: P word with no G4, G64, G2, G3 or G5.2 to use it"),
         // The program ends inside the block: the error points at its G5.2.
-        ("F600\nG0 X1\n G5.2 X1 Y1\nX2 Y2\nX3 Y1\n", "3:2: the program ends inside the NURBS block opened here (G5.3 missing)"),
+        (
+            "F600\nG0 X1\n G5.2 X1 Y1\nX2 Y2\nX3 Y1\n",
+            "3:2: the program ends inside the NURBS block opened here (G5.3 missing)",
+        ),
         ("F600\nG5.2 X1 Y1 M2\n", "2:1: the program ends inside the NURBS block opened here (G5.3 missing)"),
-        ("%\nF600\nG5.2 X1 Y1\nX2 Y2\n%\nX9 Y9\nG5.3\n", "3:1: the program ends inside the NURBS block opened here (G5.3 missing)"),
+        (
+            "%\nF600\nG5.2 X1 Y1\nX2 Y2\n%\nX9 Y9\nG5.3\n",
+            "3:1: the program ends inside the NURBS block opened here (G5.3 missing)",
+        ),
     ];
     for (source, expected) in cases {
         assert_eq!(err(source), format!("{FILE}:{expected}"), "{source:?}");

@@ -9,39 +9,19 @@ fn check_location(source: &str, result: &Result<Program, GcodeError>) -> Result<
     match result {
         Ok(program) => {
             for block in &program.blocks {
-                if let BlockKind::Rapid { to }
-                | BlockKind::Linear { to, .. }
-                | BlockKind::Arc { to, .. } = block.kind
-                {
-                    prop_assert!([to.x_mm, to.y_mm, to.z_mm, to.a_deg]
-                        .iter()
-                        .all(|v| v.is_finite()));
+                if let BlockKind::Rapid { to } | BlockKind::Linear { to, .. } | BlockKind::Arc { to, .. } = block.kind {
+                    prop_assert!([to.x_mm, to.y_mm, to.z_mm, to.a_deg].iter().all(|v| v.is_finite()));
                 }
             }
         }
-        Err(GcodeError::Parse {
-            file,
-            line,
-            column,
-            message,
-        }) => {
+        Err(GcodeError::Parse { file, line, column, message }) => {
             prop_assert_eq!(file.as_str(), "fuzz.ngc");
             prop_assert!(!message.is_empty());
             let lines: Vec<&str> = source.split('\n').collect();
-            prop_assert!(
-                *line >= 1 && *line <= lines.len(),
-                "line {} of {}",
-                line,
-                lines.len()
-            );
+            prop_assert!(*line >= 1 && *line <= lines.len(), "line {} of {}", line, lines.len());
             let text = lines[*line - 1];
             let width = text.strip_suffix('\r').unwrap_or(text).chars().count();
-            prop_assert!(
-                *column >= 1 && *column <= width + 1,
-                "column {} of {}",
-                column,
-                width
-            );
+            prop_assert!(*column >= 1 && *column <= width + 1, "column {} of {}", column, width);
         }
         Err(e) => prop_assert!(false, "unexpected error {e}"),
     }
@@ -62,12 +42,10 @@ fn random_bytes_never_panic() {
 /// Tokens that are nearly G-code: words, fragments, numbers, separators, comments.
 fn token() -> impl Strategy<Value = String> {
     let fixed = prop::sample::select(vec![
-        "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42",
-        "G61", "G64", "G90", "G91", "G90.1", "G91.1", "G5.2", "G5.3", "L", "G33", "M0", "M2", "M3",
-        "M4", "M5", "M6",
-        "M7", "M8", "M9", "M30", "F", "S", "T", "D", "P", "R", "I", "J", "K", "X", "Y", "Z", "A",
-        "N", "Q", "B", "-", "+", ".", " ", "\t", "(", ")", "(c)", ";", "\n", "\r\n", "%", "/", "#",
-        "[", "0", "1", "5", "9", "1e5", "é", "\u{fffd}",
+        "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42", "G61", "G64", "G90",
+        "G91", "G90.1", "G91.1", "G5.2", "G5.3", "L", "G33", "M0", "M2", "M3", "M4", "M5", "M6", "M7", "M8", "M9",
+        "M30", "F", "S", "T", "D", "P", "R", "I", "J", "K", "X", "Y", "Z", "A", "N", "Q", "B", "-", "+", ".", " ",
+        "\t", "(", ")", "(c)", ";", "\n", "\r\n", "%", "/", "#", "[", "0", "1", "5", "9", "1e5", "é", "\u{fffd}",
     ])
     .prop_map(str::to_string);
     let letter = prop::sample::select("GMFSTDPRIJKLXYZAN".chars().collect::<Vec<_>>());
@@ -97,21 +75,14 @@ fn notations_agree() {
         .run(&proptest::collection::vec(point, 1..20), |points| {
             // Values in units of 0.0001 inch = 0.00254 mm so that all three notations
             // are exact decimal numbers.
-            let (mut absolute_mm, mut incremental_mm, mut inches) = (
-                "G21 G90 F100\n".to_string(),
-                "G21 G91 F100\n".to_string(),
-                "G20 G90 F3.937\n".to_string(),
-            );
+            let (mut absolute_mm, mut incremental_mm, mut inches) =
+                ("G21 G90 F100\n".to_string(), "G21 G91 F100\n".to_string(), "G20 G90 F3.937\n".to_string());
             let mut last = [0i32; 3];
             for p in &points {
                 let mm = |v: i32| f64::from(v) * 0.00254;
                 absolute_mm += &format!("G1 X{:.5} Y{:.5} Z{:.5}\n", mm(p[0]), mm(p[1]), mm(p[2]));
-                incremental_mm += &format!(
-                    "G1 X{:.5} Y{:.5} Z{:.5}\n",
-                    mm(p[0] - last[0]),
-                    mm(p[1] - last[1]),
-                    mm(p[2] - last[2])
-                );
+                incremental_mm +=
+                    &format!("G1 X{:.5} Y{:.5} Z{:.5}\n", mm(p[0] - last[0]), mm(p[1] - last[1]), mm(p[2] - last[2]));
                 inches += &format!(
                     "G1 X{:.4} Y{:.4} Z{:.4}\n",
                     f64::from(p[0]) / 1e4,
@@ -121,8 +92,7 @@ fn notations_agree() {
                 last = *p;
             }
             let ends = |source: &str| -> Result<Vec<[f64; 3]>, TestCaseError> {
-                let program =
-                    parse_str(source, "n.ngc").map_err(|e| TestCaseError::fail(e.to_string()))?;
+                let program = parse_str(source, "n.ngc").map_err(|e| TestCaseError::fail(e.to_string()))?;
                 Ok(program
                     .blocks
                     .iter()
@@ -154,13 +124,11 @@ fn notations_agree() {
 /// the random programs reach arcs, modes and their checks rather than the lexer.
 fn block_line() -> impl Strategy<Value = String> {
     let g = prop::sample::select(vec![
-        "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42",
-        "G61", "G64", "G90", "G91", "G90.1", "G91.1", "M0", "M3", "M5", "M6", "M7", "M8", "M9",
+        "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42", "G61", "G64", "G90",
+        "G91", "G90.1", "G91.1", "M0", "M3", "M5", "M6", "M7", "M8", "M9",
     ])
     .prop_map(str::to_string);
-    let value = prop::sample::select(vec![
-        "0", "1", "-1", "2", "0.5", "-0.5", "3", "10", "-10", "0.001", "100",
-    ]);
+    let value = prop::sample::select(vec!["0", "1", "-1", "2", "0.5", "-0.5", "3", "10", "-10", "0.001", "100"]);
     let letter = prop::sample::select("FXYZAIJKRPSTD".chars().collect::<Vec<_>>());
     let word = (letter, value).prop_map(|(l, v)| format!("{l}{v}"));
     let item = prop_oneof![1 => g, 3 => word];
@@ -184,23 +152,11 @@ fn block_soup_never_panics() {
 fn arc_centre_and_radius_forms_agree() {
     use std::f64::consts::{PI, TAU};
     let mut runner = finestep_testkit::runner("arc_centre_and_radius_forms_agree", 500);
-    let case = (
-        0usize..3,
-        -50.0f64..50.0,
-        -50.0f64..50.0,
-        0.5f64..100.0,
-        0.0..TAU,
-        0.0..TAU,
-        any::<bool>(),
-    );
+    let case = (0usize..3, -50.0f64..50.0, -50.0f64..50.0, 0.5f64..100.0, 0.0..TAU, 0.0..TAU, any::<bool>());
     runner
         .run(&case, |(plane, cp, cq, radius, start, end, clockwise)| {
             let ccw_sweep = (end - start).rem_euclid(TAU);
-            let sweep = if clockwise {
-                TAU - ccw_sweep
-            } else {
-                ccw_sweep
-            };
+            let sweep = if clockwise { TAU - ccw_sweep } else { ccw_sweep };
             prop_assume!([0.0, PI, TAU].iter().all(|s| (sweep - s).abs() > 0.05));
             let (g, [lp, lq], [op, oq]) = match plane {
                 0 => ("G17", ['X', 'Y'], ['I', 'J']),
@@ -210,36 +166,22 @@ fn arc_centre_and_radius_forms_agree() {
             let (sp, sq) = (cp + radius * start.cos(), cq + radius * start.sin());
             let (ep, eq) = (cp + radius * end.cos(), cq + radius * end.sin());
             let motion = if clockwise { "G2" } else { "G3" };
-            let head =
-                format!("{g} F100\nG0 {lp}{sp:.6} {lq}{sq:.6}\n{motion} {lp}{ep:.6} {lq}{eq:.6}");
+            let head = format!("{g} F100\nG0 {lp}{sp:.6} {lq}{sq:.6}\n{motion} {lp}{ep:.6} {lq}{eq:.6}");
             let centre_form = format!("{head} {op}{:.6} {oq}{:.6}\n", cp - sp, cq - sq);
             let r = if sweep <= PI { radius } else { -radius };
             let radius_form = format!("{head} R{r:.6}\n");
             let centre = |source: &str| -> Result<[f64; 3], TestCaseError> {
-                let program =
-                    parse_str(source, "arc.ngc").map_err(|e| TestCaseError::fail(e.to_string()))?;
+                let program = parse_str(source, "arc.ngc").map_err(|e| TestCaseError::fail(e.to_string()))?;
                 match program.blocks.last().map(|b| b.kind.clone()) {
-                    Some(BlockKind::Arc { centre, .. }) => {
-                        Ok([centre.x_mm, centre.y_mm, centre.z_mm])
-                    }
+                    Some(BlockKind::Arc { centre, .. }) => Ok([centre.x_mm, centre.y_mm, centre.z_mm]),
                     other => Err(TestCaseError::fail(format!("not an arc: {other:?}"))),
                 }
             };
             let axis = |letter: char| "XYZ".find(letter).unwrap_or(0);
             let (a, b) = (centre(&centre_form)?, centre(&radius_form)?);
             for (letter, want) in [(lp, cp), (lq, cq)] {
-                prop_assert!(
-                    (a[axis(letter)] - want).abs() < 1e-5,
-                    "centre form {:?} want {}",
-                    a,
-                    want
-                );
-                prop_assert!(
-                    (b[axis(letter)] - want).abs() < 1e-3,
-                    "R form {:?} want {}",
-                    b,
-                    want
-                );
+                prop_assert!((a[axis(letter)] - want).abs() < 1e-5, "centre form {:?} want {}", a, want);
+                prop_assert!((b[axis(letter)] - want).abs() < 1e-3, "R form {:?} want {}", b, want);
             }
             Ok(())
         })
@@ -260,7 +202,11 @@ fn nurbs_notations_agree() {
             let mut sources = [
                 format!("G21 G90 F100\nG0 X{:.5} Y{:.5}\nG5.2 L{order}\n", mm(start[0]), mm(start[1])),
                 format!("G21 G90 F100\nG0 X{:.5} Y{:.5}\nG91\nG5.2 L{order}\n", mm(start[0]), mm(start[1])),
-                format!("G20 G90 F3.937\nG0 X{:.4} Y{:.4}\nG5.2 L{order}\n", f64::from(start[0]) / 1e4, f64::from(start[1]) / 1e4),
+                format!(
+                    "G20 G90 F3.937\nG0 X{:.4} Y{:.4}\nG5.2 L{order}\n",
+                    f64::from(start[0]) / 1e4,
+                    f64::from(start[1]) / 1e4
+                ),
             ];
             for (p, w) in &points {
                 let weight = f64::from(*w) / 1000.0;
@@ -277,7 +223,9 @@ fn nurbs_notations_agree() {
                             .blocks
                             .iter()
                             .filter_map(|b| match &b.kind {
-                                BlockKind::Nurbs { control_points, order, knots, .. } => Some((control_points.clone(), *order, knots.clone())),
+                                BlockKind::Nurbs { control_points, order, knots, .. } => {
+                                    Some((control_points.clone(), *order, knots.clone()))
+                                }
                                 _ => None,
                             })
                             .collect();
@@ -299,7 +247,10 @@ fn nurbs_notations_agree() {
             prop_assert!((first[0].x_mm - mm(start[0])).abs() < 1e-9 && (first[0].y_mm - mm(start[1])).abs() < 1e-9);
             for (other, ..) in &found[1..] {
                 for (a, b) in first.iter().zip(other) {
-                    prop_assert!((a.x_mm - b.x_mm).abs() < 1e-6 && (a.y_mm - b.y_mm).abs() < 1e-6 && a.weight == b.weight, "{a:?} vs {b:?}");
+                    prop_assert!(
+                        (a.x_mm - b.x_mm).abs() < 1e-6 && (a.y_mm - b.y_mm).abs() < 1e-6 && a.weight == b.weight,
+                        "{a:?} vs {b:?}"
+                    );
                 }
             }
             Ok(())

@@ -6,10 +6,9 @@ use finestep_model::limits::{max_increment, AxisTiming};
 use finestep_model::Increment;
 
 use crate::regs::{
-    command, enc_control, enc_count, enc_edge_time, enc_index_latch, enc_prescale, enc_probe_latch,
-    enc_status, jog_accel, jog_control, jog_remaining, jog_scale, jog_status, jog_velocity, jog_vmax,
-    jog_window, mpg_control, mpg_count, mpg_detents, mpg_status, position, probe_control,
-    probe_position, probe_status, probe_time,
+    command, enc_control, enc_count, enc_edge_time, enc_index_latch, enc_prescale, enc_probe_latch, enc_status,
+    jog_accel, jog_control, jog_remaining, jog_scale, jog_status, jog_velocity, jog_vmax, jog_window, mpg_control,
+    mpg_count, mpg_detents, mpg_status, position, probe_control, probe_position, probe_status, probe_time,
 };
 use crate::{Bus, BusError, Machine};
 
@@ -217,7 +216,13 @@ impl<B: Bus> Machine<B> {
 
     /// Arms channel `channel`'s index: latch the count at the next index event, and/or
     /// zero it then. `setup` is written again with the arms (the register holds both).
-    pub fn arm_index(&mut self, channel: usize, setup: &EncoderSetup, latch: bool, clear: bool) -> Result<(), BusError> {
+    pub fn arm_index(
+        &mut self,
+        channel: usize,
+        setup: &EncoderSetup,
+        latch: bool,
+        clear: bool,
+    ) -> Result<(), BusError> {
         self.check_channel(channel)?;
         let word = Self::encoder_control_word(setup);
         let word = enc_control::ARM_INDEX_LATCH.set(word, latch.into());

@@ -23,11 +23,11 @@ pub mod spi;
 pub mod spidev;
 pub mod stream;
 
-pub use finestep_regmap::regs;
 pub use feedback::{
     CountMode, EncoderSetup, FeedbackError, FeedbackSnapshot, HandWheelState, JogMultiplier, JogSetup, JogState,
     ProbeHit, VelocityEstimator,
 };
+pub use finestep_regmap::regs;
 pub use machine::{AxisSetup, Caps, Machine, Positions};
 pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};

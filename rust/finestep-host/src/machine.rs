@@ -2,8 +2,8 @@
 //! thinks in: identity, axis setup, faults, run, positions.
 
 use crate::regs::{
-    axis_enable, axis_mode, axis_timing_a, axis_timing_b, caps, clock_hz, command, control, fifo_level, id,
-    latch_time, period_clocks, position, start_level, status, version,
+    axis_enable, axis_mode, axis_timing_a, axis_timing_b, caps, clock_hz, command, control, fifo_level, id, latch_time,
+    period_clocks, position, start_level, status, version,
 };
 use crate::{Bus, BusError};
 use finestep_model::limits::AxisTiming;
@@ -96,12 +96,7 @@ impl<B: Bus> Machine<B> {
             dir_setup: axis_timing_b::DIR_SETUP_RESET,
             dir_hold: axis_timing_b::DIR_HOLD_RESET,
         };
-        Ok(Machine {
-            bus,
-            caps,
-            timings: vec![reset_timing; caps.n_axes],
-            period_clocks: period_clocks::CLOCKS_RESET,
-        })
+        Ok(Machine { bus, caps, timings: vec![reset_timing; caps.n_axes], period_clocks: period_clocks::CLOCKS_RESET })
     }
 
     /// The capabilities read at connection.
@@ -238,7 +233,8 @@ impl<B: Bus> Machine<B> {
         what: &str,
         read: impl Fn(&mut B) -> Result<T, BusError>,
     ) -> Result<(T, u32), BusError> {
-        let running = |bus: &mut B| -> Result<bool, BusError> { Ok(status::RUNNING.get(bus.read_one(status::ADDR)?) != 0) };
+        let running =
+            |bus: &mut B| -> Result<bool, BusError> { Ok(status::RUNNING.get(bus.read_one(status::ADDR)?) != 0) };
         for _ in 0..attempts {
             let before = self.bus.read_one(latch_time::ADDR)?;
             let first = read(&mut self.bus)?;

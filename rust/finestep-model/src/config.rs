@@ -18,11 +18,7 @@ pub struct CoreParams {
 impl Default for CoreParams {
     /// The defaults of the Verilog: 4 axes, `P_WIDTH = 20`, `TIMING_W = 12`.
     fn default() -> Self {
-        CoreParams {
-            n_axes: 4,
-            p_width: 20,
-            timing_width: 12,
-        }
+        CoreParams { n_axes: 4, p_width: 20, timing_width: 12 }
     }
 }
 
@@ -216,31 +212,18 @@ mod tests {
         assert_eq!(p.timing_mask(), 0xFFF);
         assert_eq!(p.effective_period(0), 1);
         assert_eq!(p.effective_period(0x10_0005), 5);
-        let wide = CoreParams {
-            n_axes: 8,
-            p_width: 32,
-            timing_width: 32,
-        };
+        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32 };
         assert_eq!(wide.period_mask(), u32::MAX);
         assert!(wide.validate().is_ok());
     }
 
     #[test]
     fn bad_params_are_refused() {
-        let p = CoreParams {
-            n_axes: 9,
-            ..CoreParams::default()
-        };
+        let p = CoreParams { n_axes: 9, ..CoreParams::default() };
         assert_eq!(p.validate(), Err(ParamsError::Axes(9)));
-        let p = CoreParams {
-            p_width: 0,
-            ..CoreParams::default()
-        };
+        let p = CoreParams { p_width: 0, ..CoreParams::default() };
         assert_eq!(p.validate(), Err(ParamsError::PeriodWidth(0)));
-        let p = CoreParams {
-            timing_width: 33,
-            ..CoreParams::default()
-        };
+        let p = CoreParams { timing_width: 33, ..CoreParams::default() };
         assert_eq!(p.validate(), Err(ParamsError::TimingWidth(33)));
     }
 

@@ -240,10 +240,7 @@ impl Core {
         for (set, cfg) in axes.iter_mut().zip(&inputs.axes).take(self.params.n_axes) {
             *set = AxisSettings::masked(cfg, self.counter_max, inputs.halt);
         }
-        Settings {
-            period: self.params.effective_period(inputs.period_clocks),
-            axes,
-        }
+        Settings { period: self.params.effective_period(inputs.period_clocks), axes }
     }
 
     /// One rising clock edge with `inputs`; the cycle counter advances by 1.
@@ -251,9 +248,7 @@ impl Core {
     pub fn step(&mut self, inputs: &CoreInputs) {
         let period = self.params.effective_period(inputs.period_clocks);
         let mask = self.counter_max;
-        self.edge(inputs, period, |i| {
-            AxisSettings::masked(&inputs.axes[i], mask, inputs.halt)
-        });
+        self.edge(inputs, period, |i| AxisSettings::masked(&inputs.axes[i], mask, inputs.halt));
     }
 
     /// One rising clock edge with decoded settings; returns whether an output changed.
@@ -266,12 +261,7 @@ impl Core {
     /// whether an output changed (exactly: the outputs after the edge differ from
     /// those before it).
     #[inline(always)]
-    fn edge(
-        &mut self,
-        inputs: &CoreInputs,
-        period: u32,
-        axis: impl Fn(usize) -> AxisSettings,
-    ) -> bool {
+    fn edge(&mut self, inputs: &CoreInputs, period: u32, axis: impl Fn(usize) -> AxisSettings) -> bool {
         let n = self.params.n_axes;
         let m = i64::from(self.timer.p_act) * ONE_STEP;
         let mut changed = false;
@@ -282,11 +272,7 @@ impl Core {
         }
         let gantry = self.gantry;
         let increments = self.timer.inc;
-        let axes = self.shaper[..n]
-            .iter_mut()
-            .zip(&mut self.dda[..n])
-            .zip(&self.timer.inc[..n])
-            .enumerate();
+        let axes = self.shaper[..n].iter_mut().zip(&mut self.dda[..n]).zip(&self.timer.inc[..n]).enumerate();
         // The DDAs hold their phase at M/2 until the period timer is running.
         let running = inputs.run && self.timer.active;
         for (i, ((shaper, dda), &d)) in axes {
@@ -324,10 +310,7 @@ impl Core {
         let consumed = self.timer.rec_ready() && inputs.rec_valid;
         // The edge reports exactly whether the outputs differ from before it.
         if self.step_with(set, inputs) {
-            events.push(Event {
-                cycle: self.cycle,
-                outputs: self.outputs(),
-            });
+            events.push(Event { cycle: self.cycle, outputs: self.outputs() });
         }
         consumed
     }
@@ -335,25 +318,14 @@ impl Core {
     /// Runs up to `max_cycles` clock edges with the same `inputs`, one at a time,
     /// stopping after the edge that consumes the offered record. Every edge after which
     /// the outputs differ from before it pushes an [`Event`].
-    pub fn run_chunk(
-        &mut self,
-        inputs: &CoreInputs,
-        max_cycles: u64,
-        events: &mut Vec<Event>,
-    ) -> ChunkEnd {
+    pub fn run_chunk(&mut self, inputs: &CoreInputs, max_cycles: u64, events: &mut Vec<Event>) -> ChunkEnd {
         let set = self.settings(inputs);
         for ran in 1..=max_cycles {
             if self.chunk_edge(&set, inputs, events) {
-                return ChunkEnd {
-                    cycles: ran,
-                    consumed: true,
-                };
+                return ChunkEnd { cycles: ran, consumed: true };
             }
         }
-        ChunkEnd {
-            cycles: max_cycles,
-            consumed: false,
-        }
+        ChunkEnd { cycles: max_cycles, consumed: false }
     }
 }
 
@@ -364,37 +336,20 @@ mod tests {
     use crate::record::PeriodRecord;
 
     fn inputs(run: bool, period_clocks: u32) -> CoreInputs {
-        let axis = AxisConfig {
-            step_len: 2,
-            step_space: 2,
-            dir_setup: 1,
-            dir_hold: 1,
-            enable: true,
-            ..AxisConfig::default()
-        };
-        CoreInputs {
-            run,
-            period_clocks,
-            axes: [axis; MAX_AXES],
-            ..CoreInputs::default()
-        }
+        let axis =
+            AxisConfig { step_len: 2, step_space: 2, dir_setup: 1, dir_hold: 1, enable: true, ..AxisConfig::default() };
+        CoreInputs { run, period_clocks, axes: [axis; MAX_AXES], ..CoreInputs::default() }
     }
 
     #[test]
     fn reset_state_and_unused_axes_are_zero() {
-        let params = CoreParams {
-            n_axes: 2,
-            ..CoreParams::default()
-        };
+        let params = CoreParams { n_axes: 2, ..CoreParams::default() };
         let mut core = Core::new(params);
         assert_eq!(core.cycle(), 0);
         assert_eq!(core.outputs(), CoreOutputs::default());
         core.step(&inputs(false, 10));
         let out = core.outputs();
-        assert_eq!(
-            out.pins, 0b110_110,
-            "dir (pin B) and enable of axes 0 and 1 only"
-        );
+        assert_eq!(out.pins, 0b110_110, "dir (pin B) and enable of axes 0 and 1 only");
         core.reset();
         assert_eq!(core, Core::new(params));
     }
@@ -412,13 +367,7 @@ mod tests {
         inp.record = PeriodRecord::from_raw(&[3 << 16], 0);
         let mut events = vec![];
         let end = core.run_chunk(&inp, 10, &mut events);
-        assert_eq!(
-            end,
-            ChunkEnd {
-                cycles: 1,
-                consumed: true
-            }
-        );
+        assert_eq!(end, ChunkEnd { cycles: 1, consumed: true });
         inp.rec_valid = false;
         let mut first_pos = None;
         let mut first_pin = None;
@@ -442,26 +391,14 @@ mod tests {
         let mut core = Core::new(CoreParams::default());
         let mut events = vec![];
         let end = core.run_chunk(&inputs(false, 3), 5, &mut events);
-        assert_eq!(
-            end,
-            ChunkEnd {
-                cycles: 5,
-                consumed: false
-            }
-        );
+        assert_eq!(end, ChunkEnd { cycles: 5, consumed: false });
         assert_eq!(events.len(), 1, "enable pins rise once");
         assert_eq!(events[0].cycle, 1);
         events.clear();
         let mut inp = inputs(true, 3);
         inp.rec_valid = true;
         let end = core.run_chunk(&inp, 100, &mut events);
-        assert_eq!(
-            end,
-            ChunkEnd {
-                cycles: 2,
-                consumed: true
-            }
-        );
+        assert_eq!(end, ChunkEnd { cycles: 2, consumed: true });
         assert_eq!(events.len(), 2, "rec_ready rises, then falls");
         assert!(events[0].outputs.rec_ready() && !events[1].outputs.rec_ready());
     }
@@ -504,19 +441,13 @@ mod tests {
         let out = core.outputs();
         // Without a plant the error stays: one step per tick, the ticks of e + 5, e + 10
         // and e + 15 applied by cycle e + 20 (that of e + 20 in e + 21).
-        assert_eq!(
-            (out.position(0), out.position(3), out.gantry_corrections),
-            (0, 3, 3)
-        );
+        assert_eq!((out.position(0), out.position(3), out.gantry_corrections), (0, 3, 3));
         assert_eq!(out.gantry_flags, crate::gantry_sync::flags::ENGAGED);
     }
 
     #[test]
     fn bad_params_panic_or_error() {
-        let params = CoreParams {
-            n_axes: 0,
-            ..CoreParams::default()
-        };
+        let params = CoreParams { n_axes: 0, ..CoreParams::default() };
         assert_eq!(Core::try_new(params).unwrap_err(), ParamsError::Axes(0));
         assert!(std::panic::catch_unwind(|| Core::new(params)).is_err());
     }

@@ -15,10 +15,7 @@ pub struct DdaAxis {
 impl Default for DdaAxis {
     /// The reset state: `acc = 32768` (half of `M` for `P = 1`), no request.
     fn default() -> Self {
-        DdaAxis {
-            acc: HALF_STEP,
-            req: 0,
-        }
+        DdaAxis { acc: HALF_STEP, req: 0 }
     }
 }
 

@@ -29,12 +29,7 @@ impl Core {
     /// Same as [`Core::run_chunk`] (same events, same [`ChunkEnd`], same end state) but
     /// skipping quiet cycles, so the cost grows with the number of output changes, step
     /// requests and periods rather than with `max_cycles`.
-    pub fn run_chunk_fast(
-        &mut self,
-        inputs: &CoreInputs,
-        max_cycles: u64,
-        events: &mut Vec<Event>,
-    ) -> ChunkEnd {
+    pub fn run_chunk_fast(&mut self, inputs: &CoreInputs, max_cycles: u64, events: &mut Vec<Event>) -> ChunkEnd {
         let set = self.settings(inputs);
         let mut ran = 0;
         while ran < max_cycles {
@@ -46,16 +41,10 @@ impl Core {
             }
             ran += 1;
             if self.chunk_edge(&set, inputs, events) {
-                return ChunkEnd {
-                    cycles: ran,
-                    consumed: true,
-                };
+                return ChunkEnd { cycles: ran, consumed: true };
             }
         }
-        ChunkEnd {
-            cycles: ran,
-            consumed: false,
-        }
+        ChunkEnd { cycles: ran, consumed: false }
     }
 
     /// How many cycles from the current one on are quiet with these inputs (0: the
@@ -124,9 +113,7 @@ impl Core {
             } else if e == 0 || axis.halt {
                 u32::MAX
             } else if (e > 0) == sh.dir {
-                axis.s
-                    .saturating_sub(sh.cnt)
-                    .max(axis.u.saturating_sub(sh.dcnt))
+                axis.s.saturating_sub(sh.cnt).max(axis.u.saturating_sub(sh.dcnt))
             } else {
                 axis.h.saturating_sub(sh.cnt)
             };
@@ -204,21 +191,12 @@ mod tests {
             enable: true,
             ..AxisConfig::default()
         };
-        let mut inp = CoreInputs {
-            run: false,
-            period_clocks: 100_000,
-            axes: [axis; MAX_AXES],
-            ..CoreInputs::default()
-        };
+        let mut inp =
+            CoreInputs { run: false, period_clocks: 100_000, axes: [axis; MAX_AXES], ..CoreInputs::default() };
         let mut slow = Core::new(CoreParams::default());
         let mut fast = slow.clone();
         let (mut ev_slow, mut ev_fast) = (vec![], vec![]);
-        let chunks = [
-            (false, false, 10),
-            (true, false, 1),
-            (true, true, u64::MAX),
-            (true, false, 250_000),
-        ];
+        let chunks = [(false, false, 10), (true, false, 1), (true, true, u64::MAX), (true, false, 250_000)];
         inp.record = PeriodRecord::from_raw(&[37 << 16, -(5 << 16) - 123, 0, 1], 1);
         for (run, valid, max) in chunks {
             inp.run = run;

@@ -221,14 +221,7 @@ impl GantrySync {
     /// The state after this cycle's edge with the same inputs, except that `tick_cnt`
     /// counts (the state a quiet cycle leads to).
     pub(crate) fn counted(&self) -> GantrySync {
-        GantrySync {
-            tick_cnt: if self.engaged {
-                (self.tick_cnt + 1) & TICK_MASK
-            } else {
-                self.tick_cnt
-            },
-            ..*self
-        }
+        GantrySync { tick_cnt: if self.engaged { (self.tick_cnt + 1) & TICK_MASK } else { self.tick_cnt }, ..*self }
     }
 
     /// The outputs together, to see whether they changed.
@@ -244,8 +237,7 @@ impl GantrySync {
         let before = self.output_bits();
         let master = inp.master & AXIS_MASK;
         let slave = inp.slave & AXIS_MASK;
-        let valid =
-            master != slave && usize::from(master) < ctx.n_axes && usize::from(slave) < ctx.n_axes;
+        let valid = master != slave && usize::from(master) < ctx.n_axes && usize::from(slave) < ctx.n_axes;
         let at_rest = ctx.inc[usize::from(master)] == 0 && ctx.inc[usize::from(slave)] == 0;
         let engage = !self.engaged && inp.enable && valid && at_rest;
         let disengage = self.engaged && !inp.enable;
@@ -278,11 +270,7 @@ impl GantrySync {
             s: if engage { slave } else { self.s },
             diff: inp.enc_master.wrapping_sub(inp.enc_slave),
             offset: if engage { inp.enc_master.wrapping_sub(inp.enc_slave) } else { self.offset },
-            error: if self.engaged {
-                self.diff.wrapping_sub(self.offset)
-            } else {
-                0
-            },
+            error: if self.engaged { self.diff.wrapping_sub(self.offset) } else { 0 },
             tick_cnt: if engage || disengage { 0 } else { tick_cnt },
             corr,
             corrections: if inp.clear_counters {
@@ -292,8 +280,7 @@ impl GantrySync {
             } else {
                 self.corrections
             },
-            alarm: (self.engaged && error.unsigned_abs() > u32::from(inp.limit))
-                || (self.alarm && !clear),
+            alarm: (self.engaged && error.unsigned_abs() > u32::from(inp.limit)) || (self.alarm && !clear),
             refused: (inp.enable && !valid && !self.engaged) || (self.refused && !clear),
         };
         *self = next;
@@ -308,13 +295,7 @@ mod tests {
     const N: usize = 4;
 
     fn ctx(master_req: i8) -> GantryContext {
-        GantryContext {
-            n_axes: N,
-            master_req,
-            inc: [0; crate::MAX_AXES],
-            halt: false,
-            clear_errors: false,
-        }
+        GantryContext { n_axes: N, master_req, inc: [0; crate::MAX_AXES], halt: false, clear_errors: false }
     }
 
     /// Enabled and synchronised, the rest default.
@@ -369,10 +350,7 @@ mod tests {
         // 8 + 3 masks to 3: the inputs are 3 bits wide.
         g.step(&inputs(2, 8 + 3), &ctx(0));
         assert_eq!(g.flags(), flags::ENGAGED);
-        assert_eq!(
-            (g.master(), g.slave(), g.tick_cnt(), g.corr()),
-            (2, 3, 0, 0)
-        );
+        assert_eq!((g.master(), g.slave(), g.tick_cnt(), g.corr()), (2, 3, 0, 0));
         // While engaged a new master/slave (even an invalid one) has no effect.
         g.step(&inputs(3, 3), &ctx(0));
         assert_eq!((g.flags(), g.master(), g.slave()), (flags::ENGAGED, 2, 3));
@@ -383,10 +361,7 @@ mod tests {
         let mut g = GantrySync::default();
         g.step(&inputs(1, 1), &ctx(0));
         assert!(g.refused());
-        let clearing = GantryContext {
-            clear_errors: true,
-            ..ctx(0)
-        };
+        let clearing = GantryContext { clear_errors: true, ..ctx(0) };
         g.step(&inputs(1, 1), &clearing);
         assert!(g.refused(), "set in the clearing cycle: stays set");
         g.step(&GantryInputs::default(), &clearing);
@@ -416,10 +391,7 @@ mod tests {
         g.step(&inp, &ctx(0));
         g.corr = 1;
         assert_eq!(g.tick_cnt(), 1);
-        let off = GantryInputs {
-            enable: false,
-            ..inp
-        };
+        let off = GantryInputs { enable: false, ..inp };
         g.step(&off, &ctx(0));
         assert!(!g.engaged());
         assert_eq!((g.corr(), g.tick_cnt()), (0, 0));
@@ -441,10 +413,7 @@ mod tests {
         inp.enable = true;
         inp.enc_master = 2000; // this cycle's difference 1990 (the register still 990)
         g.step(&inp, &ctx(0));
-        assert_eq!(
-            (g.engaged(), g.offset(), g.diff(), g.error()),
-            (true, 1990, 1990, 0)
-        );
+        assert_eq!((g.engaged(), g.offset(), g.diff(), g.error()), (true, 1990, 1990, 0));
         g.step(&inp, &ctx(0));
         assert_eq!(g.error(), 0, "square from the engaging cycle on");
         // Wrapping: a channel through 0.
@@ -466,11 +435,7 @@ mod tests {
         // Cycle n: the count changes.
         inp.enc_slave = 1;
         g.step(&inp, &ctx(0));
-        assert_eq!(
-            (g.diff(), g.error(), g.alarm()),
-            (u32::MAX, 0, false),
-            "n+1"
-        );
+        assert_eq!((g.diff(), g.error(), g.alarm()), (u32::MAX, 0, false), "n+1");
         g.step(&inp, &ctx(0));
         assert_eq!((g.error(), g.alarm()), (u32::MAX, false), "n+2");
         g.step(&inp, &ctx(0));
@@ -497,10 +462,7 @@ mod tests {
         g.step(&inp, &ctx(0));
         assert!(g.alarm());
         // Not engaged: no alarm.
-        let mut g = GantrySync {
-            error: 0x8000_0000,
-            ..GantrySync::default()
-        };
+        let mut g = GantrySync { error: 0x8000_0000, ..GantrySync::default() };
         g.step(&GantryInputs::default(), &ctx(0));
         assert!(!g.alarm());
     }
@@ -526,32 +488,15 @@ mod tests {
         assert_eq!(ticks(1, 4), [0, 1, 2, 3]);
         assert_eq!(ticks(3, 10), [2, 5, 8]);
         assert_eq!(ticks(1 << 24 | 2, 6), [1, 3, 5], "24 bits used");
-        let mut g = GantrySync {
-            engaged: true,
-            tick_cnt: TICK_MASK,
-            ..GantrySync::default()
-        };
+        let mut g = GantrySync { engaged: true, tick_cnt: TICK_MASK, ..GantrySync::default() };
         assert_eq!(g.cycles_to_tick(5), 0, "past the tick (lowered while engaged): at once");
-        g.step(
-            &GantryInputs {
-                enable: true,
-                tick: 5,
-                ..GantryInputs::default()
-            },
-            &ctx(0),
-        );
+        g.step(&GantryInputs { enable: true, tick: 5, ..GantryInputs::default() }, &ctx(0));
         assert_eq!(g.tick_cnt(), 0);
     }
 
     #[test]
     fn the_four_request_cases_and_the_counter() {
-        let g = |corr| GantrySync {
-            engaged: true,
-            m: 2,
-            s: 0,
-            corr,
-            ..GantrySync::default()
-        };
+        let g = |corr| GantrySync { engaged: true, m: 2, s: 0, corr, ..GantrySync::default() };
         let reqs = |r| [5, 6, r, 7];
         // (corr, master request) -> slave request, applied.
         let cases = [
@@ -572,38 +517,18 @@ mod tests {
             assert_eq!(g.shaper_request(2, &reqs(r), &REST, &ON), r, "the master: own DDA");
             assert_eq!(g.applied(r, 0, &ON, false), applied);
             let mut next = g;
-            let inp = GantryInputs {
-                enable: true,
-                sync: true,
-                tick: 100,
-                ..GantryInputs::default()
-            };
+            let inp = GantryInputs { enable: true, sync: true, tick: 100, ..GantryInputs::default() };
             next.step(&inp, &ctx(r));
             let counted = i16::from(corr) * i16::from(applied);
             assert_eq!(next.corrections(), counted as u16);
-            assert_eq!(
-                next.corr(),
-                if applied { 0 } else { corr },
-                "waits until applied"
-            );
+            assert_eq!(next.corr(), if applied { 0 } else { corr }, "waits until applied");
         }
         // Not engaged: the slave's own request.
-        let off = GantrySync {
-            engaged: false,
-            ..g(1)
-        };
+        let off = GantrySync { engaged: false, ..g(1) };
         assert_eq!(off.shaper_request(0, &reqs(1), &REST, &ON), 5);
         // The counter wraps both ways.
-        let mut w = GantrySync {
-            corrections: u16::MAX,
-            ..g(1)
-        };
-        let inp = GantryInputs {
-            enable: true,
-            sync: true,
-            tick: 100,
-            ..GantryInputs::default()
-        };
+        let mut w = GantrySync { corrections: u16::MAX, ..g(1) };
+        let inp = GantryInputs { enable: true, sync: true, tick: 100, ..GantryInputs::default() };
         w.step(&inp, &ctx(0));
         assert_eq!(w.corrections(), 0);
         w.corr = -1;
@@ -625,13 +550,8 @@ mod tests {
             (1, 0, 1),
             (0, 0, 0),
         ] {
-            let mut g = GantrySync {
-                engaged: true,
-                s: 1,
-                error: error as u32,
-                diff: error as u32,
-                ..GantrySync::default()
-            };
+            let mut g =
+                GantrySync { engaged: true, s: 1, error: error as u32, diff: error as u32, ..GantrySync::default() };
             let inp = GantryInputs {
                 enable: true,
                 sync: true,
@@ -674,10 +594,7 @@ mod tests {
             g.step(&inp, &ctx(r));
             applied += g.corrections() - before;
         }
-        assert_eq!(
-            applied, 2,
-            "the waiting one at the tick of cycle 2, that tick's in cycle 3"
-        );
+        assert_eq!(applied, 2, "the waiting one at the tick of cycle 2, that tick's in cycle 3");
     }
 
     #[test]
@@ -696,32 +613,17 @@ mod tests {
         assert_eq!(g.corr(), 1, "synchronised: +1 at the tick");
         let mut halted = base;
         halted.corr = 1;
-        halted.step(
-            &inp,
-            &GantryContext {
-                halt: true,
-                ..ctx(0)
-            },
-        );
+        halted.step(&inp, &GantryContext { halt: true, ..ctx(0) });
         assert_eq!(halted.corr(), 0, "halt: no correction");
         assert_eq!(halted.corrections(), 0, "halted: the shaper drops it, so it does not count");
         let mut forward = base;
         forward.step(&GantryInputs { sync: false, ..inp }, &ctx(0));
-        assert_eq!(
-            (forward.corr(), forward.error()),
-            (0, 10),
-            "forward: measured, not corrected"
-        );
+        assert_eq!((forward.corr(), forward.error()), (0, 10), "forward: measured, not corrected");
     }
 
     #[test]
     fn forward_mode_copies_the_master_exactly() {
-        let inp = GantryInputs {
-            sync: false,
-            tick: 1,
-            enc_master: 1000,
-            ..inputs(3, 0)
-        };
+        let inp = GantryInputs { sync: false, tick: 1, enc_master: 1000, ..inputs(3, 0) };
         let mut g = engaged(&inp);
         let mut reqs = [0i8; N];
         for k in 0..200u32 {
@@ -731,10 +633,7 @@ mod tests {
             g.step(&inp, &ctx(reqs[3]));
             assert_eq!(g.corr(), 0);
         }
-        assert!(
-            g.error() == 1000 && g.alarm(),
-            "the error is still measured"
-        );
+        assert!(g.error() == 1000 && g.alarm(), "the error is still measured");
         assert_eq!(g.corrections(), 0);
     }
 
@@ -744,32 +643,14 @@ mod tests {
         let mut g = engaged(&inp);
         g.corrections = 7;
         g.corr = -1;
-        g.step(
-            &GantryInputs {
-                clear_counters: true,
-                ..inp
-            },
-            &ctx(0),
-        );
+        g.step(&GantryInputs { clear_counters: true, ..inp }, &ctx(0));
         assert_eq!((g.corrections(), g.corr()), (0, 0));
         // clear_errors does not touch the counter; clear_counters not the flags.
         g.refused = true;
-        g.step(
-            &GantryInputs {
-                clear_counters: true,
-                ..inp
-            },
-            &ctx(0),
-        );
+        g.step(&GantryInputs { clear_counters: true, ..inp }, &ctx(0));
         assert!(g.refused());
         g.corrections = 7;
-        g.step(
-            &inp,
-            &GantryContext {
-                clear_errors: true,
-                ..ctx(0)
-            },
-        );
+        g.step(&inp, &GantryContext { clear_errors: true, ..ctx(0) });
         assert_eq!((g.corrections(), g.refused()), (7, false));
     }
 

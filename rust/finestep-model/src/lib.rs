@@ -57,8 +57,8 @@
 #![warn(missing_docs)]
 
 pub mod config;
-pub mod crc16_byte;
 pub mod core;
+pub mod crc16_byte;
 pub mod dda_axis;
 pub mod encoder_bank;
 pub mod fast;

@@ -80,11 +80,7 @@ pub fn reversal_interval(t: &AxisTiming) -> u64 {
 /// within the rated maximum for a period of `period_clocks` (0 acts as 1), with
 /// `I = I_rev` if `reversing`, else `I_fwd`. Its negation is the most negative one.
 pub fn max_increment(t: &AxisTiming, period_clocks: u32, reversing: bool) -> Increment {
-    let interval = if reversing {
-        reversal_interval(t)
-    } else {
-        forward_interval(t)
-    };
+    let interval = if reversing { reversal_interval(t) } else { forward_interval(t) };
     max_raw(period_clocks, interval)
 }
 
@@ -224,10 +220,7 @@ impl RateChecker {
         RateChecker {
             period_clocks,
             timings: timings.iter().take(MAX_AXES).copied().collect(),
-            axes: [Direction {
-                last: 1,
-                travel: REVERSAL_TRAVEL,
-            }; MAX_AXES],
+            axes: [Direction { last: 1, travel: REVERSAL_TRAVEL }; MAX_AXES],
         }
     }
 
@@ -236,15 +229,9 @@ impl RateChecker {
     pub fn check(&mut self, record: &PeriodRecord) -> Result<(), (usize, RateError)> {
         for (axis, t) in self.timings.iter().enumerate() {
             let settled = self.axes[axis].settled_sign();
-            check_increment(t, self.period_clocks, settled, record.inc[axis])
-                .map_err(|e| (axis, e))?;
+            check_increment(t, self.period_clocks, settled, record.inc[axis]).map_err(|e| (axis, e))?;
         }
-        for (dir, d) in self
-            .axes
-            .iter_mut()
-            .zip(&record.inc)
-            .take(self.timings.len())
-        {
+        for (dir, d) in self.axes.iter_mut().zip(&record.inc).take(self.timings.len()) {
             dir.apply(*d);
         }
         Ok(())
@@ -283,20 +270,12 @@ mod tests {
     use super::*;
 
     fn timing(l: u32, s: u32, u: u32, h: u32) -> AxisTiming {
-        AxisTiming {
-            step_len: l,
-            step_space: s,
-            dir_setup: u,
-            dir_hold: h,
-        }
+        AxisTiming { step_len: l, step_space: s, dir_setup: u, dir_hold: h }
     }
 
     #[test]
     fn masked_to_the_core_width() {
-        let params = CoreParams {
-            timing_width: 4,
-            ..CoreParams::default()
-        };
+        let params = CoreParams { timing_width: 4, ..CoreParams::default() };
         let t = timing(16, 17, 15, 0x1_0003).masked(&params);
         assert_eq!(t, timing(0, 1, 15, 3));
         assert_eq!(forward_interval(&t), 2, "0 acts as 1");
@@ -350,10 +329,7 @@ mod tests {
     fn checker_keeps_reversing_until_two_steps() {
         let t = timing(1, 1, 1, 1); // I_fwd 2, I_rev 4
         let mut c = RateChecker::new(8, &[t]);
-        let rec = |x: f64| PeriodRecord {
-            inc: [Increment::from_num(x); MAX_AXES],
-            flags: 0,
-        };
+        let rec = |x: f64| PeriodRecord { inc: [Increment::from_num(x); MAX_AXES], flags: 0 };
         assert!(c.check(&rec(4.0)).is_ok(), "settled positive after reset");
         assert!(c.check(&rec(-2.5)).is_err(), "reversal: at most 2");
         assert_eq!(c.last_nonzero_sign(0), 1, "refused record changes nothing");
@@ -361,10 +337,7 @@ mod tests {
         assert_eq!((c.last_nonzero_sign(0), c.settled_sign(0)), (-1, 0));
         assert_eq!(c.max_increment(0, -1), Increment::from_num(2));
         assert!(c.check(&rec(0.0)).is_ok());
-        assert!(
-            c.check(&rec(-2.5)).is_err(),
-            "still reversing after 1.5 steps"
-        );
+        assert!(c.check(&rec(-2.5)).is_err(), "still reversing after 1.5 steps");
         assert!(c.check(&rec(-0.5)).is_ok());
         assert_eq!(c.settled_sign(0), -1);
         assert!(c.check(&rec(-4.0)).is_ok(), "settled: forward limit");

@@ -94,9 +94,7 @@ impl PeriodTimer {
     /// whether they changed.
     #[inline]
     pub(crate) fn output_bits(&self) -> u8 {
-        u8::from(self.rec_ready())
-            | (u8::from(self.record_error) << 1)
-            | (u8::from(self.block_end) << 2)
+        u8::from(self.rec_ready()) | (u8::from(self.record_error) << 1) | (u8::from(self.block_end) << 2)
     }
 
     /// One rising edge.
@@ -120,10 +118,7 @@ impl PeriodTimer {
             self.remaining = self.p_act - 1;
             let n = inp.n_axes;
             let record = inp.record;
-            let accept = inp.rec_valid
-                && record.inc[..n]
-                    .iter()
-                    .all(|d| raw_acceptable(d.to_bits(), self.p_act));
+            let accept = inp.rec_valid && record.inc[..n].iter().all(|d| raw_acceptable(d.to_bits(), self.p_act));
             if accept {
                 for (slot, d) in self.inc[..n].iter_mut().zip(&record.inc[..n]) {
                     *slot = d.to_bits();
@@ -145,14 +140,7 @@ mod tests {
     use crate::record::flags::BLOCK_END;
 
     fn inputs(run: bool, rec_valid: bool, record: &PeriodRecord) -> TimerInputs<'_> {
-        TimerInputs {
-            run,
-            period: 3,
-            clear_errors: false,
-            rec_valid,
-            record,
-            n_axes: 2,
-        }
+        TimerInputs { run, period: 3, clear_errors: false, rec_valid, record, n_axes: 2 }
     }
 
     #[test]
@@ -186,10 +174,7 @@ mod tests {
         t.step(&inputs(true, true, &rec));
         assert!(t.record_error());
         assert_eq!(t.increments()[..2], [0, 0]);
-        let clear = TimerInputs {
-            clear_errors: true,
-            ..inputs(true, false, &rec)
-        };
+        let clear = TimerInputs { clear_errors: true, ..inputs(true, false, &rec) };
         t.step(&clear);
         assert!(!t.record_error());
     }

@@ -53,7 +53,13 @@ impl PositionFifo {
     /// An empty FIFO of `2^depth_log2` records (the RTL's `DEPTH_LOG2`).
     pub fn new(depth_log2: u32) -> Self {
         let depth = 1usize << depth_log2;
-        PositionFifo { entries: VecDeque::with_capacity(depth), staged: Vec::new(), depth, overflow: false, valid: false }
+        PositionFifo {
+            entries: VecDeque::with_capacity(depth),
+            staged: Vec::new(),
+            depth,
+            overflow: false,
+            valid: false,
+        }
     }
 
     /// Committed records (`level`), readable or not yet.

@@ -187,11 +187,8 @@ impl QuadratureChannel {
         self.clear_armed = inp.arm_index_clear || (self.clear_armed && !index_event);
 
         self.illegal = illegal_now || (self.illegal && !inp.clear_errors);
-        self.illegal_count = if inp.clear_counters {
-            0
-        } else {
-            self.illegal_count.saturating_add(u16::from(illegal_now))
-        };
+        self.illegal_count =
+            if inp.clear_counters { 0 } else { self.illegal_count.saturating_add(u16::from(illegal_now)) };
 
         self.a_p = inp.a;
         self.b_p = inp.b;

@@ -32,9 +32,7 @@ impl PeriodRecord {
     /// `n_axes` axes: for every axis `floor(|d| / 65536) < p_act` (`|D| < P`, at most one
     /// step per clock).
     pub fn acceptable(&self, n_axes: usize, p_act: u32) -> bool {
-        self.inc[..n_axes.min(MAX_AXES)]
-            .iter()
-            .all(|inc| raw_acceptable(inc.to_bits(), p_act))
+        self.inc[..n_axes.min(MAX_AXES)].iter().all(|inc| raw_acceptable(inc.to_bits(), p_act))
     }
 }
 

@@ -443,7 +443,11 @@ impl RegisterFile {
     pub fn probe_config(&self) -> ProbeConfig {
         use regs::probe_control as p;
         let word = self.rw[usize::from(p::ADDR)];
-        ProbeConfig { active_high: p::ACTIVE_HIGH.get(word) != 0, filter: p::FILTER.get(word) as u8, arm: self.probe_arm }
+        ProbeConfig {
+            active_high: p::ACTIVE_HIGH.get(word) != 0,
+            filter: p::FILTER.get(word) as u8,
+            arm: self.probe_arm,
+        }
     }
 
     /// `MPG_CONTROL`: `(PRESCALE, FILTER)`.
@@ -502,12 +506,8 @@ impl RegisterFile {
     /// writes and commits `{push_flags, RECORD_INC}` unless the FIFO is full. A push
     /// while the SPI layer has the port is refused too (the port cannot take it).
     pub fn fifo_port(&self, spi: &SpiFifoPort, fifo_full: bool, halt: bool, pop: bool) -> (FifoInputs, bool) {
-        let mut inputs = FifoInputs {
-            flush: self.fifo_flush(halt),
-            clear_errors: self.clear_errors,
-            pop,
-            ..FifoInputs::default()
-        };
+        let mut inputs =
+            FifoInputs { flush: self.fifo_flush(halt), clear_errors: self.clear_errors, pop, ..FifoInputs::default() };
         let mut refused = false;
         if spi.owns_port() {
             inputs.write = spi.write;
@@ -563,9 +563,7 @@ impl RegisterFile {
             s::FEEDBACK_ERROR,
             s::JOG_REFUSED,
         ];
-        errors
-            .iter()
-            .any(|field| field.get(status) != 0)
+        errors.iter().any(|field| field.get(status) != 0)
     }
 
     /// `IRQ_STATUS` from this cycle's state.
@@ -667,7 +665,11 @@ impl RegisterFile {
             }
             regs::probe_status::ADDR => {
                 use regs::probe_status as s;
-                flags(&[(s::ARMED, enc.probe_armed.into()), (s::SEEN, enc.probe_seen.into()), (s::ACTIVE, enc.probe_active.into())])
+                flags(&[
+                    (s::ARMED, enc.probe_armed.into()),
+                    (s::SEEN, enc.probe_seen.into()),
+                    (s::ACTIVE, enc.probe_active.into()),
+                ])
             }
             regs::probe_time::ADDR => regs::probe_time::CLOCKS.set(0, enc.probe_time),
             regs::mpg_count::ADDR => regs::mpg_count::EDGES.set(0, wheel.count),
@@ -838,7 +840,10 @@ mod tests {
         assert!(rf.clear_faults() && !rf.clear_errors());
         rf.step(&RegisterFileInputs::default());
         assert!(!rf.clear_faults());
-        let halted = RegisterFileInputs { hw: HardwareStatus { halt: true, ..Default::default() }, ..write(regs::control::ADDR, 1) };
+        let halted = RegisterFileInputs {
+            hw: HardwareStatus { halt: true, ..Default::default() },
+            ..write(regs::control::ADDR, 1)
+        };
         rf.step(&halted);
         assert!(!rf.run(), "halt wins over the write");
         rf.step(&write(regs::control::ADDR, 1));
@@ -860,10 +865,7 @@ mod tests {
         assert!(!rf.probe_config().arm);
 
         let engaged = HardwareStatus {
-            feedback: FeedbackStatus {
-                jog: JogStatus { engaged: true, ..Default::default() },
-                ..Default::default()
-            },
+            feedback: FeedbackStatus { jog: JogStatus { engaged: true, ..Default::default() }, ..Default::default() },
             ..Default::default()
         };
         rf.step(&RegisterFileInputs { hw: engaged, ..write(regs::control::ADDR, 1) });

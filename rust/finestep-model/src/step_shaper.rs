@@ -101,11 +101,7 @@ impl StepShaper {
 
     /// The pins (A, B, enable) in this cycle.
     pub fn pins(&self) -> (bool, bool, bool) {
-        (
-            self.pins & PIN_A != 0,
-            self.pins & PIN_B != 0,
-            self.pins & PIN_EN != 0,
-        )
+        (self.pins & PIN_A != 0, self.pins & PIN_B != 0, self.pins & PIN_EN != 0)
     }
 
     /// The pin bits the next cycle shows for the current state and settings.
@@ -125,13 +121,7 @@ impl StepShaper {
     /// saturation value of `cnt` and `dcnt`, `set.halt` the core's `halt`. Returns
     /// whether an output (pins, flags, position) changed.
     #[inline]
-    pub(crate) fn step(
-        &mut self,
-        r: i8,
-        set: &AxisSettings,
-        counter_max: u32,
-        clear: bool,
-    ) -> bool {
+    pub(crate) fn step(&mut self, r: i8, set: &AxisSettings, counter_max: u32, clear: bool) -> bool {
         let outputs_before = self.output_bits();
         self.pins = self.next_pins(set);
         let e = i32::from(self.pending) + i32::from(r);
@@ -195,13 +185,7 @@ mod tests {
     use super::*;
 
     fn settings(l: u32, s: u32, u: u32, h: u32) -> AxisSettings {
-        AxisSettings {
-            l,
-            s,
-            u,
-            h,
-            ..AxisSettings::default()
-        }
+        AxisSettings { l, s, u, h, ..AxisSettings::default() }
     }
 
     /// Runs the shaper over a request sequence and returns (level, dir) per cycle.
@@ -218,10 +202,7 @@ mod tests {
     #[test]
     fn pulse_is_l_high_and_s_low() {
         let set = settings(2, 3, 1, 1);
-        let levels: Vec<bool> = trace(&set, &[1, 1, 0, 0, 0, 0, 0, 0])
-            .iter()
-            .map(|x| x.0)
-            .collect();
+        let levels: Vec<bool> = trace(&set, &[1, 1, 0, 0, 0, 0, 0, 0]).iter().map(|x| x.0).collect();
         // rise decided at 0, high 2 cycles, low 3 cycles, second rise decided at 5.
         assert_eq!(levels, [true, true, false, false, false, true, true, false]);
     }
@@ -306,23 +287,13 @@ mod tests {
         sh.dir = false;
         sh.quad = 2;
         let base = settings(1, 1, 1, 1);
-        let with = |mode, invert| AxisSettings {
-            mode,
-            invert,
-            enable: true,
-            ..base
-        };
+        let with = |mode, invert| AxisSettings { mode, invert, enable: true, ..base };
         assert_eq!(sh.next_pins(&with(0, 0)), PIN_A | PIN_EN);
         assert_eq!(sh.next_pins(&with(3, 0)), PIN_A | PIN_EN);
         assert_eq!(sh.next_pins(&with(1, 0)), PIN_B | PIN_EN);
         assert_eq!(sh.next_pins(&with(2, 0)), PIN_A | PIN_B | PIN_EN);
         assert_eq!(sh.next_pins(&with(0, 7)), PIN_B);
-        for (quad, a, b) in [
-            (0, false, false),
-            (1, true, false),
-            (2, true, true),
-            (3, false, true),
-        ] {
+        for (quad, a, b) in [(0, false, false), (1, true, false), (2, true, true), (3, false, true)] {
             sh.quad = quad;
             let pins = sh.next_pins(&with(2, 0));
             assert_eq!((pins & PIN_A != 0, pins & PIN_B != 0), (a, b));

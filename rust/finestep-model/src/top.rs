@@ -778,11 +778,13 @@ mod tests {
 
     #[test]
     fn pins_pack_and_unpack() {
-        let inputs = TopInputs { rst: true, spi_mosi: true, bus_ad_in: 0xBEEF, estop_pin: true, ..TopInputs::default() };
+        let inputs =
+            TopInputs { rst: true, spi_mosi: true, bus_ad_in: 0xBEEF, estop_pin: true, ..TopInputs::default() };
         let word = inputs.pack();
         assert_eq!(word, 1 | 0b10 | 0b1000 | 0b1111_0000 | 1 << 8 | 0xBEEF << 16);
         assert_eq!(TopInputs::unpack(word), inputs);
-        let feedback = TopInputs { enc_a: 0x81, enc_b: 0x02, enc_z: 0x40, probe_pin: true, mpg_b: true, ..TopInputs::default() };
+        let feedback =
+            TopInputs { enc_a: 0x81, enc_b: 0x02, enc_z: 0x40, probe_pin: true, mpg_b: true, ..TopInputs::default() };
         let word = feedback.pack() & !TopInputs::default().pack();
         assert_eq!(word, 0x81 << 32 | 0x02 << 40 | 0x40 << 48 | 1 << 56 | 1 << 58);
         assert_eq!(TopInputs::unpack(feedback.pack()), feedback);

@@ -59,7 +59,13 @@ fn dedup(mut values: Vec<i64>) -> Vec<i64> {
 }
 
 /// Runs `segments` on channel `channel` of a fresh bank and checks the per-cycle rules.
-fn run(segments: &[Segment], channel: usize, mode: DecodeMode, filter: u8, prescale: u16) -> Result<Observed, TestCaseError> {
+fn run(
+    segments: &[Segment],
+    channel: usize,
+    mode: DecodeMode,
+    filter: u8,
+    prescale: u16,
+) -> Result<Observed, TestCaseError> {
     let mut bank = EncoderBank::new(MAX_CHANNELS);
     let config = ChannelConfig { mode, z_active_high: true, filter, ..ChannelConfig::default() };
     let mut inputs = EncoderBankInputs {
@@ -97,7 +103,10 @@ fn run(segments: &[Segment], channel: usize, mode: DecodeMode, filter: u8, presc
 }
 
 /// Settings of one case: mode, `FILTER`, `PRESCALE`, channel.
-fn settings(modes: &'static [DecodeMode], filters: std::ops::RangeInclusive<u8>) -> impl Strategy<Value = (DecodeMode, u8, u16, usize)> {
+fn settings(
+    modes: &'static [DecodeMode],
+    filters: std::ops::RangeInclusive<u8>,
+) -> impl Strategy<Value = (DecodeMode, u8, u16, usize)> {
     (prop::sample::select(modes), filters, prop_oneof![Just(0u16), 0..=5u16], 0..MAX_CHANNELS)
 }
 
@@ -179,7 +188,10 @@ fn glitches_shorter_than_the_filter_never_count() {
     // Per move: direction, extra clocks, and glitches (which pins: 1 A, 2 B, 3 both;
     // length and gap as fractions of their ranges).
     let glitch = (1..=3u8, any::<prop::sample::Index>(), any::<prop::sample::Index>());
-    let moves = prop::collection::vec((prop_oneof![Just(0i64), Just(1), Just(-1)], 0..=3u64, prop::collection::vec(glitch, 0..4)), 1..80);
+    let moves = prop::collection::vec(
+        (prop_oneof![Just(0i64), Just(1), Just(-1)], 0..=3u64, prop::collection::vec(glitch, 0..4)),
+        1..80,
+    );
     let case = (settings(QUADRATURE, 2..=15), 0..4i64, 0..20u64, moves);
     runner
         .run(&case, |((mode, filter, prescale, channel), p0, rest, moves)| {

@@ -5,8 +5,7 @@
 //! between chunks.
 
 use finestep_model::{
-    AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, Event, GantryInputs, Increment,
-    PeriodRecord, MAX_AXES,
+    AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, Event, GantryInputs, Increment, PeriodRecord, MAX_AXES,
 };
 use proptest::prelude::*;
 
@@ -60,27 +59,20 @@ fn timing_value() -> impl Strategy<Value = u32> {
 
 fn axis_config() -> impl Strategy<Value = AxisConfig> {
     (
-        (
-            timing_value(),
-            timing_value(),
-            timing_value(),
-            timing_value(),
-        ),
+        (timing_value(), timing_value(), timing_value(), timing_value()),
         prop_oneof![0..4u8, any::<u8>()],
         prop_oneof![Just(0u8), 0..8u8, any::<u8>()],
         prop::bool::weighted(0.8),
     )
-        .prop_map(
-            |((step_len, step_space, dir_setup, dir_hold), mode, invert, enable)| AxisConfig {
-                step_len,
-                step_space,
-                dir_setup,
-                dir_hold,
-                mode,
-                invert,
-                enable,
-            },
-        )
+        .prop_map(|((step_len, step_space, dir_setup, dir_hold), mode, invert, enable)| AxisConfig {
+            step_len,
+            step_space,
+            dir_setup,
+            dir_hold,
+            mode,
+            invert,
+            enable,
+        })
 }
 
 fn period_value() -> impl Strategy<Value = u32> {
@@ -119,18 +111,16 @@ fn gantry_settings() -> impl Strategy<Value = GantryInputs> {
         prop_oneof![3 => 0..4u16, 1 => any::<u16>()],
         prop_oneof![3 => 0..40u16, 1 => any::<u16>()],
     )
-        .prop_map(
-            |(enable, sync, (master, slave), tick, deadband, limit)| GantryInputs {
-                enable,
-                sync,
-                master,
-                slave,
-                tick,
-                deadband,
-                limit,
-                ..GantryInputs::default()
-            },
-        )
+        .prop_map(|(enable, sync, (master, slave), tick, deadband, limit)| GantryInputs {
+            enable,
+            sync,
+            master,
+            slave,
+            tick,
+            deadband,
+            limit,
+            ..GantryInputs::default()
+        })
 }
 
 fn gantry_chunk() -> impl Strategy<Value = GantryChunk> {
@@ -139,11 +129,7 @@ fn gantry_chunk() -> impl Strategy<Value = GantryChunk> {
         prop::option::weighted(0.5, (0..3u8, -6..6i32, any::<i32>())),
         prop::bool::weighted(0.05),
     )
-        .prop_map(|(settings, counts, clear_counters)| GantryChunk {
-            settings,
-            counts,
-            clear_counters,
-        })
+        .prop_map(|(settings, counts, clear_counters)| GantryChunk { settings, counts, clear_counters })
 }
 
 /// The channel counts for a chunk: a small random move of each, both following their
@@ -177,29 +163,9 @@ fn chunk() -> impl Strategy<Value = Chunk> {
         any::<u8>(),
         (max_cycles(), gantry_chunk()),
     )
-        .prop_map(
-            |(
-                (run, halt),
-                period,
-                clear_errors,
-                axis,
-                rec_valid,
-                incs,
-                flags,
-                (max_cycles, gantry),
-            )| Chunk {
-                run,
-                halt,
-                period,
-                clear_errors,
-                axis,
-                rec_valid,
-                incs,
-                flags,
-                max_cycles,
-                gantry,
-            },
-        )
+        .prop_map(|((run, halt), period, clear_errors, axis, rec_valid, incs, flags, (max_cycles, gantry))| {
+            Chunk { run, halt, period, clear_errors, axis, rec_valid, incs, flags, max_cycles, gantry }
+        })
 }
 
 fn case() -> impl Strategy<Value = Case> {
@@ -208,23 +174,9 @@ fn case() -> impl Strategy<Value = Case> {
         prop_oneof![Just(20u32), 1..=24u32, Just(32u32)],
         prop_oneof![Just(12u32), Just(4u32), 1..=16u32, Just(32u32)],
     )
-        .prop_map(|(n_axes, p_width, timing_width)| CoreParams {
-            n_axes,
-            p_width,
-            timing_width,
-        });
-    (
-        params,
-        period_value(),
-        prop::array::uniform8(axis_config()),
-        prop::collection::vec(chunk(), 1..40),
-    )
-        .prop_map(|(params, period, axes, chunks)| Case {
-            params,
-            period,
-            axes,
-            chunks,
-        })
+        .prop_map(|(n_axes, p_width, timing_width)| CoreParams { n_axes, p_width, timing_width });
+    (params, period_value(), prop::array::uniform8(axis_config()), prop::collection::vec(chunk(), 1..40))
+        .prop_map(|(params, period, axes, chunks)| Case { params, period, axes, chunks })
 }
 
 /// A raw increment of the given kind for a period of `p` clocks: zero, under a step,
@@ -248,34 +200,20 @@ fn increment(kind: u8, x: u32, p: u32) -> Increment {
 
 /// `run_chunk` written literally from its definition: outputs compared before and
 /// after every `step`.
-fn literal_chunk(
-    core: &mut Core,
-    inputs: &CoreInputs,
-    max_cycles: u64,
-    events: &mut Vec<Event>,
-) -> ChunkEnd {
+fn literal_chunk(core: &mut Core, inputs: &CoreInputs, max_cycles: u64, events: &mut Vec<Event>) -> ChunkEnd {
     for ran in 1..=max_cycles {
         let before = core.outputs();
         let consumed = before.rec_ready() && inputs.rec_valid;
         core.step(inputs);
         let after = core.outputs();
         if after != before {
-            events.push(Event {
-                cycle: core.cycle(),
-                outputs: after,
-            });
+            events.push(Event { cycle: core.cycle(), outputs: after });
         }
         if consumed {
-            return ChunkEnd {
-                cycles: ran,
-                consumed: true,
-            };
+            return ChunkEnd { cycles: ran, consumed: true };
         }
     }
-    ChunkEnd {
-        cycles: max_cycles,
-        consumed: false,
-    }
+    ChunkEnd { cycles: max_cycles, consumed: false }
 }
 
 /// Total per-clock cycles allowed per case, to bound the test's run time.
@@ -290,11 +228,7 @@ fn fast_path_is_identical_to_per_clock() {
             let mut fast = slow.clone();
             let mut literal = slow.clone();
             let mut ev_literal = vec![];
-            let mut inputs = CoreInputs {
-                period_clocks: case.period,
-                axes: case.axes,
-                ..CoreInputs::default()
-            };
+            let mut inputs = CoreInputs { period_clocks: case.period, axes: case.axes, ..CoreInputs::default() };
             let mut budget = CYCLE_BUDGET;
             let (mut ev_slow, mut ev_fast): (Vec<Event>, Vec<Event>) = (vec![], vec![]);
             for (k, chunk) in case.chunks.iter().enumerate() {
@@ -309,20 +243,14 @@ fn fast_path_is_identical_to_per_clock() {
                 }
                 inputs.rec_valid = chunk.rec_valid;
                 // Increments sized for the period in force (or about to be sampled).
-                let p = slow
-                    .timer()
-                    .p_act()
-                    .max(case.params.effective_period(inputs.period_clocks));
+                let p = slow.timer().p_act().max(case.params.effective_period(inputs.period_clocks));
                 for (slot, &(kind, x)) in inputs.record.inc.iter_mut().zip(&chunk.incs) {
                     *slot = increment(kind, x, p);
                 }
                 inputs.record.flags = chunk.flags;
                 if let Some(g) = chunk.gantry.settings {
-                    inputs.gantry = GantryInputs {
-                        enc_master: inputs.gantry.enc_master,
-                        enc_slave: inputs.gantry.enc_slave,
-                        ..g
-                    };
+                    inputs.gantry =
+                        GantryInputs { enc_master: inputs.gantry.enc_master, enc_slave: inputs.gantry.enc_slave, ..g };
                 }
                 if let Some(c) = chunk.gantry.counts {
                     counts(&slow, &mut inputs.gantry, c);
@@ -337,15 +265,9 @@ fn fast_path_is_identical_to_per_clock() {
                 let end_fast = fast.run_chunk_fast(&inputs, max, &mut ev_fast);
                 budget -= end_slow.cycles;
                 prop_assert_eq!(end_literal, end_slow, "chunk {} end (run_chunk)", k);
-                prop_assert!(
-                    ev_literal == ev_slow,
-                    "chunk {}: run_chunk events differ from the literal ones",
-                    k
-                );
+                prop_assert!(ev_literal == ev_slow, "chunk {}: run_chunk events differ from the literal ones", k);
                 prop_assert_eq!(end_slow, end_fast, "chunk {} end", k);
-                if let Some(i) = (0..ev_slow.len().max(ev_fast.len()))
-                    .find(|&i| ev_slow.get(i) != ev_fast.get(i))
-                {
+                if let Some(i) = (0..ev_slow.len().max(ev_fast.len())).find(|&i| ev_slow.get(i) != ev_fast.get(i)) {
                     return Err(TestCaseError::fail(format!(
                         "chunk {k}: event {i} differs: per-clock {:?}, fast {:?}",
                         ev_slow.get(i),
@@ -372,22 +294,12 @@ fn fast_path_skips_long_quiet_stretches() {
         ..AxisConfig::default()
     };
     let mut core = Core::new(CoreParams::default());
-    let mut inputs = CoreInputs {
-        period_clocks: 1,
-        axes: [axis; MAX_AXES],
-        ..CoreInputs::default()
-    };
+    let mut inputs = CoreInputs { period_clocks: 1, axes: [axis; MAX_AXES], ..CoreInputs::default() };
     let mut events = vec![];
     core.run_chunk_fast(&inputs, 1, &mut events);
     inputs.run = true;
     let end = core.run_chunk_fast(&inputs, 1_000_000_000, &mut events);
-    assert_eq!(
-        end,
-        ChunkEnd {
-            cycles: 1_000_000_000,
-            consumed: false
-        }
-    );
+    assert_eq!(end, ChunkEnd { cycles: 1_000_000_000, consumed: false });
     assert_eq!(events.len(), 2, "enable/dir pins, then rec_ready");
     let end = core.run_chunk_fast(&inputs, u64::MAX - 1, &mut events);
     assert_eq!(end.cycles, u64::MAX - 1, "idle at P = 1 is quiet for ever");
@@ -407,8 +319,5 @@ fn fast_path_skips_long_quiet_stretches() {
     inputs.rec_valid = false;
     core.run_chunk_fast(&inputs, 2_000_000, &mut events);
     let out = core.outputs();
-    assert_eq!(
-        (out.position(0), out.position(1), out.position(2)),
-        (-100_000, 250_000, 0)
-    );
+    assert_eq!((out.position(0), out.position(1), out.position(2)), (-100_000, 250_000, 0));
 }

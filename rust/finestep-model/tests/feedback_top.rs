@@ -223,7 +223,10 @@ fn illegal_transitions_raise_feedback_error_until_cleared() {
     bench.pins.mpg_b = true;
     bench.clock(6);
     let status = bench.reg(ms::ADDR);
-    assert_eq!((ms::ILLEGAL.get(status), ms::ILLEGAL_COUNT.get(status), ms::A.get(status), ms::B.get(status)), (1, 1, 1, 1));
+    assert_eq!(
+        (ms::ILLEGAL.get(status), ms::ILLEGAL_COUNT.get(status), ms::A.get(status), ms::B.get(status)),
+        (1, 1, 1, 1)
+    );
     assert_eq!(get(&bench, st::ADDR, st::FEEDBACK_ERROR), 1);
     assert_eq!(get(&bench, regs::mpg_count::ADDR, regs::mpg_count::EDGES), 0);
 }
@@ -240,7 +243,8 @@ fn builds_without_channels_or_hand_wheel_read_zero_there() {
     bus.write32(&mut bench, regs::jog_control::ADDR, regs::jog_control::ENABLE.set(0, 1));
     bus.write32(&mut bench, regs::enc_control::addr(3), 0xFFFF_FFFF);
     assert_eq!(bench.reg(regs::mpg_control::ADDR), 0);
-    for addr in [regs::jog_control::ADDR, regs::jog_scale::ADDR, regs::enc_control::addr(2), regs::enc_control::addr(3)] {
+    for addr in [regs::jog_control::ADDR, regs::jog_scale::ADDR, regs::enc_control::addr(2), regs::enc_control::addr(3)]
+    {
         assert_eq!(bench.reg(addr), 0, "register {addr:#04x}");
     }
     // Every channel and the wheel turn: only channels 0 and 1 count.

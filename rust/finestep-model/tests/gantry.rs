@@ -8,9 +8,7 @@
 //! in cycle `e - 1` (the `diff` register at engagement).
 
 use finestep_model::gantry_sync::flags;
-use finestep_model::{
-    AxisConfig, Core, CoreInputs, CoreParams, GantryInputs, PeriodRecord, MAX_AXES,
-};
+use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams, GantryInputs, PeriodRecord, MAX_AXES};
 
 /// Counts per step of both channels.
 const K: i64 = 4;
@@ -48,24 +46,11 @@ struct Run {
 }
 
 /// Master moves: (increment in steps per period, periods).
-const PROFILE: [(f64, u32); 5] = [
-    (0.37, 150),
-    (0.0, 30),
-    (-0.25, 120),
-    (0.61, 100),
-    (0.0, 100),
-];
+const PROFILE: [(f64, u32); 5] = [(0.37, 150), (0.0, 30), (-0.25, 120), (0.61, 100), (0.0, 100)];
 
 /// The drives' timing of the slow runs.
-const AXIS: AxisConfig = AxisConfig {
-    step_len: 3,
-    step_space: 4,
-    dir_setup: 2,
-    dir_hold: 2,
-    mode: 0,
-    invert: 0,
-    enable: true,
-};
+const AXIS: AxisConfig =
+    AxisConfig { step_len: 3, step_space: 4, dir_setup: 2, dir_hold: 2, mode: 0, invert: 0, enable: true };
 
 /// Runs the plant with the master's `PROFILE` and the disturbance `dist(cycle)` in
 /// counts; `sync` and `limit` are the gantry's settings.
@@ -74,13 +59,7 @@ fn run(sync: bool, limit: u16, dist: impl Fn(u64) -> i64) -> Run {
 }
 
 /// [`run`] with another master profile and drive timing.
-fn run_with(
-    profile: &[(f64, u32)],
-    axis: AxisConfig,
-    sync: bool,
-    limit: u16,
-    dist: impl Fn(u64) -> i64,
-) -> Run {
+fn run_with(profile: &[(f64, u32)], axis: AxisConfig, sync: bool, limit: u16, dist: impl Fn(u64) -> i64) -> Run {
     let mut core = Core::new(CoreParams::default());
     let mut inputs = CoreInputs {
         period_clocks: PERIOD,
@@ -131,10 +110,7 @@ fn run_with(
             flags: out.gantry_flags,
             master: out.position(MASTER),
             slave: out.position(SLAVE),
-            pins: [
-                (out.pin_a(MASTER), out.pin_b(MASTER)),
-                (out.pin_a(SLAVE), out.pin_b(SLAVE)),
-            ],
+            pins: [(out.pin_a(MASTER), out.pin_b(MASTER)), (out.pin_a(SLAVE), out.pin_b(SLAVE))],
             corr: core.gantry().corr(),
             master_req: core.dda(MASTER).req(),
         });
@@ -164,10 +140,7 @@ impl Run {
     fn settled(&self, n: u64) -> bool {
         let i = n as usize;
         let now = &self.samples[i];
-        i >= 16
-            && self.samples[i - 16..=i]
-                .iter()
-                .all(|s| s.corrections == now.corrections && s.master == now.master)
+        i >= 16 && self.samples[i - 16..=i].iter().all(|s| s.corrections == now.corrections && s.master == now.master)
     }
 
     fn last(&self) -> &Sample {
@@ -176,19 +149,10 @@ impl Run {
 }
 
 /// Disturbances: (cycle, counts the slave's channel loses from then on).
-const LOSSES: [(u64, i64); 4] = [
-    (3_000, 3 * K),
-    (12_000, -2 * K),
-    (25_000, 5 * K),
-    (40_000, -K),
-];
+const LOSSES: [(u64, i64); 4] = [(3_000, 3 * K), (12_000, -2 * K), (25_000, 5 * K), (40_000, -K)];
 
 fn losses(n: u64) -> i64 {
-    LOSSES
-        .iter()
-        .filter(|&&(at, _)| n >= at)
-        .map(|&(_, d)| d)
-        .sum()
+    LOSSES.iter().filter(|&&(at, _)| n >= at).map(|&(_, d)| d).sum()
 }
 
 #[test]
@@ -197,29 +161,14 @@ fn synchronised_mode_corrects_each_disturbance_within_its_ticks() {
     let r = run(true, limit, losses);
     let deadband = i64::from(DEADBAND);
     for s in &r.samples {
-        assert_eq!(
-            i64::from(s.error),
-            r.ideal_error(s.cycle),
-            "error in cycle {}",
-            s.cycle
-        );
-        assert_eq!(
-            s.flags & flags::ENGAGED != 0,
-            s.cycle > r.engage,
-            "engaged in {}",
-            s.cycle
-        );
+        assert_eq!(i64::from(s.error), r.ideal_error(s.cycle), "error in cycle {}", s.cycle);
+        assert_eq!(s.flags & flags::ENGAGED != 0, s.cycle > r.engage, "engaged in {}", s.cycle);
         assert_eq!(s.flags & flags::ALARM, 0, "never past the limit");
         // The slave follows the master plus the applied corrections, once the shapers
         // have output the last step of either (a few cycles here: a reversal takes
         // `L + H + U`).
         if r.settled(s.cycle) {
-            assert_eq!(
-                s.slave - s.master,
-                i32::from(s.corrections),
-                "cycle {}",
-                s.cycle
-            );
+            assert_eq!(s.slave - s.master, i32::from(s.corrections), "cycle {}", s.cycle);
         }
     }
     for (k, &(at, d)) in LOSSES.iter().enumerate() {
@@ -245,28 +194,15 @@ fn synchronised_mode_corrects_each_disturbance_within_its_ticks() {
             deciding as i64 >= needed,
             "disturbance {k} at {at}: at most one step per tick ({deciding} ticks for {needed})"
         );
-        assert!(
-            ticks[deciding..].iter().all(|&n| within(n)),
-            "disturbance {k}: stays corrected"
-        );
-        assert!(
-            ticks.len() > deciding + 3,
-            "disturbance {k}: settled well before the next"
-        );
+        assert!(ticks[deciding..].iter().all(|&n| within(n)), "disturbance {k}: stays corrected");
+        assert!(ticks.len() > deciding + 3, "disturbance {k}: settled well before the next");
         let settled = ticks[deciding];
-        assert!(
-            (settled - TICK..settled).any(|n| !within(n)),
-            "disturbance {k}: settled just before"
-        );
+        assert!((settled - TICK..settled).any(|n| !within(n)), "disturbance {k}: settled just before");
     }
     let last = r.last();
     let total: i64 = LOSSES.iter().map(|x| x.1).sum();
     assert_eq!(i64::from(last.slave), i64::from(last.master) + total / K);
-    assert_eq!(
-        i64::from(last.corrections),
-        total / K,
-        "exactly the net correction"
-    );
+    assert_eq!(i64::from(last.corrections), total / K, "exactly the net correction");
     assert_eq!(last.error, 0);
 }
 
@@ -286,26 +222,12 @@ fn forward_mode_copies_the_master_and_leaves_the_error() {
     let r = run(false, limit, losses);
     let first = LOSSES[0].0;
     for s in &r.samples {
-        assert_eq!(
-            i64::from(s.error),
-            r.ideal_error(s.cycle),
-            "error in cycle {}",
-            s.cycle
-        );
-        assert_eq!(
-            s.pins[0], s.pins[1],
-            "the slave's pins are the master's in cycle {}",
-            s.cycle
-        );
+        assert_eq!(i64::from(s.error), r.ideal_error(s.cycle), "error in cycle {}", s.cycle);
+        assert_eq!(s.pins[0], s.pins[1], "the slave's pins are the master's in cycle {}", s.cycle);
         assert_eq!(s.master, s.slave);
         assert_eq!(s.corrections, 0);
         // 3 steps = 12 counts > 10: alarm 3 cycles after the count changed.
-        assert_eq!(
-            s.flags & flags::ALARM != 0,
-            s.cycle >= first + 3,
-            "alarm in {}",
-            s.cycle
-        );
+        assert_eq!(s.flags & flags::ALARM != 0, s.cycle >= first + 3, "alarm in {}", s.cycle);
     }
     let total: i64 = LOSSES.iter().map(|x| x.1).sum();
     assert_eq!(i64::from(r.last().error), total, "uncorrected");
@@ -317,13 +239,7 @@ fn forward_mode_copies_the_master_and_leaves_the_error() {
 fn corrections_insert_wait_and_delete_against_a_fast_master() {
     // The master at 0.4 steps per clock with the fastest timing (one step per 2 clocks
     // at most): corrections land on master requests of both signs.
-    let axis = AxisConfig {
-        step_len: 1,
-        step_space: 1,
-        dir_setup: 1,
-        dir_hold: 1,
-        ..AXIS
-    };
+    let axis = AxisConfig { step_len: 1, step_space: 1, dir_setup: 1, dir_hold: 1, ..AXIS };
     let profile = [(40.37, 300), (-39.71, 200), (0.0, 30)];
     let dist = |n: u64| -> i64 {
         (0..40u64)
@@ -345,10 +261,7 @@ fn corrections_insert_wait_and_delete_against_a_fast_master() {
     let inserted = count(&|s| s.corr != 0 && s.master_req == 0);
     let deleted = count(&|s| s.corr != 0 && s.master_req == -s.corr);
     let waited = count(&|s| s.corr != 0 && s.master_req == s.corr);
-    assert!(
-        inserted > 0 && deleted > 0 && waited > 0,
-        "{inserted} {deleted} {waited}"
-    );
+    assert!(inserted > 0 && deleted > 0 && waited > 0, "{inserted} {deleted} {waited}");
     let last = r.last();
     let total = dist(u64::MAX) / K;
     assert_eq!(i64::from(last.slave), i64::from(last.master) + total);
@@ -391,9 +304,5 @@ fn the_fast_path_skips_an_engaged_pair_at_rest_between_ticks() {
     assert_eq!(g.corrections(), 0);
     // Engaged at the edge of cycle 0: tick_cnt is 0 in cycle 1 and counts mod 50 000.
     assert_eq!(u64::from(g.tick_cnt()), (core.cycle() - 1) % 50_000);
-    assert_eq!(
-        events.len(),
-        2,
-        "engaged, then rec_ready: nothing else changed"
-    );
+    assert_eq!(events.len(), 2, "engaged, then rec_ready: nothing else changed");
 }

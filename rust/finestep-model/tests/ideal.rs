@@ -6,9 +6,7 @@ mod common;
 
 use common::{first_timing_violation, Run};
 use finestep_model::limits::{forward_interval, max_increment, reversal_interval, reversal_wait};
-use finestep_model::{
-    AxisConfig, AxisTiming, CoreInputs, CoreParams, Increment, PeriodRecord, RateChecker, MAX_AXES,
-};
+use finestep_model::{AxisConfig, AxisTiming, CoreInputs, CoreParams, Increment, PeriodRecord, RateChecker, MAX_AXES};
 use proptest::prelude::*;
 
 fn axis(t: AxisTiming, mode: u8, invert: u8) -> AxisConfig {
@@ -24,12 +22,7 @@ fn axis(t: AxisTiming, mode: u8, invert: u8) -> AxisConfig {
 }
 
 fn timing(l: u32, s: u32, u: u32, h: u32) -> AxisTiming {
-    AxisTiming {
-        step_len: l,
-        step_space: s,
-        dir_setup: u,
-        dir_hold: h,
-    }
+    AxisTiming { step_len: l, step_space: s, dir_setup: u, dir_hold: h }
 }
 
 fn raw(x: Increment) -> i64 {
@@ -70,10 +63,7 @@ fn spec_strategy(max_cycles: u32) -> impl Strategy<Value = Spec> {
             Just(tw),
             prop::collection::vec((timing_strategy(max_t), 0..4u8, 0..8u8), n),
             prop_oneof![Just(1i64), Just(8192), Just(16384), Just(32768)],
-            prop::collection::vec(
-                prop::collection::vec((0..9u8, any::<u32>()), n),
-                1..=periods,
-            ),
+            prop::collection::vec(prop::collection::vec((0..9u8, any::<u32>()), n), 1..=periods),
         )
             .prop_map(|(p, timing_width, axes, quantum, choices)| Spec {
                 timing_width,
@@ -126,11 +116,7 @@ impl Spec {
     }
 
     fn run(&self, records: Vec<PeriodRecord>, drain: u64) -> Run {
-        let params = CoreParams {
-            n_axes: self.axes.len(),
-            p_width: 20,
-            timing_width: self.timing_width,
-        };
+        let params = CoreParams { n_axes: self.axes.len(), p_width: 20, timing_width: self.timing_width };
         let mut axes = [AxisConfig::default(); MAX_AXES];
         for (slot, &(t, mode, invert)) in axes.iter_mut().zip(&self.axes) {
             *slot = axis(t, mode, invert);
@@ -139,12 +125,7 @@ impl Spec {
     }
 
     fn drain(&self) -> u64 {
-        let rev = self
-            .timings()
-            .iter()
-            .map(reversal_interval)
-            .max()
-            .unwrap_or(0);
+        let rev = self.timings().iter().map(reversal_interval).max().unwrap_or(0);
         2 * u64::from(self.p) + 4 * rev + 16
     }
 }
@@ -167,12 +148,7 @@ fn check_rated(spec: &Spec, run: &Run) -> Result<(), TestCaseError> {
             return Err(TestCaseError::fail(v));
         }
         // (a): after the periods and the drain, exactly the rounded sum.
-        prop_assert_eq!(
-            run.final_position(i),
-            ideal.final_steps(),
-            "axis {}: final",
-            i
-        );
+        prop_assert_eq!(run.final_position(i), ideal.final_steps(), "axis {}: final", i);
         // The pins say what the position says, one cycle later, in every mode.
         if let Some(v) = run.first_pin_mismatch(i) {
             return Err(TestCaseError::fail(v));
@@ -188,8 +164,7 @@ fn check_rated(spec: &Spec, run: &Run) -> Result<(), TestCaseError> {
 
 #[test]
 fn rated_streams_follow_the_ideal_within_one_step() {
-    let mut runner =
-        finestep_testkit::runner("rated_streams_follow_the_ideal_within_one_step", 3000);
+    let mut runner = finestep_testkit::runner("rated_streams_follow_the_ideal_within_one_step", 3000);
     runner
         .run(&spec_strategy(40_000), |spec| {
             let records = spec.build();
@@ -204,13 +179,8 @@ fn rated_streams_follow_the_ideal_within_one_step() {
 #[test]
 fn constant_increment_gives_even_step_intervals() {
     let mut runner = finestep_testkit::runner("constant_increment_gives_even_step_intervals", 1000);
-    let strategy = (
-        timing_strategy(40),
-        prop_oneof![2..=64u32, 64..=2000u32],
-        100..=1000i64,
-        any::<bool>(),
-        2..=20usize,
-    );
+    let strategy =
+        (timing_strategy(40), prop_oneof![2..=64u32, 64..=2000u32], 100..=1000i64, any::<bool>(), 2..=20usize);
     runner
         .run(&strategy, |(t, p, per_mille, negative, periods)| {
             let checker = RateChecker::new(p, &[t]);
@@ -220,35 +190,17 @@ fn constant_increment_gives_even_step_intervals() {
             // At least 5 steps: enough periods for 4 intervals.
             let periods = periods.max((5 * 65536 / d.abs() + 1) as usize);
             let records = vec![PeriodRecord::from_raw(&[d as i32], 0); periods];
-            let spec = Spec {
-                timing_width: 12,
-                p,
-                axes: vec![(t, 0, 0)],
-                quantum: 1,
-                choices: vec![],
-            };
+            let spec = Spec { timing_width: 12, p, axes: vec![(t, 0, 0)], quantum: 1, choices: vec![] };
             let run = spec.run(records, 0);
-            let changes: Vec<usize> = (1..run.outputs.len())
-                .filter(|&n| run.position(n, 0) != run.position(n - 1, 0))
-                .collect();
-            let intervals: Vec<usize> = changes
-                .windows(2)
-                .map(|w| w[1] - w[0])
-                .skip(usize::from(negative))
-                .collect();
+            let changes: Vec<usize> =
+                (1..run.outputs.len()).filter(|&n| run.position(n, 0) != run.position(n - 1, 0)).collect();
+            let intervals: Vec<usize> = changes.windows(2).map(|w| w[1] - w[0]).skip(usize::from(negative)).collect();
             prop_assert!(intervals.len() >= 2, "steps at {:?}", changes);
             let m = i64::from(p) << 16;
             let lo = (m / d.abs()) as usize;
             let hi = ((m + d.abs() - 1) / d.abs()) as usize;
             for &x in &intervals {
-                prop_assert!(
-                    lo <= x && x <= hi,
-                    "interval {} outside [{}, {}]: {:?}",
-                    x,
-                    lo,
-                    hi,
-                    intervals
-                );
+                prop_assert!(lo <= x && x <= hi, "interval {} outside [{}, {}]: {:?}", x, lo, hi, intervals);
             }
             Ok(())
         })
@@ -259,15 +211,8 @@ fn constant_increment_gives_even_step_intervals() {
 /// output (no `step_lost` while the backlog stays below 127).
 #[test]
 fn over_rate_sets_rate_error_and_keeps_every_step() {
-    let mut runner =
-        finestep_testkit::runner("over_rate_sets_rate_error_and_keeps_every_step", 1000);
-    let strategy = (
-        timing_strategy(20),
-        4..=40u32,
-        1..=3i64,
-        5..=12usize,
-        0..4u8,
-    );
+    let mut runner = finestep_testkit::runner("over_rate_sets_rate_error_and_keeps_every_step", 1000);
+    let strategy = (timing_strategy(20), 4..=40u32, 1..=3i64, 5..=12usize, 0..4u8);
     runner
         .run(&strategy, |(t, scale, excess, periods, mode)| {
             let p = scale * forward_interval(&t) as u32;
@@ -277,13 +222,7 @@ fn over_rate_sets_rate_error_and_keeps_every_step() {
             prop_assert!(d < i64::from(p) << 16);
             prop_assert!(excess * periods as i64 <= 100);
             let records = vec![PeriodRecord::from_raw(&[d as i32], 0); periods];
-            let spec = Spec {
-                timing_width: 12,
-                p,
-                axes: vec![(t, mode, 0)],
-                quantum: 1,
-                choices: vec![],
-            };
+            let spec = Spec { timing_width: 12, p, axes: vec![(t, mode, 0)], quantum: 1, choices: vec![] };
             let run = spec.run(records, 130 * reversal_interval(&t) + 2 * u64::from(p));
             let last = run.outputs.last().unwrap();
             prop_assert!(last.rate_error(0), "rate_error must set");
@@ -304,10 +243,7 @@ fn over_rate_sets_rate_error_and_keeps_every_step() {
 /// with the drive timing, and the pins agree with the position.
 #[test]
 fn any_acceptable_stream_keeps_every_step_and_the_timing() {
-    let mut runner = finestep_testkit::runner(
-        "any_acceptable_stream_keeps_every_step_and_the_timing",
-        1000,
-    );
+    let mut runner = finestep_testkit::runner("any_acceptable_stream_keeps_every_step_and_the_timing", 1000);
     let strategy = (
         timing_strategy(40),
         prop_oneof![Just(12u32), Just(4u32)],
@@ -320,12 +256,7 @@ fn any_acceptable_stream_keeps_every_step_and_the_timing() {
         .run(&strategy, |(t, timing_width, p, xs, mode, invert)| {
             // With TIMING_W = 4 the core masks the settings (16 becomes 0, acting as 1).
             let mask = (1u32 << timing_width) - 1;
-            let masked = timing(
-                t.step_len & mask,
-                t.step_space & mask,
-                t.dir_setup & mask,
-                t.dir_hold & mask,
-            );
+            let masked = timing(t.step_len & mask, t.step_space & mask, t.dir_setup & mask, t.dir_hold & mask);
             let m = i64::from(p) << 16;
             let mut budget = 100 * 65536i64;
             let mut records = vec![];
@@ -335,13 +266,7 @@ fn any_acceptable_stream_keeps_every_step_and_the_timing() {
                 budget -= d.abs();
                 records.push(PeriodRecord::from_raw(&[d as i32], 0));
             }
-            let spec = Spec {
-                timing_width,
-                p,
-                axes: vec![(t, mode, invert)],
-                quantum: 1,
-                choices: vec![],
-            };
+            let spec = Spec { timing_width, p, axes: vec![(t, mode, invert)], quantum: 1, choices: vec![] };
             let run = spec.run(records, 110 * reversal_interval(&masked) + 2 * u64::from(p));
             prop_assert!(!run.outputs.last().unwrap().step_lost(0));
             prop_assert_eq!(run.final_position(0), run.ideal(0).final_steps());
@@ -366,25 +291,11 @@ fn any_acceptable_stream_keeps_every_step_and_the_timing() {
 #[test]
 fn no_drift_over_many_periods() {
     let t = timing(1, 1, 1, 1);
-    for (p, d, periods) in [
-        (3u32, 21845i32, 3000usize),
-        (7, -1, 5000),
-        (1000, 123_457, 400),
-    ] {
+    for (p, d, periods) in [(3u32, 21845i32, 3000usize), (7, -1, 5000), (1000, 123_457, 400)] {
         let records = vec![PeriodRecord::from_raw(&[d], 0); periods];
-        let spec = Spec {
-            timing_width: 12,
-            p,
-            axes: vec![(t, 0, 0)],
-            quantum: 1,
-            choices: vec![],
-        };
+        let spec = Spec { timing_width: 12, p, axes: vec![(t, 0, 0)], quantum: 1, choices: vec![] };
         let run = spec.run(records, 2 * u64::from(p) + 16);
-        assert_eq!(
-            run.final_position(0),
-            run.ideal(0).final_steps(),
-            "P {p}, d {d}"
-        );
+        assert_eq!(run.final_position(0), run.ideal(0).final_steps(), "P {p}, d {d}");
         assert!(run.first_lag_violation(0).is_none());
     }
 }
@@ -403,13 +314,7 @@ fn sign_changes_at_the_rated_maximum() {
         checker.check(&rec).unwrap();
         records.push(rec);
     }
-    let spec = Spec {
-        timing_width: 12,
-        p,
-        axes: vec![(t, 0, 0)],
-        quantum: 1,
-        choices: vec![],
-    };
+    let spec = Spec { timing_width: 12, p, axes: vec![(t, 0, 0)], quantum: 1, choices: vec![] };
     let run = spec.run(records, 2 * u64::from(p));
     check_rated(&spec, &run).unwrap();
 }
@@ -420,41 +325,18 @@ fn sign_changes_at_the_rated_maximum() {
 /// `P / I_rev`) puts the position more than one step from the ideal.
 #[test]
 fn reversal_limit_is_tight() {
-    for t in [
-        timing(1, 1, 1, 1),
-        timing(3, 2, 4, 5),
-        timing(2, 9, 1, 1),
-        timing(5, 1, 7, 2),
-    ] {
+    for t in [timing(1, 1, 1, 1), timing(3, 2, 4, 5), timing(2, 9, 1, 1), timing(5, 1, 7, 2)] {
         let w = reversal_wait(&t);
         let p = (2 * w - 1) as u32;
-        let spec = Spec {
-            timing_width: 12,
-            p,
-            axes: vec![(t, 0, 0)],
-            quantum: 1,
-            choices: vec![],
-        };
-        let over = vec![
-            PeriodRecord::from_raw(&[32768], 0),
-            PeriodRecord::from_raw(&[-65536], 0),
-        ];
+        let spec = Spec { timing_width: 12, p, axes: vec![(t, 0, 0)], quantum: 1, choices: vec![] };
+        let over = vec![PeriodRecord::from_raw(&[32768], 0), PeriodRecord::from_raw(&[-65536], 0)];
         let mut checker = RateChecker::new(p, &[t]);
         assert!(checker.check(&over[0]).is_ok());
-        assert!(
-            checker.check(&over[1]).is_err(),
-            "{t:?}: -1 step is over the limit"
-        );
+        assert!(checker.check(&over[1]).is_err(), "{t:?}: -1 step is over the limit");
         let run = spec.run(over, 4 * w);
-        assert!(
-            run.first_lag_violation(0).is_some(),
-            "{t:?}: -1 at P = 2W - 1 must lag"
-        );
+        assert!(run.first_lag_violation(0).is_some(), "{t:?}: -1 at P = 2W - 1 must lag");
         let at_limit = -raw(max_increment(&t, p, true));
-        let within = vec![
-            PeriodRecord::from_raw(&[32768], 0),
-            PeriodRecord::from_raw(&[at_limit as i32], 0),
-        ];
+        let within = vec![PeriodRecord::from_raw(&[32768], 0), PeriodRecord::from_raw(&[at_limit as i32], 0)];
         let run = spec.run(within, 4 * w);
         assert_eq!(run.first_lag_violation(0), None, "{t:?}");
     }
@@ -497,26 +379,15 @@ fn forward_limit_is_tight() {
 fn reversal_limit_covers_the_first_two_steps() {
     let t = timing(1, 1, 10, 1);
     let p = 100;
-    let records: Vec<PeriodRecord> = [0.75f64, -0.25, -50.0, -50.0]
-        .iter()
-        .map(|&x| PeriodRecord::from_raw(&[(x * 65536.0) as i32], 0))
-        .collect();
+    let records: Vec<PeriodRecord> =
+        [0.75f64, -0.25, -50.0, -50.0].iter().map(|&x| PeriodRecord::from_raw(&[(x * 65536.0) as i32], 0)).collect();
     // The third increment is within the forward limit and has the sign of the one before.
     assert!(finestep_model::limits::check_increment(&t, p, -1, records[2].inc[0]).is_ok());
     let mut checker = RateChecker::new(p, &[t]);
     assert!(checker.check(&records[0]).is_ok());
     assert!(checker.check(&records[1]).is_ok());
-    assert!(
-        checker.check(&records[2]).is_err(),
-        "still reversing: 0.25 of 2 steps"
-    );
-    let spec = Spec {
-        timing_width: 12,
-        p,
-        axes: vec![(t, 0, 0)],
-        quantum: 1,
-        choices: vec![],
-    };
+    assert!(checker.check(&records[2]).is_err(), "still reversing: 0.25 of 2 steps");
+    let spec = Spec { timing_width: 12, p, axes: vec![(t, 0, 0)], quantum: 1, choices: vec![] };
     let run = spec.run(records, 200);
     assert!(run.first_lag_violation(0).is_some());
     assert!(run.outputs.iter().any(|o| o.rate_error(0)));
@@ -526,17 +397,9 @@ fn reversal_limit_covers_the_first_two_steps() {
 /// The idle core as the harness sees it: enables and dir only, for any inputs.
 #[test]
 fn unused_axes_stay_zero() {
-    let params = CoreParams {
-        n_axes: 3,
-        ..CoreParams::default()
-    };
+    let params = CoreParams { n_axes: 3, ..CoreParams::default() };
     let mut core = finestep_model::Core::new(params);
-    let mut inputs = CoreInputs {
-        run: true,
-        period_clocks: 5,
-        rec_valid: true,
-        ..CoreInputs::default()
-    };
+    let mut inputs = CoreInputs { run: true, period_clocks: 5, rec_valid: true, ..CoreInputs::default() };
     inputs.record = PeriodRecord::from_raw(&[1 << 16; 8], 1);
     for a in &mut inputs.axes {
         a.enable = true;

@@ -125,8 +125,8 @@ fn config() -> impl Strategy<Value = Config> {
     let vmax = prop_oneof![1..=64u32, 1..=(1u32 << 22)];
     let accel = prop_oneof![1..=64u32, 1..=(1u32 << 18)];
     let scale = prop_oneof![(1..=(1i32 << 22)), (-(1i32 << 22)..=-1)];
-    (vmax, accel, scale, 0..=3u8, prop_oneof![Just(0u16), 0..=50u16, 0..=2000u16], any::<bool>(), 128..=400u32).prop_map(
-        |(vmax, accel, scale, multiplier, window, follow, period)| Config {
+    (vmax, accel, scale, 0..=3u8, prop_oneof![Just(0u16), 0..=50u16, 0..=2000u16], any::<bool>(), 128..=400u32)
+        .prop_map(|(vmax, accel, scale, multiplier, window, follow, period)| Config {
             vmax,
             accel,
             scale,
@@ -134,8 +134,7 @@ fn config() -> impl Strategy<Value = Config> {
             window,
             follow,
             period,
-        },
-    )
+        })
 }
 
 fn inputs(c: &Config) -> JogInputs {
@@ -256,14 +255,21 @@ fn periods_bound(vmax: u32, accel: u32, e: i32) -> f64 {
 #[test]
 fn a_fixed_target_is_reached_exactly() {
     let mut runner = finestep_testkit::runner("a_fixed_target_is_reached_exactly", 256);
-    let case = (1..=(1u32 << 16), 1..=64u32, prop_oneof![1..=(1i32 << 16), 1..=(1i32 << 24)], any::<bool>(), 128..=300u32);
+    let case =
+        (1..=(1u32 << 16), 1..=64u32, prop_oneof![1..=(1i32 << 16), 1..=(1i32 << 24)], any::<bool>(), 128..=300u32);
     runner
         .run(&case, |(accel, ratio, e, negative, period)| {
             let vmax = accel.saturating_mul(ratio).min(1 << 30);
             let e = if negative { -e } else { e };
             let limit = 4.0 * periods_bound(vmax, accel, e) + 20.0;
             let (records, jog) = land(vmax, accel, e, period, limit as usize)?;
-            prop_assert_eq!(jog.cmd(), i64::from(e), "not on the target after {} periods: {:?}", records.len(), records);
+            prop_assert_eq!(
+                jog.cmd(),
+                i64::from(e),
+                "not on the target after {} periods: {:?}",
+                records.len(),
+                records
+            );
             prop_assert!(jog.vel() == 0 && jog.next_vel() == 0, "not at rest");
             Ok(())
         })
@@ -338,7 +344,6 @@ fn first_spec_counterexample_slow_jog_never_arrives() {
     assert_eq!(&records[..3], &[1000, 500, 0], "{records:?}");
     assert_eq!((jog.cmd(), jog.target()), (1500, 1500));
 }
-
 
 /// Turning one way, `|target - cmd|` stays within the window at every clock.
 #[test]

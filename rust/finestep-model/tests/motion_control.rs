@@ -91,7 +91,8 @@ fn threshold_period_grid_and_underrun_timing() {
             }
             // Nothing is consumed before the threshold is reached.
             let reached = first(&trace, 0, |s| s.fifo_level >= start).expect("threshold never reached");
-            let pops: Vec<usize> = (1..trace.len()).filter(|&i| trace[i].fifo_level < trace[i - 1].fifo_level).collect();
+            let pops: Vec<usize> =
+                (1..trace.len()).filter(|&i| trace[i].fifo_level < trace[i - 1].fifo_level).collect();
             prop_assert_eq!(pops.len(), records.len(), "every record consumed once");
             // The gate opens at the edge after the threshold; the first pop is at the
             // first boundary from then on.
@@ -121,14 +122,7 @@ fn threshold_period_grid_and_underrun_timing() {
 
 #[test]
 fn a_block_end_is_a_normal_stop_and_an_underrun_waits_for_clear_errors() {
-    let sc = Scenario {
-        n_axes: 2,
-        period: 200,
-        start_level: 2,
-        step_len: 2,
-        step_space: 2,
-        records: vec![],
-    };
+    let sc = Scenario { n_axes: 2, period: 200, start_level: 2, step_len: 2, step_space: 2, records: vec![] };
     let (mut bench, bus, spi) = running(&sc);
     let step = 1 << 16; // one step per period
     let block = [record(&[step, 2 * step], 0, 2), record(&[step, 2 * step], regs_block_end(), 2)];

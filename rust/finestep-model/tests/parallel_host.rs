@@ -11,19 +11,19 @@ use host::*;
 use proptest::prelude::*;
 
 fn master() -> impl Strategy<Value = ParallelMaster> {
-    (3..7u64, 3..7u64, 9..14u64, 4..9u64)
-        .prop_map(|(adv_low, wr_low, rd_low, recovery)| ParallelMaster { adv_low, wr_low, rd_low, recovery })
+    (3..7u64, 3..7u64, 9..14u64, 4..9u64).prop_map(|(adv_low, wr_low, rd_low, recovery)| ParallelMaster {
+        adv_low,
+        wr_low,
+        rd_low,
+        recovery,
+    })
 }
 
 #[test]
 fn register_writes_read_back_as_stored() {
     let mut runner = finestep_testkit::runner("parallel_register_writes_read_back", 64);
-    let case = (
-        1..=MAX_AXES,
-        1..=16u32,
-        master(),
-        prop::collection::vec((any::<prop::sample::Index>(), any::<u32>()), 1..24),
-    );
+    let case =
+        (1..=MAX_AXES, 1..=16u32, master(), prop::collection::vec((any::<prop::sample::Index>(), any::<u32>()), 1..24));
     runner
         .run(&case, |(n_axes, timing_w, bus, writes)| {
             let p = TopParams { n_axes, timing_w, ..TopParams::default() };
@@ -68,7 +68,13 @@ fn thirty_two_bit_reads_are_coherent_across_the_low_half_wrap() {
             bench.clock(pause);
             let high = bus.read16(&mut bench, regs::timestamp::ADDR, true).expect("high half driven");
             let value = u64::from(high) << 16 | u64::from(low);
-            prop_assert!(value >= start && value <= low_end, "value {:#x} outside [{:#x}, {:#x}]", value, start, low_end);
+            prop_assert!(
+                value >= start && value <= low_end,
+                "value {:#x} outside [{:#x}, {:#x}]",
+                value,
+                start,
+                low_end
+            );
             Ok(())
         })
         .unwrap();
@@ -149,12 +155,8 @@ fn mismatched_and_aborted_cycles_write_nothing_and_count() {
 #[test]
 fn spi_and_parallel_at_once_both_get_their_accesses() {
     let mut runner = finestep_testkit::runner("spi_and_parallel_at_once", 96);
-    let case = (
-        0..400usize,
-        prop::collection::vec(any::<u32>(), 1..4),
-        prop::collection::vec(any::<u32>(), 1..4),
-        4..7u64,
-    );
+    let case =
+        (0..400usize, prop::collection::vec(any::<u32>(), 1..4), prop::collection::vec(any::<u32>(), 1..4), 4..7u64);
     runner
         .run(&case, |(delay, spi_values, bus_values, half_period)| {
             let p = TopParams::default();
@@ -188,7 +190,9 @@ fn spi_and_parallel_at_once_both_get_their_accesses() {
             }
             // Repeat the reads for the whole SPI traffic, so requests collide.
             let mut bus_wave = bus.waveform(&accesses);
-            let reads: Vec<BusAccess> = (0..bus_values.len()).flat_map(|k| ParallelMaster::read32_accesses(regs::axis_timing_a::addr(k))).collect();
+            let reads: Vec<BusAccess> = (0..bus_values.len())
+                .flat_map(|k| ParallelMaster::read32_accesses(regs::axis_timing_a::addr(k)))
+                .collect();
             while bus_wave.pins.len() < spi_wave.pins.len() {
                 let more = bus.waveform(&reads);
                 let offset = bus_wave.pins.len();
@@ -203,14 +207,23 @@ fn spi_and_parallel_at_once_both_get_their_accesses() {
                 let low = pair[0].expect("low half not driven");
                 let high = pair[1].expect("high half not driven");
                 let k = i % bus_values.len();
-                prop_assert_eq!(u32::from(high) << 16 | u32::from(low), expected[k], "8080 read {} of AXIS_TIMING_A[{}]", i, k);
+                prop_assert_eq!(
+                    u32::from(high) << 16 | u32::from(low),
+                    expected[k],
+                    "8080 read {} of AXIS_TIMING_A[{}]",
+                    i,
+                    k
+                );
             }
             for (frame, &(first, len)) in frame_samples.iter().enumerate() {
                 let rx = bits_to_bytes(&miso[first..first + len]);
                 if frame < spi_values.len() {
                     prop_assert_eq!(rx[rx.len() - 1], ACK, "SPI write {}", frame);
                 } else {
-                    let words: Vec<u32> = rx[3..3 + 4 * usize::from(count)].chunks(4).map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]])).collect();
+                    let words: Vec<u32> = rx[3..3 + 4 * usize::from(count)]
+                        .chunks(4)
+                        .map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]]))
+                        .collect();
                     prop_assert_eq!(&words, &spi_values, "SPI read-back");
                 }
             }

@@ -32,13 +32,7 @@ struct Case {
 }
 
 fn case() -> impl Strategy<Value = Case> {
-    (
-        prop::array::uniform2(1..40u32),
-        prop::bool::ANY,
-        0..6000u64,
-        1500..6000u32,
-        0..20u32,
-    )
+    (prop::array::uniform2(1..40u32), prop::bool::ANY, 0..6000u64, 1500..6000u32, 0..20u32)
         .prop_flat_map(|(step_len, watchdog, estop_after, timeout, filter)| {
             // Within the rated rate with S = U = H = 1: |D| * 2 * (L + 1) <= P.
             let max = |l: u32| (i64::from(PERIOD / (2 * (l + 1))) << 16) as i32;

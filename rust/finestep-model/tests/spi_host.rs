@@ -13,7 +13,14 @@ use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
     let feedback = (prop_oneof![Just(MAX_CHANNELS), 0..=MAX_CHANNELS], prop_oneof![Just(true), any::<bool>()]);
-    (1..=MAX_AXES, prop_oneof![Just(20u32), 1..=24u32], prop_oneof![Just(12u32), 1..=16u32], 2..=8u32, 1..=24u32, feedback)
+    (
+        1..=MAX_AXES,
+        prop_oneof![Just(20u32), 1..=24u32],
+        prop_oneof![Just(12u32), 1..=16u32],
+        2..=8u32,
+        1..=24u32,
+        feedback,
+    )
         .prop_map(|(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg))| TopParams {
             n_axes,
             p_width,
@@ -27,9 +34,8 @@ fn params() -> impl Strategy<Value = TopParams> {
 }
 
 fn master() -> impl Strategy<Value = SpiMaster> {
-    (4..9u64, 4..12u64, prop_oneof![Just(2u64), 2..40u64], prop_oneof![Just(0u64), 0..30u64]).prop_map(
-        |(half_period, cs_setup, cs_idle, byte_gap)| SpiMaster { half_period, cs_setup, cs_idle, byte_gap },
-    )
+    (4..9u64, 4..12u64, prop_oneof![Just(2u64), 2..40u64], prop_oneof![Just(0u64), 0..30u64])
+        .prop_map(|(half_period, cs_setup, cs_idle, byte_gap)| SpiMaster { half_period, cs_setup, cs_idle, byte_gap })
 }
 
 fn any_record(n_axes: usize) -> impl Strategy<Value = PeriodRecord> {
@@ -307,7 +313,8 @@ fn bad_commands_and_counts_answer_bad_command() {
     let spi = SpiMaster::default();
     let p = TopParams::default();
     let mut bench = Bench::new(p);
-    for header in [[CMD_READ, 0, 0], [CMD_WRITE, 4, 2], [CMD_WRITE, 4, 0], [CMD_FIFO, 0, 0], [0x00, 0, 1], [0xFF, 0, 1]] {
+    for header in [[CMD_READ, 0, 0], [CMD_WRITE, 4, 2], [CMD_WRITE, 4, 0], [CMD_FIFO, 0, 0], [0x00, 0, 1], [0xFF, 0, 1]]
+    {
         let mut tx = header.to_vec();
         tx.extend_from_slice(&[0; 4]);
         let rx = spi.transfer(&mut bench, &tx, None);
@@ -335,7 +342,8 @@ fn a_flush_during_a_fifo_frame_drops_it() {
             let crc_start = spi_wave.samples[spi_wave.samples.len() - 24];
             let start = header_end + ((crc_start - header_end - 40) as f64 * when) as usize;
             let mut bus_wave = Waveform { pins: vec![(true, true, true, true, 0); start], samples: vec![] };
-            let flush = bus.waveform(&ParallelMaster::write32_accesses(regs::command::ADDR, regs::command::FLUSH_FIFO.set(0, 1)));
+            let flush = bus
+                .waveform(&ParallelMaster::write32_accesses(regs::command::ADDR, regs::command::FLUSH_FIFO.set(0, 1)));
             bus_wave.pins.extend(flush.pins);
             let (miso, _) = run_waveforms(&mut bench, &spi_wave, &bus_wave);
             bench.clock(SETTLE);

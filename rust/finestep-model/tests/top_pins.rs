@@ -3,8 +3,8 @@
 
 mod host;
 
-use finestep_model::top::{Top, TopInputs, TopOutputs, TopParams};
 use finestep_model::encoder_bank::MAX_CHANNELS;
+use finestep_model::top::{Top, TopInputs, TopOutputs, TopParams};
 use finestep_model::MAX_AXES;
 use proptest::prelude::*;
 

@@ -41,7 +41,15 @@ pub struct ArcMove {
 fn sweep(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
     let ccw = (end - start).rem_euclid(TAU);
     let base = if clockwise { -((TAU - ccw) % TAU) } else { ccw };
-    let base = if base == 0.0 { if clockwise { -TAU } else { TAU } } else { base };
+    let base = if base == 0.0 {
+        if clockwise {
+            -TAU
+        } else {
+            TAU
+        }
+    } else {
+        base
+    };
     base + f64::from(extra_turns) * TAU * base.signum()
 }
 
@@ -50,7 +58,13 @@ fn sweep(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
 pub fn interpolate_arc(machine: &Machine, arc: &ArcMove) -> Result<Vec<PeriodRecord>, PlanError> {
     let axes = machine.steps_per_unit.len();
     let (first, second) = arc.plane;
-    if axes > MAX_AXES || arc.from_mm.len() != axes || arc.to_mm.len() != axes || first >= axes || second >= axes || first == second {
+    if axes > MAX_AXES
+        || arc.from_mm.len() != axes
+        || arc.to_mm.len() != axes
+        || first >= axes
+        || second >= axes
+        || first == second
+    {
         return Err(PlanError::AxisCount { coords: arc.to_mm.len(), axes });
     }
     check_endpoints(machine, &arc.from_mm)?;
@@ -66,10 +80,8 @@ pub fn interpolate_arc(machine: &Machine, arc: &ArcMove) -> Result<Vec<PeriodRec
 
     // Path length: the (slightly spiral, if r0 != r1) planar arc and the linear axes.
     let planar = swept.abs() * 0.5 * (r0 + r1);
-    let linear: f64 = (0..axes)
-        .filter(|&a| a != first && a != second)
-        .map(|a| (arc.to_mm[a] - arc.from_mm[a]).powi(2))
-        .sum();
+    let linear: f64 =
+        (0..axes).filter(|&a| a != first && a != second).map(|a| (arc.to_mm[a] - arc.from_mm[a]).powi(2)).sum();
     let length = (planar * planar + linear).sqrt();
     let along_path = length / planar;
 
@@ -199,7 +211,12 @@ mod tests {
                 for p in &path {
                     // The chord's midpoint is within the tolerance of the circle.
                     let (mu, mv) = (0.5 * (p[0] + previous[0]), 0.5 * (p[1] + previous[1]));
-                    prop_assert!(radius - mu.hypot(mv) <= tolerance + quantum, "chord error {} > {}", radius - mu.hypot(mv), tolerance);
+                    prop_assert!(
+                        radius - mu.hypot(mv) <= tolerance + quantum,
+                        "chord error {} > {}",
+                        radius - mu.hypot(mv),
+                        tolerance
+                    );
                     let step: f64 = (0..3).map(|a| (p[a] - previous[a]).powi(2)).sum::<f64>().sqrt();
                     speeds.push(step / T);
                     planar_speeds.push((p[0] - previous[0]).hypot(p[1] - previous[1]) / T);
@@ -210,7 +227,8 @@ mod tests {
                     // Centripetal acceleration of the planar motion within A.
                     prop_assert!(
                         planar * planar / radius <= 800.0 * (1.0 + 1e-6) + 2.0 * planar * quantum / T / radius,
-                        "centripetal {} over 800", planar * planar / radius
+                        "centripetal {} over 800",
+                        planar * planar / radius
                     );
                 }
                 for pair in speeds.windows(2).take(speeds.len().saturating_sub(2)) {

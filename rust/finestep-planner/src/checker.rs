@@ -135,7 +135,9 @@ impl CheckCurve {
         for i in order - 1..n {
             let (a, b) = (curve.knots[i], curve.knots[i + 1]);
             if b > a {
-                params.extend((0..CURVE_SAMPLES_PER_SPAN).map(|j| a + (b - a) * j as f64 / CURVE_SAMPLES_PER_SPAN as f64));
+                params.extend(
+                    (0..CURVE_SAMPLES_PER_SPAN).map(|j| a + (b - a) * j as f64 / CURVE_SAMPLES_PER_SPAN as f64),
+                );
             }
         }
         params.push(curve.knots[n]);
@@ -202,7 +204,8 @@ impl CheckCurve {
             b = (0..t.len() - k)
                 .map(|i| {
                     let left = if t[i + k - 1] > t[i] { (u - t[i]) / (t[i + k - 1] - t[i]) * b[i] } else { 0.0 };
-                    let right = if t[i + k] > t[i + 1] { (t[i + k] - u) / (t[i + k] - t[i + 1]) * b[i + 1] } else { 0.0 };
+                    let right =
+                        if t[i + k] > t[i + 1] { (t[i + k] - u) / (t[i + k] - t[i + 1]) * b[i + 1] } else { 0.0 };
                     left + right
                 })
                 .collect();
@@ -235,8 +238,13 @@ impl CheckCurve {
         };
         // Chords in the boxes that may hold the nearest one: a box whose distance exceeds
         // the nearest sample of any box cannot.
-        let box_distance = |b: &[f64; 4]| (b[0] - qx).max(qx - b[2]).max(0.0).hypot((b[1] - qy).max(qy - b[3]).max(0.0));
-        let upper = self.boxes.iter().map(|&(j, _, _)| d(self.samples[j].1)).fold(d(self.samples[self.samples.len() - 1].1), f64::min);
+        let box_distance =
+            |b: &[f64; 4]| (b[0] - qx).max(qx - b[2]).max(0.0).hypot((b[1] - qy).max(qy - b[3]).max(0.0));
+        let upper = self
+            .boxes
+            .iter()
+            .map(|&(j, _, _)| d(self.samples[j].1))
+            .fold(d(self.samples[self.samples.len() - 1].1), f64::min);
         let mut chords: Vec<(usize, f64)> = Vec::new();
         for &(j0, j1, ref b) in &self.boxes {
             if box_distance(b) <= upper {
@@ -308,7 +316,8 @@ impl Piece {
 
     /// Distance from `q` to the piece.
     fn distance(&self, q: &[f64; 4], present: &[bool; 4]) -> f64 {
-        let dist = |p: [f64; 4]| -> f64 { (0..4).filter(|&a| present[a]).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>().sqrt() };
+        let dist =
+            |p: [f64; 4]| -> f64 { (0..4).filter(|&a| present[a]).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>().sqrt() };
         if let Some(curve) = &self.nurbs {
             let planar = curve.distance(q[0], q[1]);
             let off: f64 = (2..4).filter(|&a| present[a]).map(|a| (q[a] - self.start[a]).powi(2)).sum();
@@ -331,7 +340,10 @@ impl Piece {
                 let phi = (q[v] - cv).atan2(q[u] - cu);
                 let base = (phi - theta0) / sweep;
                 let turns = (sweep.abs() / TAU).ceil() as i64 + 1;
-                let mut starts: Vec<f64> = (-turns..=turns).map(|k| base + k as f64 * TAU / sweep).filter(|f| (0.0..=1.0).contains(f)).collect();
+                let mut starts: Vec<f64> = (-turns..=turns)
+                    .map(|k| base + k as f64 * TAU / sweep)
+                    .filter(|f| (0.0..=1.0).contains(f))
+                    .collect();
                 let mut rise2 = 0.0;
                 let mut along = 0.0;
                 for a in (0..4).filter(|&a| present[a] && a != u && a != v) {
@@ -341,7 +353,8 @@ impl Piece {
                 if rise2 > 0.0 {
                     starts.push((along / rise2).clamp(0.0, 1.0));
                 }
-                let d2 = |f: f64| -> f64 { (0..4).filter(|&a| present[a]).map(|a| (self.point(f)[a] - q[a]).powi(2)).sum() };
+                let d2 =
+                    |f: f64| -> f64 { (0..4).filter(|&a| present[a]).map(|a| (self.point(f)[a] - q[a]).powi(2)).sum() };
                 let mut best = dist(self.start).min(dist(self.end));
                 for f0 in starts {
                     // Newton on the squared distance, numerically, kept within the arc.
@@ -377,7 +390,15 @@ fn arc_sweep(theta0: f64, theta1: f64, clockwise: bool, extra_turns: u32) -> f64
         ccw -= TAU;
     }
     // A full turn when the ends coincide, else the short way round in the chosen sense.
-    let one = if clockwise { if ccw >= TAU - 1e-12 { -TAU } else { ccw - TAU } } else { ccw };
+    let one = if clockwise {
+        if ccw >= TAU - 1e-12 {
+            -TAU
+        } else {
+            ccw - TAU
+        }
+    } else {
+        ccw
+    };
     one + one.signum() * TAU * f64::from(extra_turns)
 }
 
@@ -443,7 +464,18 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
         let still = within(to)
             && arc.is_none_or(|(_, _, r0, _, _)| r0 * scale[0].max(scale[1]).max(scale[2]) <= 0.5)
             && nurbs.as_ref().is_none_or(|c| c.points.iter().all(|&(x, y, _)| within([x, y, at[2], at[3]])));
-        out.push(Piece { line: block.line, start: at, end: to, arc, nurbs, feed, own_tolerance, allowance, stops: tolerance.is_none(), still });
+        out.push(Piece {
+            line: block.line,
+            start: at,
+            end: to,
+            arc,
+            nurbs,
+            feed,
+            own_tolerance,
+            allowance,
+            stops: tolerance.is_none(),
+            still,
+        });
         at = to;
     }
     mark_stop(&mut out);
@@ -455,7 +487,11 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
 /// geometry the records must follow is the tool-centre path: the program after cutter
 /// compensation with the configuration's tool table (a program that cannot be
 /// compensated is reported as a configuration error naming its line).
-pub fn check_program(config: &MachineConfig, program: &Program, records: &[PeriodRecord]) -> Result<CheckReport, ConfigError> {
+pub fn check_program(
+    config: &MachineConfig,
+    program: &Program,
+    records: &[PeriodRecord],
+) -> Result<CheckReport, ConfigError> {
     let compensated = crate::cutter_comp::compensate(program, &config.tool_table()).map_err(|e| ConfigError {
         file: "<program>".into(),
         key: format!("line {}", e.line),
@@ -466,14 +502,16 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
     let period = machine.period_s;
     let present: [bool; 4] = machine.axes.map(|a| a.present);
     let scale: [f64; 4] = machine.axes.map(|a| a.steps_per_unit);
-    let mut report = CheckReport { periods: records.len(), period_s: period, axis_present: present, ..CheckReport::default() };
+    let mut report =
+        CheckReport { periods: records.len(), period_s: period, axis_present: present, ..CheckReport::default() };
     let scurve = machine.profile == ProfileKind::SCurve;
     let (pieces, stops) = pieces(program, machine.path_tolerance_mm, &scale);
 
     let mut tolerance = [[0.0; 3]; 4];
     for a in 0..4 {
         let axis = &machine.axes[a];
-        report.axis_limit[a] = [axis.max_velocity, axis.max_acceleration, if scurve { axis.max_jerk } else { f64::INFINITY }];
+        report.axis_limit[a] =
+            [axis.max_velocity, axis.max_acceleration, if scurve { axis.max_jerk } else { f64::INFINITY }];
         let e = 0.5 / 65536.0 / scale[a];
         tolerance[a] = [2.0 * e / period, 4.0 * e / period.powi(2), 8.0 * e / period.powi(3)];
     }
@@ -533,7 +571,12 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
         for q in 1..3 {
             report.path_max[q] = report.path_max[q].max(path[q]);
             if path[q] > path_limit[q] * (1.0 + 1e-9) {
-                report.violate(format!("period {k}: path {} {:.6} over {}", ["", "acceleration", "jerk"][q], path[q], path_limit[q]));
+                report.violate(format!(
+                    "period {k}: path {} {:.6} over {}",
+                    ["", "acceleration", "jerk"][q],
+                    path[q],
+                    path_limit[q]
+                ));
             }
         }
         report.path_max[0] = report.path_max[0].max(path[0]);
@@ -591,7 +634,8 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
             // tolerance the tracker stays on a piece the path has already left (an
             // unblended arc-line vertex passed 0.6 mm back), so that piece's feed alone
             // would be the wrong bound.
-            let furthest_fit = (best..=(best + 3).min(pieces.len() - 1)).rev().find(|&i| fits(i).is_some()).unwrap_or(best);
+            let furthest_fit =
+                (best..=(best + 3).min(pieces.len() - 1)).rev().find(|&i| fits(i).is_some()).unwrap_or(best);
             let feed = pieces[from_piece.min(best)..=furthest_fit].iter().map(|p| p.feed).fold(0.0, f64::max);
             let speed_allowance = (0..4).filter(|&a| present[a]).map(|a| tolerance[a][0]).sum::<f64>();
             if feed.is_finite() {
@@ -603,7 +647,10 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
             // Exact stops, in order: one is missed once the path is two pieces past it
             // (one piece past may still be the vertex both pieces share).
             while next_stop < stops.len() && stops[next_stop] + 1 < piece {
-                report.violate(format!("exact stop at the end of line {} was passed without stopping on it", pieces[stops[next_stop]].line));
+                report.violate(format!(
+                    "exact stop at the end of line {} was passed without stopping on it",
+                    pieces[stops[next_stop]].line
+                ));
                 next_stop += 1;
             }
             // A stop is reached on its point after the machine has moved since the last
@@ -629,16 +676,21 @@ pub fn check_program(config: &MachineConfig, program: &Program, records: &[Perio
     report.samples.truncate(records.len());
     if next_stop < stops.len() {
         let line = pieces[stops[next_stop]].line;
-        report.violate(format!("{} exact stops not reached, the first at the end of line {line}", stops.len() - next_stop));
+        report.violate(format!(
+            "{} exact stops not reached, the first at the end of line {line}",
+            stops.len() - next_stop
+        ));
     }
     let end = pieces.last().map(|p| p.end).unwrap_or([0.0; 4]);
     for a in 0..4 {
         let target = ((end[a] * scale[a]).round() as i64) << 16;
         report.endpoint_error_steps[a] = (raw[a] - target) as f64 / 65536.0;
         if present[a] && raw[a] != target {
-            report.violate(format!("axis {} ends {} steps from the programmed end", AXIS_NAMES[a], report.endpoint_error_steps[a]));
+            report.violate(format!(
+                "axis {} ends {} steps from the programmed end",
+                AXIS_NAMES[a], report.endpoint_error_steps[a]
+            ));
         }
     }
     Ok(report)
 }
-

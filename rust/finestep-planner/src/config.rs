@@ -223,8 +223,11 @@ impl MachineConfig {
     /// Reads, parses and validates a TOML file.
     pub fn load(path: &Path) -> Result<MachineConfig, ConfigError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| ConfigError { file: file.clone(), key: "-".into(), reason: e.to_string() })?;
+        let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+            file: file.clone(),
+            key: "-".into(),
+            reason: e.to_string(),
+        })?;
         MachineConfig::from_toml_str(&text, &file)
     }
 
@@ -256,13 +259,20 @@ impl MachineConfig {
         if !(1.0..=f64::from(params.period_mask())).contains(&clocks) {
             return Err(fail(
                 "period_ms".into(),
-                format!("{clocks} clocks per period is outside the core's 1..={} (P_WIDTH = {})", params.period_mask(), params.p_width),
+                format!(
+                    "{clocks} clocks per period is outside the core's 1..={} (P_WIDTH = {})",
+                    params.period_mask(),
+                    params.p_width
+                ),
             ));
         }
         let period_clocks = clocks as u32;
         for (index, tool) in self.tools.iter().enumerate() {
             if !(tool.radius_mm.is_finite() && tool.radius_mm >= 0.0) {
-                return Err(fail(format!("tools[{index}].radius_mm"), format!("must be a finite radius >= 0, got {}", tool.radius_mm)));
+                return Err(fail(
+                    format!("tools[{index}].radius_mm"),
+                    format!("must be a finite radius >= 0, got {}", tool.radius_mm),
+                ));
             }
             if self.tools[..index].iter().any(|other| other.number == tool.number) {
                 return Err(fail(format!("tools[{index}].number"), format!("tool {} appears twice", tool.number)));
@@ -271,13 +281,19 @@ impl MachineConfig {
         positive("path_tolerance_mm", self.path_tolerance_mm)?;
         positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
         if !(2..=1_000_000).contains(&self.lookahead_moves) {
-            return Err(fail("lookahead_moves".into(), format!("must be within 2..=1000000, got {}", self.lookahead_moves)));
+            return Err(fail(
+                "lookahead_moves".into(),
+                format!("must be within 2..=1000000, got {}", self.lookahead_moves),
+            ));
         }
         let to_clocks = |key: &str, ns: f64| -> Result<u32, ConfigError> {
             // Up to whole clocks, ignoring the floating-point dust of exact multiples.
             let clocks = (ns * 1e-9 * clock_hz * (1.0 - 1e-12)).ceil();
             if !(ns.is_finite() && ns >= 0.0) || clocks > f64::from(params.timing_mask()) {
-                return Err(fail(format!("drive.{key}"), format!("{ns} ns is not within 0..={} clocks", params.timing_mask())));
+                return Err(fail(
+                    format!("drive.{key}"),
+                    format!("{ns} ns is not within 0..={} clocks", params.timing_mask()),
+                ));
             }
             Ok(clocks as u32)
         };
@@ -291,7 +307,13 @@ impl MachineConfig {
             return Err(fail(format!("axes.{name}"), "unknown axis (the planner knows X, Y, Z, A)".into()));
         }
         let mut notes = Vec::new();
-        let absent = ResolvedAxis { present: false, steps_per_unit: 1.0, max_velocity: 0.0, max_acceleration: 0.0, max_jerk: 0.0 };
+        let absent = ResolvedAxis {
+            present: false,
+            steps_per_unit: 1.0,
+            max_velocity: 0.0,
+            max_acceleration: 0.0,
+            max_jerk: 0.0,
+        };
         let mut axes = [absent; 4];
         for (slot, name) in AXIS_NAMES.iter().enumerate() {
             let Some(limits) = self.axes.get(*name) else { continue };
@@ -306,7 +328,9 @@ impl MachineConfig {
             let reverse = f64::from(period_clocks) / reversal_interval(&timing) as f64 * 0.95;
             let rated_velocity = forward / period_s / steps_per_unit;
             if max_velocity > rated_velocity {
-                notes.push(format!("{name} max velocity {max_velocity} capped at the drive's rated {rated_velocity:.3} units/s"));
+                notes.push(format!(
+                    "{name} max velocity {max_velocity} capped at the drive's rated {rated_velocity:.3} units/s"
+                ));
                 max_velocity = rated_velocity;
             }
             // A reversing axis must stay within the reversal rate until it has moved two
@@ -353,7 +377,8 @@ mod tests {
 
     #[test]
     fn a_partial_file_overrides_what_it_names() {
-        let text = "profile = \"s-curve\"\nperiod_ms = 2\n[axes.X]\nsteps_per_unit = 1000\n[axes.Z]\nmax_velocity = 20\n";
+        let text =
+            "profile = \"s-curve\"\nperiod_ms = 2\n[axes.X]\nsteps_per_unit = 1000\n[axes.Z]\nmax_velocity = 20\n";
         let config = MachineConfig::from_toml_str(text, "m.toml").unwrap();
         let resolved = config.resolve().unwrap();
         assert_eq!(resolved.profile, ProfileKind::SCurve);

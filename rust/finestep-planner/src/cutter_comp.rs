@@ -177,28 +177,16 @@ struct V2 {
 
 impl V2 {
     fn of(p: &Point) -> V2 {
-        V2 {
-            x: p.x_mm,
-            y: p.y_mm,
-        }
+        V2 { x: p.x_mm, y: p.y_mm }
     }
     fn add(self, o: V2) -> V2 {
-        V2 {
-            x: self.x + o.x,
-            y: self.y + o.y,
-        }
+        V2 { x: self.x + o.x, y: self.y + o.y }
     }
     fn sub(self, o: V2) -> V2 {
-        V2 {
-            x: self.x - o.x,
-            y: self.y - o.y,
-        }
+        V2 { x: self.x - o.x, y: self.y - o.y }
     }
     fn scale(self, k: f64) -> V2 {
-        V2 {
-            x: self.x * k,
-            y: self.y * k,
-        }
+        V2 { x: self.x * k, y: self.y * k }
     }
     fn dot(self, o: V2) -> f64 {
         self.x * o.x + self.y * o.y
@@ -214,17 +202,11 @@ impl V2 {
     }
     /// The vector turned a quarter turn counter-clockwise: the left normal of a direction.
     fn left(self) -> V2 {
-        V2 {
-            x: -self.y,
-            y: self.x,
-        }
+        V2 { x: -self.y, y: self.x }
     }
     fn rotate(self, angle: f64) -> V2 {
         let (s, c) = angle.sin_cos();
-        V2 {
-            x: c * self.x - s * self.y,
-            y: s * self.x + c * self.y,
-        }
+        V2 { x: c * self.x - s * self.y, y: s * self.x + c * self.y }
     }
     fn angle(self) -> f64 {
         self.y.atan2(self.x)
@@ -246,11 +228,7 @@ fn mm(value: f64) -> String {
 /// end and the planner use: a full circle when the angles are equal, plus extra turns.
 fn swept_angle(start: f64, end: f64, ccw: bool, extra_turns: u32) -> f64 {
     let ccw_angle = (end - start).rem_euclid(TAU);
-    let base = if ccw {
-        ccw_angle
-    } else {
-        (TAU - ccw_angle) % TAU
-    };
+    let base = if ccw { ccw_angle } else { (TAU - ccw_angle) % TAU };
     let base = if base == 0.0 { TAU } else { base };
     base + f64::from(extra_turns) * TAU
 }
@@ -318,11 +296,7 @@ impl Element {
     fn param_of(&self, point: V2, near: f64) -> f64 {
         match self.shape {
             Shape::Line { origin, dir } => point.sub(origin).dot(dir),
-            Shape::Arc {
-                centre,
-                ccw,
-                theta0,
-            } => {
+            Shape::Arc { centre, ccw, theta0 } => {
                 let turned = point.sub(centre).angle() - theta0;
                 let turned = if ccw { turned } else { -turned };
                 near + (turned - near + PI).rem_euclid(TAU) - PI
@@ -407,9 +381,7 @@ impl Compensator<'_> {
     fn block(&mut self, block: &Block) -> Result<(), CompError> {
         match block.kind {
             BlockKind::CutterComp { side, tool } => self.comp_change(block, side, tool),
-            BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. } => {
-                self.motion(block)
-            }
+            BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. } => self.motion(block),
             BlockKind::Nurbs { to, feed_mm_per_min, .. } => {
                 if self.comp_on() {
                     return Err(CompError {
@@ -426,7 +398,8 @@ impl Compensator<'_> {
                 if let Mode::Stopping { .. } = self.mode {
                     return Err(CompError {
                         line: block.line,
-                        reason: "tool change (M6) after G40 before the exit move; move out of compensation first".into(),
+                        reason: "tool change (M6) after G40 before the exit move; move out of compensation first"
+                            .into(),
                     });
                 }
                 if self.comp_on() {
@@ -446,9 +419,7 @@ impl Compensator<'_> {
             }
             _ => {
                 match &mut self.mode {
-                    Mode::On { current, .. } | Mode::Stopping { current, .. } => {
-                        current.deferred.push(block.clone())
-                    }
+                    Mode::On { current, .. } | Mode::Stopping { current, .. } => current.deferred.push(block.clone()),
                     Mode::Off | Mode::Starting { .. } => self.out.push(block.clone()),
                 }
                 Ok(())
@@ -456,28 +427,12 @@ impl Compensator<'_> {
         }
     }
 
-    fn comp_change(
-        &mut self,
-        block: &Block,
-        side: CompSide,
-        tool: Option<u32>,
-    ) -> Result<(), CompError> {
-        let fail = |reason: String| CompError {
-            line: block.line,
-            reason,
-        };
+    fn comp_change(&mut self, block: &Block, side: CompSide, tool: Option<u32>) -> Result<(), CompError> {
+        let fail = |reason: String| CompError { line: block.line, reason };
         let side = match side {
             CompSide::Off => {
                 self.mode = match std::mem::replace(&mut self.mode, Mode::Off) {
-                    Mode::On {
-                        side,
-                        radius,
-                        current,
-                    } => Mode::Stopping {
-                        side,
-                        radius,
-                        current,
-                    },
+                    Mode::On { side, radius, current } => Mode::Stopping { side, radius, current },
                     Mode::Off | Mode::Starting { .. } => Mode::Off,
                     stopping @ Mode::Stopping { .. } => stopping,
                 };
@@ -490,19 +445,12 @@ impl Compensator<'_> {
             return Err(fail("cutter compensation is already on (G40 first)".into()));
         }
         if let Mode::Stopping { .. } = self.mode {
-            return Err(fail(
-                "G41/G42 after G40 before the exit move; move out of compensation first".into(),
-            ));
+            return Err(fail("G41/G42 after G40 before the exit move; move out of compensation first".into()));
         }
         let tool = tool.unwrap_or(self.spindle_tool);
-        let radius = self
-            .tools
-            .radius_mm(tool)
-            .ok_or_else(|| fail(format!("tool {tool} is not in the tool table")))?;
+        let radius = self.tools.radius_mm(tool).ok_or_else(|| fail(format!("tool {tool} is not in the tool table")))?;
         if !(radius.is_finite() && radius >= 0.0) {
-            return Err(fail(format!(
-                "tool {tool} has radius {radius} mm; a radius must be finite and not negative"
-            )));
+            return Err(fail(format!("tool {tool} has radius {radius} mm; a radius must be finite and not negative")));
         }
         self.mode = Mode::Starting { side, radius };
         Ok(())
@@ -511,15 +459,9 @@ impl Compensator<'_> {
     fn motion(&mut self, block: &Block) -> Result<(), CompError> {
         let (to, travel) = match block.kind {
             BlockKind::Rapid { to } => (to, Travel::Rapid),
-            BlockKind::Linear {
-                to,
-                feed_mm_per_min,
+            BlockKind::Linear { to, feed_mm_per_min } | BlockKind::Arc { to, feed_mm_per_min, .. } => {
+                (to, Travel::Feed(feed_mm_per_min))
             }
-            | BlockKind::Arc {
-                to,
-                feed_mm_per_min,
-                ..
-            } => (to, Travel::Feed(feed_mm_per_min)),
             _ => return Ok(()),
         };
         let from = self.programmed;
@@ -530,17 +472,10 @@ impl Compensator<'_> {
             self.last_feed = Some(feed);
         }
         self.programmed = to;
-        let fail = |reason: &str| CompError {
-            line: block.line,
-            reason: reason.into(),
-        };
+        let fail = |reason: &str| CompError { line: block.line, reason: reason.into() };
         if let BlockKind::Arc { plane, .. } = block.kind {
             if plane != Plane::Xy && self.comp_on() {
-                let name = if plane == Plane::Zx {
-                    "G18 (ZX)"
-                } else {
-                    "G19 (YZ)"
-                };
+                let name = if plane == Plane::Zx { "G18 (ZX)" } else { "G19 (YZ)" };
                 return Err(fail(&format!(
                     "cutter compensation works in the G17 (XY) plane only; this arc is in {name}"
                 )));
@@ -551,9 +486,9 @@ impl Compensator<'_> {
                 self.out.push(block.clone());
                 return Ok(());
             }
-            Mode::Starting { side, radius }
-            | Mode::On { side, radius, .. }
-            | Mode::Stopping { side, radius, .. } => (side, radius),
+            Mode::Starting { side, radius } | Mode::On { side, radius, .. } | Mode::Stopping { side, radius, .. } => {
+                (side, radius)
+            }
         };
         if radius == 0.0 {
             // A zero radius offsets nothing (the mode stays Starting): the path is the
@@ -563,9 +498,7 @@ impl Compensator<'_> {
         }
         if !planar {
             match &mut self.mode {
-                Mode::On { current, .. } | Mode::Stopping { current, .. } => {
-                    current.deferred.push(block.clone())
-                }
+                Mode::On { current, .. } | Mode::Stopping { current, .. } => current.deferred.push(block.clone()),
                 _ => self.out.push(block.clone()),
             }
             return Ok(());
@@ -585,37 +518,23 @@ impl Compensator<'_> {
             Mode::Off => {}
             Mode::Starting { .. } => {
                 if is_arc {
-                    return Err(fail(
-                        "the entry move after G41/G42 must be a straight line (G0/G1), not an arc",
-                    ));
+                    return Err(fail("the entry move after G41/G42 must be a straight line (G0/G1), not an arc"));
                 }
-                let element = entry_element(V2::of(&from), V2::of(&to), side, radius)
-                    .map_err(|r| fail(&r))?;
+                let element = entry_element(V2::of(&from), V2::of(&to), side, radius).map_err(|r| fail(&r))?;
                 let current = Box::new(pending(element, V2::of(&to)));
-                self.mode = Mode::On {
-                    side,
-                    radius,
-                    current,
-                };
+                self.mode = Mode::On { side, radius, current };
             }
             Mode::On { current, .. } => {
                 let element = offset_element(block, &from, side, radius).map_err(|r| fail(&r))?;
                 let next = pending(element, V2::of(&to));
                 let next = self.join_and_emit(*current, next, side, radius, feed_before)?;
-                self.mode = Mode::On {
-                    side,
-                    radius,
-                    current: Box::new(next),
-                };
+                self.mode = Mode::On { side, radius, current: Box::new(next) };
             }
             Mode::Stopping { current, .. } => {
                 if is_arc {
-                    return Err(fail(
-                        "the exit move after G40 must be a straight line (G0/G1), not an arc",
-                    ));
+                    return Err(fail("the exit move after G40 must be a straight line (G0/G1), not an arc"));
                 }
-                let element =
-                    exit_element(V2::of(&from), V2::of(&to), side, radius).map_err(|r| fail(&r))?;
+                let element = exit_element(V2::of(&from), V2::of(&to), side, radius).map_err(|r| fail(&r))?;
                 let exit = pending(element, V2::of(&to));
                 self.join_and_emit(*current, exit, side, radius, feed_before)?;
                 // The exit line (its start possibly cut back, which does not change the
@@ -654,16 +573,9 @@ impl Compensator<'_> {
                 }
             };
             let z_a = next.start;
-            let point = |p: V2| Point {
-                x_mm: p.x,
-                y_mm: p.y,
-                ..z_a
-            };
+            let point = |p: V2| Point { x_mm: p.x, y_mm: p.y, ..z_a };
             let kind = if to.sub(from).norm() < SHORT_ARC_CHORD_MM {
-                BlockKind::Linear {
-                    to: point(to),
-                    feed_mm_per_min: feed,
-                }
+                BlockKind::Linear { to: point(to), feed_mm_per_min: feed }
             } else {
                 BlockKind::Arc {
                     to: point(to),
@@ -674,11 +586,7 @@ impl Compensator<'_> {
                     feed_mm_per_min: feed,
                 }
             };
-            self.out.push(Block {
-                line: next.line,
-                n: next.n,
-                kind,
-            });
+            self.out.push(Block { line: next.line, n: next.n, kind });
         }
         Ok(next)
     }
@@ -686,17 +594,10 @@ impl Compensator<'_> {
     /// Emits a compensated move from wherever the tool is to its (final) end.
     fn emit(&mut self, pending: &Pending) {
         let element = &pending.element;
-        let to = Point {
-            x_mm: element.end.x,
-            y_mm: element.end.y,
-            ..pending.end
-        };
+        let to = Point { x_mm: element.end.x, y_mm: element.end.y, ..pending.end };
         let kind = match (element.shape, pending.travel) {
             (Shape::Line { .. }, Travel::Rapid) => BlockKind::Rapid { to },
-            (Shape::Line { .. }, Travel::Feed(feed)) => BlockKind::Linear {
-                to,
-                feed_mm_per_min: feed,
-            },
+            (Shape::Line { .. }, Travel::Feed(feed)) => BlockKind::Linear { to, feed_mm_per_min: feed },
             (Shape::Arc { centre, ccw, .. }, travel) => {
                 let feed = match travel {
                     Travel::Feed(f) => f,
@@ -706,10 +607,7 @@ impl Compensator<'_> {
                 };
                 let sweep = element.end_param - element.start_param;
                 if sweep < PI && element.end.sub(element.start).norm() < SHORT_ARC_CHORD_MM {
-                    BlockKind::Linear {
-                        to,
-                        feed_mm_per_min: feed,
-                    }
+                    BlockKind::Linear { to, feed_mm_per_min: feed }
                 } else {
                     let from_angle = element.start.sub(centre).angle();
                     let to_angle = element.end.sub(centre).angle();
@@ -717,11 +615,7 @@ impl Compensator<'_> {
                     let extra = ((sweep - base) / TAU).round().max(0.0);
                     BlockKind::Arc {
                         to,
-                        centre: Point {
-                            x_mm: centre.x,
-                            y_mm: centre.y,
-                            ..pending.start
-                        },
+                        centre: Point { x_mm: centre.x, y_mm: centre.y, ..pending.start },
                         plane: Plane::Xy,
                         clockwise: !ccw,
                         extra_turns: extra as u32,
@@ -730,17 +624,12 @@ impl Compensator<'_> {
                 }
             }
         };
-        self.out.push(Block {
-            line: pending.line,
-            n: pending.n,
-            kind,
-        });
+        self.out.push(Block { line: pending.line, n: pending.n, kind });
     }
 
     /// Ends compensation where the program ends: the last move stops at its offset end.
     fn flush(&mut self) {
-        if let Mode::On { current, .. } | Mode::Stopping { current, .. } =
-            std::mem::replace(&mut self.mode, Mode::Off)
+        if let Mode::On { current, .. } | Mode::Stopping { current, .. } = std::mem::replace(&mut self.mode, Mode::Off)
         {
             let mut current = *current;
             let at = current.element.end;
@@ -768,13 +657,7 @@ fn place_in_xy(mut block: Block, at: V2) -> Block {
 fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result<Element, String> {
     let start = V2::of(from);
     match block.kind {
-        BlockKind::Arc {
-            to,
-            centre,
-            clockwise,
-            extra_turns,
-            ..
-        } => {
+        BlockKind::Arc { to, centre, clockwise, extra_turns, .. } => {
             let (end, centre) = (V2::of(&to), V2::of(&centre));
             let ccw = !clockwise;
             let (r0, r1) = (start.sub(centre).norm(), end.sub(centre).norm());
@@ -783,25 +666,13 @@ fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result
             let (r0_off, r1_off) = (r0 - shrink * radius, r1 - shrink * radius);
             if r0_off.min(r1_off) <= JOIN_TOLERANCE_MM || !(r0 > 0.0 && r1 > 0.0) {
                 let arc = r0.min(r1);
-                let relation = if radius > arc + JOIN_TOLERANCE_MM {
-                    "is larger than"
-                } else {
-                    "equals"
-                };
-                return Err(format!(
-                    "tool radius {} mm {relation} the concave arc radius {} mm",
-                    mm(radius),
-                    mm(arc)
-                ));
+                let relation = if radius > arc + JOIN_TOLERANCE_MM { "is larger than" } else { "equals" };
+                return Err(format!("tool radius {} mm {relation} the concave arc radius {} mm", mm(radius), mm(arc)));
             }
             let theta0 = start.sub(centre).angle();
             let sweep = swept_angle(theta0, end.sub(centre).angle(), ccw, extra_turns);
             Ok(Element {
-                shape: Shape::Arc {
-                    centre,
-                    ccw,
-                    theta0,
-                },
+                shape: Shape::Arc { centre, ccw, theta0 },
                 start: centre.add(start.sub(centre).scale(r0_off / r0)),
                 start_param: 0.0,
                 end: centre.add(end.sub(centre).scale(r1_off / r1)),
@@ -866,10 +737,7 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64) -> Result<Join
     let turn = ta.cross(tb);
     let reversal = ta.dot(tb) < 0.0 && turn.abs() <= REVERSAL_SINE;
     if side * turn < 0.0 || reversal {
-        return Ok(Join::Arc {
-            from: a_end,
-            to: b_start,
-        });
+        return Ok(Join::Arc { from: a_end, to: b_start });
     }
     let too_large = |line: usize, what: &str| CompError {
         line,
@@ -883,12 +751,7 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64) -> Result<Join
             let cost = |v: &V2| v.sub(a_end).norm() + v.sub(b_start).norm();
             cost(p).total_cmp(&cost(q))
         })
-        .ok_or_else(|| {
-            too_large(
-                b.line,
-                "the offset paths at the inside corner before this move do not meet",
-            )
-        })?;
+        .ok_or_else(|| too_large(b.line, "the offset paths at the inside corner before this move do not meet"))?;
 
     // Cut back: the crossing must not lie before the start of the first move (its
     // offset would run backwards) nor after the end of the second. It may lie a little
@@ -904,10 +767,7 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64) -> Result<Join
         ));
     }
     if new_end > ea.end_param + ea.param_span(EXTENSION_TOLERANCE_MM) {
-        return Err(too_large(
-            b.line,
-            "the offset paths at the inside corner before this move do not meet",
-        ));
+        return Err(too_large(b.line, "the offset paths at the inside corner before this move do not meet"));
     }
     let eb = &b.element;
     let new_start = eb.param_of(meet, eb.start_param);
@@ -918,10 +778,7 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64) -> Result<Join
         ));
     }
     if new_start < eb.start_param - eb.param_span(EXTENSION_TOLERANCE_MM) {
-        return Err(too_large(
-            b.line,
-            "the offset paths at the inside corner before this move do not meet",
-        ));
+        return Err(too_large(b.line, "the offset paths at the inside corner before this move do not meet"));
     }
     a.element.end = meet;
     a.element.end_param = new_end.max(a.element.start_param);
@@ -943,12 +800,8 @@ fn intersections(a: &Element, b: &Element, corner: V2, side: f64, radius: f64) -
             }
             vec![corner.add(na.add(nb).scale(side * radius / denominator))]
         }
-        (Shape::Line { origin, dir }, Shape::Arc { centre, .. }) => {
-            line_circle(origin, dir, centre, b.radius_start)
-        }
-        (Shape::Arc { centre, .. }, Shape::Line { origin, dir }) => {
-            line_circle(origin, dir, centre, a.radius_end)
-        }
+        (Shape::Line { origin, dir }, Shape::Arc { centre, .. }) => line_circle(origin, dir, centre, b.radius_start),
+        (Shape::Arc { centre, .. }, Shape::Line { origin, dir }) => line_circle(origin, dir, centre, a.radius_end),
         (Shape::Arc { centre: ca, .. }, Shape::Arc { centre: cb, .. }) => {
             circle_circle(ca, a.radius_end, cb, b.radius_start)
         }
@@ -962,26 +815,17 @@ fn line_circle(origin: V2, dir: V2, centre: V2, radius: f64) -> Vec<V2> {
         return Vec::new();
     }
     let half_chord = (radius * radius - distance * distance).max(0.0).sqrt();
-    vec![
-        foot.add(dir.scale(half_chord)),
-        foot.sub(dir.scale(half_chord)),
-    ]
+    vec![foot.add(dir.scale(half_chord)), foot.sub(dir.scale(half_chord))]
 }
 
 fn circle_circle(c1: V2, r1: f64, c2: V2, r2: f64) -> Vec<V2> {
     let d = c2.sub(c1).norm();
-    if d <= JOIN_TOLERANCE_MM
-        || d > r1 + r2 + JOIN_TOLERANCE_MM
-        || d < (r1 - r2).abs() - JOIN_TOLERANCE_MM
-    {
+    if d <= JOIN_TOLERANCE_MM || d > r1 + r2 + JOIN_TOLERANCE_MM || d < (r1 - r2).abs() - JOIN_TOLERANCE_MM {
         return Vec::new();
     }
     let u = c2.sub(c1).scale(1.0 / d);
     let along = (r1 * r1 - r2 * r2 + d * d) / (2.0 * d);
     let half_chord = (r1 * r1 - along * along).max(0.0).sqrt();
     let mid = c1.add(u.scale(along));
-    vec![
-        mid.add(u.left().scale(half_chord)),
-        mid.sub(u.left().scale(half_chord)),
-    ]
+    vec![mid.add(u.left().scale(half_chord)), mid.sub(u.left().scale(half_chord))]
 }

@@ -235,7 +235,15 @@ pub const MIN_ARC_RADIUS_STEPS: f64 = 10.0;
 fn sweep_angle(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
     let ccw = (end - start).rem_euclid(TAU);
     let base = if clockwise { -((TAU - ccw) % TAU) } else { ccw };
-    let base = if base.abs() < 1e-12 { if clockwise { -TAU } else { TAU } } else { base };
+    let base = if base.abs() < 1e-12 {
+        if clockwise {
+            -TAU
+        } else {
+            TAU
+        }
+    } else {
+        base
+    };
     base + f64::from(extra_turns) * TAU * base.signum()
 }
 
@@ -321,7 +329,10 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
             }
             let steps = (to[a] * axis.steps_per_unit).abs();
             if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
-                return Err(fail(format!("axis {} endpoint {} is outside the core's 32-bit step position", AXIS_NAMES[a], to[a])));
+                return Err(fail(format!(
+                    "axis {} endpoint {} is outside the core's 32-bit step position",
+                    AXIS_NAMES[a], to[a]
+                )));
             }
         }
         let curve = match nurbs {
@@ -336,7 +347,10 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
                         }
                         let steps = (value * axis.steps_per_unit).abs();
                         if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
-                            return Err(fail(format!("NURBS control point {AXIS_NAMES}{value} is outside the core's 32-bit step position", AXIS_NAMES = AXIS_NAMES[a])));
+                            return Err(fail(format!(
+                                "NURBS control point {AXIS_NAMES}{value} is outside the core's 32-bit step position",
+                                AXIS_NAMES = AXIS_NAMES[a]
+                            )));
                         }
                     }
                 }
@@ -347,7 +361,9 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
                 points[n - 1].1 = to[1];
                 // A curve whose control points all lie within half a step (per axis) of its
                 // ends is no curve on this machine: it moves as a line (or not at all).
-                let near = |x: f64, y: f64, q: Vec4| (0..2).all(|a| ((if a == 0 { x } else { y } - q[a]) * config.axes[a].steps_per_unit).abs() <= 0.5);
+                let near = |x: f64, y: f64, q: Vec4| {
+                    (0..2).all(|a| ((if a == 0 { x } else { y } - q[a]) * config.axes[a].steps_per_unit).abs() <= 0.5)
+                };
                 if points.iter().all(|&(x, y, _)| near(x, y, at) || near(x, y, to)) {
                     None
                 } else {
@@ -362,7 +378,19 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
             continue; // nothing to do; keeps neighbouring corners blendable
         }
         // G61 stops at the end of every move.
-        out.push(Move { nurbs: curve, line: block.line, start: at, end: to, feed, arc, programmed, blend, stop_after: blend.is_none(), dwell_periods: 0, dwell_line: 0 });
+        out.push(Move {
+            nurbs: curve,
+            line: block.line,
+            start: at,
+            end: to,
+            feed,
+            arc,
+            programmed,
+            blend,
+            stop_after: blend.is_none(),
+            dwell_periods: 0,
+            dwell_line: 0,
+        });
         at = to;
     }
     if let Some(last) = out.last_mut() {
@@ -623,7 +651,9 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
             let d2 = sub(n.end, n.start);
             let (l1, l2) = (norm(d1), norm(d2));
             let room = 0.5 * l1.min(l2);
-            if let Some((a, b, shape, length)) = blend_arc(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room) {
+            if let Some((a, b, shape, length)) =
+                blend_arc(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
+            {
                 let blend = Element {
                     shape,
                     start: a,

@@ -85,7 +85,12 @@ impl Emitter<'_> {
 
 /// Periods for `elements` run at junction speeds `speeds` (`elements.len() + 1` of them),
 /// after `leading_dwell` idle periods, starting at the origin.
-pub fn interpolate(config: &Resolved, elements: &[Element], speeds: &[f64], leading_dwell: u64) -> Result<Interpolated, ProgramError> {
+pub fn interpolate(
+    config: &Resolved,
+    elements: &[Element],
+    speeds: &[f64],
+    leading_dwell: u64,
+) -> Result<Interpolated, ProgramError> {
     let mut emitter = Emitter {
         config,
         checker: RateChecker::new(config.period_clocks, &config.timing),

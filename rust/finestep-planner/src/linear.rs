@@ -75,8 +75,6 @@ pub enum PlanError {
     },
 }
 
-
-
 /// One record per period moving from `from_mm` to `to_mm`, the last flagged
 /// [`FLAG_BLOCK_END`]. Endpoints are first rounded to whole steps; the increments sum
 /// exactly to the difference of the rounded endpoints.
@@ -117,10 +115,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn sum_steps(records: &[PeriodRecord], axis: usize) -> BigRational {
-        records
-            .iter()
-            .map(|r| BigRational::new(r.inc[axis].to_bits().into(), 65536.into()))
-            .sum()
+        records.iter().map(|r| BigRational::new(r.inc[axis].to_bits().into(), 65536.into())).sum()
     }
 
     #[test]
@@ -165,13 +160,8 @@ mod tests {
     #[test]
     fn bad_parameters_are_errors() {
         let machine = Machine::new(vec![1000.0], 0.001);
-        let mut line = LineMove {
-            from_mm: vec![0.0],
-            to_mm: vec![1.0],
-            feed_mm_s: 0.0,
-            start_speed_mm_s: 1.0,
-            accel_mm_s2: 1.0,
-        };
+        let mut line =
+            LineMove { from_mm: vec![0.0], to_mm: vec![1.0], feed_mm_s: 0.0, start_speed_mm_s: 1.0, accel_mm_s2: 1.0 };
         assert!(matches!(interpolate_line(&machine, &line), Err(PlanError::NotPositive { name: "feed", .. })));
         line.feed_mm_s = 1.0;
         line.to_mm = vec![1e9];
@@ -180,7 +170,13 @@ mod tests {
         assert!(matches!(interpolate_line(&machine, &line), Err(PlanError::AxisCount { .. })));
         // 100 000 steps/mm at 1 m/s: 100 000 steps in a 1 ms period do not fit I16F16.
         let fast = Machine::new(vec![100_000.0], 0.001);
-        let long = LineMove { from_mm: vec![0.0], to_mm: vec![1000.0], feed_mm_s: 1000.0, start_speed_mm_s: 1000.0, accel_mm_s2: 1.0 };
+        let long = LineMove {
+            from_mm: vec![0.0],
+            to_mm: vec![1000.0],
+            feed_mm_s: 1000.0,
+            start_speed_mm_s: 1000.0,
+            accel_mm_s2: 1.0,
+        };
         assert!(matches!(interpolate_line(&fast, &long), Err(PlanError::IncrementTooLarge { axis: 0, .. })));
     }
 
@@ -188,11 +184,7 @@ mod tests {
     fn random_lines_are_exact_and_stay_on_the_line() {
         let mut runner = finestep_testkit::runner("random_lines_are_exact_and_stay_on_the_line", 256);
         let coord = prop_oneof![-200.0..200.0f64, -0.05..0.05f64];
-        let strategy = (
-            proptest::collection::vec((coord.clone(), coord), 1..=4),
-            1.0..100.0f64,
-            10.0..2000.0f64,
-        );
+        let strategy = (proptest::collection::vec((coord.clone(), coord), 1..=4), 1.0..100.0f64, 10.0..2000.0f64);
         runner
             .run(&strategy, |(points, feed, accel)| {
                 let machine = Machine::new(vec![200.0; points.len()], 0.001);
@@ -232,10 +224,7 @@ mod tests {
                 let speeds: Vec<f64> = records
                     .iter()
                     .map(|r| {
-                        (0..points.len())
-                            .map(|a| (r.inc[a].to_num::<f64>() / 200.0).powi(2))
-                            .sum::<f64>()
-                            .sqrt()
+                        (0..points.len()).map(|a| (r.inc[a].to_num::<f64>() / 200.0).powi(2)).sum::<f64>().sqrt()
                             / 0.001
                     })
                     .collect();
@@ -246,7 +235,9 @@ mod tests {
                 for pair in speeds.windows(2).take(speeds.len().saturating_sub(2)) {
                     prop_assert!(
                         (pair[1] - pair[0]).abs() <= accel * 0.001 * (1.0 + 1e-9) + quantum,
-                        "speed step {:?} over A*T = {}", pair, accel * 0.001
+                        "speed step {:?} over A*T = {}",
+                        pair,
+                        accel * 0.001
                     );
                 }
                 Ok(())

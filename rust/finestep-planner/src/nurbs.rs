@@ -52,7 +52,9 @@
 use std::sync::Arc;
 
 use crate::config::{ProfileKind, Resolved};
-use crate::geometry::{Element, Shape, Vec4, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE};
+use crate::geometry::{
+    Element, Shape, Vec4, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
+};
 
 /// Samples of the speed limit per knot span.
 pub const SAMPLES_PER_SPAN: usize = 64;
@@ -150,12 +152,22 @@ impl NurbsCurve {
     /// `base`.
     pub fn new(points: &[(f64, f64, f64)], degree: usize, knots: &[f64], base: Vec4) -> Result<NurbsCurve, String> {
         if degree + 1 > points.len() || knots.len() != points.len() + degree + 1 || degree >= 23 {
-            return Err(format!("a NURBS of order {} with {} control points and {} knots", degree + 1, points.len(), knots.len()));
+            return Err(format!(
+                "a NURBS of order {} with {} control points and {} knots",
+                degree + 1,
+                points.len(),
+                knots.len()
+            ));
         }
-        if knots.iter().any(|k| !k.is_finite()) || knots.windows(2).any(|w| w[0] > w[1]) || knots[degree] >= knots[points.len()] {
+        if knots.iter().any(|k| !k.is_finite())
+            || knots.windows(2).any(|w| w[0] > w[1])
+            || knots[degree] >= knots[points.len()]
+        {
             return Err("NURBS knots must increase".into());
         }
-        if let Some(&(x, y, w)) = points.iter().find(|(x, y, w)| !(x.is_finite() && y.is_finite() && *w > 0.0 && w.is_finite())) {
+        if let Some(&(x, y, w)) =
+            points.iter().find(|(x, y, w)| !(x.is_finite() && y.is_finite() && *w > 0.0 && w.is_finite()))
+        {
             return Err(format!("NURBS control point ({x}, {y}) with weight {w}: weights must be positive"));
         }
         let homogeneous: Vec<H> = points.iter().map(|&(x, y, w)| [w * x, w * y, w]).collect();
@@ -381,7 +393,13 @@ fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, S
     let mut out = vec![ua];
     let mut stack: Vec<(f64, f64, u32)> = (0..SAMPLES_PER_SPAN)
         .rev()
-        .map(|j| (ua + (ub - ua) * j as f64 / SAMPLES_PER_SPAN as f64, ua + (ub - ua) * (j + 1) as f64 / SAMPLES_PER_SPAN as f64, 0))
+        .map(|j| {
+            (
+                ua + (ub - ua) * j as f64 / SAMPLES_PER_SPAN as f64,
+                ua + (ub - ua) * (j + 1) as f64 / SAMPLES_PER_SPAN as f64,
+                0,
+            )
+        })
         .collect();
     while let Some((a, b, depth)) = stack.pop() {
         let (ta, _) = tangent(a);
@@ -508,8 +526,9 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
             })
             .collect();
         // Per interval: the smallest cap of the four samples around it.
-        let interval_cap: Vec<f64> =
-            (0..m).map(|j| samples[j.saturating_sub(1)..=(j + 2).min(m)].iter().map(|s| s.cap).fold(f64::INFINITY, f64::min)).collect();
+        let interval_cap: Vec<f64> = (0..m)
+            .map(|j| samples[j.saturating_sub(1)..=(j + 2).min(m)].iter().map(|s| s.cap).fold(f64::INFINITY, f64::min))
+            .collect();
         let mut j = 0;
         while j < m {
             let (mut lo, mut hi) = (interval_cap[j], interval_cap[j]);

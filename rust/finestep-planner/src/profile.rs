@@ -88,4 +88,3 @@ fn fastest_stoppable(ceiling: f64, remaining: f64, stop: f64, step: f64, period:
     }
     lo
 }
-

@@ -49,8 +49,8 @@ impl From<ConfigError> for ProgramError {
 /// Plan and interpolate `program` on the machine `config`, starting at rest at the origin.
 pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<PlannedProgram, ProgramError> {
     let resolved = config.resolve()?;
-    let compensated = compensate(program, &config.tool_table())
-        .map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
+    let compensated =
+        compensate(program, &config.tool_table()).map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
     let path = elements(&resolved, &compensated)?;
     for e in &path.elements {
         if !(e.length.is_finite() && e.v_cap > 0.0 && e.v_cap.is_finite() && e.accel > 0.0 && e.jerk > 0.0) {
@@ -99,7 +99,8 @@ mod tests {
         // A 20 mm square cut counter-clockwise with the tool on the right of the path
         // (G42), i.e. outside, with tool 1 (r = 3 mm): the tool centre reaches x = 23 mm,
         // and leaves at the exit point.
-        let source = "G21 G90 G17 F1200\nG0 X-10 Y-10\nG42 D1\nG1 X0 Y0\nG1 X20\nG1 Y20\nG1 X0\nG1 Y0\nG40\nG1 X-10 Y-10\nM2\n";
+        let source =
+            "G21 G90 G17 F1200\nG0 X-10 Y-10\nG42 D1\nG1 X0 Y0\nG1 X20\nG1 Y20\nG1 X0\nG1 Y0\nG40\nG1 X-10 Y-10\nM2\n";
         let program = finestep_gcode::parse_str(source, "square.ngc").unwrap();
         let config = MachineConfig::default();
         let planned = plan_program(&config, &program).unwrap();

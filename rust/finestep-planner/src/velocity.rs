@@ -99,7 +99,9 @@ impl Half {
         let time = limits.change_time(dv);
         let distance = 0.5 * (v_from + v_to) * time;
         match limits.kind {
-            ProfileKind::Trapezoid => Half { v_from, sign, t_jerk: 0.0, t_accel: time, a_peak: limits.accel, jerk: 0.0, time, distance },
+            ProfileKind::Trapezoid => {
+                Half { v_from, sign, t_jerk: 0.0, t_accel: time, a_peak: limits.accel, jerk: 0.0, time, distance }
+            }
             ProfileKind::SCurve => {
                 let a2j = limits.accel * limits.accel / limits.jerk;
                 let (t_jerk, t_accel, a_peak) = if dv >= a2j {
@@ -236,7 +238,10 @@ mod tests {
                 for &length in &[1e-4, 0.01, 0.3, 7.0, 100.0] {
                     let x = l.reachable(v, length);
                     let d = l.change_distance(v, x);
-                    assert!((d - length).abs() <= 1e-9 * length.max(1.0) + 1e-9, "{kind:?} v {v} L {length}: {x} covers {d}");
+                    assert!(
+                        (d - length).abs() <= 1e-9 * length.max(1.0) + 1e-9,
+                        "{kind:?} v {v} L {length}: {x} covers {d}"
+                    );
                 }
             }
         }
@@ -246,7 +251,12 @@ mod tests {
     fn profiles_cover_the_length_with_bounded_derivatives() {
         for kind in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
             let l = limits(kind);
-            for &(length, v0, v1, cap) in &[(10.0f64, 0.0f64, 0.0f64, 50.0f64), (0.5, 3.0, 1.0, 50.0), (100.0, 20.0, 0.0, 60.0), (1.0, 0.0, 30.0, 40.0)] {
+            for &(length, v0, v1, cap) in &[
+                (10.0f64, 0.0f64, 0.0f64, 50.0f64),
+                (0.5, 3.0, 1.0, 50.0),
+                (100.0, 20.0, 0.0, 60.0),
+                (1.0, 0.0, 30.0, 40.0),
+            ] {
                 let v1 = v1.min(l.reachable(v0, length));
                 let p = Profile::new(&l, length, v0, v1, cap);
                 assert!((p.distance_at(p.duration) - length).abs() < 1e-9);

@@ -17,10 +17,7 @@ fn speeds(planned: &PlannedProgram, config: &MachineConfig) -> Vec<f64> {
         .records
         .iter()
         .map(|r| {
-            (0..4)
-                .map(|a| (r.inc[a].to_num::<f64>() / resolved.axes[a].steps_per_unit).powi(2))
-                .sum::<f64>()
-                .sqrt()
+            (0..4).map(|a| (r.inc[a].to_num::<f64>() / resolved.axes[a].steps_per_unit).powi(2)).sum::<f64>().sqrt()
                 / resolved.period_s
         })
         .collect()
@@ -116,7 +113,11 @@ fn a_long_cam_program_flows_without_stopping() {
         // Never stops between the first and last 50 periods.
         let slowest = v[50..v.len() - 50].iter().cloned().fold(f64::INFINITY, f64::min);
         let mean = v.iter().sum::<f64>() / v.len() as f64;
-        eprintln!("{profile:?}: {} periods, mean {mean:.1} mm/s, slowest {slowest:.2} mm/s, deviation {:.4}", v.len(), report.max_deviation);
+        eprintln!(
+            "{profile:?}: {} periods, mean {mean:.1} mm/s, slowest {slowest:.2} mm/s, deviation {:.4}",
+            v.len(),
+            report.max_deviation
+        );
         let (least, least_mean) = if profile == ProfileKind::Trapezoid { (5.0, 30.0) } else { (1.0, 10.0) };
         assert!(slowest > least, "{profile:?}: slowed to {slowest} mm/s");
         assert!(mean > least_mean, "{profile:?}: mean {mean} mm/s");
@@ -165,7 +166,11 @@ fn look_ahead_sees_two_thousand_moves_and_brakes_in_time_for_the_corner() {
     }
     assert!(corner_speed < 5.0, "corner at {corner_speed} mm/s");
     let braking_from = braking_from.expect("no braking");
-    assert!(30.0 - braking_from > 9.9, "braking started {braking_from} mm, {} mm before the corner", 30.0 - braking_from);
+    assert!(
+        30.0 - braking_from > 9.9,
+        "braking started {braking_from} mm, {} mm before the corner",
+        30.0 - braking_from
+    );
 
     // A short look-ahead cannot reach the feed on the same segments.
     let short = MachineConfig { lookahead_moves: 20, ..MachineConfig::default() };
@@ -177,7 +182,16 @@ fn look_ahead_sees_two_thousand_moves_and_brakes_in_time_for_the_corner() {
 
 /// Random polylines, arcs in any plane and helices, in random G61/G64 modes and feeds.
 fn random_program() -> impl Strategy<Value = String> {
-    let step = (0u8..4, -20.0..20.0f64, -20.0..20.0f64, -3.0..3.0f64, 0.0..6.3f64, 0.3..8.0f64, 100.0..6000.0f64, any::<bool>());
+    let step = (
+        0u8..4,
+        -20.0..20.0f64,
+        -20.0..20.0f64,
+        -3.0..3.0f64,
+        0.0..6.3f64,
+        0.3..8.0f64,
+        100.0..6000.0f64,
+        any::<bool>(),
+    );
     (prop::collection::vec(step, 1..40), 0.001..0.05f64).prop_map(|(steps, tolerance)| {
         let mut text = format!("G21 G90 G64 P{tolerance:.4}\n");
         let (mut x, mut y, mut z) = (0.0f64, 0.0f64, 0.0f64);
@@ -260,51 +274,53 @@ fn random_programs_pass_the_checker() {
 fn random_machines_plan_or_refuse_and_pass_the_checker() {
     // Log-uniform over decades: steps/unit 10..3000, velocity 1..1000, acceleration
     // 10..30 000, jerk 1e3..1e7.
-    let axis = (1.0..3.5f64, 0.0..3.0f64, 1.0..4.5f64, 3.0..7.0f64).prop_map(|(s, v, a, j)| (10f64.powf(s), 10f64.powf(v), 10f64.powf(a), 10f64.powf(j)));
-    let machine = (
-        prop::array::uniform4(axis),
-        0.25..4.0f64,
-        any::<bool>(),
-        1e-4..1.0f64,
-        1e-4..0.1f64,
-        2usize..50,
-    );
+    let axis = (1.0..3.5f64, 0.0..3.0f64, 1.0..4.5f64, 3.0..7.0f64)
+        .prop_map(|(s, v, a, j)| (10f64.powf(s), 10f64.powf(v), 10f64.powf(a), 10f64.powf(j)));
+    let machine = (prop::array::uniform4(axis), 0.25..4.0f64, any::<bool>(), 1e-4..1.0f64, 1e-4..0.1f64, 2usize..50);
     let mut runner = finestep_testkit::runner("random_machines_plan_or_refuse_and_pass_the_checker", 16);
     let outcomes = std::cell::RefCell::new([0usize; 4]); // parse refused, config refused, plan refused, planned
     runner
-        .run(&(machine, random_program()), |((axes, period_ms, scurve, path_tolerance, chord_tolerance, lookahead), text)| {
-            let mut config = MachineConfig {
-                period_ms,
-                profile: if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid },
-                path_tolerance_mm: path_tolerance,
-                chord_tolerance_mm: chord_tolerance,
-                lookahead_moves: lookahead,
-                ..MachineConfig::default()
-            };
-            for (limits, (steps, velocity, accel, jerk)) in config.axes.values_mut().zip(axes) {
-                *limits = finestep_planner::config::AxisLimits { steps_per_unit: steps, max_velocity: velocity, max_acceleration: accel, max_jerk: jerk };
-            }
-            let Ok(program) = finestep_gcode::parse_str(&text, "random.ngc") else {
-                outcomes.borrow_mut()[0] += 1;
-                return Ok(());
-            };
-            if config.resolve().is_err() {
-                outcomes.borrow_mut()[1] += 1;
-                return Ok(()); // refused with a named key, e.g. acceleration past the reversal rate
-            }
-            match plan_program(&config, &program) {
-                Err(_) => {
-                    outcomes.borrow_mut()[2] += 1;
-                    Ok(())
+        .run(
+            &(machine, random_program()),
+            |((axes, period_ms, scurve, path_tolerance, chord_tolerance, lookahead), text)| {
+                let mut config = MachineConfig {
+                    period_ms,
+                    profile: if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid },
+                    path_tolerance_mm: path_tolerance,
+                    chord_tolerance_mm: chord_tolerance,
+                    lookahead_moves: lookahead,
+                    ..MachineConfig::default()
+                };
+                for (limits, (steps, velocity, accel, jerk)) in config.axes.values_mut().zip(axes) {
+                    *limits = finestep_planner::config::AxisLimits {
+                        steps_per_unit: steps,
+                        max_velocity: velocity,
+                        max_acceleration: accel,
+                        max_jerk: jerk,
+                    };
                 }
-                Ok(planned) => {
-                    outcomes.borrow_mut()[3] += 1;
-                    let report = check_program(&config, &program, &planned.records).unwrap();
-                    prop_assert!(report.passed(), "{config:?}: {:#?}\n{}", report.violations, text);
-                    Ok(())
+                let Ok(program) = finestep_gcode::parse_str(&text, "random.ngc") else {
+                    outcomes.borrow_mut()[0] += 1;
+                    return Ok(());
+                };
+                if config.resolve().is_err() {
+                    outcomes.borrow_mut()[1] += 1;
+                    return Ok(()); // refused with a named key, e.g. acceleration past the reversal rate
                 }
-            }
-        })
+                match plan_program(&config, &program) {
+                    Err(_) => {
+                        outcomes.borrow_mut()[2] += 1;
+                        Ok(())
+                    }
+                    Ok(planned) => {
+                        outcomes.borrow_mut()[3] += 1;
+                        let report = check_program(&config, &program, &planned.records).unwrap();
+                        prop_assert!(report.passed(), "{config:?}: {:#?}\n{}", report.violations, text);
+                        Ok(())
+                    }
+                }
+            },
+        )
         .unwrap();
     let outcomes = outcomes.into_inner();
     eprintln!("parse refused, machine refused, plan refused, planned: {outcomes:?}");
@@ -320,10 +336,26 @@ fn a_wide_tolerance_does_not_hold_the_path_to_the_feed_of_a_piece_it_has_left() 
     let text = "G21 G90 G64 P0.0298\nG64\nG17 G2 X1.9601 Y0.4113 Z-0.3155 I1.8158 J-3.7770 F2560\n\
                 G19 G2 Y-5.1184 Z-0.4112 J-2.7064 K-3.4238 F653\nG18 G2 Z-0.4448 X1.7948 K-3.8363 I0.6940 F4277\n\
                 G1 X7.5300 Y-22.1560 Z0.1762 F5388\n";
-    let axes = [(10.0, 1.0, 10.0), (103.27111664583514, 5.14359212472905, 9485.10179970263), (67.32091576884115, 250.7183319349355, 6239.239604336582), (10.0, 1.0, 10.0)];
-    let mut config = MachineConfig { period_ms: 0.25, path_tolerance_mm: 0.6063654021146841, chord_tolerance_mm: 0.0001, lookahead_moves: 2, ..config(ProfileKind::Trapezoid) };
+    let axes = [
+        (10.0, 1.0, 10.0),
+        (103.27111664583514, 5.14359212472905, 9485.10179970263),
+        (67.32091576884115, 250.7183319349355, 6239.239604336582),
+        (10.0, 1.0, 10.0),
+    ];
+    let mut config = MachineConfig {
+        period_ms: 0.25,
+        path_tolerance_mm: 0.6063654021146841,
+        chord_tolerance_mm: 0.0001,
+        lookahead_moves: 2,
+        ..config(ProfileKind::Trapezoid)
+    };
     for (limits, (steps, velocity, accel)) in config.axes.values_mut().zip(axes) {
-        *limits = finestep_planner::config::AxisLimits { steps_per_unit: steps, max_velocity: velocity, max_acceleration: accel, max_jerk: 1000.0 };
+        *limits = finestep_planner::config::AxisLimits {
+            steps_per_unit: steps,
+            max_velocity: velocity,
+            max_acceleration: accel,
+            max_jerk: 1000.0,
+        };
     }
     let (planned, report) = plan_and_check("wide_tolerance.ngc", &parse("wide_tolerance.ngc", text), &config);
     // The line's own limit (X at 5.14 mm/s, a third of its direction) lets it pass the arc's

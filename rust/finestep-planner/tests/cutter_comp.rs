@@ -51,29 +51,16 @@ fn xy(p: &Point) -> P2 {
 #[derive(Clone, Copy, Debug)]
 enum Piece {
     Seg(P2, P2),
-    Arc {
-        centre: P2,
-        radius: f64,
-        start: f64,
-        sweep: f64,
-    },
+    Arc { centre: P2, radius: f64, start: f64, sweep: f64 },
 }
 
 impl Piece {
     fn at(&self, t: f64) -> P2 {
         match *self {
             Piece::Seg(a, b) => (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)),
-            Piece::Arc {
-                centre,
-                radius,
-                start,
-                sweep,
-            } => {
+            Piece::Arc { centre, radius, start, sweep } => {
                 let angle = start + t * sweep;
-                (
-                    centre.0 + radius * angle.cos(),
-                    centre.1 + radius * angle.sin(),
-                )
+                (centre.0 + radius * angle.cos(), centre.1 + radius * angle.sin())
             }
         }
     }
@@ -91,19 +78,10 @@ impl Piece {
             Piece::Seg(a, b) => {
                 let (d, w) = (sub(b, a), sub(q, a));
                 let l2 = d.0 * d.0 + d.1 * d.1;
-                let t = if l2 == 0.0 {
-                    0.0
-                } else {
-                    ((w.0 * d.0 + w.1 * d.1) / l2).clamp(0.0, 1.0)
-                };
+                let t = if l2 == 0.0 { 0.0 } else { ((w.0 * d.0 + w.1 * d.1) / l2).clamp(0.0, 1.0) };
                 dist(q, self.at(t))
             }
-            Piece::Arc {
-                centre,
-                radius,
-                start,
-                sweep,
-            } => {
+            Piece::Arc { centre, radius, start, sweep } => {
                 let angle = (q.1 - centre.1).atan2(q.0 - centre.0);
                 // Turned from the start in the arc's direction, in [0, 2 pi).
                 let turned = ((angle - start) * sweep.signum()).rem_euclid(TAU);
@@ -118,10 +96,7 @@ impl Piece {
 }
 
 fn contour_distance(contour: &[Piece], q: P2) -> f64 {
-    contour
-        .iter()
-        .map(|p| p.distance(q))
-        .fold(f64::INFINITY, f64::min)
+    contour.iter().map(|p| p.distance(q)).fold(f64::INFINITY, f64::min)
 }
 
 /// The signed sweep of a G2/G3 from `from` to `to` around `centre`, by the rule the
@@ -154,14 +129,7 @@ fn pieces(program: &Program) -> Vec<(usize, Piece)> {
                 out.push((block.line, Piece::Seg(at, xy(&to))));
                 at = xy(&to);
             }
-            BlockKind::Arc {
-                to,
-                centre,
-                plane,
-                clockwise,
-                extra_turns,
-                ..
-            } => {
+            BlockKind::Arc { to, centre, plane, clockwise, extra_turns, .. } => {
                 assert_eq!(plane, Plane::Xy);
                 let c = xy(&centre);
                 out.push((
@@ -186,12 +154,7 @@ fn moves(program: &Program) -> Vec<BlockKind> {
         .blocks
         .iter()
         .map(|b| b.kind.clone())
-        .filter(|k| {
-            matches!(
-                k,
-                BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. }
-            )
-        })
+        .filter(|k| matches!(k, BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. }))
         .collect()
 }
 
@@ -205,18 +168,11 @@ fn end_of(kind: &BlockKind) -> Point {
 /// The end of the last output block of source line `line`.
 fn last_end(program: &Program, line: usize) -> Point {
     let block = program.blocks.iter().rev().find(|b| b.line == line);
-    end_of(
-        &block
-            .unwrap_or_else(|| panic!("no block of line {line}: {program:#?}"))
-            .kind,
-    )
+    end_of(&block.unwrap_or_else(|| panic!("no block of line {line}: {program:#?}")).kind)
 }
 
 fn assert_near(actual: P2, expected: P2) {
-    assert!(
-        dist(actual, expected) < 1e-9,
-        "{actual:?} is not {expected:?}"
-    );
+    assert!(dist(actual, expected) < 1e-9, "{actual:?} is not {expected:?}");
 }
 
 // ---------------------------------------------------------------- squares
@@ -256,45 +212,22 @@ fn square_outside_gets_corner_arcs_and_a_tangent_entry_and_exit() {
     for (kind, (to, centre)) in m.iter().zip(&expected) {
         assert_near(xy(&end_of(kind)), *to);
         match (kind, centre) {
-            (
-                BlockKind::Arc {
-                    centre: c,
-                    clockwise,
-                    extra_turns,
-                    ..
-                },
-                Some(e),
-            ) => {
+            (BlockKind::Arc { centre: c, clockwise, extra_turns, .. }, Some(e)) => {
                 assert_near(xy(c), *e);
-                assert!(
-                    !clockwise,
-                    "outside corners of a counter-clockwise G42 path turn left"
-                );
+                assert!(!clockwise, "outside corners of a counter-clockwise G42 path turn left");
                 assert_eq!(*extra_turns, 0);
             }
-            (
-                BlockKind::Linear {
-                    feed_mm_per_min, ..
-                },
-                None,
-            ) => assert_eq!(*feed_mm_per_min, 600.0),
+            (BlockKind::Linear { feed_mm_per_min, .. }, None) => assert_eq!(*feed_mm_per_min, 600.0),
             (BlockKind::Rapid { .. }, None) => {}
             _ => panic!("{kind:?} where {centre:?} was expected"),
         }
     }
     // No CutterComp block is left, and the program still ends.
-    assert!(!out
-        .blocks
-        .iter()
-        .any(|b| matches!(b.kind, BlockKind::CutterComp { .. })));
+    assert!(!out.blocks.iter().any(|b| matches!(b.kind, BlockKind::CutterComp { .. })));
     assert!(matches!(out.blocks.last().unwrap().kind, BlockKind::End));
     // Corner arcs carry the line of the move after the corner.
-    let arc_lines: Vec<usize> = out
-        .blocks
-        .iter()
-        .filter(|b| matches!(b.kind, BlockKind::Arc { .. }))
-        .map(|b| b.line)
-        .collect();
+    let arc_lines: Vec<usize> =
+        out.blocks.iter().filter(|b| matches!(b.kind, BlockKind::Arc { .. })).map(|b| b.line).collect();
     assert_eq!(arc_lines, vec![5, 6, 7, 8]);
 }
 
@@ -302,10 +235,7 @@ fn square_outside_gets_corner_arcs_and_a_tangent_entry_and_exit() {
 fn square_inside_is_cut_back_at_every_corner() {
     let out = run(&square("G41", (5.0, 5.0)), 1.0).unwrap();
     let m = moves(&out);
-    assert!(
-        !m.iter().any(|k| matches!(k, BlockKind::Arc { .. })),
-        "{m:#?}"
-    );
+    assert!(!m.iter().any(|k| matches!(k, BlockKind::Arc { .. })), "{m:#?}");
     let ends: Vec<P2> = m.iter().map(|k| xy(&end_of(k))).collect();
     assert_eq!(ends.len(), 8);
     assert_near(ends[2], (9.0, 1.0));
@@ -321,8 +251,7 @@ fn square_inside_is_cut_back_at_every_corner() {
 #[test]
 fn both_sides_of_the_same_path_are_mirror_images() {
     // Clockwise square: G41 is now the outside.
-    let cw =
-        "G0 X5 Y-5\nG41 D1\nG1 X5 Y0 F600\nG1 X0\nG1 Y10\nG1 X10\nG1 Y0\nG1 X5\nG40\nG0 X5 Y-5\n";
+    let cw = "G0 X5 Y-5\nG41 D1\nG1 X5 Y0 F600\nG1 X0\nG1 Y10\nG1 X10\nG1 Y0\nG1 X5\nG40\nG0 X5 Y-5\n";
     let left = run(cw, 2.0).unwrap();
     let right = run(&square("G42", (5.0, -5.0)), 2.0).unwrap();
     let (l, r) = (pieces(&left), pieces(&right));
@@ -338,8 +267,7 @@ fn both_sides_of_the_same_path_are_mirror_images() {
 
 // ---------------------------------------------------------------- triangles
 
-const TRIANGLE: &str =
-    "G0 X5 Y-5\n{side} D1\nG1 X5 Y0 F300\nG1 X20\nG1 X0 Y4\nG1 Y0\nG1 X5\nG40\nG0 X5 Y-5\n";
+const TRIANGLE: &str = "G0 X5 Y-5\n{side} D1\nG1 X5 Y0 F300\nG1 X20\nG1 X0 Y4\nG1 Y0\nG1 X5\nG40\nG0 X5 Y-5\n";
 
 fn triangle(side: &str) -> String {
     TRIANGLE.replace("{side}", side)
@@ -388,25 +316,14 @@ fn rounded_pocket_inside_shrinks_its_arcs() {
     let arcs: Vec<(P2, f64, f64)> = pieces(&out)
         .iter()
         .filter_map(|(_, p)| match p {
-            Piece::Arc {
-                centre,
-                radius,
-                sweep,
-                ..
-            } => Some((*centre, *radius, *sweep)),
+            Piece::Arc { centre, radius, sweep, .. } => Some((*centre, *radius, *sweep)),
             _ => None,
         })
         .collect();
     assert_eq!(arcs.len(), 4, "tangent joins need no corner arcs: {arcs:?}");
-    for ((centre, radius, sweep), expected) in
-        arcs.iter()
-            .zip([(17.0, 3.0), (17.0, 7.0), (3.0, 7.0), (3.0, 3.0)])
-    {
+    for ((centre, radius, sweep), expected) in arcs.iter().zip([(17.0, 3.0), (17.0, 7.0), (3.0, 7.0), (3.0, 3.0)]) {
         assert_near(*centre, expected);
-        assert!(
-            (radius - 2.0).abs() < 1e-9 && (sweep - PI / 2.0).abs() < 1e-9,
-            "{radius} {sweep}"
-        );
+        assert!((radius - 2.0).abs() < 1e-9 && (sweep - PI / 2.0).abs() < 1e-9, "{radius} {sweep}");
     }
 }
 
@@ -428,14 +345,8 @@ fn rounded_pocket_outside_grows_its_arcs() {
 #[test]
 fn a_tool_not_smaller_than_a_concave_arc_is_an_error() {
     let inside = POCKET.replace("{side}", "G41");
-    assert_eq!(
-        err(&inside, 3.5),
-        "line 5: tool radius 3.5 mm is larger than the concave arc radius 3 mm"
-    );
-    assert_eq!(
-        err(&inside, 3.0),
-        "line 5: tool radius 3 mm equals the concave arc radius 3 mm"
-    );
+    assert_eq!(err(&inside, 3.5), "line 5: tool radius 3.5 mm is larger than the concave arc radius 3 mm");
+    assert_eq!(err(&inside, 3.0), "line 5: tool radius 3 mm equals the concave arc radius 3 mm");
     assert!(run(&inside, 2.99).is_ok());
 }
 
@@ -444,41 +355,26 @@ fn a_tool_not_smaller_than_a_concave_arc_is_an_error() {
 #[test]
 fn l_shape_both_sides_is_at_the_tool_radius() {
     let shape = Shape {
-        vertices: vec![
-            (0.0, 0.0),
-            (20.0, 0.0),
-            (20.0, 10.0),
-            (10.0, 10.0),
-            (10.0, 20.0),
-            (0.0, 20.0),
-        ],
+        vertices: vec![(0.0, 0.0), (20.0, 0.0), (20.0, 10.0), (10.0, 10.0), (10.0, 20.0), (0.0, 20.0)],
         bulges: vec![None; 6],
     };
     for (outside, corner_arcs) in [(true, 5), (false, 1)] {
         let (program, entry, exit) = shape.program(outside, 2.0, 1.0);
         let out = compensate(&program, &tool(2.0)).unwrap();
         check_distance(&shape.contour(), &out, 2.0, entry, exit).unwrap();
-        let arcs = out
-            .blocks
-            .iter()
-            .filter(|b| matches!(b.kind, BlockKind::Arc { .. }))
-            .count();
+        let arcs = out.blocks.iter().filter(|b| matches!(b.kind, BlockKind::Arc { .. })).count();
         assert_eq!(arcs, corner_arcs, "outside {outside}");
     }
     // From inside, a 6 mm tool no longer fits the 10 mm wide arms.
     let (program, ..) = shape.program(false, 6.0, 1.0);
-    assert!(compensate(&program, &tool(6.0))
-        .unwrap_err()
-        .to_string()
-        .contains("vanishes"));
+    assert!(compensate(&program, &tool(6.0)).unwrap_err().to_string().contains("vanishes"));
 }
 
 // ---------------------------------------------------------------- line-arc and arc-arc joins
 
 #[test]
 fn line_into_arc_concave_and_convex() {
-    let path =
-        "G1 X0 Y-5 F100\n{side} D1\nG1 X0 Y0\nG1 X10\nG2 X20 Y0 I5 J0\nG1 Y-5\nG40\nG1 X30\n";
+    let path = "G1 X0 Y-5 F100\n{side} D1\nG1 X0 Y0\nG1 X10\nG2 X20 Y0 I5 J0\nG1 Y-5\nG40\nG1 X30\n";
     // G41: tool above the line and outside the cw arc (radius 6): concave corner at
     // (10,0), cut back to y = 1 on the circle of radius 6 around (15,0).
     let out = run(&path.replace("{side}", "G41"), 1.0).unwrap();
@@ -487,18 +383,12 @@ fn line_into_arc_concave_and_convex() {
     // around (10,0) from (10,-1) to (11,0).
     let out = run(&path.replace("{side}", "G42"), 1.0).unwrap();
     let p = pieces(&out);
-    let corner = p.iter().find(
-        |(_, piece)| matches!(piece, Piece::Arc { radius, .. } if (radius - 1.0).abs() < 1e-9),
-    );
-    let Some((line, Piece::Arc { centre, sweep, .. })) = corner else {
-        panic!("{p:#?}")
-    };
+    let corner = p.iter().find(|(_, piece)| matches!(piece, Piece::Arc { radius, .. } if (radius - 1.0).abs() < 1e-9));
+    let Some((line, Piece::Arc { centre, sweep, .. })) = corner else { panic!("{p:#?}") };
     assert_eq!(*line, 5);
     assert_near(*centre, (10.0, 0.0));
     assert!((sweep - PI / 2.0).abs() < 1e-9);
-    assert!(p.iter().any(
-        |(_, piece)| matches!(piece, Piece::Arc { radius, .. } if (radius - 4.0).abs() < 1e-9)
-    ));
+    assert!(p.iter().any(|(_, piece)| matches!(piece, Piece::Arc { radius, .. } if (radius - 4.0).abs() < 1e-9)));
 }
 
 #[test]
@@ -506,67 +396,35 @@ fn arc_into_arc_concave_meets_at_the_circles_crossing() {
     // A ccw quarter circle around (0,0) from (5,0) to (0,5), heading -x at its end,
     // then a ccw half circle around (-5,5) heading +y at its start: a right turn,
     // concave for G42, which keeps the tool outside both (radius 6).
-    let source =
-        "G0 X5 Y-5\nG42 D1\nG1 X5 Y0 F100\nG3 X0 Y5 I-5 J0\nG3 X-10 Y5 I-5 J0\nG40\nG1 X-10 Y-5\n";
+    let source = "G0 X5 Y-5\nG42 D1\nG1 X5 Y0 F100\nG3 X0 Y5 I-5 J0\nG3 X-10 Y5 I-5 J0\nG40\nG1 X-10 Y-5\n";
     let out = run(source, 1.0).unwrap();
     // Both arcs end at the crossing of the two circles of radius 6 nearest the corner.
     let h = (36.0 - 12.5f64).sqrt() / 2f64.sqrt();
     let crossing = (-2.5 + h, 2.5 + h);
     assert_near(xy(&last_end(&out, 4)), crossing);
-    assert!(
-        (dist(crossing, (0.0, 0.0)) - 6.0).abs() < 1e-12
-            && (dist(crossing, (-5.0, 5.0)) - 6.0).abs() < 1e-12
-    );
+    assert!((dist(crossing, (0.0, 0.0)) - 6.0).abs() < 1e-12 && (dist(crossing, (-5.0, 5.0)) - 6.0).abs() < 1e-12);
     let p = pieces(&out);
-    let Some((_, Piece::Arc { centre, radius, .. })) = p.iter().find(|(l, _)| *l == 5) else {
-        panic!("{p:#?}")
-    };
+    let Some((_, Piece::Arc { centre, radius, .. })) = p.iter().find(|(l, _)| *l == 5) else { panic!("{p:#?}") };
     assert_near(*centre, (-5.0, 5.0));
     assert!((radius - 6.0).abs() < 1e-9);
     // G41 on the same path: a right turn is convex for it, a corner arc of radius 1.
-    let out = run(
-        &source.replace("G42", "G41").replace("X5 Y-5", "X-5 Y0"),
-        1.0,
-    )
-    .unwrap();
-    let corner = pieces(&out).into_iter().find(|(l, p)| {
-        *l == 5 && matches!(p, Piece::Arc { radius, .. } if (radius - 1.0).abs() < 1e-9)
-    });
-    let Some((_, Piece::Arc { centre, sweep, .. })) = corner else {
-        panic!()
-    };
+    let out = run(&source.replace("G42", "G41").replace("X5 Y-5", "X-5 Y0"), 1.0).unwrap();
+    let corner = pieces(&out)
+        .into_iter()
+        .find(|(l, p)| *l == 5 && matches!(p, Piece::Arc { radius, .. } if (radius - 1.0).abs() < 1e-9));
+    let Some((_, Piece::Arc { centre, sweep, .. })) = corner else { panic!() };
     assert_near(centre, (0.0, 5.0));
     assert!((sweep + PI / 2.0).abs() < 1e-9, "{sweep}");
 }
 
 #[test]
 fn a_line_turning_straight_back_goes_round_its_end() {
-    let out = run(
-        "G0 X-5 Y0\nG41 D1\nG1 X0 Y0 F100\nG1 X10\nG1 X0\nG40\nG1 X-5 Y5\n",
-        1.0,
-    )
-    .unwrap();
+    let out = run("G0 X-5 Y0\nG41 D1\nG1 X0 Y0 F100\nG1 X10\nG1 X0\nG40\nG1 X-5 Y5\n", 1.0).unwrap();
     let p = pieces(&out);
-    let turn = p
-        .iter()
-        .find(|(line, piece)| *line == 5 && matches!(piece, Piece::Arc { .. }));
-    let Some((
-        _,
-        Piece::Arc {
-            centre,
-            radius,
-            sweep,
-            start,
-        },
-    )) = turn
-    else {
-        panic!("{p:#?}")
-    };
+    let turn = p.iter().find(|(line, piece)| *line == 5 && matches!(piece, Piece::Arc { .. }));
+    let Some((_, Piece::Arc { centre, radius, sweep, start })) = turn else { panic!("{p:#?}") };
     assert_near(*centre, (10.0, 0.0));
-    assert!(
-        (radius - 1.0).abs() < 1e-9 && (sweep + PI).abs() < 1e-9,
-        "{sweep}"
-    );
+    assert!((radius - 1.0).abs() < 1e-9 && (sweep + PI).abs() < 1e-9, "{sweep}");
     assert!((start - PI / 2.0).abs() < 1e-9);
 }
 
@@ -587,24 +445,13 @@ fn near_tangent_kinks_join_at_the_tool_radius() {
                     let centre = (10.0 + 5.0 * to_centre.0, 5.0 * to_centre.1);
                     let start_angle = (0.0 - centre.1).atan2(10.0 - centre.0);
                     let sweep = if clockwise { -PI / 2.0 } else { PI / 2.0 };
-                    let arc = Piece::Arc {
-                        centre,
-                        radius: 5.0,
-                        start: start_angle,
-                        sweep,
-                    };
+                    let arc = Piece::Arc { centre, radius: 5.0, start: start_angle, sweep };
                     let end = arc.at(1.0);
                     // The arc's tangent at its end, in the forward direction.
                     let radial = ((end.0 - centre.0) / 5.0, (end.1 - centre.1) / 5.0);
-                    let end_tangent = if clockwise {
-                        (radial.1, -radial.0)
-                    } else {
-                        (-radial.1, radial.0)
-                    };
+                    let end_tangent = if clockwise { (radial.1, -radial.0) } else { (-radial.1, radial.0) };
                     // A point 2 mm to the tool's side of `at` for travel along `tangent`.
-                    let aside = |at: P2, tangent: P2| {
-                        (at.0 - 2.0 * s * tangent.1, at.1 + 2.0 * s * tangent.0)
-                    };
+                    let aside = |at: P2, tangent: P2| (at.0 - 2.0 * s * tangent.1, at.1 + 2.0 * s * tangent.0);
                     let mut b = Builder::default();
                     let (entry, exit);
                     if backwards {
@@ -628,8 +475,8 @@ fn near_tangent_kinks_join_at_the_tool_radius() {
                     let out = compensate(&Program { blocks: b.blocks }, &tool(radius))
                         .unwrap_or_else(|e| panic!("{case}: {e}"));
                     let contour = [Piece::Seg((0.0, 0.0), (10.0, 0.0)), arc];
-                    let length = check_distance(&contour, &out, radius, entry, exit)
-                        .unwrap_or_else(|e| panic!("{case}: {e}"));
+                    let length =
+                        check_distance(&contour, &out, radius, entry, exit).unwrap_or_else(|e| panic!("{case}: {e}"));
                     assert!(length > 10.0, "{case}: {length}");
                 }
             }
@@ -645,26 +492,14 @@ fn entry_follows_linuxcnc_tangent_rule_and_exit_ends_on_the_programmed_point() {
     // G42 from (0,-10) up to (0,0), then left along -x: the entry leans right by
     // theta and ends at the tangent point on the 2 mm circle around (0,0); the left turn
     // is an outside corner for G42, rounded by an arc to (0,2).
-    let out = run(
-        "G0 X0 Y-10\nG42 D1\nG1 X0 Y0 F100\nG1 X-10 Y0\nG40\nG0 X-10 Y-10\n",
-        2.0,
-    )
-    .unwrap();
+    let out = run("G0 X0 Y-10\nG42 D1\nG1 X0 Y0 F100\nG1 X-10 Y0\nG40\nG0 X-10 Y-10\n", 2.0).unwrap();
     let m = moves(&out);
     let tangent = (2.0 * theta.cos(), -2.0 * theta.sin());
     assert_near(xy(&end_of(&m[1])), tangent);
     // Tangent: the radius to the tangent point is perpendicular to the entry line.
     let along = sub(tangent, (0.0, -10.0));
     assert!((along.0 * tangent.0 + along.1 * tangent.1).abs() < 1e-9);
-    let BlockKind::Arc {
-        to,
-        centre,
-        clockwise,
-        ..
-    } = m[2]
-    else {
-        panic!("{m:#?}")
-    };
+    let BlockKind::Arc { to, centre, clockwise, .. } = m[2] else { panic!("{m:#?}") };
     assert_near(xy(&to), (0.0, 2.0));
     assert_near(xy(&centre), (0.0, 0.0));
     assert!(!clockwise);
@@ -672,34 +507,23 @@ fn entry_follows_linuxcnc_tangent_rule_and_exit_ends_on_the_programmed_point() {
     assert_eq!(xy(&end_of(m.last().unwrap())), (-10.0, -10.0));
     // G41: the same turn is an inside corner: the entry is cut back where it meets the
     // offset of the second line, y = -2.
-    let out = run(
-        "G0 X0 Y-10\nG41 D1\nG1 X0 Y0 F100\nG1 X-10 Y0\nG40\nG0 X-10 Y-10\n",
-        2.0,
-    )
-    .unwrap();
+    let out = run("G0 X0 Y-10\nG41 D1\nG1 X0 Y0 F100\nG1 X-10 Y0\nG40\nG0 X-10 Y-10\n", 2.0).unwrap();
     let m = moves(&out);
     assert_near(xy(&end_of(&m[1])), (-8.0 * theta.tan(), -2.0));
     // The exit (leaning away from (-10,0) to the tool side, then down to (-10,-10)) is a
     // left turn too: the second line is cut back where it meets the exit line.
     let exit_start = (-10.0 + 2.0 * theta.cos(), -2.0 * theta.sin());
-    assert_near(
-        xy(&end_of(&m[2])),
-        (exit_start.0 - (2.0 + exit_start.1) * theta.tan(), -2.0),
-    );
+    assert_near(xy(&end_of(&m[2])), (exit_start.0 - (2.0 + exit_start.1) * theta.tan(), -2.0));
     assert_eq!(xy(&end_of(&m[3])), (-10.0, -10.0));
 }
 
 #[test]
 fn moves_of_z_alone_keep_the_tool_where_it_is() {
-    let source = "G0 X5 Y-5 Z5\nG42 D1\nG1 X5 Y0 F600\nG1 Z-1\nG1 X10\nG1 Y10 Z-2\nG1 X0\nG1 Y0\nG1 X5\nG40\nG0 Z5\nG0 X5 Y-5\n";
+    let source =
+        "G0 X5 Y-5 Z5\nG42 D1\nG1 X5 Y0 F600\nG1 Z-1\nG1 X10\nG1 Y10 Z-2\nG1 X0\nG1 Y0\nG1 X5\nG40\nG0 Z5\nG0 X5 Y-5\n";
     let out = run(source, 2.0).unwrap();
-    let find = |line: usize| -> Vec<Point> {
-        out.blocks
-            .iter()
-            .filter(|b| b.line == line)
-            .map(|b| end_of(&b.kind))
-            .collect()
-    };
+    let find =
+        |line: usize| -> Vec<Point> { out.blocks.iter().filter(|b| b.line == line).map(|b| end_of(&b.kind)).collect() };
     // The plunge happens where the entry ended.
     let entry_end = find(3)[0];
     let plunge = find(4);
@@ -715,15 +539,7 @@ fn moves_of_z_alone_keep_the_tool_where_it_is() {
     assert_eq!(retract.len(), 1);
     assert_eq!(retract[0].z_mm, 5.0);
     assert!((retract[0].y_mm + 2.0).abs() < 1e-9, "{retract:?}");
-    assert_eq!(
-        find(12).last().unwrap(),
-        &Point {
-            x_mm: 5.0,
-            y_mm: -5.0,
-            z_mm: 5.0,
-            a_deg: 0.0
-        }
-    );
+    assert_eq!(find(12).last().unwrap(), &Point { x_mm: 5.0, y_mm: -5.0, z_mm: 5.0, a_deg: 0.0 });
 }
 
 #[test]
@@ -732,16 +548,7 @@ fn helix_inside_a_circle_keeps_turns_and_depth() {
     let out = run(source, 1.0).unwrap();
     let helix: Vec<&Block> = out.blocks.iter().filter(|b| b.line == 4).collect();
     assert_eq!(helix.len(), 1);
-    let BlockKind::Arc {
-        to,
-        centre,
-        extra_turns,
-        clockwise,
-        ..
-    } = helix[0].kind
-    else {
-        panic!()
-    };
+    let BlockKind::Arc { to, centre, extra_turns, clockwise, .. } = helix[0].kind else { panic!() };
     assert_eq!(to.z_mm, -3.0);
     assert_eq!(centre.z_mm, 0.0);
     assert!(!clockwise);
@@ -749,9 +556,7 @@ fn helix_inside_a_circle_keeps_turns_and_depth() {
     // Two turns less the bits cut back at the entry and exit corners: 1 extra turn.
     assert_eq!(extra_turns, 1);
     let p = pieces(&out);
-    let Piece::Arc { radius, sweep, .. } = p.iter().find(|(l, _)| *l == 4).unwrap().1 else {
-        panic!()
-    };
+    let Piece::Arc { radius, sweep, .. } = p.iter().find(|(l, _)| *l == 4).unwrap().1 else { panic!() };
     assert!((radius - 9.0).abs() < 1e-9);
     assert!(sweep > 3.0 * PI && sweep < 2.0 * TAU, "{sweep}");
 }
@@ -762,31 +567,14 @@ fn full_circle_boss_outside_is_one_arc_cut_back_at_entry_and_exit() {
     let source = "G0 X-20 Y0\nG41 D1\nG1 X-10 Y0 F100\nG2 X-10 Y0 I10 J0\nG40\nG1 X-20 Y0\n";
     let out = run(source, 2.0).unwrap();
     let p = pieces(&out);
-    let circle: Vec<&Piece> = p
-        .iter()
-        .filter(|(l, _)| *l == 4)
-        .map(|(_, piece)| piece)
-        .collect();
+    let circle: Vec<&Piece> = p.iter().filter(|(l, _)| *l == 4).map(|(_, piece)| piece).collect();
     assert_eq!(circle.len(), 1, "{p:#?}");
-    let Piece::Arc {
-        centre,
-        radius,
-        sweep,
-        ..
-    } = *circle[0]
-    else {
-        panic!("{p:#?}")
-    };
+    let Piece::Arc { centre, radius, sweep, .. } = *circle[0] else { panic!("{p:#?}") };
     assert_near(centre, (0.0, 0.0));
     assert!((radius - 12.0).abs() < 1e-9);
     // Nearly a whole turn, clockwise, less what the entry and exit cut back.
     assert!(sweep < -1.8 * PI && sweep > -TAU, "{sweep}");
-    let contour = [Piece::Arc {
-        centre: (0.0, 0.0),
-        radius: 10.0,
-        start: PI,
-        sweep: -TAU,
-    }];
+    let contour = [Piece::Arc { centre: (0.0, 0.0), radius: 10.0, start: PI, sweep: -TAU }];
     check_distance(&contour, &out, 2.0, 3, 6).unwrap();
 }
 
@@ -794,28 +582,11 @@ fn full_circle_boss_outside_is_one_arc_cut_back_at_entry_and_exit() {
 
 #[test]
 fn radius_comes_from_d_or_from_the_tool_in_the_spindle() {
-    let table = ToolTable::new()
-        .with_radius_mm(2, 1.0)
-        .with_radius_mm(3, 2.0);
-    let with_d = compensate(
-        &parse(&square("G42", (5.0, -5.0)).replace("D1", "D3")),
-        &table,
-    )
-    .unwrap();
-    let spindle = compensate(
-        &parse(&format!(
-            "T2 M6\n{}",
-            square("G42", (5.0, -5.0)).replace(" D1", "")
-        )),
-        &table,
-    )
-    .unwrap();
-    let x_max = |p: &Program| {
-        moves(p)
-            .iter()
-            .map(|k| end_of(k).x_mm)
-            .fold(f64::MIN, f64::max)
-    };
+    let table = ToolTable::new().with_radius_mm(2, 1.0).with_radius_mm(3, 2.0);
+    let with_d = compensate(&parse(&square("G42", (5.0, -5.0)).replace("D1", "D3")), &table).unwrap();
+    let spindle =
+        compensate(&parse(&format!("T2 M6\n{}", square("G42", (5.0, -5.0)).replace(" D1", ""))), &table).unwrap();
+    let x_max = |p: &Program| moves(p).iter().map(|k| end_of(k).x_mm).fold(f64::MIN, f64::max);
     assert!((x_max(&with_d) - 12.0).abs() < 1e-9);
     assert!((x_max(&spindle) - 11.0).abs() < 1e-9);
 }
@@ -824,12 +595,8 @@ fn radius_comes_from_d_or_from_the_tool_in_the_spindle() {
 fn zero_radius_leaves_the_path_as_programmed() {
     let program = parse(&POCKET.replace("{side}", "G41"));
     let out = compensate(&program, &tool(0.0)).unwrap();
-    let without_comp: Vec<Block> = program
-        .blocks
-        .iter()
-        .filter(|b| !matches!(b.kind, BlockKind::CutterComp { .. }))
-        .cloned()
-        .collect();
+    let without_comp: Vec<Block> =
+        program.blocks.iter().filter(|b| !matches!(b.kind, BlockKind::CutterComp { .. })).cloned().collect();
     assert_eq!(out.blocks, without_comp);
 }
 
@@ -837,15 +604,11 @@ fn zero_radius_leaves_the_path_as_programmed() {
 fn bad_programs_and_tables_are_errors_naming_the_line() {
     let sq = square("G42", (5.0, -5.0));
     assert_eq!(
-        compensate(&parse(&sq), &ToolTable::new())
-            .unwrap_err()
-            .to_string(),
+        compensate(&parse(&sq), &ToolTable::new()).unwrap_err().to_string(),
         "line 2: tool 1 is not in the tool table"
     );
     assert_eq!(
-        compensate(&parse(&sq), &tool(-1.0))
-            .unwrap_err()
-            .to_string(),
+        compensate(&parse(&sq), &tool(-1.0)).unwrap_err().to_string(),
         "line 2: tool 1 has radius -1 mm; a radius must be finite and not negative"
     );
     assert!(compensate(&parse(&sq), &tool(f64::NAN))
@@ -887,9 +650,10 @@ fn bad_programs_and_tables_are_errors_naming_the_line() {
     );
     // A convex corner between rapids takes the last feed.
     let out = run("G1 X0 Y-5 F123\nG41 D1\nG0 X0 Y0\nG0 X5\n", 0.5).unwrap();
-    assert!(out.blocks.iter().any(
-        |b| matches!(b.kind, BlockKind::Arc { feed_mm_per_min, .. } if feed_mm_per_min == 123.0)
-    ));
+    assert!(out
+        .blocks
+        .iter()
+        .any(|b| matches!(b.kind, BlockKind::Arc { feed_mm_per_min, .. } if feed_mm_per_min == 123.0)));
 }
 
 #[test]
@@ -942,11 +706,7 @@ impl Shape {
     fn tangent_turn_at(&self, i: usize) -> f64 {
         // Turn at vertex i between edge i-1's end and edge i's start.
         let tangent = |piece: Piece, at_end: bool| -> P2 {
-            let (p, q) = if at_end {
-                (piece.at(1.0 - 1e-7), piece.at(1.0))
-            } else {
-                (piece.at(0.0), piece.at(1e-7))
-            };
+            let (p, q) = if at_end { (piece.at(1.0 - 1e-7), piece.at(1.0)) } else { (piece.at(0.0), piece.at(1e-7)) };
             let d = sub(q, p);
             (d.0 / len(d), d.1 / len(d))
         };
@@ -962,19 +722,11 @@ impl Shape {
         let mid = ((a.0 + b.0) / 2.0, (a.1 + b.1) / 2.0);
         let l = dist(a, b);
         let out_normal = ((b.1 - a.1) / l, -(b.0 - a.0) / l);
-        let k = if outside {
-            radius + entry_distance
-        } else {
-            -(radius + entry_distance)
-        };
+        let k = if outside { radius + entry_distance } else { -(radius + entry_distance) };
         let start = (mid.0 + k * out_normal.0, mid.1 + k * out_normal.1);
         let mut builder = Builder::default();
         builder.rapid(start);
-        builder.comp(if outside {
-            CompSide::Right
-        } else {
-            CompSide::Left
-        });
+        builder.comp(if outside { CompSide::Right } else { CompSide::Left });
         let entry = builder.line(mid);
         builder.line(b);
         for i in 1..self.n() {
@@ -987,13 +739,7 @@ impl Shape {
         builder.line(mid);
         builder.comp(CompSide::Off);
         let exit = builder.line(start);
-        (
-            Program {
-                blocks: builder.blocks,
-            },
-            entry,
-            exit,
-        )
+        (Program { blocks: builder.blocks }, entry, exit)
     }
 
     fn contour(&self) -> Vec<Piece> {
@@ -1013,31 +759,17 @@ struct Builder {
 impl Builder {
     fn push(&mut self, kind: BlockKind) -> usize {
         let line = self.blocks.len() + 1;
-        self.blocks.push(Block {
-            line,
-            n: None,
-            kind,
-        });
+        self.blocks.push(Block { line, n: None, kind });
         line
     }
     fn point(p: P2) -> Point {
-        Point {
-            x_mm: p.0,
-            y_mm: p.1,
-            z_mm: 0.0,
-            a_deg: 0.0,
-        }
+        Point { x_mm: p.0, y_mm: p.1, z_mm: 0.0, a_deg: 0.0 }
     }
     fn rapid(&mut self, to: P2) -> usize {
-        self.push(BlockKind::Rapid {
-            to: Builder::point(to),
-        })
+        self.push(BlockKind::Rapid { to: Builder::point(to) })
     }
     fn line(&mut self, to: P2) -> usize {
-        self.push(BlockKind::Linear {
-            to: Builder::point(to),
-            feed_mm_per_min: 500.0,
-        })
+        self.push(BlockKind::Linear { to: Builder::point(to), feed_mm_per_min: 500.0 })
     }
     fn arc(&mut self, to: P2, centre: P2, clockwise: bool) -> usize {
         self.push(BlockKind::Arc {
@@ -1050,10 +782,7 @@ impl Builder {
         })
     }
     fn comp(&mut self, side: CompSide) -> usize {
-        self.push(BlockKind::CutterComp {
-            side,
-            tool: Some(1),
-        })
+        self.push(BlockKind::CutterComp { side, tool: Some(1) })
     }
 }
 
@@ -1077,10 +806,7 @@ fn shape_strategy() -> impl Strategy<Value = Shape> {
             let mut angle = phase;
             let mut vertices = Vec::new();
             for gap in &gaps {
-                vertices.push((
-                    centre.0 + circle * angle.cos(),
-                    centre.1 + circle * angle.sin(),
-                ));
+                vertices.push((centre.0 + circle * angle.cos(), centre.1 + circle * angle.sin()));
                 angle += gap;
             }
             // Exterior turn at vertex i of the inscribed polygon: half the two gaps.
@@ -1114,10 +840,7 @@ fn check_distance(
         for k in 0..=16 {
             let q = piece.at(f64::from(k) / 16.0);
             let d = contour_distance(contour, q);
-            prop_assert!(
-                (d - radius).abs() <= 1e-9,
-                "line {line} {piece:?} at {q:?}: distance {d}, radius {radius}"
-            );
+            prop_assert!((d - radius).abs() <= 1e-9, "line {line} {piece:?} at {q:?}: distance {d}, radius {radius}");
         }
     }
     Ok(length)
@@ -1127,31 +850,23 @@ fn check_distance(
 fn outside_of_convex_shapes_is_at_the_tool_radius_and_as_long_as_steiner_says() {
     let mut runner = finestep_testkit::runner("cutter_comp_outside_convex", 256);
     runner
-        .run(
-            &(shape_strategy(), 0.001f64..1.0, 0.1f64..5.0),
-            |(shape, radius_fraction, entry)| {
-                // The entry cuts back at most r from the half of the first edge after it.
-                let radius = radius_fraction * 0.45 * dist(shape.vertices[0], shape.vertices[1]);
-                let (program, entry_line, exit_line) = shape.program(true, radius, entry);
-                let out = compensate(&program, &tool(radius))
-                    .map_err(|e| TestCaseError::fail(e.to_string()))?;
-                let length = check_distance(&shape.contour(), &out, radius, entry_line, exit_line)?;
-                // Steiner: the outer parallel curve of a convex curve is longer by 2 pi r;
-                // the entry and exit cut at most r each from the loop.
-                let full = shape.perimeter() + TAU * radius;
-                prop_assert!(
-                    length <= full + 1e-7 && length >= full - 2.0 * radius - 1e-7,
-                    "{length} vs {full}"
-                );
-                // The path ends exactly where the program does.
-                let Some(BlockKind::Linear { to, .. }) = program.blocks.last().map(|b| b.kind.clone())
-                else {
-                    unreachable!()
-                };
-                prop_assert_eq!(last_end(&out, exit_line), to);
-                Ok(())
-            },
-        )
+        .run(&(shape_strategy(), 0.001f64..1.0, 0.1f64..5.0), |(shape, radius_fraction, entry)| {
+            // The entry cuts back at most r from the half of the first edge after it.
+            let radius = radius_fraction * 0.45 * dist(shape.vertices[0], shape.vertices[1]);
+            let (program, entry_line, exit_line) = shape.program(true, radius, entry);
+            let out = compensate(&program, &tool(radius)).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let length = check_distance(&shape.contour(), &out, radius, entry_line, exit_line)?;
+            // Steiner: the outer parallel curve of a convex curve is longer by 2 pi r;
+            // the entry and exit cut at most r each from the loop.
+            let full = shape.perimeter() + TAU * radius;
+            prop_assert!(length <= full + 1e-7 && length >= full - 2.0 * radius - 1e-7, "{length} vs {full}");
+            // The path ends exactly where the program does.
+            let Some(BlockKind::Linear { to, .. }) = program.blocks.last().map(|b| b.kind.clone()) else {
+                unreachable!()
+            };
+            prop_assert_eq!(last_end(&out, exit_line), to);
+            Ok(())
+        })
         .unwrap();
 }
 
@@ -1159,56 +874,42 @@ fn outside_of_convex_shapes_is_at_the_tool_radius_and_as_long_as_steiner_says() 
 fn inside_of_convex_shapes_is_at_the_tool_radius_or_an_error_when_it_does_not_fit() {
     let mut runner = finestep_testkit::runner("cutter_comp_inside_convex", 256);
     runner
-        .run(
-            &(shape_strategy(), 0.01f64..1.0, 0.1f64..3.0),
-            |(shape, radius_fraction, entry)| {
-                // A radius between tiny and a large part of the shape's size.
-                let size = shape.perimeter() / TAU;
-                let radius = radius_fraction * radius_fraction * size;
-                let (program, entry_line, exit_line) = shape.program(false, radius, entry);
-                let contour = shape.contour();
-                // Sizes that certainly fit (cut-backs well below half of every edge) and that
-                // certainly do not (a concave arc no larger than the tool).
-                let mut fits = 0.1
-                    * (0..shape.n())
-                        .map(|i| contour[i].length())
-                        .fold(f64::INFINITY, f64::min);
-                let mut too_large = false;
-                for i in 0..shape.n() {
-                    let shortest = contour[i]
-                        .length()
-                        .min(contour[(i + shape.n() - 1) % shape.n()].length());
-                    fits = fits.min(0.2 * shortest / (shape.tangent_turn_at(i) / 2.0).tan());
-                    if let Piece::Arc { radius: arc, .. } = contour[i] {
-                        fits = fits.min(0.25 * arc);
-                        too_large |= arc <= radius;
+        .run(&(shape_strategy(), 0.01f64..1.0, 0.1f64..3.0), |(shape, radius_fraction, entry)| {
+            // A radius between tiny and a large part of the shape's size.
+            let size = shape.perimeter() / TAU;
+            let radius = radius_fraction * radius_fraction * size;
+            let (program, entry_line, exit_line) = shape.program(false, radius, entry);
+            let contour = shape.contour();
+            // Sizes that certainly fit (cut-backs well below half of every edge) and that
+            // certainly do not (a concave arc no larger than the tool).
+            let mut fits = 0.1 * (0..shape.n()).map(|i| contour[i].length()).fold(f64::INFINITY, f64::min);
+            let mut too_large = false;
+            for i in 0..shape.n() {
+                let shortest = contour[i].length().min(contour[(i + shape.n() - 1) % shape.n()].length());
+                fits = fits.min(0.2 * shortest / (shape.tangent_turn_at(i) / 2.0).tan());
+                if let Piece::Arc { radius: arc, .. } = contour[i] {
+                    fits = fits.min(0.25 * arc);
+                    too_large |= arc <= radius;
+                }
+            }
+            match compensate(&program, &tool(radius)) {
+                Ok(out) => {
+                    prop_assert!(!too_large, "a concave arc no larger than r = {radius} was accepted");
+                    let length = check_distance(&contour, &out, radius, entry_line, exit_line)?;
+                    prop_assert!(length > 0.0);
+                    // Every programmed edge but the split one is still there.
+                    for line in entry_line + 2..exit_line - 2 {
+                        prop_assert!(out.blocks.iter().any(|b| b.line == line), "line {line} vanished");
                     }
                 }
-                match compensate(&program, &tool(radius)) {
-                    Ok(out) => {
-                        prop_assert!(
-                            !too_large,
-                            "a concave arc no larger than r = {radius} was accepted"
-                        );
-                        let length = check_distance(&contour, &out, radius, entry_line, exit_line)?;
-                        prop_assert!(length > 0.0);
-                        // Every programmed edge but the split one is still there.
-                        for line in entry_line + 2..exit_line - 2 {
-                            prop_assert!(
-                                out.blocks.iter().any(|b| b.line == line),
-                                "line {line} vanished"
-                            );
-                        }
-                    }
-                    Err(e) => {
-                        prop_assert!(radius > fits, "r = {radius} fits (bound {fits}) but: {e}");
-                        prop_assert!(e.line >= 1 && e.line <= program.blocks.len());
-                        prop_assert!(e.to_string().contains("tool radius"), "{e}");
-                    }
+                Err(e) => {
+                    prop_assert!(radius > fits, "r = {radius} fits (bound {fits}) but: {e}");
+                    prop_assert!(e.line >= 1 && e.line <= program.blocks.len());
+                    prop_assert!(e.to_string().contains("tool radius"), "{e}");
                 }
-                Ok(())
-            },
-        )
+            }
+            Ok(())
+        })
         .unwrap();
 }
 
@@ -1258,17 +959,11 @@ fn rounded_strategy() -> impl Strategy<Value = Vec<Piece>> {
 /// A program running `contour` (which starts with a line) from the middle of its first
 /// line round to that point again, entered and left across it on the tool's side.
 fn loop_program(contour: &[Piece], side: CompSide, radius: f64) -> (Program, usize, usize) {
-    let Piece::Seg(a, b) = contour[0] else {
-        panic!("starts with a line")
-    };
+    let Piece::Seg(a, b) = contour[0] else { panic!("starts with a line") };
     let mid = ((a.0 + b.0) / 2.0, (a.1 + b.1) / 2.0);
     let l = dist(a, b);
     let right = ((b.1 - a.1) / l, -(b.0 - a.0) / l);
-    let k = if side == CompSide::Right {
-        radius + 1.0
-    } else {
-        -(radius + 1.0)
-    };
+    let k = if side == CompSide::Right { radius + 1.0 } else { -(radius + 1.0) };
     let start = (mid.0 + k * right.0, mid.1 + k * right.1);
     let mut builder = Builder::default();
     builder.rapid(start);
@@ -1284,72 +979,50 @@ fn loop_program(contour: &[Piece], side: CompSide, radius: f64) -> (Program, usi
     builder.line(mid);
     builder.comp(CompSide::Off);
     let exit = builder.line(start);
-    (
-        Program {
-            blocks: builder.blocks,
-        },
-        entry,
-        exit,
-    )
+    (Program { blocks: builder.blocks }, entry, exit)
 }
 
 #[test]
 fn offsetting_an_offset_back_gives_the_original() {
     let mut runner = finestep_testkit::runner("cutter_comp_offset_back", 256);
     runner
-        .run(
-            &(rounded_strategy(), 0.001f64..1.0),
-            |(contour, radius_fraction)| {
-                // No small features: the first pass's entry cuts at most r from the second
-                // half of the first line, the second pass enters in the middle of what is
-                // left and cuts at most r again: r < l/6 leaves some of it.
-                let radius = radius_fraction * 0.15 * contour[0].length();
-                let (program, entry, exit) = loop_program(&contour, CompSide::Right, radius);
-                let out = compensate(&program, &tool(radius))
-                    .map_err(|e| TestCaseError::fail(e.to_string()))?;
-                check_distance(&contour, &out, radius, entry, exit)?;
-                // The offset loop (tangent everywhere again) without the entry and exit.
-                let offset: Vec<Piece> = pieces(&out)
-                    .into_iter()
-                    .filter(|(l, _)| *l > entry && *l < exit)
-                    .map(|(_, p)| p)
-                    .collect();
-                prop_assert_eq!(
-                    offset.len(),
-                    contour.len() + 1,
-                    "a tangent loop gets no corner arcs"
-                );
-                // Without its last piece (the rest of the first line), the loop runs from
-                // the middle of its first piece round to there again.
-                let (back, entry2, exit2) =
-                    loop_program(&offset[..offset.len() - 1], CompSide::Left, radius);
-                let out2 = compensate(&back, &tool(radius))
-                    .map_err(|e| TestCaseError::fail(e.to_string()))?;
-                // The path lies on the original contour ...
-                let mut length = 0.0;
-                for (line, piece) in pieces(&out2) {
-                    if line <= entry2 || line >= exit2 {
-                        continue;
-                    }
-                    length += piece.length();
-                    for k in 0..=16 {
-                        let q = piece.at(f64::from(k) / 16.0);
-                        let d = contour_distance(&contour, q);
-                        prop_assert!(
-                            d <= 1e-9,
-                            "line {line} {piece:?} at {q:?} is {d} off the original"
-                        );
-                    }
+        .run(&(rounded_strategy(), 0.001f64..1.0), |(contour, radius_fraction)| {
+            // No small features: the first pass's entry cuts at most r from the second
+            // half of the first line, the second pass enters in the middle of what is
+            // left and cuts at most r again: r < l/6 leaves some of it.
+            let radius = radius_fraction * 0.15 * contour[0].length();
+            let (program, entry, exit) = loop_program(&contour, CompSide::Right, radius);
+            let out = compensate(&program, &tool(radius)).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            check_distance(&contour, &out, radius, entry, exit)?;
+            // The offset loop (tangent everywhere again) without the entry and exit.
+            let offset: Vec<Piece> =
+                pieces(&out).into_iter().filter(|(l, _)| *l > entry && *l < exit).map(|(_, p)| p).collect();
+            prop_assert_eq!(offset.len(), contour.len() + 1, "a tangent loop gets no corner arcs");
+            // Without its last piece (the rest of the first line), the loop runs from
+            // the middle of its first piece round to there again.
+            let (back, entry2, exit2) = loop_program(&offset[..offset.len() - 1], CompSide::Left, radius);
+            let out2 = compensate(&back, &tool(radius)).map_err(|e| TestCaseError::fail(e.to_string()))?;
+            // The path lies on the original contour ...
+            let mut length = 0.0;
+            for (line, piece) in pieces(&out2) {
+                if line <= entry2 || line >= exit2 {
+                    continue;
                 }
-                // ... and covers it, less what the entry and exit cut back.
-                let perimeter: f64 = contour.iter().map(Piece::length).sum();
-                prop_assert!(
-                    length >= perimeter - 4.0 * radius - 1e-7 && length <= perimeter + 1e-7,
-                    "{length} vs {perimeter}"
-                );
-                Ok(())
-            },
-        )
+                length += piece.length();
+                for k in 0..=16 {
+                    let q = piece.at(f64::from(k) / 16.0);
+                    let d = contour_distance(&contour, q);
+                    prop_assert!(d <= 1e-9, "line {line} {piece:?} at {q:?} is {d} off the original");
+                }
+            }
+            // ... and covers it, less what the entry and exit cut back.
+            let perimeter: f64 = contour.iter().map(Piece::length).sum();
+            prop_assert!(
+                length >= perimeter - 4.0 * radius - 1e-7 && length <= perimeter + 1e-7,
+                "{length} vs {perimeter}"
+            );
+            Ok(())
+        })
         .unwrap();
 }
 
@@ -1378,50 +1051,33 @@ fn non_finite_coordinates_do_not_panic() {
 /// an accepted program has finite coordinates.
 #[test]
 fn random_programs_never_panic() {
-    let step = (
-        0u8..8,
-        -20.0f64..20.0,
-        -20.0f64..20.0,
-        -20.0f64..20.0,
-        -20.0f64..20.0,
-        any::<bool>(),
-    );
+    let step = (0u8..8, -20.0f64..20.0, -20.0f64..20.0, -20.0f64..20.0, -20.0f64..20.0, any::<bool>());
     let mut runner = finestep_testkit::runner("cutter_comp_random_programs", 512);
     runner
-        .run(
-            &(proptest::collection::vec(step, 0..30), 0.0f64..5.0),
-            |(steps, radius)| {
-                let mut builder = Builder::default();
-                for (what, x, y, cx, cy, cw) in steps {
-                    match what {
-                        0 => builder.rapid((x, y)),
-                        1 | 2 => builder.line((x, y)),
-                        3 => builder.arc((x, y), (cx, cy), cw),
-                        4 => builder.comp(if cw { CompSide::Left } else { CompSide::Right }),
-                        5 => builder.comp(CompSide::Off),
-                        6 => builder.push(BlockKind::Linear {
-                            to: Point {
-                                x_mm: x,
-                                y_mm: y,
-                                z_mm: cx,
-                                a_deg: cy,
-                            },
-                            feed_mm_per_min: 100.0,
-                        }),
-                        _ => builder.push(BlockKind::Dwell { seconds: 0.1 }),
-                    };
-                }
-                let program = Program {
-                    blocks: builder.blocks,
+        .run(&(proptest::collection::vec(step, 0..30), 0.0f64..5.0), |(steps, radius)| {
+            let mut builder = Builder::default();
+            for (what, x, y, cx, cy, cw) in steps {
+                match what {
+                    0 => builder.rapid((x, y)),
+                    1 | 2 => builder.line((x, y)),
+                    3 => builder.arc((x, y), (cx, cy), cw),
+                    4 => builder.comp(if cw { CompSide::Left } else { CompSide::Right }),
+                    5 => builder.comp(CompSide::Off),
+                    6 => builder.push(BlockKind::Linear {
+                        to: Point { x_mm: x, y_mm: y, z_mm: cx, a_deg: cy },
+                        feed_mm_per_min: 100.0,
+                    }),
+                    _ => builder.push(BlockKind::Dwell { seconds: 0.1 }),
                 };
-                if let Ok(out) = compensate(&program, &tool(radius)) {
-                    for kind in moves(&out) {
-                        let p = end_of(&kind);
-                        prop_assert!(p.x_mm.is_finite() && p.y_mm.is_finite(), "{kind:?}");
-                    }
+            }
+            let program = Program { blocks: builder.blocks };
+            if let Ok(out) = compensate(&program, &tool(radius)) {
+                for kind in moves(&out) {
+                    let p = end_of(&kind);
+                    prop_assert!(p.x_mm.is_finite() && p.y_mm.is_finite(), "{kind:?}");
                 }
-                Ok(())
-            },
-        )
+            }
+            Ok(())
+        })
         .unwrap();
 }

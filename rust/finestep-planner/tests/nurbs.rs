@@ -44,7 +44,12 @@ fn to_f64(x: &BigRational) -> f64 {
 
 /// N_{i,k}(u) and their derivatives for every i, exactly, by the Cox-de Boor
 /// recursion on rationals (the end of the domain belongs to the last span).
-fn exact_basis(knots: &[BigRational], order: usize, count: usize, u: &BigRational) -> (Vec<BigRational>, Vec<BigRational>) {
+fn exact_basis(
+    knots: &[BigRational],
+    order: usize,
+    count: usize,
+    u: &BigRational,
+) -> (Vec<BigRational>, Vec<BigRational>) {
     let zero = BigRational::from_integer(BigInt::from(0));
     let one = BigRational::from_integer(BigInt::from(1));
     let end = &knots[count];
@@ -53,7 +58,13 @@ fn exact_basis(knots: &[BigRational], order: usize, count: usize, u: &BigRationa
         last_span -= 1;
     }
     let mut b: Vec<BigRational> = (0..knots.len() - 1)
-        .map(|i| if (&knots[i] <= u && u < &knots[i + 1]) || (u >= end && i == last_span) { one.clone() } else { zero.clone() })
+        .map(|i| {
+            if (&knots[i] <= u && u < &knots[i + 1]) || (u >= end && i == last_span) {
+                one.clone()
+            } else {
+                zero.clone()
+            }
+        })
         .collect();
     let mut d = vec![zero.clone(); b.len()];
     for k in 2..=order {
@@ -107,7 +118,11 @@ fn exact_point(points: &[(f64, f64, f64)], knots: &[f64], order: usize, u: f64) 
 #[test]
 fn de_boor_agrees_with_exact_rational_evaluation() {
     let curve = (2usize..=5).prop_flat_map(|order| {
-        (Just(order), prop::collection::vec((-50.0..50.0f64, -50.0..50.0f64, 0.2..5.0f64), order..order + 8), prop::collection::vec(0.0..1.0f64, 8))
+        (
+            Just(order),
+            prop::collection::vec((-50.0..50.0f64, -50.0..50.0f64, 0.2..5.0f64), order..order + 8),
+            prop::collection::vec(0.0..1.0f64, 8),
+        )
     });
     let mut runner = finestep_testkit::runner("de_boor_agrees_with_exact_rational_evaluation", 64);
     let worst = std::cell::Cell::new((0.0f64, 0.0f64));
@@ -122,7 +137,8 @@ fn de_boor_agrees_with_exact_rational_evaluation() {
                 let d = curve.derivatives(u);
                 let p = curve.point(u);
                 let size = 100.0;
-                let point_error = (d.point[0] - point[0]).hypot(d.point[1] - point[1]).max((p[0] - point[0]).hypot(p[1] - point[1]));
+                let point_error =
+                    (d.point[0] - point[0]).hypot(d.point[1] - point[1]).max((p[0] - point[0]).hypot(p[1] - point[1]));
                 let speed = first[0].hypot(first[1]).max(1.0);
                 let first_error = (d.first[0] - first[0]).hypot(d.first[1] - first[1]) / speed;
                 prop_assert!(point_error <= 1e-12 * size, "order {order} u {u}: point {:?} vs {point:?}", d.point);
@@ -186,7 +202,10 @@ fn a_quarter_circle_nurbs_is_on_the_circle_at_the_arc_s_feed() {
             let radial = points.iter().map(|p| (p[0].hypot(p[1]) - 10.0).abs()).fold(0.0, f64::max);
             assert!(radial <= rounding + 1e-9, "{profile:?} F{feed}: {radial} mm off the circle");
             // Chord midpoints within the chord tolerance.
-            let sag = points.windows(2).map(|w| 10.0 - (0.5 * (w[0][0] + w[1][0])).hypot(0.5 * (w[0][1] + w[1][1]))).fold(0.0, f64::max);
+            let sag = points
+                .windows(2)
+                .map(|w| 10.0 - (0.5 * (w[0][0] + w[1][0])).hypot(0.5 * (w[0][1] + w[1][1])))
+                .fold(0.0, f64::max);
             assert!(sag <= 0.001 + rounding, "{profile:?} F{feed}: sag {sag}");
             // Period by period at the arc's speed; at cruise the feed or the normal
             // acceleration cap, as a chord per period of 2 r sin(v T / 2 r) / T.
@@ -200,8 +219,16 @@ fn a_quarter_circle_nurbs_is_on_the_circle_at_the_arc_s_feed() {
             // Cruising: the period and both neighbours within 1e-3 of the cruise speed (a
             // period where a ramp ends is not).
             let near = |v: f64| (v / chord_speed - 1.0).abs() < 1e-3;
-            let cruising: Vec<f64> = (1..speeds.len() - 1).filter(|&k| (k - 1..=k + 1).all(|i| near(arc_speeds[i]))).map(|k| speeds[k]).collect();
-            assert!(cruising.len() * 5 > speeds.len(), "{profile:?} F{feed}: {} of {} periods at speed", cruising.len(), speeds.len());
+            let cruising: Vec<f64> = (1..speeds.len() - 1)
+                .filter(|&k| (k - 1..=k + 1).all(|i| near(arc_speeds[i])))
+                .map(|k| speeds[k])
+                .collect();
+            assert!(
+                cruising.len() * 5 > speeds.len(),
+                "{profile:?} F{feed}: {} of {} periods at speed",
+                cruising.len(),
+                speeds.len()
+            );
             let feed_error = cruising.iter().map(|v| (v / chord_speed - 1.0).abs()).fold(0.0, f64::max);
             // (An S-curve on this short arc may peak a hair below the cap.)
             if profile == ProfileKind::Trapezoid {
@@ -238,7 +265,10 @@ fn the_chord_tolerance_limits_the_speed_on_a_tight_curve() {
         let (planned, report) = plan_and_check("tight.ngc", &program, &config);
         let (points, speeds) = positions_and_speeds(&planned, &config);
         let on: Vec<usize> = (0..points.len()).filter(|&k| planned.lines[k] == 6).collect();
-        let sag = on.windows(2).map(|k| 1.0 - (0.5 * (points[k[0]][0] + points[k[1]][0])).hypot(0.5 * (points[k[0]][1] + points[k[1]][1]))).fold(0.0, f64::max);
+        let sag = on
+            .windows(2)
+            .map(|k| 1.0 - (0.5 * (points[k[0]][0] + points[k[1]][0])).hypot(0.5 * (points[k[0]][1] + points[k[1]][1])))
+            .fold(0.0, f64::max);
         let fastest = on.iter().map(|&k| speeds[k]).fold(0.0, f64::max);
         let rounding = 2f64.sqrt() * 0.5 / 65536.0 / 800.0;
         assert!(sag <= 0.001 + rounding && sag > 0.0009, "{profile:?}: sag {sag} mm");
@@ -252,7 +282,8 @@ fn every_parameter_step_covers_the_arc_length_asked_for() {
     // The cursor alone on a free-form rational cubic, 0.05 mm (3 m/min at 1 ms) a step:
     // each step's arc length (measured by a finer quadrature) is the one asked for, and
     // the sum over a span is its length; the Taylor step alone is off by far more.
-    let points = [(0.0, 0.0, 1.0), (5.0, 12.0, 3.0), (15.0, -8.0, 0.3), (25.0, 10.0, 1.0), (30.0, 0.0, 2.0), (40.0, 5.0, 1.0)];
+    let points =
+        [(0.0, 0.0, 1.0), (5.0, 12.0, 3.0), (15.0, -8.0, 0.3), (25.0, 10.0, 1.0), (30.0, 0.0, 2.0), (40.0, 5.0, 1.0)];
     let knots = finestep_gcode::nurbs_knots(points.len(), 4);
     let curve = NurbsCurve::new(&points, 3, &knots, [0.0; 4]).unwrap();
     let (mut worst_step, mut worst_taylor, mut worst_end) = (0.0f64, 0.0f64, 0.0f64);
@@ -292,7 +323,12 @@ fn a_free_form_cubic_ends_exactly_and_stays_on_the_curve() {
     let (points, _) = positions_and_speeds(&planned, &config);
     assert_eq!(points.last().copied(), Some([40.0, 5.0]));
     assert!(report.max_deviation <= 0.001 + 0.001, "{}", report.max_deviation);
-    eprintln!("free-form cubic: {} periods, checker deviation {:.2e} mm, feed ratio {:.6}", planned.records.len(), report.max_deviation, report.max_feed_ratio);
+    eprintln!(
+        "free-form cubic: {} periods, checker deviation {:.2e} mm, feed ratio {:.6}",
+        planned.records.len(),
+        report.max_deviation,
+        report.max_feed_ratio
+    );
 }
 
 #[test]
@@ -324,13 +360,25 @@ fn a_nurbs_with_cutter_compensation_or_a_cusp_is_refused() {
     // by the compensation pass, never cut without its offset.
     use finestep_gcode::{Block, BlockKind, CompSide, NurbsPoint, Point};
     let point = |x_mm: f64, y_mm: f64| Point { x_mm, y_mm, z_mm: 0.0, a_deg: 0.0 };
-    let control_points = vec![NurbsPoint { x_mm: 5.0, y_mm: 0.0, weight: 1.0 }, NurbsPoint { x_mm: 5.0, y_mm: 5.0, weight: 1.0 }, NurbsPoint { x_mm: 0.0, y_mm: 5.0, weight: 1.0 }];
+    let control_points = vec![
+        NurbsPoint { x_mm: 5.0, y_mm: 0.0, weight: 1.0 },
+        NurbsPoint { x_mm: 5.0, y_mm: 5.0, weight: 1.0 },
+        NurbsPoint { x_mm: 0.0, y_mm: 5.0, weight: 1.0 },
+    ];
     let kinds = [
         BlockKind::CutterComp { side: CompSide::Left, tool: Some(1) },
         BlockKind::Linear { to: point(5.0, 0.0), feed_mm_per_min: 600.0 },
-        BlockKind::Nurbs { to: point(0.0, 5.0), control_points, order: 3, knots: finestep_gcode::nurbs_knots(3, 3), feed_mm_per_min: 600.0 },
+        BlockKind::Nurbs {
+            to: point(0.0, 5.0),
+            control_points,
+            order: 3,
+            knots: finestep_gcode::nurbs_knots(3, 3),
+            feed_mm_per_min: 600.0,
+        },
     ];
-    let program = Program { blocks: kinds.into_iter().enumerate().map(|(i, kind)| Block { line: i + 1, n: None, kind }).collect() };
+    let program = Program {
+        blocks: kinds.into_iter().enumerate().map(|(i, kind)| Block { line: i + 1, n: None, kind }).collect(),
+    };
     let error = plan_program(&config, &program).unwrap_err();
     assert_eq!(error.line, 3, "{error}");
     assert!(error.reason.contains("not offset"), "{error}");
@@ -344,8 +392,8 @@ fn a_nurbs_with_cutter_compensation_or_a_cusp_is_refused() {
 /// G61.
 fn random_nurbs_program() -> impl Strategy<Value = String> {
     let point = (-20.0..20.0f64, -20.0..20.0f64, 0.2..5.0f64, 0u8..10);
-    (2u32..=4, prop::collection::vec(point, 1..10), 600.0..6000.0f64, any::<bool>(), 0.2..5.0f64)
-        .prop_map(|(order, points, feed, exact, first_weight)| {
+    (2u32..=4, prop::collection::vec(point, 1..10), 600.0..6000.0f64, any::<bool>(), 0.2..5.0f64).prop_map(
+        |(order, points, feed, exact, first_weight)| {
             let mut text = format!("G21 G90 G17 {}\nG1 X1 Y2 F{feed:.0}\n", if exact { "G61" } else { "G64 P0.01" });
             text.push_str(&format!("G5.2 P{first_weight:.3} L{order}\n"));
             let (mut last_x, mut last_y) = (1.0, 2.0);
@@ -356,14 +404,17 @@ fn random_nurbs_program() -> impl Strategy<Value = String> {
             }
             text.push_str("G5.3\nG1 X0 Y0\nM2\n");
             text
-        })
+        },
+    )
 }
 
 #[test]
 fn random_nurbs_on_random_machines_plan_or_refuse_and_pass_the_checker() {
-    let axis = (1.5..3.5f64, 1.0..3.0f64, 1.5..4.5f64, 3.0..7.0f64).prop_map(|(s, v, a, j)| (10f64.powf(s), 10f64.powf(v), 10f64.powf(a), 10f64.powf(j)));
+    let axis = (1.5..3.5f64, 1.0..3.0f64, 1.5..4.5f64, 3.0..7.0f64)
+        .prop_map(|(s, v, a, j)| (10f64.powf(s), 10f64.powf(v), 10f64.powf(a), 10f64.powf(j)));
     let machine = (prop::array::uniform2(axis), 0.25..2.0f64, any::<bool>(), 1e-4..0.05f64);
-    let mut runner = finestep_testkit::runner("random_nurbs_on_random_machines_plan_or_refuse_and_pass_the_checker", 32);
+    let mut runner =
+        finestep_testkit::runner("random_nurbs_on_random_machines_plan_or_refuse_and_pass_the_checker", 32);
     let outcomes = std::cell::RefCell::new([0usize; 4]); // parse refused, machine refused, plan refused, planned
     runner
         .run(&(machine, random_nurbs_program()), |((axes, period_ms, scurve, chord_tolerance), text)| {
@@ -376,7 +427,12 @@ fn random_nurbs_on_random_machines_plan_or_refuse_and_pass_the_checker() {
             for (name, (steps, velocity, accel, jerk)) in ["X", "Y"].into_iter().zip(axes) {
                 config.axes.insert(
                     name.to_string(),
-                    finestep_planner::config::AxisLimits { steps_per_unit: steps, max_velocity: velocity, max_acceleration: accel, max_jerk: jerk },
+                    finestep_planner::config::AxisLimits {
+                        steps_per_unit: steps,
+                        max_velocity: velocity,
+                        max_acceleration: accel,
+                        max_jerk: jerk,
+                    },
                 );
             }
             let program = match finestep_gcode::parse_str(&text, "random_nurbs.ngc") {
@@ -413,7 +469,6 @@ fn random_nurbs_on_random_machines_plan_or_refuse_and_pass_the_checker() {
     assert!(outcomes[3] * 3 >= outcomes.iter().sum::<usize>(), "too few random NURBS planned: {outcomes:?}");
 }
 
-
 // ---------------------------------------------------------------------------------
 // The committed NURBS programs (the corpus test plans and checks them too).
 
@@ -426,15 +481,25 @@ fn a_circle_of_four_nurbs_runs_round_at_the_feed() {
         // The four quarters (their G5.3 lines 10, 13, 16, 19), on the circle and at the feed, 50 mm/s:
         // the junctions between them are tangent with equal curvature.
         let on: Vec<usize> = (0..points.len()).filter(|&k| [10, 13, 16, 19].contains(&planned.lines[k])).collect();
-        let radial = on.iter().map(|&k| ((points[k][0] - 50.0).hypot(points[k][1] - 30.0) - 20.0).abs()).fold(0.0, f64::max);
+        let radial =
+            on.iter().map(|&k| ((points[k][0] - 50.0).hypot(points[k][1] - 30.0) - 20.0).abs()).fold(0.0, f64::max);
         assert!(radial < 1e-7, "{profile:?}: {radial} mm off the circle");
         // (S-curve: the curvature jump where the straight lead-in meets the circle holds
         // the speed to about sqrt(0.25 J T R) = 22 mm/s there, as for an arc; the junctions
         // between the quarters have none.)
         let middle: &[usize] = if profile == ProfileKind::Trapezoid { &[10, 13, 16, 19] } else { &[13, 16] };
-        let slowest = on.iter().filter(|&&k| middle.contains(&planned.lines[k])).map(|&k| speeds[k]).fold(f64::INFINITY, f64::min);
+        let slowest = on
+            .iter()
+            .filter(|&&k| middle.contains(&planned.lines[k]))
+            .map(|&k| speeds[k])
+            .fold(f64::INFINITY, f64::min);
         assert!(slowest > 49.99, "{profile:?}: {slowest} mm/s on the circle");
-        assert!(report.max_deviation < 0.0015, "{profile:?}: {} on line {}", report.max_deviation, report.max_deviation_line);
+        assert!(
+            report.max_deviation < 0.0015,
+            "{profile:?}: {} on line {}",
+            report.max_deviation,
+            report.max_deviation_line
+        );
         eprintln!("NURBS circle {profile:?}: {} periods, slowest {slowest:.4} mm/s on the circle, {radial:.1e} mm off it, checker deviation {:.2e} mm", on.len(), report.max_deviation);
     }
 }
@@ -445,7 +510,12 @@ fn a_free_form_contour_of_nurbs_passes_the_checker() {
         let config = config(profile);
         let (planned, report) = plan_and_check("nurbs_contour.ngc", &read("nurbs_contour.ngc"), &config);
         // Only chords and half a step of rounding: no corner is blended.
-        assert!(report.max_deviation < 0.0015, "{profile:?}: {} on line {}", report.max_deviation, report.max_deviation_line);
+        assert!(
+            report.max_deviation < 0.0015,
+            "{profile:?}: {} on line {}",
+            report.max_deviation,
+            report.max_deviation_line
+        );
         assert!(report.max_feed_ratio <= 1.0 + 1e-4, "{profile:?}: {}", report.max_feed_ratio);
         // The order-2 NURBS stops nearly dead at its corners (X0 Y20, 3 periods either side).
         let (points, speeds) = positions_and_speeds(&planned, &config);
@@ -454,8 +524,16 @@ fn a_free_form_contour_of_nurbs_passes_the_checker() {
             d(a).total_cmp(&d(b))
         });
         let k = corner.unwrap();
-        assert!(speeds[k.saturating_sub(3)..=k + 3].iter().any(|&v| v < 1.0), "{profile:?}: {:?}", &speeds[k - 3..=k + 3]);
-        eprintln!("NURBS contour {profile:?}: {} periods, checker deviation {:.2e} mm, feed ratio {:.6}", planned.records.len(), report.max_deviation, report.max_feed_ratio);
+        assert!(
+            speeds[k.saturating_sub(3)..=k + 3].iter().any(|&v| v < 1.0),
+            "{profile:?}: {:?}",
+            &speeds[k - 3..=k + 3]
+        );
+        eprintln!(
+            "NURBS contour {profile:?}: {} periods, checker deviation {:.2e} mm, feed ratio {:.6}",
+            planned.records.len(),
+            report.max_deviation,
+            report.max_feed_ratio
+        );
     }
 }
-

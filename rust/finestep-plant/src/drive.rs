@@ -110,11 +110,7 @@ impl Drive {
             Mechanics::Lag { tau } if (1..=MAX_TAU).contains(&tau) => 1.0 - 1.0 / tau as f64,
             Mechanics::Lag { tau } => return Err(PlantError::Tau { tau }),
         };
-        let anchor = Anchor {
-            cycle: 0,
-            commanded: 0,
-            error: 0.0,
-        };
+        let anchor = Anchor { cycle: 0, commanded: 0, error: 0.0 };
         Ok(Drive {
             config,
             r,
@@ -236,10 +232,7 @@ impl Drive {
         if cycle >= self.current.cycle {
             &self.current
         } else {
-            debug_assert!(
-                cycle >= self.previous.cycle,
-                "drive: cycle {cycle} is before the last input"
-            );
+            debug_assert!(cycle >= self.previous.cycle, "drive: cycle {cycle} is before the last input");
             &self.previous
         }
     }
@@ -346,12 +339,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn drive(input: StepInput, mechanics: Mechanics) -> Drive {
-        Drive::new(DriveConfig {
-            input,
-            mechanics,
-            ..DriveConfig::default()
-        })
-        .unwrap()
+        Drive::new(DriveConfig { input, mechanics, ..DriveConfig::default() }).unwrap()
     }
 
     #[test]
@@ -381,9 +369,8 @@ mod tests {
         assert_eq!(d.commanded(), -1);
 
         let mut d = drive(StepInput::Quadrature, Mechanics::Ideal);
-        for (n, (a, b)) in [(true, false), (true, true), (false, true), (false, false), (true, true)]
-            .into_iter()
-            .enumerate()
+        for (n, (a, b)) in
+            [(true, false), (true, true), (false, true), (false, false), (true, true)].into_iter().enumerate()
         {
             d.input(n as u64 + 1, a, b);
         }
@@ -391,11 +378,7 @@ mod tests {
         assert_eq!(d.commanded(), 4);
         assert_eq!(d.illegal_inputs(), 1);
 
-        let mut d = Drive::new(DriveConfig {
-            invert_a: true,
-            ..DriveConfig::default()
-        })
-        .unwrap();
+        let mut d = Drive::new(DriveConfig { invert_a: true, ..DriveConfig::default() }).unwrap();
         d.input(1, true, true); // pin high = inverted step low: nothing
         d.input(2, false, true); // pin falls = step rises
         d.advance_to(3);
@@ -404,11 +387,7 @@ mod tests {
 
     #[test]
     fn bad_tau_is_an_error() {
-        assert!(Drive::new(DriveConfig {
-            mechanics: Mechanics::Lag { tau: 0 },
-            ..DriveConfig::default()
-        })
-        .is_err());
+        assert!(Drive::new(DriveConfig { mechanics: Mechanics::Lag { tau: 0 }, ..DriveConfig::default() }).is_err());
     }
 
     /// The lag is the per-cycle recurrence `x += (c - x) / tau`, evaluated in closed

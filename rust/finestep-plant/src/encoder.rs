@@ -78,10 +78,9 @@ impl Index {
     fn at(self, count: i64) -> bool {
         match self {
             Index::None => false,
-            Index::PerRev {
-                counts_per_rev,
-                phase,
-            } => (i128::from(count) - i128::from(phase)).rem_euclid(i128::from(counts_per_rev)) == 0,
+            Index::PerRev { counts_per_rev, phase } => {
+                (i128::from(count) - i128::from(phase)).rem_euclid(i128::from(counts_per_rev)) == 0
+            }
             Index::Reference { count: mark } => count == mark,
         }
     }
@@ -137,10 +136,7 @@ impl EncoderConfig {
         EncoderConfig {
             counts_per_step,
             offset: 0,
-            index: Index::PerRev {
-                counts_per_rev,
-                phase: index_phase,
-            },
+            index: Index::PerRev { counts_per_rev, phase: index_phase },
             z_active_low: false,
             faults: Faults::default(),
         }
@@ -167,10 +163,7 @@ impl EncoderConfig {
         }
         if let Some(g) = self.faults.glitches {
             if g.shorter_than < 2 || g.mean_interval == 0 {
-                return Err(PlantError::Glitches {
-                    shorter_than: g.shorter_than,
-                    mean_interval: g.mean_interval,
-                });
+                return Err(PlantError::Glitches { shorter_than: g.shorter_than, mean_interval: g.mean_interval });
             }
         }
         if let Some(one_in) = self.faults.missing_one_in {
@@ -263,11 +256,7 @@ impl Encoder {
             }
             let mut rng = crate::stream(seed, 0, 2 + pin as u64);
             let next = cycle.saturating_add(gap(&mut rng, g.mean_interval));
-            Some(GlitchPin {
-                rng,
-                active: false,
-                next,
-            })
+            Some(GlitchPin { rng, active: false, next })
         });
         let mut encoder = Encoder {
             config,
@@ -423,11 +412,7 @@ impl Encoder {
                 self.faults.first_missing_edge.get_or_insert(t);
             }
         }
-        let delay = if faults.jitter > 0 {
-            self.jitter_rng.random_range(0..=faults.jitter)
-        } else {
-            0
-        };
+        let delay = if faults.jitter > 0 { self.jitter_rng.random_range(0..=faults.jitter) } else { 0 };
         let earliest = self.last_scheduled.map_or(t, |last| last + 1);
         let at = t.saturating_add(delay).max(earliest);
         self.queue.push_back((at, target));
@@ -452,11 +437,7 @@ impl Encoder {
 
 fn ideal_levels(config: &EncoderConfig, count: i64) -> Levels {
     let (a, b) = quadrature(count);
-    Levels {
-        a,
-        b,
-        z: config.index.at(count) ^ config.z_active_low,
-    }
+    Levels { a, b, z: config.index.at(count) ^ config.z_active_low }
 }
 
 /// A gap between glitches: uniform in `1..=2 * mean - 1` (mean `mean`).
@@ -467,7 +448,7 @@ fn gap(rng: &mut Xoshiro256PlusPlus, mean: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testutil::{step_pins, Stepper, StepPlan, X4};
+    use crate::testutil::{step_pins, StepPlan, Stepper, X4};
     use crate::{Drive, DriveConfig, Mechanics};
     use proptest::prelude::*;
 
@@ -502,27 +483,15 @@ mod tests {
                 let k = u64::from(scale.num().div_ceil(scale.den()));
                 let mechanics = match tau {
                     None if k == 1 => Mechanics::Ideal,
-                    tau => Mechanics::Lag {
-                        tau: tau.unwrap_or(1).max(if k > 1 { 3 * k } else { 1 }),
-                    },
+                    tau => Mechanics::Lag { tau: tau.unwrap_or(1).max(if k > 1 { 3 * k } else { 1 }) },
                 };
-                Case {
-                    scale,
-                    mechanics,
-                    plan: plan.stretched(k),
-                    offset,
-                    index,
-                }
+                Case { scale, mechanics, plan: plan.stretched(k), offset, index }
             })
     }
 
     impl Case {
         fn drive(&self) -> Drive {
-            Drive::new(DriveConfig {
-                mechanics: self.mechanics,
-                ..DriveConfig::default()
-            })
-            .unwrap()
+            Drive::new(DriveConfig { mechanics: self.mechanics, ..DriveConfig::default() }).unwrap()
         }
 
         fn config(&self, faults: Faults) -> EncoderConfig {
@@ -592,12 +561,7 @@ mod tests {
 
     /// The cycles in which any pin changed, with the new levels.
     fn changes(levels: &[Levels]) -> Vec<(u64, Levels)> {
-        levels
-            .windows(2)
-            .enumerate()
-            .filter(|(_, w)| w[0] != w[1])
-            .map(|(n, w)| (n as u64 + 1, w[1]))
-            .collect()
+        levels.windows(2).enumerate().filter(|(_, w)| w[0] != w[1]).map(|(n, w)| (n as u64 + 1, w[1])).collect()
     }
 
     /// Jitter delays each change by at most `j` cycles and keeps the order: the same

@@ -86,16 +86,11 @@ impl HandWheel {
     /// A wheel at rest in detent 0 in cycle 0; bounce drawn from `seed`.
     pub fn new(config: HandWheelConfig, seed: u64) -> Result<HandWheel, PlantError> {
         if config.rest_phase > 3 {
-            return Err(PlantError::RestPhase {
-                phase: config.rest_phase,
-            });
+            return Err(PlantError::RestPhase { phase: config.rest_phase });
         }
         if let Some(b) = config.bounce {
             if 2 * u64::from(b.extra) > b.within {
-                return Err(PlantError::Bounce {
-                    extra: b.extra,
-                    within: b.within,
-                });
+                return Err(PlantError::Bounce { extra: b.extra, within: b.within });
             }
         }
         Ok(HandWheel {
@@ -126,38 +121,23 @@ impl HandWheel {
     pub fn turn(&mut self, detents: i64, cycles_per_edge: u64) -> Result<(), PlantError> {
         let within = self.config.bounce.map_or(0, |b| b.within);
         if cycles_per_edge == 0 || cycles_per_edge <= within {
-            return Err(PlantError::EdgeRate {
-                cycles_per_edge,
-                within,
-            });
+            return Err(PlantError::EdgeRate { cycles_per_edge, within });
         }
         if detents == 0 {
             return Ok(());
         }
         let start = self.script_end.max(self.cursor);
         let edges = detents.unsigned_abs().checked_mul(EDGES_PER_DETENT).ok_or(PlantError::ScriptOverflow)?;
-        let end = edges
-            .checked_mul(cycles_per_edge)
-            .and_then(|d| start.checked_add(d))
-            .ok_or(PlantError::ScriptOverflow)?;
-        self.script.push_back(Turn {
-            start,
-            cycles_per_edge,
-            edges,
-            dir: detents.signum(),
-            done: 0,
-        });
+        let end =
+            edges.checked_mul(cycles_per_edge).and_then(|d| start.checked_add(d)).ok_or(PlantError::ScriptOverflow)?;
+        self.script.push_back(Turn { start, cycles_per_edge, edges, dir: detents.signum(), done: 0 });
         self.script_end = end;
         Ok(())
     }
 
     /// Queue a pause of `cycles`.
     pub fn pause(&mut self, cycles: u64) -> Result<(), PlantError> {
-        self.script_end = self
-            .script_end
-            .max(self.cursor)
-            .checked_add(cycles)
-            .ok_or(PlantError::ScriptOverflow)?;
+        self.script_end = self.script_end.max(self.cursor).checked_add(cycles).ok_or(PlantError::ScriptOverflow)?;
         Ok(())
     }
 
@@ -305,10 +285,9 @@ mod tests {
     #[test]
     fn detents_match_a_decoder_with_bounce_filtered() {
         let mut runner = finestep_testkit::runner("detents_match_a_decoder_with_bounce_filtered", 128);
-        let bounce = prop::option::of((0u32..=4, 0u64..=30).prop_map(|(extra, slack)| Bounce {
-            extra,
-            within: 2 * u64::from(extra) + slack,
-        }));
+        let bounce = prop::option::of(
+            (0u32..=4, 0u64..=30).prop_map(|(extra, slack)| Bounce { extra, within: 2 * u64::from(extra) + slack }),
+        );
         let strategy = (bounce, 0u8..=3).prop_flat_map(|(bounce, rest_phase)| {
             let min = bounce.map_or(1, |b| b.within + 1);
             (Just(HandWheelConfig { rest_phase, bounce }), script_strategy(min), any::<u64>())

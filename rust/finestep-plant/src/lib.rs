@@ -145,7 +145,9 @@ pub enum PlantError {
     },
     /// The hand wheel's edges must come at least one cycle apart and after each
     /// edge's bounce has settled.
-    #[error("hand wheel edge every {cycles_per_edge} cycles: must be at least 1 and more than the bounce window {within}")]
+    #[error(
+        "hand wheel edge every {cycles_per_edge} cycles: must be at least 1 and more than the bounce window {within}"
+    )]
     EdgeRate {
         /// Cycles per edge given.
         cycles_per_edge: u64,
@@ -193,10 +195,7 @@ impl CountsPerStep {
             return Err(PlantError::Scale { num, den });
         }
         let g = gcd(num, den);
-        Ok(CountsPerStep {
-            num: num / g,
-            den: den / g,
-        })
+        Ok(CountsPerStep { num: num / g, den: den / g })
     }
 
     /// `n` counts per step.

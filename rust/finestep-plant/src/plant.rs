@@ -6,7 +6,9 @@
 //! axis at their own resolutions: a motor encoder and a linear grating on the same
 //! axis are two channels with different [`CountsPerStep`](crate::CountsPerStep).
 
-use crate::{Drive, DriveConfig, Encoder, EncoderConfig, HandWheel, HandWheelConfig, Levels, PlantError, Probe, ProbeConfig};
+use crate::{
+    Drive, DriveConfig, Encoder, EncoderConfig, HandWheel, HandWheelConfig, Levels, PlantError, Probe, ProbeConfig,
+};
 
 /// Encoder channels the pin masks hold.
 pub const MAX_CHANNELS: usize = 8;
@@ -71,23 +73,12 @@ impl Plant {
     /// The machine at rest in cycle 0, every position 0, faults drawn from `seed`.
     pub fn new(config: PlantConfig, seed: u64) -> Result<Plant, PlantError> {
         use rand::Rng;
-        let drives = config
-            .drives
-            .iter()
-            .map(|&d| Drive::new(d))
-            .collect::<Result<Vec<_>, _>>()?;
+        let drives = config.drives.iter().map(|&d| Drive::new(d)).collect::<Result<Vec<_>, _>>()?;
         if config.channels.len() > MAX_CHANNELS {
-            return Err(PlantError::Channels {
-                channels: config.channels.len(),
-            });
+            return Err(PlantError::Channels { channels: config.channels.len() });
         }
-        let axis = |what: String, axis: usize| {
-            drives.get(axis).ok_or(PlantError::Axis {
-                what,
-                axis,
-                axes: drives.len(),
-            })
-        };
+        let axis =
+            |what: String, axis: usize| drives.get(axis).ok_or(PlantError::Axis { what, axis, axes: drives.len() });
         let sub_seed = |component: u64| crate::stream(seed, component, 0xFFFF).next_u64();
         let mut channels = Vec::with_capacity(config.channels.len());
         for (c, ch) in config.channels.iter().enumerate() {
@@ -102,13 +93,7 @@ impl Plant {
             Some(h) => Some(HandWheel::new(h, sub_seed(HAND_WHEEL_COMPONENT))?),
             None => None,
         };
-        Ok(Plant {
-            cycle: 0,
-            drives,
-            channels,
-            probe,
-            hand_wheel,
-        })
+        Ok(Plant { cycle: 0, drives, channels, probe, hand_wheel })
     }
 
     /// The plant's current cycle.
@@ -136,10 +121,7 @@ impl Plant {
     /// new input comes; `None` if they never change. Exact: each part's answer is exact
     /// and the parts drive different pins.
     pub fn next_change(&self) -> Option<u64> {
-        let encoders = self
-            .channels
-            .iter()
-            .filter_map(|(axis, encoder)| encoder.next_change(&self.drives[*axis]));
+        let encoders = self.channels.iter().filter_map(|(axis, encoder)| encoder.next_change(&self.drives[*axis]));
         let probe = self.probe.iter().filter_map(|(axis, p)| p.next_change(&self.drives[*axis]));
         let wheel = self.hand_wheel.iter().filter_map(HandWheel::next_change);
         encoders.chain(probe).chain(wheel).min()
@@ -272,7 +254,12 @@ mod tests {
                     encoder: EncoderConfig::linear_grating(CountsPerStep::new(2, 5).unwrap(), Some(1)),
                 },
             ],
-            probe: Some(ProbeConfig { axis: 1, counts_per_step: one, touching: vec![3..=4, 9..=30], active_high: true }),
+            probe: Some(ProbeConfig {
+                axis: 1,
+                counts_per_step: one,
+                touching: vec![3..=4, 9..=30],
+                active_high: true,
+            }),
             hand_wheel: Some(HandWheelConfig { rest_phase, bounce: Some(crate::Bounce { extra: 2, within: 9 }) }),
         }
     }
@@ -307,12 +294,19 @@ mod tests {
     #[test]
     fn next_change_is_exact() {
         let mut runner = finestep_testkit::runner("plant_next_change_is_exact", 64);
-        let faults = (0u64..=3, any::<bool>(), prop::option::of(2u32..=12)).prop_map(|(jitter, glitch, missing)| Faults {
-            jitter,
-            glitches: glitch.then_some(Glitches { a: true, b: false, z: true, shorter_than: 3, mean_interval: 400 }),
-            missing_one_in: missing,
-            swap_ab: false,
-        });
+        let faults =
+            (0u64..=3, any::<bool>(), prop::option::of(2u32..=12)).prop_map(|(jitter, glitch, missing)| Faults {
+                jitter,
+                glitches: glitch.then_some(Glitches {
+                    a: true,
+                    b: false,
+                    z: true,
+                    shorter_than: 3,
+                    mean_interval: 400,
+                }),
+                missing_one_in: missing,
+                swap_ab: false,
+            });
         let turns = prop::collection::vec((0u64..=3000, -3i64..=3, 10u64..=30), 0..=4);
         let strategy = (12u64..=200, faults, 0u8..=3, plan_strategy(), turns, any::<u64>());
         runner
@@ -321,8 +315,7 @@ mod tests {
                 let pins = core_pins(&plans);
                 let end = pins.last().map_or(0, |p| p.0).max(3000) + 40 * tau + 4 * 30 * 12;
                 // Inputs: core pin words and hand wheel turns, in cycle order.
-                let mut inputs: Vec<TimedInput> =
-                    pins.iter().map(|&(t, w)| (t, Some(w), None)).collect();
+                let mut inputs: Vec<TimedInput> = pins.iter().map(|&(t, w)| (t, Some(w), None)).collect();
                 inputs.extend(turns.iter().map(|&(t, d, cpe)| (t, None, Some((d, cpe)))));
                 inputs.sort_by_key(|i| (i.0, i.1.is_none()));
                 let apply = |plant: &mut Plant, input: &TimedInput| {

@@ -39,12 +39,8 @@ pub struct Probe {
 impl Probe {
     /// A probe following `motion` from `cycle`.
     pub fn new(config: &ProbeConfig, motion: &impl Motion, cycle: u64) -> Probe {
-        let mut ranges: Vec<(i64, i64)> = config
-            .touching
-            .iter()
-            .filter(|r| !r.is_empty())
-            .map(|r| (*r.start(), *r.end()))
-            .collect();
+        let mut ranges: Vec<(i64, i64)> =
+            config.touching.iter().filter(|r| !r.is_empty()).map(|r| (*r.start(), *r.end())).collect();
         ranges.sort_unstable();
         let mut merged: Vec<(i64, i64)> = Vec::with_capacity(ranges.len());
         for (lo, hi) in ranges {

@@ -36,9 +36,7 @@ impl StepPlan {
 
     /// `n` positive steps `gap` cycles apart.
     pub fn forward(n: usize, gap: u64) -> StepPlan {
-        StepPlan {
-            steps: vec![(gap, true); n],
-        }
+        StepPlan { steps: vec![(gap, true); n] }
     }
 
     /// Gaps multiplied by `k`.
@@ -90,11 +88,7 @@ pub struct Stepper {
 
 impl Stepper {
     pub fn new(drive: Drive, plan: &StepPlan) -> Stepper {
-        Stepper {
-            drive,
-            pins: step_pins(plan),
-            next: 0,
-        }
+        Stepper { drive, pins: step_pins(plan), next: 0 }
     }
 
     pub fn drive(&self) -> &Drive {

@@ -111,18 +111,11 @@ pub fn check_docs(root: &Path) -> Result<(), DocsCheckError> {
     let map = load_map(root)?;
     let expected = markdown::generate(&map);
     let path = root.join(DOCS_PATH);
-    let found = std::fs::read_to_string(&path).map_err(|source| DocsCheckError::Unreadable {
-        path: path.clone(),
-        source,
-    })?;
+    let found =
+        std::fs::read_to_string(&path).map_err(|source| DocsCheckError::Unreadable { path: path.clone(), source })?;
     match first_difference(&expected, &found) {
         None => Ok(()),
-        Some((line, expected, found)) => Err(DocsCheckError::Stale {
-            path,
-            line,
-            expected,
-            found,
-        }),
+        Some((line, expected, found)) => Err(DocsCheckError::Stale { path, line, expected, found }),
     }
 }
 
@@ -150,14 +143,8 @@ mod tests {
     #[test]
     fn first_difference_names_the_line() {
         assert_eq!(first_difference("a\nb\n", "a\nb\n"), None);
-        assert_eq!(
-            first_difference("a\nb\nc\n", "a\nx\nc\n"),
-            Some((2, "b".to_string(), "x".to_string()))
-        );
+        assert_eq!(first_difference("a\nb\nc\n", "a\nx\nc\n"), Some((2, "b".to_string(), "x".to_string())));
         // A missing final newline is a difference too.
-        assert_eq!(
-            first_difference("a\n", "a"),
-            Some((2, String::new(), "(end of file)".to_string()))
-        );
+        assert_eq!(first_difference("a\n", "a"), Some((2, String::new(), "(end of file)".to_string())));
     }
 }

@@ -36,9 +36,7 @@ pub fn generate(map: &MapSpec) -> String {
 
     out.push_str("## Address map\n\n| address | register | reset | description |\n| --- | --- | --- | --- |\n");
     for register in &map.registers {
-        let reset = register
-            .reset_word()
-            .map_or_else(|| "-".to_string(), |word| format!("{word:#010x}"));
+        let reset = register.reset_word().map_or_else(|| "-".to_string(), |word| format!("{word:#010x}"));
         let _ = writeln!(
             out,
             "| {} | [{}](#{}) | {reset} | {} |",
@@ -68,9 +66,7 @@ pub fn generate(map: &MapSpec) -> String {
                 bit_range(field),
                 field.name,
                 field.access,
-                field
-                    .value_after_reset()
-                    .map_or_else(|| "-".to_string(), number),
+                field.value_after_reset().map_or_else(|| "-".to_string(), number),
                 cell(&field.description)
             );
         }
@@ -91,16 +87,8 @@ fn addresses(register: &RegisterSpec) -> String {
     match register.array {
         None => format!("{:#04x}", register.address),
         Some(array) => {
-            let step = if array.stride == 1 {
-                "i".to_string()
-            } else {
-                format!("{}i", array.stride)
-            };
-            format!(
-                "{:#04x} + {step} (i = 0..{})",
-                register.address,
-                array.count - 1
-            )
+            let step = if array.stride == 1 { "i".to_string() } else { format!("{}i", array.stride) };
+            format!("{:#04x} + {step} (i = 0..{})", register.address, array.count - 1)
         }
     }
 }

@@ -15,15 +15,10 @@ pub fn generate(map: &MapSpec) -> String {
     let mut out = String::new();
     let version = map.version;
     // Writing to a String cannot fail; the `let _ =` are for that.
-    out.push_str(
-        "// Generated from hdl/registers.toml by finestep-regmap's build.rs; do not edit.\n\n",
-    );
+    out.push_str("// Generated from hdl/registers.toml by finestep-regmap's build.rs; do not edit.\n\n");
     let _ = writeln!(out, "/// Name of the register map.");
     let _ = writeln!(out, "pub const MAP_NAME: &str = {:?};", map.name);
-    let _ = writeln!(
-        out,
-        "/// Bits of a word address: every address is below `1 << ADDRESS_BITS`."
-    );
+    let _ = writeln!(out, "/// Bits of a word address: every address is below `1 << ADDRESS_BITS`.");
     let _ = writeln!(out, "pub const ADDRESS_BITS: u32 = {};", map.address_bits);
     for (part, meaning, number) in [
         ("MAJOR", "incompatible changes", version.major),
@@ -67,11 +62,7 @@ fn register_module(out: &mut String, register: &RegisterSpec) {
     doc(out, "", &register.description);
     doc(out, "", "");
     match register.array {
-        None => doc(
-            out,
-            "",
-            &format!("Register `{name}`, word address {:#04x}.", register.address),
-        ),
+        None => doc(out, "", &format!("Register `{name}`, word address {:#04x}.", register.address)),
         Some(array) => doc(
             out,
             "",
@@ -93,26 +84,15 @@ fn register_module(out: &mut String, register: &RegisterSpec) {
             let _ = writeln!(out, "    pub const ADDR: u8 = {:#04x};", register.address);
             doc(out, "    ", "Number of elements.");
             let _ = writeln!(out, "    pub const COUNT: usize = {};", array.count);
-            doc(
-                out,
-                "    ",
-                "Address distance between consecutive elements.",
-            );
+            doc(out, "    ", "Address distance between consecutive elements.");
             let _ = writeln!(out, "    pub const STRIDE: u8 = {};", array.stride);
             doc(out, "    ", &format!("Word address of `{name}[index]`."));
             doc(out, "    ", "");
             doc(out, "    ", "# Panics");
             doc(out, "    ", "");
-            doc(
-                out,
-                "    ",
-                "If `index >= COUNT`, like indexing a slice out of range.",
-            );
+            doc(out, "    ", "If `index >= COUNT`, like indexing a slice out of range.");
             let _ = writeln!(out, "    pub const fn addr(index: usize) -> u8 {{");
-            let _ = writeln!(
-                out,
-                "        assert!(index < COUNT, \"{name} index out of range\");"
-            );
+            let _ = writeln!(out, "        assert!(index < COUNT, \"{name} index out of range\");");
             // The map validation guarantees the last element's address fits in a u8.
             let _ = writeln!(out, "        ADDR + index as u8 * STRIDE");
             let _ = writeln!(out, "    }}");
@@ -153,26 +133,14 @@ fn field_items(out: &mut String, field: &FieldSpec) {
     }
     summary.push('.');
     doc(out, "    ", &summary);
-    let _ = writeln!(
-        out,
-        "    pub const {name}: Field = Field {{ lsb: {}, width: {} }};",
-        field.lsb, field.width
-    );
+    let _ = writeln!(out, "    pub const {name}: Field = Field {{ lsb: {}, width: {} }};", field.lsb, field.width);
     if let Some(reset) = field.reset {
         let _ = writeln!(out, "    /// Value of [`{name}`] after reset.");
-        let _ = writeln!(
-            out,
-            "    pub const {}: u32 = {reset:#x};",
-            naming::rust_reset(field)
-        );
+        let _ = writeln!(out, "    pub const {}: u32 = {reset:#x};", naming::rust_reset(field));
     }
     if let Some(value) = field.value {
         let _ = writeln!(out, "    /// The value [`{name}`] always reads.");
-        let _ = writeln!(
-            out,
-            "    pub const {}: u32 = {value:#x};",
-            naming::rust_value(field)
-        );
+        let _ = writeln!(out, "    pub const {}: u32 = {value:#x};", naming::rust_value(field));
     }
 }
 

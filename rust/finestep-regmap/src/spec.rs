@@ -39,13 +39,8 @@ pub enum Access {
 
 impl Access {
     /// Every access type, in the order the legend lists them.
-    pub const ALL: [Access; 5] = [
-        Access::ReadOnly,
-        Access::ReadWrite,
-        Access::Pulse,
-        Access::WriteOnly,
-        Access::WriteOneToClear,
-    ];
+    pub const ALL: [Access; 5] =
+        [Access::ReadOnly, Access::ReadWrite, Access::Pulse, Access::WriteOnly, Access::WriteOneToClear];
 
     /// The keyword the map file uses (`ro`, `rw`, `pulse`, `wo`, `w1c`).
     pub const fn keyword(self) -> &'static str {
@@ -62,22 +57,16 @@ impl Access {
     pub const fn meaning(self) -> &'static str {
         match self {
             Access::ReadOnly => "read-only, a hardware value",
-            Access::ReadWrite => {
-                "read/write, holds what the host wrote; the reset column is its value after reset"
-            }
+            Access::ReadWrite => "read/write, holds what the host wrote; the reset column is its value after reset",
             Access::Pulse => "write-only: writing 1 acts once, writing 0 does nothing; reads 0",
             Access::WriteOnly => "write-only data: every write acts once with the value written; reads 0",
-            Access::WriteOneToClear => {
-                "set by hardware (sticky), cleared by writing 1; reads the flag"
-            }
+            Access::WriteOneToClear => "set by hardware (sticky), cleared by writing 1; reads the flag",
         }
     }
 
     /// The access type for a map keyword, or `None` for an unknown one.
     pub fn from_keyword(keyword: &str) -> Option<Access> {
-        Access::ALL
-            .into_iter()
-            .find(|access| access.keyword() == keyword)
+        Access::ALL.into_iter().find(|access| access.keyword() == keyword)
     }
 }
 
@@ -194,18 +183,12 @@ impl RegisterSpec {
     /// value then (see [`FieldSpec::value_after_reset`]); unmapped bits read 0.
     /// `None` when some field is a hardware value.
     pub fn reset_word(&self) -> Option<u32> {
-        self.fields.iter().try_fold(0, |word, field| {
-            field
-                .value_after_reset()
-                .map(|value| word | (value << field.lsb))
-        })
+        self.fields.iter().try_fold(0, |word, field| field.value_after_reset().map(|value| word | (value << field.lsb)))
     }
 
     /// Whether some field is `rw`.
     pub fn has_writable_state(&self) -> bool {
-        self.fields
-            .iter()
-            .any(|field| field.access == Access::ReadWrite)
+        self.fields.iter().any(|field| field.access == Access::ReadWrite)
     }
 }
 
@@ -401,27 +384,19 @@ impl SpecError {
 }
 
 fn list(problems: &[Problem]) -> String {
-    problems
-        .iter()
-        .map(|problem| format!("\n  {problem}"))
-        .collect()
+    problems.iter().map(|problem| format!("\n  {problem}")).collect()
 }
 
 /// Reads and validates the map file at `path`.
 pub fn load(path: &Path) -> Result<MapSpec, SpecError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SpecError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = std::fs::read_to_string(path).map_err(|source| SpecError::Read { path: path.to_path_buf(), source })?;
     parse(&text, &path.display().to_string())
 }
 
 /// Parses and validates map text; `origin` names it in error messages.
 pub fn parse(text: &str, origin: &str) -> Result<MapSpec, SpecError> {
-    let raw: RawMap = toml::from_str(text).map_err(|source| SpecError::Syntax {
-        origin: origin.to_string(),
-        source,
-    })?;
+    let raw: RawMap =
+        toml::from_str(text).map_err(|source| SpecError::Syntax { origin: origin.to_string(), source })?;
     let mut checker = Checker::default();
     let map = checker.map(raw);
     if checker.problems.is_empty() {
@@ -430,10 +405,7 @@ pub fn parse(text: &str, origin: &str) -> Result<MapSpec, SpecError> {
     if checker.problems.is_empty() {
         Ok(map)
     } else {
-        Err(SpecError::Invalid {
-            origin: origin.to_string(),
-            problems: checker.problems,
-        })
+        Err(SpecError::Invalid { origin: origin.to_string(), problems: checker.problems })
     }
 }
 
@@ -487,11 +459,10 @@ struct RawField {
 /// Rust keywords (strict, reserved and edition-dependent): a register whose lower-case
 /// name is one of these cannot be a module.
 const RUST_KEYWORDS: &[&str] = &[
-    "abstract", "as", "async", "await", "become", "box", "break", "const", "continue", "crate",
-    "do", "dyn", "else", "enum", "extern", "false", "final", "fn", "for", "gen", "if", "impl",
-    "in", "let", "loop", "macro", "match", "mod", "move", "mut", "override", "priv", "pub", "ref",
-    "return", "self", "static", "struct", "super", "trait", "true", "try", "type", "typeof",
-    "union", "unsafe", "unsized", "use", "virtual", "where", "while", "yield",
+    "abstract", "as", "async", "await", "become", "box", "break", "const", "continue", "crate", "do", "dyn", "else",
+    "enum", "extern", "false", "final", "fn", "for", "gen", "if", "impl", "in", "let", "loop", "macro", "match", "mod",
+    "move", "mut", "override", "priv", "pub", "ref", "return", "self", "static", "struct", "super", "trait", "true",
+    "try", "type", "typeof", "union", "unsafe", "unsized", "use", "virtual", "where", "while", "yield",
 ];
 
 /// Verilog-2005 constants are plain `integer`s: keep numbers that end up in one signed.
@@ -504,10 +475,7 @@ struct Checker {
 
 impl Checker {
     fn report(&mut self, place: &Place, message: String) {
-        self.problems.push(Problem {
-            place: place.clone(),
-            message,
-        });
+        self.problems.push(Problem { place: place.clone(), message });
     }
 
     /// Converts the raw map, reporting every rule that one item alone can break.
@@ -536,27 +504,15 @@ impl Checker {
         if raw.registers.is_empty() {
             self.report(&place, "the map has no [[register]]".to_string());
         }
-        let registers = raw
-            .registers
-            .into_iter()
-            .map(|register| self.register(register, address_bits))
-            .collect();
-        MapSpec {
-            name: raw.name,
-            address_bits,
-            version,
-            registers,
-        }
+        let registers = raw.registers.into_iter().map(|register| self.register(register, address_bits)).collect();
+        MapSpec { name: raw.name, address_bits, version, registers }
     }
 
     fn version_part(&mut self, value: &i64, part: &str) -> u32 {
         if (0..=MAX_VERILOG_INTEGER).contains(value) {
             *value as u32
         } else {
-            self.report(
-                &Place::Map,
-                format!("version.{part} {value} is outside 0..={MAX_VERILOG_INTEGER}"),
-            );
+            self.report(&Place::Map, format!("version.{part} {value} is outside 0..={MAX_VERILOG_INTEGER}"));
             0
         }
     }
@@ -566,10 +522,7 @@ impl Checker {
         self.upper_snake(&place, "register name", &raw.name);
         let lower = raw.name.to_ascii_lowercase();
         if RUST_KEYWORDS.contains(&lower.as_str()) {
-            self.report(
-                &place,
-                format!("its Rust module name `{lower}` is a Rust keyword"),
-            );
+            self.report(&place, format!("its Rust module name `{lower}` is a Rust keyword"));
         }
         self.text(&place, "description", &raw.description);
         let address_limit = 1i64 << address_bits;
@@ -591,20 +544,14 @@ impl Checker {
             if !(1..=address_limit).contains(&array.count) {
                 self.report(
                     &place,
-                    format!(
-                        "array count {} is not at least 1 and at most {address_limit}",
-                        array.count
-                    ),
+                    format!("array count {} is not at least 1 and at most {address_limit}", array.count),
                 );
                 count_ok = false;
             }
             if !(1..address_limit).contains(&array.stride) {
                 self.report(
                     &place,
-                    format!(
-                        "array stride {} is not at least 1 and below {address_limit}",
-                        array.stride
-                    ),
+                    format!("array stride {} is not at least 1 and below {address_limit}", array.stride),
                 );
                 count_ok = false;
             }
@@ -623,34 +570,22 @@ impl Checker {
                 }
             }
             if count_ok {
-                ArraySpec {
-                    count: array.count as u32,
-                    stride: array.stride as u32,
-                }
+                ArraySpec { count: array.count as u32, stride: array.stride as u32 }
             } else {
-                ArraySpec {
-                    count: 1,
-                    stride: 1,
-                }
+                ArraySpec { count: 1, stride: 1 }
             }
         });
         if raw.fields.is_empty() {
             self.report(&place, "has no fields".to_string());
         }
-        let checked: Vec<(FieldSpec, bool)> = raw
-            .fields
-            .into_iter()
-            .map(|field| self.field(&raw.name, field))
-            .collect();
+        let checked: Vec<(FieldSpec, bool)> =
+            raw.fields.into_iter().map(|field| self.field(&raw.name, field)).collect();
         let mut seen = HashSet::new();
         let mut occupied: Vec<(u32, &FieldSpec)> = Vec::new();
         for (field, placed) in &checked {
             let field_place = Place::field(&raw.name, &field.name);
             if !seen.insert(field.name.as_str()) {
-                self.report(
-                    &field_place,
-                    "the name appears twice in this register".to_string(),
-                );
+                self.report(&field_place, "the name appears twice in this register".to_string());
             }
             // A field whose bits are already reported as wrong has no place to overlap.
             if !placed {
@@ -660,12 +595,7 @@ impl Checker {
                 if mask & field.mask() != 0 {
                     self.report(
                         &field_place,
-                        format!(
-                            "bits {} overlap field {} (bits {})",
-                            bit_range(field),
-                            other.name,
-                            bit_range(other)
-                        ),
+                        format!("bits {} overlap field {} (bits {})", bit_range(field), other.name, bit_range(other)),
                     );
                 }
             }
@@ -687,10 +617,7 @@ impl Checker {
         self.text(&place, "description", &raw.description);
         let word = i64::from(WORD_BITS);
         let geometry = if !(0..word).contains(&raw.lsb) {
-            self.report(
-                &place,
-                format!("lsb {} is outside 0..={}", raw.lsb, word - 1),
-            );
+            self.report(&place, format!("lsb {} is outside 0..={}", raw.lsb, word - 1));
             None
         } else if !(1..=word).contains(&raw.width) {
             self.report(&place, format!("width {} is outside 1..={word}", raw.width));
@@ -698,11 +625,7 @@ impl Checker {
         } else if raw.lsb + raw.width > word {
             self.report(
                 &place,
-                format!(
-                    "bits {}:{} do not fit in a {word}-bit register",
-                    raw.lsb + raw.width - 1,
-                    raw.lsb
-                ),
+                format!("bits {}:{} do not fit in a {word}-bit register", raw.lsb + raw.width - 1, raw.lsb),
             );
             None
         } else {
@@ -711,52 +634,30 @@ impl Checker {
         let access = Access::from_keyword(&raw.access);
         if access.is_none() {
             let known: Vec<&str> = Access::ALL.iter().map(|access| access.keyword()).collect();
-            self.report(
-                &place,
-                format!(
-                    "unknown access `{}` (known: {})",
-                    raw.access,
-                    known.join(", ")
-                ),
-            );
+            self.report(&place, format!("unknown access `{}` (known: {})", raw.access, known.join(", ")));
         }
         if let Some(access) = access {
             if access == Access::ReadWrite && raw.reset.is_none() {
                 self.report(&place, "an rw field needs a `reset` value".to_string());
             }
             if access != Access::ReadWrite && raw.reset.is_some() {
-                self.report(
-                    &place,
-                    format!("`reset` is only for rw fields, this one is {access}"),
-                );
+                self.report(&place, format!("`reset` is only for rw fields, this one is {access}"));
             }
             if access != Access::ReadOnly && raw.value.is_some() {
-                self.report(
-                    &place,
-                    format!("`value` is only for ro fields, this one is {access}"),
-                );
+                self.report(&place, format!("`value` is only for ro fields, this one is {access}"));
             }
         }
         // Fit is only meaningful once the width is known.
         let (reset, value) = match geometry {
-            Some((_, width)) => (
-                self.constant(&place, "reset", raw.reset, width),
-                self.constant(&place, "value", raw.value, width),
-            ),
+            Some((_, width)) => {
+                (self.constant(&place, "reset", raw.reset, width), self.constant(&place, "value", raw.value, width))
+            }
             None => (None, None),
         };
         // Stand-ins for broken parts; a map with any problem is never returned.
         let (lsb, width) = geometry.unwrap_or((0, 1));
         let access = access.unwrap_or(Access::ReadOnly);
-        let field = FieldSpec {
-            name: raw.name,
-            lsb,
-            width,
-            access,
-            reset,
-            value,
-            description: raw.description,
-        };
+        let field = FieldSpec { name: raw.name, lsb, width, access, reset, value, description: raw.description };
         (field, geometry.is_some())
     }
 
@@ -791,10 +692,7 @@ impl Checker {
             self.report(place, format!("{what} is empty"));
         } else if text.chars().any(char::is_control) {
             // Descriptions become one-line comments and table cells.
-            self.report(
-                place,
-                format!("{what} has a line break or control character"),
-            );
+            self.report(place, format!("{what} has a line break or control character"));
         }
     }
 
@@ -803,10 +701,7 @@ impl Checker {
         let mut names = HashSet::new();
         for register in &map.registers {
             if !names.insert(register.name.as_str()) {
-                self.report(
-                    &Place::register(&register.name),
-                    "the name appears twice in the map".to_string(),
-                );
+                self.report(&Place::register(&register.name), "the name appears twice in the map".to_string());
             }
         }
 
@@ -832,8 +727,7 @@ impl Checker {
         let mut verilog_names = BTreeMap::new();
         for (constant, owner) in naming::verilog_constants(map) {
             if let Some(first_owner) = verilog_names.get(&constant) {
-                let message =
-                    format!("its Verilog constant {constant} is also generated for {first_owner}");
+                let message = format!("its Verilog constant {constant} is also generated for {first_owner}");
                 self.report(&owner, message);
             } else {
                 verilog_names.insert(constant, owner);
@@ -887,7 +781,5 @@ pub fn is_upper_snake(name: &str) -> bool {
     name.starts_with(|c: char| c.is_ascii_uppercase())
         && !name.ends_with('_')
         && !name.contains("__")
-        && name
-            .chars()
-            .all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
+        && name.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
 }

@@ -48,28 +48,12 @@ pub fn generate(map: &MapSpec) -> String {
          /* verilator lint_off UNUSEDPARAM */\n\
          \n",
     );
-    let _ = writeln!(
-        out,
-        "localparam integer {} = {address_bits};",
-        naming::VERILOG_ADDR_WIDTH
-    );
-    for (part, number) in [
-        ("MAJOR", version.major),
-        ("MINOR", version.minor),
-        ("PATCH", version.patch),
-    ] {
-        let _ = writeln!(
-            out,
-            "localparam integer {} = {number};",
-            naming::verilog_map_version(part)
-        );
+    let _ = writeln!(out, "localparam integer {} = {address_bits};", naming::VERILOG_ADDR_WIDTH);
+    for (part, number) in [("MAJOR", version.major), ("MINOR", version.minor), ("PATCH", version.patch)] {
+        let _ = writeln!(out, "localparam integer {} = {number};", naming::verilog_map_version(part));
     }
     for register in &map.registers {
-        let _ = writeln!(
-            out,
-            "\n// register {}: {}",
-            register.name, register.description
-        );
+        let _ = writeln!(out, "\n// register {}: {}", register.name, register.description);
         let _ = writeln!(
             out,
             "localparam [{}:0] {} = {};",
@@ -78,12 +62,8 @@ pub fn generate(map: &MapSpec) -> String {
             sized(address_bits, register.address)
         );
         if let Some(array) = register.array {
-            let _ = writeln!(
-                out,
-                "localparam integer {} = {};",
-                naming::verilog_register(register, "COUNT"),
-                array.count
-            );
+            let _ =
+                writeln!(out, "localparam integer {} = {};", naming::verilog_register(register, "COUNT"), array.count);
             let _ = writeln!(
                 out,
                 "localparam integer {} = {};",
@@ -101,12 +81,8 @@ pub fn generate(map: &MapSpec) -> String {
                 field.access,
                 field.description
             );
-            let _ = writeln!(
-                out,
-                "localparam integer {} = {};",
-                naming::verilog_field(register, field, "LSB"),
-                field.lsb
-            );
+            let _ =
+                writeln!(out, "localparam integer {} = {};", naming::verilog_field(register, field, "LSB"), field.lsb);
             let _ = writeln!(
                 out,
                 "localparam integer {} = {};",

@@ -6,10 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn regmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_finestep-regmap"))
-        .args(args)
-        .output()
-        .expect("cannot run finestep-regmap")
+    Command::new(env!("CARGO_BIN_EXE_finestep-regmap")).args(args).output().expect("cannot run finestep-regmap")
 }
 
 fn scratch(test: &str) -> PathBuf {
@@ -27,30 +24,16 @@ fn verilog_and_markdown_write_the_generated_text() {
     let docs = dir.join("registers.md");
     for (command, path) in [("verilog", &header), ("markdown", &docs)] {
         let output = regmap(&[command, path.to_str().unwrap()]);
-        assert!(
-            output.status.success(),
-            "{}",
-            String::from_utf8_lossy(&output.stderr)
-        );
+        assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     }
-    assert_eq!(
-        std::fs::read_to_string(header).unwrap(),
-        verilog::generate(&map)
-    );
-    assert_eq!(
-        std::fs::read_to_string(docs).unwrap(),
-        markdown::generate(&map)
-    );
+    assert_eq!(std::fs::read_to_string(header).unwrap(), verilog::generate(&map));
+    assert_eq!(std::fs::read_to_string(docs).unwrap(), markdown::generate(&map));
 }
 
 #[test]
 fn check_passes_on_this_repository_and_fails_on_stale_docs() {
     let output = regmap(&["check"]);
-    assert!(
-        output.status.success(),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
 
     let root = scratch("stale");
     std::fs::create_dir_all(root.join("hdl")).unwrap();
@@ -60,10 +43,7 @@ fn check_passes_on_this_repository_and_fails_on_stale_docs() {
     let output = regmap(&["check", "--root", root.to_str().unwrap()]);
     assert!(!output.status.success());
     let message = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        message.contains("docs/registers.md is stale: line 1"),
-        "{message}"
-    );
+    assert!(message.contains("docs/registers.md is stale: line 1"), "{message}");
 }
 
 #[test]
@@ -75,17 +55,9 @@ fn an_invalid_map_fails_with_the_problem_not_a_panic() {
     let broken = map.replace("address = 0x50", "address = 0x04");
     assert_ne!(broken, map);
     std::fs::write(root.join(MAP_PATH), broken).unwrap();
-    let output = regmap(&[
-        "verilog",
-        root.join("out.vh").to_str().unwrap(),
-        "--root",
-        root.to_str().unwrap(),
-    ]);
+    let output = regmap(&["verilog", root.join("out.vh").to_str().unwrap(), "--root", root.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(1));
     let message = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        message.contains("register RECORD_PUSH: RECORD_PUSH at address 0x04 overlaps CONTROL"),
-        "{message}"
-    );
+    assert!(message.contains("register RECORD_PUSH: RECORD_PUSH at address 0x04 overlaps CONTROL"), "{message}");
     assert!(!message.contains("panicked"), "{message}");
 }

@@ -33,17 +33,11 @@ fn generated_docs() -> String {
 #[test]
 fn an_edited_line_is_reported_with_its_number_and_the_fix() {
     let edited = generated_docs().replacen("| 0 | RUN | rw | 0 |", "| 0 | RUN | rw | 1 |", 1);
-    let line = edited
-        .lines()
-        .position(|line| line.starts_with("| 0 | RUN | rw | 1 |"))
-        .unwrap()
-        + 1;
+    let line = edited.lines().position(|line| line.starts_with("| 0 | RUN | rw | 1 |")).unwrap() + 1;
     let root = scratch_root("edited", Some(&edited));
     match check_docs(&root) {
         Err(error @ DocsCheckError::Stale { .. }) => {
-            let DocsCheckError::Stale { line: reported, .. } = &error else {
-                unreachable!()
-            };
+            let DocsCheckError::Stale { line: reported, .. } = &error else { unreachable!() };
             assert_eq!(*reported, line);
             let message = error.to_string();
             assert!(message.contains("docs/registers.md is stale"), "{message}");
@@ -57,20 +51,14 @@ fn an_edited_line_is_reported_with_its_number_and_the_fix() {
 fn a_truncated_file_is_stale() {
     let generated = generated_docs();
     let root = scratch_root("truncated", Some(&generated[..generated.len() / 2]));
-    assert!(matches!(
-        check_docs(&root),
-        Err(DocsCheckError::Stale { .. })
-    ));
+    assert!(matches!(check_docs(&root), Err(DocsCheckError::Stale { .. })));
 }
 
 #[test]
 fn a_missing_file_is_reported() {
     let root = scratch_root("missing", None);
     let error = check_docs(&root).unwrap_err();
-    assert!(
-        matches!(error, DocsCheckError::Unreadable { .. }),
-        "{error:?}"
-    );
+    assert!(matches!(error, DocsCheckError::Unreadable { .. }), "{error:?}");
     assert!(error.to_string().contains("generate it with"), "{error}");
 }
 

@@ -3,8 +3,7 @@
 
 use finestep_regmap::spec::{parse, Access, Place, SpecError};
 
-const HEADER: &str =
-    "name = \"test\"\naddress_bits = 7\nversion = { major = 1, minor = 2, patch = 3 }\n";
+const HEADER: &str = "name = \"test\"\naddress_bits = 7\nversion = { major = 1, minor = 2, patch = 3 }\n";
 
 /// A map with the given `[[register]]` tables after a valid header.
 fn map_with(registers: &str) -> String {
@@ -13,9 +12,7 @@ fn map_with(registers: &str) -> String {
 
 /// One plain register with the given fields lines.
 fn register(name: &str, address: u32, fields: &str) -> String {
-    format!(
-        "\n[[register]]\nname = \"{name}\"\naddress = {address}\ndescription = \"d\"\nfields = [\n{fields}\n]\n"
-    )
+    format!("\n[[register]]\nname = \"{name}\"\naddress = {address}\ndescription = \"d\"\nfields = [\n{fields}\n]\n")
 }
 
 fn rw(name: &str, lsb: i64, width: i64, reset: i64) -> String {
@@ -30,9 +27,7 @@ fn ro(name: &str, lsb: i64, width: i64) -> String {
 /// or fails for another reason.
 fn problems(text: &str) -> Vec<String> {
     match parse(text, "test.toml") {
-        Err(error @ SpecError::Invalid { .. }) => {
-            error.problems().iter().map(ToString::to_string).collect()
-        }
+        Err(error @ SpecError::Invalid { .. }) => error.problems().iter().map(ToString::to_string).collect(),
         Err(other) => panic!("expected validation problems, got: {other}"),
         Ok(_) => panic!("the broken map was accepted:\n{text}"),
     }
@@ -44,11 +39,7 @@ fn assert_single_problem(text: &str, place: Place, needle: &str) {
     let found = error.problems();
     assert_eq!(found.len(), 1, "expected one problem, got: {error}");
     assert_eq!(found[0].place, place, "{error}");
-    assert!(
-        found[0].message.contains(needle),
-        "{:?} does not mention {needle:?}",
-        found[0].message
-    );
+    assert!(found[0].message.contains(needle), "{:?} does not mention {needle:?}", found[0].message);
 }
 
 fn syntax_error(text: &str) -> String {
@@ -61,8 +52,7 @@ fn syntax_error(text: &str) -> String {
 
 #[test]
 fn the_repository_map_is_valid() {
-    let map = finestep_regmap::load_map(&finestep_regmap::default_root())
-        .unwrap_or_else(|error| panic!("{error}"));
+    let map = finestep_regmap::load_map(&finestep_regmap::default_root()).unwrap_or_else(|error| panic!("{error}"));
     let control = map.registers.iter().find(|r| r.name == "CONTROL").unwrap();
     assert_eq!(control.address, 0x04);
     assert_eq!(control.fields[2].name, "ESTOP_ACTIVE_HIGH");
@@ -83,27 +73,19 @@ fn a_small_valid_map_parses_to_what_it_says() {
     assert_eq!(control.fields[1].mask(), 0b111_0000);
     assert_eq!(control.reset_word(), None, "STATE is a hardware value");
     let table = &map.registers[1];
-    assert_eq!(
-        table.addresses().collect::<Vec<_>>(),
-        [0x10, 0x12, 0x14, 0x16]
-    );
+    assert_eq!(table.addresses().collect::<Vec<_>>(), [0x10, 0x12, 0x14, 0x16]);
     assert_eq!(table.reset_word(), Some(0xFFFF_FFFF));
 }
 
 #[test]
 fn address_outside_the_address_bits() {
     let text = map_with(&register("FAR", 0x80, &ro("X", 0, 1)));
-    assert_single_problem(
-        &text,
-        Place::register("FAR"),
-        "address 128 is outside 0..=0x7f",
-    );
+    assert_single_problem(&text, Place::register("FAR"), "address 128 is outside 0..=0x7f");
 }
 
 #[test]
 fn address_bits_beyond_a_u8() {
-    let text =
-        map_with(&register("A", 0, &ro("X", 0, 1))).replace("address_bits = 7", "address_bits = 9");
+    let text = map_with(&register("A", 0, &ro("X", 0, 1))).replace("address_bits = 7", "address_bits = 9");
     assert_single_problem(&text, Place::Map, "address_bits 9");
 }
 
@@ -112,11 +94,7 @@ fn array_running_past_the_last_address() {
     let text = map_with(
         "\n[[register]]\nname = \"ARR\"\naddress = 0x7C\narray = { count = 3, stride = 2 }\ndescription = \"d\"\nfields = [ { name = \"X\", lsb = 0, width = 1, access = \"ro\", description = \"d\" } ]\n",
     );
-    assert_single_problem(
-        &text,
-        Place::register("ARR"),
-        "element 2 would be at address 0x80",
-    );
+    assert_single_problem(&text, Place::register("ARR"), "element 2 would be at address 0x80");
 }
 
 #[test]
@@ -153,45 +131,25 @@ fn interleaved_arrays_that_do_not_collide_are_fine() {
     let text = map_with(&format!("{}{}", array("EVEN", 0x20), array("ODD", 0x21)));
     parse(&text, "test.toml").unwrap_or_else(|error| panic!("{error}"));
     let clash = map_with(&format!("{}{}", array("EVEN", 0x20), array("LATE", 0x2E)));
-    assert_single_problem(
-        &clash,
-        Place::register("LATE"),
-        "LATE[0] at address 0x2e overlaps EVEN[7]",
-    );
+    assert_single_problem(&clash, Place::register("LATE"), "LATE[0] at address 0x2e overlaps EVEN[7]");
 }
 
 #[test]
 fn two_registers_at_one_address() {
-    let text = map_with(&format!(
-        "{}{}",
-        register("A", 3, &ro("X", 0, 1)),
-        register("B", 3, &ro("X", 0, 1))
-    ));
+    let text = map_with(&format!("{}{}", register("A", 3, &ro("X", 0, 1)), register("B", 3, &ro("X", 0, 1))));
     assert_single_problem(&text, Place::register("B"), "B at address 0x03 overlaps A");
 }
 
 #[test]
 fn field_past_bit_31() {
     let text = map_with(&register("R", 0, &ro("WIDE", 20, 16)));
-    assert_single_problem(
-        &text,
-        Place::field("R", "WIDE"),
-        "bits 35:20 do not fit in a 32-bit register",
-    );
+    assert_single_problem(&text, Place::field("R", "WIDE"), "bits 35:20 do not fit in a 32-bit register");
 }
 
 #[test]
 fn field_of_zero_width_or_negative_lsb() {
-    assert_single_problem(
-        &map_with(&register("R", 0, &ro("EMPTY", 0, 0))),
-        Place::field("R", "EMPTY"),
-        "width 0",
-    );
-    assert_single_problem(
-        &map_with(&register("R", 0, &ro("NEG", -1, 2))),
-        Place::field("R", "NEG"),
-        "lsb -1",
-    );
+    assert_single_problem(&map_with(&register("R", 0, &ro("EMPTY", 0, 0))), Place::field("R", "EMPTY"), "width 0");
+    assert_single_problem(&map_with(&register("R", 0, &ro("NEG", -1, 2))), Place::field("R", "NEG"), "lsb -1");
 }
 
 #[test]
@@ -230,21 +188,16 @@ fn value_too_big_for_the_field() {
 
 #[test]
 fn reset_and_value_only_where_they_belong() {
-    let rw_without_reset =
-        "  { name = \"F\", lsb = 0, width = 1, access = \"rw\", description = \"d\" }";
-    assert_single_problem(
-        &map_with(&register("R", 0, rw_without_reset)),
-        Place::field("R", "F"),
-        "needs a `reset`",
-    );
-    let ro_with_reset =
-        "  { name = \"F\", lsb = 0, width = 1, access = \"ro\", reset = 0, description = \"d\" }";
+    let rw_without_reset = "  { name = \"F\", lsb = 0, width = 1, access = \"rw\", description = \"d\" }";
+    assert_single_problem(&map_with(&register("R", 0, rw_without_reset)), Place::field("R", "F"), "needs a `reset`");
+    let ro_with_reset = "  { name = \"F\", lsb = 0, width = 1, access = \"ro\", reset = 0, description = \"d\" }";
     assert_single_problem(
         &map_with(&register("R", 0, ro_with_reset)),
         Place::field("R", "F"),
         "`reset` is only for rw fields, this one is ro",
     );
-    let rw_with_value = "  { name = \"F\", lsb = 0, width = 1, access = \"rw\", reset = 0, value = 1, description = \"d\" }";
+    let rw_with_value =
+        "  { name = \"F\", lsb = 0, width = 1, access = \"rw\", reset = 0, value = 1, description = \"d\" }";
     assert_single_problem(
         &map_with(&register("R", 0, rw_with_value)),
         Place::field("R", "F"),
@@ -264,16 +217,9 @@ fn unknown_access_type() {
 
 #[test]
 fn duplicate_names() {
-    let twice = map_with(&format!(
-        "{}{}",
-        register("SAME", 0, &ro("X", 0, 1)),
-        register("SAME", 1, &ro("X", 0, 1))
-    ));
+    let twice = map_with(&format!("{}{}", register("SAME", 0, &ro("X", 0, 1)), register("SAME", 1, &ro("X", 0, 1))));
     let found = problems(&twice);
-    assert!(
-        found.contains(&"register SAME: the name appears twice in the map".to_string()),
-        "{found:?}"
-    );
+    assert!(found.contains(&"register SAME: the name appears twice in the map".to_string()), "{found:?}");
     let fields = format!("{}\n{}", ro("F", 0, 1), ro("F", 1, 1));
     assert_single_problem(
         &map_with(&register("R", 0, &fields)),
@@ -284,29 +230,14 @@ fn duplicate_names() {
 
 #[test]
 fn names_must_be_upper_snake() {
-    for bad in [
-        "Control",
-        "_LEAD",
-        "TRAIL_",
-        "DOUBLE__UNDERSCORE",
-        "9LIVES",
-        "HY-PHEN",
-        "",
-    ] {
+    for bad in ["Control", "_LEAD", "TRAIL_", "DOUBLE__UNDERSCORE", "9LIVES", "HY-PHEN", ""] {
         let text = map_with(&register(bad, 0, &ro("X", 0, 1)));
         let found = problems(&text);
-        assert!(
-            found
-                .iter()
-                .any(|problem| problem.contains("is not UPPER_SNAKE")),
-            "register name {bad:?}: {found:?}"
-        );
+        assert!(found.iter().any(|problem| problem.contains("is not UPPER_SNAKE")), "register name {bad:?}: {found:?}");
         let text = map_with(&register("R", 0, &ro(bad, 0, 1)));
         let found = problems(&text);
         assert!(
-            found
-                .iter()
-                .any(|problem| problem.contains(&format!("field name {bad:?} is not UPPER_SNAKE"))),
+            found.iter().any(|problem| problem.contains(&format!("field name {bad:?} is not UPPER_SNAKE"))),
             "field name {bad:?}: {found:?}"
         );
     }
@@ -324,14 +255,13 @@ fn register_named_like_a_rust_keyword() {
 #[test]
 fn generated_verilog_names_must_not_collide() {
     // FS_A_B_C_LSB would be generated for both.
-    let text = map_with(&format!(
-        "{}{}",
-        register("A", 0, &ro("B_C", 0, 1)),
-        register("A_B", 1, &ro("C", 0, 1))
-    ));
+    let text = map_with(&format!("{}{}", register("A", 0, &ro("B_C", 0, 1)), register("A_B", 1, &ro("C", 0, 1))));
     let found = problems(&text);
     assert!(
-        found.contains(&"register A_B, field C: its Verilog constant FS_A_B_C_LSB is also generated for register A, field B_C".to_string()),
+        found.contains(
+            &"register A_B, field C: its Verilog constant FS_A_B_C_LSB is also generated for register A, field B_C"
+                .to_string()
+        ),
         "{found:?}"
     );
 }
@@ -342,18 +272,14 @@ fn generated_rust_names_must_not_collide() {
     let text = map_with(&register("R", 0, &ro("ADDR", 0, 1)));
     let found = problems(&text);
     assert!(
-        found.iter().any(|problem| problem
-            .contains("its Rust constant r::ADDR is also generated for register R")),
+        found.iter().any(|problem| problem.contains("its Rust constant r::ADDR is also generated for register R")),
         "{found:?}"
     );
     // RUN's reset constant is RUN_RESET.
     let fields = format!("{}\n{}", rw("RUN", 0, 1, 0), ro("RUN_RESET", 1, 1));
     let found = problems(&map_with(&register("R", 0, &fields)));
     assert!(
-        found
-            .iter()
-            .any(|problem| problem
-                .contains("r::RUN_RESET is also generated for register R, field RUN")),
+        found.iter().any(|problem| problem.contains("r::RUN_RESET is also generated for register R, field RUN")),
         "{found:?}"
     );
 }
@@ -361,21 +287,12 @@ fn generated_rust_names_must_not_collide() {
 #[test]
 fn empty_maps_registers_and_descriptions() {
     assert_single_problem(HEADER, Place::Map, "no [[register]]");
-    assert_single_problem(
-        &map_with(&register("R", 0, "")),
-        Place::register("R"),
-        "has no fields",
-    );
+    assert_single_problem(&map_with(&register("R", 0, "")), Place::register("R"), "has no fields");
     let text = map_with(&register("R", 0, &ro("X", 0, 1)))
         .replace("description = \"d\"\nfields", "description = \" \"\nfields");
     assert_single_problem(&text, Place::register("R"), "description is empty");
-    let field =
-        "  { name = \"F\", lsb = 0, width = 1, access = \"ro\", description = \"two\\nlines\" }";
-    assert_single_problem(
-        &map_with(&register("R", 0, field)),
-        Place::field("R", "F"),
-        "line break",
-    );
+    let field = "  { name = \"F\", lsb = 0, width = 1, access = \"ro\", description = \"two\\nlines\" }";
+    assert_single_problem(&map_with(&register("R", 0, field)), Place::field("R", "F"), "line break");
 }
 
 #[test]
@@ -384,22 +301,10 @@ fn every_problem_is_reported_not_just_the_first() {
     let error = parse(&map_with(&register("R", 0, &fields)), "test.toml").unwrap_err();
     let message = error.to_string();
     assert_eq!(error.problems().len(), 3, "{message}");
-    assert!(
-        message.starts_with("test.toml: invalid register map:"),
-        "{message}"
-    );
-    assert!(
-        message.contains("register R, field A: reset 5 does not fit"),
-        "{message}"
-    );
-    assert!(
-        message.contains("register R, field lower: field name \"lower\" is not UPPER_SNAKE"),
-        "{message}"
-    );
-    assert!(
-        message.contains("register R, field lower: lsb 40 is outside 0..=31"),
-        "{message}"
-    );
+    assert!(message.starts_with("test.toml: invalid register map:"), "{message}");
+    assert!(message.contains("register R, field A: reset 5 does not fit"), "{message}");
+    assert!(message.contains("register R, field lower: field name \"lower\" is not UPPER_SNAKE"), "{message}");
+    assert!(message.contains("register R, field lower: lsb 40 is outside 0..=31"), "{message}");
 }
 
 #[test]
@@ -415,23 +320,13 @@ fn malformed_toml_and_unknown_keys_are_syntax_errors_with_a_position() {
     ));
     let message = syntax_error(&typo);
     assert!(message.contains("rest"), "{message}");
-    let missing = map_with(&register(
-        "R",
-        0,
-        "  { name = \"F\", width = 1, access = \"ro\", description = \"d\" }",
-    ));
+    let missing = map_with(&register("R", 0, "  { name = \"F\", width = 1, access = \"ro\", description = \"d\" }"));
     let message = syntax_error(&missing);
     assert!(message.contains("lsb"), "{message}");
 }
 
 #[test]
 fn a_missing_file_is_an_error_naming_it() {
-    let error = finestep_regmap::spec::load(std::path::Path::new("/nonexistent/registers.toml"))
-        .unwrap_err();
-    assert!(
-        error
-            .to_string()
-            .contains("cannot read /nonexistent/registers.toml"),
-        "{error}"
-    );
+    let error = finestep_regmap::spec::load(std::path::Path::new("/nonexistent/registers.toml")).unwrap_err();
+    assert!(error.to_string().contains("cannot read /nonexistent/registers.toml"), "{error}");
 }

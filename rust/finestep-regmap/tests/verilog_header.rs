@@ -29,31 +29,20 @@ fn parse_header(text: &str) -> BTreeMap<String, Constant> {
         if line.is_empty() || line.starts_with("//") || line.starts_with("/* verilator lint_") {
             continue;
         }
-        let declaration = line
-            .strip_prefix("localparam ")
-            .unwrap_or_else(|| panic!("unexpected line {line:?}"));
+        let declaration = line.strip_prefix("localparam ").unwrap_or_else(|| panic!("unexpected line {line:?}"));
         let statement = declaration.split(';').next().unwrap();
         let (left, literal) = statement.split_once(" = ").unwrap();
         let (kind, name) = left.split_once(' ').unwrap();
         let width = match kind {
             "integer" => None,
             range => {
-                let msb: u32 = range
-                    .strip_prefix('[')
-                    .and_then(|r| r.strip_suffix(":0]"))
-                    .unwrap()
-                    .parse()
-                    .unwrap();
+                let msb: u32 = range.strip_prefix('[').and_then(|r| r.strip_suffix(":0]")).unwrap().parse().unwrap();
                 Some(msb + 1)
             }
         };
         let value = match literal.split_once("'h") {
             Some((size, hex)) => {
-                assert_eq!(
-                    Some(size.parse().unwrap()),
-                    width,
-                    "{name}: literal size differs from declared range"
-                );
+                assert_eq!(Some(size.parse().unwrap()), width, "{name}: literal size differs from declared range");
                 u64::from_str_radix(hex, 16).unwrap()
             }
             None => literal.parse().unwrap(),
@@ -65,17 +54,11 @@ fn parse_header(text: &str) -> BTreeMap<String, Constant> {
 }
 
 fn integer(value: impl Into<u64>) -> Constant {
-    Constant {
-        width: None,
-        value: value.into(),
-    }
+    Constant { width: None, value: value.into() }
 }
 
 fn sized(width: u32, value: impl Into<u64>) -> Constant {
-    Constant {
-        width: Some(width),
-        value: value.into(),
-    }
+    Constant { width: Some(width), value: value.into() }
 }
 
 #[test]
@@ -83,15 +66,9 @@ fn a_few_constants_by_hand() {
     let constants = parse_header(&verilog::generate(&map()));
     assert_eq!(constants["FS_CONTROL_ADDR"], sized(7, 0x04u8));
     assert_eq!(constants["FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB"], integer(2u32));
-    assert_eq!(
-        constants["FS_CONTROL_ESTOP_ACTIVE_HIGH_RESET"],
-        sized(1, 1u32)
-    );
+    assert_eq!(constants["FS_CONTROL_ESTOP_ACTIVE_HIGH_RESET"], sized(1, 1u32));
     assert_eq!(constants["FS_PERIOD_CLOCKS_CLOCKS_WIDTH"], integer(24u32));
-    assert_eq!(
-        constants["FS_PERIOD_CLOCKS_CLOCKS_RESET"],
-        sized(24, 50_000u32)
-    );
+    assert_eq!(constants["FS_PERIOD_CLOCKS_CLOCKS_RESET"], sized(24, 50_000u32));
     assert_eq!(constants["FS_ID_MAGIC_VALUE"], sized(32, 0x4653_5450u32));
     assert_eq!(constants["FS_AXIS_MODE_ADDR"], sized(7, 0x22u8));
     assert_eq!(constants["FS_AXIS_MODE_COUNT"], integer(8u32));
@@ -108,30 +85,16 @@ fn a_few_constants_by_hand() {
 fn every_verilog_constant_equals_its_rust_counterpart() {
     let constants = parse_header(&verilog::generate(&map()));
     let get = |name: String| -> Constant {
-        *constants
-            .get(&name)
-            .unwrap_or_else(|| panic!("{name} is missing from the header"))
+        *constants.get(&name).unwrap_or_else(|| panic!("{name} is missing from the header"))
     };
     assert_eq!(get("FS_ADDR_WIDTH".into()), integer(regs::ADDRESS_BITS));
-    assert_eq!(
-        get("FS_MAP_VERSION_MAJOR".into()),
-        integer(regs::MAP_VERSION_MAJOR)
-    );
-    assert_eq!(
-        get("FS_MAP_VERSION_MINOR".into()),
-        integer(regs::MAP_VERSION_MINOR)
-    );
-    assert_eq!(
-        get("FS_MAP_VERSION_PATCH".into()),
-        integer(regs::MAP_VERSION_PATCH)
-    );
+    assert_eq!(get("FS_MAP_VERSION_MAJOR".into()), integer(regs::MAP_VERSION_MAJOR));
+    assert_eq!(get("FS_MAP_VERSION_MINOR".into()), integer(regs::MAP_VERSION_MINOR));
+    assert_eq!(get("FS_MAP_VERSION_PATCH".into()), integer(regs::MAP_VERSION_PATCH));
     let mut expected_names = 4;
     for register in regs::REGISTERS {
         let prefix = format!("FS_{}", register.name);
-        assert_eq!(
-            get(format!("{prefix}_ADDR")),
-            sized(regs::ADDRESS_BITS, register.addr)
-        );
+        assert_eq!(get(format!("{prefix}_ADDR")), sized(regs::ADDRESS_BITS, register.addr));
         expected_names += 1;
         if let Some(array) = register.array {
             assert_eq!(get(format!("{prefix}_COUNT")), integer(array.count as u64));
@@ -145,36 +108,23 @@ fn every_verilog_constant_equals_its_rust_counterpart() {
             expected_names += 2;
             if let Some(reset) = info.reset {
                 assert_eq!(info.access, Access::ReadWrite);
-                assert_eq!(
-                    get(format!("{prefix}_RESET")),
-                    sized(info.field.width, reset)
-                );
+                assert_eq!(get(format!("{prefix}_RESET")), sized(info.field.width, reset));
                 expected_names += 1;
             }
             if let Some(value) = info.value {
-                assert_eq!(
-                    get(format!("{prefix}_VALUE")),
-                    sized(info.field.width, value)
-                );
+                assert_eq!(get(format!("{prefix}_VALUE")), sized(info.field.width, value));
                 expected_names += 1;
             }
         }
     }
-    assert_eq!(
-        constants.len(),
-        expected_names,
-        "the header declares constants the Rust side lacks"
-    );
+    assert_eq!(constants.len(), expected_names, "the header declares constants the Rust side lacks");
 }
 
 #[test]
 fn header_declares_exactly_the_names_validation_knows() {
     let map = map();
     let declared: Vec<String> = parse_header(&verilog::generate(&map)).into_keys().collect();
-    let mut promised: Vec<String> = naming::verilog_constants(&map)
-        .into_iter()
-        .map(|(name, _)| name)
-        .collect();
+    let mut promised: Vec<String> = naming::verilog_constants(&map).into_iter().map(|(name, _)| name).collect();
     promised.sort();
     assert_eq!(declared, promised);
 }
@@ -273,9 +223,7 @@ fn on_path(tool: &str) -> bool {
 }
 
 fn run(command: &mut Command) {
-    let output = command
-        .output()
-        .unwrap_or_else(|error| panic!("cannot run {command:?}: {error}"));
+    let output = command.output().unwrap_or_else(|error| panic!("cannot run {command:?}: {error}"));
     assert!(
         output.status.success() && output.stderr.is_empty(),
         "{command:?} failed:\n{}{}",
@@ -310,19 +258,9 @@ fn yosys_reads_the_header() {
             dir.display(),
             path.display()
         );
-        let output = Command::new("yosys")
-            .args(["-q", "-p", &script])
-            .output()
-            .expect("cannot run yosys");
-        let log = format!(
-            "{}{}",
-            String::from_utf8_lossy(&output.stdout),
-            String::from_utf8_lossy(&output.stderr)
-        );
-        assert!(
-            output.status.success() && !log.contains("Warning"),
-            "yosys on {top}:\n{log}"
-        );
+        let output = Command::new("yosys").args(["-q", "-p", &script]).output().expect("cannot run yosys");
+        let log = format!("{}{}", String::from_utf8_lossy(&output.stdout), String::from_utf8_lossy(&output.stderr));
+        assert!(output.status.success() && !log.contains("Warning"), "yosys on {top}:\n{log}");
     }
 }
 
@@ -331,21 +269,11 @@ fn no_comment_line_starts_with_a_tool_pragma_word() {
     // Verilator reads `// verilator ...` and Yosys `// synthesis ...` as directives.
     for line in verilog::generate(&map()).lines() {
         if let Some(comment) = line.trim().strip_prefix("//") {
-            let first_word = comment
-                .split_whitespace()
-                .next()
-                .unwrap_or("")
-                .to_ascii_lowercase();
+            let first_word = comment.split_whitespace().next().unwrap_or("").to_ascii_lowercase();
             assert!(
-                ![
-                    "verilator",
-                    "synthesis",
-                    "synopsys",
-                    "pragma",
-                    "lint_checking"
-                ]
-                .iter()
-                .any(|word| first_word.starts_with(word)),
+                !["verilator", "synthesis", "synopsys", "pragma", "lint_checking"]
+                    .iter()
+                    .any(|word| first_word.starts_with(word)),
                 "comment line {line:?} could be read as a pragma"
             );
         }

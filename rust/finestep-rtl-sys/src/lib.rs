@@ -107,11 +107,7 @@ impl Rtl {
     }
 
     fn from_raw(sim: *mut ffi::fs_sim) -> Rtl {
-        Rtl {
-            sim: NonNull::new(sim).expect("fs_new returned null"),
-            events: Vec::new(),
-            _not_send: PhantomData,
-        }
+        Rtl { sim: NonNull::new(sim).expect("fs_new returned null"), events: Vec::new(), _not_send: PhantomData }
     }
 
     /// One clock with `rst` high; the cycle count restarts at 0.
@@ -161,10 +157,9 @@ impl Rtl {
                     &mut stored,
                 )
             };
-            events.extend(self.events[..stored].iter().map(|e| Event {
-                cycle: e.cycle,
-                outputs: outputs_from(&e.outputs),
-            }));
+            events.extend(
+                self.events[..stored].iter().map(|e| Event { cycle: e.cycle, outputs: outputs_from(&e.outputs) }),
+            );
             total.cycles += end.cycles;
             total.consumed = end.consumed != 0;
         }

@@ -20,17 +20,15 @@ use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 /// fixed by the test's name, else fresh.
 pub fn seed(test: &str) -> u64 {
     match std::env::var("FINESTEP_SEED") {
-        Ok(text) => parse_seed(&text)
-            .unwrap_or_else(|| panic!("FINESTEP_SEED={text:?} is not a decimal or 0x-hex u64")),
+        Ok(text) => {
+            parse_seed(&text).unwrap_or_else(|| panic!("FINESTEP_SEED={text:?} is not a decimal or 0x-hex u64"))
+        }
         Err(_) if std::env::var_os("CI").is_some_and(|v| !v.is_empty()) => fixed_seed(test),
         Err(_) => {
             use std::hash::{BuildHasher, Hasher};
             let mut hasher = std::collections::hash_map::RandomState::new().build_hasher();
             hasher.write_u128(
-                std::time::SystemTime::now()
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .map(|d| d.as_nanos())
-                    .unwrap_or(0),
+                std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos()).unwrap_or(0),
             );
             hasher.finish()
         }
@@ -52,10 +50,7 @@ fn parse_seed(text: &str) -> Option<u64> {
 
 /// Number of cases: `FINESTEP_CASES` if set, else `default_cases`.
 pub fn cases(default_cases: u32) -> u32 {
-    std::env::var("FINESTEP_CASES")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default_cases)
+    std::env::var("FINESTEP_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default_cases)
 }
 
 /// A proptest runner seeded from [`seed`], printing `test`'s seed and how to rerun it.
@@ -66,11 +61,7 @@ pub fn runner(test: &str, default_cases: u32) -> TestRunner {
     for (i, chunk) in bytes.chunks_mut(8).enumerate() {
         chunk.copy_from_slice(&seed.wrapping_add(i as u64).to_le_bytes());
     }
-    let config = Config {
-        cases: cases(default_cases),
-        failure_persistence: None,
-        ..Config::default()
-    };
+    let config = Config { cases: cases(default_cases), failure_persistence: None, ..Config::default() };
     TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &bytes))
 }
 

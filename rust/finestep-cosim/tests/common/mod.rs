@@ -148,7 +148,8 @@ pub fn scenario(max_actions: usize) -> impl Strategy<Value = Scenario> {
 /// Play a scenario on RTL and model side by side; the first difference is an error.
 pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
     let mut harness = Harness::new(name, path);
-    let mut inputs = CoreInputs { run: true, period_clocks: scenario.period_clocks, gantry: scenario.gantry, ..Default::default() };
+    let mut inputs =
+        CoreInputs { run: true, period_clocks: scenario.period_clocks, gantry: scenario.gantry, ..Default::default() };
     inputs.axes[..AXES].copy_from_slice(&scenario.axes);
     for action in &scenario.actions {
         match action {
@@ -159,12 +160,8 @@ pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness,
             }
             Action::Idle(cycles) => harness.idle(&inputs, *cycles)?,
             Action::Stop(cycles, offer) => {
-                let stopped = CoreInputs {
-                    run: false,
-                    rec_valid: offer.is_some(),
-                    record: offer.unwrap_or_default(),
-                    ..inputs
-                };
+                let stopped =
+                    CoreInputs { run: false, rec_valid: offer.is_some(), record: offer.unwrap_or_default(), ..inputs };
                 // A record offered while stopping is consumed at most once, and discarded.
                 let end = harness.run_chunk(&stopped, *cycles)?;
                 let rest = CoreInputs { rec_valid: false, ..stopped };
@@ -181,7 +178,11 @@ pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness,
                 harness.idle(&halted, *cycles)?;
             }
             Action::Gantry(config) => {
-                inputs.gantry = GantryInputs { enc_master: inputs.gantry.enc_master, enc_slave: inputs.gantry.enc_slave, ..*config };
+                inputs.gantry = GantryInputs {
+                    enc_master: inputs.gantry.enc_master,
+                    enc_slave: inputs.gantry.enc_slave,
+                    ..*config
+                };
             }
             Action::Counts(master, slave) => {
                 inputs.gantry.enc_master = inputs.gantry.enc_master.wrapping_add(*master as u32);

@@ -6,9 +6,7 @@
 
 #![allow(dead_code)]
 
-use finestep_model::{
-    AxisConfig, AxisTiming, Core, CoreInputs, CoreOutputs, CoreParams, PeriodRecord, MAX_AXES,
-};
+use finestep_model::{AxisConfig, AxisTiming, Core, CoreInputs, CoreOutputs, CoreParams, PeriodRecord, MAX_AXES};
 use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Zero};
@@ -97,12 +95,7 @@ impl Run {
         drain: u64,
     ) -> Run {
         let mut core = Core::new(params);
-        let mut inputs = CoreInputs {
-            run: false,
-            period_clocks: p,
-            axes,
-            ..CoreInputs::default()
-        };
+        let mut inputs = CoreInputs { run: false, period_clocks: p, axes, ..CoreInputs::default() };
         let p_eff = u64::from(params.effective_period(p));
         let end = FIRST_BOUNDARY + records.len() as u64 * p_eff + drain;
         let mut outputs = Vec::with_capacity(end as usize + 1);
@@ -117,32 +110,18 @@ impl Run {
                 inputs.record = records[next];
             }
             if core.outputs().rec_ready() && inputs.rec_valid {
-                assert_eq!(
-                    core.cycle(),
-                    FIRST_BOUNDARY + next as u64 * p_eff,
-                    "record {next} consumed off schedule"
-                );
+                assert_eq!(core.cycle(), FIRST_BOUNDARY + next as u64 * p_eff, "record {next} consumed off schedule");
                 next += 1;
             }
             core.step(&inputs);
             outputs.push(core.outputs());
         }
         assert_eq!(next, records.len(), "every record consumed");
-        Run {
-            params,
-            axes,
-            p,
-            records,
-            outputs,
-        }
+        Run { params, axes, p, records, outputs }
     }
 
     pub fn ideal(&self, axis: usize) -> Ideal {
-        let d = self
-            .records
-            .iter()
-            .map(|r| i64::from(r.inc[axis].to_bits()))
-            .collect();
+        let d = self.records.iter().map(|r| i64::from(r.inc[axis].to_bits())).collect();
         Ideal::new(self.params.effective_period(self.p), d)
     }
 
@@ -186,10 +165,7 @@ impl Run {
                 _ => false,
             };
             if !ok {
-                return Some(format!(
-                    "axis {axis}: cycle {}: position {before} -> {after} with R = {r}",
-                    n + 2
-                ));
+                return Some(format!("axis {axis}: cycle {}: position {before} -> {after} with R = {r}", n + 2));
             }
         }
         None
@@ -199,16 +175,8 @@ impl Run {
     /// to 0 whatever the inversion) shows cycle 1's values.
     pub fn pins(&self, axis: usize) -> Vec<(bool, bool)> {
         let inv = self.axes[axis].invert;
-        let mut pins: Vec<(bool, bool)> = self
-            .outputs
-            .iter()
-            .map(|o| {
-                (
-                    o.pin_a(axis) ^ (inv & 1 != 0),
-                    o.pin_b(axis) ^ (inv & 2 != 0),
-                )
-            })
-            .collect();
+        let mut pins: Vec<(bool, bool)> =
+            self.outputs.iter().map(|o| (o.pin_a(axis) ^ (inv & 1 != 0), o.pin_b(axis) ^ (inv & 2 != 0))).collect();
         if pins.len() > 1 {
             pins[0] = pins[1];
         }
@@ -260,12 +228,8 @@ impl Run {
         let decoded = self.decoded_positions(axis);
         (1..decoded.len()).find_map(|n| {
             let want = self.position(n - 1, axis);
-            (decoded[n] != want).then(|| {
-                format!(
-                    "axis {axis}: cycle {n}: pins say {} but position(n-1) = {want}",
-                    decoded[n]
-                )
-            })
+            (decoded[n] != want)
+                .then(|| format!("axis {axis}: cycle {n}: pins say {} but position(n-1) = {want}", decoded[n]))
         })
     }
 }
@@ -288,10 +252,7 @@ pub fn first_timing_violation(pins: &[(bool, bool)], t: &AxisTiming) -> Option<S
             }
             if let Some(f) = fall {
                 if c - f < h {
-                    return Some(format!(
-                        "cycle {c}: dir changes {} cycles after the fall at {f}, H = {h}",
-                        c - f
-                    ));
+                    return Some(format!("cycle {c}: dir changes {} cycles after the fall at {f}, H = {h}", c - f));
                 }
             }
             turn = Some(c);
@@ -299,18 +260,12 @@ pub fn first_timing_violation(pins: &[(bool, bool)], t: &AxisTiming) -> Option<S
         if a1 && !a0 {
             if let Some(f) = fall {
                 if c - f < s {
-                    return Some(format!(
-                        "cycle {c}: rise after {} low cycles, S = {s}",
-                        c - f
-                    ));
+                    return Some(format!("cycle {c}: rise after {} low cycles, S = {s}", c - f));
                 }
             }
             if let Some(d) = turn {
                 if c - d < u {
-                    return Some(format!(
-                        "cycle {c}: rise {} cycles after the dir change, U = {u}",
-                        c - d
-                    ));
+                    return Some(format!("cycle {c}: rise {} cycles after the dir change, U = {u}", c - d));
                 }
             }
             rise = Some(c);

@@ -178,7 +178,11 @@ pub type BusLevels = (bool, bool, bool, bool, u16);
 /// Runs an SPI and an 8080 waveform at the same time (either may be empty), idle pins
 /// after each ends. Returns the MISO bits and the `bus_ad` values (`None` when not
 /// driven) at their sample cycles.
-pub fn run_waveforms(bench: &mut Bench, spi: &Waveform<SpiLevels>, bus: &Waveform<BusLevels>) -> (Vec<bool>, Vec<Option<u16>>) {
+pub fn run_waveforms(
+    bench: &mut Bench,
+    spi: &Waveform<SpiLevels>,
+    bus: &Waveform<BusLevels>,
+) -> (Vec<bool>, Vec<Option<u16>>) {
     let cycles = spi.pins.len().max(bus.pins.len());
     let (mut miso, mut ad) = (vec![], vec![]);
     let (mut next_spi, mut next_bus) = (0, 0);
@@ -438,9 +442,7 @@ pub fn rw_mask(addr: u8, p: &TopParams) -> Option<u32> {
         regs::irq_mask::ADDR => Some(regs::irq_mask::MASK.mask()),
         regs::axis_enable::ADDR => Some(low(p.n_axes as u32)),
         regs::enc_prescale::ADDR => Some(regs::enc_prescale::PRESCALE.mask()),
-        regs::probe_control::ADDR => {
-            Some(regs::probe_control::ACTIVE_HIGH.mask() | regs::probe_control::FILTER.mask())
-        }
+        regs::probe_control::ADDR => Some(regs::probe_control::ACTIVE_HIGH.mask() | regs::probe_control::FILTER.mask()),
         regs::mpg_control::ADDR => Some(mpg(regs::mpg_control::PRESCALE.mask() | regs::mpg_control::FILTER.mask())),
         regs::jog_control::ADDR => {
             use regs::jog_control as j;
