@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/crc16_byte.md
 // CRC-16/IBM-3740 (the "CCITT-FALSE" CRC: polynomial 0x1021, initial value 0xFFFF,
 // MSB first, no reflection, no final XOR), one byte per step, combinational: the SPI
 // frame layer updates its CRC register on the clock a byte arrives, so the frame's

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/dda_axis.md
 // DDA fine interpolator for one axis: spreads the period's signed Q16.16 increment d
 // evenly over the P clocks of the period, one step request at a time.
 //

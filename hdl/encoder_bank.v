@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/encoder_bank.md
 // Encoder bank: N_ENC quadrature channels (gratings, motor encoders) on one sampling
 // prescaler, and the probe input that snapshots every channel's count, every axis's
 // step position and the timestamp on one clock. The counts and edge times the host

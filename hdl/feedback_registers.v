@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/feedback_registers.md
 // Host registers of the feedback blocks (encoders, probe, hand wheel, jog): their
 // configuration fields, their one-shot arms, and their read values. It sits beside
 // register_file on the same arbitrated register bus: writes take effect at the edge

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/finestep_core.md
 // finestep core: the fine-interpolation half of a two-stage CNC controller. Period
 // records (every axis's Q16.16 increment for one period + flags) enter through a
 // valid/ready port; the period timer loads one per period on the same clock for all

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/finestep_top.md
 // finestep top: the motion core behind its host interface. Two host links (SPI with
 // CRC-checked frames, and the 8080/FSMC parallel bus) share one register bus into the
 // register file; period records reach the core through the position FIFO, gated by the

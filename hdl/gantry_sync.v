@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/gantry_sync.md
 // Gantry synchronisation (seed 001): two motors move one gantry axis. The slave axis's
 // step shaper takes the master axis's step requests instead of its own DDA's; in
 // synchronised mode a correction, decided once per tick from the difference of two

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/hand_wheel.md
 // Hand wheel (MPG): a quadrature channel counting x4 on its own sampling prescaler, slow
 // enough to filter contact bounce, and the wheel's position in detents of 4 edges.
 // detents = floor((count + 2) / 4): a wheel resting where it was at reset sits in the

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/input_filter.md
 // Input filter for one asynchronous pin: a two-flop synchroniser, then a glitch filter
 // whose output changes only after the synchronised pin has shown the other level in
 // max(filter_len, 1) consecutive sample cycles. Sample cycles come from a shared

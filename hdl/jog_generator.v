@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/jog_generator.md
 // Jog generator: moves one axis after the hand wheel, through the core. While engaged it
 // is the core's record source: one record a period carrying `next_vel` on the jogged
 // axis, so the DDA, the step timing, the rate checks and the step position serve the jog

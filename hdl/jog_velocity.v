@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/jog_generator.md ("Computation")
 // The jog's velocity for the next period, computed sequentially in the 80 cycles after a
 // period boundary (a period is thousands of clocks, so a radix-4 shift-add multiplier, a
 // digit-by-digit square root and a pipelined clamp cost a few hundred flip-flops instead

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/motion_control.md
 // Motion control: decides when the period timer may take records from the position
 // FIFO. A gate opens once START_LEVEL records are queued (PMAC's rotary-buffer
 // threshold) and closes when the FIFO is empty at a period boundary. Empty after a

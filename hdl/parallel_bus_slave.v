@@ -1,9 +1,10 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/parallel_bus_slave.md
 // 8080/FSMC parallel bus slave: the STM32 FSMC's asynchronous multiplexed mode of seed
 // 003 (chip select, NADV address latch, RD, WR, 16-bit address/data). The strobes and
 // the bus are synchronised before use, so the host's timing only has to be slow enough
-// (see README). Registers are 32 bits: reading the low half latches the high half and
+// (see the spec). Registers are 32 bits: reading the low half latches the high half and
 // the high half must be written right after the low half, so 32-bit accesses over the
 // 16-bit bus are coherent and a torn write is refused rather than applied.
 //

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/period_timer.md
 // Period timer: cuts time into interpolation periods of P clocks and loads one period
 // record (all axes' increments + flags) at each period boundary, so every axis changes
 // increment on the same clock.

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/position_fifo.md
 // Position-control FIFO: the buffer of period records between the host's coarse
 // interpolation and the period timer (seed 000's position-control buffer, PMAC's rotary
 // buffer). First-word-fall-through: the head record is on rd_data whenever rd_valid.

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/quadrature_channel.md
 // One quadrature encoder (or linear grating) channel: A, B and index Z through input
 // filters, decoded x4, x2, x1 or as step/dir into a 32-bit count; an A/B change in the
 // same cycle is an illegal transition (flagged and counted, never counted as motion);

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/register_file.md
 // Register file: the host-visible registers of hdl/registers.toml (addresses and field
 // positions come from the generated finestep_regs.vh), the register-bus arbiter for the
 // two host links (SPI first), error counters, the interrupt, the per-period position

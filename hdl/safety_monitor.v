@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/safety_monitor.md
 // Safety monitor: the host watchdog and the external E-stop, either of which halts the
 // machine (all pulse output stops, enables drop) through a sticky fault that only the
 // host can clear, and only once its cause is gone.

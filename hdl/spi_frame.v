@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/spi_frame.md
 // SPI frame layer: turns the byte stream of spi_slave_phy into register reads and
 // writes and into period records for the position FIFO. Every frame is
 // `cmd, addr, count`, then data; a write is applied only when the frame's CRC-16 checks

@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/spi_slave_phy.md
 // SPI mode-0 slave, byte level: the pins of the host link (an STM32 or a Raspberry Pi
 // as master) brought into the core clock domain. CS_n, SCK and MOSI pass two-flop
 // synchronisers; a rising SCK edge samples MOSI, a falling one shifts MISO. Bytes go

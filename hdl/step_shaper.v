@@ -1,5 +1,6 @@
 `timescale 1ns / 1ps
 `default_nettype none
+// Specification: docs/spec/step_shaper.md
 // Step shaper for one axis: turns the DDA's step requests into step/dir (or up/down, or
 // quadrature) pulses that honour the drive's timing, as hostmot2's stepgen does: step
 // high exactly L clocks, low at least S clocks, dir stable H clocks after a falling

@@ -4,7 +4,7 @@
 //! strobes, chip select released before the strobe ends, a high half without its low
 //! half, aborted reads), interleaved with valid accesses over both links.
 //!
-//! The expected state is tracked here from the README and `docs/registers.md` alone:
+//! The expected state is tracked here from docs/spec/ and `docs/registers.md` alone:
 //! every `rw` register holds exactly its last valid write, everything else reads what
 //! the spec says (no register changes otherwise), the error counters count exactly the
 //! corrupted, truncated and torn accesses, and the FIFO holds exactly the records of the
@@ -213,7 +213,7 @@ fn op() -> impl Strategy<Value = Op> {
     ]
 }
 
-/// What an SPI frame does, from the README's frame layer: `bits` bits of `bytes` sent,
+/// What an SPI frame does, from the frame layer's spec: `bits` bits of `bytes` sent,
 /// `free` records of room in the FIFO at its header.
 #[derive(Clone, Debug, PartialEq)]
 enum Outcome {

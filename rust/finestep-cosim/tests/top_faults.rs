@@ -2,7 +2,7 @@
 //! host driver: a forced underrun, FIFO overflow (SPI and 8080), the watchdog, the
 //! E-stop, and coherent position reads while moving.
 //!
-//! Every expectation is computed here from the README, not taken from the model: pulse
+//! Every expectation is computed here from docs/spec/, not taken from the model: pulse
 //! counts are the DDA's round-half-up of the summed increments, counters and flags are
 //! what the spec says they count, latencies are the spec's. The drive pins are watched
 //! on every clock by [`Probe`] (a [`PinTarget`] wrapping [`TopLockstep`]), so step

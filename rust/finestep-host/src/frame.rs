@@ -1,4 +1,4 @@
-//! The SPI frame format of `spi_frame` (README, "SPI frame layer"): building the bytes a
+//! The SPI frame format of `spi_frame` (docs/spec/spi_frame.md): building the bytes a
 //! host sends and checking the bytes it gets back. Pure functions, shared by every SPI
 //! transport.
 //!

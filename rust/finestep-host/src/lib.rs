@@ -6,7 +6,7 @@
 //!   [`ParallelBus`] over the 8080 pins.
 //! - Transports: [`PinHost`] drives a simulated core at its pins ([`PinTarget`]: the
 //!   Verilated RTL, the reference model, or both in lockstep) with the SPI and 8080
-//!   timing of the README; [`spidev::Spidev`] a real board over Linux spidev.
+//!   timing of the spec (docs/spec/); [`spidev::Spidev`] a real board over Linux spidev.
 //! - [`Machine`]: identity check, configuration, faults, run, coherent positions; its
 //!   [`feedback`] side: encoders, probe, hand wheel, jog, velocity estimation.
 //! - [`stream`]: keeps the FIFO fed from an iterator of period records.

@@ -1,6 +1,7 @@
 //! Driving a simulated core at its pins: [`PinTarget`] is a clocked model of
 //! `finestep_top` (packed pin words), and [`PinHost`] plays an SPI master and an 8080
-//! master on it with the host timing of the README, cycle by cycle.
+//! master on it with the host timing of docs/spec/spi_frame.md and
+//! docs/spec/parallel_bus_slave.md, cycle by cycle.
 
 use crate::spi::SpiTransfer;
 use crate::BusError;
@@ -85,7 +86,7 @@ pub trait PinTarget {
     }
 }
 
-/// Host-side timing in core clocks (defaults: the fastest the README allows).
+/// Host-side timing in core clocks (defaults: the fastest the spec allows).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PinTiming {
     /// SCK half period (>= 4: SCK at most clk/8).

@@ -2,6 +2,8 @@
 //! and one [`StepShaper`], and the [`GantrySync`] between the DDAs and the shapers, with
 //! the packed outputs.
 //!
+//! Specification: docs/spec/finestep_core.md
+//!
 //! Latency: a DDA update in cycle `n` gives `req` in `n+1`, the earliest rise decision
 //! in `n+1` (level and `position` in `n+2`) and the pin edge in `n+3`. Every output is a
 //! function of the state only.

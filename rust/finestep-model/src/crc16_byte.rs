@@ -2,6 +2,8 @@
 //! reflection, no final XOR; check value of "123456789" is 0x29B1), one byte per clock:
 //! the CRC after a byte from the CRC before it. A frame followed by its own CRC, high
 //! byte first, leaves 0, which is how the SPI frame layer checks a frame.
+//!
+//! Specification: docs/spec/crc16_byte.md
 
 /// The generator polynomial `x^16 + x^12 + x^5 + 1` without its top bit.
 pub const POLYNOMIAL: u16 = 0x1021;

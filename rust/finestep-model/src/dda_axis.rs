@@ -1,5 +1,7 @@
 //! `dda_axis`: the digital differential analyser of one axis.
 //!
+//! Specification: docs/spec/dda_axis.md
+//!
 //! The accumulator `acc` stays in `[0, M)` with `M = p_act * 65536`; each cycle it adds
 //! the axis's increment and wraps, and a wrap is a step request `req` of +1 or -1 in the
 //! next cycle. While stopped it is preset to `M / 2`, so the number of requests since

@@ -1,6 +1,8 @@
 //! `encoder_bank`: the `N_ENC` encoder channels on one sampling prescaler, the probe,
 //! and the register copies of the counts.
 //!
+//! Specification: docs/spec/encoder_bank.md
+//!
 //! The channels and the probe share one prescaler (`ENC_PRESCALE`) so that every
 //! filtered input moves on the same clocks. A probe event snapshots every channel's
 //! count, every axis's step position and `TIMESTAMP` on one clock: seed 000 measures a

@@ -3,6 +3,8 @@
 //! mode) one correction step per tick from the difference of two channel counts, one
 //! on each side of the gantry.
 //!
+//! Specification: docs/spec/gantry_sync.md
+//!
 //! A correction inserts a slave request where the master has none, or deletes a master
 //! request of the opposite sign; it waits while the master requests in its own
 //! direction, and against the master's motion it waits to delete (the slave never

@@ -3,6 +3,8 @@
 //! contacts whose bounce outlasts any encoder's edge, so they are sampled slowly
 //! (the reset setting, PRESCALE 499 and FILTER 4, rejects bounce under 40 us at 50 MHz).
 //!
+//! Specification: docs/spec/hand_wheel.md
+//!
 //! The wheel's position in detents is `floor((count + 2) / 4)`: a 100-pulse wheel makes
 //! 4 edges per detent, and one resting where it was at reset sits in the middle of
 //! detent 0, two edges from either boundary, so bounce at rest never changes it.

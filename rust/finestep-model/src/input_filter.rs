@@ -1,6 +1,8 @@
 //! `input_filter`: the sampling prescaler and, per feedback pin, a two-flop synchroniser
 //! and a glitch filter.
 //!
+//! Specification: docs/spec/input_filter.md
+//!
 //! The prescaler fixes *when* the pins are looked at (every `PRESCALE + 1` clocks), the
 //! filter *what* is believed: the filtered `level` takes a new value only after
 //! `max(FILTER, 1)` samples of it in a row, so a pulse with fewer samples than that never

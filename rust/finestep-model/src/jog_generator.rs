@@ -1,5 +1,7 @@
 //! `jog_generator`: moves one axis after the hand wheel, through the core.
 //!
+//! Specification: docs/spec/jog_generator.md (`jog_velocity` is its "Computation")
+//!
 //! The jog's increments are ordinary period records (the jog offers one at every
 //! boundary while engaged), so the DDA, the step shaper's timing, the rate checks and
 //! `POSITION` work exactly as for streamed motion; the jog and a FIFO run never both

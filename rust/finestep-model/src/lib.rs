@@ -5,8 +5,8 @@
 //! period) per interpolation period, spreads each increment evenly over the period's
 //! clocks with a DDA per axis, and turns the DDA's step requests into step/direction,
 //! up/down or quadrature pulses with the drive's timing. This crate is an independent
-//! implementation of the specification in the repository's README ("Specification of
-//! the core"), against which the Verilog is checked bit for bit in co-simulation.
+//! implementation of the specification in the repository's `docs/spec/` (one file per
+//! block), against which the Verilog is checked bit for bit in co-simulation.
 //!
 //! Modules mirror the HDL blocks: [`period_timer`], [`dda_axis`], [`step_shaper`],
 //! [`gantry_sync`] (a slave axis following a master, with encoder corrections) and

@@ -1,4 +1,4 @@
-//! The rated rate (README, "Rated rate"): the increments within which `rate_error`
+//! The rated rate (docs/spec/rated_rate.md): the increments within which `rate_error`
 //! never sets and the output position stays within one step of the ideal one.
 //!
 //! For an axis with timing `L, S, U, H` (each taken as at least 1):

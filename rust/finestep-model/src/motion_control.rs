@@ -1,5 +1,7 @@
 //! `motion_control`: the gate between the position FIFO and the period timer.
 //!
+//! Specification: docs/spec/motion_control.md
+//!
 //! Motion starts only once `START_LEVEL` records are queued (a rotary-buffer
 //! threshold); an empty FIFO after a record with `BLOCK_END` is a normal stop, after
 //! which the gate waits for the threshold again; an empty FIFO in the middle of a block

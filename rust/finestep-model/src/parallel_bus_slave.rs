@@ -2,6 +2,8 @@
 //! the register bus. `bus_ad` carries the halfword address `a[7:0]` while `bus_adv_n` is
 //! low, then data; register `a[7:1]`, half `a[0]` (0 = bits 15:0).
 //!
+//! Specification: docs/spec/parallel_bus_slave.md
+//!
 //! The strobes pass two-flop synchronisers and one more flop (`x_s` synchronised, `x_p`
 //! the cycle before); `bus_ad_in` a two-flop synchroniser. A write of the low half is
 //! held until the high half of the same register completes it (one 32-bit register

@@ -1,6 +1,8 @@
 //! `period_timer`: counts the interpolation period, takes one [`PeriodRecord`] per
 //! period boundary over valid/ready, and holds the increments every DDA uses.
 //!
+//! Specification: docs/spec/period_timer.md
+//!
 //! `rec_ready = active && remaining == 0`; a cycle with `rec_ready` is a period boundary.
 //! A record taken at boundary `b` is applied in cycles `b+1 ..= b+P` and the next
 //! boundary is `b+P`. A missing or unacceptable record gives an idle period (all

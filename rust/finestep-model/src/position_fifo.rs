@@ -1,5 +1,7 @@
 //! `position_fifo`: the buffer of period records between the host and the period timer.
 //!
+//! Specification: docs/spec/position_fifo.md
+//!
 //! First-word-fall-through: while `rd_valid`, the head record (the oldest committed one)
 //! is readable. Writes are staged and become readable only at a commit; an abort drops
 //! them (a bus frame whose CRC fails never reaches the period timer). A write when

@@ -1,6 +1,8 @@
 //! `quadrature_channel`: one encoder channel's decoder, counter, index logic and
 //! snapshots, from the filtered levels of its pins.
 //!
+//! Specification: docs/spec/quadrature_channel.md
+//!
 //! The decoder compares the filtered `a`, `b` with their values one clock before
 //! (`a_p`, `b_p`), so the count moves at most one per clock. Forward is A leading B, the
 //! step shaper's quadrature order (A,B) 00 -> 10 -> 11 -> 01: an axis driven in

@@ -3,6 +3,8 @@
 //! count, interrupt, sticky flags, error counters) and the position FIFO's write-port
 //! multiplexer.
 //!
+//! Specification: docs/spec/register_file.md and docs/spec/feedback_registers.md
+//!
 //! Addresses, field positions, access types and reset values come from the generated
 //! register map ([`finestep_regmap::regs`]); the `rw` bits live in one word per address,
 //! masked on every write to the bits this build implements (timing fields to

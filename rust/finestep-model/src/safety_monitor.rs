@@ -1,6 +1,8 @@
 //! `safety_monitor`: the host watchdog and the external E-stop. Either sets a sticky
 //! fault that halts the machine; the host clears a fault only once its cause is gone.
 //! Out of reset the machine is halted with the E-stop taken as active.
+//!
+//! Specification: docs/spec/safety_monitor.md
 
 /// Configuration and host inputs of one clock edge.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

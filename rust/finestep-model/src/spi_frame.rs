@@ -1,5 +1,7 @@
 //! `spi_frame`: the SPI frame layer on top of [`spi_slave_phy`](crate::spi_slave_phy).
 //!
+//! Specification: docs/spec/spi_frame.md
+//!
 //! Every frame starts with a header `cmd, addr, count`. READ answers `count` register
 //! words and their CRC; WRITE applies one register write only when its CRC checks; FIFO
 //! stages `count` period records into the position FIFO as they arrive and commits them

@@ -2,6 +2,8 @@
 //! rising edge, MISO changed after the falling edge, MSB first) brought into the core
 //! clock domain, byte by byte.
 //!
+//! Specification: docs/spec/spi_slave_phy.md
+//!
 //! CS_n, SCK and MOSI pass two-flop synchronisers (`*_s` is the second flop); SCK has one
 //! more flop (`sck_prev`) to find its edges; `selected` is `!cs_s` one clock later and
 //! finds the CS_n edges. Latency, counting the first cycle a pin shows its new level as

@@ -1,5 +1,7 @@
 //! `step_shaper`: turns an axis's step requests into pulses with the drive's timing.
 //!
+//! Specification: docs/spec/step_shaper.md
+//!
 //! Requests add to `pending`; a pulse (`level` high exactly `L` clocks) is started when
 //! the level has been low at least `S` clocks and `dir` has been stable at least `U`
 //! clocks; `dir` changes only while low and at least `H` clocks after the fall. The pins

@@ -3,6 +3,8 @@
 //! monitor, [`Core`], and the feedback blocks (the [`EncoderBank`] with the probe, the
 //! [`HandWheel`] and the [`JogGenerator`]), composed cycle by cycle.
 //!
+//! Specification: docs/spec/finestep_top.md
+//!
 //! The core runs while `(CONTROL.RUN || jog engaged) && !halt`; motion control sees
 //! `CONTROL.RUN && !halt` only. While the jog is engaged the core takes the jog's
 //! records and the FIFO is not popped.

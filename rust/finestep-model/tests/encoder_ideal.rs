@@ -5,7 +5,8 @@
 //! x4: `p - p0` edges; x2: the edges of A, at the half-integers `k + 1/2` with `k` even,
 //! `floor((p + 1) / 2) - floor((p0 + 1) / 2)`; x1: the edges of A while B is low, at
 //! `k + 1/2` with `k = 0 mod 4`, `floor((p + 3) / 4) - floor((p0 + 3) / 4)`. A step/dir
-//! source has made the signed number of its step pulses. The README's rate claim: a
+//! source has made the signed number of its step pulses. The rate claim of
+//! docs/spec/input_filter.md: a
 //! state that lasts at least `max(FILTER, 1) * (PRESCALE + 1)` clocks passes the filter
 //! (the extra clock it quotes is margin for A/B skew, which these waveforms include by
 //! varying the state lengths from that minimum). So:

@@ -1,5 +1,5 @@
 //! The feedback blocks in `finestep_top`, through the pins and the register bus, against
-//! the README's "Feedback" section: the hand wheel jogs an axis whose quadrature output
+//! the feedback blocks' specs (docs/spec/): the hand wheel jogs an axis whose quadrature output
 //! an encoder channel reads back (the count must equal the step position, and both the
 //! rounded commanded position), the probe snapshots them on one clock, the index arms,
 //! illegal transitions, the jog's interplay with `CONTROL.RUN` and the FIFO, and the

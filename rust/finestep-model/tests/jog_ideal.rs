@@ -1,7 +1,7 @@
 //! The jog generator against its limits and an ideal of where it should go.
 //!
 //! A harness steps `JogGenerator` clock by clock with the period timer's `rec_ready`
-//! (the README's timer: the run starts the cycle after engagement, the first boundary
+//! (the spec's timer: the run starts the cycle after engagement, the first boundary
 //! comes one cycle later, then one every `P` clocks) and random hand-wheel detents at
 //! random clocks. At every boundary the record taken is checked against the limits
 //! (`|next_vel - vel| <= A`, `|next_vel| <= max(VM, |vel|)`), and `cmd` against the sum
@@ -13,7 +13,7 @@
 //! on it exactly, within the continuous-time reference: covering `|e|` with acceleration
 //! and deceleration `A` and a speed limit `VM` takes at most `2 sqrt(|e| / A) + |e| / VM`
 //! periods. The first version of the spec's rules failed both (the cases are kept below
-//! as `first_spec_counterexample_*`); the README's rules now pass them.
+//! as `first_spec_counterexample_*`); the spec's rules now pass them.
 
 use finestep_model::jog_generator::{multiplier, JogGenerator, JogInputs, MIN_PERIOD_CLOCKS};
 use proptest::prelude::*;
@@ -249,7 +249,7 @@ fn periods_bound(vmax: u32, accel: u32, e: i32) -> f64 {
 }
 
 /// A fixed target with the velocity limit no lower than the acceleration (the usual
-/// setting: full speed takes several periods) is reached exactly. The README's
+/// setting: full speed takes several periods) is reached exactly. The reset
 /// settings (`JOG_VMAX` 1 step, `JOG_ACCEL` 1/16 step) are among them. (Not always in
 /// the continuous-time bound: the overshoot below costs periods.)
 #[test]
@@ -276,7 +276,7 @@ fn a_fixed_target_is_reached_exactly() {
         .unwrap();
 }
 
-/// The README: "with a target that stays put the jog never overshoots". It does, by the
+/// The first spec: "with a target that stays put the jog never overshoots". It does, by the
 /// spec's own rules: see `spec_counterexample_arrive_overshoots`. Kept as the property
 /// a fixed spec must pass, with the time to arrive: the continuous-time bound plus a
 /// few periods (the boundary before the first record, the computation's period of lag,
@@ -301,7 +301,7 @@ fn a_fixed_target_is_reached_in_time_without_overshoot() {
         .unwrap();
 }
 
-/// The README: "... and lands on it exactly". Not when `VM` is below about `A / 2`: see
+/// The first spec: "... and lands on it exactly". Not when `VM` is below about `A / 2`: see
 /// `spec_counterexample_slow_jog_never_arrives`.
 #[test]
 fn every_fixed_target_is_reached() {
@@ -317,7 +317,7 @@ fn every_fixed_target_is_reached() {
         .unwrap();
 }
 
-/// Worked by hand from the README's rules, at the reset settings `A = 4096`,
+/// Worked by hand from the spec's rules, at the reset settings `A = 4096`,
 /// `VM = 65536` and a target of `2A + 1 = 8193` (1/8 step): from rest `u = isqrt(2 A e)
 /// - A = 8192 - 4096 = 4096`, so `v1 = 4096`; then `e = 4097`, `vel = 4096`: arrive
 /// (`|e| <= VM`, `|e - vel| = 1 <= A`), `v2 = 4097`, `e = 0`; then `vel = 4097 > A`, so

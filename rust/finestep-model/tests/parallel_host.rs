@@ -1,5 +1,5 @@
 //! The 8080/FSMC link of `finestep_top`, driven by a pin-level master: 32-bit writes
-//! and coherent 32-bit reads, the read timing of the README, and aborted or mismatched
+//! and coherent 32-bit reads, the read timing of the spec, and aborted or mismatched
 //! cycles that must write nothing.
 
 mod host;
@@ -101,7 +101,7 @@ fn read_data_timing_is_as_documented() {
             assert_eq!(out.bus_ad_out, regs::id::MAGIC_VALUE as u16);
         }
     }
-    assert!(first_driven.is_some_and(|d| d <= 6), "driven {first_driven:?} clocks after bus_rd_n fell, README: from 6");
+    assert!(first_driven.is_some_and(|d| d <= 6), "driven {first_driven:?} clocks after bus_rd_n fell, spec: from 6");
     bench.pins.bus_rd_n = true;
     let rise = bench.since_reset;
     let mut released = None;
@@ -111,7 +111,7 @@ fn read_data_timing_is_as_documented() {
             released = Some(bench.since_reset - rise);
         }
     }
-    assert_eq!(released, Some(3), "README: released 3 clocks after bus_rd_n rises");
+    assert_eq!(released, Some(3), "spec: released 3 clocks after bus_rd_n rises");
     // The high half was latched by the low-half read.
     bench.pins.bus_cs_n = true;
     bench.clock(4);

@@ -1,5 +1,6 @@
 //! The watchdog and the E-stop halting `finestep_top` in the middle of a move, through
-//! the pins: halted within the README's latencies, no runt pulse (every step high phase
+//! the pins: halted within the latencies of docs/spec/safety_monitor.md, no runt pulse
+//! (every step high phase
 //! lasts exactly `L`), no new pulse and no direction change after the halt, enables
 //! inactive from the clock after it, the FIFO flushed, `CONTROL.RUN` cleared, and a
 //! fault that cannot be cleared while its cause persists.

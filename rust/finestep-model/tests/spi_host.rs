@@ -1,5 +1,6 @@
 //! The SPI link of `finestep_top`, driven by a pin-level SPI master: register reads
-//! after writes against the README's storage rules, FIFO records exact and in order,
+//! after writes against the storage rules of docs/spec/register_file.md, FIFO records
+//! exact and in order,
 //! CRC errors rejected and counted, truncated frames never applied, the status byte.
 
 mod host;
@@ -45,7 +46,7 @@ fn any_record(n_axes: usize) -> impl Strategy<Value = PeriodRecord> {
 /// Clocks for a frame's end to pass the synchroniser and the frame layer.
 const SETTLE: u64 = 6;
 
-/// The status byte from the README's `STATUS` bits while halted out of reset.
+/// The status byte from the `STATUS` bits of docs/registers.md while halted out of reset.
 fn halted_status(estop_active: bool) -> u8 {
     use regs::status as s;
     let word = s::HALT.set(0, 1);
@@ -219,7 +220,7 @@ impl Frame {
         }
     }
 
-    /// What applying the frame to a machine halted since reset changes, by the README.
+    /// What applying the frame to a machine halted since reset changes, by the spec.
     fn applied_to(&self, before: &Observable, p: &TopParams) -> Observable {
         let mut after = before.clone();
         if let Some((addr, value)) = self.write_target(p) {

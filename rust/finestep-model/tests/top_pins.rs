@@ -62,7 +62,8 @@ fn random_pins_never_break_the_top() {
 
 /// The axis registers reach the pins: with the machine halted and stopped, pin A is
 /// the step level (0) and pin B the direction (1, positive), each XOR its inversion, and
-/// the enable pin `(AXIS_ENABLE & !halt) ^ INVERT_EN`, from the README's pin table.
+/// the enable pin `(AXIS_ENABLE & !halt) ^ INVERT_EN`, from the pin table of
+/// docs/spec/step_shaper.md.
 #[test]
 fn axis_registers_reach_the_idle_pins() {
     use finestep_regmap::regs::{axis_enable, axis_mode};

@@ -322,7 +322,7 @@ impl MachineConfig {
             let mut max_velocity = positive(&key("max_velocity"), limits.max_velocity)?;
             let max_acceleration = positive(&key("max_acceleration"), limits.max_acceleration)?;
             let max_jerk = positive(&key("max_jerk"), limits.max_jerk)?;
-            // Rated rates in steps per period (README, "Rated rate"), with 5 % kept back
+            // Rated rates in steps per period (docs/spec/rated_rate.md), with 5 % kept back
             // for the Q16.16 rounding of positions.
             let forward = f64::from(period_clocks) / forward_interval(&timing) as f64 * 0.95;
             let reverse = f64::from(period_clocks) / reversal_interval(&timing) as f64 * 0.95;

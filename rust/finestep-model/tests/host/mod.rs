@@ -1,5 +1,5 @@
 //! Pin-level host masters for the `finestep_top` model: an SPI mode-0 master and an
-//! STM32-FSMC-style 8080 master, each written from the README's host timing, and the
+//! STM32-FSMC-style 8080 master, each written from the spec's host timing, and the
 //! frame encoding of the SPI protocol. Shared by the host-interface tests.
 
 #![allow(dead_code)]
@@ -11,7 +11,7 @@ use finestep_regmap::regs;
 /// CRC-16/IBM-3740 from the `crc` crate: the ideal the frames are checked against.
 pub const CRC: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740);
 
-/// Frame commands and result codes, as the README's frame table gives them.
+/// Frame commands and result codes, as the frame table of docs/spec/spi_frame.md gives them.
 pub const CMD_READ: u8 = 0x01;
 pub const CMD_WRITE: u8 = 0x02;
 pub const CMD_FIFO: u8 = 0x03;
@@ -138,7 +138,8 @@ impl Bench {
     }
 }
 
-/// SPI mode-0 master at the pin level. Timing in core clocks, from the README: SCK at
+/// SPI mode-0 master at the pin level. Timing in core clocks, from
+/// docs/spec/spi_frame.md: SCK at
 /// most clk/8 (`half_period >= 4`), at least 4 clocks from CS_n falling to the first
 /// SCK edge, CS_n rising half an SCK period after the last falling edge.
 #[derive(Clone, Copy, Debug)]
@@ -314,7 +315,8 @@ pub fn record(raw: &[i32], flags: u8, n_axes: usize) -> PeriodRecord {
 }
 
 /// 8080 master in the STM32 FSMC's multiplexed mode, at the pin level. Timing in core
-/// clocks, from the README: address valid >= 3 clocks before `bus_adv_n` rises and
+/// clocks, from docs/spec/parallel_bus_slave.md: address valid >= 3 clocks before
+/// `bus_adv_n` rises and
 /// `bus_adv_n` low >= 3; write data valid >= 3 clocks before `bus_wr_n` rises;
 /// `bus_rd_n` low >= 9 clocks (data driven from 6 clocks after it falls); >= 4 clocks
 /// of turnaround after a read; >= 3 clocks high between strobes.
@@ -416,7 +418,7 @@ impl ParallelMaster {
     }
 }
 
-/// The bits a write to `addr` stores, from the README's rules ("timing fields keep only
+/// The bits a write to `addr` stores, from docs/spec/register_file.md ("timing fields keep only
 /// `TIMING_W` bits, `PERIOD_CLOCKS` only `P_WIDTH`, `WATCHDOG_TIMEOUT` only `WD_W`";
 /// fields of axes at and above `N_AXES` read 0), or `None` for an address that is not a
 /// plain read/write register.
@@ -515,7 +517,7 @@ pub fn timing_b(u: u32, h: u32) -> u32 {
 }
 
 /// The steps the DDA requests for a sum of raw I16F16 increments: `floor(T/M + 1/2)`
-/// with `T/M` the sum in steps (the README's rounding half up).
+/// with `T/M` the sum in steps (docs/spec/dda_axis.md's rounding half up).
 pub fn rounded_steps(raw_sum: i64) -> i64 {
     (raw_sum + (1 << 15)).div_euclid(1 << 16)
 }
