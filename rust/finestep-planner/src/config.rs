@@ -4,7 +4,7 @@
 //!
 //! ```toml
 //! period_ms = 1.0               # interpolation period T
-//! clock_hz = 50_000_000         # FPGA clock
+//! clock_hz = 50_000_000         # FPGA clock: the core's when absent, checked against it
 //! profile = "trapezoid"         # or "s-curve"
 //! path_tolerance_mm = 0.01      # G64 without P
 //! chord_tolerance_mm = 0.001    # arcs: largest chord-to-circle distance
@@ -22,6 +22,11 @@
 //! max_acceleration = 1000.0     # units/s^2
 //! max_jerk = 100000.0           # units/s^3 (S-curve profile only)
 //! ```
+//!
+//! A configuration is resolved against the core it will run on ([`CoreLimits`]: the
+//! clock, `CAPS.P_WIDTH`, `CAPS.TIMING_W`, `CAPS.N_AXES` as read from the chip, or the
+//! default build's when no chip is attached): the period in clocks, the drive timing and
+//! the axes must fit that core, and a `clock_hz` given in the file must be its clock.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -96,8 +101,9 @@ impl Default for DriveTiming {
 pub struct MachineConfig {
     /// Interpolation period T, ms.
     pub period_ms: f64,
-    /// FPGA clock, Hz.
-    pub clock_hz: f64,
+    /// FPGA clock, Hz: when absent, the core's ([`CoreLimits::clock_hz`]); when given, it
+    /// must be the core's.
+    pub clock_hz: Option<f64>,
     /// Feed profile.
     pub profile: ProfileKind,
     /// Path tolerance of G64 without P, mm.
@@ -113,6 +119,44 @@ pub struct MachineConfig {
     /// The tool table: radii for cutter compensation (G41/G42 D, or the tool in the
     /// spindle).
     pub tools: Vec<ToolConfig>,
+    /// The core the configuration is resolved against (not read from the file; see
+    /// [`MachineConfig::for_core`]): the default build's unless set.
+    #[serde(skip)]
+    pub core: CoreLimits,
+}
+
+/// What the configuration must fit: the core's clock and the build parameters it reports
+/// in `CAPS` (read from the chip), or those of the default build.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoreLimits {
+    /// The core clock, Hz (`CLOCK_HZ`).
+    pub clock_hz: f64,
+    /// Bits of the period counter (`CAPS.P_WIDTH`).
+    pub p_width: u32,
+    /// Bits of each drive timing counter (`CAPS.TIMING_W`).
+    pub timing_w: u32,
+    /// Step/dir axes (`CAPS.N_AXES`).
+    pub n_axes: usize,
+}
+
+impl Default for CoreLimits {
+    /// The default build: 50 MHz, its `P_WIDTH`, `TIMING_W` and `N_AXES`.
+    fn default() -> Self {
+        let params = CoreParams::default();
+        CoreLimits { clock_hz: 50e6, p_width: params.p_width, timing_w: params.timing_width, n_axes: params.n_axes }
+    }
+}
+
+impl CoreLimits {
+    /// The longest period in clocks, `2^P_WIDTH - 1`.
+    pub fn period_max(&self) -> u32 {
+        ((1u64 << self.p_width.min(32)) - 1) as u32
+    }
+
+    /// The largest drive timing in clocks, `2^TIMING_W - 1`.
+    pub fn timing_max(&self) -> u32 {
+        ((1u64 << self.timing_w.min(32)) - 1) as u32
+    }
 }
 
 /// One tool of the tool table.
@@ -142,7 +186,7 @@ impl Default for MachineConfig {
         ];
         MachineConfig {
             period_ms: 1.0,
-            clock_hz: 50e6,
+            clock_hz: None,
             profile: ProfileKind::Trapezoid,
             path_tolerance_mm: 0.01,
             chord_tolerance_mm: 0.001,
@@ -154,6 +198,7 @@ impl Default for MachineConfig {
                 ToolConfig { number: 2, radius_mm: 1.5 },
                 ToolConfig { number: 3, radius_mm: 0.5 },
             ],
+            core: CoreLimits::default(),
         }
     }
 }
@@ -188,6 +233,8 @@ pub struct ResolvedAxis {
 /// A validated configuration in the units the planner computes in.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Resolved {
+    /// The core clock, Hz (the core's, see [`CoreLimits`]).
+    pub clock_hz: f64,
     /// Period T, s.
     pub period_s: f64,
     /// Period in FPGA clocks (as the core runs it).
@@ -238,7 +285,13 @@ impl MachineConfig {
             .fold(crate::cutter_comp::ToolTable::new(), |table, tool| table.with_radius_mm(tool.number, tool.radius_mm))
     }
 
-    /// Validates and converts to planner units (file name `<built-in>` in errors).
+    /// The same configuration, to be resolved against `core` (the chip's CAPS and clock).
+    pub fn for_core(self, core: CoreLimits) -> MachineConfig {
+        MachineConfig { core, ..self }
+    }
+
+    /// Validates against [`MachineConfig::core`] and converts to planner units (file name
+    /// `<built-in>` in errors).
     pub fn resolve(&self) -> Result<Resolved, ConfigError> {
         self.resolve_in("<built-in>")
     }
@@ -253,16 +306,24 @@ impl MachineConfig {
             }
         };
         let period_s = positive("period_ms", self.period_ms)? * 1e-3;
-        let clock_hz = positive("clock_hz", self.clock_hz)?;
+        let core = &self.core;
+        let clock_hz = positive("clock_hz", self.clock_hz.unwrap_or(core.clock_hz))?;
+        if clock_hz != core.clock_hz {
+            return Err(fail(
+                "clock_hz".into(),
+                format!("{clock_hz} Hz, but the core runs at {} Hz (CLOCK_HZ)", core.clock_hz),
+            ));
+        }
         let clocks = (period_s * clock_hz).round();
-        let params = CoreParams::default();
-        if !(1.0..=f64::from(params.period_mask())).contains(&clocks) {
+        if !(1.0..=f64::from(core.period_max())).contains(&clocks) {
             return Err(fail(
                 "period_ms".into(),
                 format!(
-                    "{clocks} clocks per period is outside the core's 1..={} (P_WIDTH = {})",
-                    params.period_mask(),
-                    params.p_width
+                    "{} ms is {clocks} clocks at {} MHz, outside the core's 1..={} (CAPS.P_WIDTH = {})",
+                    self.period_ms,
+                    clock_hz / 1e6,
+                    core.period_max(),
+                    core.p_width
                 ),
             ));
         }
@@ -289,10 +350,15 @@ impl MachineConfig {
         let to_clocks = |key: &str, ns: f64| -> Result<u32, ConfigError> {
             // Up to whole clocks, ignoring the floating-point dust of exact multiples.
             let clocks = (ns * 1e-9 * clock_hz * (1.0 - 1e-12)).ceil();
-            if !(ns.is_finite() && ns >= 0.0) || clocks > f64::from(params.timing_mask()) {
+            if !(ns.is_finite() && ns >= 0.0) || clocks > f64::from(core.timing_max()) {
                 return Err(fail(
                     format!("drive.{key}"),
-                    format!("{ns} ns is not within 0..={} clocks", params.timing_mask()),
+                    format!(
+                        "{ns} ns is {clocks} clocks at {} MHz, not within the core's 0..={} (CAPS.TIMING_W = {})",
+                        clock_hz / 1e6,
+                        core.timing_max(),
+                        core.timing_w
+                    ),
                 ));
             }
             Ok(clocks as u32)
@@ -317,6 +383,12 @@ impl MachineConfig {
         let mut axes = [absent; 4];
         for (slot, name) in AXIS_NAMES.iter().enumerate() {
             let Some(limits) = self.axes.get(*name) else { continue };
+            if slot >= core.n_axes {
+                return Err(fail(
+                    format!("axes.{name}"),
+                    format!("{name} is axis {slot}, but the core has {} axes (CAPS.N_AXES)", core.n_axes),
+                ));
+            }
             let key = |field: &str| format!("axes.{name}.{field}");
             let steps_per_unit = positive(&key("steps_per_unit"), limits.steps_per_unit)?;
             let mut max_velocity = positive(&key("max_velocity"), limits.max_velocity)?;
@@ -349,6 +421,7 @@ impl MachineConfig {
             return Err(fail("axes".into(), "no axis configured".into()));
         }
         Ok(Resolved {
+            clock_hz,
             period_s,
             period_clocks,
             timing: [timing; 4],

@@ -15,11 +15,12 @@ use finestep_model::limits::RateChecker;
 use finestep_model::{Increment, PeriodRecord};
 
 use crate::config::{Resolved, AXIS_NAMES};
-use crate::geometry::{Element, Shape, Vec4};
+use crate::element::{Element, Shape};
+use crate::error::ProgramError;
 use crate::lookahead::element_limits;
 use crate::nurbs::NurbsCursor;
 use crate::path::FLAG_BLOCK_END;
-use crate::program::ProgramError;
+use crate::vec4::Vec4;
 use crate::velocity::Profile;
 
 /// Periods and where they came from.

@@ -73,14 +73,18 @@ pub mod arc;
 pub mod checker;
 pub mod config;
 pub mod cutter_comp;
+pub mod element;
+pub mod error;
 pub mod geometry;
 pub mod interpolate;
 pub mod linear;
 pub mod lookahead;
 pub mod nurbs;
+pub mod nurbs_pieces;
 pub mod path;
 pub mod profile;
 pub mod program;
+pub mod vec4;
 pub mod velocity;
 
 pub use arc::{interpolate_arc, ArcMove};

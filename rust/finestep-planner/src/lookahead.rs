@@ -31,7 +31,8 @@
 //! moves on, because a later window end only allows higher speeds.
 
 use crate::config::{ProfileKind, Resolved};
-use crate::geometry::{sub, Element, GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE};
+use crate::element::{Element, GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE};
+use crate::vec4::sub;
 use crate::velocity::Limits;
 
 /// The profile limits of an element.

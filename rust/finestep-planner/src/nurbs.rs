@@ -1,5 +1,6 @@
-//! NURBS pieces of the path (G5.2/G5.3) and their direct interpolation: the curve
-//! parameter is stepped every period, the curve is never broken into lines.
+//! The NURBS curve of a G5.2/G5.3 block and its direct interpolation: the curve
+//! parameter is stepped every period, the curve is never broken into lines. Its split
+//! into sub-pieces for the look-ahead is [`crate::nurbs_pieces`].
 //!
 //! # Evaluation
 //!
@@ -8,30 +9,6 @@
 //! its first and second derivatives by de Boor on the derivative curves (the hodographs,
 //! B-splines of degree p - 1 and p - 2 whose control points are precomputed), then
 //! projects: `C = A / w`, `C' = (A' - w' C) / w`, `C'' = (A'' - 2 w' C' - w'' C) / w`.
-//!
-//! # Pieces for the look-ahead
-//!
-//! The curve is split at its knots into spans, and each span into sub-pieces of nearly
-//! constant speed limit ([`pieces`]): the span is sampled at [`SAMPLES_PER_SPAN`] + 1
-//! parameters, bisected wherever the tangent turns more than [`MAX_SAMPLE_TURN`]
-//! between neighbours (a cusp, where the curve stops and turns back, is refused), and
-//! at each sample the curvature `k = |C' x C''| / |C'|^3` limits the speed
-//!
-//! - by the chord tolerance delta: a chord `v T` on the osculating circle of radius
-//!   `rho = 1/k` sags at most delta when `v <= 2/T sqrt(2 rho delta - delta^2)`;
-//! - by the normal acceleration `k v^2` within [`GEOMETRIC_ACCEL_SHARE`] of every
-//!   axis's limit, as on an arc;
-//! - in S-curve mode by the jerk of turning, `(k^2 + |dk/ds|) v^3` within
-//!   [`ARC_JERK_SHARE`] of every axis's jerk limit.
-//!
-//! An interval between two samples takes the smallest limit of the four samples around
-//! it (so a peak between samples is covered), and consecutive intervals whose limits
-//! stay within [`PIECE_SPEED_RATIO`] of each other form one sub-piece, an [`Element`]
-//! with the smallest of their limits, the per-axis velocity, acceleration and jerk
-//! limits projected on the largest tangent component over it (parabolas through five
-//! points of every interval find a maximum between samples), and its arc length
-//! (Gauss-Legendre quadrature). The look-ahead treats the sub-pieces as any
-//! other elements: their junctions are tangent (order >= 3), so they flow at speed.
 //!
 //! # Direct interpolation
 //!
@@ -49,21 +26,11 @@
 //! every other point); the first and last control points are on whole steps, so a
 //! NURBS ending at an exact stop ends exactly there.
 
-use std::sync::Arc;
+use crate::vec4::Vec4;
 
-use crate::config::{ProfileKind, Resolved};
-use crate::geometry::{
-    Element, Shape, Vec4, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
-};
-
-/// Samples of the speed limit per knot span.
-pub const SAMPLES_PER_SPAN: usize = 64;
-/// Consecutive intervals form one sub-piece while their speed limits stay within this ratio.
-pub const PIECE_SPEED_RATIO: f64 = 1.25;
 /// The arc length each period's parameter step must match, units.
 pub const ARC_TOLERANCE: f64 = 1e-10;
 
-/// Nodes and weights of 5-point Gauss-Legendre quadrature on [-1, 1].
 const GAUSS: [(f64, f64); 5] = [
     (0.0, 0.568_888_888_888_888_9),
     (-0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
@@ -368,244 +335,4 @@ impl NurbsCursor {
         self.s += covered;
         u
     }
-}
-
-/// Largest turn of the tangent between neighbouring samples, radians (5 degrees).
-pub const MAX_SAMPLE_TURN: f64 = 5.0 * std::f64::consts::PI / 180.0;
-
-fn cusp_error(d: &Derivatives) -> String {
-    format!(
-        "the NURBS has a cusp (it stops and turns back) at X{:.4} Y{:.4}: a repeated or folded-back control point? Split the curve there",
-        d.point[0], d.point[1]
-    )
-}
-
-/// The sample parameters of the span `ua..ub`: [`SAMPLES_PER_SPAN`] + 1 uniform ones,
-/// then bisected wherever the tangent turns by more than [`MAX_SAMPLE_TURN`] between
-/// neighbours, so that no sharp bend hides between samples. A turn of more than a
-/// right angle that bisection cannot resolve is a cusp: refused.
-fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, String> {
-    let tangent = |u: f64| {
-        let d = curve.derivatives_on(u, ua);
-        let speed = d.speed();
-        ([d.first[0] / speed, d.first[1] / speed], d)
-    };
-    let mut out = vec![ua];
-    let mut stack: Vec<(f64, f64, u32)> = (0..SAMPLES_PER_SPAN)
-        .rev()
-        .map(|j| {
-            (
-                ua + (ub - ua) * j as f64 / SAMPLES_PER_SPAN as f64,
-                ua + (ub - ua) * (j + 1) as f64 / SAMPLES_PER_SPAN as f64,
-                0,
-            )
-        })
-        .collect();
-    while let Some((a, b, depth)) = stack.pop() {
-        let (ta, _) = tangent(a);
-        let (tb, db) = tangent(b);
-        let cos = (ta[0] * tb[0] + ta[1] * tb[1]).clamp(-1.0, 1.0);
-        if cos.is_nan() {
-            return Err(cusp_error(&db));
-        }
-        if cos.acos() > MAX_SAMPLE_TURN {
-            if depth < 48 && b - a > 1e-13 * (ub - ua) {
-                let mid = 0.5 * (a + b);
-                stack.push((mid, b, depth + 1));
-                stack.push((a, mid, depth + 1));
-                continue;
-            }
-            if cos < 0.0 {
-                return Err(cusp_error(&db));
-            }
-        }
-        out.push(b);
-        if out.len() > 1 << 16 {
-            return Err("the NURBS bends too sharply to be sampled (over 65 536 samples in one knot span)".into());
-        }
-    }
-    Ok(out)
-}
-
-/// The speed limits at one sample of the curve.
-struct Sample {
-    u: f64,
-    /// Curvature magnitude, 1/units.
-    k: f64,
-    /// Unit tangent (X, Y).
-    tangent: [f64; 2],
-    /// Speed cap from curvature, units/s.
-    cap: f64,
-}
-
-/// The curve as elements ([`Shape::Nurbs`] sub-pieces with their own limits; module
-/// docs), for the block on `line` at `feed` units/s; `Err` with the reason when the
-/// curve cannot be followed (a cusp: the parametric speed vanishes).
-pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize) -> Result<Vec<Element>, String> {
-    let scurve = config.profile == ProfileKind::SCurve;
-    let plane_axes = [0usize, 1];
-    let mut out = Vec::new();
-    let (start_u, end_u) = curve.domain();
-    let size = {
-        let (a, b) = (curve.point(start_u), curve.point(end_u));
-        (b[0] - a[0]).hypot(b[1] - a[1]).max(curve.arc_length_composite(start_u, end_u, 8)).max(1e-9)
-    };
-    for (ua, ub) in curve.spans() {
-        let params = sample_parameters(&curve, ua, ub)?;
-        let m = params.len() - 1;
-        let mut samples: Vec<Sample> = Vec::with_capacity(m + 1);
-        for &u in &params {
-            let d = curve.derivatives_on(u, ua);
-            let speed = d.speed();
-            if speed.is_nan() || speed <= 1e-9 * size / (ub - ua).max(1e-300) || !speed.is_finite() {
-                return Err(cusp_error(&d));
-            }
-            let k = d.curvature().abs();
-            samples.push(Sample { u, k, tangent: [d.first[0] / speed, d.first[1] / speed], cap: f64::INFINITY });
-        }
-        // |dk/ds| by differences between samples.
-        let ds: Vec<f64> = (0..m).map(|j| curve.arc_length_composite(samples[j].u, samples[j + 1].u, 2)).collect();
-        let dk: Vec<f64> = (0..=m)
-            .map(|j| {
-                let back = if j > 0 { (samples[j].k - samples[j - 1].k).abs() / ds[j - 1].max(1e-300) } else { 0.0 };
-                let ahead = if j < m { (samples[j + 1].k - samples[j].k).abs() / ds[j].max(1e-300) } else { 0.0 };
-                back.max(ahead)
-            })
-            .collect();
-        for (j, sample) in samples.iter_mut().enumerate() {
-            let k = sample.k;
-            let mut cap = f64::INFINITY;
-            if k > 1e-12 {
-                let rho = 1.0 / k;
-                let delta = config.chord_tolerance_mm.min(rho);
-                cap = cap.min(2.0 / config.period_s * (2.0 * rho * delta - delta * delta).max(0.0).sqrt());
-            }
-            for &a in &plane_axes {
-                let limits = &config.axes[a];
-                if !limits.present {
-                    continue;
-                }
-                if k > 1e-12 {
-                    cap = cap.min((GEOMETRIC_ACCEL_SHARE * limits.max_acceleration / k).sqrt());
-                }
-                let turning = k * k + dk[j];
-                if scurve && turning > 1e-12 {
-                    cap = cap.min((ARC_JERK_SHARE * limits.max_jerk / turning).cbrt());
-                }
-            }
-            sample.cap = cap;
-        }
-        // Per interval and axis, the largest tangent component: parabolas through the
-        // values at five points of the interval, at their vertices where those are inside
-        // (an inflection between samples lets the tangent swing past both ends), kept a
-        // millionth high.
-        let tangent_max: Vec<[f64; 2]> = (0..m)
-            .map(|j| {
-                let (a, b) = (samples[j].u, samples[j + 1].u);
-                let mut f = [samples[j].tangent; 5];
-                f[4] = samples[j + 1].tangent;
-                for (i, slot) in f.iter_mut().enumerate().take(4).skip(1) {
-                    let d = curve.derivatives_on(a + (b - a) * i as f64 / 4.0, ua);
-                    let speed = d.speed();
-                    *slot = [d.first[0] / speed, d.first[1] / speed];
-                }
-                [0, 1].map(|c| {
-                    let mut top = f.iter().map(|t| t[c].abs()).fold(0.0, f64::max);
-                    for k in [0, 2] {
-                        let (f0, fm, f1) = (f[k][c], f[k + 1][c], f[k + 2][c]);
-                        let (lin, quad) = (-3.0 * f0 + 4.0 * fm - f1, 2.0 * f0 - 4.0 * fm + 2.0 * f1);
-                        if quad.abs() > 1e-300 {
-                            let t = -lin / (2.0 * quad);
-                            if (0.0..=1.0).contains(&t) {
-                                top = top.max((f0 + t * lin + t * t * quad).abs());
-                            }
-                        }
-                    }
-                    (top * (1.0 + 1e-6)).min(1.0)
-                })
-            })
-            .collect();
-        // Per interval: the smallest cap of the four samples around it.
-        let interval_cap: Vec<f64> = (0..m)
-            .map(|j| samples[j.saturating_sub(1)..=(j + 2).min(m)].iter().map(|s| s.cap).fold(f64::INFINITY, f64::min))
-            .collect();
-        let mut j = 0;
-        while j < m {
-            let (mut lo, mut hi) = (interval_cap[j], interval_cap[j]);
-            let mut end = j + 1;
-            while end < m {
-                let c = interval_cap[end];
-                let (nlo, nhi) = (lo.min(c), hi.max(c));
-                if nhi.is_finite() && nhi > PIECE_SPEED_RATIO * nlo || (nhi.is_infinite() != nlo.is_infinite()) {
-                    break;
-                }
-                (lo, hi) = (nlo, nhi);
-                end += 1;
-            }
-            let window = &samples[j.saturating_sub(1)..=(end + 1).min(m)];
-            let k_max = window.iter().map(|s| s.k).fold(0.0, f64::max);
-            // Per axis the largest tangent component over the window; 1 where the
-            // tangent passes through the axis's direction between two samples.
-            let intervals = &tangent_max[j.saturating_sub(1)..(end + 1).min(m)];
-            let weights = [0, 1].map(|c| {
-                let through = window.windows(2).any(|w| w[0].tangent[1 - c] * w[1].tangent[1 - c] <= 0.0);
-                if through {
-                    1.0
-                } else {
-                    intervals.iter().map(|t| t[c]).fold(0.0, f64::max)
-                }
-            });
-            let (u0, u1) = (samples[j].u, samples[end].u);
-            let mut v_cap = feed.min(lo);
-            let mut accel = f64::INFINITY;
-            let mut jerk = f64::INFINITY;
-            for (c, &a) in plane_axes.iter().enumerate() {
-                let limits = &config.axes[a];
-                let w = weights[c];
-                if limits.present && w > 1e-12 {
-                    v_cap = v_cap.min(limits.max_velocity / w);
-                    accel = accel.min(TANGENTIAL_ACCEL_SHARE * limits.max_acceleration / w);
-                    jerk = jerk.min(TANGENTIAL_JERK_SHARE * limits.max_jerk / w);
-                }
-            }
-            if scurve && k_max > 1e-12 {
-                for &a in &plane_axes {
-                    let limits = &config.axes[a];
-                    if limits.present {
-                        // Tangential acceleration turning with the path: 3 k v a (as on arcs).
-                        accel = accel.min(ARC_JERK_SHARE * limits.max_jerk / (3.0 * k_max * v_cap));
-                    }
-                }
-            }
-            let length: f64 = ds[j..end].iter().sum();
-            let start = curve.point(u0);
-            let end_point = curve.point(u1);
-            out.push(Element {
-                shape: Shape::Nurbs { curve: Arc::clone(&curve), u0, u1 },
-                start,
-                end: end_point,
-                length,
-                line,
-                v_cap,
-                accel,
-                jerk,
-                stop_after: false,
-                dwell_periods: 0,
-                dwell_line: 0,
-                block_end: false,
-            });
-            j = end;
-        }
-    }
-    if out.is_empty() {
-        return Err("the NURBS has no length".into());
-    }
-    // The ends exactly on the control points (on whole steps).
-    let first = curve.point(start_u);
-    let last = curve.point(end_u);
-    out[0].start = first;
-    if let Some(e) = out.last_mut() {
-        e.end = last;
-    }
-    Ok(out)
 }

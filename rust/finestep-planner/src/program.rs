@@ -9,8 +9,9 @@
 use finestep_gcode::Program;
 use finestep_model::PeriodRecord;
 
-use crate::config::{ConfigError, MachineConfig};
+use crate::config::MachineConfig;
 use crate::cutter_comp::compensate;
+pub use crate::error::ProgramError;
 use crate::geometry::elements;
 use crate::interpolate::interpolate;
 use crate::lookahead::junction_speeds;
@@ -28,22 +29,6 @@ pub struct PlannedProgram {
     pub elements: usize,
     /// What was adjusted or not carried out as programmed, for the report.
     pub notes: Vec<String>,
-}
-
-/// Why a program cannot be planned: the block's line and the reason.
-#[derive(Debug, thiserror::Error, PartialEq)]
-#[error("line {line}: {reason}")]
-pub struct ProgramError {
-    /// 1-based source line (0: not about one line).
-    pub line: usize,
-    /// What is wrong.
-    pub reason: String,
-}
-
-impl From<ConfigError> for ProgramError {
-    fn from(e: ConfigError) -> Self {
-        ProgramError { line: 0, reason: e.to_string() }
-    }
 }
 
 /// Plan and interpolate `program` on the machine `config`, starting at rest at the origin.
