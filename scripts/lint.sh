@@ -4,6 +4,7 @@
 # warning, any inferred latch or any logic-loop/driver problem found by `check`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+python3 scripts/check_links.py   # relative links in README.md and docs/ resolve
 TOP=finestep_top
 SOURCES=(hdl/*.v)
 GEN=build/gen
