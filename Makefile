@@ -41,9 +41,10 @@ flows: setup
 test-long: setup
 	FINESTEP_CASES=2000 $(CARGO) test --release --workspace
 
-# Regenerate docs/registers.md from hdl/registers.toml (cargo test fails while it is stale).
+# Regenerate docs/registers.md and docs/interface.md from hdl/registers.toml and
+# hdl/interface.toml (cargo test fails while they are stale).
 regmap: setup
-	$(CARGO) run -q --release -p finestep-regmap -- markdown docs/registers.md
+	$(CARGO) run -q --release -p finestep-regmap -- docs
 
 # Bitstreams with the open tools from PyPI (outputs under build/bitstream/, never
 # committed); each fails unless nextpnr meets the constrained clock. `make test` runs them

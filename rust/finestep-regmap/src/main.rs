@@ -1,13 +1,16 @@
-//! `finestep-regmap`: writes the Verilog header and the Markdown documentation of the
-//! register map, and checks that the committed `docs/registers.md` is current.
+//! `finestep-regmap`: writes the Verilog headers, the C header and the Markdown
+//! documentation of the register map and the interface description, and checks that
+//! the committed docs are current.
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
-use finestep_regmap::{check_docs, default_root, load_map, markdown, rust_source, verilog};
+use finestep_regmap::{
+    c_header, check_docs, default_root, docs, hdl_headers, load_interface, load_map, markdown, rust_source, verilog,
+};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-/// Generators for finestep's register map (hdl/registers.toml).
+/// Generators for finestep's register map (hdl/registers.toml) and interface (hdl/interface.toml).
 #[derive(Parser)]
 #[command(version, about)]
 struct Cli {
@@ -36,7 +39,21 @@ enum Command {
         /// Output file
         out: PathBuf,
     },
-    /// Fail unless docs/registers.md is exactly what the map generates
+    /// Write every Verilog header the RTL includes (finestep_regs.vh,
+    /// finestep_interface.vh, <module>_checks.vh) into DIR
+    Headers {
+        /// Output directory
+        dir: PathBuf,
+    },
+    /// Write the C header of the Verilator shims (finestep_interface.h) to OUT
+    CHeader {
+        /// Output file
+        out: PathBuf,
+    },
+    /// Regenerate the committed docs (docs/registers.md, docs/interface.md) under the root
+    Docs,
+    /// Fail unless docs/registers.md and docs/interface.md are exactly what the map and
+    /// the interface description generate
     Check,
 }
 
@@ -56,9 +73,28 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Verilog { out } => write(&out, verilog::generate(&load_map(&root)?)),
         Command::Markdown { out } => write(&out, markdown::generate(&load_map(&root)?)),
         Command::Rust { out } => write(&out, rust_source::generate(&load_map(&root)?)),
+        Command::Headers { dir } => {
+            let (map, interface) = load_interface(&root)?;
+            for (name, text) in hdl_headers(&map, &interface) {
+                write(&dir.join(name), text)?;
+            }
+            Ok(())
+        }
+        Command::CHeader { out } => write(&out, c_header::generate(&load_interface(&root)?.1)),
+        Command::Docs => {
+            let (map, interface) = load_interface(&root)?;
+            for (path, text) in docs(&map, &interface) {
+                write(&root.join(path), text)?;
+            }
+            Ok(())
+        }
         Command::Check => {
             check_docs(&root)?;
-            println!("finestep-regmap: {} is current", finestep_regmap::DOCS_PATH);
+            println!(
+                "finestep-regmap: {} and {} are current",
+                finestep_regmap::DOCS_PATH,
+                finestep_regmap::INTERFACE_DOCS_PATH
+            );
             Ok(())
         }
     }

@@ -305,6 +305,9 @@ pub enum Place {
     Register(String),
     /// One field of a register.
     Field(String, String),
+    /// A part of the interface description (`hdl/interface.toml`), in words
+    /// (`enum OUT_MODE`, `module finestep_top, parameter N_AXES`).
+    Interface(String),
 }
 
 impl Place {
@@ -325,6 +328,7 @@ impl fmt::Display for Place {
             Place::Map => f.write_str("map"),
             Place::Register(register) => write!(f, "register {register}"),
             Place::Field(register, field) => write!(f, "register {register}, field {field}"),
+            Place::Interface(part) => f.write_str(part),
         }
     }
 }

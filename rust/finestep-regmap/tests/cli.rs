@@ -1,7 +1,9 @@
 //! The `finestep-regmap` binary: its subcommands write what the library generates, and
 //! `check` fails on stale docs with a message.
 
-use finestep_regmap::{default_root, load_map, markdown, verilog, DOCS_PATH, MAP_PATH};
+use finestep_regmap::{
+    default_root, load_map, markdown, verilog, DOCS_PATH, INTERFACE_DOCS_PATH, INTERFACE_PATH, MAP_PATH,
+};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -39,6 +41,8 @@ fn check_passes_on_this_repository_and_fails_on_stale_docs() {
     std::fs::create_dir_all(root.join("hdl")).unwrap();
     std::fs::create_dir_all(root.join("docs")).unwrap();
     std::fs::copy(default_root().join(MAP_PATH), root.join(MAP_PATH)).unwrap();
+    std::fs::copy(default_root().join(INTERFACE_PATH), root.join(INTERFACE_PATH)).unwrap();
+    std::fs::copy(default_root().join(INTERFACE_DOCS_PATH), root.join(INTERFACE_DOCS_PATH)).unwrap();
     std::fs::write(root.join(DOCS_PATH), "# an old copy\n").unwrap();
     let output = regmap(&["check", "--root", root.to_str().unwrap()]);
     assert!(!output.status.success());
@@ -60,4 +64,23 @@ fn an_invalid_map_fails_with_the_problem_not_a_panic() {
     let message = String::from_utf8_lossy(&output.stderr);
     assert!(message.contains("register RECORD_PUSH: RECORD_PUSH at address 0x04 overlaps CONTROL"), "{message}");
     assert!(!message.contains("panicked"), "{message}");
+}
+
+#[test]
+fn headers_writes_every_verilog_header_and_docs_regenerates_both_pages() {
+    let dir = scratch("headers");
+    let output = regmap(&["headers", dir.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    for name in ["finestep_regs.vh", "finestep_interface.vh", "finestep_top_checks.vh", "finestep_core_checks.vh"] {
+        assert!(dir.join(name).is_file(), "{name} missing");
+    }
+    let root = scratch("docs");
+    std::fs::create_dir_all(root.join("hdl")).unwrap();
+    std::fs::create_dir_all(root.join("docs")).unwrap();
+    std::fs::copy(default_root().join(MAP_PATH), root.join(MAP_PATH)).unwrap();
+    std::fs::copy(default_root().join(INTERFACE_PATH), root.join(INTERFACE_PATH)).unwrap();
+    let output = regmap(&["docs", "--root", root.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let output = regmap(&["check", "--root", root.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
 }

@@ -1,7 +1,10 @@
-//! `docs/registers.md` is committed: `cargo test --workspace` (and so `make test`) fails
-//! here when it no longer matches `hdl/registers.toml`.
+//! `docs/registers.md` and `docs/interface.md` are committed: `cargo test --workspace`
+//! (and so `make test`) fails here when they no longer match `hdl/registers.toml` and
+//! `hdl/interface.toml`.
 
-use finestep_regmap::{check_docs, default_root, DocsCheckError, DOCS_PATH, MAP_PATH};
+use finestep_regmap::{
+    check_docs, default_root, DocsCheckError, DOCS_PATH, INTERFACE_DOCS_PATH, INTERFACE_PATH, MAP_PATH,
+};
 use std::path::{Path, PathBuf};
 
 #[test]
@@ -18,9 +21,13 @@ fn scratch_root(test: &str, docs: Option<&str>) -> PathBuf {
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(root.join("hdl")).unwrap();
     std::fs::copy(default_root().join(MAP_PATH), root.join(MAP_PATH)).unwrap();
+    std::fs::copy(default_root().join(INTERFACE_PATH), root.join(INTERFACE_PATH)).unwrap();
     if let Some(docs) = docs {
         std::fs::create_dir_all(root.join("docs")).unwrap();
         std::fs::write(root.join(DOCS_PATH), docs).unwrap();
+        let (_, interface) = finestep_regmap::load_interface(&default_root()).unwrap();
+        std::fs::write(root.join(INTERFACE_DOCS_PATH), finestep_regmap::interface_markdown::generate(&interface))
+            .unwrap();
     }
     root
 }
@@ -66,4 +73,12 @@ fn a_missing_file_is_reported() {
 fn a_fresh_copy_passes() {
     let root = scratch_root("fresh", Some(&generated_docs()));
     check_docs(&root).unwrap();
+}
+
+#[test]
+fn a_stale_interface_page_is_reported() {
+    let root = scratch_root("interface", Some(&generated_docs()));
+    std::fs::write(root.join(INTERFACE_DOCS_PATH), "# an old copy\n").unwrap();
+    let message = check_docs(&root).unwrap_err().to_string();
+    assert!(message.contains("docs/interface.md is stale: line 1"), "{message}");
 }
