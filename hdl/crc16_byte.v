@@ -12,7 +12,9 @@ module crc16_byte (
     output wire [15:0] crc_out
 );
 
-    localparam [15:0] POLYNOMIAL = 16'h1021;
+`include "finestep_interface.vh"
+
+    localparam [15:0] POLYNOMIAL = FS_SPI_CRC_POLYNOMIAL;
 
     function [15:0] next_crc(input [15:0] crc_before, input [7:0] byte_in);
         integer bit_index;
@@ -31,7 +33,7 @@ module crc16_byte (
     always @(*) begin
         assert (next_crc(next_crc(crc_in, crc_in[15:8]), crc_in[7:0]) == 16'h0000);
         assert (next_crc(next_crc(next_crc(next_crc(next_crc(next_crc(next_crc(next_crc(next_crc(
-                16'hFFFF, "1"), "2"), "3"), "4"), "5"), "6"), "7"), "8"), "9") == 16'h29B1);
+                FS_SPI_CRC_INITIAL, "1"), "2"), "3"), "4"), "5"), "6"), "7"), "8"), "9") == 16'h29B1);
     end
 `endif
 

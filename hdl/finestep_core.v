@@ -66,6 +66,9 @@ module finestep_core #(
     output wire [15:0]                gantry_corrections
 );
 
+`include "finestep_interface.vh"
+`include "finestep_core_checks.vh"
+
     wire                 timer_active;
     wire [P_WIDTH-1:0]   p_active;
     // The DDAs hold their phase at M/2 until the period timer runs.
@@ -174,8 +177,8 @@ module finestep_core #(
                 .step_space(step_space[TIMING_W*i +: TIMING_W]),
                 .dir_setup(dir_setup[TIMING_W*i +: TIMING_W]),
                 .dir_hold(dir_hold[TIMING_W*i +: TIMING_W]),
-                .out_mode(out_mode[2*i +: 2]),
-                .invert(invert[3*i +: 3]),
+                .out_mode(out_mode[FS_OUT_MODE_WIDTH*i +: FS_OUT_MODE_WIDTH]),
+                .invert(invert[FS_INVERT_WIDTH*i +: FS_INVERT_WIDTH]),
                 .axis_enable(axis_enable[i]),
                 .clear_errors(clear_errors),
                 .halt(halt),

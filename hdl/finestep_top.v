@@ -54,7 +54,13 @@ module finestep_top #(
     output wire [N_AXES-1:0] pin_en
 );
 
-    localparam REC_W   = 32 * N_AXES + 8;
+`include "finestep_regs.vh"
+`include "finestep_interface.vh"
+`include "finestep_top_checks.vh"
+
+    // A FIFO record: the increments, then the flags (FS_REC_*).
+    localparam INC_W   = FS_REC_INC_WIDTH * N_AXES;
+    localparam REC_W   = INC_W + FS_REC_FLAGS_WIDTH;
     localparam LEVEL_W = FIFO_DEPTH_LOG2 + 1;
 
     // Register bus
@@ -73,8 +79,8 @@ module finestep_top #(
     wire [15:0]                start_level;
     wire [N_AXES-1:0]          axis_enable;
     wire [TIMING_W*N_AXES-1:0] step_len, step_space, dir_setup, dir_hold;
-    wire [2*N_AXES-1:0]        out_mode;
-    wire [3*N_AXES-1:0]        invert;
+    wire [FS_OUT_MODE_WIDTH*N_AXES-1:0] out_mode;
+    wire [FS_INVERT_WIDTH*N_AXES-1:0]   invert;
     wire                       clear_errors, clear_faults, flush_cmd, kick;
     // Safety
     wire estop_active, fault_estop, fault_watchdog, halt;
@@ -108,8 +114,8 @@ module finestep_top #(
     wire rec_ready, fifo_rec_valid, gate, underrun, underrun_event;
     wire boundary = core_run && rec_ready;
     wire rec_valid = jog_engaged ? 1'b1 : fifo_rec_valid;
-    wire [32*N_AXES-1:0] rec_inc   = jog_engaged ? jog_inc : fifo_head[32*N_AXES-1:0];
-    wire [7:0]           rec_flags = jog_engaged ? 8'd0 : fifo_head[32*N_AXES +: 8];
+    wire [INC_W-1:0]              rec_inc   = jog_engaged ? jog_inc : fifo_head[INC_W-1:0];
+    wire [FS_REC_FLAGS_WIDTH-1:0] rec_flags = jog_engaged ? {FS_REC_FLAGS_WIDTH{1'b0}} : fifo_head[INC_W +: FS_REC_FLAGS_WIDTH];
     wire [32*N_AXES-1:0] position;
     wire [N_AXES-1:0]    rate_error, step_lost;
     wire record_error, block_end;
@@ -252,7 +258,7 @@ module finestep_top #(
 
     safety_monitor #(
         .WD_W(WD_W),
-        .FILTER_W(8)
+        .FILTER_W(FS_ESTOP_FILTER_SAMPLES_WIDTH)
     ) safety (
         .clk(clk), .rst(rst),
         .watchdog_enable(watchdog_enable), .watchdog_timeout(watchdog_timeout),
@@ -283,7 +289,7 @@ module finestep_top #(
     ) motion (
         .clk(clk), .rst(rst),
         .core_run(fifo_run), .start_level(start_level), .clear_errors(clear_errors),
-        .fifo_level(fifo_level), .fifo_valid(fifo_valid), .head_block_end(fifo_head[32*N_AXES]),
+        .fifo_level(fifo_level), .fifo_valid(fifo_valid), .head_block_end(fifo_head[INC_W + FS_REC_FLAG_BLOCK_END_BIT]),
         .fifo_pop(fifo_pop_request),
         .rec_ready(rec_ready), .rec_valid(fifo_rec_valid),
         .gate(gate), .underrun(underrun), .underrun_event(underrun_event)
@@ -348,7 +354,7 @@ module finestep_top #(
     );
 
     encoder_bank #(
-        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(4)
+        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH)
     ) encoders (
         .clk(clk), .rst(rst),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
@@ -368,7 +374,7 @@ module finestep_top #(
 
     generate
         if (HAS_MPG != 0) begin : mpg
-            hand_wheel #(.FILTER_W(4)) wheel (
+            hand_wheel #(.FILTER_W(FS_MPG_CONTROL_FILTER_WIDTH)) wheel (
                 .clk(clk), .rst(rst), .mpg_a(mpg_a), .mpg_b(mpg_b),
                 .prescale(mpg_prescale), .filter_len(mpg_filter),
                 .clear_errors(clear_errors), .clear_counters(clear_counters),

@@ -45,6 +45,7 @@ module jog_generator #(
 );
 
     localparam MIN_PERIOD = 128;
+`include "finestep_interface.vh"
 
     reg         engaged_reg;
     reg  [2:0]  axis_reg;
@@ -78,8 +79,8 @@ module jog_generator #(
     wire [47:0] scale_x1   = {{16{scale[31]}}, scale};
     wire [47:0] scale_x10  = (scale_x1 << 3) + (scale_x1 << 1);
     wire [47:0] scale_x100 = (scale_x1 << 6) + (scale_x1 << 5) + (scale_x1 << 2);
-    wire [47:0] detent_travel = (multiplier == 2'd0) ? scale_x1 :
-                                (multiplier == 2'd1) ? scale_x10 : scale_x100;
+    wire [47:0] detent_travel = (multiplier == FS_JOG_MULTIPLIER_X1) ? scale_x1 :
+                                (multiplier == FS_JOG_MULTIPLIER_X10) ? scale_x10 : scale_x100;
     wire [48:0] travel_cfg_49 = {travel_cfg_reg[47], travel_cfg_reg};
     wire [48:0] window_cfg_49 = {1'b0, window_cfg_reg};
 

@@ -38,8 +38,8 @@ module period_timer #(
     output wire                 record_error
 );
 
-    localparam INC_FRAC_BITS = 16;
-    localparam FLAG_BLOCK_END = 0;
+    // The record layout (FS_REC_*): I16F16 increments, the BLOCK_END flag.
+`include "finestep_interface.vh"
 
     reg                 active_reg;
     reg [P_WIDTH-1:0]   remaining_reg;
@@ -67,8 +67,8 @@ module period_timer #(
     always @* begin
         record_ok = 1'b1;
         for (axis = 0; axis < N_AXES; axis = axis + 1) begin
-            whole_steps = rec_inc[32*axis+31] ? ~rec_inc[32*axis+INC_FRAC_BITS +: 16] : rec_inc[32*axis+INC_FRAC_BITS +: 16];
-            carries     = rec_inc[32*axis+31] && (rec_inc[32*axis +: INC_FRAC_BITS] == {INC_FRAC_BITS{1'b0}});
+            whole_steps = rec_inc[32*axis+31] ? ~rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16] : rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16];
+            carries     = rec_inc[32*axis+31] && (rec_inc[32*axis +: FS_REC_INC_FRAC_BITS] == {FS_REC_INC_FRAC_BITS{1'b0}});
             if (carries ? ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, p_act_minus_one_reg})
                         : ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, p_act_reg}))
                 record_ok = 1'b0;
@@ -106,7 +106,7 @@ module period_timer #(
             boundary_reg  <= (p_act_minus_one_reg == {P_WIDTH{1'b0}});
             if (take_record && record_ok) begin
                 inc_reg     <= rec_inc;
-                cur_end_reg <= rec_flags[FLAG_BLOCK_END];
+                cur_end_reg <= rec_flags[FS_REC_FLAG_BLOCK_END_BIT];
             end else begin
                 inc_reg     <= {32*N_AXES{1'b0}};
                 cur_end_reg <= 1'b0;
@@ -155,7 +155,7 @@ module period_timer #(
         f_record_ok = 1'b1;
         for (f_rec_axis = 0; f_rec_axis < N_AXES; f_rec_axis = f_rec_axis + 1) begin
             f_rec_magnitude = rec_inc[32*f_rec_axis+31] ? (~rec_inc[32*f_rec_axis +: 32] + 32'd1) : rec_inc[32*f_rec_axis +: 32];
-            if ({{P_WIDTH{1'b0}}, f_rec_magnitude[31:INC_FRAC_BITS]} >= {16'd0, p_act_reg}) f_record_ok = 1'b0;
+            if ({{P_WIDTH{1'b0}}, f_rec_magnitude[31:FS_REC_INC_FRAC_BITS]} >= {16'd0, p_act_reg}) f_record_ok = 1'b0;
         end
     end
     always @(*) if (f_past_valid && !rst) begin
@@ -169,7 +169,7 @@ module period_timer #(
         if (!active_reg) assert (remaining_reg == {P_WIDTH{1'b0}} && inc_reg == {32*N_AXES{1'b0}});
         for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) begin
             f_magnitude = inc_reg[32*f_axis+31] ? (~inc_reg[32*f_axis +: 32] + 32'd1) : inc_reg[32*f_axis +: 32];
-            assert ({{P_WIDTH{1'b0}}, f_magnitude[31:INC_FRAC_BITS]} < {16'd0, p_act_reg});
+            assert ({{P_WIDTH{1'b0}}, f_magnitude[31:FS_REC_INC_FRAC_BITS]} < {16'd0, p_act_reg});
         end
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin

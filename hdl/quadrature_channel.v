@@ -47,10 +47,8 @@ module quadrature_channel #(
     output wire                z_level_active   // the index after polarity
 );
 
-    localparam [1:0] MODE_X4 = 2'd0;
-    localparam [1:0] MODE_X2 = 2'd1;
-    localparam [1:0] MODE_X1 = 2'd2;
-    localparam [1:0] MODE_STEP_DIR = 2'd3;
+    // The count modes (ENC_CONTROL.MODE) are FS_COUNT_MODE_* of the interface.
+`include "finestep_interface.vh"
 
     // The three filters share the sample strobe, so they are primed on the same clock.
     wire a, b, z_level, primed, primed_b_unused, primed_z_unused;
@@ -84,7 +82,7 @@ module quadrature_channel #(
     wire da      = (a != a_prev_reg);
     wire db      = (b != b_prev_reg);
     wire forward = (da && (a != b)) || (db && (a == b));
-    wire step_dir = (mode == MODE_STEP_DIR);
+    wire step_dir = (mode == FS_COUNT_MODE_STEP_DIR);
     wire both    = live_reg && da && db && !step_dir;
 
     // The count change this cycle: +1, -1 or none.
@@ -93,9 +91,9 @@ module quadrature_channel #(
         step    = 1'b0;
         step_up = forward;
         case (mode)
-            MODE_X4: step = (da != db);
-            MODE_X2: step = da && !db;
-            MODE_X1: begin
+            FS_COUNT_MODE_X4: step = (da != db);
+            FS_COUNT_MODE_X2: step = da && !db;
+            FS_COUNT_MODE_X1: begin
                 step    = da && !db && !b;
                 step_up = a;
             end
@@ -195,7 +193,7 @@ module quadrature_channel #(
     always @(*) if (f_past_valid && !rst) begin
         assert (!clear_armed_reg);
         if (!live_reg) assert (count_reg == 32'd0 && !illegal_reg);
-        if (mode == MODE_X4 && f_clean && live_reg) assert (count_reg[1:0] == f_phase - f_phase0);
+        if (mode == FS_COUNT_MODE_X4 && f_clean && live_reg) assert (count_reg[1:0] == f_phase - f_phase0);
     end
 `endif
 

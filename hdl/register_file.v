@@ -108,6 +108,7 @@ module register_file #(
 );
 
 `include "finestep_regs.vh"
+`include "finestep_interface.vh"
 
     localparam FIFO_DEPTH = 1 << FIFO_DEPTH_LOG2;
     localparam IRQ_W = FS_IRQ_MASK_MASK_WIDTH;
@@ -138,8 +139,8 @@ module register_file #(
     reg [TIMING_W*N_AXES-1:0]  step_space_reg;
     reg [TIMING_W*N_AXES-1:0]  dir_setup_reg;
     reg [TIMING_W*N_AXES-1:0]  dir_hold_reg;
-    reg [2*N_AXES-1:0]         out_mode_reg;
-    reg [3*N_AXES-1:0]         invert_reg;
+    reg [FS_OUT_MODE_WIDTH*N_AXES-1:0] out_mode_reg;
+    reg [FS_INVERT_WIDTH*N_AXES-1:0]   invert_reg;
     reg [32*N_AXES-1:0]        record_inc_reg;
     // Hardware state
     reg [31:0]                 timestamp_reg;
@@ -164,7 +165,7 @@ module register_file #(
     reg                        clear_counters_reg;
     reg                        kick_reg;
     reg                        push_reg;
-    reg [7:0]                  push_flags_reg;
+    reg [FS_REC_FLAGS_WIDTH-1:0] push_flags_reg;
 
     // Arbiter: SPI first.
     wire        grant_spi = spi_req;
@@ -266,10 +267,11 @@ module register_file #(
                 timing_b_word[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*index +: TIMING_W];
                 timing_b_word[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*index +: TIMING_W];
                 mode_word = 32'd0;
-                mode_word[FS_AXIS_MODE_OUT_MODE_LSB +: 2] = out_mode_reg[2*index +: 2];
-                mode_word[FS_AXIS_MODE_INVERT_A_LSB]      = invert_reg[3*index];
-                mode_word[FS_AXIS_MODE_INVERT_B_LSB]      = invert_reg[3*index + 1];
-                mode_word[FS_AXIS_MODE_INVERT_EN_LSB]     = invert_reg[3*index + 2];
+                mode_word[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH] =
+                    out_mode_reg[FS_OUT_MODE_WIDTH*index +: FS_OUT_MODE_WIDTH];
+                mode_word[FS_AXIS_MODE_INVERT_A_LSB]  = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_A_BIT];
+                mode_word[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_B_BIT];
+                mode_word[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_EN_BIT];
                 read_value = read_value
                     | ({32{{25'd0, addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
                     | ({32{{25'd0, addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
@@ -327,7 +329,7 @@ module register_file #(
                 FS_AXIS_ENABLE_ADDR:      axis_enable_reg      <= bus_wdata[N_AXES-1:0];
                 FS_RECORD_PUSH_ADDR: begin
                     push_reg       <= 1'b1;
-                    push_flags_reg <= bus_wdata[FS_RECORD_PUSH_FLAGS_LSB +: 8];
+                    push_flags_reg <= bus_wdata[FS_RECORD_PUSH_FLAGS_LSB +: FS_REC_FLAGS_WIDTH];
                 end
                 default: ;
             endcase
@@ -341,10 +343,11 @@ module register_file #(
                     dir_hold_reg[TIMING_W*axis +: TIMING_W]  <= bus_wdata[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W];
                 end
                 if ({25'd0, bus_addr} == {25'd0, FS_AXIS_MODE_ADDR} + axis * FS_AXIS_MODE_STRIDE) begin
-                    out_mode_reg[2*axis +: 2] <= bus_wdata[FS_AXIS_MODE_OUT_MODE_LSB +: 2];
-                    invert_reg[3*axis]        <= bus_wdata[FS_AXIS_MODE_INVERT_A_LSB];
-                    invert_reg[3*axis + 1]    <= bus_wdata[FS_AXIS_MODE_INVERT_B_LSB];
-                    invert_reg[3*axis + 2]    <= bus_wdata[FS_AXIS_MODE_INVERT_EN_LSB];
+                    out_mode_reg[FS_OUT_MODE_WIDTH*axis +: FS_OUT_MODE_WIDTH] <=
+                        bus_wdata[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH];
+                    invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_A_BIT]  <= bus_wdata[FS_AXIS_MODE_INVERT_A_LSB];
+                    invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_B_BIT]  <= bus_wdata[FS_AXIS_MODE_INVERT_B_LSB];
+                    invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_EN_BIT] <= bus_wdata[FS_AXIS_MODE_INVERT_EN_LSB];
                 end
                 if ({25'd0, bus_addr} == {25'd0, FS_RECORD_INC_ADDR} + axis * FS_RECORD_INC_STRIDE)
                     record_inc_reg[32*axis +: 32] <= bus_wdata;
@@ -394,7 +397,11 @@ module register_file #(
             dir_setup_reg            <= {N_AXES{FS_AXIS_TIMING_B_DIR_SETUP_RESET[TIMING_W-1:0]}};
             dir_hold_reg             <= {N_AXES{FS_AXIS_TIMING_B_DIR_HOLD_RESET[TIMING_W-1:0]}};
             out_mode_reg             <= {N_AXES{FS_AXIS_MODE_OUT_MODE_RESET}};
-            invert_reg               <= {N_AXES{FS_AXIS_MODE_INVERT_EN_RESET, FS_AXIS_MODE_INVERT_B_RESET, FS_AXIS_MODE_INVERT_A_RESET}};
+            for (axis = 0; axis < N_AXES; axis = axis + 1) begin
+                invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_A_BIT]  <= FS_AXIS_MODE_INVERT_A_RESET;
+                invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_B_BIT]  <= FS_AXIS_MODE_INVERT_B_RESET;
+                invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_EN_BIT] <= FS_AXIS_MODE_INVERT_EN_RESET;
+            end
             record_inc_reg           <= {N_AXES{FS_RECORD_INC_INC_RESET}};
             timestamp_reg            <= 32'd0;
             latch_time_reg           <= 32'd0;
@@ -417,7 +424,7 @@ module register_file #(
             clear_counters_reg       <= 1'b0;
             kick_reg                 <= 1'b0;
             push_reg                 <= 1'b0;
-            push_flags_reg           <= 8'd0;
+            push_flags_reg           <= {FS_REC_FLAGS_WIDTH{1'b0}};
         end
     end
 

@@ -50,18 +50,11 @@ module spi_frame #(
     output wire [7:0]               refused_count
 );
 
-    localparam REC_BYTES = 4 * N_AXES + 1;
+`include "finestep_interface.vh"
+
+    // Command and result bytes, the record layout and the CRC: FS_SPI_*, FS_REC_*.
+    localparam REC_BYTES = (FS_REC_INC_WIDTH / 8) * N_AXES + FS_REC_FLAGS_WIDTH / 8;
     localparam REC_W     = 8 * REC_BYTES;
-
-    localparam [7:0] CMD_READ  = 8'h01;
-    localparam [7:0] CMD_WRITE = 8'h02;
-    localparam [7:0] CMD_FIFO  = 8'h03;
-
-    localparam [7:0] RESULT_ACK       = 8'hA0;
-    localparam [7:0] RESULT_CRC       = 8'hE1;
-    localparam [7:0] RESULT_BAD       = 8'hE2;
-    localparam [7:0] RESULT_REFUSED   = 8'hE3;
-    localparam [7:0] RESULT_FLUSHED   = 8'hE4;
 
     localparam [3:0] PHASE_IDLE        = 4'd0;
     localparam [3:0] PHASE_ADDR        = 4'd1;
@@ -122,9 +115,9 @@ module spi_frame #(
     crc16_byte crc_received (.crc_in(crc_reg), .data(rx_byte), .crc_out(crc_with_rx));
     crc16_byte crc_sent (.crc_in(crc_reg), .data(tx_now), .crc_out(crc_with_tx));
 
-    wire is_read  = (cmd_reg == CMD_READ);
-    wire is_write = (cmd_reg == CMD_WRITE);
-    wire is_fifo  = (cmd_reg == CMD_FIFO);
+    wire is_read  = (cmd_reg == FS_SPI_CMD_READ);
+    wire is_write = (cmd_reg == FS_SPI_CMD_WRITE);
+    wire is_fifo  = (cmd_reg == FS_SPI_CMD_FIFO);
     wire [5:0] item_last = is_fifo ? REC_BYTES[5:0] - 6'd1 : 6'd3;
     wire count_nonzero = (rx_byte != 8'd0);
     wire fifo_room     = ({8'd0, rx_byte} <= {{(16-LEVEL_W){1'b0}}, fifo_free});   // LEVEL_W <= 16
@@ -161,12 +154,12 @@ module spi_frame #(
             any_bits_reg  <= 1'b0;
         end else if (do_start) begin
             phase_reg    <= PHASE_IDLE;
-            crc_reg      <= 16'hFFFF;
+            crc_reg      <= FS_SPI_CRC_INITIAL;
             any_bits_reg <= 1'b1;
         end else if (do_flush) begin
             wr_abort_reg  <= 1'b1;
             fifo_busy_reg <= 1'b0;
-            result_reg    <= RESULT_FLUSHED;
+            result_reg    <= FS_SPI_RESULT_FIFO_FLUSHED;
             phase_reg     <= PHASE_RESULT;
         end else if (do_byte) begin
             case (phase_reg)
@@ -191,10 +184,10 @@ module spi_frame #(
                     byte_in_item_reg <= 6'd0;
                     items_left_reg   <= rx_byte;
                     if (bad_header) begin
-                        result_reg <= RESULT_BAD;
+                        result_reg <= FS_SPI_RESULT_BAD_COMMAND;
                         phase_reg  <= PHASE_RESULT;
                     end else if (fifo_refuse) begin
-                        result_reg <= RESULT_REFUSED;
+                        result_reg <= FS_SPI_RESULT_FIFO_REFUSED;
                         phase_reg  <= PHASE_RESULT;
                     end else if (is_read) begin
                         phase_reg     <= PHASE_READ_DATA;
@@ -230,7 +223,7 @@ module spi_frame #(
                     phase_reg <= PHASE_RESULT;
                     if (is_fifo) fifo_busy_reg <= 1'b0;
                     if (crc_good) begin
-                        result_reg <= RESULT_ACK;
+                        result_reg <= FS_SPI_RESULT_ACK;
                         if (is_fifo) wr_commit_reg <= 1'b1;
                         if (is_write) begin
                             bus_req_reg   <= 1'b1;
@@ -239,7 +232,7 @@ module spi_frame #(
                             bus_wdata_reg <= word_reg;
                         end
                     end else begin
-                        result_reg <= RESULT_CRC;
+                        result_reg <= FS_SPI_RESULT_CRC_MISMATCH;
                         if (is_fifo) wr_abort_reg <= 1'b1;
                     end
                 end
@@ -273,7 +266,7 @@ module spi_frame #(
             addr_reg         <= 7'd0;
             items_left_reg   <= 8'd0;
             byte_in_item_reg <= 6'd0;
-            crc_reg          <= 16'hFFFF;
+            crc_reg          <= FS_SPI_CRC_INITIAL;
             result_reg       <= 8'h00;
             word_reg         <= 32'd0;
             record_reg       <= {REC_W{1'b0}};
@@ -298,10 +291,11 @@ module spi_frame #(
     genvar axis;
     generate
         for (axis = 0; axis < N_AXES; axis = axis + 1) begin : unpack
-            assign fifo_wr_data[32*axis +: 32] = record_reg[REC_W-1-32*axis -: 32];
+            assign fifo_wr_data[FS_REC_INC_WIDTH*axis +: FS_REC_INC_WIDTH] =
+                record_reg[REC_W-1-FS_REC_INC_WIDTH*axis -: FS_REC_INC_WIDTH];
         end
     endgenerate
-    assign fifo_wr_data[32*N_AXES +: 8] = record_reg[7:0];
+    assign fifo_wr_data[FS_REC_INC_WIDTH*N_AXES +: FS_REC_FLAGS_WIDTH] = record_reg[FS_REC_FLAGS_WIDTH-1:0];
 
     assign tx_byte        = tx_now;
     assign bus_req        = bus_req_reg;

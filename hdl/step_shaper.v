@@ -46,8 +46,8 @@ module step_shaper #(
 
     localparam PEND_W = 8;
     localparam [PEND_W-1:0] PEND_MAX = 8'sd127;
-    localparam [1:0] MODE_UP_DOWN    = 2'd1;
-    localparam [1:0] MODE_QUADRATURE = 2'd2;
+    // The output modes (out_mode) and inversion bits (invert): FS_OUT_MODE_*, FS_INVERT_*.
+`include "finestep_interface.vh"
     localparam [TIMING_W-1:0] COUNT_MAX = {TIMING_W{1'b1}};
     localparam [TIMING_W-1:0] COUNT_ONE = {{(TIMING_W-1){1'b0}}, 1'b1};
 
@@ -118,11 +118,11 @@ module step_shaper #(
     reg a_now, b_now;
     always @* begin
         case (out_mode)
-            MODE_UP_DOWN: begin
+            FS_OUT_MODE_UP_DOWN: begin
                 a_now = level_reg && dir_reg;
                 b_now = level_reg && !dir_reg;
             end
-            MODE_QUADRATURE: begin
+            FS_OUT_MODE_QUADRATURE: begin
                 a_now = quad_reg[0] ^ quad_reg[1];
                 b_now = quad_reg[1];
             end
@@ -134,9 +134,9 @@ module step_shaper #(
     end
 
     always @(posedge clk) begin
-        pin_a_reg  <= a_now ^ invert[0];
-        pin_b_reg  <= b_now ^ invert[1];
-        pin_en_reg <= (axis_enable && !halt) ^ invert[2];
+        pin_a_reg  <= a_now ^ invert[FS_INVERT_PIN_A_BIT];
+        pin_b_reg  <= b_now ^ invert[FS_INVERT_PIN_B_BIT];
+        pin_en_reg <= (axis_enable && !halt) ^ invert[FS_INVERT_PIN_EN_BIT];
 
         if (rise) level_reg <= 1'b1;
         else if (fall) level_reg <= 1'b0;
@@ -273,14 +273,17 @@ module step_shaper #(
         if ($past(dir_reg) != dir_reg) assert (!$past(level_reg) && !level_reg && $past(f_low) >= {2'b00, dir_hold});
         // The pins in every mode and polarity, one cycle behind the state.
         case ($past(out_mode))
-            MODE_UP_DOWN: assert ((pin_a ^ $past(invert[0])) == $past(level_reg && dir_reg)
-                                  && (pin_b ^ $past(invert[1])) == $past(level_reg && !dir_reg));
-            MODE_QUADRATURE: assert ((pin_a ^ $past(invert[0])) == $past(quad_reg[0] ^ quad_reg[1])
-                                     && (pin_b ^ $past(invert[1])) == $past(quad_reg[1]));
-            default: assert ((pin_a ^ $past(invert[0])) == $past(level_reg)
-                             && (pin_b ^ $past(invert[1])) == $past(dir_reg));
+            FS_OUT_MODE_UP_DOWN:
+                assert ((pin_a ^ $past(invert[FS_INVERT_PIN_A_BIT])) == $past(level_reg && dir_reg)
+                        && (pin_b ^ $past(invert[FS_INVERT_PIN_B_BIT])) == $past(level_reg && !dir_reg));
+            FS_OUT_MODE_QUADRATURE:
+                assert ((pin_a ^ $past(invert[FS_INVERT_PIN_A_BIT])) == $past(quad_reg[0] ^ quad_reg[1])
+                        && (pin_b ^ $past(invert[FS_INVERT_PIN_B_BIT])) == $past(quad_reg[1]));
+            default:
+                assert ((pin_a ^ $past(invert[FS_INVERT_PIN_A_BIT])) == $past(level_reg)
+                        && (pin_b ^ $past(invert[FS_INVERT_PIN_B_BIT])) == $past(dir_reg));
         endcase
-        assert ((pin_en ^ $past(invert[2])) == $past(axis_enable && !halt));
+        assert ((pin_en ^ $past(invert[FS_INVERT_PIN_EN_BIT])) == $past(axis_enable && !halt));
         if ($past(halt)) assert (!$rose(level_reg) && $past(dir_reg) == dir_reg && pending_reg == 8'sd0);
         // Quadrature: one step is one Gray-code move, +1 forward and -1 backward.
         if ($past(rise)) assert (quad_reg == ($past(dir_reg) ? $past(quad_reg) + 2'd1 : $past(quad_reg) - 2'd1));

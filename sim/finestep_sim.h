@@ -9,11 +9,12 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* FS_MAX_AXES, fs_drive_timing: generated from hdl/interface.toml. */
+#include "finestep_interface.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-#define FS_MAX_AXES 8
 
 /* Packed pins word: bit 3i pin_a[i], 3i+1 pin_b[i], 3i+2 pin_en[i] (i < 8),
  * 24+i rate_error[i], 32+i step_lost[i], 40 rec_ready, 41 record_error, 42 block_end. */
@@ -24,10 +25,7 @@ extern "C" {
 #define FS_BIT_BLOCK_END 42
 
 typedef struct fs_axis_config {
-    uint32_t step_len;
-    uint32_t step_space;
-    uint32_t dir_setup;
-    uint32_t dir_hold;
+    fs_drive_timing timing;
     uint8_t mode;
     uint8_t invert;
     uint8_t enable;

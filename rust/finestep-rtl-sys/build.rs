@@ -10,13 +10,31 @@ use std::env;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Parameters the simulators are built with (the shims report them).
-const N_AXES: u32 = 4;
-const P_WIDTH: u32 = 20;
-const TIMING_W: u32 = 12;
-const FIFO_DEPTH_LOG2: u32 = 8;
-const N_ENC: u32 = 4;
-const HAS_MPG: u32 = 1;
+/// Parameters the simulators are built with (the shims report them): the defaults of
+/// `finestep_top` in `hdl/interface.toml`, which the core is built with too.
+struct Params {
+    n_axes: i64,
+    p_width: i64,
+    timing_w: i64,
+    fifo_depth_log2: i64,
+    n_enc: i64,
+    has_mpg: i64,
+}
+
+impl Params {
+    fn defaults(interface: &finestep_regmap::interface::InterfaceSpec) -> Params {
+        let top = interface.modules.iter().find(|m| m.name == "finestep_top").expect("finestep_top in the interface");
+        let default = |name: &str| top.parameter(name).unwrap_or_else(|| panic!("finestep_top has no {name}")).default;
+        Params {
+            n_axes: default("N_AXES"),
+            p_width: default("P_WIDTH"),
+            timing_w: default("TIMING_W"),
+            fifo_depth_log2: default("FIFO_DEPTH_LOG2"),
+            n_enc: default("N_ENC"),
+            has_mpg: default("HAS_MPG"),
+        }
+    }
+}
 
 fn main() {
     let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap());
@@ -36,13 +54,19 @@ fn main() {
     {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
-    // The register map's Verilog constants, generated from the one source.
+    // The Verilog headers (register map, interface constants, elaboration checks) and
+    // the shims' C header, generated from the one source.
     println!("cargo:rerun-if-changed={}", repo.join(finestep_regmap::MAP_PATH).display());
+    println!("cargo:rerun-if-changed={}", repo.join(finestep_regmap::INTERFACE_PATH).display());
     let gen = out.join("gen");
     std::fs::create_dir_all(&gen).expect("OUT_DIR/gen");
-    let map = finestep_regmap::load_map(&repo).unwrap_or_else(|e| panic!("{}: {e}", finestep_regmap::MAP_PATH));
-    std::fs::write(gen.join("finestep_regs.vh"), finestep_regmap::verilog::generate(&map))
-        .expect("write finestep_regs.vh");
+    let (map, interface) = finestep_regmap::load_interface(&repo).unwrap_or_else(|e| panic!("{e}"));
+    for (name, text) in finestep_regmap::hdl_headers(&map, &interface) {
+        std::fs::write(gen.join(&name), text).unwrap_or_else(|e| panic!("write {name}: {e}"));
+    }
+    std::fs::write(gen.join(finestep_regmap::c_header::HEADER_NAME), finestep_regmap::c_header::generate(&interface))
+        .expect("write finestep_interface.h");
+    let params = Params::defaults(&interface);
 
     let verilator = env::var("VERILATOR").unwrap_or_else(|_| "verilator".to_string());
     let root = verilator_root(&verilator);
@@ -64,16 +88,17 @@ fn main() {
         .include(root.join("include"))
         .include(root.join("include/vltstd"))
         .include(&sim)
+        .include(&gen)
         .define("VL_TIME_CONTEXT", None)
-        .define("FS_N_AXES", N_AXES.to_string().as_str())
-        .define("FS_P_WIDTH", P_WIDTH.to_string().as_str())
-        .define("FS_TIMING_W", TIMING_W.to_string().as_str())
-        .define("FT_N_AXES", N_AXES.to_string().as_str())
-        .define("FT_P_WIDTH", P_WIDTH.to_string().as_str())
-        .define("FT_TIMING_W", TIMING_W.to_string().as_str())
-        .define("FT_FIFO_DEPTH_LOG2", FIFO_DEPTH_LOG2.to_string().as_str())
-        .define("FT_N_ENC", N_ENC.to_string().as_str())
-        .define("FT_HAS_MPG", HAS_MPG.to_string().as_str());
+        .define("FS_N_AXES", params.n_axes.to_string().as_str())
+        .define("FS_P_WIDTH", params.p_width.to_string().as_str())
+        .define("FS_TIMING_W", params.timing_w.to_string().as_str())
+        .define("FT_N_AXES", params.n_axes.to_string().as_str())
+        .define("FT_P_WIDTH", params.p_width.to_string().as_str())
+        .define("FT_TIMING_W", params.timing_w.to_string().as_str())
+        .define("FT_FIFO_DEPTH_LOG2", params.fifo_depth_log2.to_string().as_str())
+        .define("FT_N_ENC", params.n_enc.to_string().as_str())
+        .define("FT_HAS_MPG", params.has_mpg.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -90,7 +115,7 @@ fn main() {
     ];
     for (top, prefix, trace) in models {
         let dir = mdir.join(prefix);
-        let classes = verilate(&verilator, &sources, &gen, top, prefix, trace, &dir);
+        let classes = verilate(&verilator, &sources, &gen, &params, top, prefix, trace, &dir);
         let list = |name: &str| -> Vec<String> {
             classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
         };
@@ -135,6 +160,7 @@ fn main() {
         .allowlist_function("fs_.*|ft_.*")
         .allowlist_type("fs_.*|ft_.*")
         .allowlist_var("FS_.*|FT_.*")
+        .clang_arg(format!("-I{}", gen.display()))
         .derive_default(true)
         .generate()
         .expect("bindgen on the shims in sim/")
@@ -143,10 +169,12 @@ fn main() {
 }
 
 /// Runs Verilator on module `top` into `dir` and returns the variables of its `*_classes.mk`.
+#[allow(clippy::too_many_arguments)]
 fn verilate(
     verilator: &str,
     sources: &[PathBuf],
     include: &Path,
+    params: &Params,
     top: &str,
     prefix: &str,
     trace: Option<&str>,
@@ -164,12 +192,12 @@ fn verilate(
         // Lint is `make lint`'s job; a newer Verilator's new warnings must not stop a build.
         .arg("-Wno-fatal")
         .args(trace)
-        .arg(format!("-GN_AXES={N_AXES}"))
-        .arg(format!("-GP_WIDTH={P_WIDTH}"))
-        .arg(format!("-GTIMING_W={TIMING_W}"))
-        .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={FIFO_DEPTH_LOG2}")))
-        .args((top == "finestep_top").then(|| format!("-GN_ENC={N_ENC}")))
-        .args((top == "finestep_top").then(|| format!("-GHAS_MPG={HAS_MPG}")))
+        .arg(format!("-GN_AXES={}", params.n_axes))
+        .arg(format!("-GP_WIDTH={}", params.p_width))
+        .arg(format!("-GTIMING_W={}", params.timing_w))
+        .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
+        .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
+        .args((top == "finestep_top").then(|| format!("-GHAS_MPG={}", params.has_mpg)))
         .args(sources)
         .status()
         .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));

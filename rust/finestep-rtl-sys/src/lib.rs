@@ -215,12 +215,14 @@ fn inputs_to(inputs: &CoreInputs) -> ffi::fs_inputs {
         let axis = &inputs.axes[i];
         raw.rec_inc[i] = inputs.record.inc[i].to_bits();
         raw.axes[i] = ffi::fs_axis_config {
-            step_len: axis.step_len,
-            step_space: axis.step_space,
-            dir_setup: axis.dir_setup,
-            dir_hold: axis.dir_hold,
-            mode: axis.mode & 0b11,
-            invert: axis.invert & 0b111,
+            timing: ffi::fs_drive_timing {
+                step_len: axis.step_len,
+                step_space: axis.step_space,
+                dir_setup: axis.dir_setup,
+                dir_hold: axis.dir_hold,
+            },
+            mode: axis.mode & ffi::FS_OUT_MODE_MASK as u8,
+            invert: axis.invert & ffi::FS_INVERT_MASK as u8,
             enable: axis.enable as u8,
         };
     }
