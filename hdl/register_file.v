@@ -111,6 +111,15 @@ module register_file #(
 `include "finestep_interface.vh"
 
     localparam FIFO_DEPTH = 1 << FIFO_DEPTH_LOG2;
+    localparam WORD_W     = 32;                                  // every register
+    localparam ADDR_W     = FS_ADDR_WIDTH;
+    localparam INC_W      = FS_REC_INC_WIDTH;                    // RECORD_INC, one axis
+    localparam POS_W      = FS_POSITION_STEPS_WIDTH;             // POSITION, one axis
+    localparam WATERMARK_W = FS_FIFO_WATERMARK_WATERMARK_WIDTH;
+    localparam START_W    = FS_START_LEVEL_LEVEL_WIDTH;
+    localparam FILTER_W   = FS_ESTOP_FILTER_SAMPLES_WIDTH;
+    localparam COUNT_W    = FS_UNDERRUN_COUNT_COUNT_WIDTH;       // every error counter
+    localparam LEVEL_W    = FS_FIFO_LEVEL_LEVEL_WIDTH;
     localparam IRQ_W = FS_IRQ_MASK_MASK_WIDTH;
     localparam [31:0] VERSION_WORD = (FS_MAP_VERSION_MAJOR << FS_VERSION_MAJOR_LSB) |
                                      (FS_MAP_VERSION_MINOR << FS_VERSION_MINOR_LSB) |
@@ -130,9 +139,9 @@ module register_file #(
     reg                        estop_active_high_reg;
     reg [P_WIDTH-1:0]          period_reg;
     reg [WD_W-1:0]             watchdog_timeout_reg;
-    reg [7:0]                  estop_filter_reg;
-    reg [15:0]                 watermark_reg;
-    reg [15:0]                 start_level_reg;
+    reg [FILTER_W-1:0]         estop_filter_reg;
+    reg [WATERMARK_W-1:0]      watermark_reg;
+    reg [START_W-1:0]          start_level_reg;
     reg [IRQ_W-1:0]            irq_mask_reg;
     reg [N_AXES-1:0]           axis_enable_reg;
     reg [TIMING_W*N_AXES-1:0]  step_len_reg;
@@ -141,23 +150,23 @@ module register_file #(
     reg [TIMING_W*N_AXES-1:0]  dir_hold_reg;
     reg [FS_OUT_MODE_WIDTH*N_AXES-1:0] out_mode_reg;
     reg [FS_INVERT_WIDTH*N_AXES-1:0]   invert_reg;
-    reg [32*N_AXES-1:0]        record_inc_reg;
+    reg [INC_W*N_AXES-1:0]     record_inc_reg;
     // Hardware state
-    reg [31:0]                 timestamp_reg;
-    reg [31:0]                 latch_time_reg;
-    reg [31:0]                 period_count_reg;
-    reg [32*N_AXES-1:0]        position_latch_reg;
+    reg [WORD_W-1:0]           timestamp_reg;
+    reg [WORD_W-1:0]           latch_time_reg;
+    reg [WORD_W-1:0]           period_count_reg;
+    reg [POS_W*N_AXES-1:0]     position_latch_reg;
     reg                        irq_period_reg;
     reg                        irq_block_end_reg;
     reg                        overflow_reg;
     reg                        bus_error_reg;
-    reg [15:0]                 underrun_count_reg;
-    reg [15:0]                 crc_error_count_reg;
-    reg [15:0]                 frame_error_count_reg;
-    reg [15:0]                 parallel_error_count_reg;
-    reg [15:0]                 refused_count_reg;
+    reg [COUNT_W-1:0]          underrun_count_reg;
+    reg [COUNT_W-1:0]          crc_error_count_reg;
+    reg [COUNT_W-1:0]          frame_error_count_reg;
+    reg [COUNT_W-1:0]          parallel_error_count_reg;
+    reg [COUNT_W-1:0]          refused_count_reg;
     reg                        irq_reg;
-    reg [31:0]                 rdata_reg;
+    reg [WORD_W-1:0]           rdata_reg;
     // One-cycle pulses after a write
     reg                        clear_errors_reg;
     reg                        clear_faults_reg;
@@ -172,8 +181,8 @@ module register_file #(
     wire        grant_par = par_req && !spi_req;
     wire        granted   = grant_spi || grant_par;
     wire        bus_we    = grant_spi ? spi_we : par_we;
-    wire [6:0]  bus_addr  = grant_spi ? spi_addr : par_addr;
-    wire [31:0] bus_wdata = grant_spi ? spi_wdata : par_wdata;
+    wire [ADDR_W-1:0] bus_addr  = grant_spi ? spi_addr : par_addr;
+    wire [WORD_W-1:0] bus_wdata = grant_spi ? spi_wdata : par_wdata;
     wire        write     = granted && bus_we;
     wire        read      = granted && !bus_we;
 
@@ -181,7 +190,7 @@ module register_file #(
     wire any_step_lost  = |step_lost;
     wire any_error = underrun || overflow_reg || record_error || any_rate_error || any_step_lost || bus_error_reg ||
                      feedback_error || jog_refused;
-    wire fifo_low  = ({{(15-FIFO_DEPTH_LOG2){1'b0}}, fifo_level} < watermark_reg);
+    wire fifo_low  = ({{(LEVEL_W-1-FIFO_DEPTH_LOG2){1'b0}}, fifo_level} < watermark_reg);
     wire [IRQ_W-1:0] irq_status;
     assign irq_status[FS_IRQ_STATUS_FIFO_LOW_LSB]  = fifo_low;
     assign irq_status[FS_IRQ_STATUS_PERIOD_LSB]    = irq_period_reg;
@@ -191,9 +200,9 @@ module register_file #(
 
     wire [FIFO_DEPTH_LOG2:0] fifo_free = FIFO_DEPTH[FIFO_DEPTH_LOG2:0] - fifo_level - fifo_staged;
 
-    reg [31:0] status_word;
+    reg [WORD_W-1:0] status_word;
     always @* begin
-        status_word = 32'd0;
+        status_word = {WORD_W{1'b0}};
         status_word[FS_STATUS_RUNNING_LSB]        = core_run;
         status_word[FS_STATUS_STREAMING_LSB]      = gate;
         status_word[FS_STATUS_HALT_LSB]           = halt;
@@ -214,12 +223,12 @@ module register_file #(
 
     // The read value of an address, from the state of this cycle. A function called only
     // on a read, so a simulator evaluates this wide mux only when a read is served.
-    function [31:0] read_word(input [6:0] addr);
+    function [WORD_W-1:0] read_word(input [ADDR_W-1:0] addr);
         integer index;
-        reg [31:0] read_value;
-        reg [31:0] timing_a_word, timing_b_word, mode_word;   // one axis's
+        reg [WORD_W-1:0] read_value;
+        reg [WORD_W-1:0] timing_a_word, timing_b_word, mode_word;   // one axis's
         begin
-            read_value = 32'd0;
+            read_value = {WORD_W{1'b0}};
             case (addr)
                 FS_ID_ADDR:       read_value = FS_ID_MAGIC_VALUE;
                 FS_VERSION_ADDR:  read_value = VERSION_WORD;
@@ -235,21 +244,21 @@ module register_file #(
                     read_value[FS_FIFO_LEVEL_LEVEL_LSB +: FIFO_DEPTH_LOG2 + 1] = fifo_level;
                     read_value[FS_FIFO_LEVEL_FREE_LSB +: FIFO_DEPTH_LOG2 + 1]  = fifo_free;
                 end
-                FS_FIFO_WATERMARK_ADDR:   read_value[15:0] = watermark_reg;
-                FS_START_LEVEL_ADDR:      read_value[15:0] = start_level_reg;
+                FS_FIFO_WATERMARK_ADDR:   read_value[WATERMARK_W-1:0] = watermark_reg;
+                FS_START_LEVEL_ADDR:      read_value[START_W-1:0] = start_level_reg;
                 FS_PERIOD_CLOCKS_ADDR:    read_value[P_WIDTH-1:0] = period_reg;
                 FS_WATCHDOG_TIMEOUT_ADDR: read_value[WD_W-1:0] = watchdog_timeout_reg;
-                FS_ESTOP_FILTER_ADDR:     read_value[7:0] = estop_filter_reg;
+                FS_ESTOP_FILTER_ADDR:     read_value[FILTER_W-1:0] = estop_filter_reg;
                 FS_IRQ_STATUS_ADDR:       read_value[IRQ_W-1:0] = irq_status;
                 FS_IRQ_MASK_ADDR:         read_value[IRQ_W-1:0] = irq_mask_reg;
                 FS_TIMESTAMP_ADDR:        read_value = timestamp_reg;
                 FS_LATCH_TIME_ADDR:       read_value = latch_time_reg;
                 FS_PERIOD_COUNT_ADDR:     read_value = period_count_reg;
-                FS_UNDERRUN_COUNT_ADDR:       read_value[15:0] = underrun_count_reg;
-                FS_CRC_ERROR_COUNT_ADDR:      read_value[15:0] = crc_error_count_reg;
-                FS_FRAME_ERROR_COUNT_ADDR:    read_value[15:0] = frame_error_count_reg;
-                FS_PARALLEL_ERROR_COUNT_ADDR: read_value[15:0] = parallel_error_count_reg;
-                FS_REFUSED_RECORD_COUNT_ADDR: read_value[15:0] = refused_count_reg;
+                FS_UNDERRUN_COUNT_ADDR:       read_value[COUNT_W-1:0] = underrun_count_reg;
+                FS_CRC_ERROR_COUNT_ADDR:      read_value[COUNT_W-1:0] = crc_error_count_reg;
+                FS_FRAME_ERROR_COUNT_ADDR:    read_value[COUNT_W-1:0] = frame_error_count_reg;
+                FS_PARALLEL_ERROR_COUNT_ADDR: read_value[COUNT_W-1:0] = parallel_error_count_reg;
+                FS_REFUSED_RECORD_COUNT_ADDR: read_value[COUNT_W-1:0] = refused_count_reg;
                 FS_AXIS_STATUS_ADDR: begin
                     read_value[FS_AXIS_STATUS_RATE_ERROR_LSB +: N_AXES] = rate_error;
                     read_value[FS_AXIS_STATUS_STEP_LOST_LSB +: N_AXES]  = step_lost;
@@ -260,26 +269,26 @@ module register_file #(
             // The per-axis arrays: an OR of masked words (the map keeps addresses distinct),
             // a shallow tree where overriding ifs would put a multiplexer per register in series.
             for (index = 0; index < N_AXES; index = index + 1) begin
-                timing_a_word = 32'd0;
+                timing_a_word = {WORD_W{1'b0}};
                 timing_a_word[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*index +: TIMING_W];
                 timing_a_word[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*index +: TIMING_W];
-                timing_b_word = 32'd0;
+                timing_b_word = {WORD_W{1'b0}};
                 timing_b_word[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*index +: TIMING_W];
                 timing_b_word[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*index +: TIMING_W];
-                mode_word = 32'd0;
+                mode_word = {WORD_W{1'b0}};
                 mode_word[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH] =
                     out_mode_reg[FS_OUT_MODE_WIDTH*index +: FS_OUT_MODE_WIDTH];
                 mode_word[FS_AXIS_MODE_INVERT_A_LSB]  = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_A_BIT];
                 mode_word[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_B_BIT];
                 mode_word[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_EN_BIT];
                 read_value = read_value
-                    | ({32{{25'd0, addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
-                    | ({32{{25'd0, addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
-                    | ({32{{25'd0, addr} == {25'd0, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word)
-                    | ({32{{25'd0, addr} == {25'd0, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE}} &
-                       position_latch_reg[32*index +: 32])
-                    | ({32{{25'd0, addr} == {25'd0, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE}} &
-                       record_inc_reg[32*index +: 32]);
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word)
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE}} &
+                       position_latch_reg[POS_W*index +: POS_W])
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE}} &
+                       record_inc_reg[INC_W*index +: INC_W]);
             end
             read_word = read_value;
         end
@@ -288,143 +297,166 @@ module register_file #(
     integer axis;
 
     wire push_refused = push_reg && (fifo_full || spi_fifo_in_use);
-    wire [15:0] refused_now = (push_refused ? 16'd1 : 16'd0) + (spi_refused ? {8'd0, spi_refused_count} : 16'd0);
+    wire [COUNT_W-1:0] refused_now = (push_refused ? {{(COUNT_W-1){1'b0}}, 1'b1} : {COUNT_W{1'b0}}) +
+                                     (spi_refused ? {{(COUNT_W-8){1'b0}}, spi_refused_count} : {COUNT_W{1'b0}});
 
+    // Time and the position latch.
     always @(posedge clk) begin
-        timestamp_reg <= timestamp_reg + 32'd1;
-        if (boundary) period_count_reg <= period_count_reg + 32'd1;
-        if (latch_now) begin
-            position_latch_reg <= position;
-            latch_time_reg     <= timestamp_reg;
-        end
-        irq_reg <= |(irq_status & irq_mask_reg);
-        if (read) rdata_reg <= read_word(bus_addr) | feedback_rdata;
-
-        clear_errors_reg   <= 1'b0;
-        clear_faults_reg   <= 1'b0;
-        flush_reg          <= 1'b0;
-        clear_counters_reg <= 1'b0;
-        push_reg           <= 1'b0;
-        kick_reg           <= write || spi_fifo_commit;
-
-        if (write) begin
-            case (bus_addr)
-                FS_CONTROL_ADDR: begin
-                    run_reg               <= bus_wdata[FS_CONTROL_RUN_LSB];
-                    watchdog_enable_reg   <= bus_wdata[FS_CONTROL_WATCHDOG_ENABLE_LSB];
-                    estop_active_high_reg <= bus_wdata[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB];
-                end
-                FS_COMMAND_ADDR: begin
-                    clear_errors_reg   <= bus_wdata[FS_COMMAND_CLEAR_ERRORS_LSB];
-                    clear_faults_reg   <= bus_wdata[FS_COMMAND_CLEAR_FAULTS_LSB];
-                    flush_reg          <= bus_wdata[FS_COMMAND_FLUSH_FIFO_LSB];
-                    clear_counters_reg <= bus_wdata[FS_COMMAND_CLEAR_COUNTERS_LSB];
-                end
-                FS_FIFO_WATERMARK_ADDR:   watermark_reg        <= bus_wdata[15:0];
-                FS_START_LEVEL_ADDR:      start_level_reg      <= bus_wdata[15:0];
-                FS_PERIOD_CLOCKS_ADDR:    period_reg           <= bus_wdata[P_WIDTH-1:0];
-                FS_WATCHDOG_TIMEOUT_ADDR: watchdog_timeout_reg <= bus_wdata[WD_W-1:0];
-                FS_ESTOP_FILTER_ADDR:     estop_filter_reg     <= bus_wdata[7:0];
-                FS_IRQ_MASK_ADDR:         irq_mask_reg         <= bus_wdata[IRQ_W-1:0];
-                FS_AXIS_ENABLE_ADDR:      axis_enable_reg      <= bus_wdata[N_AXES-1:0];
-                FS_RECORD_PUSH_ADDR: begin
-                    push_reg       <= 1'b1;
-                    push_flags_reg <= bus_wdata[FS_RECORD_PUSH_FLAGS_LSB +: FS_REC_FLAGS_WIDTH];
-                end
-                default: ;
-            endcase
-            for (axis = 0; axis < N_AXES; axis = axis + 1) begin
-                if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_A_ADDR} + axis * FS_AXIS_TIMING_A_STRIDE) begin
-                    step_len_reg[TIMING_W*axis +: TIMING_W]   <= bus_wdata[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W];
-                    step_space_reg[TIMING_W*axis +: TIMING_W] <= bus_wdata[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W];
-                end
-                if ({25'd0, bus_addr} == {25'd0, FS_AXIS_TIMING_B_ADDR} + axis * FS_AXIS_TIMING_B_STRIDE) begin
-                    dir_setup_reg[TIMING_W*axis +: TIMING_W] <= bus_wdata[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W];
-                    dir_hold_reg[TIMING_W*axis +: TIMING_W]  <= bus_wdata[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W];
-                end
-                if ({25'd0, bus_addr} == {25'd0, FS_AXIS_MODE_ADDR} + axis * FS_AXIS_MODE_STRIDE) begin
-                    out_mode_reg[FS_OUT_MODE_WIDTH*axis +: FS_OUT_MODE_WIDTH] <=
-                        bus_wdata[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH];
-                    invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_A_BIT]  <= bus_wdata[FS_AXIS_MODE_INVERT_A_LSB];
-                    invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_B_BIT]  <= bus_wdata[FS_AXIS_MODE_INVERT_B_LSB];
-                    invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_EN_BIT] <= bus_wdata[FS_AXIS_MODE_INVERT_EN_LSB];
-                end
-                if ({25'd0, bus_addr} == {25'd0, FS_RECORD_INC_ADDR} + axis * FS_RECORD_INC_STRIDE)
-                    record_inc_reg[32*axis +: 32] <= bus_wdata;
+        if (rst) begin
+            timestamp_reg      <= {WORD_W{1'b0}};
+            latch_time_reg     <= {WORD_W{1'b0}};
+            period_count_reg   <= {WORD_W{1'b0}};
+            position_latch_reg <= {POS_W*N_AXES{1'b0}};
+        end else begin
+            timestamp_reg <= timestamp_reg + 1'b1;
+            if (boundary) period_count_reg <= period_count_reg + 1'b1;
+            if (latch_now) begin
+                position_latch_reg <= position;
+                latch_time_reg     <= timestamp_reg;
             end
         end
-        // A halt wins over a write of RUN; so does the jog while it drives the core.
-        if (halt || jog_engaged) run_reg <= 1'b0;
+    end
 
-        // Sticky interrupt sources: set wins over a write-1-to-clear.
-        if (boundary) irq_period_reg <= 1'b1;
-        else if (write && bus_addr == FS_IRQ_STATUS_ADDR && bus_wdata[FS_IRQ_STATUS_PERIOD_LSB]) irq_period_reg <= 1'b0;
-        if (block_end) irq_block_end_reg <= 1'b1;
-        else if (write && bus_addr == FS_IRQ_STATUS_ADDR && bus_wdata[FS_IRQ_STATUS_BLOCK_END_LSB]) irq_block_end_reg <= 1'b0;
-
-        if (push_refused || spi_refused) overflow_reg <= 1'b1;
-        else if (clear_errors_reg) overflow_reg <= 1'b0;
-        if (spi_crc_error || spi_frame_error || par_error) bus_error_reg <= 1'b1;
-        else if (clear_errors_reg) bus_error_reg <= 1'b0;
-
-        if (clear_counters_reg) begin
-            underrun_count_reg       <= 16'd0;
-            crc_error_count_reg      <= 16'd0;
-            frame_error_count_reg    <= 16'd0;
-            parallel_error_count_reg <= 16'd0;
-            refused_count_reg        <= 16'd0;
-        end else begin
-            if (underrun_event) underrun_count_reg <= underrun_count_reg + 16'd1;
-            if (spi_crc_error) crc_error_count_reg <= crc_error_count_reg + 16'd1;
-            if (spi_frame_error) frame_error_count_reg <= frame_error_count_reg + 16'd1;
-            if (par_error) parallel_error_count_reg <= parallel_error_count_reg + 16'd1;
-            refused_count_reg <= refused_count_reg + refused_now;
-        end
-
+    // The read port (one clock of latency) and the interrupt pin.
+    always @(posedge clk) begin
         if (rst) begin
-            run_reg                  <= FS_CONTROL_RUN_RESET;
-            watchdog_enable_reg      <= FS_CONTROL_WATCHDOG_ENABLE_RESET;
-            estop_active_high_reg    <= FS_CONTROL_ESTOP_ACTIVE_HIGH_RESET;
-            period_reg               <= FS_PERIOD_CLOCKS_CLOCKS_RESET[P_WIDTH-1:0];
-            watchdog_timeout_reg     <= FS_WATCHDOG_TIMEOUT_CLOCKS_RESET[WD_W-1:0];
-            estop_filter_reg         <= FS_ESTOP_FILTER_SAMPLES_RESET;
-            watermark_reg            <= FS_FIFO_WATERMARK_WATERMARK_RESET;
-            start_level_reg          <= FS_START_LEVEL_LEVEL_RESET;
-            irq_mask_reg             <= FS_IRQ_MASK_MASK_RESET;
-            axis_enable_reg          <= FS_AXIS_ENABLE_ENABLE_RESET[N_AXES-1:0];
-            step_len_reg             <= {N_AXES{FS_AXIS_TIMING_A_STEP_LEN_RESET[TIMING_W-1:0]}};
-            step_space_reg           <= {N_AXES{FS_AXIS_TIMING_A_STEP_SPACE_RESET[TIMING_W-1:0]}};
-            dir_setup_reg            <= {N_AXES{FS_AXIS_TIMING_B_DIR_SETUP_RESET[TIMING_W-1:0]}};
-            dir_hold_reg             <= {N_AXES{FS_AXIS_TIMING_B_DIR_HOLD_RESET[TIMING_W-1:0]}};
-            out_mode_reg             <= {N_AXES{FS_AXIS_MODE_OUT_MODE_RESET}};
+            irq_reg   <= 1'b0;
+            rdata_reg <= {WORD_W{1'b0}};
+        end else begin
+            irq_reg <= |(irq_status & irq_mask_reg);
+            if (read) rdata_reg <= read_word(bus_addr) | feedback_rdata;
+        end
+    end
+
+    // Host registers: what a served write puts there. A halt wins over a write of RUN;
+    // so does the jog while it drives the core.
+    always @(posedge clk) begin
+        if (rst) begin
+            run_reg               <= FS_CONTROL_RUN_RESET;
+            watchdog_enable_reg   <= FS_CONTROL_WATCHDOG_ENABLE_RESET;
+            estop_active_high_reg <= FS_CONTROL_ESTOP_ACTIVE_HIGH_RESET;
+            period_reg            <= FS_PERIOD_CLOCKS_CLOCKS_RESET[P_WIDTH-1:0];
+            watchdog_timeout_reg  <= FS_WATCHDOG_TIMEOUT_CLOCKS_RESET[WD_W-1:0];
+            estop_filter_reg      <= FS_ESTOP_FILTER_SAMPLES_RESET;
+            watermark_reg         <= FS_FIFO_WATERMARK_WATERMARK_RESET;
+            start_level_reg       <= FS_START_LEVEL_LEVEL_RESET;
+            irq_mask_reg          <= FS_IRQ_MASK_MASK_RESET;
+            axis_enable_reg       <= FS_AXIS_ENABLE_ENABLE_RESET[N_AXES-1:0];
+            step_len_reg          <= {N_AXES{FS_AXIS_TIMING_A_STEP_LEN_RESET[TIMING_W-1:0]}};
+            step_space_reg        <= {N_AXES{FS_AXIS_TIMING_A_STEP_SPACE_RESET[TIMING_W-1:0]}};
+            dir_setup_reg         <= {N_AXES{FS_AXIS_TIMING_B_DIR_SETUP_RESET[TIMING_W-1:0]}};
+            dir_hold_reg          <= {N_AXES{FS_AXIS_TIMING_B_DIR_HOLD_RESET[TIMING_W-1:0]}};
+            out_mode_reg          <= {N_AXES{FS_AXIS_MODE_OUT_MODE_RESET}};
             for (axis = 0; axis < N_AXES; axis = axis + 1) begin
                 invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_A_BIT]  <= FS_AXIS_MODE_INVERT_A_RESET;
                 invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_B_BIT]  <= FS_AXIS_MODE_INVERT_B_RESET;
                 invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_EN_BIT] <= FS_AXIS_MODE_INVERT_EN_RESET;
             end
-            record_inc_reg           <= {N_AXES{FS_RECORD_INC_INC_RESET}};
-            timestamp_reg            <= 32'd0;
-            latch_time_reg           <= 32'd0;
-            period_count_reg         <= 32'd0;
-            position_latch_reg       <= {32*N_AXES{1'b0}};
-            irq_period_reg           <= 1'b0;
-            irq_block_end_reg        <= 1'b0;
-            overflow_reg             <= 1'b0;
-            bus_error_reg            <= 1'b0;
-            underrun_count_reg       <= 16'd0;
-            crc_error_count_reg      <= 16'd0;
-            frame_error_count_reg    <= 16'd0;
-            parallel_error_count_reg <= 16'd0;
-            refused_count_reg        <= 16'd0;
-            irq_reg                  <= 1'b0;
-            rdata_reg                <= 32'd0;
-            clear_errors_reg         <= 1'b0;
-            clear_faults_reg         <= 1'b0;
-            flush_reg                <= 1'b0;
-            clear_counters_reg       <= 1'b0;
-            kick_reg                 <= 1'b0;
-            push_reg                 <= 1'b0;
-            push_flags_reg           <= {FS_REC_FLAGS_WIDTH{1'b0}};
+            record_inc_reg        <= {N_AXES{FS_RECORD_INC_INC_RESET}};
+        end else begin
+            if (write) begin
+                case (bus_addr)
+                    FS_CONTROL_ADDR: begin
+                        run_reg               <= bus_wdata[FS_CONTROL_RUN_LSB];
+                        watchdog_enable_reg   <= bus_wdata[FS_CONTROL_WATCHDOG_ENABLE_LSB];
+                        estop_active_high_reg <= bus_wdata[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB];
+                    end
+                    FS_FIFO_WATERMARK_ADDR:   watermark_reg        <= bus_wdata[WATERMARK_W-1:0];
+                    FS_START_LEVEL_ADDR:      start_level_reg      <= bus_wdata[START_W-1:0];
+                    FS_PERIOD_CLOCKS_ADDR:    period_reg           <= bus_wdata[P_WIDTH-1:0];
+                    FS_WATCHDOG_TIMEOUT_ADDR: watchdog_timeout_reg <= bus_wdata[WD_W-1:0];
+                    FS_ESTOP_FILTER_ADDR:     estop_filter_reg     <= bus_wdata[FILTER_W-1:0];
+                    FS_IRQ_MASK_ADDR:         irq_mask_reg         <= bus_wdata[IRQ_W-1:0];
+                    FS_AXIS_ENABLE_ADDR:      axis_enable_reg      <= bus_wdata[N_AXES-1:0];
+                    default: ;
+                endcase
+                for (axis = 0; axis < N_AXES; axis = axis + 1) begin
+                    if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + axis * FS_AXIS_TIMING_A_STRIDE) begin
+                        step_len_reg[TIMING_W*axis +: TIMING_W] <=
+                            bus_wdata[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W];
+                        step_space_reg[TIMING_W*axis +: TIMING_W] <=
+                            bus_wdata[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W];
+                    end
+                    if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + axis * FS_AXIS_TIMING_B_STRIDE) begin
+                        dir_setup_reg[TIMING_W*axis +: TIMING_W] <=
+                            bus_wdata[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W];
+                        dir_hold_reg[TIMING_W*axis +: TIMING_W] <=
+                            bus_wdata[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W];
+                    end
+                    if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + axis * FS_AXIS_MODE_STRIDE) begin
+                        out_mode_reg[FS_OUT_MODE_WIDTH*axis +: FS_OUT_MODE_WIDTH] <=
+                            bus_wdata[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH];
+                        invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_A_BIT]  <= bus_wdata[FS_AXIS_MODE_INVERT_A_LSB];
+                        invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_B_BIT]  <= bus_wdata[FS_AXIS_MODE_INVERT_B_LSB];
+                        invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_EN_BIT] <= bus_wdata[FS_AXIS_MODE_INVERT_EN_LSB];
+                    end
+                    if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + axis * FS_RECORD_INC_STRIDE)
+                        record_inc_reg[INC_W*axis +: INC_W] <= bus_wdata[INC_W-1:0];
+                end
+            end
+            if (halt || jog_engaged) run_reg <= 1'b0;
+        end
+    end
+
+    // One-clock pulses after a write: the commands, RECORD_PUSH and the watchdog kick
+    // (every served write and every SPI commit).
+    always @(posedge clk) begin
+        if (rst) begin
+            clear_errors_reg   <= 1'b0;
+            clear_faults_reg   <= 1'b0;
+            flush_reg          <= 1'b0;
+            clear_counters_reg <= 1'b0;
+            kick_reg           <= 1'b0;
+            push_reg           <= 1'b0;
+            push_flags_reg     <= {FS_REC_FLAGS_WIDTH{1'b0}};
+        end else begin
+            clear_errors_reg   <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_CLEAR_ERRORS_LSB];
+            clear_faults_reg   <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_CLEAR_FAULTS_LSB];
+            flush_reg          <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_FLUSH_FIFO_LSB];
+            clear_counters_reg <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_CLEAR_COUNTERS_LSB];
+            push_reg           <= write && bus_addr == FS_RECORD_PUSH_ADDR;
+            if (write && bus_addr == FS_RECORD_PUSH_ADDR)
+                push_flags_reg <= bus_wdata[FS_RECORD_PUSH_FLAGS_LSB +: FS_REC_FLAGS_WIDTH];
+            kick_reg           <= write || spi_fifo_commit;
+        end
+    end
+
+    // Sticky flags: a set wins over a clear in the same clock (write-1-to-clear for the
+    // interrupt sources, CLEAR_ERRORS for the others).
+    always @(posedge clk) begin
+        if (rst) begin
+            irq_period_reg    <= 1'b0;
+            irq_block_end_reg <= 1'b0;
+            overflow_reg      <= 1'b0;
+            bus_error_reg     <= 1'b0;
+        end else begin
+            if (boundary) irq_period_reg <= 1'b1;
+            else if (write && bus_addr == FS_IRQ_STATUS_ADDR && bus_wdata[FS_IRQ_STATUS_PERIOD_LSB])
+                irq_period_reg <= 1'b0;
+            if (block_end) irq_block_end_reg <= 1'b1;
+            else if (write && bus_addr == FS_IRQ_STATUS_ADDR && bus_wdata[FS_IRQ_STATUS_BLOCK_END_LSB])
+                irq_block_end_reg <= 1'b0;
+            if (push_refused || spi_refused) overflow_reg <= 1'b1;
+            else if (clear_errors_reg) overflow_reg <= 1'b0;
+            if (spi_crc_error || spi_frame_error || par_error) bus_error_reg <= 1'b1;
+            else if (clear_errors_reg) bus_error_reg <= 1'b0;
+        end
+    end
+
+    // Error counters (wrap at 16 bits); CLEAR_COUNTERS zeroes them all and wins.
+    always @(posedge clk) begin
+        if (rst || clear_counters_reg) begin
+            underrun_count_reg       <= {COUNT_W{1'b0}};
+            crc_error_count_reg      <= {COUNT_W{1'b0}};
+            frame_error_count_reg    <= {COUNT_W{1'b0}};
+            parallel_error_count_reg <= {COUNT_W{1'b0}};
+            refused_count_reg        <= {COUNT_W{1'b0}};
+        end else begin
+            if (underrun_event) underrun_count_reg <= underrun_count_reg + 1'b1;
+            if (spi_crc_error) crc_error_count_reg <= crc_error_count_reg + 1'b1;
+            if (spi_frame_error) frame_error_count_reg <= frame_error_count_reg + 1'b1;
+            if (par_error) parallel_error_count_reg <= parallel_error_count_reg + 1'b1;
+            refused_count_reg <= refused_count_reg + refused_now;
         end
     end
 
