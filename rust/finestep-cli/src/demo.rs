@@ -35,10 +35,7 @@ pub fn demo_axis() -> AxisSetup {
 pub fn demo_axis_config() -> finestep_model::AxisConfig {
     let setup = demo_axis();
     finestep_model::AxisConfig {
-        step_len: setup.step_len,
-        step_space: setup.step_space,
-        dir_setup: setup.dir_setup,
-        dir_hold: setup.dir_hold,
+        timing: finestep_model::DriveTiming::new(setup.step_len, setup.step_space, setup.dir_setup, setup.dir_hold),
         mode: 0,
         invert: 0,
         enable: true,

@@ -115,10 +115,7 @@ pub fn run_program(
     let (positions, cycles) = if fast {
         let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
         for (axis, timing) in inputs.axes.iter_mut().zip(&resolved.timing) {
-            axis.step_len = timing.step_len;
-            axis.step_space = timing.step_space;
-            axis.dir_setup = timing.dir_setup;
-            axis.dir_hold = timing.dir_hold;
+            axis.timing = *timing;
             axis.enable = true;
         }
         let mut core = Core::new(CoreParams::default());

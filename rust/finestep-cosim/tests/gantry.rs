@@ -6,7 +6,7 @@
 //! alarm.
 
 use finestep_cosim::{Harness, ModelPath};
-use finestep_model::{AxisConfig, CoreInputs, GantryInputs, Increment, PeriodRecord};
+use finestep_model::{AxisConfig, CoreInputs, DriveTiming, GantryInputs, Increment, PeriodRecord};
 
 const PERIOD: u32 = 200;
 const COUNTS_PER_STEP: i64 = 4;
@@ -28,7 +28,7 @@ struct Outcome {
 /// counts the chip sees lag the motors by up to a period, as a slow feedback path would).
 fn run(path: ModelPath, sync: bool, lost: i64, at: usize, periods: usize, limit: u16) -> Outcome {
     let mut harness = Harness::new("gantry", path);
-    let axis = AxisConfig { step_len: 2, step_space: 2, dir_setup: 2, dir_hold: 2, mode: 0, invert: 0, enable: true };
+    let axis = AxisConfig { timing: DriveTiming::new(2, 2, 2, 2), mode: 0, invert: 0, enable: true };
     let mut inputs = CoreInputs { run: true, period_clocks: PERIOD, ..Default::default() };
     inputs.axes[MASTER] = axis;
     inputs.axes[SLAVE] = axis;

@@ -6,8 +6,8 @@
 mod common;
 
 use finestep_cosim::{Harness, ModelPath};
-use finestep_model::limits::{AxisTiming, RateChecker};
-use finestep_model::{pins, AxisConfig, CoreInputs, PeriodRecord};
+use finestep_model::limits::RateChecker;
+use finestep_model::{pins, AxisConfig, CoreInputs, DriveTiming, PeriodRecord};
 use finestep_planner::{interpolate_line, LineMove, Machine};
 use proptest::prelude::*;
 
@@ -19,10 +19,10 @@ const PERIOD_S: f64 = 0.001;
 fn run_line(line: &LineMove, path: ModelPath) -> Result<(), TestCaseError> {
     let machine = Machine::new(vec![1000.0, 800.0, 100.0], PERIOD_S);
     let records = interpolate_line(&machine, line).map_err(|e| TestCaseError::fail(e.to_string()))?;
-    let axis = AxisConfig { step_len: 5, step_space: 5, dir_setup: 10, dir_hold: 10, mode: 0, invert: 0, enable: true };
+    let axis = AxisConfig { timing: DriveTiming::new(5, 5, 10, 10), mode: 0, invert: 0, enable: true };
     let mut inputs = CoreInputs { run: true, period_clocks: PERIOD_CLOCKS, ..Default::default() };
     inputs.axes[..3].copy_from_slice(&[axis; 3]);
-    let mut checker = RateChecker::new(PERIOD_CLOCKS, &inputs.axes.iter().map(AxisTiming::from).collect::<Vec<_>>());
+    let mut checker = RateChecker::new(PERIOD_CLOCKS, &inputs.axes.iter().map(|axis| axis.timing).collect::<Vec<_>>());
     // The parameter ranges below keep every line within the rated rate: a refusal is a
     // planner defect, not a case to skip.
     for (index, record) in records.iter().enumerate() {

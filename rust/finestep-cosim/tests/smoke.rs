@@ -5,10 +5,10 @@ mod common;
 
 use common::{play, Action, Scenario, AXES};
 use finestep_cosim::ModelPath;
-use finestep_model::{AxisConfig, Increment, PeriodRecord};
+use finestep_model::{AxisConfig, DriveTiming, Increment, PeriodRecord};
 
 fn scenario() -> Scenario {
-    let axis = AxisConfig { step_len: 3, step_space: 2, dir_setup: 4, dir_hold: 2, mode: 0, invert: 0, enable: true };
+    let axis = AxisConfig { timing: DriveTiming::new(3, 2, 4, 2), mode: 0, invert: 0, enable: true };
     let mut axes = [axis; AXES];
     axes[1].mode = 1;
     axes[2].mode = 2;

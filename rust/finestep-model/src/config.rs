@@ -2,118 +2,31 @@
 //! their port widths before use.
 
 use crate::record::PeriodRecord;
-use crate::MAX_AXES;
-
-/// Design-time parameters of the core (the Verilog module parameters).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CoreParams {
-    /// `N_AXES`: number of axes, 1 ..= [`MAX_AXES`].
-    pub n_axes: usize,
-    /// `P_WIDTH`: width of the period register in bits, 1 ..= 32.
-    pub p_width: u32,
-    /// `TIMING_W`: width of the step timing settings and counters in bits, 1 ..= 32.
-    pub timing_width: u32,
-}
-
-impl Default for CoreParams {
-    /// The defaults of the Verilog: 4 axes, `P_WIDTH = 20`, `TIMING_W = 12`.
-    fn default() -> Self {
-        CoreParams { n_axes: 4, p_width: 20, timing_width: 12 }
-    }
-}
-
-/// A [`CoreParams`] value outside what the core supports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum ParamsError {
-    /// `n_axes` is 0 or above [`MAX_AXES`].
-    #[error("n_axes = {0} is outside 1..={MAX_AXES}")]
-    Axes(usize),
-    /// `p_width` is 0 or above 32.
-    #[error("p_width = {0} is outside 1..=32")]
-    PeriodWidth(u32),
-    /// `timing_width` is 0 or above 32.
-    #[error("timing_width = {0} is outside 1..=32")]
-    TimingWidth(u32),
-}
-
-impl CoreParams {
-    /// Checks the parameters are in the supported ranges.
-    pub fn validate(&self) -> Result<(), ParamsError> {
-        if !(1..=MAX_AXES).contains(&self.n_axes) {
-            return Err(ParamsError::Axes(self.n_axes));
-        }
-        if !(1..=32).contains(&self.p_width) {
-            return Err(ParamsError::PeriodWidth(self.p_width));
-        }
-        if !(1..=32).contains(&self.timing_width) {
-            return Err(ParamsError::TimingWidth(self.timing_width));
-        }
-        Ok(())
-    }
-
-    /// All ones in the low `p_width` bits: the largest period in clocks.
-    pub fn period_mask(&self) -> u32 {
-        low_ones(self.p_width)
-    }
-
-    /// All ones in the low `timing_width` bits: the largest timing value, and the value
-    /// at which the shaper's `cnt` and `dcnt` saturate (`sat`).
-    pub fn timing_mask(&self) -> u32 {
-        low_ones(self.timing_width)
-    }
-
-    /// The effective period in clocks for a `period_clocks` input: masked to `p_width`
-    /// bits, 0 acting as 1.
-    pub fn effective_period(&self, period_clocks: u32) -> u32 {
-        (period_clocks & self.period_mask()).max(1)
-    }
-}
-
-fn low_ones(width: u32) -> u32 {
-    if width >= 32 {
-        u32::MAX
-    } else {
-        (1u32 << width) - 1
-    }
-}
+use crate::{DriveTiming, MAX_AXES};
+pub use finestep_interface::{CoreParams, ParamError};
 
 /// Per-axis settings (the per-axis slices of the Verilog's packed input ports).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct AxisConfig {
-    /// `L`: clocks the step level stays high (0 acts as 1).
-    pub step_len: u32,
-    /// `S`: minimum clocks the step level stays low between pulses (0 acts as 1).
-    pub step_space: u32,
-    /// `U`: minimum clocks from a direction change to the next rising edge (0 acts as 1).
-    pub dir_setup: u32,
-    /// `H`: minimum clocks from a falling edge to a direction change (0 acts as 1).
-    pub dir_hold: u32,
-    /// Output mode (2 bits): 0 step/dir, 1 up/down, 2 quadrature, 3 acts as 0.
+    /// `L, S, U, H`: the drive timing in clocks (`step_len`, `step_space`, `dir_setup`,
+    /// `dir_hold`; each 0 acts as 1), masked to `TIMING_W` bits by the core.
+    pub timing: DriveTiming,
+    /// Output mode (2 bits, see [`mode`]): 0 step/dir, 1 up/down, 2 quadrature, 3 acts as 0.
     pub mode: u8,
-    /// Inversion (3 bits): bit 0 pin A, bit 1 pin B, bit 2 the enable pin.
+    /// Inversion (3 bits, see [`invert`]): bit 0 pin A, bit 1 pin B, bit 2 the enable pin.
     pub invert: u8,
     /// Drive enable (`axis_enable[i]`).
     pub enable: bool,
 }
 
-/// Output mode values of [`AxisConfig::mode`].
+/// Output mode values of [`AxisConfig::mode`] (the interface's `OUT_MODE`).
 pub mod mode {
-    /// Step on pin A, direction on pin B (1 = positive).
-    pub const STEP_DIR: u8 = 0;
-    /// Up pulses on pin A, down pulses on pin B (CW/CCW).
-    pub const UP_DOWN: u8 = 1;
-    /// Quadrature A/B, A leading B when moving positive.
-    pub const QUADRATURE: u8 = 2;
+    pub use finestep_interface::out_mode::*;
 }
 
-/// Bits of [`AxisConfig::invert`].
+/// Bits of [`AxisConfig::invert`] (the interface's `INVERT`).
 pub mod invert {
-    /// Inverts pin A.
-    pub const PIN_A: u8 = 1 << 0;
-    /// Inverts pin B.
-    pub const PIN_B: u8 = 1 << 1;
-    /// Inverts the enable pin.
-    pub const PIN_EN: u8 = 1 << 2;
+    pub use finestep_interface::invert::*;
 }
 
 /// Everything presented on the core's input ports in one cycle.
@@ -173,10 +86,8 @@ pub struct GantryInputs {
 /// One axis's settings masked to the port widths, as the blocks use them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub(crate) struct AxisSettings {
-    pub(crate) l: u32,
-    pub(crate) s: u32,
-    pub(crate) u: u32,
-    pub(crate) h: u32,
+    /// `L, S, U, H`, masked to `TIMING_W` bits.
+    pub(crate) timing: DriveTiming,
     pub(crate) mode: u8,
     pub(crate) invert: u8,
     /// `axis_enable & !halt`: the enable the pins show.
@@ -189,12 +100,9 @@ impl AxisSettings {
     #[inline]
     pub(crate) fn masked(cfg: &AxisConfig, timing_mask: u32, halt: bool) -> Self {
         AxisSettings {
-            l: cfg.step_len & timing_mask,
-            s: cfg.step_space & timing_mask,
-            u: cfg.dir_setup & timing_mask,
-            h: cfg.dir_hold & timing_mask,
-            mode: cfg.mode & 0b11,
-            invert: cfg.invert & 0b111,
+            timing: DriveTiming::from_array(cfg.timing.to_array().map(|value| value & timing_mask)),
+            mode: cfg.mode & ((1 << mode::WIDTH) - 1),
+            invert: cfg.invert & invert::ALL,
             enable: cfg.enable && !halt,
             halt,
         }
@@ -206,40 +114,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn masks_follow_the_widths() {
-        let p = CoreParams::default();
-        assert_eq!(p.period_mask(), 0xF_FFFF);
-        assert_eq!(p.timing_mask(), 0xFFF);
-        assert_eq!(p.effective_period(0), 1);
-        assert_eq!(p.effective_period(0x10_0005), 5);
-        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32 };
-        assert_eq!(wide.period_mask(), u32::MAX);
-        assert!(wide.validate().is_ok());
-    }
-
-    #[test]
-    fn bad_params_are_refused() {
-        let p = CoreParams { n_axes: 9, ..CoreParams::default() };
-        assert_eq!(p.validate(), Err(ParamsError::Axes(9)));
-        let p = CoreParams { p_width: 0, ..CoreParams::default() };
-        assert_eq!(p.validate(), Err(ParamsError::PeriodWidth(0)));
-        let p = CoreParams { timing_width: 33, ..CoreParams::default() };
-        assert_eq!(p.validate(), Err(ParamsError::TimingWidth(33)));
-    }
-
-    #[test]
     fn settings_are_masked() {
         let cfg = AxisConfig {
-            step_len: 0x1_0003,
-            step_space: 0xFFFF_FFFF,
-            dir_setup: 16,
-            dir_hold: 17,
+            timing: DriveTiming::new(0x1_0003, 0xFFFF_FFFF, 16, 17),
             mode: 0xFE,
             invert: 0xFF,
             enable: true,
         };
         let s = AxisSettings::masked(&cfg, 0xF, false);
-        assert_eq!((s.l, s.s, s.u, s.h), (3, 15, 0, 1));
+        assert_eq!(s.timing, DriveTiming::new(3, 15, 0, 1));
         assert_eq!((s.mode, s.invert, s.enable), (2, 7, true));
         let halted = AxisSettings::masked(&cfg, 0xF, true);
         assert!(halted.halt && !halted.enable, "halt drops the enable");

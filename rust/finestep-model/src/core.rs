@@ -8,7 +8,7 @@
 //! in `n+1` (level and `position` in `n+2`) and the pin edge in `n+3`. Every output is a
 //! function of the state only.
 
-use crate::config::{AxisSettings, CoreInputs, CoreParams, ParamsError};
+use crate::config::{AxisSettings, CoreInputs, CoreParams, ParamError};
 use crate::dda_axis::{DdaAxis, ONE_STEP};
 use crate::gantry_sync::{GantryContext, GantrySync};
 use crate::period_timer::{PeriodTimer, TimerInputs};
@@ -162,7 +162,7 @@ impl Core {
     }
 
     /// A core in its reset state at cycle 0, or why `params` are not supported.
-    pub fn try_new(params: CoreParams) -> Result<Core, ParamsError> {
+    pub fn try_new(params: CoreParams) -> Result<Core, ParamError> {
         params.validate()?;
         let counter_max = params.timing_mask();
         Ok(Core {
@@ -336,10 +336,10 @@ mod tests {
     use super::*;
     use crate::config::AxisConfig;
     use crate::record::PeriodRecord;
+    use crate::DriveTiming;
 
     fn inputs(run: bool, period_clocks: u32) -> CoreInputs {
-        let axis =
-            AxisConfig { step_len: 2, step_space: 2, dir_setup: 1, dir_hold: 1, enable: true, ..AxisConfig::default() };
+        let axis = AxisConfig { timing: DriveTiming::new(2, 2, 1, 1), enable: true, ..AxisConfig::default() };
         CoreInputs { run, period_clocks, axes: [axis; MAX_AXES], ..CoreInputs::default() }
     }
 
@@ -450,7 +450,7 @@ mod tests {
     #[test]
     fn bad_params_panic_or_error() {
         let params = CoreParams { n_axes: 0, ..CoreParams::default() };
-        assert_eq!(Core::try_new(params).unwrap_err(), ParamsError::Axes(0));
+        assert_eq!(Core::try_new(params).unwrap_err().name, "N_AXES");
         assert!(std::panic::catch_unwind(|| Core::new(params)).is_err());
     }
 }

@@ -5,11 +5,11 @@
 //!
 //! Specification: docs/spec/crc16_byte.md
 
-/// The generator polynomial `x^16 + x^12 + x^5 + 1` without its top bit.
-pub const POLYNOMIAL: u16 = 0x1021;
+/// The generator polynomial `x^16 + x^12 + x^5 + 1` without its top bit (the interface's).
+pub const POLYNOMIAL: u16 = finestep_interface::spi::CRC_POLYNOMIAL;
 
-/// The register value at the start of a frame.
-pub const INITIAL: u16 = 0xFFFF;
+/// The register value at the start of a frame (the interface's).
+pub const INITIAL: u16 = finestep_interface::spi::CRC_INITIAL;
 
 /// The CRC after `byte` (most significant bit first) from the CRC `crc` before it: the
 /// combinational function of the HDL block.

@@ -12,11 +12,11 @@
 //! positions, counts and edge times read after a boundary come from one clock.
 
 use crate::input_filter::{InputFilter, Prescaler};
-use crate::quadrature_channel::{ChannelInputs, DecodeMode, QuadratureChannel};
+use crate::quadrature_channel::{ChannelInputs, CountMode, QuadratureChannel};
 use crate::MAX_AXES;
 
 /// The most encoder channels (`N_ENC <= 4`: the register map has room for four).
-pub const MAX_CHANNELS: usize = 4;
+pub const MAX_CHANNELS: usize = finestep_interface::params::finestep_top::N_ENC.max as usize;
 
 /// The index of each pin's filter in a channel's `[a, b, z]`.
 const PIN_A: usize = 0;
@@ -27,7 +27,7 @@ const PIN_Z: usize = 2;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ChannelConfig {
     /// `MODE`.
-    pub mode: DecodeMode,
+    pub mode: CountMode,
     /// `Z_ACTIVE_HIGH`.
     pub z_active_high: bool,
     /// `FILTER` (4 bits; 0 acts as 1).

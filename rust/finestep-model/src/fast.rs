@@ -109,13 +109,13 @@ impl Core {
                 return 0;
             }
             let to_decision = if sh.level {
-                axis.l.saturating_sub(sh.cnt)
+                axis.timing.step_len.saturating_sub(sh.cnt)
             } else if e == 0 || axis.halt {
                 u32::MAX
             } else if (e > 0) == sh.dir {
-                axis.s.saturating_sub(sh.cnt).max(axis.u.saturating_sub(sh.dcnt))
+                axis.timing.step_space.saturating_sub(sh.cnt).max(axis.timing.dir_setup.saturating_sub(sh.dcnt))
             } else {
-                axis.h.saturating_sub(sh.cnt)
+                axis.timing.dir_hold.saturating_sub(sh.cnt)
             };
             if to_decision != u32::MAX {
                 quiet = quiet.min(u64::from(to_decision));
@@ -179,18 +179,11 @@ impl Core {
 
 #[cfg(test)]
 mod tests {
-    use crate::{AxisConfig, Core, CoreInputs, CoreParams, PeriodRecord, MAX_AXES};
+    use crate::{AxisConfig, Core, CoreInputs, CoreParams, DriveTiming, PeriodRecord, MAX_AXES};
 
     #[test]
     fn a_long_move_costs_few_iterations_and_matches_per_clock() {
-        let axis = AxisConfig {
-            step_len: 100,
-            step_space: 100,
-            dir_setup: 50,
-            dir_hold: 50,
-            enable: true,
-            ..AxisConfig::default()
-        };
+        let axis = AxisConfig { timing: DriveTiming::new(100, 100, 50, 50), enable: true, ..AxisConfig::default() };
         let mut inp =
             CoreInputs { run: false, period_clocks: 100_000, axes: [axis; MAX_AXES], ..CoreInputs::default() };
         let mut slow = Core::new(CoreParams::default());

@@ -10,7 +10,7 @@
 //! detent 0, two edges from either boundary, so bounce at rest never changes it.
 
 use crate::input_filter::{InputFilter, Prescaler};
-use crate::quadrature_channel::{ChannelInputs, DecodeMode, QuadratureChannel};
+use crate::quadrature_channel::{ChannelInputs, CountMode, QuadratureChannel};
 
 /// Edges per detent.
 pub const EDGES_PER_DETENT: i64 = 4;
@@ -122,7 +122,7 @@ impl HandWheel {
             a: self.filters[0].level(),
             b: self.filters[1].level(),
             primed: self.filters.iter().all(InputFilter::primed),
-            mode: DecodeMode::X4,
+            mode: CountMode::X4,
             // No index: z stays inactive.
             z_level: false,
             z_active_high: true,

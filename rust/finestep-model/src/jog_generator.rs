@@ -38,13 +38,10 @@ pub fn wrap48(x: i64) -> i64 {
     (x << (64 - POSITION_BITS)) >> (64 - POSITION_BITS)
 }
 
-/// `m` of `JOG_CONTROL.MULTIPLIER`: 1, 10, 100, and 100 for 3.
+/// `m` of `JOG_CONTROL.MULTIPLIER`: 1, 10, 100, and 100 for 3 (the interface's
+/// `JOG_MULTIPLIER`).
 pub fn multiplier(bits: u32) -> i64 {
-    match bits & 3 {
-        0 => 1,
-        1 => 10,
-        _ => 100,
-    }
+    i64::from(finestep_interface::JogMultiplier::from_bits(bits).factor())
 }
 
 /// Integer square root, `floor(sqrt(n))`.

@@ -13,14 +13,19 @@
 //! [`core`](mod@core) (`finestep_core`, their composition). [`Core::step`] is one clock
 //! edge and is the definition; [`Core::run_chunk`] runs many edges with the same inputs
 //! and reports output changes, and [`Core::run_chunk_fast`] gives the same results by
-//! skipping quiet cycles ([`fast`]). [`limits`] holds the rated rate: the increments
-//! within which the pulse train follows the ideal position to within one step.
+//! skipping quiet cycles ([`fast`]).
+//!
+//! What the model shares with the RTL, the host and the planner (the register map, the
+//! [`PeriodRecord`], the field values, [`DriveTiming`], the build parameters and the rated
+//! rate) is the `finestep_interface` crate, generated from the interface description;
+//! this crate re-exports those types ([`limits`] is the interface's rated rate, the
+//! increments within which the pulse train follows the ideal position to within one step).
 //!
 //! The host-interface top [`top`] (`finestep_top`) is modelled per clock by
 //! [`top::Top::step`] with the pins of [`top::TopInputs`]: [`spi_slave_phy`] and
 //! [`spi_frame`] (the SPI link, with [`crc16_byte`]), [`parallel_bus_slave`] (the
 //! 8080/FSMC link), [`register_file`] (register bus, registers from the generated
-//! register map `finestep_regmap`, counters, interrupt, position latch, FIFO write
+//! register map `finestep_interface::regs`, counters, interrupt, position latch, FIFO write
 //! port), [`position_fifo`], [`motion_control`], [`safety_monitor`] and the core.
 //!
 //! The feedback blocks: [`input_filter`] (sampling prescaler, synchroniser and glitch
@@ -34,11 +39,10 @@
 //! Move axis 0 by 2.5 steps in one period of 1000 clocks, then let the pulses drain:
 //!
 //! ```
-//! use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams, Increment, MAX_AXES};
+//! use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams, DriveTiming, Increment, MAX_AXES};
 //!
 //! let mut core = Core::new(CoreParams::default());
-//! let axis = AxisConfig { step_len: 10, step_space: 10, dir_setup: 5, dir_hold: 5,
-//!                         enable: true, ..AxisConfig::default() };
+//! let axis = AxisConfig { timing: DriveTiming::new(10, 10, 5, 5), enable: true, ..AxisConfig::default() };
 //! let mut inputs = CoreInputs { period_clocks: 1000, axes: [axis; MAX_AXES],
 //!                               ..CoreInputs::default() };
 //! let mut events = Vec::new();
@@ -80,15 +84,10 @@ pub mod spi_slave_phy;
 pub mod step_shaper;
 pub mod top;
 
-pub use crate::config::{AxisConfig, CoreInputs, CoreParams, GantryInputs, ParamsError};
+pub use crate::config::{AxisConfig, CoreInputs, GantryInputs};
 pub use crate::core::{pins, ChunkEnd, Core, CoreOutputs, Event};
 pub use crate::gantry_sync::GantrySync;
-pub use crate::limits::{AxisTiming, RateChecker, RateError};
-pub use crate::record::PeriodRecord;
-pub use crate::top::{top_pins, Top, TopInputs, TopOutputs, TopParams, TopParamsError};
-
-/// The most axes a core can have (`N_AXES <= 8`).
-pub const MAX_AXES: usize = 8;
-
-/// An axis increment: signed steps per period in two's complement Q16.16.
-pub type Increment = fixed::types::I16F16;
+pub use crate::limits::AxisTiming;
+pub use crate::top::{top_pins, Top, TopInputs, TopOutputs};
+pub use finestep_interface::rate::{RateChecker, RateError};
+pub use finestep_interface::{regs, CoreParams, DriveTiming, Increment, ParamError, PeriodRecord, TopParams, MAX_AXES};

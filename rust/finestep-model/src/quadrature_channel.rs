@@ -13,50 +13,23 @@
 //! Nothing is decoded until `live` (the cycle after the filters' first adopted sample
 //! is visible), so the power-on levels are never taken for an edge.
 
-/// How the channel turns edges into counts (`ENC_CONTROL.MODE`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum DecodeMode {
-    /// Mode 0: every edge of A or B counts.
-    #[default]
-    X4,
-    /// Mode 1: every edge of A counts.
-    X2,
-    /// Mode 2: the edges of A while B is low count.
-    X1,
-    /// Mode 3: A is a step input (rising edges count), B the direction (1 up).
-    StepDir,
-}
-
-impl DecodeMode {
-    /// The mode from the 2-bit field value (only the low 2 bits are looked at).
-    pub fn from_bits(bits: u32) -> DecodeMode {
-        match bits & 3 {
-            0 => DecodeMode::X4,
-            1 => DecodeMode::X2,
-            2 => DecodeMode::X1,
-            _ => DecodeMode::StepDir,
-        }
-    }
-
-    /// Whether A and B changing in one clock is an illegal transition (quadrature modes).
-    pub fn quadrature(self) -> bool {
-        self != DecodeMode::StepDir
-    }
-}
+/// How the channel turns edges into counts (`ENC_CONTROL.MODE`): the interface's
+/// `COUNT_MODE`.
+pub use finestep_interface::CountMode;
 
 /// The count change from one clock's filtered levels: `(delta, illegal)`, `delta` in
 /// {-1, 0, +1}. Only meaningful while `live`.
-pub fn decode(mode: DecodeMode, a: bool, b: bool, a_p: bool, b_p: bool) -> (i32, bool) {
+pub fn decode(mode: CountMode, a: bool, b: bool, a_p: bool, b_p: bool) -> (i32, bool) {
     let da = a != a_p;
     let db = b != b_p;
     let forward = (da && a != b) || (db && a == b);
     let signed = |up: bool| if up { 1 } else { -1 };
     match mode {
-        DecodeMode::StepDir => (if a && !a_p { signed(b) } else { 0 }, false),
+        CountMode::StepDir => (if a && !a_p { signed(b) } else { 0 }, false),
         _ if da && db => (0, true),
-        DecodeMode::X4 if da != db => (signed(forward), false),
-        DecodeMode::X2 if da => (signed(forward), false),
-        DecodeMode::X1 if da && !b => (signed(a), false),
+        CountMode::X4 if da != db => (signed(forward), false),
+        CountMode::X2 if da => (signed(forward), false),
+        CountMode::X1 if da && !b => (signed(a), false),
         _ => (0, false),
     }
 }
@@ -73,7 +46,7 @@ pub struct ChannelInputs {
     /// The filters have adopted their first sample (`live` follows it one clock later).
     pub primed: bool,
     /// `ENC_CONTROL.MODE`.
-    pub mode: DecodeMode,
+    pub mode: CountMode,
     /// `ENC_CONTROL.Z_ACTIVE_HIGH`.
     pub z_active_high: bool,
     /// `ARM_INDEX_LATCH` pulse.
@@ -208,7 +181,7 @@ mod tests {
 
     #[test]
     fn every_mode_decodes_a_forward_and_a_backward_turn() {
-        for (mode, per_turn) in [(DecodeMode::X4, 4), (DecodeMode::X2, 2), (DecodeMode::X1, 1)] {
+        for (mode, per_turn) in [(CountMode::X4, 4), (CountMode::X2, 2), (CountMode::X1, 1)] {
             let mut total = 0;
             for k in 0..8 {
                 let (a_p, b_p) = GRAY[k % 4];
@@ -226,10 +199,10 @@ mod tests {
             }
             assert_eq!(total, -2 * per_turn, "{mode:?} backward");
         }
-        assert_eq!(decode(DecodeMode::StepDir, true, true, false, true), (1, false));
-        assert_eq!(decode(DecodeMode::StepDir, true, false, false, false), (-1, false));
-        assert_eq!(decode(DecodeMode::StepDir, true, true, false, false), (1, false), "no illegal in step/dir");
-        assert_eq!(decode(DecodeMode::X4, true, true, false, false), (0, true));
+        assert_eq!(decode(CountMode::StepDir, true, true, false, true), (1, false));
+        assert_eq!(decode(CountMode::StepDir, true, false, false, false), (-1, false));
+        assert_eq!(decode(CountMode::StepDir, true, true, false, false), (1, false), "no illegal in step/dir");
+        assert_eq!(decode(CountMode::X4, true, true, false, false), (0, true));
     }
 
     fn live_inputs() -> ChannelInputs {

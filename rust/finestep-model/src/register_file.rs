@@ -6,7 +6,7 @@
 //! Specification: docs/spec/register_file.md and docs/spec/feedback_registers.md
 //!
 //! Addresses, field positions, access types and reset values come from the generated
-//! register map ([`finestep_regmap::regs`]); the `rw` bits live in one word per address,
+//! register map ([`finestep_interface::regs`]); the `rw` bits live in one word per address,
 //! masked on every write to the bits this build implements (timing fields to
 //! `TIMING_W`, `PERIOD_CLOCKS` to `P_WIDTH`, `WATCHDOG_TIMEOUT` to `WD_W`, per-axis
 //! registers and bits to `N_AXES`).
@@ -19,14 +19,13 @@
 //! The feedback registers (encoders, probe, hand wheel, jog) read the blocks' state
 //! through [`FeedbackStatus`]; their settings are `rw` bits here like any other.
 
-use finestep_regmap::regs;
-use finestep_regmap::{Access, Field};
+use finestep_interface::regs;
+use finestep_interface::{invert, Access, CountMode, DriveTiming, Field};
 
 use crate::encoder_bank::{ChannelConfig, EncoderBankStatus, ProbeConfig, MAX_CHANNELS};
 use crate::hand_wheel::HandWheelStatus;
 use crate::jog_generator::{JogInputs, JogStatus};
 use crate::position_fifo::FifoInputs;
-use crate::quadrature_channel::DecodeMode;
 use crate::record::PeriodRecord;
 use crate::spi_frame::{SpiFifoPort, SpiFrameEvents};
 use crate::top::TopParams;
@@ -362,24 +361,15 @@ impl RegisterFile {
         if axis >= self.params.n_axes {
             return crate::AxisConfig::default();
         }
-        use regs::{axis_mode as m, axis_timing_a as a, axis_timing_b as b};
-        let timing_a = self.rw[usize::from(a::addr(axis))];
-        let timing_b = self.rw[usize::from(b::addr(axis))];
+        use regs::axis_mode as m;
         let mode = self.rw[usize::from(m::addr(axis))];
         crate::AxisConfig {
-            step_len: a::STEP_LEN.get(timing_a),
-            step_space: a::STEP_SPACE.get(timing_a),
-            dir_setup: b::DIR_SETUP.get(timing_b),
-            dir_hold: b::DIR_HOLD.get(timing_b),
+            timing: DriveTiming::from_registers(axis, |addr| self.rw[usize::from(addr)]),
             mode: m::OUT_MODE.get(mode) as u8,
-            invert: [
-                (m::INVERT_A, crate::config::invert::PIN_A),
-                (m::INVERT_B, crate::config::invert::PIN_B),
-                (m::INVERT_EN, crate::config::invert::PIN_EN),
-            ]
-            .iter()
-            .filter(|(field, _)| field.get(mode) != 0)
-            .fold(0, |bits, (_, pin)| bits | pin),
+            invert: [(m::INVERT_A, invert::PIN_A), (m::INVERT_B, invert::PIN_B), (m::INVERT_EN, invert::PIN_EN)]
+                .iter()
+                .filter(|(field, _)| field.get(mode) != 0)
+                .fold(0, |bits, (_, pin)| bits | pin),
             enable: self.axis_enable(axis),
         }
     }
@@ -428,7 +418,7 @@ impl RegisterFile {
         use regs::enc_control as e;
         let word = self.rw[usize::from(e::addr(c))];
         ChannelConfig {
-            mode: DecodeMode::from_bits(e::MODE.get(word)),
+            mode: CountMode::from_bits(e::MODE.get(word)),
             z_active_high: e::Z_ACTIVE_HIGH.get(word) != 0,
             filter: e::FILTER.get(word) as u8,
             arm_index_latch: self.arm_index_latch >> c & 1 != 0,

@@ -20,29 +20,11 @@ use crate::record::PeriodRecord;
 use crate::register_file::BusRequest;
 use crate::{Increment, MAX_AXES};
 
-/// Command bytes (the first byte of a frame).
-pub mod command {
-    /// Read `count` registers from `addr` on.
-    pub const READ: u8 = 0x01;
-    /// Write one register (`count` = 1).
-    pub const WRITE: u8 = 0x02;
-    /// Queue `count` period records into the position FIFO.
-    pub const FIFO: u8 = 0x03;
-}
+/// Command bytes (the first byte of a frame): the interface's.
+pub use finestep_interface::spi::command;
 
-/// Result codes of WRITE and FIFO frames, and of every rejected frame.
-pub mod result {
-    /// Applied.
-    pub const ACK: u8 = 0xA0;
-    /// The CRC did not check; nothing applied.
-    pub const CRC_MISMATCH: u8 = 0xE1;
-    /// Unknown command, or a count the command does not allow.
-    pub const BAD_COMMAND: u8 = 0xE2;
-    /// FIFO frame refused at the header: `count` above the free room.
-    pub const FIFO_REFUSED: u8 = 0xE3;
-    /// The FIFO was flushed during the frame; its records were dropped.
-    pub const FIFO_FLUSHED: u8 = 0xE4;
-}
+/// Result codes of WRITE and FIFO frames, and of every rejected frame: the interface's.
+pub use finestep_interface::spi::result;
 
 /// Where the frame layer is in the current frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]

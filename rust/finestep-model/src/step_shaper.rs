@@ -131,14 +131,14 @@ impl StepShaper {
         let mut fall = false;
         let mut turn = false;
         if self.level {
-            fall = self.cnt >= set.l;
+            fall = self.cnt >= set.timing.step_len;
         } else if set.halt {
             // Halted: only a running pulse may end.
         } else if e != 0 {
             if (e > 0) == self.dir {
-                rise = self.cnt >= set.s && self.dcnt >= set.u;
+                rise = self.cnt >= set.timing.step_space && self.dcnt >= set.timing.dir_setup;
             } else {
-                turn = self.cnt >= set.h;
+                turn = self.cnt >= set.timing.dir_hold;
             }
         }
         let step: i32 = match (rise, self.dir) {
@@ -187,7 +187,7 @@ mod tests {
     use super::*;
 
     fn settings(l: u32, s: u32, u: u32, h: u32) -> AxisSettings {
-        AxisSettings { l, s, u, h, ..AxisSettings::default() }
+        AxisSettings { timing: crate::DriveTiming::new(l, s, u, h), ..AxisSettings::default() }
     }
 
     /// Runs the shaper over a request sequence and returns (level, dir) per cycle.

@@ -16,7 +16,7 @@
 //!
 //! ```
 //! use finestep_model::top::{Top, TopInputs, TopParams};
-//! use finestep_regmap::regs;
+//! use finestep_interface::regs;
 //!
 //! let mut top = Top::new(TopParams::default());
 //! let idle = TopInputs::default();
@@ -27,11 +27,10 @@
 //! assert_eq!(regs::status::HALT.get(top.register(regs::status::ADDR)), 1);
 //! ```
 
-use finestep_regmap::regs;
+use finestep_interface::regs;
 
-use crate::config::CoreParams;
 use crate::core::Core;
-use crate::encoder_bank::{EncoderBank, EncoderBankInputs, MAX_CHANNELS};
+use crate::encoder_bank::{EncoderBank, EncoderBankInputs};
 use crate::hand_wheel::{HandWheel, HandWheelInputs};
 use crate::jog_generator::JogGenerator;
 use crate::motion_control::{MotionControl, MotionInputs};
@@ -43,111 +42,11 @@ use crate::register_file::{
 use crate::safety_monitor::{SafetyInputs, SafetyMonitor};
 use crate::spi_frame::{SpiFrame, SpiFrameInputs};
 use crate::spi_slave_phy::{SpiPins, SpiSlavePhy};
-use crate::{CoreInputs, MAX_AXES};
+use crate::{CoreInputs, ParamError, MAX_AXES};
+pub use finestep_interface::TopParams;
 
 /// `FILTER_W` of the safety monitor's E-stop filter (the width of `ESTOP_FILTER`).
 pub const ESTOP_FILTER_WIDTH: u32 = regs::estop_filter::SAMPLES.width;
-
-/// Design-time parameters of the top (the Verilog module parameters).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct TopParams {
-    /// `N_AXES`: number of axes, 1 ..= [`MAX_AXES`].
-    pub n_axes: usize,
-    /// `P_WIDTH`: bits of the period, 1 ..= the width of `PERIOD_CLOCKS.CLOCKS` (24).
-    pub p_width: u32,
-    /// `TIMING_W`: bits of each step timing, 1 ..= the width of the timing fields (16).
-    pub timing_w: u32,
-    /// `FIFO_DEPTH_LOG2`: the FIFO holds `2^n` records, 1 ..= 15 (`LEVEL` is 16 bits).
-    pub fifo_depth_log2: u32,
-    /// `WD_W`: bits of the watchdog, 1 ..= the width of `WATCHDOG_TIMEOUT.CLOCKS` (24).
-    pub wd_w: u32,
-    /// `CLOCK_HZ`: the clock frequency, only reported in `CLOCK_HZ`.
-    pub clock_hz: u32,
-    /// `HAS_SPI`: the SPI slave is built.
-    pub has_spi: bool,
-    /// `HAS_PARALLEL`: the 8080/FSMC slave is built.
-    pub has_parallel: bool,
-    /// `N_ENC`: encoder channels, 0 ..= [`MAX_CHANNELS`].
-    pub n_enc: usize,
-    /// `HAS_MPG`: the hand wheel and the jog generator are built.
-    pub has_mpg: bool,
-}
-
-impl Default for TopParams {
-    /// The defaults of the Verilog: 4 axes, `P_WIDTH = 20`, `TIMING_W = 12`, 256 records,
-    /// `WD_W = 24`, 50 MHz, both host links, 4 encoder channels and the hand wheel.
-    fn default() -> Self {
-        TopParams {
-            n_axes: 4,
-            p_width: 20,
-            timing_w: 12,
-            fifo_depth_log2: 8,
-            wd_w: 24,
-            clock_hz: 50_000_000,
-            has_spi: true,
-            has_parallel: true,
-            n_enc: MAX_CHANNELS,
-            has_mpg: true,
-        }
-    }
-}
-
-/// A [`TopParams`] value outside what the top supports.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-pub enum TopParamsError {
-    /// `n_axes` is 0 or above [`MAX_AXES`].
-    #[error("n_axes = {0} is outside 1..={MAX_AXES}")]
-    Axes(usize),
-    /// `p_width` is 0 or wider than `PERIOD_CLOCKS`.
-    #[error("p_width = {0} is outside 1..={max}", max = regs::period_clocks::CLOCKS.width)]
-    PeriodWidth(u32),
-    /// `timing_w` is 0 or wider than the timing fields.
-    #[error("timing_w = {0} is outside 1..={max}", max = regs::axis_timing_a::STEP_LEN.width)]
-    TimingWidth(u32),
-    /// `fifo_depth_log2` is 0 or the depth does not fit `FIFO_LEVEL.LEVEL`.
-    #[error("fifo_depth_log2 = {0} is outside 1..={max}", max = MAX_FIFO_DEPTH_LOG2)]
-    FifoDepth(u32),
-    /// `wd_w` is 0 or wider than `WATCHDOG_TIMEOUT`.
-    #[error("wd_w = {0} is outside 1..={max}", max = regs::watchdog_timeout::CLOCKS.width)]
-    WatchdogWidth(u32),
-    /// `n_enc` is above [`MAX_CHANNELS`].
-    #[error("n_enc = {0} is outside 0..={MAX_CHANNELS}")]
-    Encoders(usize),
-}
-
-/// The deepest FIFO whose full level still fits `FIFO_LEVEL.LEVEL`.
-pub const MAX_FIFO_DEPTH_LOG2: u32 = regs::fifo_level::LEVEL.width - 1;
-
-impl TopParams {
-    /// Checks the parameters are in the supported ranges.
-    pub fn validate(&self) -> Result<(), TopParamsError> {
-        let within = |value: u32, max: u32| (1..=max).contains(&value);
-        if !(1..=MAX_AXES).contains(&self.n_axes) {
-            return Err(TopParamsError::Axes(self.n_axes));
-        }
-        if !within(self.p_width, regs::period_clocks::CLOCKS.width) {
-            return Err(TopParamsError::PeriodWidth(self.p_width));
-        }
-        if !within(self.timing_w, regs::axis_timing_a::STEP_LEN.width) {
-            return Err(TopParamsError::TimingWidth(self.timing_w));
-        }
-        if !within(self.fifo_depth_log2, MAX_FIFO_DEPTH_LOG2) {
-            return Err(TopParamsError::FifoDepth(self.fifo_depth_log2));
-        }
-        if !within(self.wd_w, regs::watchdog_timeout::CLOCKS.width) {
-            return Err(TopParamsError::WatchdogWidth(self.wd_w));
-        }
-        if self.n_enc > MAX_CHANNELS {
-            return Err(TopParamsError::Encoders(self.n_enc));
-        }
-        Ok(())
-    }
-
-    /// The parameters of the core inside.
-    pub fn core_params(&self) -> CoreParams {
-        CoreParams { n_axes: self.n_axes, p_width: self.p_width, timing_width: self.timing_w }
-    }
-}
 
 /// Bit positions of the packed pins (the layout of the Verilator shim).
 pub mod top_pins {
@@ -427,7 +326,7 @@ impl Top {
     }
 
     /// A top in its reset state, or why `params` are not supported.
-    pub fn try_new(params: TopParams) -> Result<Top, TopParamsError> {
+    pub fn try_new(params: TopParams) -> Result<Top, ParamError> {
         params.validate()?;
         let registers = RegisterFile::new(&params);
         let safety = SafetyMonitor::new(params.wd_w, ESTOP_FILTER_WIDTH, &safety_config(&registers));
@@ -797,15 +696,16 @@ mod tests {
 
     #[test]
     fn bad_params_are_refused() {
-        let bad = |p: TopParams| Top::try_new(p).unwrap_err();
+        let bad = |p: TopParams| Top::try_new(p).unwrap_err().name;
         let d = TopParams::default();
-        assert_eq!(bad(TopParams { n_axes: 0, ..d }), TopParamsError::Axes(0));
-        assert_eq!(bad(TopParams { p_width: 25, ..d }), TopParamsError::PeriodWidth(25));
-        assert_eq!(bad(TopParams { timing_w: 17, ..d }), TopParamsError::TimingWidth(17));
-        assert_eq!(bad(TopParams { fifo_depth_log2: 16, ..d }), TopParamsError::FifoDepth(16));
-        assert_eq!(bad(TopParams { wd_w: 0, ..d }), TopParamsError::WatchdogWidth(0));
-        assert_eq!(bad(TopParams { n_enc: 5, ..d }), TopParamsError::Encoders(5));
-        assert!(Top::try_new(TopParams { n_enc: 0, has_mpg: false, ..d }).is_ok());
+        assert_eq!(bad(TopParams { n_axes: 0, ..d }), "N_AXES");
+        assert_eq!(bad(TopParams { p_width: 25, ..d }), "P_WIDTH");
+        assert_eq!(bad(TopParams { timing_w: 17, ..d }), "TIMING_W");
+        assert_eq!(bad(TopParams { fifo_depth_log2: 16, ..d }), "FIFO_DEPTH_LOG2");
+        assert_eq!(bad(TopParams { wd_w: 0, ..d }), "WD_W");
+        assert_eq!(bad(TopParams { n_enc: 5, ..d }), "N_ENC");
+        assert_eq!(bad(TopParams { n_enc: 0, ..d }), "N_ENC", "the RTL's per-channel vectors need a channel");
+        assert!(Top::try_new(TopParams { n_enc: 1, has_mpg: false, ..d }).is_ok());
         assert!(std::panic::catch_unwind(|| Top::new(TopParams { n_axes: 9, ..d })).is_err());
     }
 

@@ -19,7 +19,7 @@
 //! the cycle whose decoding moved it.
 
 use finestep_model::encoder_bank::{ChannelConfig, EncoderBank, EncoderBankInputs, ProbeConfig, MAX_CHANNELS};
-use finestep_model::quadrature_channel::DecodeMode;
+use finestep_model::quadrature_channel::CountMode;
 use proptest::prelude::*;
 
 /// Pin levels `(a, b)` at absolute quadrature position `p`.
@@ -28,12 +28,12 @@ fn levels(p: i64) -> (bool, bool) {
 }
 
 /// The ideal count of a quadrature decoder at absolute position `p` (0 at `p = 0`).
-fn ideal(mode: DecodeMode, p: i64) -> i64 {
+fn ideal(mode: CountMode, p: i64) -> i64 {
     match mode {
-        DecodeMode::X4 => p,
-        DecodeMode::X2 => (p + 1).div_euclid(2),
-        DecodeMode::X1 => (p + 3).div_euclid(4),
-        DecodeMode::StepDir => unreachable!("step/dir has no quadrature position"),
+        CountMode::X4 => p,
+        CountMode::X2 => (p + 1).div_euclid(2),
+        CountMode::X1 => (p + 3).div_euclid(4),
+        CountMode::StepDir => unreachable!("step/dir has no quadrature position"),
     }
 }
 
@@ -63,7 +63,7 @@ fn dedup(mut values: Vec<i64>) -> Vec<i64> {
 fn run(
     segments: &[Segment],
     channel: usize,
-    mode: DecodeMode,
+    mode: CountMode,
     filter: u8,
     prescale: u16,
 ) -> Result<Observed, TestCaseError> {
@@ -105,9 +105,9 @@ fn run(
 
 /// Settings of one case: mode, `FILTER`, `PRESCALE`, channel.
 fn settings(
-    modes: &'static [DecodeMode],
+    modes: &'static [CountMode],
     filters: std::ops::RangeInclusive<u8>,
-) -> impl Strategy<Value = (DecodeMode, u8, u16, usize)> {
+) -> impl Strategy<Value = (CountMode, u8, u16, usize)> {
     (prop::sample::select(modes), filters, prop_oneof![Just(0u16), 0..=5u16], 0..MAX_CHANNELS)
 }
 
@@ -116,7 +116,7 @@ fn min_state(filter: u8, prescale: u16) -> u64 {
     u64::from(filter.max(1)) * (u64::from(prescale) + 1)
 }
 
-const QUADRATURE: &[DecodeMode] = &[DecodeMode::X4, DecodeMode::X2, DecodeMode::X1];
+const QUADRATURE: &[CountMode] = &[CountMode::X4, CountMode::X2, CountMode::X1];
 
 /// The first change of a pin must come after cycle 0, whose levels the first sample
 /// adopts; long enough at the end for the last state to be counted.
@@ -156,7 +156,7 @@ fn clean_quadrature_counts_exactly_in_every_mode() {
 fn step_dir_counts_every_step_pulse() {
     let mut runner = finestep_testkit::runner("step_dir_counts_every_step_pulse", 128);
     let steps = prop::collection::vec((any::<bool>(), 0..=3u64, 0..=3u64, 0..=3u64), 1..100);
-    let case = (settings(&[DecodeMode::StepDir], 0..=15), any::<bool>(), 0..20u64, steps);
+    let case = (settings(&[CountMode::StepDir], 0..=15), any::<bool>(), 0..20u64, steps);
     runner
         .run(&case, |((mode, filter, prescale, channel), dir0, rest, steps)| {
             let min = min_state(filter, prescale);

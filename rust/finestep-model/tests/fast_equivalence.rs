@@ -5,7 +5,8 @@
 //! between chunks.
 
 use finestep_model::{
-    AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, Event, GantryInputs, Increment, PeriodRecord, MAX_AXES,
+    AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, DriveTiming, Event, GantryInputs, Increment, PeriodRecord,
+    MAX_AXES,
 };
 use proptest::prelude::*;
 
@@ -65,10 +66,7 @@ fn axis_config() -> impl Strategy<Value = AxisConfig> {
         prop::bool::weighted(0.8),
     )
         .prop_map(|((step_len, step_space, dir_setup, dir_hold), mode, invert, enable)| AxisConfig {
-            step_len,
-            step_space,
-            dir_setup,
-            dir_hold,
+            timing: DriveTiming::new(step_len, step_space, dir_setup, dir_hold),
             mode,
             invert,
             enable,
@@ -285,14 +283,7 @@ fn fast_path_is_identical_to_per_clock() {
 /// slow move, finish at once and agree with each other's outputs.
 #[test]
 fn fast_path_skips_long_quiet_stretches() {
-    let axis = AxisConfig {
-        step_len: 500,
-        step_space: 500,
-        dir_setup: 100,
-        dir_hold: 100,
-        enable: true,
-        ..AxisConfig::default()
-    };
+    let axis = AxisConfig { timing: DriveTiming::new(500, 500, 100, 100), enable: true, ..AxisConfig::default() };
     let mut core = Core::new(CoreParams::default());
     let mut inputs = CoreInputs { period_clocks: 1, axes: [axis; MAX_AXES], ..CoreInputs::default() };
     let mut events = vec![];

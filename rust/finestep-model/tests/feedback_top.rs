@@ -7,9 +7,9 @@
 
 mod host;
 
+use finestep_interface::regs;
+use finestep_interface::Field;
 use finestep_model::top::TopParams;
-use finestep_regmap::regs;
-use finestep_regmap::Field;
 use host::*;
 
 /// Quadrature pin levels `(a, b)` at position `p` (A leads B forward).

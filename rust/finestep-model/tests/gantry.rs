@@ -8,7 +8,7 @@
 //! in cycle `e - 1` (the `diff` register at engagement).
 
 use finestep_model::gantry_sync::flags;
-use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams, GantryInputs, PeriodRecord, MAX_AXES};
+use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams, DriveTiming, GantryInputs, PeriodRecord, MAX_AXES};
 
 /// Counts per step of both channels.
 const K: i64 = 4;
@@ -49,8 +49,7 @@ struct Run {
 const PROFILE: [(f64, u32); 5] = [(0.37, 150), (0.0, 30), (-0.25, 120), (0.61, 100), (0.0, 100)];
 
 /// The drives' timing of the slow runs.
-const AXIS: AxisConfig =
-    AxisConfig { step_len: 3, step_space: 4, dir_setup: 2, dir_hold: 2, mode: 0, invert: 0, enable: true };
+const AXIS: AxisConfig = AxisConfig { timing: DriveTiming::new(3, 4, 2, 2), mode: 0, invert: 0, enable: true };
 
 /// Runs the plant with the master's `PROFILE` and the disturbance `dist(cycle)` in
 /// counts; `sync` and `limit` are the gantry's settings.
@@ -239,7 +238,7 @@ fn forward_mode_copies_the_master_and_leaves_the_error() {
 fn corrections_insert_wait_and_delete_against_a_fast_master() {
     // The master at 0.4 steps per clock with the fastest timing (one step per 2 clocks
     // at most): corrections land on master requests of both signs.
-    let axis = AxisConfig { step_len: 1, step_space: 1, dir_setup: 1, dir_hold: 1, ..AXIS };
+    let axis = AxisConfig { timing: DriveTiming::new(1, 1, 1, 1), ..AXIS };
     let profile = [(40.37, 300), (-39.71, 200), (0.0, 30)];
     let dist = |n: u64| -> i64 {
         (0..40u64)

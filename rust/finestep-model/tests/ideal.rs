@@ -6,23 +6,15 @@ mod common;
 
 use common::{first_timing_violation, Run};
 use finestep_model::limits::{forward_interval, max_increment, reversal_interval, reversal_wait};
-use finestep_model::{AxisConfig, AxisTiming, CoreInputs, CoreParams, Increment, PeriodRecord, RateChecker, MAX_AXES};
+use finestep_model::{AxisConfig, CoreInputs, CoreParams, DriveTiming, Increment, PeriodRecord, RateChecker, MAX_AXES};
 use proptest::prelude::*;
 
-fn axis(t: AxisTiming, mode: u8, invert: u8) -> AxisConfig {
-    AxisConfig {
-        step_len: t.step_len,
-        step_space: t.step_space,
-        dir_setup: t.dir_setup,
-        dir_hold: t.dir_hold,
-        mode,
-        invert,
-        enable: true,
-    }
+fn axis(timing: DriveTiming, mode: u8, invert: u8) -> AxisConfig {
+    AxisConfig { timing, mode, invert, enable: true }
 }
 
-fn timing(l: u32, s: u32, u: u32, h: u32) -> AxisTiming {
-    AxisTiming { step_len: l, step_space: s, dir_setup: u, dir_hold: h }
+fn timing(l: u32, s: u32, u: u32, h: u32) -> DriveTiming {
+    DriveTiming::new(l, s, u, h)
 }
 
 fn raw(x: Increment) -> i64 {
@@ -39,7 +31,7 @@ fn inc(d: i64) -> Increment {
 struct Spec {
     timing_width: u32,
     p: u32,
-    axes: Vec<(AxisTiming, u8, u8)>,
+    axes: Vec<(DriveTiming, u8, u8)>,
     /// Increments of the "fraction" kinds are rounded towards 0 to a multiple of this
     /// (1/8, 1/4, 1/2 step), so the commanded position often lands exactly on a
     /// rounding point.
@@ -47,7 +39,7 @@ struct Spec {
     choices: Vec<Vec<(u8, u32)>>,
 }
 
-fn timing_strategy(max: u32) -> impl Strategy<Value = AxisTiming> {
+fn timing_strategy(max: u32) -> impl Strategy<Value = DriveTiming> {
     let value = prop_oneof![3 => 0..=4u32, 2 => 0..=max.min(12), 1 => 0..=max];
     (value.clone(), value.clone(), value.clone(), value).prop_map(|(l, s, u, h)| timing(l, s, u, h))
 }
@@ -76,7 +68,7 @@ fn spec_strategy(max_cycles: u32) -> impl Strategy<Value = Spec> {
 }
 
 impl Spec {
-    fn timings(&self) -> Vec<AxisTiming> {
+    fn timings(&self) -> Vec<DriveTiming> {
         self.axes.iter().map(|a| a.0).collect()
     }
 
@@ -255,8 +247,7 @@ fn any_acceptable_stream_keeps_every_step_and_the_timing() {
     runner
         .run(&strategy, |(t, timing_width, p, xs, mode, invert)| {
             // With TIMING_W = 4 the core masks the settings (16 becomes 0, acting as 1).
-            let mask = (1u32 << timing_width) - 1;
-            let masked = timing(t.step_len & mask, t.step_space & mask, t.dir_setup & mask, t.dir_hold & mask);
+            let masked = t.masked(timing_width);
             let m = i64::from(p) << 16;
             let mut budget = 100 * 65536i64;
             let mut records = vec![];

@@ -5,9 +5,9 @@
 
 mod host;
 
+use finestep_interface::regs;
 use finestep_model::top::TopParams;
 use finestep_model::{PeriodRecord, MAX_AXES};
-use finestep_regmap::regs;
 use host::*;
 use proptest::prelude::*;
 

@@ -7,9 +7,9 @@
 
 mod host;
 
+use finestep_interface::regs;
 use finestep_model::top::TopParams;
 use finestep_model::PeriodRecord;
-use finestep_regmap::regs;
 use host::*;
 use proptest::prelude::*;
 

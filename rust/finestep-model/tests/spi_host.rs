@@ -5,21 +5,22 @@
 
 mod host;
 
+use finestep_interface::regs;
 use finestep_model::encoder_bank::MAX_CHANNELS;
 use finestep_model::top::TopParams;
 use finestep_model::{PeriodRecord, MAX_AXES};
-use finestep_regmap::regs;
 use host::*;
 use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
-    let feedback = (prop_oneof![Just(MAX_CHANNELS), 0..=MAX_CHANNELS], prop_oneof![Just(true), any::<bool>()]);
+    use finestep_interface::params::finestep_top::{N_AXES, P_WIDTH, TIMING_W, WD_W};
+    let feedback = (prop_oneof![Just(MAX_CHANNELS), 1..=MAX_CHANNELS], prop_oneof![Just(true), any::<bool>()]);
     (
-        1..=MAX_AXES,
-        prop_oneof![Just(20u32), 1..=24u32],
-        prop_oneof![Just(12u32), 1..=16u32],
+        N_AXES.min as usize..=N_AXES.max as usize,
+        prop_oneof![Just(P_WIDTH.default), P_WIDTH.min..=P_WIDTH.max],
+        prop_oneof![Just(TIMING_W.default), TIMING_W.min..=TIMING_W.max],
         2..=8u32,
-        1..=24u32,
+        WD_W.min..=WD_W.max,
         feedback,
     )
         .prop_map(|(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg))| TopParams {

@@ -9,7 +9,7 @@ use finestep_model::MAX_AXES;
 use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
-    let links = (any::<bool>(), any::<bool>(), 0..=MAX_CHANNELS, any::<bool>());
+    let links = (any::<bool>(), any::<bool>(), 1..=MAX_CHANNELS, any::<bool>());
     (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links).prop_map(
         |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (has_spi, has_parallel, n_enc, has_mpg))| TopParams {
             n_axes,
@@ -66,7 +66,7 @@ fn random_pins_never_break_the_top() {
 /// docs/spec/step_shaper.md.
 #[test]
 fn axis_registers_reach_the_idle_pins() {
-    use finestep_regmap::regs::{axis_enable, axis_mode};
+    use finestep_interface::regs::{axis_enable, axis_mode};
     let p = TopParams { n_axes: 3, ..TopParams::default() };
     let bus = host::ParallelMaster::default();
     let mut bench = host::Bench::new(p);
@@ -97,7 +97,7 @@ fn axis_registers_reach_the_idle_pins() {
 /// follows one clock later when the source is enabled; writing 1 clears the source.
 #[test]
 fn irq_follows_the_masked_period_source() {
-    use finestep_regmap::regs::{control, irq_mask, irq_status, period_clocks};
+    use finestep_interface::regs::{control, irq_mask, irq_status, period_clocks};
     let bus = host::ParallelMaster::default();
     let mut bench = host::Bench::new(TopParams::default());
     bench.bring_up(&bus);

@@ -1,11 +1,11 @@
-//! The Rust source of [`crate::regs`]: one module per register with its address, its
-//! fields as `Field` constants, their reset and fixed values, and a table of the whole
-//! map. `build.rs` compiles this file too and writes its output to
+//! The Rust source of the `finestep-interface` crate's `regs` module: one module per
+//! register with its address, its fields as `Field` constants, their reset and fixed
+//! values, and a table of the whole map. That crate's build script writes it to
 //! `OUT_DIR/registers.rs`.
 //!
 //! The generated code names `crate::Field`, `crate::Access`, `crate::RegisterInfo`,
-//! `crate::ArrayInfo` and `crate::FieldInfo`, so it belongs in this crate. Every item
-//! carries the map's description as its doc comment.
+//! `crate::ArrayInfo` and `crate::FieldInfo`, the support types of that crate. Every
+//! item carries the map's description as its doc comment.
 
 use crate::spec::{bit_range, naming, Access, FieldSpec, MapSpec, RegisterSpec};
 use std::fmt::Write;
@@ -15,7 +15,7 @@ pub fn generate(map: &MapSpec) -> String {
     let mut out = String::new();
     let version = map.version;
     // Writing to a String cannot fail; the `let _ =` are for that.
-    out.push_str("// Generated from hdl/registers.toml by finestep-regmap's build.rs; do not edit.\n\n");
+    out.push_str("// Generated from hdl/registers.toml by finestep-regmap; do not edit.\n\n");
     let _ = writeln!(out, "/// Name of the register map.");
     let _ = writeln!(out, "pub const MAP_NAME: &str = {:?};", map.name);
     let _ = writeln!(out, "/// Bits of a word address: every address is below `1 << ADDRESS_BITS`.");

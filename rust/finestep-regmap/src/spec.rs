@@ -1,9 +1,6 @@
 //! The register map as typed, validated data: `hdl/registers.toml` parsed with serde and
 //! checked, so every generator can trust it.
 //!
-//! This file is compiled twice: into the library and into `build.rs` (through
-//! `#[path]`), so it uses nothing but `std`, `serde`, `toml` and `thiserror`.
-//!
 //! Parsing happens in two steps. serde reads the file into loosely typed `Raw*`
 //! structs (integers as `i64`, access as a string), which rejects unknown keys and
 //! malformed TOML with toml's line/column messages. Then [`parse`] checks every rule

@@ -1,9 +1,9 @@
-//! The generated Verilog header: it agrees with the Rust constants, declares exactly the
-//! names the scheme promises, and passes Verilator `-Wall` and Yosys when those tools are
+//! The generated Verilog header: it declares exactly the names the scheme promises (the
+//! finestep-interface crate checks it against the Rust constants), and passes Verilator `-Wall` and Yosys when those tools are
 //! on PATH (skipped with a note otherwise).
 
 use finestep_regmap::spec::{naming, MapSpec};
-use finestep_regmap::{default_root, load_map, regs, verilog, Access};
+use finestep_regmap::{default_root, load_map, verilog};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -79,45 +79,6 @@ fn a_few_constants_by_hand() {
     assert_eq!(constants["FS_ENC_COUNT_COUNT"], integer(4u32));
     assert_eq!(constants["FS_MPG_CONTROL_PRESCALE_RESET"], sized(16, 499u32));
     assert_eq!(constants["FS_JOG_VMAX_STEPS_WIDTH"], integer(31u32));
-}
-
-#[test]
-fn every_verilog_constant_equals_its_rust_counterpart() {
-    let constants = parse_header(&verilog::generate(&map()));
-    let get = |name: String| -> Constant {
-        *constants.get(&name).unwrap_or_else(|| panic!("{name} is missing from the header"))
-    };
-    assert_eq!(get("FS_ADDR_WIDTH".into()), integer(regs::ADDRESS_BITS));
-    assert_eq!(get("FS_MAP_VERSION_MAJOR".into()), integer(regs::MAP_VERSION_MAJOR));
-    assert_eq!(get("FS_MAP_VERSION_MINOR".into()), integer(regs::MAP_VERSION_MINOR));
-    assert_eq!(get("FS_MAP_VERSION_PATCH".into()), integer(regs::MAP_VERSION_PATCH));
-    let mut expected_names = 4;
-    for register in regs::REGISTERS {
-        let prefix = format!("FS_{}", register.name);
-        assert_eq!(get(format!("{prefix}_ADDR")), sized(regs::ADDRESS_BITS, register.addr));
-        expected_names += 1;
-        if let Some(array) = register.array {
-            assert_eq!(get(format!("{prefix}_COUNT")), integer(array.count as u64));
-            assert_eq!(get(format!("{prefix}_STRIDE")), integer(array.stride));
-            expected_names += 2;
-        }
-        for info in register.fields {
-            let prefix = format!("{prefix}_{}", info.name);
-            assert_eq!(get(format!("{prefix}_LSB")), integer(info.field.lsb));
-            assert_eq!(get(format!("{prefix}_WIDTH")), integer(info.field.width));
-            expected_names += 2;
-            if let Some(reset) = info.reset {
-                assert_eq!(info.access, Access::ReadWrite);
-                assert_eq!(get(format!("{prefix}_RESET")), sized(info.field.width, reset));
-                expected_names += 1;
-            }
-            if let Some(value) = info.value {
-                assert_eq!(get(format!("{prefix}_VALUE")), sized(info.field.width, value));
-                expected_names += 1;
-            }
-        }
-    }
-    assert_eq!(constants.len(), expected_names, "the header declares constants the Rust side lacks");
 }
 
 #[test]

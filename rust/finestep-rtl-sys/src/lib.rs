@@ -20,7 +20,8 @@ use std::marker::PhantomData;
 use std::path::Path;
 use std::ptr::NonNull;
 
-use finestep_model::{ChunkEnd, CoreInputs, CoreOutputs, CoreParams, Event, MAX_AXES};
+use finestep_interface::{CoreParams, DriveTiming, MAX_AXES};
+use finestep_model::{ChunkEnd, CoreInputs, CoreOutputs, Event};
 
 pub mod top;
 pub use top::{top_build, PinEvent, RtlTop, TopBuild};
@@ -215,18 +216,19 @@ fn inputs_to(inputs: &CoreInputs) -> ffi::fs_inputs {
         let axis = &inputs.axes[i];
         raw.rec_inc[i] = inputs.record.inc[i].to_bits();
         raw.axes[i] = ffi::fs_axis_config {
-            timing: ffi::fs_drive_timing {
-                step_len: axis.step_len,
-                step_space: axis.step_space,
-                dir_setup: axis.dir_setup,
-                dir_hold: axis.dir_hold,
-            },
+            timing: drive_timing(&axis.timing),
             mode: axis.mode & ffi::FS_OUT_MODE_MASK as u8,
             invert: axis.invert & ffi::FS_INVERT_MASK as u8,
             enable: axis.enable as u8,
         };
     }
     raw
+}
+
+/// The C struct generated from the same `[[timing]]` fields as [`DriveTiming`].
+fn drive_timing(timing: &DriveTiming) -> ffi::fs_drive_timing {
+    let DriveTiming { step_len, step_space, dir_setup, dir_hold } = *timing;
+    ffi::fs_drive_timing { step_len, step_space, dir_setup, dir_hold }
 }
 
 fn outputs_from(raw: &ffi::fs_outputs) -> CoreOutputs {

@@ -3,7 +3,7 @@
 #![allow(dead_code)]
 
 use finestep_cosim::{Harness, Mismatch, ModelPath};
-use finestep_model::{AxisConfig, CoreInputs, GantryInputs, Increment, PeriodRecord, MAX_AXES};
+use finestep_model::{AxisConfig, CoreInputs, DriveTiming, GantryInputs, Increment, PeriodRecord, MAX_AXES};
 use proptest::prelude::*;
 
 /// Axes of the Verilated core.
@@ -51,10 +51,7 @@ pub fn axis_config() -> impl Strategy<Value = AxisConfig> {
     let timing = prop_oneof![4 => 0u32..6, 1 => 0u32..40, 1 => Just(4095u32), 1 => any::<u32>()];
     (timing.clone(), timing.clone(), timing.clone(), timing, 0u8..4, 0u8..8, any::<bool>()).prop_map(
         |(step_len, step_space, dir_setup, dir_hold, mode, invert, enable)| AxisConfig {
-            step_len,
-            step_space,
-            dir_setup,
-            dir_hold,
+            timing: DriveTiming::new(step_len, step_space, dir_setup, dir_hold),
             mode,
             invert,
             enable,

@@ -6,7 +6,7 @@
 
 #![allow(dead_code)]
 
-use finestep_model::{AxisConfig, AxisTiming, Core, CoreInputs, CoreOutputs, CoreParams, PeriodRecord, MAX_AXES};
+use finestep_model::{AxisConfig, Core, CoreInputs, CoreOutputs, CoreParams, DriveTiming, PeriodRecord, MAX_AXES};
 use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Zero};
@@ -236,7 +236,7 @@ impl Run {
 
 /// The shaper's timing guarantees read from step/dir pins (A step, B dir), for timing
 /// `t`. Returns the first violation.
-pub fn first_timing_violation(pins: &[(bool, bool)], t: &AxisTiming) -> Option<String> {
+pub fn first_timing_violation(pins: &[(bool, bool)], t: &DriveTiming) -> Option<String> {
     let l = t.step_len.max(1) as usize;
     let s = t.step_space.max(1) as usize;
     let u = t.dir_setup.max(1) as usize;

@@ -4,9 +4,9 @@
 
 #![allow(dead_code)]
 
+use finestep_interface::regs;
 use finestep_model::top::{Top, TopInputs, TopOutputs, TopParams};
 use finestep_model::{PeriodRecord, MAX_AXES};
-use finestep_regmap::regs;
 
 /// CRC-16/IBM-3740 from the `crc` crate: the ideal the frames are checked against.
 pub const CRC: crc::Crc<u16> = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740);

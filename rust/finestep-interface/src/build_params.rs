@@ -1,0 +1,213 @@
+//! The build parameters a core is made with ([`CoreParams`] for `finestep_core`,
+//! [`TopParams`] for `finestep_top`), their defaults and their legal ranges, from the
+//! generated [`crate::params`]: the same ranges the RTL's elaboration checks enforce.
+
+use crate::params::{finestep_core, finestep_top};
+
+/// One build parameter's default and legal range (the constants of [`crate::params`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ParamRange {
+    /// The Verilog module (`finestep_top`).
+    pub module: &'static str,
+    /// The Verilog parameter (`P_WIDTH`).
+    pub name: &'static str,
+    /// Its default in the Verilog.
+    pub default: u32,
+    /// Least legal value.
+    pub min: u32,
+    /// Greatest legal value.
+    pub max: u32,
+}
+
+impl ParamRange {
+    /// Whether `value` is legal.
+    pub const fn contains(&self, value: u64) -> bool {
+        self.min as u64 <= value && value <= self.max as u64
+    }
+
+    /// `Ok` when `value` is legal, else the error naming the parameter.
+    pub fn check(&self, value: impl Into<u64>) -> Result<(), ParamError> {
+        let value = value.into();
+        if self.contains(value) {
+            Ok(())
+        } else {
+            Err(ParamError { module: self.module, name: self.name, value, min: self.min, max: self.max })
+        }
+    }
+}
+
+/// A build parameter outside what the core supports (the build the RTL's elaboration
+/// check refuses).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{module}: {name} = {value} is outside {min}..={max}")]
+pub struct ParamError {
+    /// The module.
+    pub module: &'static str,
+    /// The parameter.
+    pub name: &'static str,
+    /// The value refused.
+    pub value: u64,
+    /// Least legal value.
+    pub min: u32,
+    /// Greatest legal value.
+    pub max: u32,
+}
+
+fn low_ones(width: u32) -> u32 {
+    if width >= u32::BITS {
+        u32::MAX
+    } else {
+        (1u32 << width) - 1
+    }
+}
+
+/// Design-time parameters of the core (`finestep_core`'s Verilog parameters).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CoreParams {
+    /// `N_AXES`: number of axes ([`finestep_core::N_AXES`]).
+    pub n_axes: usize,
+    /// `P_WIDTH`: width of the period register in bits ([`finestep_core::P_WIDTH`]).
+    pub p_width: u32,
+    /// `TIMING_W`: width of the step timing settings and counters in bits
+    /// ([`finestep_core::TIMING_W`]).
+    pub timing_width: u32,
+}
+
+impl Default for CoreParams {
+    /// The defaults of the Verilog.
+    fn default() -> Self {
+        CoreParams {
+            n_axes: finestep_core::N_AXES.default as usize,
+            p_width: finestep_core::P_WIDTH.default,
+            timing_width: finestep_core::TIMING_W.default,
+        }
+    }
+}
+
+impl CoreParams {
+    /// Checks the parameters are in the supported ranges.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finestep_core::N_AXES.check(self.n_axes as u64)?;
+        finestep_core::P_WIDTH.check(self.p_width)?;
+        finestep_core::TIMING_W.check(self.timing_width)
+    }
+
+    /// All ones in the low `p_width` bits: the largest period in clocks.
+    pub fn period_mask(&self) -> u32 {
+        low_ones(self.p_width)
+    }
+
+    /// All ones in the low `timing_width` bits: the largest timing value, and the value
+    /// at which the shaper's `cnt` and `dcnt` saturate (`sat`).
+    pub fn timing_mask(&self) -> u32 {
+        low_ones(self.timing_width)
+    }
+
+    /// The effective period in clocks for a `period_clocks` input: masked to `p_width`
+    /// bits, 0 acting as 1.
+    pub fn effective_period(&self, period_clocks: u32) -> u32 {
+        (period_clocks & self.period_mask()).max(1)
+    }
+}
+
+/// Design-time parameters of the top (`finestep_top`'s Verilog parameters).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TopParams {
+    /// `N_AXES`: number of axes ([`finestep_top::N_AXES`]).
+    pub n_axes: usize,
+    /// `P_WIDTH`: bits of the period, at most the width of `PERIOD_CLOCKS.CLOCKS`.
+    pub p_width: u32,
+    /// `TIMING_W`: bits of each step timing, at most the width of the timing fields.
+    pub timing_w: u32,
+    /// `FIFO_DEPTH_LOG2`: the FIFO holds `2^n` records; its full level fits `FIFO_LEVEL.LEVEL`.
+    pub fifo_depth_log2: u32,
+    /// `WD_W`: bits of the watchdog, at most the width of `WATCHDOG_TIMEOUT.CLOCKS`.
+    pub wd_w: u32,
+    /// `CLOCK_HZ`: the clock frequency, only reported in `CLOCK_HZ`.
+    pub clock_hz: u32,
+    /// `HAS_SPI`: the SPI slave is built.
+    pub has_spi: bool,
+    /// `HAS_PARALLEL`: the 8080/FSMC slave is built.
+    pub has_parallel: bool,
+    /// `N_ENC`: encoder channels ([`finestep_top::N_ENC`]).
+    pub n_enc: usize,
+    /// `HAS_MPG`: the hand wheel and the jog generator are built.
+    pub has_mpg: bool,
+}
+
+impl Default for TopParams {
+    /// The defaults of the Verilog.
+    fn default() -> Self {
+        TopParams {
+            n_axes: finestep_top::N_AXES.default as usize,
+            p_width: finestep_top::P_WIDTH.default,
+            timing_w: finestep_top::TIMING_W.default,
+            fifo_depth_log2: finestep_top::FIFO_DEPTH_LOG2.default,
+            wd_w: finestep_top::WD_W.default,
+            clock_hz: finestep_top::CLOCK_HZ.default,
+            has_spi: finestep_top::HAS_SPI.default != 0,
+            has_parallel: finestep_top::HAS_PARALLEL.default != 0,
+            n_enc: finestep_top::N_ENC.default as usize,
+            has_mpg: finestep_top::HAS_MPG.default != 0,
+        }
+    }
+}
+
+impl TopParams {
+    /// Checks the parameters are in the supported ranges (the first one outside is reported).
+    pub fn validate(&self) -> Result<(), ParamError> {
+        finestep_top::N_AXES.check(self.n_axes as u64)?;
+        finestep_top::P_WIDTH.check(self.p_width)?;
+        finestep_top::TIMING_W.check(self.timing_w)?;
+        finestep_top::FIFO_DEPTH_LOG2.check(self.fifo_depth_log2)?;
+        finestep_top::WD_W.check(self.wd_w)?;
+        finestep_top::CLOCK_HZ.check(self.clock_hz)?;
+        finestep_top::HAS_SPI.check(self.has_spi)?;
+        finestep_top::HAS_PARALLEL.check(self.has_parallel)?;
+        finestep_top::N_ENC.check(self.n_enc as u64)?;
+        finestep_top::HAS_MPG.check(self.has_mpg)
+    }
+
+    /// The parameters of the core inside.
+    pub fn core_params(&self) -> CoreParams {
+        CoreParams { n_axes: self.n_axes, p_width: self.p_width, timing_width: self.timing_w }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn masks_follow_the_widths() {
+        let p = CoreParams::default();
+        assert_eq!(p.period_mask(), 0xF_FFFF);
+        assert_eq!(p.timing_mask(), 0xFFF);
+        assert_eq!(p.effective_period(0), 1);
+        assert_eq!(p.effective_period(0x10_0005), 5);
+        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32 };
+        assert_eq!(wide.period_mask(), u32::MAX);
+        assert!(wide.validate().is_ok());
+    }
+
+    #[test]
+    fn bad_params_are_refused_naming_the_parameter() {
+        let bad = |p: CoreParams| p.validate().unwrap_err();
+        assert_eq!(bad(CoreParams { n_axes: 9, ..CoreParams::default() }).name, "N_AXES");
+        assert_eq!(bad(CoreParams { p_width: 0, ..CoreParams::default() }).name, "P_WIDTH");
+        let e = bad(CoreParams { timing_width: 33, ..CoreParams::default() });
+        assert_eq!(e.to_string(), "finestep_core: TIMING_W = 33 is outside 1..=32");
+        let top = |p: TopParams| p.validate().unwrap_err().name;
+        let d = TopParams::default();
+        assert!(d.validate().is_ok());
+        assert_eq!(top(TopParams { n_axes: 0, ..d }), "N_AXES");
+        assert_eq!(top(TopParams { p_width: 25, ..d }), "P_WIDTH");
+        assert_eq!(top(TopParams { timing_w: 17, ..d }), "TIMING_W");
+        assert_eq!(top(TopParams { fifo_depth_log2: 16, ..d }), "FIFO_DEPTH_LOG2");
+        assert_eq!(top(TopParams { wd_w: 0, ..d }), "WD_W");
+        assert_eq!(top(TopParams { n_enc: 5, ..d }), "N_ENC");
+        assert_eq!(top(TopParams { n_enc: 0, ..d }), "N_ENC");
+        assert_eq!(top(TopParams { clock_hz: 0, ..d }), "CLOCK_HZ");
+        assert!(TopParams { n_enc: 1, has_mpg: false, has_spi: false, ..d }.validate().is_ok());
+    }
+}

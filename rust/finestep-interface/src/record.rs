@@ -1,0 +1,106 @@
+//! The period record: every axis's increment for one period, and the flags
+//! (docs/interface.md, "Period record").
+
+use crate::{flags, record_layout, MAX_AXES};
+
+/// An axis increment: signed steps per period in two's complement Q16.16.
+pub type Increment = fixed::types::I16F16;
+
+// The description states the format; `Increment` must be it.
+const _: () = assert!(
+    record_layout::INC_INT_BITS == 16 && record_layout::INC_FRAC_BITS == 16,
+    "hdl/interface.toml changed the increment format: change `Increment` with it"
+);
+const _: () = assert!(record_layout::FLAGS_WIDTH <= u8::BITS, "the flags no longer fit a byte");
+
+/// Bytes of one increment on the wire.
+const INC_BYTES: usize = (record_layout::INC_WIDTH / 8) as usize;
+
+/// One period record (`rec_inc`, `rec_flags`): axis `i` moves `inc[i]` steps in the
+/// period. Entries at and above the core's `n_axes` are ignored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct PeriodRecord {
+    /// Signed steps per period, I16F16.
+    pub inc: [Increment; MAX_AXES],
+    /// Flags, see [`flags`]; the bits it does not name are reserved and ignored.
+    pub flags: u8,
+}
+
+impl PeriodRecord {
+    /// A record from raw I16F16 increments (`d = D * 65536`), the rest zero.
+    pub fn from_raw(raw: &[i32], flags: u8) -> Self {
+        let mut inc = [Increment::ZERO; MAX_AXES];
+        for (slot, &d) in inc.iter_mut().zip(raw) {
+            *slot = Increment::from_bits(d);
+        }
+        PeriodRecord { inc, flags }
+    }
+
+    /// Whether [`flags::BLOCK_END`] is set: the last period of a block.
+    pub fn block_end(&self) -> bool {
+        self.flags & flags::BLOCK_END != 0
+    }
+
+    /// Whether the core accepts this record for a period of `p_act` clocks when it has
+    /// `n_axes` axes: for every axis `floor(|d| / 65536) < p_act` (`|D| < P`, at most one
+    /// step per clock).
+    pub fn acceptable(&self, n_axes: usize, p_act: u32) -> bool {
+        self.inc[..n_axes.min(MAX_AXES)].iter().all(|inc| raw_acceptable(inc.to_bits(), p_act))
+    }
+
+    /// Bytes of one record in an SPI FIFO frame for a core of `n_axes` axes.
+    pub const fn wire_bytes(n_axes: usize) -> usize {
+        INC_BYTES * n_axes + (record_layout::FLAGS_WIDTH as usize).div_ceil(8)
+    }
+
+    /// Appends the record's bytes in an SPI FIFO frame for a core of `n_axes` axes: each
+    /// axis's increment big-endian, axis 0 first, then the flags.
+    pub fn encode(&self, n_axes: usize, out: &mut Vec<u8>) {
+        for inc in &self.inc[..n_axes.min(MAX_AXES)] {
+            out.extend_from_slice(&inc.to_bits().to_be_bytes());
+        }
+        out.push(self.flags);
+    }
+}
+
+/// `floor(|d| / 65536) < p_act` for a raw increment `d`: whether the core accepts the
+/// increment in a period of `p_act` clocks.
+#[inline]
+pub fn raw_acceptable(d: i32, p_act: u32) -> bool {
+    (i64::from(d).unsigned_abs() >> record_layout::INC_FRAC_BITS) < u64::from(p_act)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn acceptance_is_whole_steps_below_the_period() {
+        assert!(raw_acceptable(0, 1));
+        assert!(raw_acceptable(65535, 1));
+        assert!(raw_acceptable(-65535, 1));
+        assert!(!raw_acceptable(65536, 1));
+        assert!(!raw_acceptable(-65536, 1));
+        assert!(raw_acceptable(2 * 65536 - 1, 2));
+        assert!(!raw_acceptable(i32::MIN, 32768));
+        assert!(raw_acceptable(i32::MIN, 32769));
+        assert!(raw_acceptable(i32::MAX, 32768));
+    }
+
+    #[test]
+    fn only_the_core_axes_are_looked_at() {
+        let r = PeriodRecord::from_raw(&[0, 0, 1 << 20], 0);
+        assert!(r.acceptable(2, 1));
+        assert!(!r.acceptable(3, 1));
+    }
+
+    #[test]
+    fn wire_bytes_are_axis_major_big_endian_then_flags() {
+        let record = PeriodRecord::from_raw(&[0x0102_0304, -1], flags::BLOCK_END);
+        let mut bytes = Vec::new();
+        record.encode(2, &mut bytes);
+        assert_eq!(bytes, [1, 2, 3, 4, 0xFF, 0xFF, 0xFF, 0xFF, 0x01]);
+        assert_eq!(bytes.len(), PeriodRecord::wire_bytes(2));
+        assert!(record.block_end());
+    }
+}
