@@ -5,7 +5,7 @@
 
 use std::f64::consts::TAU;
 
-use finestep_model::{PeriodRecord, MAX_AXES};
+use finestep_interface::{PeriodRecord, MAX_AXES};
 
 use crate::linear::{Machine, PlanError};
 use crate::path::{check_endpoints, quantise, to_steps};

@@ -38,8 +38,8 @@ use std::f64::consts::TAU;
 use std::rc::Rc;
 
 use finestep_gcode::{BlockKind, PathControl, Plane, Program};
-use finestep_model::limits::RateChecker;
-use finestep_model::PeriodRecord;
+use finestep_interface::rate::RateChecker;
+use finestep_interface::PeriodRecord;
 
 use crate::config::{ConfigError, MachineConfig, ProfileKind, AXIS_NAMES};
 

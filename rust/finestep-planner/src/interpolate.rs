@@ -11,8 +11,8 @@
 //! parameter from period to period and steps it by the arc length the profile asks
 //! for (second-order Taylor step and Newton correction, [`crate::nurbs`]).
 
-use finestep_model::limits::RateChecker;
-use finestep_model::{Increment, PeriodRecord};
+use finestep_interface::rate::RateChecker;
+use finestep_interface::{Increment, PeriodRecord};
 
 use crate::config::{Resolved, AXIS_NAMES};
 use crate::element::{Element, Shape};

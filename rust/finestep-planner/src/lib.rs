@@ -67,7 +67,7 @@
 //! assert_eq!(total, 4000 << 16); // exactly 4 mm of steps on Y
 //! ```
 //!
-//! [`PeriodRecord`]: finestep_model::PeriodRecord
+//! [`PeriodRecord`]: finestep_interface::PeriodRecord
 
 pub mod arc;
 pub mod checker;

@@ -1,6 +1,6 @@
 //! Seed 000's time-division linear interpolation with trapezoidal feed.
 
-use finestep_model::{PeriodRecord, MAX_AXES};
+use finestep_interface::{PeriodRecord, MAX_AXES};
 
 use crate::path::{check_endpoints, quantise, to_steps};
 use crate::profile::FeedProfile;

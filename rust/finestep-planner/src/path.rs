@@ -1,6 +1,6 @@
 //! From points along a path, in steps, to period records on the core's Q16.16 grid.
 
-use finestep_model::{Increment, PeriodRecord};
+use finestep_interface::{Increment, PeriodRecord};
 
 use crate::linear::{Machine, PlanError};
 use crate::profile::positive;

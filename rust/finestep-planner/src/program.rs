@@ -7,7 +7,7 @@
 //! canonical blocks, with the radii of the configuration's tool table.
 
 use finestep_gcode::Program;
-use finestep_model::PeriodRecord;
+use finestep_interface::PeriodRecord;
 
 use crate::config::MachineConfig;
 use crate::cutter_comp::compensate;
