@@ -5,11 +5,12 @@ use std::time::Instant;
 
 use finestep_cosim::{Harness, ModelPath};
 use finestep_model::{Core, CoreInputs, Event, Increment, PeriodRecord};
+use finestep_planner::config::Resolved;
+use finestep_planner::MachineConfig;
 use finestep_rtl_sys::Rtl;
 
-use crate::demo::{demo_axis_config, CLOCK_HZ};
+use crate::machine_setup;
 
-const PERIOD_CLOCKS: u32 = 50_000;
 const AXES: usize = 4;
 
 /// Sinusoidal velocities with different amplitudes and phases per axis, peaking near
@@ -26,17 +27,24 @@ fn stream(periods: u64) -> impl Iterator<Item = PeriodRecord> {
     })
 }
 
-fn inputs() -> CoreInputs {
-    let mut inputs = CoreInputs { run: true, period_clocks: PERIOD_CLOCKS, rec_valid: true, ..Default::default() };
-    for axis in inputs.axes.iter_mut().take(AXES) {
-        *axis = demo_axis_config();
+/// The benches' machine: the built-in configuration (T = 1 ms, 4 axes, the default
+/// drives), resolved against the model's build.
+pub(crate) fn bench_machine() -> anyhow::Result<Resolved> {
+    Ok(machine_setup::resolve(MachineConfig::default(), machine_setup::model_limits(), "<built-in>")?.1)
+}
+
+fn inputs(machine: &Resolved) -> CoreInputs {
+    let period_clocks = machine.period_clocks;
+    let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
+    for (axis, slot) in inputs.axes.iter_mut().enumerate().take(AXES) {
+        *slot = machine_setup::axis_config(machine, axis);
     }
     inputs
 }
 
 /// Feed `periods` records to a `run_chunk`-shaped simulator; returns cycles run.
-fn drive(periods: u64, mut run_chunk: impl FnMut(&CoreInputs, &mut Vec<Event>) -> u64) -> u64 {
-    let mut inputs = inputs();
+fn drive(machine: &Resolved, periods: u64, mut run_chunk: impl FnMut(&CoreInputs, &mut Vec<Event>) -> u64) -> u64 {
+    let mut inputs = inputs(machine);
     let mut events = Vec::new();
     let mut cycles = 0;
     for record in stream(periods) {
@@ -47,12 +55,13 @@ fn drive(periods: u64, mut run_chunk: impl FnMut(&CoreInputs, &mut Vec<Event>) -
     cycles
 }
 
-pub(crate) fn report(what: &str, cycles: u64, seconds: f64) {
+/// One throughput figure of `cycles` simulated in `seconds` on `machine`'s period and clock.
+pub(crate) fn report(machine: &Resolved, what: &str, cycles: u64, seconds: f64) {
     println!(
         "  {what:<44} {:>7.2} M cycles/s  {:>9.0} periods/s  {:>7.3}x real time",
         cycles as f64 / seconds / 1e6,
-        cycles as f64 / f64::from(PERIOD_CLOCKS) / seconds,
-        cycles as f64 / CLOCK_HZ / seconds
+        cycles as f64 / f64::from(machine.period_clocks) / seconds,
+        cycles as f64 / machine.clock_hz / seconds
     );
 }
 
@@ -98,15 +107,15 @@ struct Timed {
 }
 
 fn plan_timed(profile: finestep_planner::ProfileKind, program: &finestep_gcode::Program) -> anyhow::Result<Timed> {
-    use finestep_planner::{geometry, interpolate, lookahead, MachineConfig};
-    let config = MachineConfig { profile, ..MachineConfig::default() }.resolve()?;
+    use finestep_planner::{geometry, interpolate, lookahead};
+    let profiled = MachineConfig { profile, ..MachineConfig::default() };
+    let (_, config) = machine_setup::resolve(profiled, machine_setup::model_limits(), "<built-in>")?;
     let start = Instant::now();
-    let path = geometry::elements(&config, program).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let path = geometry::elements(&config, program)?;
     let speeds = lookahead::junction_speeds(&config, &path.elements);
     let plan_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)?;
     Ok(Timed {
         elements: path.elements.len(),
         plan_s,
@@ -179,24 +188,26 @@ pub fn front_end() -> anyhow::Result<()> {
 }
 
 pub fn run(cycles: u64) -> anyhow::Result<()> {
-    let periods = (cycles / u64::from(PERIOD_CLOCKS)).max(1);
-    let limit = u64::from(PERIOD_CLOCKS) + 8;
-    println!("finestep bench: {AXES} axes, P = {PERIOD_CLOCKS} clocks, {periods} periods per figure, one core");
+    let machine = bench_machine()?;
+    let period_clocks = machine.period_clocks;
+    let periods = (cycles / u64::from(period_clocks)).max(1);
+    let limit = u64::from(period_clocks) + 8;
+    println!("finestep bench: {AXES} axes, P = {period_clocks} clocks, {periods} periods per figure, one core");
 
     let mut rtl = Rtl::new();
     let start = Instant::now();
-    let n = drive(periods, |inputs, events| rtl.run_chunk(inputs, limit, events).cycles);
-    report("RTL alone (Verilator, event capture)", n, start.elapsed().as_secs_f64());
+    let n = drive(&machine, periods, |inputs, events| rtl.run_chunk(inputs, limit, events).cycles);
+    report(&machine, "RTL alone (Verilator, event capture)", n, start.elapsed().as_secs_f64());
 
     let mut model = Core::new(finestep_rtl_sys::params());
     let start = Instant::now();
-    let n = drive(periods, |inputs, events| model.run_chunk(inputs, limit, events).cycles);
-    report("model per-clock step()", n, start.elapsed().as_secs_f64());
+    let n = drive(&machine, periods, |inputs, events| model.run_chunk(inputs, limit, events).cycles);
+    report(&machine, "model per-clock step()", n, start.elapsed().as_secs_f64());
 
     let mut model = Core::new(finestep_rtl_sys::params());
     let start = Instant::now();
-    let n = drive(periods * 20, |inputs, events| model.run_chunk_fast(inputs, limit, events).cycles);
-    report("model fast path", n, start.elapsed().as_secs_f64());
+    let n = drive(&machine, periods * 20, |inputs, events| model.run_chunk_fast(inputs, limit, events).cycles);
+    report(&machine, "model fast path", n, start.elapsed().as_secs_f64());
 
     for (what, path) in [
         ("lockstep RTL + model per-clock, compared", ModelPath::PerClock),
@@ -204,9 +215,9 @@ pub fn run(cycles: u64) -> anyhow::Result<()> {
     ] {
         let mut harness = Harness::new("bench", path);
         let start = Instant::now();
-        let mut inputs = inputs();
-        harness.feed(&mut inputs, stream(periods)).map_err(|m| anyhow::anyhow!("{m}"))?;
-        report(what, harness.cycle(), start.elapsed().as_secs_f64());
+        let mut inputs = inputs(&machine);
+        harness.feed(&mut inputs, stream(periods))?;
+        report(&machine, what, harness.cycle(), start.elapsed().as_secs_f64());
     }
     front_end()
 }

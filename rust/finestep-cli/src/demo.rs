@@ -6,45 +6,31 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail, Context};
+use anyhow::{bail, Context};
 use finestep_cosim::{TopLockstep, TraceDepth};
-use finestep_host::AxisSetup;
-use finestep_model::limits::{AxisTiming, RateChecker};
+use finestep_host::stream::{self, StreamEvent};
+use finestep_model::limits::RateChecker;
 use finestep_model::PeriodRecord;
 use finestep_planner::{interpolate_line, LineMove, Machine as Kinematics, MachineConfig};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::machine_setup::{self, BURST};
 use crate::plot::{plot_axes, AxisTrace};
 use crate::run::run_program;
-use crate::spi_stream::{stream_over_spi, StreamSetup, BURST};
 
-/// The FPGA clock of the demo, Hz.
-pub const CLOCK_HZ: f64 = 50e6;
 const AXIS_NAMES: [&str; 3] = ["X", "Z", "C"];
 const AXIS_UNITS: [&str; 3] = ["mm", "mm", "deg"];
+/// Steps per unit of X (wheel slide, mm), Z (table, mm) and C (indexing head, degree).
+const STEPS_PER_UNIT: [f64; 3] = [1000.0, 400.0, 100.0];
 /// Periods traced into the waveform (the start of the move: direction set-up, first steps).
 const TRACED_PERIODS: u64 = 4;
 
-/// Drive timing of the demo's drives, in clocks at 50 MHz: 2 us step, 2 us space,
-/// 5 us dir setup and hold.
-pub fn demo_axis() -> AxisSetup {
-    AxisSetup { step_len: 100, step_space: 100, dir_setup: 250, dir_hold: 250, out_mode: 0, invert: 0 }
-}
-
-/// The same drive timing as the core's axis configuration (for the core-level bench).
-pub fn demo_axis_config() -> finestep_model::AxisConfig {
-    let setup = demo_axis();
-    finestep_model::AxisConfig {
-        timing: finestep_model::DriveTiming::new(setup.step_len, setup.step_space, setup.dir_setup, setup.dir_hold),
-        mode: 0,
-        invert: 0,
-        enable: true,
-    }
-}
-
 pub fn run(out: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let kinematics = Kinematics::new(vec![1000.0, 400.0, 100.0], 0.002);
+    let mut chip = machine_setup::open(TopLockstep::new("demo"))?;
+    let core = machine_setup::chip_limits(&chip.caps());
+    let (_, resolved) = machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_UNIT), core, "<demo part 1>")?;
+    let kinematics = Kinematics::new(machine_setup::steps_per_unit(&resolved, AXIS_NAMES.len()), resolved.period_s);
     let line = LineMove {
         from_mm: vec![0.0, 0.0, 0.0],
         to_mm: vec![-1.0, 10.0, 15.0],
@@ -53,15 +39,8 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         accel_mm_s2: 100.0,
     };
     let records = interpolate_line(&kinematics, &line)?;
-    let period_clocks = (kinematics.period_s * CLOCK_HZ).round() as u32;
-    let setup = demo_axis();
-    let timing = AxisTiming {
-        step_len: setup.step_len,
-        step_space: setup.step_space,
-        dir_setup: setup.dir_setup,
-        dir_hold: setup.dir_hold,
-    };
-    let mut checker = RateChecker::new(period_clocks, &[timing; 3]);
+    let period_clocks = resolved.period_clocks;
+    let mut checker = RateChecker::new(period_clocks, &resolved.timing[..AXIS_NAMES.len()]);
     for (index, record) in records.iter().enumerate() {
         if let Err((axis, why)) = checker.check(record) {
             bail!("period {index}: axis {}: {why}", AXIS_NAMES.get(axis).unwrap_or(&"?"));
@@ -74,21 +53,31 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         line.to_mm[1],
         line.to_mm[2],
         line.feed_mm_s,
-        kinematics.period_s * 1e3,
+        resolved.period_s * 1e3,
         period_clocks,
-        CLOCK_HZ / 1e6
+        resolved.clock_hz / 1e6
     );
     println!(
         "  {} period records streamed over SPI (SCK = clk/8, bursts of {BURST}, CRC-checked frames) into the FIFO;",
         records.len()
     );
     println!("  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock");
-    let stream_setup = StreamSetup { period_clocks, axes: vec![setup; 3], clock_hz: CLOCK_HZ };
+    machine_setup::configure(&mut chip, &resolved)?;
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} records queued {per_sec}")?);
-    let (streamed, lockstep) = stream_over_spi(TopLockstep::new("demo"), &stream_setup, &records, |queued| {
-        progress.set_position(queued as u64)
-    })?;
+    // The latched positions the host reads while it waits: (LATCH_TIME, steps).
+    let mut samples = Vec::new();
+    let report =
+        stream::run(&mut chip, records.iter().copied(), &machine_setup::stream_config(&resolved), |chip, event| {
+            match event {
+                StreamEvent::Queued { queued } => progress.set_position(queued),
+                StreamEvent::Waited => {
+                    let positions = chip.positions()?;
+                    samples.push((positions.latch_time, positions.steps));
+                }
+            }
+            Ok(())
+        })?;
     progress.finish_and_clear();
 
     println!("  axis   final steps   final position   commanded");
@@ -99,7 +88,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         }
     }
     for axis in 0..AXIS_NAMES.len() {
-        let steps = streamed.positions[axis];
+        let steps = report.end.steps[axis];
         let target = commanded[axis] as f64 / 65536.0;
         println!(
             "  {:<4} {:>13} {:>12.4} {:<3} {:>10.4} {}",
@@ -114,22 +103,23 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
             bail!("axis {} ended at {steps} steps, commanded {target}", AXIS_NAMES[axis]);
         }
     }
-    if streamed.underruns != 0 {
-        bail!("{} FIFO underruns", streamed.underruns);
+    if report.stream.underruns != 0 {
+        bail!("{} FIFO underruns", report.stream.underruns);
     }
     println!(
         "  {} bursts, 0 underruns; bit-exact over {} cycles ({:.3} s of machine time)",
-        streamed.bursts,
-        streamed.cycles,
-        streamed.cycles as f64 / CLOCK_HZ
+        report.stream.bursts,
+        report.cycles,
+        report.cycles as f64 / resolved.clock_hz
     );
 
+    let lockstep = chip.into_bus().into_link().into_target();
     let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });
-    let traced = lockstep.cycle() - streamed.cycles + TRACED_PERIODS * u64::from(period_clocks);
-    lockstep.write_waveform(&waveform, TraceDepth::Ports, traced).map_err(|e| anyhow!(e))?;
+    let traced = lockstep.cycle() - report.cycles + TRACED_PERIODS * u64::from(period_clocks);
+    lockstep.write_waveform(&waveform, TraceDepth::Ports, traced)?;
 
     // Commanded positions at the period boundaries; emitted ones where the host sampled
-    // the latched POSITION registers.
+    // the latched POSITION registers, timed from the first boundary.
     let mut traces: Vec<AxisTrace> = (0..AXIS_NAMES.len()).map(|_| AxisTrace::default()).collect();
     let mut running = [0i64; 3];
     for record in std::iter::once(PeriodRecord::default()).chain(records.iter().copied()) {
@@ -138,9 +128,10 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
             trace.commanded.push(running[axis] as f64 / 65536.0);
         }
     }
-    for (t, steps) in &streamed.samples {
+    for (latch_time, steps) in &samples {
+        let t = f64::from(latch_time.wrapping_sub(report.first_boundary)) / resolved.clock_hz;
         for (axis, trace) in traces.iter_mut().enumerate() {
-            trace.emitted.push((*t, f64::from(steps[axis])));
+            trace.emitted.push((t, f64::from(steps[axis])));
         }
     }
     let png = out.join("demo.png");
@@ -151,7 +142,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     println!();
     println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
     let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
-    run_program(&program, "demo-part.ngc", false, &MachineConfig::default(), out)?;
+    run_program(&program, "demo-part.ngc", false, MachineConfig::default(), "<built-in>", out)?;
     crate::demo_feedback::run()
 }
 

@@ -11,23 +11,22 @@
 //! The chip is the Verilated RTL in lockstep with the reference model, every pin on
 //! every clock; the host driver talks to it over SPI at its pins.
 
-use anyhow::{anyhow, bail};
+use anyhow::{bail, Context};
 use finestep_cosim::{PlantLoop, TopLockstep};
-use finestep_host::{
-    Bus, BusError, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus,
-};
+use finestep_host::stream::{self, StreamEvent};
+use finestep_host::{Bus, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
 use finestep_model::{Increment, PeriodRecord};
+use finestep_planner::config::Resolved;
 use finestep_planner::{interpolate_line, LineMove, Machine as Kinematics};
 use finestep_plant::{
     Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, HandWheel, HandWheelConfig, Mechanics, Plant,
     PlantConfig, ProbeConfig,
 };
 
-use crate::demo::{demo_axis, CLOCK_HZ};
+use crate::machine_setup::{self, Chip};
 
-type Chip<T> = Machine<SpiBus<PinHost<PlantLoop<T>>>>;
-
-/// X (wheel slide, 1000 steps/mm) and Z (table, 400 steps/mm) as in part 1.
+/// X (wheel slide, 1000 steps/mm) and Z (table, 400 steps/mm) as in part 1, in record
+/// slots 0 and 1.
 const STEPS_PER_MM: [f64; 2] = [1000.0, 400.0];
 /// Grating resolution: X 1 um, Z 0.5 um (x4 counts).
 const GRATING_COUNTS_PER_MM: [f64; 2] = [1000.0, 2000.0];
@@ -35,10 +34,6 @@ const GRATING_COUNTS_PER_MM: [f64; 2] = [1000.0, 2000.0];
 const MARKS_MM: [f64; 4] = [2.0, 4.0, 6.0, 8.0];
 /// The drives' time constant: 1 ms.
 const DRIVE_TAU_CLOCKS: u64 = 50_000;
-
-fn bus(e: BusError) -> anyhow::Error {
-    anyhow!("{e}")
-}
 
 fn plant() -> anyhow::Result<Plant> {
     let drive = DriveConfig { mechanics: Mechanics::Lag { tau: DRIVE_TAU_CLOCKS }, ..DriveConfig::default() };
@@ -63,38 +58,35 @@ fn plant() -> anyhow::Result<Plant> {
     Ok(Plant::new(config, 0xFEED)?)
 }
 
-fn connect<T: PinTarget>(target: T) -> anyhow::Result<Chip<T>> {
-    let mut host = PinHost::new(PlantLoop::new(target, plant()?), PinTiming::default());
-    host.reset(4).map_err(bus)?;
-    host.idle(8).map_err(bus)?;
-    let mut machine = Machine::connect(SpiBus::new(host, 4)).map_err(bus)?;
-    for axis in 0..2 {
-        machine.configure_axis(axis, &demo_axis()).map_err(bus)?;
-    }
-    machine.enable_axes(0b11).map_err(bus)?;
-    machine.set_period(100_000).map_err(bus)?; // 2 ms
-    machine.clear_faults_and_errors().map_err(bus)?;
+/// The chip with the plant on its pins, configured as the demo's machine (T = 2 ms, X
+/// and Z) resolved against its CAPS and clock, with the gratings and the hand wheel set up.
+fn connect<T: PinTarget>(target: T) -> anyhow::Result<(Chip<PlantLoop<T>>, Resolved)> {
+    let mut machine = machine_setup::open(PlantLoop::new(target, plant()?))?;
+    let core = machine_setup::chip_limits(&machine.caps());
+    let (_, resolved) = machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_MM), core, "<demo part 3>")?;
+    machine_setup::configure(&mut machine, &resolved)?;
     for channel in 0..2 {
-        machine.configure_encoder(channel, &EncoderSetup { filter: 3, ..EncoderSetup::default() }).map_err(bus)?;
+        machine.configure_encoder(channel, &EncoderSetup { filter: 3, ..EncoderSetup::default() })?;
     }
     // 20 us of contact bounce: sample every 10 us, 4 samples.
-    machine.configure_hand_wheel(499, 4).map_err(bus)?;
-    Ok(machine)
+    let prescale = ((10e-6 * resolved.clock_hz).round() as u32).saturating_sub(1);
+    machine.configure_hand_wheel(u16::try_from(prescale).context("the hand wheel's sample prescaler")?, 4)?;
+    Ok((machine, resolved))
 }
 
 pub fn run() -> anyhow::Result<()> {
     println!();
     println!("finestep demo, part 3: feedback with a simulated machine on the pins (drives lagging 1 ms,");
     println!("  gratings X 1 um and Z 0.5 um, a probe, a hand wheel with contact bounce); RTL and model in lockstep");
-    let mut machine = connect(TopLockstep::new("demo-feedback"))?;
-    grating_pass(&mut machine)?;
-    jog(&mut machine)?;
+    let (mut machine, resolved) = connect(TopLockstep::new("demo-feedback"))?;
+    grating_pass(&mut machine, &resolved)?;
+    jog(&mut machine, &resolved)?;
     Ok(())
 }
 
-/// Z traverses 10 mm at 20 mm/s; the probe touches four marks on the way.
-fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
-    let kinematics = Kinematics::new(STEPS_PER_MM.to_vec(), 0.002);
+/// Z traverses 10 mm at 40 mm/s; the probe touches four marks on the way.
+fn grating_pass<T: PinTarget>(machine: &mut Chip<PlantLoop<T>>, resolved: &Resolved) -> anyhow::Result<()> {
+    let kinematics = Kinematics::new(machine_setup::steps_per_unit(resolved, 2), resolved.period_s);
     let line = LineMove {
         from_mm: vec![0.0, 0.0],
         to_mm: vec![0.0, 10.0],
@@ -103,40 +95,30 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
         accel_mm_s2: 400.0,
     };
     let records: Vec<PeriodRecord> = interpolate_line(&kinematics, &line)?;
-    // The host keeps the FIFO topped up and polls the probe between bursts.
-    let mut sent = 0;
-    let mut top_up = |machine: &mut Chip<T>| -> anyhow::Result<bool> {
-        let (_, free) = machine.fifo().map_err(bus)?;
-        let burst = &records[sent..records.len().min(sent + (free as usize).min(32))];
-        if !burst.is_empty() {
-            machine.bus().push_records(burst).map_err(bus)?;
-            sent += burst.len();
-        }
-        Ok(sent < records.len())
-    };
-    machine.set_start_level(64).map_err(bus)?;
-    for _ in 0..4 {
-        top_up(machine)?;
-    }
-    machine.arm_probe(true, 2).map_err(bus)?;
-    machine.set_control(true, false, true).map_err(bus)?;
-    println!("  grating pass: Z 0 -> 10 mm at 40 mm/s, {} periods of 2 ms; probe hits:", records.len());
+    machine.arm_probe(true, 2)?;
+    println!(
+        "  grating pass: Z 0 -> 10 mm at 40 mm/s, {} periods of {} ms; probe hits:",
+        records.len(),
+        resolved.period_s * 1e3
+    );
     println!("    mark   time ms   Z steps   Z by steps mm   Z grating mm   lag um   X grating um");
+    // The host keeps the FIFO topped up and polls the probe while it waits.
+    let config = machine_setup::stream_config(resolved);
+    let config =
+        stream::StreamConfig { poll_clocks: (resolved.period_clocks / 4).into(), prefill: 4 * config.burst, ..config };
     let mut hits = Vec::new();
-    let budget = records.len() as u64 * 100_000 + 20_000_000;
-    let mut waited = 0;
-    while hits.len() < MARKS_MM.len() && waited < budget {
-        machine.bus().wait(25_000).map_err(bus)?;
-        waited += 25_000;
-        top_up(machine)?;
-        if let Some(hit) = machine.probe_hit().map_err(bus)? {
-            let z_steps = f64::from(hit.steps[1]) / STEPS_PER_MM[1];
+    let report = stream::run(machine, records.iter().copied(), &config, |machine, event| {
+        if event != StreamEvent::Waited {
+            return Ok(());
+        }
+        if let Some(hit) = machine.probe_hit()? {
+            let z_steps = f64::from(hit.steps[1]) / kinematics.steps_per_unit[1];
             let z_grating = f64::from(hit.counts[1]) / GRATING_COUNTS_PER_MM[1];
             let x_grating = f64::from(hit.counts[0]) / GRATING_COUNTS_PER_MM[0];
             println!(
                 "    {:>4} {:>9.3} {:>9} {:>15.4} {:>14.4} {:>8.1} {:>14.1}",
                 hits.len() + 1,
-                f64::from(hit.time) / CLOCK_HZ * 1e3,
+                f64::from(hit.time) / resolved.clock_hz * 1e3,
                 hit.steps[1],
                 z_steps,
                 z_grating,
@@ -144,11 +126,12 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
                 x_grating * 1e3
             );
             hits.push(hit);
-            machine.arm_probe(true, 2).map_err(bus)?;
+            machine.arm_probe(true, 2)?;
         }
-    }
-    while top_up(machine)? {
-        machine.bus().wait(25_000).map_err(bus)?;
+        Ok(())
+    })?;
+    if report.stream.underruns != 0 {
+        bail!("{} FIFO underruns", report.stream.underruns);
     }
     if hits.len() != MARKS_MM.len() {
         bail!("{} probe hits, expected {}", hits.len(), MARKS_MM.len());
@@ -161,27 +144,26 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
             bail!("probe at Z = {z_grating} mm by the grating, the mark is at {mark} mm");
         }
     }
-    finestep_host::stream::wait_idle(machine.bus(), 100_000, 40_000_000).map_err(bus)?;
     // The lag decays as exp(-t / tau): after 30 tau it is below 2^-32 steps, at rest.
-    machine.bus().wait(30 * DRIVE_TAU_CLOCKS).map_err(bus)?;
-    let snapshot = machine.feedback().map_err(bus)?;
+    machine.bus().wait(30 * DRIVE_TAU_CLOCKS)?;
+    let snapshot = machine.feedback()?;
     let ideal = machine.bus().link().target().plant().encoder(1).ideal_count();
     println!(
         "    at rest: Z {} steps = {:.4} mm, grating {} counts = {:.4} mm (the plant's ideal count: {ideal})",
         snapshot.steps[1],
-        f64::from(snapshot.steps[1]) / STEPS_PER_MM[1],
+        f64::from(snapshot.steps[1]) / kinematics.steps_per_unit[1],
         snapshot.counts[1],
         f64::from(snapshot.counts[1]) / GRATING_COUNTS_PER_MM[1]
     );
     if i64::from(snapshot.counts[1]) != ideal {
         bail!("Z grating reads {}, the plant is at {ideal}", snapshot.counts[1]);
     }
-    machine.set_control(false, false, true).map_err(bus)?;
+    machine.set_control(false, false, true)?;
     Ok(())
 }
 
 /// The hand wheel moves X through the jog: bursts at x10 and x100, both ways.
-fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
+fn jog<T: PinTarget>(machine: &mut Chip<PlantLoop<T>>, resolved: &Resolved) -> anyhow::Result<()> {
     let mut setup = JogSetup {
         axis: 0,
         multiplier: JogMultiplier::X10,
@@ -191,9 +173,9 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
         accel: Increment::from_num(0.4), // 100 mm/s^2
         window: 200,                     // drop mode: at most 0.2 mm behind the wheel
     };
-    machine.configure_jog(&setup).map_err(bus)?;
-    machine.enable_jog(&setup, true).map_err(bus)?;
-    let start = machine.positions().map_err(bus)?.steps[0];
+    machine.configure_jog(&setup)?;
+    machine.enable_jog(&setup, true)?;
+    let start = machine.positions()?.steps[0];
     println!("  hand-wheel jog of X (1 um a detent at x1; vmax 10 mm/s, accel 100 mm/s^2):");
     println!(
         "    turn   detents/s   multiplier   mode     wheel detents   dropped   X target um   X at rest um   peak mm/s"
@@ -210,17 +192,17 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
         if (multiplier, follow) != (setup.multiplier, setup.follow) {
             setup.multiplier = multiplier;
             setup.follow = follow;
-            machine.enable_jog(&setup, true).map_err(bus)?;
+            machine.enable_jog(&setup, true)?;
         }
-        let dropped_before = machine.jog().map_err(bus)?.dropped;
+        let dropped_before = machine.jog()?.dropped;
         let factor = multiplier.factor();
-        let per_edge = HandWheel::cycles_per_edge(CLOCK_HZ as u64, rate);
+        let per_edge = HandWheel::cycles_per_edge(resolved.clock_hz as u64, rate);
         let wheel = machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().expect("the plant has a wheel");
         wheel.turn(detents, per_edge)?;
         let mut peak = Increment::ZERO;
         loop {
-            machine.bus().wait(50_000).map_err(bus)?;
-            let state = machine.jog().map_err(bus)?;
+            machine.bus().wait(50_000)?;
+            let state = machine.jog()?;
             peak = peak.max(state.velocity.abs());
             let loop_ = machine.bus().link().target();
             let wheel_busy = loop_.plant().hand_wheel().expect("wheel").script_end() > loop_.cycle();
@@ -228,10 +210,10 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
                 break;
             }
         }
-        let wheel = machine.hand_wheel().map_err(bus)?;
-        let dropped = i64::from(machine.jog().map_err(bus)?.dropped.wrapping_sub(dropped_before));
+        let wheel = machine.hand_wheel()?;
+        let dropped = i64::from(machine.jog()?.dropped.wrapping_sub(dropped_before));
         target += (detents - detents.signum() * dropped) * factor;
-        let at = machine.positions().map_err(bus)?.steps[0] - start;
+        let at = machine.positions()?.steps[0] - start;
         println!(
             "    {:>4} {:>11} {:>12}   {:<6} {:>15} {:>9} {:>13} {:>14} {:>11.2}",
             index + 1,
@@ -242,7 +224,7 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
             dropped,
             target,
             at,
-            peak.to_num::<f64>() / STEPS_PER_MM[0] / 0.002
+            peak.to_num::<f64>() / resolved.axes[0].steps_per_unit / resolved.period_s
         );
         if i64::from(at) != target {
             bail!("X at {at} steps after turn {}, the wheel asks for {target}", index + 1);
@@ -251,9 +233,9 @@ fn jog<T: PinTarget>(machine: &mut Chip<T>) -> anyhow::Result<()> {
             bail!("the hand wheel's filter let contact bounce through");
         }
     }
-    machine.enable_jog(&setup, false).map_err(bus)?;
-    machine.bus().wait(200_000).map_err(bus)?;
-    if machine.jog().map_err(bus)?.engaged {
+    machine.enable_jog(&setup, false)?;
+    machine.bus().wait(200_000)?;
+    if machine.jog()?.engaged {
         bail!("the jog did not disengage");
     }
     println!("    every followed detent landed exactly; the jog disengaged at rest; no illegal transition through the bounce");

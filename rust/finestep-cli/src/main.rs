@@ -5,9 +5,9 @@ mod bench;
 mod bench_top;
 mod demo;
 mod demo_feedback;
+mod machine_setup;
 mod plot;
 mod run;
-mod spi_stream;
 
 use std::path::PathBuf;
 

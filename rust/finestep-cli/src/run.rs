@@ -5,17 +5,17 @@
 
 use std::path::Path;
 
-use anyhow::{bail, Context};
+use anyhow::{anyhow, bail, Context};
 use finestep_cosim::TopLockstep;
 use finestep_gcode::Program;
-use finestep_host::AxisSetup;
-use finestep_model::{Core, CoreInputs, CoreParams};
+use finestep_host::stream::{self, StreamEvent};
+use finestep_model::{Core, CoreInputs};
 use finestep_planner::config::AXIS_NAMES;
 use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, ProfileKind};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::machine_setup;
 use crate::plot::{plot_motion, plot_toolpath};
-use crate::spi_stream::{stream_over_spi, StreamSetup};
 
 const AXIS_UNITS: [&str; 4] = ["mm", "mm", "mm", "deg"];
 
@@ -57,9 +57,9 @@ pub fn run(
     profile: Option<&str>,
     out: &Path,
 ) -> anyhow::Result<()> {
-    let mut config = match config_path {
-        Some(path) => MachineConfig::load(path)?,
-        None => MachineConfig::default(),
+    let (mut config, config_name) = match config_path {
+        Some(path) => (MachineConfig::load(path)?, path.display().to_string()),
+        None => (MachineConfig::default(), "<built-in>".to_string()),
     };
     match profile {
         Some("trapezoid") => config.profile = ProfileKind::Trapezoid,
@@ -67,19 +67,28 @@ pub fn run(
         _ => {}
     }
     let program = finestep_gcode::parse_file(file)?;
-    run_program(&program, &file.display().to_string(), fast, &config, out)
+    run_program(&program, &file.display().to_string(), fast, config, &config_name, out)
 }
 
-/// Plans, checks, plots and runs `program` (named `name` in messages and plot files).
+/// Plans, checks, plots and runs `program` (named `name` in messages and plot files) on
+/// the machine `config` (named `config_name` in errors): on the chip, whose CAPS and
+/// clock the configuration is resolved against, or with `fast` on the model's build.
 pub fn run_program(
     program: &Program,
     name: &str,
     fast: bool,
-    config: &MachineConfig,
+    config: MachineConfig,
+    config_name: &str,
     out: &Path,
 ) -> anyhow::Result<()> {
-    let resolved = config.resolve()?;
-    let planned = plan_program(config, program).map_err(|e| anyhow::anyhow!("{name}:{}: {}", e.line, e.reason))?;
+    let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
+    let mut chip = if fast { None } else { Some(machine_setup::open(TopLockstep::new(&stem))?) };
+    let core = match &chip {
+        Some(chip) => machine_setup::chip_limits(&chip.caps()),
+        None => machine_setup::model_limits(),
+    };
+    let (config, resolved) = machine_setup::resolve(config, core, config_name)?;
+    let planned = plan_program(&config, program).map_err(|e| anyhow!("{name}:{}: {}", e.line, e.reason))?;
     let records = &planned.records;
     for note in &planned.notes {
         println!("  note: {note}");
@@ -98,10 +107,9 @@ pub fn run_program(
             "streamed over SPI; RTL in lockstep with the model, every pin every clock"
         }
     );
-    let report = check_program(config, program, records)?;
+    let report = check_program(&config, program, records)?;
     print_check(&report);
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
     let toolpath = out.join(format!("{stem}-toolpath.png"));
     let motion = out.join(format!("{stem}-motion.png"));
     plot_toolpath(&toolpath, &report.samples)?;
@@ -112,52 +120,44 @@ pub fn run_program(
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} periods {per_sec} {msg}")?);
     let drain = 2 * u64::from(period_clocks);
-    let (positions, cycles) = if fast {
-        let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
-        for (axis, timing) in inputs.axes.iter_mut().zip(&resolved.timing) {
-            axis.timing = *timing;
-            axis.enable = true;
-        }
-        let mut core = Core::new(CoreParams::default());
-        let mut events = Vec::new();
-        for (index, record) in records.iter().enumerate() {
-            inputs.record = *record;
-            while !core.run_chunk_fast(&inputs, u64::MAX, &mut events).consumed {}
-            events.clear();
-            if index % 1024 == 0 {
-                progress.set_position(index as u64);
-                progress.set_message(format!("line {}", planned.lines[index]));
+    let (positions, cycles) = match &mut chip {
+        None => {
+            let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
+            for (axis, slot) in inputs.axes.iter_mut().enumerate().take(resolved.timing.len()) {
+                *slot = machine_setup::axis_config(&resolved, axis);
             }
-        }
-        inputs.rec_valid = false;
-        core.run_chunk_fast(&inputs, drain, &mut events);
-        (core.outputs().positions.map(|p| p as i32).to_vec(), core.cycle())
-    } else {
-        let setup = StreamSetup {
-            period_clocks,
-            axes: resolved
-                .timing
-                .iter()
-                .map(|t| AxisSetup {
-                    step_len: t.step_len,
-                    step_space: t.step_space,
-                    dir_setup: t.dir_setup,
-                    dir_hold: t.dir_hold,
-                    ..AxisSetup::default()
-                })
-                .collect(),
-            clock_hz: config.clock_hz,
-        };
-        let (streamed, _) = stream_over_spi(TopLockstep::new(&stem), &setup, records, |queued| {
-            progress.set_position(queued as u64);
-            if let Some(line) = planned.lines.get(queued.saturating_sub(1)) {
-                progress.set_message(format!("line {line}"));
+            let mut core = Core::new(machine_setup::model_core_params());
+            let mut events = Vec::new();
+            for (index, record) in records.iter().enumerate() {
+                inputs.record = *record;
+                while !core.run_chunk_fast(&inputs, u64::MAX, &mut events).consumed {}
+                events.clear();
+                if index % 1024 == 0 {
+                    progress.set_position(index as u64);
+                    progress.set_message(format!("line {}", planned.lines[index]));
+                }
             }
-        })?;
-        if streamed.underruns != 0 {
-            bail!("{} FIFO underruns", streamed.underruns);
+            inputs.rec_valid = false;
+            core.run_chunk_fast(&inputs, drain, &mut events);
+            (core.outputs().positions.map(|p| p as i32).to_vec(), core.cycle())
         }
-        (streamed.positions, streamed.cycles)
+        Some(chip) => {
+            machine_setup::configure(chip, &resolved)?;
+            let config = machine_setup::stream_config(&resolved);
+            let streamed = stream::run(chip, records.iter().copied(), &config, |_, event| {
+                if let StreamEvent::Queued { queued } = event {
+                    progress.set_position(queued);
+                    if let Some(line) = planned.lines.get((queued as usize).saturating_sub(1)) {
+                        progress.set_message(format!("line {line}"));
+                    }
+                }
+                Ok(())
+            })?;
+            if streamed.stream.underruns != 0 {
+                bail!("{} FIFO underruns", streamed.stream.underruns);
+            }
+            (streamed.end.steps, streamed.cycles)
+        }
     };
     progress.finish_and_clear();
 

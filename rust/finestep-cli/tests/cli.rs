@@ -93,3 +93,16 @@ fn a_bad_configuration_names_the_file_and_the_key() {
     assert!(!ok);
     assert!(text.contains(&format!("{config}: axes.Y.max_jerk: must be a positive finite number, got 0")), "{text}");
 }
+
+#[test]
+fn a_configuration_is_resolved_against_the_chips_caps_and_clock() {
+    // A file for a 48 MHz board loads, but the co-simulated chip reports 50 MHz.
+    let config = scratch("clock.toml", "clock_hz = 48_000_000\n");
+    let (ok, text) = finestep(&["run", "--config", &config, &program("contour.ngc")]);
+    assert!(!ok);
+    assert!(text.contains("does not fit the core (50 MHz, CAPS: P_WIDTH 20, TIMING_W 12, 4 axes)"), "{text}");
+    assert!(text.contains(&format!("{config}: clock_hz: 48000000 Hz, but the core runs at 50000000 Hz")), "{text}");
+    // With --fast the model's build is the core: the same clock.
+    let (ok, text) = finestep(&["run", "--fast", "--config", &config, &program("contour.ngc")]);
+    assert!(!ok && text.contains("clock_hz: 48000000 Hz"), "{text}");
+}

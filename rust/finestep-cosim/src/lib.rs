@@ -28,7 +28,7 @@ use finestep_model::{pins, ChunkEnd, Core, CoreInputs, CoreOutputs, Event, Perio
 use finestep_rtl_sys::Rtl;
 pub use finestep_rtl_sys::TraceDepth;
 
-pub use mismatch::{describe_difference, Mismatch};
+pub use mismatch::{describe_difference, Mismatch, WaveformError};
 pub use plant_loop::PlantLoop;
 pub use top_lockstep::{rtl_top_params, ModelPins, RtlPins, TopLockstep, TopMismatch};
 
@@ -102,7 +102,13 @@ impl Harness {
 
     /// Replay everything run so far on a traced RTL and write the waveform of cycles
     /// `from..to` to `path` (VCD, or FST with the -sys crate's feature `fst`).
-    pub fn write_waveform(&self, path: &std::path::Path, depth: TraceDepth, from: u64, to: u64) -> std::io::Result<()> {
+    pub fn write_waveform(
+        &self,
+        path: &std::path::Path,
+        depth: TraceDepth,
+        from: u64,
+        to: u64,
+    ) -> Result<(), WaveformError> {
         let mut rtl = Rtl::new_traced();
         let mut scratch = Vec::new();
         let mut tracing = false;
@@ -110,7 +116,7 @@ impl Harness {
             let mut left = *cycles;
             while left > 0 && rtl.cycle() < to {
                 if !tracing && rtl.cycle() >= from {
-                    rtl.trace_open(path, depth)?;
+                    rtl.trace_open(path, depth).map_err(WaveformError::at(path))?;
                     tracing = true;
                 }
                 let stop = if tracing { to } else { from };
@@ -214,7 +220,7 @@ impl Harness {
         };
         keep(&mut recent_model);
         keep(&mut recent_rtl);
-        let waveform = self.write_window(cycle).map_err(|e| e.to_string());
+        let waveform = self.write_window(cycle);
         Mismatch {
             test: self.name.clone(),
             cycle,
@@ -229,9 +235,9 @@ impl Harness {
     }
 
     /// The waveform window around a mismatch at `cycle`, named after the test.
-    fn write_window(&self, cycle: u64) -> std::io::Result<PathBuf> {
+    fn write_window(&self, cycle: u64) -> Result<PathBuf, WaveformError> {
         let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../target/cosim-failures"));
-        std::fs::create_dir_all(&dir)?;
+        std::fs::create_dir_all(&dir).map_err(WaveformError::at(&dir))?;
         let suffix = if finestep_rtl_sys::trace_is_fst() { "fst" } else { "vcd" };
         let path = dir.join(format!("{}.{suffix}", self.name));
         self.write_waveform(&path, TraceDepth::Everything, cycle.saturating_sub(WINDOW_BEFORE), cycle + WINDOW_AFTER)?;

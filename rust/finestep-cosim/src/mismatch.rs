@@ -25,7 +25,25 @@ pub struct Mismatch {
     /// The RTL's last events up to the mismatch.
     pub recent_rtl: Vec<Event>,
     /// The waveform window written around the mismatch, or why it could not be.
-    pub waveform: Result<PathBuf, String>,
+    pub waveform: Result<PathBuf, WaveformError>,
+}
+
+/// A waveform that could not be written.
+#[derive(Debug, thiserror::Error)]
+#[error("writing the waveform {path}: {source}")]
+pub struct WaveformError {
+    /// The file (or the directory it goes in).
+    pub path: PathBuf,
+    /// What failed.
+    #[source]
+    pub source: std::io::Error,
+}
+
+impl WaveformError {
+    /// A closure for `map_err` that names `path`.
+    pub(crate) fn at(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> WaveformError + '_ {
+        move |source| WaveformError { path: path.to_path_buf(), source }
+    }
 }
 
 /// The outputs of one side at `cycle`, given its outputs before the chunk and its events.

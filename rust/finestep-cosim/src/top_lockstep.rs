@@ -11,6 +11,8 @@ use finestep_host::{BusError, PinTarget};
 use finestep_model::top::{top_pins, Top, TopInputs, TopParams};
 use finestep_rtl_sys::{top_build, PinEvent, RtlTop, TraceDepth};
 
+use crate::mismatch::WaveformError;
+
 /// Cycles of waveform after the mismatch.
 const WINDOW_AFTER: u64 = 16;
 
@@ -28,7 +30,7 @@ pub struct TopMismatch {
     /// The packed inputs held in that cycle.
     pub inputs: u64,
     /// The waveform of the whole run up to the mismatch, or why it could not be written.
-    pub waveform: Result<PathBuf, String>,
+    pub waveform: Result<PathBuf, WaveformError>,
 }
 
 /// The name of bit `index` of the packed outputs.
@@ -125,9 +127,9 @@ impl TopLockstep {
         }
     }
 
-    fn failure_waveform(&self, until: u64) -> Result<PathBuf, String> {
+    fn failure_waveform(&self, until: u64) -> Result<PathBuf, WaveformError> {
         let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../target/cosim-failures");
-        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        std::fs::create_dir_all(&dir).map_err(WaveformError::at(&dir))?;
         let extension = if finestep_rtl_sys::trace_is_fst() { "fst" } else { "vcd" };
         let path = dir.join(format!("{}.{extension}", self.name));
         self.write_waveform(&path, TraceDepth::Everything, until)?;
@@ -136,9 +138,9 @@ impl TopLockstep {
 
     /// Replays the run so far on a traced RTL from power-on up to cycle `until` and
     /// writes its waveform to `path`.
-    pub fn write_waveform(&self, path: &std::path::Path, depth: TraceDepth, until: u64) -> Result<(), String> {
+    pub fn write_waveform(&self, path: &std::path::Path, depth: TraceDepth, until: u64) -> Result<(), WaveformError> {
         let mut rtl = RtlTop::new_traced();
-        rtl.trace_open(path, depth).map_err(|e| e.to_string())?;
+        rtl.trace_open(path, depth).map_err(WaveformError::at(path))?;
         let mut scratch = Vec::new();
         let mut ran = 0;
         for &(inputs, cycles) in &self.log {

@@ -2,7 +2,7 @@
 
 use finestep_cosim::TopLockstep;
 use finestep_host::regs::{command, control, fifo_level, status};
-use finestep_host::stream::{stream, wait_idle, StreamConfig};
+use finestep_host::stream::{self, stream, wait_idle, StreamConfig, StreamEvent};
 use finestep_host::{AxisSetup, Bus, Machine, ParallelBus, PinHost, PinTiming, SpiBus};
 use finestep_model::PeriodRecord;
 
@@ -81,6 +81,47 @@ fn spi_stream_moves_exactly() {
     // Stopped, the latch follows the pins every clock; the read still settles.
     machine.set_control(false, false, true).unwrap();
     assert_eq!(machine.positions().unwrap().steps, positions.steps);
+}
+
+/// The whole run as the CLI does it: pre-fill, start, feed, wait, with an observer that
+/// follows the queue and samples the latched positions while the streamer waits.
+#[test]
+fn spi_run_prefills_starts_and_reports() {
+    let mut machine = spi_machine("spi_run_prefills_starts_and_reports");
+    let axis = AxisSetup { step_len: 3, step_space: 3, dir_setup: 2, dir_hold: 2, ..AxisSetup::default() };
+    for i in 0..4 {
+        machine.configure_axis(i, &axis).unwrap();
+    }
+    machine.enable_axes(0xF).unwrap();
+    machine.set_period(2000).unwrap();
+    machine.set_start_level(1).unwrap();
+    machine.clear_faults_and_errors().unwrap();
+    let records = moves(300);
+    let config = StreamConfig { poll_clocks: 1000, ..StreamConfig::default() };
+    let (mut queued, mut samples) = (Vec::new(), Vec::new());
+    let report = stream::run(&mut machine, records.iter().copied(), &config, |machine, event| {
+        match event {
+            StreamEvent::Queued { queued: n } => queued.push(n),
+            StreamEvent::Waited => samples.push(machine.positions()?),
+        }
+        Ok(())
+    })
+    .unwrap();
+    // The pre-fill (two bursts) is one event, then a burst at a time up to the last record.
+    assert_eq!(queued.first(), Some(&64));
+    assert_eq!(queued.last(), Some(&300));
+    assert!(queued.windows(2).all(|w| w[0] < w[1] && w[1] - w[0] <= 32), "{queued:?}");
+    assert_eq!((report.stream.records, report.stream.underruns), (300, 0));
+    assert_eq!(report.stream.bursts, queued.len() as u64 + 1);
+    for axis in 0..4 {
+        assert_eq!(report.end.steps[axis], expected_steps(&records, axis), "axis {axis}");
+    }
+    // The samples (one per wait) move forward in time from the first boundary on, and
+    // the run took at least its 300 periods.
+    assert!(!samples.is_empty());
+    assert!(samples.windows(2).all(|w| w[1].latch_time.wrapping_sub(w[0].latch_time) < 1 << 31));
+    assert!(samples.iter().all(|s| s.latch_time.wrapping_sub(report.first_boundary) < 1 << 31));
+    assert!(report.cycles >= 300 * 2000, "{}", report.cycles);
 }
 
 #[test]

@@ -59,7 +59,12 @@ fn ten_thousand_periods_over_spi_without_underrun() {
     machine.set_control(true, false, true).unwrap();
 
     let started = Instant::now();
-    let report = stream(machine.bus(), records.iter().copied(), StreamConfig { burst: 32, poll_clocks: 2000 }).unwrap();
+    let report = stream(
+        machine.bus(),
+        records.iter().copied(),
+        StreamConfig { burst: 32, poll_clocks: 2000, ..StreamConfig::default() },
+    )
+    .unwrap();
     wait_idle(machine.bus(), 2000, 4 * u64::from(PERIOD) * 300).unwrap();
     machine.bus().wait(1000).unwrap();
     let elapsed = started.elapsed().as_secs_f64();

@@ -174,12 +174,6 @@ pub enum FeedbackError {
     Period(u32),
 }
 
-impl From<FeedbackError> for BusError {
-    fn from(e: FeedbackError) -> Self {
-        BusError::Protocol(e.to_string())
-    }
-}
-
 impl<B: Bus> Machine<B> {
     fn check_channel(&self, channel: usize) -> Result<(), FeedbackError> {
         if channel >= self.caps.n_enc {

@@ -88,7 +88,7 @@ pub fn read_request(addr: u8, count: usize) -> Vec<u8> {
 /// misread makes the check fail too.
 pub fn read_response(tx: &[u8], rx: &[u8]) -> Result<Vec<u32>, BusError> {
     if rx.len() != tx.len() || tx.len() < 9 || (tx.len() - 5) & 3 != 0 {
-        return Err(BusError::Protocol(format!("read frame of {} bytes answered with {}", tx.len(), rx.len())));
+        return Err(BusError::ShortAnswer { sent: tx.len(), received: rx.len() });
     }
     let data = &rx[3..rx.len() - 2];
     let mut digest = FRAME_CRC.digest();

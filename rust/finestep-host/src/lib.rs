@@ -9,7 +9,8 @@
 //!   timing of the spec (docs/spec/); [`spidev::Spidev`] a real board over Linux spidev.
 //! - [`Machine`]: identity check, configuration, faults, run, coherent positions; its
 //!   [`feedback`] side: encoders, probe, hand wheel, jog, velocity estimation.
-//! - [`stream`]: keeps the FIFO fed from an iterator of period records.
+//! - [`stream`]: runs period records: pre-fills the FIFO, starts, keeps it fed in bursts
+//!   and waits for the end, with an observer called while it waits.
 
 #![warn(missing_docs)]
 
@@ -27,7 +28,7 @@ pub use feedback::{
     CountMode, EncoderSetup, FeedbackError, FeedbackSnapshot, HandWheelState, JogMultiplier, JogSetup, JogState,
     ProbeHit, VelocityEstimator,
 };
-pub use finestep_interface::regs;
+pub use finestep_regmap::regs;
 pub use machine::{AxisSetup, Caps, Machine, Positions};
 pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};
@@ -49,12 +50,89 @@ pub enum BusError {
         /// CRC the core sent.
         got: u16,
     },
-    /// The core did not behave as the protocol says (e.g. no data on an 8080 read).
-    #[error("protocol: {0}")]
-    Protocol(String),
-    /// The device at the other end is not a finestep core of a compatible version.
-    #[error("not a compatible finestep core: {0}")]
-    Identity(String),
+    /// A read frame's answer is not as long as the request.
+    #[error("read frame of {sent} bytes answered with {received}")]
+    ShortAnswer {
+        /// Bytes sent.
+        sent: usize,
+        /// Bytes received.
+        received: usize,
+    },
+    /// An 8080 read strobe found the bus not driven by the core.
+    #[error("8080 read of halfword {halfword:#04x}: the core did not drive the bus")]
+    NotDriven {
+        /// The halfword address read.
+        halfword: u8,
+    },
+    /// The device at the other end does not answer ID with the finestep magic.
+    #[error("not a finestep core: ID reads {found:#010x}, not {expected:#010x}")]
+    NotFinestep {
+        /// What ID read.
+        found: u32,
+        /// The finestep magic.
+        expected: u32,
+    },
+    /// The core speaks another major version of the register map.
+    #[error("not a compatible finestep core: register map version {found}.x, this driver speaks {driver}.x")]
+    MapVersion {
+        /// The core's major version.
+        found: u32,
+        /// The driver's major version.
+        driver: u32,
+    },
+    /// An axis the core was not built with (`CAPS.N_AXES`).
+    #[error("axis {axis}: the core has {n_axes} axes (CAPS.N_AXES)")]
+    NoSuchAxis {
+        /// The axis asked for.
+        axis: usize,
+        /// Axes the core has.
+        n_axes: usize,
+    },
+    /// A drive timing wider than the core's timing counters (`CAPS.TIMING_W`).
+    #[error("axis {axis}: {field} = {value} clocks exceeds the core's {max} (CAPS.TIMING_W)")]
+    TimingRange {
+        /// The axis.
+        axis: usize,
+        /// The timing field (`step_len`, `step_space`, `dir_setup`, `dir_hold`).
+        field: &'static str,
+        /// The value asked for, clocks.
+        value: u32,
+        /// The largest the core holds, clocks.
+        max: u32,
+    },
+    /// A period the core's period counter cannot hold (`CAPS.P_WIDTH`).
+    #[error("a period of {clocks} clocks is outside the core's 1..={max} (CAPS.P_WIDTH)")]
+    PeriodRange {
+        /// The period asked for, clocks.
+        clocks: u32,
+        /// The longest period the core holds, clocks.
+        max: u32,
+    },
+    /// More records than one FIFO frame carries.
+    #[error("{records} records in one burst (at most {max})")]
+    BurstTooLong {
+        /// Records in the burst.
+        records: usize,
+        /// Records a frame carries at most.
+        max: usize,
+    },
+    /// The position latch moved during every attempt at a coherent read.
+    #[error("the latch kept moving during {attempts} attempts to read the {what}")]
+    LatchMoving {
+        /// Attempts made.
+        attempts: usize,
+        /// What was being read.
+        what: &'static str,
+    },
+    /// The core still had records to run (or was still streaming) after the wait.
+    #[error("still streaming after {clocks} clocks")]
+    StillStreaming {
+        /// Clocks waited.
+        clocks: u64,
+    },
+    /// A feedback request the core cannot carry out (refused before anything was written).
+    #[error(transparent)]
+    Feedback(#[from] FeedbackError),
     /// The transport failed (an I/O error, or a co-simulation mismatch).
     #[error("transport: {0}")]
     Transport(Box<dyn std::error::Error + Send + Sync>),

@@ -27,6 +27,19 @@ pub struct Caps {
     pub has_mpg: bool,
 }
 
+impl Caps {
+    /// The longest period the core's period counter holds, clocks (`2^P_WIDTH - 1`,
+    /// within the `PERIOD_CLOCKS.CLOCKS` field).
+    pub fn period_max(&self) -> u32 {
+        (((1u64 << self.p_width.min(32)) - 1) as u32).min(period_clocks::CLOCKS.max())
+    }
+
+    /// The largest drive timing the core's counters hold, clocks (`2^TIMING_W - 1`).
+    pub fn timing_max(&self) -> u32 {
+        ((1u64 << self.timing_w.min(32)) - 1) as u32
+    }
+}
+
 /// Step timing and output mode of one axis, in core clocks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct AxisSetup {
@@ -71,14 +84,11 @@ impl<B: Bus> Machine<B> {
         bus.read(id::ADDR, &mut words)?;
         let [magic, version_word, caps_word, clock] = words;
         if magic != id::MAGIC_VALUE {
-            return Err(BusError::Identity(format!("ID reads {magic:#010x}, not {:#010x}", id::MAGIC_VALUE)));
+            return Err(BusError::NotFinestep { found: magic, expected: id::MAGIC_VALUE });
         }
         let major = version::MAJOR.get(version_word);
         if major != crate::regs::MAP_VERSION_MAJOR {
-            return Err(BusError::Identity(format!(
-                "register map version {major}.x, this driver speaks {}.x",
-                crate::regs::MAP_VERSION_MAJOR
-            )));
+            return Err(BusError::MapVersion { found: major, driver: crate::regs::MAP_VERSION_MAJOR });
         }
         debug_assert_eq!(clock_hz::ADDR, id::ADDR + 3);
         let caps = Caps {
@@ -104,6 +114,11 @@ impl<B: Bus> Machine<B> {
         self.caps
     }
 
+    /// The period last written, clocks (the reset value until then).
+    pub fn period_clocks(&self) -> u32 {
+        self.period_clocks
+    }
+
     /// The bus.
     pub fn bus(&mut self) -> &mut B {
         &mut self.bus
@@ -119,21 +134,22 @@ impl<B: Bus> Machine<B> {
         self.bus
     }
 
-    /// Sets the step timing and output mode of `axis`.
+    /// Sets the step timing and output mode of `axis`; a timing wider than the core's
+    /// counters (`CAPS.TIMING_W`) or an axis it lacks is refused before anything is written.
     pub fn configure_axis(&mut self, axis: usize, setup: &AxisSetup) -> Result<(), BusError> {
-        let limit = (1u32 << self.caps.timing_w) - 1;
-        for (name, value) in [
+        if axis >= self.caps.n_axes {
+            return Err(BusError::NoSuchAxis { axis, n_axes: self.caps.n_axes });
+        }
+        let max = self.caps.timing_max();
+        for (field, value) in [
             ("step_len", setup.step_len),
             ("step_space", setup.step_space),
             ("dir_setup", setup.dir_setup),
             ("dir_hold", setup.dir_hold),
         ] {
-            if value > limit {
-                return Err(BusError::Protocol(format!("axis {axis}: {name} {value} exceeds {limit} clocks")));
+            if value > max {
+                return Err(BusError::TimingRange { axis, field, value, max });
             }
-        }
-        if axis >= self.caps.n_axes {
-            return Err(BusError::Protocol(format!("axis {axis}: the core has {} axes", self.caps.n_axes)));
         }
         let a = axis_timing_a::STEP_SPACE.set(axis_timing_a::STEP_LEN.set(0, setup.step_len), setup.step_space);
         let b = axis_timing_b::DIR_HOLD.set(axis_timing_b::DIR_SETUP.set(0, setup.dir_setup), setup.dir_hold);
@@ -161,9 +177,13 @@ impl<B: Bus> Machine<B> {
         self.bus.write(axis_enable::ADDR, axis_enable::ENABLE.set(0, mask & 0xFF))
     }
 
-    /// The interpolation period in clocks (taken when a run starts).
+    /// The interpolation period in clocks (taken when a run starts); a period outside
+    /// `1..=` [`Caps::period_max`] is refused before anything is written.
     pub fn set_period(&mut self, clocks: u32) -> Result<(), BusError> {
-        let clocks = clocks & period_clocks::CLOCKS.max() & ((1u64 << self.caps.p_width) - 1) as u32;
+        let max = self.caps.period_max();
+        if !(1..=max).contains(&clocks) {
+            return Err(BusError::PeriodRange { clocks, max });
+        }
         self.bus.write(period_clocks::ADDR, period_clocks::CLOCKS.set(0, clocks))?;
         self.period_clocks = clocks;
         Ok(())
@@ -230,7 +250,7 @@ impl<B: Bus> Machine<B> {
     pub(crate) fn read_latched<T: PartialEq>(
         &mut self,
         attempts: usize,
-        what: &str,
+        what: &'static str,
         read: impl Fn(&mut B) -> Result<T, BusError>,
     ) -> Result<(T, u32), BusError> {
         let running =
@@ -250,6 +270,61 @@ impl<B: Bus> Machine<B> {
                 }
             }
         }
-        Err(BusError::Protocol(format!("the latch kept moving during {attempts} attempts to read the {what}")))
+        Err(BusError::LatchMoving { attempts, what })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::PeriodRecord;
+
+    /// A register file that answers the identity of a core with 3 axes, P_WIDTH 16 and
+    /// TIMING_W 8, and records every write.
+    struct Registers {
+        writes: Vec<(u8, u32)>,
+    }
+
+    impl Bus for Registers {
+        fn read(&mut self, addr: u8, out: &mut [u32]) -> Result<(), BusError> {
+            for (i, word) in out.iter_mut().enumerate() {
+                let caps_word = caps::TIMING_W.set(caps::P_WIDTH.set(caps::N_AXES.set(0, 3), 16), 8);
+                *word = match addr + i as u8 {
+                    id::ADDR => id::MAGIC_VALUE,
+                    version::ADDR => version::MAJOR.set(0, crate::regs::MAP_VERSION_MAJOR),
+                    caps::ADDR => caps_word,
+                    clock_hz::ADDR => 50_000_000,
+                    _ => 0,
+                };
+            }
+            Ok(())
+        }
+        fn write(&mut self, addr: u8, value: u32) -> Result<(), BusError> {
+            self.writes.push((addr, value));
+            Ok(())
+        }
+        fn push_records(&mut self, _: &[PeriodRecord]) -> Result<(), BusError> {
+            Ok(())
+        }
+        fn wait(&mut self, _: u64) -> Result<(), BusError> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn requests_beyond_the_caps_are_refused_before_any_write() {
+        let mut machine = Machine::connect(Registers { writes: Vec::new() }).unwrap();
+        assert_eq!((machine.caps().period_max(), machine.caps().timing_max()), (65_535, 255));
+        let err = machine.set_period(65_536).unwrap_err();
+        assert!(matches!(err, BusError::PeriodRange { clocks: 65_536, max: 65_535 }), "{err}");
+        assert!(matches!(machine.set_period(0), Err(BusError::PeriodRange { .. })));
+        let slow = AxisSetup { dir_setup: 256, ..AxisSetup::default() };
+        let err = machine.configure_axis(0, &slow).unwrap_err();
+        assert_eq!(err.to_string(), "axis 0: dir_setup = 256 clocks exceeds the core's 255 (CAPS.TIMING_W)");
+        let err = machine.configure_axis(3, &AxisSetup::default()).unwrap_err();
+        assert!(matches!(err, BusError::NoSuchAxis { axis: 3, n_axes: 3 }), "{err}");
+        assert!(machine.bus_ref().writes.is_empty());
+        machine.set_period(65_535).unwrap();
+        assert_eq!(machine.bus_ref().writes, [(period_clocks::ADDR, 65_535)]);
     }
 }

@@ -218,9 +218,7 @@ impl<T: PinTarget> PinHost<T> {
         let outputs = self.target.outputs();
         self.end_access()?;
         if outputs >> OUT_BUS_AD_OE & 1 == 0 {
-            return Err(BusError::Protocol(format!(
-                "8080 read of halfword {halfword:#04x}: the core did not drive the bus"
-            )));
+            return Err(BusError::NotDriven { halfword });
         }
         Ok((outputs >> OUT_BUS_AD0) as u16)
     }

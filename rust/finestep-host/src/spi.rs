@@ -90,7 +90,7 @@ impl<T: SpiTransfer> Bus for SpiBus<T> {
             return Ok(());
         }
         if records.len() > frame::MAX_COUNT {
-            return Err(BusError::Protocol(format!("{} records in one burst (at most 255)", records.len())));
+            return Err(BusError::BurstTooLong { records: records.len(), max: frame::MAX_COUNT });
         }
         let tx = frame::fifo_request(records, self.n_axes);
         self.checked_write(&tx)

@@ -1,11 +1,28 @@
 //! Streaming period records into the position FIFO: the host's half of seed 000's
 //! position-control buffer, which must never run dry during a move.
+//!
+//! - [`run`]: a whole run as a host does it on a board: pre-fill the FIFO, start, keep
+//!   it fed in bursts, wait until the last record ran, and report the final positions.
+//! - [`stream`] and [`wait_idle`]: the two halves of it, for a core already started.
+//!
+//! [`run`] and the `_observed` forms call an observer with the machine after every
+//! burst and every wait, e.g. to sample the latched positions, poll the probe or drive a
+//! progress display; an error it returns ends the stream.
+//!
+//! ```no_run
+//! # fn demo<B: finestep_host::Bus>(machine: &mut finestep_host::Machine<B>,
+//! #         records: &[finestep_model::PeriodRecord]) -> Result<(), finestep_host::BusError> {
+//! use finestep_host::stream::{run, StreamConfig};
+//! let report = run(machine, records.iter().copied(), &StreamConfig::default(), |_, _| Ok(()))?;
+//! assert_eq!(report.stream.underruns, 0);
+//! # Ok(()) }
+//! ```
 
 use finestep_model::PeriodRecord;
 
 use crate::frame::MAX_COUNT;
-use crate::regs::{fifo_level, status, underrun_count};
-use crate::{Bus, BusError};
+use crate::regs::{fifo_level, latch_time, status, underrun_count};
+use crate::{Bus, BusError, Machine, Positions};
 
 /// How the streamer polls and fills.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -14,12 +31,33 @@ pub struct StreamConfig {
     pub burst: usize,
     /// Clocks to wait when the FIFO has less room than a burst.
     pub poll_clocks: u64,
+    /// [`run`]: records queued before the run starts (the FIFO's depth at most).
+    pub prefill: usize,
+    /// [`run`]: the E-stop input's polarity written with the run request.
+    pub estop_active_high: bool,
+    /// [`run`]: whether the run request arms the watchdog.
+    pub watchdog: bool,
 }
 
 impl Default for StreamConfig {
+    /// Bursts of 32, a poll every 2000 clocks, two bursts before the start, E-stop
+    /// active high, no watchdog.
     fn default() -> Self {
-        StreamConfig { burst: 32, poll_clocks: 2000 }
+        StreamConfig { burst: 32, poll_clocks: 2000, prefill: 64, estop_active_high: true, watchdog: false }
     }
+}
+
+/// What the streamer tells its observer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StreamEvent {
+    /// A burst went into the FIFO: `queued` records so far.
+    Queued {
+        /// Records queued so far.
+        queued: u64,
+    },
+    /// `poll_clocks` passed while the FIFO had no room for a burst, or while the last
+    /// records ran.
+    Waited,
 }
 
 /// What a stream did.
@@ -35,19 +73,61 @@ pub struct StreamReport {
     pub underruns: u16,
 }
 
-/// Queues every record of `records`, keeping the FIFO as full as the bursts allow,
-/// and returns once the last one is queued (not executed: see [`wait_idle`]).
-pub fn stream<B: Bus>(
-    bus: &mut B,
+/// What a [`run`] did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RunReport {
+    /// Records, bursts and polls of the whole run (pre-fill included), and the underruns
+    /// the core counted from before the pre-fill to the end.
+    pub stream: StreamReport,
+    /// `LATCH_TIME` read just after the run request: the timestamp of the first period
+    /// boundary, which takes the first record.
+    pub first_boundary: u32,
+    /// Clock cycles from just before the run request to the final positions.
+    pub cycles: u64,
+    /// The positions after the last record ran and the step trains settled.
+    pub end: Positions,
+}
+
+/// Where the streamer's loops run: a bare bus, or a whole machine (then the observer
+/// may use every [`Machine`] method: positions, probe, feedback).
+trait Feed {
+    type Bus: Bus;
+    fn feed_bus(&mut self) -> &mut Self::Bus;
+}
+
+impl<B: Bus> Feed for Machine<B> {
+    type Bus = B;
+    fn feed_bus(&mut self) -> &mut B {
+        self.bus()
+    }
+}
+
+struct Bare<'a, B>(&'a mut B);
+
+impl<B: Bus> Feed for Bare<'_, B> {
+    type Bus = B;
+    fn feed_bus(&mut self) -> &mut B {
+        self.0
+    }
+}
+
+fn underruns<B: Bus>(bus: &mut B) -> Result<u16, BusError> {
+    Ok(underrun_count::COUNT.get(bus.read_one(underrun_count::ADDR)?) as u16)
+}
+
+fn queue<F: Feed>(
+    target: &mut F,
     records: impl IntoIterator<Item = PeriodRecord>,
-    config: StreamConfig,
+    config: &StreamConfig,
+    mut observe: impl FnMut(&mut F, StreamEvent) -> Result<(), BusError>,
 ) -> Result<StreamReport, BusError> {
     let burst_max = config.burst.clamp(1, MAX_COUNT);
-    let underruns_before = bus.read_one(underrun_count::ADDR)? as u16;
+    let underruns_before = underruns(target.feed_bus())?;
     let mut report = StreamReport::default();
     let mut records = records.into_iter().peekable();
     let mut burst = Vec::with_capacity(burst_max);
     while records.peek().is_some() {
+        let bus = target.feed_bus();
         let free = fifo_level::FREE.get(bus.read_one(fifo_level::ADDR)?) as usize;
         report.polls += 1;
         if free < burst_max {
@@ -56,6 +136,7 @@ pub fn stream<B: Bus>(
             let tail_fits = records.size_hint().1.is_some_and(|left| left <= free) && free > 0;
             if !tail_fits {
                 bus.wait(config.poll_clocks)?;
+                observe(target, StreamEvent::Waited)?;
                 continue;
             }
         }
@@ -64,25 +145,122 @@ pub fn stream<B: Bus>(
         bus.push_records(&burst)?;
         report.records += burst.len() as u64;
         report.bursts += 1;
+        observe(target, StreamEvent::Queued { queued: report.records })?;
     }
-    report.underruns = (bus.read_one(underrun_count::ADDR)? as u16).wrapping_sub(underruns_before);
+    report.underruns = underruns(target.feed_bus())?.wrapping_sub(underruns_before);
     Ok(report)
 }
 
-/// Waits until the FIFO is empty and the gate has closed (the last record ran), polling
-/// every `poll_clocks`; gives up after `max_clocks`.
-pub fn wait_idle<B: Bus>(bus: &mut B, poll_clocks: u64, max_clocks: u64) -> Result<(), BusError> {
+fn idle<F: Feed>(
+    target: &mut F,
+    poll_clocks: u64,
+    max_clocks: u64,
+    mut observe: impl FnMut(&mut F, StreamEvent) -> Result<(), BusError>,
+) -> Result<(), BusError> {
     let mut waited = 0;
     loop {
+        let bus = target.feed_bus();
         let level = fifo_level::LEVEL.get(bus.read_one(fifo_level::ADDR)?);
         let streaming = status::STREAMING.get(bus.read_one(status::ADDR)?) != 0;
         if level == 0 && !streaming {
             return Ok(());
         }
         if waited >= max_clocks {
-            return Err(BusError::Protocol(format!("still streaming after {max_clocks} clocks")));
+            return Err(BusError::StillStreaming { clocks: waited });
         }
         bus.wait(poll_clocks)?;
         waited += poll_clocks;
+        observe(target, StreamEvent::Waited)?;
     }
+}
+
+/// Queues every record of `records` into a running core, keeping the FIFO as full as
+/// the bursts allow, and returns once the last one is queued (not executed: see
+/// [`wait_idle`]).
+pub fn stream<B: Bus>(
+    bus: &mut B,
+    records: impl IntoIterator<Item = PeriodRecord>,
+    config: StreamConfig,
+) -> Result<StreamReport, BusError> {
+    queue(&mut Bare(bus), records, &config, |_, _| Ok(()))
+}
+
+/// [`stream`] on a machine, calling `observe` after every burst and every wait.
+pub fn stream_observed<B: Bus>(
+    machine: &mut Machine<B>,
+    records: impl IntoIterator<Item = PeriodRecord>,
+    config: &StreamConfig,
+    observe: impl FnMut(&mut Machine<B>, StreamEvent) -> Result<(), BusError>,
+) -> Result<StreamReport, BusError> {
+    queue(machine, records, config, observe)
+}
+
+/// Waits until the FIFO is empty and the gate has closed (the last record ran), polling
+/// every `poll_clocks`; gives up after `max_clocks` with [`BusError::StillStreaming`].
+pub fn wait_idle<B: Bus>(bus: &mut B, poll_clocks: u64, max_clocks: u64) -> Result<(), BusError> {
+    idle(&mut Bare(bus), poll_clocks, max_clocks, |_, _| Ok(()))
+}
+
+/// [`wait_idle`] on a machine, calling `observe` after every wait.
+pub fn wait_idle_observed<B: Bus>(
+    machine: &mut Machine<B>,
+    poll_clocks: u64,
+    max_clocks: u64,
+    observe: impl FnMut(&mut Machine<B>, StreamEvent) -> Result<(), BusError>,
+) -> Result<(), BusError> {
+    idle(machine, poll_clocks, max_clocks, observe)
+}
+
+/// Runs `records` on a configured, stopped core: queues the first `config.prefill`
+/// records, requests the run (the first period boundary after it takes the first record,
+/// and the position latch then holds that boundary's time), keeps the FIFO fed, waits
+/// until the last record ran and two more periods for the step trains to settle, and
+/// reads the final positions. `observe` is called after every burst (the count includes
+/// the pre-fill) and every wait.
+pub fn run<B: Bus>(
+    machine: &mut Machine<B>,
+    records: impl IntoIterator<Item = PeriodRecord>,
+    config: &StreamConfig,
+    mut observe: impl FnMut(&mut Machine<B>, StreamEvent) -> Result<(), BusError>,
+) -> Result<RunReport, BusError> {
+    let burst_max = config.burst.clamp(1, MAX_COUNT);
+    let period = u64::from(machine.period_clocks());
+    let fifo_depth = machine.caps().fifo_depth;
+    let underruns_before = underruns(machine.bus())?;
+    let mut records = records.into_iter();
+    let first: Vec<PeriodRecord> = records.by_ref().take(config.prefill.min(fifo_depth)).collect();
+    let mut prefill = StreamReport::default();
+    for burst in first.chunks(burst_max) {
+        machine.bus().push_records(burst)?;
+        prefill.records += burst.len() as u64;
+        prefill.bursts += 1;
+    }
+    if prefill.records > 0 {
+        observe(machine, StreamEvent::Queued { queued: prefill.records })?;
+    }
+    let before_run = machine.positions()?.latch_time;
+    machine.set_control(true, config.watchdog, config.estop_active_high)?;
+    let first_boundary = machine.bus().read_one(latch_time::ADDR)?;
+    let streamed = queue(machine, records, config, |machine, event| match event {
+        StreamEvent::Queued { queued } => observe(machine, StreamEvent::Queued { queued: prefill.records + queued }),
+        StreamEvent::Waited => observe(machine, event),
+    })?;
+    // Once the last record is queued the FIFO holds at most its depth, each record one
+    // period: twice that is a core that stopped taking records.
+    let max_clocks = 2 * (fifo_depth as u64 + 2) * period;
+    idle(machine, config.poll_clocks, max_clocks, &mut observe)?;
+    machine.bus().wait(2 * period)?;
+    let underruns = underruns(machine.bus())?.wrapping_sub(underruns_before);
+    let end = machine.positions()?;
+    Ok(RunReport {
+        stream: StreamReport {
+            records: prefill.records + streamed.records,
+            bursts: prefill.bursts + streamed.bursts,
+            polls: streamed.polls,
+            underruns,
+        },
+        first_boundary,
+        cycles: u64::from(end.latch_time.wrapping_sub(before_run)),
+        end,
+    })
 }

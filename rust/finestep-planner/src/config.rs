@@ -256,15 +256,20 @@ pub struct Resolved {
 }
 
 impl MachineConfig {
-    /// Parses and validates TOML text; `file` names it in errors.
+    /// Parses and validates TOML text; `file` names it in errors. With no chip to ask,
+    /// the file is checked against the default build at its own `clock_hz`; the chip's
+    /// CAPS and clock are checked when it is resolved for the chip ([`Self::for_core`]).
     pub fn from_toml_str(text: &str, file: &str) -> Result<MachineConfig, ConfigError> {
         let config: MachineConfig = toml::from_str(text).map_err(|e| ConfigError {
             file: file.to_string(),
             key: "-".to_string(),
             reason: e.to_string().trim_end().replace('\n', " "),
         })?;
+        let default_build = config.core;
+        let at_its_clock = CoreLimits { clock_hz: config.clock_hz.unwrap_or(default_build.clock_hz), ..default_build };
+        let config = config.for_core(at_its_clock);
         config.resolve_in(file)?;
-        Ok(config)
+        Ok(config.for_core(default_build))
     }
 
     /// Reads, parses and validates a TOML file.
@@ -296,7 +301,8 @@ impl MachineConfig {
         self.resolve_in("<built-in>")
     }
 
-    fn resolve_in(&self, file: &str) -> Result<Resolved, ConfigError> {
+    /// [`MachineConfig::resolve`], naming `file` in errors.
+    pub fn resolve_in(&self, file: &str) -> Result<Resolved, ConfigError> {
         let fail = |key: String, reason: String| ConfigError { file: file.to_string(), key, reason };
         let positive = |key: &str, value: f64| {
             if value.is_finite() && value > 0.0 {
@@ -476,6 +482,27 @@ mod tests {
         assert_eq!(err.key, "axes.X.max_acceleration");
         let err = MachineConfig::from_toml_str("profile = \"cubic\"\n", "m.toml").unwrap_err();
         assert!(err.reason.contains("cubic"), "{err}");
+    }
+
+    #[test]
+    fn the_core_limits_the_configuration() {
+        let core = CoreLimits::default();
+        let key = |core: CoreLimits, config: MachineConfig| config.for_core(core).resolve().unwrap_err().key;
+        assert_eq!(key(CoreLimits { p_width: 15, ..core }, MachineConfig::default()), "period_ms");
+        assert_eq!(key(CoreLimits { timing_w: 7, ..core }, MachineConfig::default()), "drive.dir_setup_ns");
+        assert_eq!(key(CoreLimits { n_axes: 3, ..core }, MachineConfig::default()), "axes.A");
+        let other_clock = CoreLimits { clock_hz: 48e6, ..core };
+        let config = MachineConfig { clock_hz: Some(50e6), ..MachineConfig::default() };
+        let err = config.for_core(other_clock).resolve().unwrap_err();
+        assert_eq!(err.to_string(), "<built-in>: clock_hz: 50000000 Hz, but the core runs at 48000000 Hz (CLOCK_HZ)");
+        // Without clock_hz the core's clock is taken.
+        let resolved = MachineConfig::default().for_core(other_clock).resolve().unwrap();
+        assert_eq!((resolved.clock_hz, resolved.period_clocks), (48e6, 48_000));
+        // A file for a 48 MHz board loads; it is checked against the chip when resolved for it.
+        let config = MachineConfig::from_toml_str("clock_hz = 48e6\n", "m.toml").unwrap();
+        assert_eq!(config.for_core(other_clock).resolve().unwrap().period_clocks, 48_000);
+        let err = MachineConfig::from_toml_str("clock_hz = 48e6\n", "m.toml").unwrap().resolve_in("m.toml");
+        assert_eq!(err.unwrap_err().key, "clock_hz");
     }
 
     #[test]

@@ -146,6 +146,34 @@ pub struct CompError {
     pub reason: String,
 }
 
+/// Why one move cannot be offset, before its line is attached ([`CompError`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum OffsetError {
+    /// The tool does not fit inside a concave arc.
+    #[error("tool radius {} mm {relation} the concave arc radius {} mm", mm(*radius), mm(*arc))]
+    ConcaveArc {
+        /// Tool radius, mm.
+        radius: f64,
+        /// `is larger than`, or `equals` (within the join tolerance).
+        relation: &'static str,
+        /// The arc's smaller radius, mm.
+        arc: f64,
+    },
+    /// The entry or exit move is not longer than the tool radius.
+    #[error("the {which} moves {} mm in XY; it must move more than the tool radius {} mm", mm(*length), mm(*radius))]
+    TooShort {
+        /// `entry move after G41/G42` or `exit move after G40`.
+        which: &'static str,
+        /// Its length in XY, mm.
+        length: f64,
+        /// Tool radius, mm.
+        radius: f64,
+    },
+    /// The block is not a line or an arc.
+    #[error("not a move")]
+    NotAMove,
+}
+
 /// Resolves cutter radius compensation in `program` with the radii of `tools`.
 ///
 /// The result has no [`BlockKind::CutterComp`] blocks; every other block is kept in
@@ -520,12 +548,13 @@ impl Compensator<'_> {
                 if is_arc {
                     return Err(fail("the entry move after G41/G42 must be a straight line (G0/G1), not an arc"));
                 }
-                let element = entry_element(V2::of(&from), V2::of(&to), side, radius).map_err(|r| fail(&r))?;
+                let element =
+                    entry_element(V2::of(&from), V2::of(&to), side, radius).map_err(|e| fail(&e.to_string()))?;
                 let current = Box::new(pending(element, V2::of(&to)));
                 self.mode = Mode::On { side, radius, current };
             }
             Mode::On { current, .. } => {
-                let element = offset_element(block, &from, side, radius).map_err(|r| fail(&r))?;
+                let element = offset_element(block, &from, side, radius).map_err(|e| fail(&e.to_string()))?;
                 let next = pending(element, V2::of(&to));
                 let next = self.join_and_emit(*current, next, side, radius, feed_before)?;
                 self.mode = Mode::On { side, radius, current: Box::new(next) };
@@ -534,7 +563,8 @@ impl Compensator<'_> {
                 if is_arc {
                     return Err(fail("the exit move after G40 must be a straight line (G0/G1), not an arc"));
                 }
-                let element = exit_element(V2::of(&from), V2::of(&to), side, radius).map_err(|r| fail(&r))?;
+                let element =
+                    exit_element(V2::of(&from), V2::of(&to), side, radius).map_err(|e| fail(&e.to_string()))?;
                 let exit = pending(element, V2::of(&to));
                 self.join_and_emit(*current, exit, side, radius, feed_before)?;
                 // The exit line (its start possibly cut back, which does not change the
@@ -654,7 +684,7 @@ fn place_in_xy(mut block: Block, at: V2) -> Block {
 }
 
 /// The offset of a programmed line or arc from `from` (before any corner is cut back).
-fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result<Element, String> {
+fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result<Element, OffsetError> {
     let start = V2::of(from);
     match block.kind {
         BlockKind::Arc { to, centre, clockwise, extra_turns, .. } => {
@@ -667,7 +697,7 @@ fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result
             if r0_off.min(r1_off) <= JOIN_TOLERANCE_MM || !(r0 > 0.0 && r1 > 0.0) {
                 let arc = r0.min(r1);
                 let relation = if radius > arc + JOIN_TOLERANCE_MM { "is larger than" } else { "equals" };
-                return Err(format!("tool radius {} mm {relation} the concave arc radius {} mm", mm(radius), mm(arc)));
+                return Err(OffsetError::ConcaveArc { radius, relation, arc });
             }
             let theta0 = start.sub(centre).angle();
             let sweep = swept_angle(theta0, end.sub(centre).angle(), ccw, extra_turns);
@@ -687,20 +717,16 @@ fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result
             let offset = dir.left().scale(side * radius);
             Ok(Element::line(start.add(offset), end.add(offset), dir))
         }
-        _ => Err("not a move".into()),
+        _ => Err(OffsetError::NotAMove),
     }
 }
 
 /// The entry line from `from` (uncompensated) to the tangent point on the circle of
 /// `radius` around `to`, on the compensation side.
-fn entry_element(from: V2, to: V2, side: f64, radius: f64) -> Result<Element, String> {
+fn entry_element(from: V2, to: V2, side: f64, radius: f64) -> Result<Element, OffsetError> {
     let length = to.sub(from).norm();
     if length <= radius + JOIN_TOLERANCE_MM {
-        return Err(format!(
-            "the entry move after G41/G42 moves {} mm in XY; it must move more than the tool radius {} mm",
-            mm(length),
-            mm(radius)
-        ));
+        return Err(OffsetError::TooShort { which: "entry move after G41/G42", length, radius });
     }
     let dir = to.sub(from).unit().rotate(side * (radius / length).asin());
     let end = to.add(dir.left().scale(side * radius));
@@ -709,14 +735,10 @@ fn entry_element(from: V2, to: V2, side: f64, radius: f64) -> Result<Element, St
 
 /// The exit line from the tangent point on the circle of `radius` around `from` (on
 /// the compensation side) to `to` exactly.
-fn exit_element(from: V2, to: V2, side: f64, radius: f64) -> Result<Element, String> {
+fn exit_element(from: V2, to: V2, side: f64, radius: f64) -> Result<Element, OffsetError> {
     let length = to.sub(from).norm();
     if length <= radius + JOIN_TOLERANCE_MM {
-        return Err(format!(
-            "the exit move after G40 moves {} mm in XY; it must move more than the tool radius {} mm",
-            mm(length),
-            mm(radius)
-        ));
+        return Err(OffsetError::TooShort { which: "exit move after G40", length, radius });
     }
     let dir = to.sub(from).unit().rotate(-side * (radius / length).asin());
     let start = from.add(dir.left().scale(side * radius));

@@ -208,7 +208,8 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
                     None
                 } else {
                     let (order, knots) = nurbs_shape;
-                    let curve = NurbsCurve::new(&points, order.saturating_sub(1), knots, at).map_err(&fail)?;
+                    let curve = NurbsCurve::new(&points, order.saturating_sub(1), knots, at)
+                        .map_err(|e| fail(e.to_string()))?;
                     Some(Arc::new(curve))
                 }
             }
@@ -445,7 +446,7 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
         }
         if let Some(curve) = &m.nurbs {
             let mut pieces = nurbs_pieces::pieces(config, Arc::clone(curve), m.feed, m.line)
-                .map_err(|reason| ProgramError { line: m.line, reason })?;
+                .map_err(|e| ProgramError { line: m.line, reason: e.to_string() })?;
             let last = pieces.last_mut().expect("a NURBS has a piece");
             last.block_end = true;
             last.stop_after = m.stop_after;

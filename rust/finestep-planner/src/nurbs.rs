@@ -113,29 +113,68 @@ impl Derivatives {
     }
 }
 
+/// Why a NURBS cannot be built or followed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NurbsError {
+    /// The order, control points and knots do not make a clamped NURBS.
+    #[error("a NURBS of order {order} with {points} control points and {knots} knots")]
+    Shape {
+        /// Order (degree + 1).
+        order: usize,
+        /// Control points.
+        points: usize,
+        /// Knots.
+        knots: usize,
+    },
+    /// A knot is not finite, the knots decrease, or the domain is empty.
+    #[error("NURBS knots must increase")]
+    Knots,
+    /// A control point that is not finite or has a weight that is not positive.
+    #[error("NURBS control point ({x}, {y}) with weight {weight}: weights must be positive")]
+    Weight {
+        /// X.
+        x: f64,
+        /// Y.
+        y: f64,
+        /// Weight.
+        weight: f64,
+    },
+    /// The curve stops and turns back (its parametric speed vanishes).
+    #[error(
+        "the NURBS has a cusp (it stops and turns back) at X{x:.4} Y{y:.4}: a repeated or folded-back control point? Split the curve there"
+    )]
+    Cusp {
+        /// X of the cusp.
+        x: f64,
+        /// Y of the cusp.
+        y: f64,
+    },
+    /// The tangent turns too fast for sampling.
+    #[error("the NURBS bends too sharply to be sampled (over 65 536 samples in one knot span)")]
+    TooSharp,
+    /// The curve is a point.
+    #[error("the NURBS has no length")]
+    NoLength,
+}
+
 impl NurbsCurve {
     /// The curve of control points `(x, y, weight)`, degree `degree` on `knots`
     /// (`points.len() + degree + 1` of them, non-decreasing, clamped), the other axes at
     /// `base`.
-    pub fn new(points: &[(f64, f64, f64)], degree: usize, knots: &[f64], base: Vec4) -> Result<NurbsCurve, String> {
+    pub fn new(points: &[(f64, f64, f64)], degree: usize, knots: &[f64], base: Vec4) -> Result<NurbsCurve, NurbsError> {
         if degree + 1 > points.len() || knots.len() != points.len() + degree + 1 || degree >= 23 {
-            return Err(format!(
-                "a NURBS of order {} with {} control points and {} knots",
-                degree + 1,
-                points.len(),
-                knots.len()
-            ));
+            return Err(NurbsError::Shape { order: degree + 1, points: points.len(), knots: knots.len() });
         }
         if knots.iter().any(|k| !k.is_finite())
             || knots.windows(2).any(|w| w[0] > w[1])
             || knots[degree] >= knots[points.len()]
         {
-            return Err("NURBS knots must increase".into());
+            return Err(NurbsError::Knots);
         }
         if let Some(&(x, y, w)) =
             points.iter().find(|(x, y, w)| !(x.is_finite() && y.is_finite() && *w > 0.0 && w.is_finite()))
         {
-            return Err(format!("NURBS control point ({x}, {y}) with weight {w}: weights must be positive"));
+            return Err(NurbsError::Weight { x, y, weight: w });
         }
         let homogeneous: Vec<H> = points.iter().map(|&(x, y, w)| [w * x, w * y, w]).collect();
         let d1 = hodograph(&homogeneous, knots, degree);

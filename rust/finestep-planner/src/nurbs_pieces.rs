@@ -30,7 +30,7 @@ use crate::config::{ProfileKind, Resolved};
 use crate::element::{
     Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
 };
-use crate::nurbs::{Derivatives, NurbsCurve};
+use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
 
 /// Samples of the speed limit per knot span.
 pub const SAMPLES_PER_SPAN: usize = 64;
@@ -40,18 +40,15 @@ pub const PIECE_SPEED_RATIO: f64 = 1.25;
 /// Largest turn of the tangent between neighbouring samples, radians (5 degrees).
 pub const MAX_SAMPLE_TURN: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
-fn cusp_error(d: &Derivatives) -> String {
-    format!(
-        "the NURBS has a cusp (it stops and turns back) at X{:.4} Y{:.4}: a repeated or folded-back control point? Split the curve there",
-        d.point[0], d.point[1]
-    )
+fn cusp_error(d: &Derivatives) -> NurbsError {
+    NurbsError::Cusp { x: d.point[0], y: d.point[1] }
 }
 
 /// The sample parameters of the span `ua..ub`: [`SAMPLES_PER_SPAN`] + 1 uniform ones,
 /// then bisected wherever the tangent turns by more than [`MAX_SAMPLE_TURN`] between
 /// neighbours, so that no sharp bend hides between samples. A turn of more than a
 /// right angle that bisection cannot resolve is a cusp: refused.
-fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, String> {
+fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, NurbsError> {
     let tangent = |u: f64| {
         let d = curve.derivatives_on(u, ua);
         let speed = d.speed();
@@ -88,7 +85,7 @@ fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, S
         }
         out.push(b);
         if out.len() > 1 << 16 {
-            return Err("the NURBS bends too sharply to be sampled (over 65 536 samples in one knot span)".into());
+            return Err(NurbsError::TooSharp);
         }
     }
     Ok(out)
@@ -106,9 +103,9 @@ struct Sample {
 }
 
 /// The curve as elements ([`Shape::Nurbs`] sub-pieces with their own limits; module
-/// docs), for the block on `line` at `feed` units/s; `Err` with the reason when the
-/// curve cannot be followed (a cusp: the parametric speed vanishes).
-pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize) -> Result<Vec<Element>, String> {
+/// docs), for the block on `line` at `feed` units/s; `Err` when the curve cannot be
+/// followed (a cusp: the parametric speed vanishes).
+pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize) -> Result<Vec<Element>, NurbsError> {
     let scurve = config.profile == ProfileKind::SCurve;
     let plane_axes = [0usize, 1];
     let mut out = Vec::new();
@@ -265,7 +262,7 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
         }
     }
     if out.is_empty() {
-        return Err("the NURBS has no length".into());
+        return Err(NurbsError::NoLength);
     }
     // The ends exactly on the control points (on whole steps).
     let first = curve.point(start_u);

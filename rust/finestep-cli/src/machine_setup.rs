@@ -1,0 +1,156 @@
+//! The chip and the configuration it runs, resolved in one place: the co-simulated
+//! chip is opened through the host driver (identity, `CAPS`, `CLOCK_HZ`), the machine
+//! configuration is resolved once against what it reports, and the result is written to
+//! it. `run`, the demo's parts and the benches build on this; every clock, period and
+//! drive timing they use or print comes from the [`Resolved`] made here.
+
+use std::collections::BTreeMap;
+
+use anyhow::Context;
+use finestep_host::stream::StreamConfig;
+use finestep_host::{AxisSetup, Bus, Caps, Machine, PinHost, PinTarget, PinTiming, SpiBus};
+use finestep_model::top::TopParams;
+use finestep_model::{AxisConfig, CoreParams};
+use finestep_planner::config::{AxisLimits, CoreLimits, Resolved};
+use finestep_planner::MachineConfig;
+
+/// A chip on the host driver's SPI master at its pins.
+pub type Chip<T> = Machine<SpiBus<PinHost<T>>>;
+
+/// Records per SPI burst.
+pub const BURST: usize = 32;
+
+/// Resets the chip behind `target` and connects to it: checks its identity and reads
+/// its capabilities and clock.
+pub fn open<T: PinTarget>(target: T) -> anyhow::Result<Chip<T>> {
+    let mut host = PinHost::new(target, PinTiming::default());
+    host.reset(4)?;
+    host.idle(8)?;
+    let mut machine = Machine::connect(SpiBus::new(host, 1)).context("connecting to the chip (ID, VERSION, CAPS)")?;
+    let n_axes = machine.caps().n_axes;
+    machine.bus().set_n_axes(n_axes);
+    Ok(machine)
+}
+
+/// What a configuration must fit, as the chip reports it.
+pub fn chip_limits(caps: &Caps) -> CoreLimits {
+    CoreLimits {
+        clock_hz: f64::from(caps.clock_hz),
+        p_width: caps.p_width,
+        timing_w: caps.timing_w,
+        n_axes: caps.n_axes,
+    }
+}
+
+/// The reference model's build, for runs with no chip to ask (`run --fast`, the
+/// core-level bench): its `TopParams`, clock included.
+pub fn model_params() -> TopParams {
+    TopParams::default()
+}
+
+/// What a configuration must fit on the model of [`model_params`].
+pub fn model_limits() -> CoreLimits {
+    let params = model_params();
+    CoreLimits {
+        clock_hz: f64::from(params.clock_hz),
+        p_width: params.p_width,
+        timing_w: params.timing_w,
+        n_axes: params.n_axes,
+    }
+}
+
+/// The core parameters of the model of [`model_params`].
+pub fn model_core_params() -> CoreParams {
+    let params = model_params();
+    CoreParams { n_axes: params.n_axes, p_width: params.p_width, timing_width: params.timing_w }
+}
+
+/// Resolves `config` (named `file` in errors) against `core`: the only place the CLI
+/// resolves a configuration. Returns the configuration bound to that core (for the
+/// planner and the checker) and its resolution; an error names the file and the field.
+pub fn resolve(config: MachineConfig, core: CoreLimits, file: &str) -> anyhow::Result<(MachineConfig, Resolved)> {
+    let config = config.for_core(core);
+    let resolved = config.resolve_in(file).with_context(|| {
+        format!(
+            "the machine configuration does not fit the core ({} MHz, CAPS: P_WIDTH {}, TIMING_W {}, {} axes)",
+            core.clock_hz / 1e6,
+            core.p_width,
+            core.timing_w,
+            core.n_axes
+        )
+    })?;
+    Ok((config, resolved))
+}
+
+/// The resolved drive timing of record slot `axis`, as the host driver writes it.
+pub fn axis_setup(resolved: &Resolved, axis: usize) -> AxisSetup {
+    let timing = &resolved.timing[axis];
+    AxisSetup {
+        step_len: timing.step_len,
+        step_space: timing.step_space,
+        dir_setup: timing.dir_setup,
+        dir_hold: timing.dir_hold,
+        ..AxisSetup::default()
+    }
+}
+
+/// The same as the core's axis configuration, enabled (for the core-level bench).
+pub fn axis_config(resolved: &Resolved, axis: usize) -> AxisConfig {
+    let setup = axis_setup(resolved, axis);
+    AxisConfig {
+        step_len: setup.step_len,
+        step_space: setup.step_space,
+        dir_setup: setup.dir_setup,
+        dir_hold: setup.dir_hold,
+        mode: 0,
+        invert: 0,
+        enable: true,
+    }
+}
+
+/// Writes `resolved` to the chip: drive timing of every configured axis (and only those
+/// enabled), the period, a start level of one record; clears faults and errors.
+pub fn configure<B: Bus>(machine: &mut Machine<B>, resolved: &Resolved) -> anyhow::Result<()> {
+    let mut mask = 0;
+    for axis in (0..resolved.axes.len()).filter(|&a| resolved.axes[a].present) {
+        machine.configure_axis(axis, &axis_setup(resolved, axis))?;
+        mask |= 1 << axis;
+    }
+    machine.enable_axes(mask)?;
+    machine.set_period(resolved.period_clocks)?;
+    machine.set_start_level(1)?;
+    machine.clear_faults_and_errors()?;
+    Ok(())
+}
+
+/// How the CLI streams: bursts of [`BURST`], two of them before the start, a poll every
+/// half period.
+pub fn stream_config(resolved: &Resolved) -> StreamConfig {
+    StreamConfig {
+        burst: BURST,
+        poll_clocks: u64::from(resolved.period_clocks / 2).max(1),
+        prefill: 2 * BURST,
+        ..StreamConfig::default()
+    }
+}
+
+/// The demo's machine: T = 2 ms, the default drives (2 us step and space, 5 us direction
+/// set-up and hold), and the axes `steps_per_unit` in record slots 0, 1, ... (the planner
+/// names them X, Y, Z, A). The demo's moves stay well within the limits given here.
+pub fn demo_config(steps_per_unit: &[f64]) -> MachineConfig {
+    let names = finestep_planner::config::AXIS_NAMES;
+    let axes: BTreeMap<String, AxisLimits> = names
+        .iter()
+        .zip(steps_per_unit)
+        .map(|(name, &steps_per_unit)| {
+            let limits = AxisLimits { steps_per_unit, max_velocity: 50.0, max_acceleration: 500.0, max_jerk: 50_000.0 };
+            (name.to_string(), limits)
+        })
+        .collect();
+    MachineConfig { period_ms: 2.0, axes, ..MachineConfig::default() }
+}
+
+/// The steps per unit of the first `n` record slots.
+pub fn steps_per_unit(resolved: &Resolved, n: usize) -> Vec<f64> {
+    resolved.axes[..n].iter().map(|a| a.steps_per_unit).collect()
+}
