@@ -98,10 +98,7 @@ pub fn axis_setup(resolved: &Resolved, axis: usize) -> AxisSetup {
 pub fn axis_config(resolved: &Resolved, axis: usize) -> AxisConfig {
     let setup = axis_setup(resolved, axis);
     AxisConfig {
-        step_len: setup.step_len,
-        step_space: setup.step_space,
-        dir_setup: setup.dir_setup,
-        dir_hold: setup.dir_hold,
+        timing: finestep_model::DriveTiming::new(setup.step_len, setup.step_space, setup.dir_setup, setup.dir_hold),
         mode: 0,
         invert: 0,
         enable: true,

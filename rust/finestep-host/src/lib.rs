@@ -28,7 +28,7 @@ pub use feedback::{
     CountMode, EncoderSetup, FeedbackError, FeedbackSnapshot, HandWheelState, JogMultiplier, JogSetup, JogState,
     ProbeHit, VelocityEstimator,
 };
-pub use finestep_regmap::regs;
+pub use finestep_interface::regs;
 pub use machine::{AxisSetup, Caps, Machine, Positions};
 pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};
