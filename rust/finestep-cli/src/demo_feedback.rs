@@ -195,7 +195,7 @@ fn jog<T: PinTarget>(machine: &mut Chip<PlantLoop<T>>, resolved: &Resolved) -> a
             machine.enable_jog(&setup, true)?;
         }
         let dropped_before = machine.jog()?.dropped;
-        let factor = multiplier.factor();
+        let factor = i64::from(multiplier.factor());
         let per_edge = HandWheel::cycles_per_edge(resolved.clock_hz as u64, rate);
         let wheel = machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().expect("the plant has a wheel");
         wheel.turn(detents, per_edge)?;

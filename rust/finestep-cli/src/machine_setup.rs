@@ -84,25 +84,13 @@ pub fn resolve(config: MachineConfig, core: CoreLimits, file: &str) -> anyhow::R
 
 /// The resolved drive timing of record slot `axis`, as the host driver writes it.
 pub fn axis_setup(resolved: &Resolved, axis: usize) -> AxisSetup {
-    let timing = &resolved.timing[axis];
-    AxisSetup {
-        step_len: timing.step_len,
-        step_space: timing.step_space,
-        dir_setup: timing.dir_setup,
-        dir_hold: timing.dir_hold,
-        ..AxisSetup::default()
-    }
+    AxisSetup { timing: resolved.timing[axis], ..AxisSetup::default() }
 }
 
 /// The same as the core's axis configuration, enabled (for the core-level bench).
 pub fn axis_config(resolved: &Resolved, axis: usize) -> AxisConfig {
     let setup = axis_setup(resolved, axis);
-    AxisConfig {
-        timing: finestep_model::DriveTiming::new(setup.step_len, setup.step_space, setup.dir_setup, setup.dir_hold),
-        mode: 0,
-        invert: 0,
-        enable: true,
-    }
+    AxisConfig { timing: setup.timing, mode: 0, invert: 0, enable: true }
 }
 
 /// Writes `resolved` to the chip: drive timing of every configured axis (and only those

@@ -17,14 +17,15 @@ use finestep_host::regs::{
 };
 use finestep_host::stream::wait_idle;
 use finestep_host::{AxisSetup, Bus, BusError, Machine, ParallelBus, PinHost, PinTarget, PinTiming, SpiBus};
-use finestep_model::PeriodRecord;
+use finestep_model::{DriveTiming, PeriodRecord};
 
 const N_AXES: usize = 4;
 const FIFO_DEPTH: usize = 256;
 /// Step timing of every axis: L = 3, S = 3, U = 2, H = 2, so I_fwd = 6 and
 /// I_rev = 2 * (3 + max(3, 2 + 2) - 1) = 12 clocks.
 const STEP_LEN: u64 = 3;
-const AXIS: AxisSetup = AxisSetup { step_len: 3, step_space: 3, dir_setup: 2, dir_hold: 2, out_mode: 0, invert: 0 };
+const AXIS: AxisSetup =
+    AxisSetup { timing: DriveTiming::new(3, 3, 2, 2), out_mode: finestep_host::OutMode::StepDir, invert: 0 };
 /// Largest |increment| the record generator makes, in steps: within the rated rate
 /// (|D| * I_rev <= P) for every period used below (P >= 120).
 const MAX_STEPS: i64 = 8;

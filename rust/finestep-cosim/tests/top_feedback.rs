@@ -11,7 +11,7 @@ use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{
     AxisSetup, Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus,
 };
-use finestep_model::{Increment, PeriodRecord};
+use finestep_model::{DriveTiming, Increment, PeriodRecord};
 use finestep_plant::{
     Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Faults, Glitches, HandWheelConfig, Mechanics,
     Plant, PlantConfig, ProbeConfig,
@@ -28,7 +28,7 @@ fn connect(name: &str, plant: Plant) -> Chip {
     host.reset(4).unwrap();
     host.idle(8).unwrap();
     let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
-    let axis = AxisSetup { step_len: 20, step_space: 20, dir_setup: 10, dir_hold: 10, ..AxisSetup::default() };
+    let axis = AxisSetup { timing: DriveTiming::new(20, 20, 10, 10), ..AxisSetup::default() };
     for i in 0..machine.caps().n_axes {
         machine.configure_axis(i, &axis).unwrap();
     }

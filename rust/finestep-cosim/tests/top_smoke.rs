@@ -4,7 +4,7 @@ use finestep_cosim::TopLockstep;
 use finestep_host::regs::{command, control, fifo_level, status};
 use finestep_host::stream::{self, stream, wait_idle, StreamConfig, StreamEvent};
 use finestep_host::{AxisSetup, Bus, Machine, ParallelBus, PinHost, PinTiming, SpiBus};
-use finestep_model::PeriodRecord;
+use finestep_model::{DriveTiming, PeriodRecord};
 
 fn spi_machine(name: &str) -> Machine<SpiBus<PinHost<TopLockstep>>> {
     let mut host = PinHost::new(TopLockstep::new(name), PinTiming::default());
@@ -21,7 +21,7 @@ fn parallel_machine(name: &str) -> Machine<ParallelBus<TopLockstep>> {
 }
 
 fn start<B: Bus>(machine: &mut Machine<B>, period: u32) {
-    let axis = AxisSetup { step_len: 3, step_space: 3, dir_setup: 2, dir_hold: 2, ..AxisSetup::default() };
+    let axis = AxisSetup { timing: DriveTiming::new(3, 3, 2, 2), ..AxisSetup::default() };
     for i in 0..machine.caps().n_axes {
         machine.configure_axis(i, &axis).unwrap();
     }
@@ -88,7 +88,7 @@ fn spi_stream_moves_exactly() {
 #[test]
 fn spi_run_prefills_starts_and_reports() {
     let mut machine = spi_machine("spi_run_prefills_starts_and_reports");
-    let axis = AxisSetup { step_len: 3, step_space: 3, dir_setup: 2, dir_hold: 2, ..AxisSetup::default() };
+    let axis = AxisSetup { timing: DriveTiming::new(3, 3, 2, 2), ..AxisSetup::default() };
     for i in 0..4 {
         machine.configure_axis(i, &axis).unwrap();
     }

@@ -8,7 +8,7 @@ use finestep_cosim::TopLockstep;
 use finestep_host::regs::{status, underrun_count};
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{AxisSetup, Bus, Machine, PinHost, PinTiming, SpiBus};
-use finestep_model::{AxisTiming, PeriodRecord, RateChecker};
+use finestep_model::{DriveTiming, PeriodRecord, RateChecker};
 
 const PERIOD: u32 = 2000;
 const PERIODS: usize = 10_000;
@@ -39,7 +39,7 @@ fn long_move() -> Vec<PeriodRecord> {
 #[test]
 fn ten_thousand_periods_over_spi_without_underrun() {
     let records = long_move();
-    let timing = AxisTiming { step_len: 3, step_space: 3, dir_setup: 2, dir_hold: 2 };
+    let timing = DriveTiming::new(3, 3, 2, 2);
     let mut checker = RateChecker::new(PERIOD, &[timing; 4]);
     for (k, record) in records.iter().enumerate() {
         checker.check(record).unwrap_or_else(|(axis, e)| panic!("record {k}, axis {axis} over the rated rate: {e}"));
@@ -48,7 +48,7 @@ fn ten_thousand_periods_over_spi_without_underrun() {
     let mut host = PinHost::new(TopLockstep::new("ten_thousand_periods_over_spi"), PinTiming::default());
     host.reset(4).unwrap();
     let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
-    let axis = AxisSetup { step_len: 3, step_space: 3, dir_setup: 2, dir_hold: 2, ..AxisSetup::default() };
+    let axis = AxisSetup { timing, ..AxisSetup::default() };
     for i in 0..4 {
         machine.configure_axis(i, &axis).unwrap();
     }

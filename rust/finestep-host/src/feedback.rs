@@ -2,8 +2,8 @@
 //! wheel and the jog, at the level a machine builder thinks in, plus velocity estimation
 //! from the counters' edge timestamps.
 
-use finestep_model::limits::{max_increment, AxisTiming};
-use finestep_model::Increment;
+use finestep_interface::rate::max_increment;
+use finestep_interface::{DriveTiming, Increment};
 
 use crate::regs::{
     command, enc_control, enc_count, enc_edge_time, enc_index_latch, enc_prescale, enc_probe_latch, enc_status,
@@ -12,19 +12,9 @@ use crate::regs::{
 };
 use crate::{Bus, BusError, Machine};
 
-/// How a channel decodes its A/B inputs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum CountMode {
-    /// Every edge of A and B (4 counts per quadrature cycle).
-    #[default]
-    X4,
-    /// Every edge of A.
-    X2,
-    /// Rising edges of A going forward, falling going backward.
-    X1,
-    /// A is a step input, B the direction.
-    StepDir,
-}
+/// How a channel decodes its A/B inputs (`ENC_CONTROL.MODE`), and the jog's detent
+/// multiplier (`JOG_CONTROL.MULTIPLIER`): the interface's field values.
+pub use finestep_interface::{CountMode, JogMultiplier};
 
 /// Configuration of one encoder channel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,29 +70,6 @@ pub struct HandWheelState {
     pub illegal: bool,
     /// Illegal transitions counted (saturating).
     pub illegal_count: u16,
-}
-
-/// Jog multiplier: travel per detent is `scale` times this.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum JogMultiplier {
-    /// x1.
-    #[default]
-    X1,
-    /// x10.
-    X10,
-    /// x100.
-    X100,
-}
-
-impl JogMultiplier {
-    /// Travel per detent, in units of `JogSetup::scale`.
-    pub fn factor(self) -> i64 {
-        match self {
-            JogMultiplier::X1 => 1,
-            JogMultiplier::X10 => 10,
-            JogMultiplier::X100 => 100,
-        }
-    }
 }
 
 /// Configuration of the hand-wheel jog.
@@ -188,13 +155,7 @@ impl<B: Bus> Machine<B> {
     }
 
     fn encoder_control_word(setup: &EncoderSetup) -> u32 {
-        let mode = match setup.mode {
-            CountMode::X4 => 0,
-            CountMode::X2 => 1,
-            CountMode::X1 => 2,
-            CountMode::StepDir => 3,
-        };
-        let word = enc_control::MODE.set(0, mode);
+        let word = enc_control::MODE.set(0, setup.mode.bits().into());
         let word = enc_control::Z_ACTIVE_HIGH.set(word, setup.z_active_high.into());
         enc_control::FILTER.set(word, u32::from(setup.filter))
     }
@@ -342,7 +303,7 @@ impl<B: Bus> Machine<B> {
         if self.period_clocks < 128 {
             return Err(FeedbackError::Period(self.period_clocks).into());
         }
-        let timing: AxisTiming = self.timings[setup.axis];
+        let timing: DriveTiming = self.timings[setup.axis];
         let max = max_increment(&timing, self.period_clocks, true);
         if setup.vmax > max {
             return Err(FeedbackError::Rate { vmax: setup.vmax, max, period: self.period_clocks }.into());
@@ -356,11 +317,7 @@ impl<B: Bus> Machine<B> {
     }
 
     fn jog_control_word(setup: &JogSetup, enable: bool) -> u32 {
-        let multiplier = match setup.multiplier {
-            JogMultiplier::X1 => 0,
-            JogMultiplier::X10 => 1,
-            JogMultiplier::X100 => 2,
-        };
+        let multiplier = u32::from(setup.multiplier.bits());
         let word = jog_control::ENABLE.set(0, enable.into());
         let word = jog_control::AXIS.set(word, setup.axis as u32);
         let word = jog_control::MULTIPLIER.set(word, multiplier);

@@ -34,7 +34,7 @@ pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};
 pub use spi::{SpiBus, SpiTransfer};
 
-use finestep_model::PeriodRecord;
+pub use finestep_interface::{DriveTiming, Increment, OutMode, PeriodRecord};
 
 /// Why a bus operation failed. Nothing is applied by a failed write.
 #[derive(Debug, thiserror::Error)]

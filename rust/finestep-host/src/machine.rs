@@ -2,11 +2,11 @@
 //! thinks in: identity, axis setup, faults, run, positions.
 
 use crate::regs::{
-    axis_enable, axis_mode, axis_timing_a, axis_timing_b, caps, clock_hz, command, control, fifo_level, id, latch_time,
-    period_clocks, position, start_level, status, version,
+    axis_enable, axis_mode, caps, clock_hz, command, control, fifo_level, id, latch_time, period_clocks, position,
+    start_level, status, version,
 };
 use crate::{Bus, BusError};
-use finestep_model::limits::AxisTiming;
+use finestep_interface::{invert, DriveTiming, OutMode};
 
 /// What the core was built with (`CAPS`, `CLOCK_HZ`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,21 +40,15 @@ impl Caps {
     }
 }
 
-/// Step timing and output mode of one axis, in core clocks.
+/// Step timing and output mode of one axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct AxisSetup {
-    /// Step pulse high time L.
-    pub step_len: u32,
-    /// Least low time between pulses S.
-    pub step_space: u32,
-    /// Direction change to the next rising edge U.
-    pub dir_setup: u32,
-    /// Falling edge to a direction change H.
-    pub dir_hold: u32,
-    /// 0 step/dir, 1 up/down, 2 quadrature.
-    pub out_mode: u32,
-    /// Pin inversions: bit 0 A, bit 1 B, bit 2 enable.
-    pub invert: u32,
+    /// The drive timing L, S, U, H in core clocks.
+    pub timing: DriveTiming,
+    /// How the pins are driven.
+    pub out_mode: OutMode,
+    /// Pin inversions: the bits of [`finestep_interface::invert`].
+    pub invert: u8,
 }
 
 /// Every axis's position latched on one clock, with that clock's timestamp.
@@ -72,7 +66,7 @@ pub struct Machine<B> {
     pub(crate) caps: Caps,
     /// The step timing last written per axis (reset values until then), for the jog's
     /// rated-rate check.
-    pub(crate) timings: Vec<AxisTiming>,
+    pub(crate) timings: Vec<DriveTiming>,
     /// The period last written (the reset value until then).
     pub(crate) period_clocks: u32,
 }
@@ -100,13 +94,8 @@ impl<B: Bus> Machine<B> {
             n_enc: caps::N_ENC.get(caps_word) as usize,
             has_mpg: caps::HAS_MPG.get(caps_word) != 0,
         };
-        let reset_timing = AxisTiming {
-            step_len: axis_timing_a::STEP_LEN_RESET,
-            step_space: axis_timing_a::STEP_SPACE_RESET,
-            dir_setup: axis_timing_b::DIR_SETUP_RESET,
-            dir_hold: axis_timing_b::DIR_HOLD_RESET,
-        };
-        Ok(Machine { bus, caps, timings: vec![reset_timing; caps.n_axes], period_clocks: period_clocks::CLOCKS_RESET })
+        let timings = vec![DriveTiming::RESET; caps.n_axes];
+        Ok(Machine { bus, caps, timings, period_clocks: period_clocks::CLOCKS_RESET })
     }
 
     /// The capabilities read at connection.
@@ -141,34 +130,23 @@ impl<B: Bus> Machine<B> {
             return Err(BusError::NoSuchAxis { axis, n_axes: self.caps.n_axes });
         }
         let max = self.caps.timing_max();
-        for (field, value) in [
-            ("step_len", setup.step_len),
-            ("step_space", setup.step_space),
-            ("dir_setup", setup.dir_setup),
-            ("dir_hold", setup.dir_hold),
-        ] {
-            if value > max {
-                return Err(BusError::TimingRange { axis, field, value, max });
-            }
+        if let Some((field, value)) = setup.timing.first_above(max) {
+            return Err(BusError::TimingRange { axis, field, value, max });
         }
-        let a = axis_timing_a::STEP_SPACE.set(axis_timing_a::STEP_LEN.set(0, setup.step_len), setup.step_space);
-        let b = axis_timing_b::DIR_HOLD.set(axis_timing_b::DIR_SETUP.set(0, setup.dir_setup), setup.dir_hold);
-        let mode = axis_mode::INVERT_EN.set(
-            axis_mode::INVERT_B.set(
-                axis_mode::INVERT_A.set(axis_mode::OUT_MODE.set(0, setup.out_mode & 3), setup.invert & 1),
-                setup.invert >> 1 & 1,
-            ),
-            setup.invert >> 2 & 1,
-        );
-        self.bus.write(axis_timing_a::addr(axis), a)?;
-        self.bus.write(axis_timing_b::addr(axis), b)?;
+        let mode = [
+            (axis_mode::INVERT_A, invert::PIN_A),
+            (axis_mode::INVERT_B, invert::PIN_B),
+            (axis_mode::INVERT_EN, invert::PIN_EN),
+        ]
+        .into_iter()
+        .fold(axis_mode::OUT_MODE.set(0, setup.out_mode.bits().into()), |word, (field, bit)| {
+            field.set(word, u32::from(setup.invert & bit != 0))
+        });
+        for (addr, word) in setup.timing.register_words(axis) {
+            self.bus.write(addr, word)?;
+        }
         self.bus.write(axis_mode::addr(axis), mode)?;
-        self.timings[axis] = AxisTiming {
-            step_len: setup.step_len,
-            step_space: setup.step_space,
-            dir_setup: setup.dir_setup,
-            dir_hold: setup.dir_hold,
-        };
+        self.timings[axis] = setup.timing;
         Ok(())
     }
 
@@ -318,7 +296,8 @@ mod tests {
         let err = machine.set_period(65_536).unwrap_err();
         assert!(matches!(err, BusError::PeriodRange { clocks: 65_536, max: 65_535 }), "{err}");
         assert!(matches!(machine.set_period(0), Err(BusError::PeriodRange { .. })));
-        let slow = AxisSetup { dir_setup: 256, ..AxisSetup::default() };
+        let slow =
+            AxisSetup { timing: DriveTiming { dir_setup: 256, ..DriveTiming::default() }, ..AxisSetup::default() };
         let err = machine.configure_axis(0, &slow).unwrap_err();
         assert_eq!(err.to_string(), "axis 0: dir_setup = 256 clocks exceeds the core's 255 (CAPS.TIMING_W)");
         let err = machine.configure_axis(3, &AxisSetup::default()).unwrap_err();

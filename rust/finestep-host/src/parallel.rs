@@ -1,6 +1,6 @@
 //! [`Bus`] over the 8080/FSMC parallel bus, at its pins.
 
-use finestep_model::PeriodRecord;
+use finestep_interface::PeriodRecord;
 
 use crate::pins::{PinHost, PinTarget};
 use crate::regs::{record_inc, record_push};

@@ -1,6 +1,6 @@
 //! [`Bus`] over SPI frames.
 
-use finestep_model::PeriodRecord;
+use finestep_interface::PeriodRecord;
 
 use crate::frame::{self, FrameResult};
 use crate::{Bus, BusError};

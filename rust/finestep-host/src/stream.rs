@@ -11,14 +11,14 @@
 //!
 //! ```no_run
 //! # fn demo<B: finestep_host::Bus>(machine: &mut finestep_host::Machine<B>,
-//! #         records: &[finestep_model::PeriodRecord]) -> Result<(), finestep_host::BusError> {
+//! #         records: &[finestep_interface::PeriodRecord]) -> Result<(), finestep_host::BusError> {
 //! use finestep_host::stream::{run, StreamConfig};
 //! let report = run(machine, records.iter().copied(), &StreamConfig::default(), |_, _| Ok(()))?;
 //! assert_eq!(report.stream.underruns, 0);
 //! # Ok(()) }
 //! ```
 
-use finestep_model::PeriodRecord;
+use finestep_interface::PeriodRecord;
 
 use crate::frame::MAX_COUNT;
 use crate::regs::{fifo_level, latch_time, status, underrun_count};

@@ -87,7 +87,6 @@ pub mod top;
 pub use crate::config::{AxisConfig, CoreInputs, GantryInputs};
 pub use crate::core::{pins, ChunkEnd, Core, CoreOutputs, Event};
 pub use crate::gantry_sync::GantrySync;
-pub use crate::limits::AxisTiming;
 pub use crate::top::{top_pins, Top, TopInputs, TopOutputs};
 pub use finestep_interface::rate::{RateChecker, RateError};
 pub use finestep_interface::{regs, CoreParams, DriveTiming, Increment, ParamError, PeriodRecord, TopParams, MAX_AXES};

@@ -6,7 +6,3 @@
 //! pulse trains against it.
 
 pub use finestep_interface::rate::*;
-
-/// The drive timing under its old name, for the crates not yet moved to
-/// [`finestep_interface::DriveTiming`] (the host driver and the planner).
-pub type AxisTiming = finestep_interface::DriveTiming;

@@ -28,7 +28,7 @@ use crate::jog_generator::{JogInputs, JogStatus};
 use crate::position_fifo::FifoInputs;
 use crate::record::PeriodRecord;
 use crate::spi_frame::{SpiFifoPort, SpiFrameEvents};
-use crate::top::TopParams;
+use crate::TopParams;
 use crate::{Increment, MAX_AXES};
 
 /// Number of word addresses on the register bus (7-bit addresses).

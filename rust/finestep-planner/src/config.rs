@@ -31,8 +31,8 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use finestep_model::limits::{forward_interval, reversal_interval, AxisTiming};
-use finestep_model::CoreParams;
+use finestep_interface::rate::{forward_interval, reversal_interval};
+use finestep_interface::{DriveTiming, TopParams};
 use serde::Deserialize;
 
 /// The axis names the planner knows, in record slot order.
@@ -74,10 +74,11 @@ impl Default for AxisLimits {
     }
 }
 
-/// Step/direction timing of the drives, ns; rounded up to whole clocks.
+/// Step/direction timing of the drives as the file gives it, ns; resolved to a
+/// [`DriveTiming`] in whole clocks by [`DriveTiming::from_ns`].
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct DriveTiming {
+pub struct DriveTimingNs {
     /// Step pulse length.
     pub step_len_ns: f64,
     /// Least space between pulses.
@@ -88,9 +89,17 @@ pub struct DriveTiming {
     pub dir_hold_ns: f64,
 }
 
-impl Default for DriveTiming {
+impl Default for DriveTimingNs {
     fn default() -> Self {
-        DriveTiming { step_len_ns: 2000.0, step_space_ns: 2000.0, dir_setup_ns: 5000.0, dir_hold_ns: 5000.0 }
+        DriveTimingNs { step_len_ns: 2000.0, step_space_ns: 2000.0, dir_setup_ns: 5000.0, dir_hold_ns: 5000.0 }
+    }
+}
+
+impl DriveTimingNs {
+    /// The values in the order of [`DriveTiming::FIELDS`].
+    pub fn to_array(&self) -> [f64; DriveTiming::COUNT] {
+        let DriveTimingNs { step_len_ns, step_space_ns, dir_setup_ns, dir_hold_ns } = *self;
+        [step_len_ns, step_space_ns, dir_setup_ns, dir_hold_ns]
     }
 }
 
@@ -113,7 +122,7 @@ pub struct MachineConfig {
     /// Every move is planned seeing at least this many programmed moves ahead.
     pub lookahead_moves: usize,
     /// Drive timing, the same for every axis.
-    pub drive: DriveTiming,
+    pub drive: DriveTimingNs,
     /// Axes by name (X, Y, Z, A); absent axes must not move.
     pub axes: BTreeMap<String, AxisLimits>,
     /// The tool table: radii for cutter compensation (G41/G42 D, or the tool in the
@@ -140,10 +149,16 @@ pub struct CoreLimits {
 }
 
 impl Default for CoreLimits {
-    /// The default build: 50 MHz, its `P_WIDTH`, `TIMING_W` and `N_AXES`.
+    /// The default build (`finestep_top`'s defaults in `hdl/interface.toml`): its
+    /// `CLOCK_HZ`, `P_WIDTH`, `TIMING_W` and `N_AXES`.
     fn default() -> Self {
-        let params = CoreParams::default();
-        CoreLimits { clock_hz: 50e6, p_width: params.p_width, timing_w: params.timing_width, n_axes: params.n_axes }
+        let params = TopParams::default();
+        CoreLimits {
+            clock_hz: f64::from(params.clock_hz),
+            p_width: params.p_width,
+            timing_w: params.timing_w,
+            n_axes: params.n_axes,
+        }
     }
 }
 
@@ -191,7 +206,7 @@ impl Default for MachineConfig {
             path_tolerance_mm: 0.01,
             chord_tolerance_mm: 0.001,
             lookahead_moves: 2000,
-            drive: DriveTiming::default(),
+            drive: DriveTimingNs::default(),
             axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
             tools: vec![
                 ToolConfig { number: 1, radius_mm: 3.0 },
@@ -240,7 +255,7 @@ pub struct Resolved {
     /// Period in FPGA clocks (as the core runs it).
     pub period_clocks: u32,
     /// The drive timing in clocks, one per record slot.
-    pub timing: [AxisTiming; 4],
+    pub timing: [DriveTiming; 4],
     /// Axes X, Y, Z, A.
     pub axes: [ResolvedAxis; 4],
     /// Profile.
@@ -353,28 +368,20 @@ impl MachineConfig {
                 format!("must be within 2..=1000000, got {}", self.lookahead_moves),
             ));
         }
-        let to_clocks = |key: &str, ns: f64| -> Result<u32, ConfigError> {
-            // Up to whole clocks, ignoring the floating-point dust of exact multiples.
-            let clocks = (ns * 1e-9 * clock_hz * (1.0 - 1e-12)).ceil();
-            if !(ns.is_finite() && ns >= 0.0) || clocks > f64::from(core.timing_max()) {
-                return Err(fail(
-                    format!("drive.{key}"),
-                    format!(
-                        "{ns} ns is {clocks} clocks at {} MHz, not within the core's 0..={} (CAPS.TIMING_W = {})",
-                        clock_hz / 1e6,
-                        core.timing_max(),
-                        core.timing_w
-                    ),
-                ));
-            }
-            Ok(clocks as u32)
-        };
-        let timing = AxisTiming {
-            step_len: to_clocks("step_len_ns", self.drive.step_len_ns)?,
-            step_space: to_clocks("step_space_ns", self.drive.step_space_ns)?,
-            dir_setup: to_clocks("dir_setup_ns", self.drive.dir_setup_ns)?,
-            dir_hold: to_clocks("dir_hold_ns", self.drive.dir_hold_ns)?,
-        };
+        // Up to whole clocks, ignoring the floating-point dust of exact multiples.
+        let timing = DriveTiming::from_ns(self.drive.to_array(), clock_hz, core.timing_max()).map_err(|e| {
+            let clocks = (e.ns * 1e-9 * clock_hz * (1.0 - 1e-12)).ceil();
+            fail(
+                format!("drive.{}_ns", e.field),
+                format!(
+                    "{} ns is {clocks} clocks at {} MHz, not within the core's 0..={} (CAPS.TIMING_W = {})",
+                    e.ns,
+                    clock_hz / 1e6,
+                    e.max_clocks,
+                    core.timing_w
+                ),
+            )
+        })?;
         if let Some(name) = self.axes.keys().find(|n| !AXIS_NAMES.contains(&n.as_str())) {
             return Err(fail(format!("axes.{name}"), "unknown axis (the planner knows X, Y, Z, A)".into()));
         }
