@@ -77,6 +77,7 @@ pub mod period_timer;
 pub mod position_fifo;
 pub mod quadrature_channel;
 pub mod record;
+pub mod register_bus;
 pub mod register_file;
 pub mod safety_monitor;
 pub mod spi_frame;

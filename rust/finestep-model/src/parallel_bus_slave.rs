@@ -13,7 +13,7 @@
 //! once, driven on `bus_ad` from `n+5` (from `n+3` for a latched high half); `bus_ad`
 //! is released 3 clocks after `bus_rd_n` rises.
 
-use crate::register_file::BusRequest;
+use crate::register_bus::BusRequest;
 
 /// The bus pins in one cycle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

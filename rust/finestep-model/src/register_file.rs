@@ -27,23 +27,13 @@ use crate::hand_wheel::HandWheelStatus;
 use crate::jog_generator::{JogInputs, JogStatus};
 use crate::position_fifo::FifoInputs;
 use crate::record::PeriodRecord;
+pub use crate::register_bus::BusRequest;
 use crate::spi_frame::{SpiFifoPort, SpiFrameEvents};
 use crate::TopParams;
 use crate::{Increment, MAX_AXES};
 
 /// Number of word addresses on the register bus (7-bit addresses).
 pub const ADDRESSES: usize = 1 << regs::ADDRESS_BITS;
-
-/// A register-bus request, held by its master until granted.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct BusRequest {
-    /// `we`: a write (else a read).
-    pub write: bool,
-    /// `addr[6:0]`: the word address.
-    pub addr: u8,
-    /// `wdata`: the word to write.
-    pub wdata: u32,
-}
 
 /// Which master the register bus serves in a cycle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -17,7 +17,7 @@
 
 use crate::crc16_byte::{crc16_byte, INITIAL};
 use crate::record::PeriodRecord;
-use crate::register_file::BusRequest;
+use crate::register_bus::BusRequest;
 use crate::{Increment, MAX_AXES};
 
 /// Command bytes (the first byte of a frame): the interface's.
