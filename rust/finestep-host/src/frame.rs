@@ -11,7 +11,7 @@
 //! ```
 
 pub use finestep_interface::frame::{
-    fifo_request, read_request, write_request, Command, FrameError, ResultCode, FRAME_CRC, MAX_COUNT,
+    fifo_request, read_request, write_request, Command, FrameError, ResultCode, FRAME_CRC, HEADER_BYTES, MAX_COUNT,
 };
 use finestep_interface::PeriodRecord;
 

@@ -6,7 +6,8 @@
 //!   [`ParallelBus`] over the 8080 pins.
 //! - Transports: [`PinHost`] drives a simulated core at its pins ([`PinTarget`]: the
 //!   Verilated RTL, the reference model, or both in lockstep) with the SPI and 8080
-//!   timing of the spec (docs/spec/); [`spidev::Spidev`] a real board over Linux spidev.
+//!   timing of the spec (docs/spec/); [`spidev::Spidev`] a real board over Linux spidev;
+//!   [`sim_link::SimSocket`] a simulated chip served on a Unix socket (`finestep sim-chip`).
 //! - [`Machine`]: identity check, configuration, faults, run, coherent positions; its
 //!   [`feedback`] side: encoders, probe, hand wheel, jog, velocity estimation.
 //! - [`stream`]: runs period records: pre-fills the FIFO, starts, keeps it fed in bursts
@@ -19,6 +20,8 @@ pub mod frame;
 pub mod machine;
 pub mod parallel;
 pub mod pins;
+#[cfg(unix)]
+pub mod sim_link;
 pub mod spi;
 #[cfg(all(target_os = "linux", feature = "spidev"))]
 pub mod spidev;

@@ -13,6 +13,16 @@ pub trait SpiTransfer {
     fn wait(&mut self, clocks: u64) -> Result<(), BusError>;
 }
 
+impl<T: SpiTransfer + ?Sized> SpiTransfer for Box<T> {
+    fn transfer(&mut self, tx: &[u8]) -> Result<Vec<u8>, BusError> {
+        (**self).transfer(tx)
+    }
+
+    fn wait(&mut self, clocks: u64) -> Result<(), BusError> {
+        (**self).wait(clocks)
+    }
+}
+
 /// [`Bus`] over an [`SpiTransfer`]: every access is one CRC-checked frame.
 pub struct SpiBus<T> {
     link: T,
