@@ -8,6 +8,7 @@ mod demo_feedback;
 mod machine_setup;
 mod plot;
 mod run;
+mod sim_chip;
 
 use std::path::PathBuf;
 
@@ -58,6 +59,21 @@ enum Command {
         #[arg(long)]
         host_only: bool,
     },
+    /// Serve the simulated chip on a Unix socket at the byte level of the SPI link (the
+    /// framing of finestep_host::sim_link), for host tools on `--bus sim:SOCKET`.
+    SimChip {
+        /// The socket path (a stale socket there is replaced).
+        socket: PathBuf,
+        /// What simulates the chip.
+        #[arg(long, value_enum, default_value = "lockstep")]
+        target: sim_chip::Target,
+        /// Inject a fault (repeatable), for tests that must notice it.
+        #[arg(long, value_enum)]
+        fault: Vec<sim_chip::Fault>,
+        /// Exit when the first client disconnects.
+        #[arg(long)]
+        once: bool,
+    },
 }
 
 fn main() -> anyhow::Result<()> {
@@ -74,5 +90,6 @@ fn main() -> anyhow::Result<()> {
                 bench_top::run(200)
             }
         }
+        Command::SimChip { socket, target, fault, once } => sim_chip::run(&socket, target, &fault, once),
     }
 }

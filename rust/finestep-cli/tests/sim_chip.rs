@@ -1,0 +1,133 @@
+//! `finestep sim-chip SOCKET` end to end: the host driver on a [`SimSocket`] (the
+//! `SpiTransfer` a spidev board is driven through) reads the identity and CAPS and
+//! streams records with exactly the results of the same driver on the in-process chip.
+
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use finestep_cosim::TopLockstep;
+use finestep_host::sim_link::SimSocket;
+use finestep_host::stream::{self, RunReport, StreamConfig};
+use finestep_host::{AxisSetup, Bus, DriveTiming, Machine, PeriodRecord, PinHost, PinTiming, SpiBus, SpiTransfer};
+
+/// A `finestep sim-chip` process, killed when dropped.
+struct Server {
+    child: Child,
+    socket: PathBuf,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_file(&self.socket);
+    }
+}
+
+fn scratch_dir() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("finestep-sim-chip-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Starts `finestep sim-chip` on a fresh socket named `name` with `args`, and waits
+/// until it accepts connections.
+fn serve(name: &str, args: &[&str]) -> Server {
+    let socket = scratch_dir().join(format!("{name}.sock"));
+    let _ = std::fs::remove_file(&socket);
+    let child = Command::new(env!("CARGO_BIN_EXE_finestep"))
+        .arg("sim-chip")
+        .arg(&socket)
+        .args(args)
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("start finestep sim-chip");
+    let server = Server { child, socket };
+    let started = Instant::now();
+    while !server.socket.exists() {
+        assert!(started.elapsed() < Duration::from_secs(60), "sim-chip never bound {}", server.socket.display());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    server
+}
+
+fn connect<T: SpiTransfer>(link: T) -> Machine<SpiBus<T>> {
+    let mut machine = Machine::connect(SpiBus::new(link, 1)).unwrap();
+    let n_axes = machine.caps().n_axes;
+    machine.bus().set_n_axes(n_axes);
+    machine
+}
+
+/// A short reversing move on every axis, configured and streamed as `finestep run` does
+/// (T = 0.1 ms: a burst of 32 records takes about 7 periods on the wire at clk/8).
+fn run_move<T: SpiTransfer>(machine: &mut Machine<SpiBus<T>>) -> (RunReport, u32) {
+    let n = machine.caps().n_axes;
+    let timing = DriveTiming::new(3, 3, 2, 2);
+    for axis in 0..n {
+        machine.configure_axis(axis, &AxisSetup { timing, ..AxisSetup::default() }).unwrap();
+    }
+    machine.enable_axes((1 << n) - 1).unwrap();
+    machine.set_period(5_000).unwrap();
+    machine.set_start_level(1).unwrap();
+    machine.clear_faults_and_errors().unwrap();
+    let records: Vec<PeriodRecord> = (0..200)
+        .map(|k: i32| {
+            let raw: Vec<i32> = (0..4).map(|a| (k % 40 - 20) * (a + 1) * 9_000).collect();
+            PeriodRecord::from_raw(&raw, u8::from(k == 199))
+        })
+        .collect();
+    let config = StreamConfig { burst: 32, poll_clocks: 2_500, prefill: 64, ..StreamConfig::default() };
+    let report = match stream::run(machine, records, &config, |_, _| Ok(())) {
+        Ok(report) => report,
+        Err(e) => panic!("{e}: STATUS {:#x}, FIFO {:?}", machine.status().unwrap(), machine.fifo().unwrap()),
+    };
+    let status = machine.status().unwrap();
+    (report, status)
+}
+
+#[test]
+fn a_client_on_the_socket_gets_exactly_what_the_in_process_bus_gets() {
+    let server = serve("lockstep", &["--once"]);
+    let mut remote = connect(SimSocket::connect(&server.socket).unwrap());
+    let mut host = PinHost::new(TopLockstep::new("sim_chip_in_process"), PinTiming::default());
+    host.reset(4).unwrap();
+    host.idle(8).unwrap();
+    let mut local = connect(host);
+    assert_eq!(remote.caps(), local.caps());
+    assert_eq!(remote.caps().n_axes, 4, "{:?}", remote.caps());
+    let mut id = [0u32; 4];
+    let mut local_id = [0u32; 4];
+    remote.bus().read(finestep_host::regs::id::ADDR, &mut id).unwrap();
+    local.bus().read(finestep_host::regs::id::ADDR, &mut local_id).unwrap();
+    assert_eq!(id, local_id);
+    let (remote_report, remote_status) = run_move(&mut remote);
+    let (local_report, local_status) = run_move(&mut local);
+    assert_eq!(remote_report, local_report);
+    assert_eq!(remote_status, local_status);
+    assert_eq!(remote_report.stream.records, 200);
+    assert!(remote_report.end.steps.iter().any(|&s| s != 0), "{remote_report:?}");
+    assert_eq!(remote.bus().last_status(), local.bus().last_status());
+}
+
+#[test]
+fn the_model_alone_serves_the_same_chip_and_keeps_its_state_across_clients() {
+    let server = serve("model", &["--target", "model"]);
+    let caps = {
+        let mut first = connect(SimSocket::connect(&server.socket).unwrap());
+        first.set_period(777).unwrap();
+        first.caps()
+    };
+    let mut second = connect(SimSocket::connect(&server.socket).unwrap());
+    assert_eq!(second.caps(), caps);
+    let period = second.bus().read_one(finestep_host::regs::period_clocks::ADDR).unwrap();
+    assert_eq!(period, 777);
+}
+
+#[test]
+fn a_server_with_a_wrong_identity_is_refused_naming_what_id_read() {
+    let server = serve("wrong-id", &["--target", "model", "--fault", "wrong-identity"]);
+    let link = SimSocket::connect(&server.socket).unwrap();
+    let err = Machine::connect(SpiBus::new(link, 4)).err().expect("refused").to_string();
+    assert!(err.contains("ID reads 0xdeadbeef"), "{err}");
+}
