@@ -11,7 +11,7 @@ use finestep_cosim::{TopLockstep, TraceDepth};
 use finestep_host::stream::{self, StreamEvent};
 use finestep_model::limits::RateChecker;
 use finestep_model::PeriodRecord;
-use finestep_planner::{interpolate_line, LineMove, Machine as Kinematics, MachineConfig};
+use finestep_planner::MachineConfig;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::machine_setup::{self, BURST};
@@ -29,16 +29,12 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let mut chip = machine_setup::open(TopLockstep::new("demo"))?;
     let core = machine_setup::chip_limits(&chip.caps());
-    let (_, resolved) = machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_UNIT), core, "<demo part 1>")?;
-    let kinematics = Kinematics::new(machine_setup::steps_per_unit(&resolved, AXIS_NAMES.len()), resolved.period_s);
-    let line = LineMove {
-        from_mm: vec![0.0, 0.0, 0.0],
-        to_mm: vec![-1.0, 10.0, 15.0],
-        feed_mm_s: 20.0,
-        start_speed_mm_s: 1.0,
-        accel_mm_s2: 100.0,
-    };
-    let records = interpolate_line(&kinematics, &line)?;
+    let (config, resolved) =
+        machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_UNIT), core, "<demo part 1>")?;
+    // X, Z and C in record slots 0, 1 and 2.
+    let target = [-1.0, 10.0, 15.0];
+    let feed_mm_s = 20.0;
+    let records = machine_setup::plan_line(&config, [target[0], target[1], target[2], 0.0], feed_mm_s)?;
     let period_clocks = resolved.period_clocks;
     let mut checker = RateChecker::new(period_clocks, &resolved.timing[..AXIS_NAMES.len()]);
     for (index, record) in records.iter().enumerate() {
@@ -49,10 +45,10 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
 
     println!(
         "finestep demo: seed 000 line X {:+} mm, Z {:+} mm, C {:+} deg at {} mm/s, T = {} ms, P = {} clocks at {} MHz",
-        line.to_mm[0],
-        line.to_mm[1],
-        line.to_mm[2],
-        line.feed_mm_s,
+        target[0],
+        target[1],
+        target[2],
+        feed_mm_s,
         resolved.period_s * 1e3,
         period_clocks,
         resolved.clock_hz / 1e6
@@ -94,9 +90,9 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
             "  {:<4} {:>13} {:>12.4} {:<3} {:>10.4} {}",
             AXIS_NAMES[axis],
             steps,
-            f64::from(steps) / kinematics.steps_per_unit[axis],
+            f64::from(steps) / STEPS_PER_UNIT[axis],
             AXIS_UNITS[axis],
-            target / kinematics.steps_per_unit[axis],
+            target / STEPS_PER_UNIT[axis],
             AXIS_UNITS[axis]
         );
         if f64::from(steps) != target {
@@ -135,7 +131,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         }
     }
     let png = out.join("demo.png");
-    plot_axes(&png, &traces, &AXIS_NAMES, kinematics.period_s)?;
+    plot_axes(&png, &traces, &AXIS_NAMES, resolved.period_s)?;
     println!("  waveform of the ports, first {TRACED_PERIODS} periods: {}", waveform.display());
     println!("  plot: {}", png.display());
 

@@ -17,7 +17,7 @@ use finestep_host::stream::{self, StreamEvent};
 use finestep_host::{Bus, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
 use finestep_model::{Increment, PeriodRecord};
 use finestep_planner::config::Resolved;
-use finestep_planner::{interpolate_line, LineMove, Machine as Kinematics};
+use finestep_planner::MachineConfig;
 use finestep_plant::{
     Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, HandWheel, HandWheelConfig, Mechanics, Plant,
     PlantConfig, ProbeConfig,
@@ -60,10 +60,10 @@ fn plant() -> anyhow::Result<Plant> {
 
 /// The chip with the plant on its pins, configured as the demo's machine (T = 2 ms, X
 /// and Z) resolved against its CAPS and clock, with the gratings and the hand wheel set up.
-fn connect<T: PinTarget>(target: T) -> anyhow::Result<(Chip<PlantLoop<T>>, Resolved)> {
+fn connect<T: PinTarget>(target: T) -> anyhow::Result<(Chip<PlantLoop<T>>, MachineConfig, Resolved)> {
     let mut machine = machine_setup::open(PlantLoop::new(target, plant()?))?;
     let core = machine_setup::chip_limits(&machine.caps());
-    let (_, resolved) = machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_MM), core, "<demo part 3>")?;
+    let (config, resolved) = machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_MM), core, "<demo part 3>")?;
     machine_setup::configure(&mut machine, &resolved)?;
     for channel in 0..2 {
         machine.configure_encoder(channel, &EncoderSetup { filter: 3, ..EncoderSetup::default() })?;
@@ -71,30 +71,27 @@ fn connect<T: PinTarget>(target: T) -> anyhow::Result<(Chip<PlantLoop<T>>, Resol
     // 20 us of contact bounce: sample every 10 us, 4 samples.
     let prescale = ((10e-6 * resolved.clock_hz).round() as u32).saturating_sub(1);
     machine.configure_hand_wheel(u16::try_from(prescale).context("the hand wheel's sample prescaler")?, 4)?;
-    Ok((machine, resolved))
+    Ok((machine, config, resolved))
 }
 
 pub fn run() -> anyhow::Result<()> {
     println!();
     println!("finestep demo, part 3: feedback with a simulated machine on the pins (drives lagging 1 ms,");
     println!("  gratings X 1 um and Z 0.5 um, a probe, a hand wheel with contact bounce); RTL and model in lockstep");
-    let (mut machine, resolved) = connect(TopLockstep::new("demo-feedback"))?;
-    grating_pass(&mut machine, &resolved)?;
+    let (mut machine, config, resolved) = connect(TopLockstep::new("demo-feedback"))?;
+    grating_pass(&mut machine, &config, &resolved)?;
     jog(&mut machine, &resolved)?;
     Ok(())
 }
 
 /// Z traverses 10 mm at 40 mm/s; the probe touches four marks on the way.
-fn grating_pass<T: PinTarget>(machine: &mut Chip<PlantLoop<T>>, resolved: &Resolved) -> anyhow::Result<()> {
-    let kinematics = Kinematics::new(machine_setup::steps_per_unit(resolved, 2), resolved.period_s);
-    let line = LineMove {
-        from_mm: vec![0.0, 0.0],
-        to_mm: vec![0.0, 10.0],
-        feed_mm_s: 40.0,
-        start_speed_mm_s: 0.5,
-        accel_mm_s2: 400.0,
-    };
-    let records: Vec<PeriodRecord> = interpolate_line(&kinematics, &line)?;
+fn grating_pass<T: PinTarget>(
+    machine: &mut Chip<PlantLoop<T>>,
+    config: &MachineConfig,
+    resolved: &Resolved,
+) -> anyhow::Result<()> {
+    // Z is record slot 1.
+    let records: Vec<PeriodRecord> = machine_setup::plan_line(config, [0.0, 10.0, 0.0, 0.0], 40.0)?;
     machine.arm_probe(true, 2)?;
     println!(
         "  grating pass: Z 0 -> 10 mm at 40 mm/s, {} periods of {} ms; probe hits:",
@@ -112,7 +109,7 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<PlantLoop<T>>, resolved: &Resol
             return Ok(());
         }
         if let Some(hit) = machine.probe_hit()? {
-            let z_steps = f64::from(hit.steps[1]) / kinematics.steps_per_unit[1];
+            let z_steps = f64::from(hit.steps[1]) / STEPS_PER_MM[1];
             let z_grating = f64::from(hit.counts[1]) / GRATING_COUNTS_PER_MM[1];
             let x_grating = f64::from(hit.counts[0]) / GRATING_COUNTS_PER_MM[0];
             println!(
@@ -151,7 +148,7 @@ fn grating_pass<T: PinTarget>(machine: &mut Chip<PlantLoop<T>>, resolved: &Resol
     println!(
         "    at rest: Z {} steps = {:.4} mm, grating {} counts = {:.4} mm (the plant's ideal count: {ideal})",
         snapshot.steps[1],
-        f64::from(snapshot.steps[1]) / kinematics.steps_per_unit[1],
+        f64::from(snapshot.steps[1]) / STEPS_PER_MM[1],
         snapshot.counts[1],
         f64::from(snapshot.counts[1]) / GRATING_COUNTS_PER_MM[1]
     );

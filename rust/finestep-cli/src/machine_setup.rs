@@ -10,6 +10,7 @@ use anyhow::Context;
 use finestep_host::stream::StreamConfig;
 use finestep_host::{AxisSetup, Bus, Caps, Machine, PinHost, PinTarget, PinTiming, SpiBus};
 use finestep_model::top::TopParams;
+use finestep_model::PeriodRecord;
 use finestep_model::{AxisConfig, CoreParams};
 use finestep_planner::config::{AxisLimits, CoreLimits, Resolved};
 use finestep_planner::MachineConfig;
@@ -135,7 +136,13 @@ pub fn demo_config(steps_per_unit: &[f64]) -> MachineConfig {
     MachineConfig { period_ms: 2.0, axes, ..MachineConfig::default() }
 }
 
-/// The steps per unit of the first `n` record slots.
-pub fn steps_per_unit(resolved: &Resolved, n: usize) -> Vec<f64> {
-    resolved.axes[..n].iter().map(|a| a.steps_per_unit).collect()
+/// A straight move from the origin to `target` (record slots X, Y, Z, A in axis units) at
+/// `feed_mm_s`, planned as a one-block part program by the planner the `run` command
+/// uses: trapezoidal feed within the configured limits, exact end on whole steps.
+pub fn plan_line(config: &MachineConfig, target: [f64; 4], feed_mm_s: f64) -> anyhow::Result<Vec<PeriodRecord>> {
+    let text =
+        format!("G90 G64\nG1 X{} Y{} Z{} A{} F{}\nM2\n", target[0], target[1], target[2], target[3], feed_mm_s * 60.0);
+    let program = finestep_gcode::parse_str(&text, "<line>")?;
+    let planned = finestep_planner::plan_program(config, &program).map_err(|e| anyhow::anyhow!("<line>:{e}"))?;
+    Ok(planned.records)
 }

@@ -19,9 +19,9 @@ use crate::element::{Element, Shape};
 use crate::error::ProgramError;
 use crate::lookahead::element_limits;
 use crate::nurbs::NurbsCursor;
-use crate::path::FLAG_BLOCK_END;
 use crate::vec4::Vec4;
 use crate::velocity::Profile;
+use finestep_interface::flags::BLOCK_END;
 
 /// Periods and where they came from.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -123,7 +123,7 @@ pub fn interpolate(
         while t >= profile.duration {
             let element = &elements[index];
             if element.block_end {
-                flags |= FLAG_BLOCK_END;
+                flags |= BLOCK_END;
             }
             if element.stop_after {
                 let grid = emitter.grid_exact(element.end);

@@ -54,22 +54,8 @@
 //!   (one or more per knot span), so the look-ahead window, counted in elements, sees
 //!   fewer programmed blocks ahead on NURBS than on lines.
 //!
-//! The single-move interpolators of seed 000 ([`interpolate_line`], [`interpolate_arc`])
-//! remain for the co-simulation tests that drive one move at a time:
-//!
-//! ```
-//! use finestep_planner::{Machine, LineMove, interpolate_line};
-//! let machine = Machine::new(vec![1000.0, 1000.0], 0.001); // 1000 steps/mm, T = 1 ms
-//! let line = LineMove { from_mm: vec![0.0, 0.0], to_mm: vec![3.0, 4.0], feed_mm_s: 50.0,
-//!                       start_speed_mm_s: 1.0, accel_mm_s2: 500.0 };
-//! let records = interpolate_line(&machine, &line).unwrap();
-//! let total: i64 = records.iter().map(|r| r.inc[1].to_bits() as i64).sum();
-//! assert_eq!(total, 4000 << 16); // exactly 4 mm of steps on Y
-//! ```
-//!
 //! [`PeriodRecord`]: finestep_interface::PeriodRecord
 
-pub mod arc;
 pub mod checker;
 pub mod config;
 pub mod cutter_comp;
@@ -77,18 +63,13 @@ pub mod element;
 pub mod error;
 pub mod geometry;
 pub mod interpolate;
-pub mod linear;
 pub mod lookahead;
 pub mod nurbs;
 pub mod nurbs_pieces;
-pub mod path;
-pub mod profile;
 pub mod program;
 pub mod vec4;
 pub mod velocity;
 
-pub use arc::{interpolate_arc, ArcMove};
 pub use checker::{check_program, CheckReport};
 pub use config::{ConfigError, MachineConfig, ProfileKind};
-pub use linear::{interpolate_line, LineMove, Machine, PlanError};
 pub use program::{plan_program, PlannedProgram, ProgramError};
