@@ -3,7 +3,7 @@ CARGO ?= cargo
 export VERILATOR ?= verilator
 
 .PHONY: all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
-        bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report
+        bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick
 
 all: test
 
@@ -33,6 +33,16 @@ wheel-check: setup
 
 formal: setup
 	@./scripts/formal.sh
+
+# Common-mode mutants (mutants/README.md): each spec misreading in mutants/LIST applied
+# identically to the RTL and the model in a scratch copy under build/mutants/, run against
+# the independent checks only (model ideals, formal, host-side tests); fails if one survives.
+mutants: setup
+	@./scripts/mutants.sh
+
+# The quick slice of make test: the mutants flagged quick, so the list cannot rot.
+mutants-quick: setup
+	@./scripts/mutants.sh --quick
 
 # The ECP5 and iCE40 bitstreams and the MachXO2 fit, held to constraints/flow_limits.txt.
 flows: setup
