@@ -83,6 +83,17 @@ pub enum BusError {
         /// The driver's major version.
         driver: u32,
     },
+    /// `CAPS` or `CLOCK_HZ` describe no build the RTL accepts (the link is broken, or
+    /// this is not a finestep core).
+    #[error("CAPS reads {word:#010x} and CLOCK_HZ {clock_hz}: {error}")]
+    Caps {
+        /// The CAPS word read.
+        word: u32,
+        /// The CLOCK_HZ word read.
+        clock_hz: u32,
+        /// The first parameter outside its range.
+        error: finestep_interface::ParamError,
+    },
     /// An axis the core was not built with (`CAPS.N_AXES`).
     #[error("axis {axis}: the core has {n_axes} axes (CAPS.N_AXES)")]
     NoSuchAxis {
@@ -136,6 +147,16 @@ pub enum BusError {
     /// A feedback request the core cannot carry out (refused before anything was written).
     #[error(transparent)]
     Feedback(#[from] FeedbackError),
+    /// An SCK faster than the core's synchronisers follow ([`spi::CLOCKS_PER_SCK_MIN`]).
+    #[error("SCK {sck_hz} Hz is over the core's limit of {max_hz} Hz ({core_clock_hz} Hz core clock / {ratio})", ratio = spi::CLOCKS_PER_SCK_MIN)]
+    SckTooFast {
+        /// The SCK asked for.
+        sck_hz: u32,
+        /// The fastest SCK the core follows.
+        max_hz: u32,
+        /// The core clock.
+        core_clock_hz: u32,
+    },
     /// The transport failed (an I/O error, or a co-simulation mismatch).
     #[error("transport: {0}")]
     Transport(Box<dyn std::error::Error + Send + Sync>),

@@ -72,7 +72,8 @@ pub struct Machine<B> {
 }
 
 impl<B: Bus> Machine<B> {
-    /// Checks the identity and version, and reads the capabilities.
+    /// Checks the identity and version, and reads the capabilities (refused when they
+    /// are outside every build the RTL accepts).
     pub fn connect(mut bus: B) -> Result<Machine<B>, BusError> {
         let mut words = [0u32; 4];
         bus.read(id::ADDR, &mut words)?;
@@ -94,6 +95,17 @@ impl<B: Bus> Machine<B> {
             n_enc: caps::N_ENC.get(caps_word) as usize,
             has_mpg: caps::HAS_MPG.get(caps_word) != 0,
         };
+        let build = finestep_interface::TopParams {
+            n_axes: caps.n_axes,
+            p_width: caps.p_width,
+            timing_w: caps.timing_w,
+            fifo_depth_log2: caps::FIFO_DEPTH_LOG2.get(caps_word),
+            clock_hz: clock,
+            n_enc: caps.n_enc,
+            has_mpg: caps.has_mpg,
+            ..finestep_interface::TopParams::default()
+        };
+        build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
         let timings = vec![DriveTiming::RESET; caps.n_axes];
         Ok(Machine { bus, caps, timings, period_clocks: period_clocks::CLOCKS_RESET })
     }
@@ -261,12 +273,14 @@ mod tests {
     /// TIMING_W 8, and records every write.
     struct Registers {
         writes: Vec<(u8, u32)>,
+        fifo_depth_log2: u32,
     }
 
     impl Bus for Registers {
         fn read(&mut self, addr: u8, out: &mut [u32]) -> Result<(), BusError> {
             for (i, word) in out.iter_mut().enumerate() {
                 let caps_word = caps::TIMING_W.set(caps::P_WIDTH.set(caps::N_AXES.set(0, 3), 16), 8);
+                let caps_word = caps::N_ENC.set(caps::FIFO_DEPTH_LOG2.set(caps_word, self.fifo_depth_log2), 1);
                 *word = match addr + i as u8 {
                     id::ADDR => id::MAGIC_VALUE,
                     version::ADDR => version::MAJOR.set(0, crate::regs::MAP_VERSION_MAJOR),
@@ -291,7 +305,7 @@ mod tests {
 
     #[test]
     fn requests_beyond_the_caps_are_refused_before_any_write() {
-        let mut machine = Machine::connect(Registers { writes: Vec::new() }).unwrap();
+        let mut machine = Machine::connect(Registers { writes: Vec::new(), fifo_depth_log2: 8 }).unwrap();
         assert_eq!((machine.caps().period_max(), machine.caps().timing_max()), (65_535, 255));
         let err = machine.set_period(65_536).unwrap_err();
         assert!(matches!(err, BusError::PeriodRange { clocks: 65_536, max: 65_535 }), "{err}");
@@ -305,5 +319,14 @@ mod tests {
         assert!(machine.bus_ref().writes.is_empty());
         machine.set_period(65_535).unwrap();
         assert_eq!(machine.bus_ref().writes, [(period_clocks::ADDR, 65_535)]);
+    }
+
+    #[test]
+    fn caps_of_no_buildable_core_are_refused_naming_what_was_read() {
+        let err = Machine::connect(Registers { writes: Vec::new(), fifo_depth_log2: 0 }).err().unwrap().to_string();
+        assert_eq!(
+            err,
+            "CAPS reads 0x00110013 and CLOCK_HZ 50000000: finestep_top: FIFO_DEPTH_LOG2 = 0 is outside 1..=15"
+        );
     }
 }

@@ -5,6 +5,24 @@ use finestep_interface::PeriodRecord;
 use crate::frame::{self, FrameResult};
 use crate::{Bus, BusError};
 
+/// The core clock must be at least this many times SCK (docs/spec/spi_slave_phy.md:
+/// SCK and MOSI pass two-flop synchronisers; 6.25 MHz SCK at 50 MHz).
+pub const CLOCKS_PER_SCK_MIN: u32 = 8;
+
+/// The fastest SCK a core clocked at `core_clock_hz` follows.
+pub fn sck_max_hz(core_clock_hz: u32) -> u32 {
+    core_clock_hz / CLOCKS_PER_SCK_MIN
+}
+
+/// Refuses an SCK the core at `core_clock_hz` cannot follow, before anything is sent.
+pub fn check_sck(sck_hz: u32, core_clock_hz: u32) -> Result<(), BusError> {
+    let max_hz = sck_max_hz(core_clock_hz);
+    if sck_hz == 0 || sck_hz > max_hz {
+        return Err(BusError::SckTooFast { sck_hz, max_hz, core_clock_hz });
+    }
+    Ok(())
+}
+
 /// One full-duplex SPI frame: chip select low, `tx` out, the same number of bytes in.
 pub trait SpiTransfer {
     /// Sends `tx` in one frame and returns the bytes received meanwhile.
@@ -108,5 +126,18 @@ impl<T: SpiTransfer> Bus for SpiBus<T> {
 
     fn wait(&mut self, clocks: u64) -> Result<(), BusError> {
         self.link.wait(clocks)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sck_is_held_to_an_eighth_of_the_core_clock() {
+        assert!(check_sck(6_250_000, 50_000_000).is_ok());
+        let err = check_sck(6_250_001, 50_000_000).unwrap_err().to_string();
+        assert_eq!(err, "SCK 6250001 Hz is over the core's limit of 6250000 Hz (50000000 Hz core clock / 8)");
+        assert!(check_sck(0, 50_000_000).is_err());
     }
 }

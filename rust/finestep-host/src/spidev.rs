@@ -15,7 +15,10 @@ pub struct Spidev {
 
 impl Spidev {
     /// Opens `path` with SCK at `sck_hz`; `core_clock_hz` converts waits into sleeps.
+    /// An SCK over the core's limit ([`crate::spi::check_sck`]) is refused before the
+    /// device is opened.
     pub fn open(path: &str, sck_hz: u32, core_clock_hz: u32) -> Result<Spidev, BusError> {
+        crate::spi::check_sck(sck_hz, core_clock_hz)?;
         let mut device = Device::open(path).map_err(|e| BusError::Transport(Box::new(e)))?;
         let options = SpidevOptions::new().bits_per_word(8).max_speed_hz(sck_hz).mode(SpiModeFlags::SPI_MODE_0).build();
         device.configure(&options).map_err(|e| BusError::Transport(Box::new(e)))?;
