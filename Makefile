@@ -13,7 +13,7 @@ setup:
 demo: setup
 	$(CARGO) run --release -q -p finestep-cli -- demo
 
-test: setup lint cargo-test wheel-check formal flows
+test: setup lint cargo-test wheel-check formal mutants-quick flows
 	@echo "make test: all passed"
 
 # Before a commit: fmt, clippy, Verilator lint and the unit tests (a few minutes warm).
