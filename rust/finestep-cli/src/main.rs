@@ -3,6 +3,7 @@
 
 mod bench;
 mod bench_top;
+mod bus;
 mod demo;
 mod demo_feedback;
 mod machine_setup;
@@ -40,6 +41,10 @@ enum Command {
         /// Use the reference model's fast path alone (no RTL), for long programs.
         #[arg(long)]
         fast: bool,
+        /// The chip: lockstep (default), model, spidev:/dev/spidevB.C[@SCK_HZ] or
+        /// sim:SOCKET; overrides the configuration's `bus`.
+        #[arg(long)]
+        bus: Option<bus::BusTarget>,
         /// Machine configuration (TOML); the built-in machine when absent.
         #[arg(long)]
         config: Option<PathBuf>,
@@ -79,8 +84,8 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Demo { out } => demo::run(&out),
-        Command::Run { file, fast, config, profile, out } => {
-            run::run(&file, fast, config.as_deref(), profile.as_deref(), &out)
+        Command::Run { file, fast, bus, config, profile, out } => {
+            run::run(&file, fast, bus, config.as_deref(), profile.as_deref(), &out)
         }
         Command::Bench { cycles, host_only } => {
             if host_only {

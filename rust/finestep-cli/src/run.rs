@@ -6,7 +6,6 @@
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Context};
-use finestep_cosim::TopLockstep;
 use finestep_gcode::Program;
 use finestep_host::stream::{self, StreamEvent};
 use finestep_model::{Core, CoreInputs};
@@ -14,6 +13,7 @@ use finestep_planner::config::AXIS_NAMES;
 use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, ProfileKind};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::bus::BusTarget;
 use crate::machine_setup;
 use crate::plot::{plot_motion, plot_toolpath};
 
@@ -53,6 +53,7 @@ fn print_check(report: &CheckReport) {
 pub fn run(
     file: &Path,
     fast: bool,
+    bus: Option<BusTarget>,
     config_path: Option<&Path>,
     profile: Option<&str>,
     out: &Path,
@@ -66,8 +67,9 @@ pub fn run(
         Some("s-curve") => config.profile = ProfileKind::SCurve,
         _ => {}
     }
+    let bus = BusTarget::choose(bus, config.bus.as_deref(), &config_name)?;
     let program = finestep_gcode::parse_file(file)?;
-    run_program(&program, &file.display().to_string(), fast, config, &config_name, out)
+    run_program_on(&program, &file.display().to_string(), fast, &bus, config, &config_name, out)
 }
 
 /// Plans, checks, plots and runs `program` (named `name` in messages and plot files) on
@@ -81,8 +83,22 @@ pub fn run_program(
     config_name: &str,
     out: &Path,
 ) -> anyhow::Result<()> {
+    run_program_on(program, name, fast, &BusTarget::Lockstep, config, config_name, out)
+}
+
+/// [`run_program`] with the chip on `bus` (unused with `fast`).
+pub fn run_program_on(
+    program: &Program,
+    name: &str,
+    fast: bool,
+    bus: &BusTarget,
+    config: MachineConfig,
+    config_name: &str,
+    out: &Path,
+) -> anyhow::Result<()> {
     let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
-    let mut chip = if fast { None } else { Some(machine_setup::open(TopLockstep::new(&stem))?) };
+    let clock_hz = config.clock_hz.map_or(machine_setup::model_params().clock_hz, |hz| hz as u32);
+    let mut chip = if fast { None } else { Some(crate::bus::open(bus, &stem, clock_hz)?) };
     let core = match &chip {
         Some(chip) => machine_setup::chip_limits(&chip.caps()),
         None => machine_setup::model_limits(),
@@ -102,9 +118,11 @@ pub fn run_program(
         records.len() as f64 * resolved.period_s,
         resolved.profile,
         if fast {
-            "model fast path"
+            "model fast path".to_string()
+        } else if bus.is_lockstep() {
+            "streamed over SPI; RTL in lockstep with the model, every pin every clock".to_string()
         } else {
-            "streamed over SPI; RTL in lockstep with the model, every pin every clock"
+            format!("streamed over SPI on {bus}")
         }
     );
     let report = check_program(&config, program, records)?;
@@ -179,7 +197,10 @@ pub fn run_program(
             steps - target
         );
     }
-    println!("  {cycles} clock cycles{}", if fast { "" } else { ", bit-exact RTL against the model" });
+    println!(
+        "  {cycles} clock cycles{}",
+        if !fast && bus.is_lockstep() { ", bit-exact RTL against the model" } else { "" }
+    );
     if worst != 0 {
         bail!("the pulse train ended {worst} steps from the programmed end");
     }

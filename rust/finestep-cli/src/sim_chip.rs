@@ -11,8 +11,10 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use finestep_cosim::{rtl_top_params, ModelPins, TopLockstep};
 use finestep_host::frame::{self, Command, FRAME_CRC};
-use finestep_host::{regs, sim_link, BusError, PinHost, PinTarget, PinTiming, SpiTransfer};
+use finestep_host::{regs, sim_link, BusError, SpiTransfer};
 use finestep_model::top::Top;
+
+use crate::bus::pin_link;
 
 /// What serves the chip.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -32,14 +34,6 @@ pub enum Fault {
 
 /// The ID a chip with [`Fault::WrongIdentity`] answers.
 pub const WRONG_ID: u32 = 0xDEAD_BEEF;
-
-/// Resets a simulated chip at its pins and puts the host's SPI master on it.
-fn chip<T: PinTarget + 'static>(target: T) -> anyhow::Result<Box<dyn SpiTransfer>> {
-    let mut host = PinHost::new(target, PinTiming::default());
-    host.reset(4)?;
-    host.idle(8)?;
-    Ok(Box::new(host))
-}
 
 /// Rewrites the ID word of every READ frame that covers it, CRC included.
 struct WrongIdentity<L> {
@@ -82,8 +76,8 @@ pub fn run(socket: &Path, target: Target, faults: &[Fault], once: bool) -> anyho
         std::fs::remove_file(socket).with_context(|| format!("removing the stale socket {}", socket.display()))?;
     }
     let mut link = match target {
-        Target::Lockstep => chip(TopLockstep::new("sim-chip"))?,
-        Target::Model => chip(ModelPins(Top::new(rtl_top_params())))?,
+        Target::Lockstep => pin_link(TopLockstep::new("sim-chip"))?,
+        Target::Model => pin_link(ModelPins(Top::new(rtl_top_params())))?,
     };
     for fault in faults {
         link = match fault {

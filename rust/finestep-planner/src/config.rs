@@ -128,6 +128,10 @@ pub struct MachineConfig {
     /// The tool table: radii for cutter compensation (G41/G42 D, or the tool in the
     /// spindle).
     pub tools: Vec<ToolConfig>,
+    /// The host link the `finestep` tools talk over (`lockstep`, `model`,
+    /// `spidev:/dev/spidevB.C[@SCK_HZ]`, `sim:SOCKET`); `--bus` overrides it. The planner
+    /// does not read it.
+    pub bus: Option<String>,
     /// The core the configuration is resolved against (not read from the file; see
     /// [`MachineConfig::for_core`]): the default build's unless set.
     #[serde(skip)]
@@ -206,6 +210,7 @@ impl Default for MachineConfig {
             path_tolerance_mm: 0.01,
             chord_tolerance_mm: 0.001,
             lookahead_moves: 2000,
+            bus: None,
             drive: DriveTimingNs::default(),
             axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
             tools: vec![

@@ -1,0 +1,109 @@
+//! `--bus` end to end: a part program on a chip served by `finestep sim-chip`, the bus
+//! from the machine configuration, and the errors of a missing device, a socket with
+//! nothing listening and a chip answering a wrong identity.
+
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn finestep(args: &[&str]) -> (bool, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_finestep")).args(args).output().expect("run finestep");
+    let text = String::from_utf8_lossy(&output.stdout).to_string() + &String::from_utf8_lossy(&output.stderr);
+    (output.status.success(), text)
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("finestep-bus-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// A `finestep sim-chip` process, killed when dropped.
+struct Server {
+    child: Child,
+    socket: PathBuf,
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_file(&self.socket);
+    }
+}
+
+fn serve(name: &str, args: &[&str]) -> Server {
+    let socket = scratch(&format!("{name}.sock"));
+    let _ = std::fs::remove_file(&socket);
+    let child = Command::new(env!("CARGO_BIN_EXE_finestep"))
+        .arg("sim-chip")
+        .arg(&socket)
+        .args(args)
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("start finestep sim-chip");
+    let server = Server { child, socket };
+    let started = Instant::now();
+    while !server.socket.exists() {
+        assert!(started.elapsed() < Duration::from_secs(60), "sim-chip never bound {}", server.socket.display());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    server
+}
+
+fn program() -> String {
+    let path = scratch("square.ngc");
+    std::fs::write(&path, "G21 G90 G64 P0.01 F3000\nG1 X1 Y0\nG1 X1 Y1\nG1 X0 Y0\nM2\n").unwrap();
+    path.display().to_string()
+}
+
+#[test]
+fn a_part_program_runs_on_a_served_chip_to_its_exact_end() {
+    let server = serve("run", &["--target", "model"]);
+    let bus = format!("sim:{}", server.socket.display());
+    let out = scratch("out").display().to_string();
+    let (ok, text) = finestep(&["run", "--bus", &bus, "--out", &out, &program()]);
+    assert!(ok, "{text}");
+    assert!(text.contains(&format!("streamed over SPI on {bus}")), "{text}");
+    let finals: Vec<&str> = text.lines().skip_while(|l| !l.contains("final steps")).skip(1).take(2).collect();
+    assert_eq!(finals.len(), 2, "{text}");
+    assert!(finals.iter().all(|l| l.ends_with(" 0 steps")), "{text}");
+}
+
+#[test]
+fn the_configuration_names_the_bus_and_the_command_line_overrides_it() {
+    let config = scratch("machine.toml");
+    let socket = scratch("nobody-config.sock");
+    std::fs::write(&config, format!("bus = \"sim:{}\"\n", socket.display())).unwrap();
+    let config = config.display().to_string();
+    let (ok, text) = finestep(&["run", "--config", &config, &program()]);
+    assert!(!ok);
+    assert!(text.contains(&format!("sim:{}: cannot connect", socket.display())), "{text}");
+    let out = scratch("out-model").display().to_string();
+    let (ok, text) = finestep(&["run", "--config", &config, "--bus", "model", "--out", &out, &program()]);
+    assert!(ok, "{text}");
+    std::fs::write(&config, "bus = \"usb\"\n").unwrap();
+    let (ok, text) = finestep(&["run", "--config", &config, &program()]);
+    assert!(!ok);
+    assert!(text.contains(&format!("{config}: bus: unknown bus `usb`")), "{text}");
+}
+
+#[test]
+fn a_missing_device_a_dead_socket_and_a_wrong_identity_are_named() {
+    let (ok, text) = finestep(&["run", "--bus", "spidev:/dev/spidev9.9", &program()]);
+    assert!(!ok);
+    assert!(text.contains("spidev:/dev/spidev9.9: no such device"), "{text}");
+    let (ok, text) = finestep(&["run", "--bus", "spidev:/dev/spidev9.9@25000000", &program()]);
+    assert!(!ok);
+    assert!(text.contains("SCK 25000000 Hz is over the core's limit of 6250000 Hz"), "{text}");
+    let socket = scratch("nobody.sock").display().to_string();
+    let (ok, text) = finestep(&["run", "--bus", &format!("sim:{socket}"), &program()]);
+    assert!(!ok);
+    assert!(text.contains(&format!("sim:{socket}: cannot connect")), "{text}");
+    let server = serve("wrong-id", &["--target", "model", "--fault", "wrong-identity"]);
+    let bus = format!("sim:{}", server.socket.display());
+    let (ok, text) = finestep(&["run", "--bus", &bus, &program()]);
+    assert!(!ok);
+    assert!(text.contains(&format!("{bus}: the chip's identity")), "{text}");
+    assert!(text.contains("not a finestep core: ID reads 0xdeadbeef"), "{text}");
+}
