@@ -17,10 +17,11 @@ use std::path::PathBuf;
 use std::str::FromStr;
 
 use anyhow::{bail, Context};
-use finestep_cosim::{rtl_top_params, ModelPins, TopLockstep};
+use finestep_cosim::{rtl_top_params, ModelPins, PlantLoop, TopLockstep};
 use finestep_host::spi::check_sck;
 use finestep_host::{Machine, PinHost, PinTarget, PinTiming, SpiBus, SpiTransfer};
 use finestep_model::top::Top;
+use finestep_plant::{ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Plant, PlantConfig};
 
 /// SCK on spidev when the target does not give one.
 pub const DEFAULT_SCK_HZ: u32 = 1_000_000;
@@ -134,14 +135,47 @@ fn spidev_link(path: &std::path::Path, sck_hz: u32, core_clock_hz: u32) -> anyho
     Ok(Box::new(spi))
 }
 
+/// The machine on a simulated chip's pins for the self-test's loopback: a drive on
+/// every axis (following the step pins exactly) and on encoder channel 0 a grating on
+/// axis 0 with one count per step; `dead_encoder` leaves the channel unplugged.
+pub fn loopback_plant(n_axes: usize, dead_encoder: bool) -> anyhow::Result<Plant> {
+    let channels = if dead_encoder {
+        Vec::new()
+    } else {
+        vec![ChannelConfig { axis: 0, encoder: EncoderConfig::linear_grating(CountsPerStep::integer(1)?, None) }]
+    };
+    let config = PlantConfig { drives: vec![DriveConfig::default(); n_axes], channels, probe: None, hand_wheel: None };
+    Ok(Plant::new(config, 0x5E1F)?)
+}
+
+/// A simulated chip (lockstep or the model alone), with `plant` on its pins when given.
+pub fn sim_link(lockstep: bool, name: &str, plant: Option<Plant>) -> anyhow::Result<Link> {
+    match (lockstep, plant) {
+        (true, None) => pin_link(TopLockstep::new(name)),
+        (true, Some(plant)) => pin_link(PlantLoop::new(TopLockstep::new(name), plant)),
+        (false, None) => pin_link(ModelPins(Top::new(rtl_top_params()))),
+        (false, Some(plant)) => pin_link(PlantLoop::new(ModelPins(Top::new(rtl_top_params())), plant)),
+    }
+}
+
 /// Opens `target` (a simulated chip's failure waveform is named `name`) and connects:
 /// identity, map version, CAPS and CLOCK_HZ checked. `core_clock_hz` is the clock the
 /// SCK of a spidev target is checked against before anything is sent (the
 /// configuration's, or the default build's); it is checked again against CLOCK_HZ.
 pub fn open(target: &BusTarget, name: &str, core_clock_hz: u32) -> anyhow::Result<BusMachine> {
+    open_with(target, name, core_clock_hz, None)
+}
+
+/// [`open`] with `plant` on the pins of a simulated chip (`lockstep`, `model`).
+pub fn open_with(
+    target: &BusTarget,
+    name: &str,
+    core_clock_hz: u32,
+    plant: Option<Plant>,
+) -> anyhow::Result<BusMachine> {
     let link: Link = match target {
-        BusTarget::Lockstep => pin_link(TopLockstep::new(name))?,
-        BusTarget::Model => pin_link(ModelPins(Top::new(rtl_top_params())))?,
+        BusTarget::Lockstep => sim_link(true, name, plant)?,
+        BusTarget::Model => sim_link(false, name, plant)?,
         #[cfg(target_os = "linux")]
         BusTarget::Spidev { path, sck_hz } => spidev_link(path, *sck_hz, core_clock_hz)?,
         #[cfg(not(target_os = "linux"))]

@@ -9,6 +9,7 @@ mod demo_feedback;
 mod machine_setup;
 mod plot;
 mod run;
+mod selftest;
 mod sim_chip;
 
 use std::path::PathBuf;
@@ -64,6 +65,18 @@ enum Command {
         #[arg(long)]
         host_only: bool,
     },
+    /// The bring-up pass/fail table: identity, registers, CRC refusal, FIFO, watchdog,
+    /// E-stop, a move counted back on an encoder. Exits non-zero on any failure.
+    Selftest {
+        /// The chip: lockstep (default, with the loopback machine on its pins), model,
+        /// spidev:/dev/spidevB.C[@SCK_HZ] or sim:SOCKET.
+        #[arg(long)]
+        bus: Option<bus::BusTarget>,
+        /// Axis 0's step/dir pins are wired to encoder channel 0 (x4, one count per
+        /// step): on a board, or a `sim-chip --plant`; always so on lockstep and model.
+        #[arg(long)]
+        loopback: bool,
+    },
     /// Serve the simulated chip on a Unix socket at the byte level of the SPI link (the
     /// framing of finestep_host::sim_link), for host tools on `--bus sim:SOCKET`.
     SimChip {
@@ -72,6 +85,10 @@ enum Command {
         /// What simulates the chip.
         #[arg(long, value_enum, default_value = "lockstep")]
         target: sim_chip::Target,
+        /// Put the self-test's loopback machine on the pins: drives on every axis, encoder
+        /// channel 0 on axis 0 at one count per step.
+        #[arg(long)]
+        plant: bool,
         /// Inject a fault (repeatable), for tests that must notice it.
         #[arg(long, value_enum)]
         fault: Vec<sim_chip::Fault>,
@@ -95,6 +112,7 @@ fn main() -> anyhow::Result<()> {
                 bench_top::run(200)
             }
         }
-        Command::SimChip { socket, target, fault, once } => sim_chip::run(&socket, target, &fault, once),
+        Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
+        Command::Selftest { bus, loopback } => selftest::run(bus, loopback),
     }
 }

@@ -9,12 +9,9 @@ use std::os::unix::net::UnixListener;
 use std::path::Path;
 
 use anyhow::{bail, Context};
-use finestep_cosim::{rtl_top_params, ModelPins, TopLockstep};
+use finestep_cosim::rtl_top_params;
 use finestep_host::frame::{self, Command, FRAME_CRC};
 use finestep_host::{regs, sim_link, BusError, SpiTransfer};
-use finestep_model::top::Top;
-
-use crate::bus::pin_link;
 
 /// What serves the chip.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -30,6 +27,8 @@ pub enum Target {
 pub enum Fault {
     /// ID reads 0xDEADBEEF (with a valid CRC): not a finestep core.
     WrongIdentity,
+    /// The loopback encoder is unplugged (implies `--plant`): it never counts.
+    DeadEncoder,
 }
 
 /// The ID a chip with [`Fault::WrongIdentity`] answers.
@@ -64,24 +63,33 @@ impl<L: SpiTransfer> SpiTransfer for WrongIdentity<L> {
     fn wait(&mut self, clocks: u64) -> Result<(), BusError> {
         self.link.wait(clocks)
     }
+
+    fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
+        self.link.drive_estop(level)
+    }
 }
 
 /// Serves the chip on `socket` (a stale socket file there is replaced) until killed,
-/// or until the first client leaves with `once`.
-pub fn run(socket: &Path, target: Target, faults: &[Fault], once: bool) -> anyhow::Result<()> {
+/// or until the first client leaves with `once`; with `plant`, the self-test's loopback
+/// machine is on its pins ([`crate::bus::loopback_plant`]).
+pub fn run(socket: &Path, target: Target, plant: bool, faults: &[Fault], once: bool) -> anyhow::Result<()> {
     if let Ok(meta) = std::fs::symlink_metadata(socket) {
         if !meta.file_type().is_socket() {
             bail!("{} exists and is not a socket", socket.display());
         }
         std::fs::remove_file(socket).with_context(|| format!("removing the stale socket {}", socket.display()))?;
     }
-    let mut link = match target {
-        Target::Lockstep => pin_link(TopLockstep::new("sim-chip"))?,
-        Target::Model => pin_link(ModelPins(Top::new(rtl_top_params())))?,
+    let dead_encoder = faults.contains(&Fault::DeadEncoder);
+    let plant = if plant || dead_encoder {
+        Some(crate::bus::loopback_plant(rtl_top_params().n_axes, dead_encoder)?)
+    } else {
+        None
     };
+    let mut link = crate::bus::sim_link(target == Target::Lockstep, "sim-chip", plant)?;
     for fault in faults {
         link = match fault {
             Fault::WrongIdentity => Box::new(WrongIdentity { link }),
+            Fault::DeadEncoder => link,
         };
     }
     let listener = UnixListener::bind(socket).with_context(|| format!("binding {}", socket.display()))?;

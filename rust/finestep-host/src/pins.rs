@@ -284,4 +284,9 @@ impl<T: PinTarget> SpiTransfer for PinHost<T> {
     fn wait(&mut self, clocks: u64) -> Result<(), BusError> {
         self.hold(clocks)
     }
+
+    fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
+        self.set_estop_pin(level);
+        Ok(true)
+    }
 }

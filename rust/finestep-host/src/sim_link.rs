@@ -8,10 +8,11 @@
 //! | --- | --- |
 //! | transfer | `b'T'`, `len: u32`, `len` bytes sent on MOSI in one chip-select frame |
 //! | wait | `b'W'`, `8: u32`, `clocks: u64` core clocks to let pass |
+//! | E-stop | `b'E'`, `1: u32`, the level to drive on the E-stop input (0 or 1) |
 //!
 //! | reply | bytes |
 //! | --- | --- |
-//! | done | `0`, `len: u32`, the `len` bytes received on MISO (0 for a wait) |
+//! | done | `0`, `len: u32`, the `len` bytes received on MISO (0 for a wait; for an E-stop, one byte: 1 when driven) |
 //! | failed | `1`, `len: u32`, a UTF-8 message (a lockstep mismatch, an unknown op) |
 //!
 //! Simulated time advances only by transfers and waits: a result never depends on how
@@ -36,6 +37,8 @@ use crate::BusError;
 pub const OP_TRANSFER: u8 = b'T';
 /// Request op: let core clocks pass.
 pub const OP_WAIT: u8 = b'W';
+/// Request op: drive the E-stop input.
+pub const OP_ESTOP: u8 = b'E';
 /// Reply status: done.
 pub const REPLY_DONE: u8 = 0;
 /// Reply status: failed, the payload is the message.
@@ -148,6 +151,10 @@ impl SpiTransfer for SimSocket {
         self.request(OP_WAIT, &clocks.to_le_bytes())?;
         Ok(())
     }
+
+    fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
+        Ok(self.request(OP_ESTOP, &[u8::from(level)])? == [1])
+    }
 }
 
 /// Serves `link` to one client on `stream` until the client closes it: each transfer
@@ -160,6 +167,12 @@ pub fn serve<S: Read + Write, L: SpiTransfer + ?Sized>(stream: &mut S, link: &mu
             OP_WAIT => match <[u8; 8]>::try_from(payload.as_slice()) {
                 Ok(clocks) => link.wait(u64::from_le_bytes(clocks)).map(|()| Vec::new()).map_err(|e| e.to_string()),
                 Err(_) => Err(format!("a wait of {} bytes, not 8", payload.len())),
+            },
+            OP_ESTOP => match payload.as_slice() {
+                &[level @ (0 | 1)] => {
+                    link.drive_estop(level == 1).map(|driven| vec![u8::from(driven)]).map_err(|e| e.to_string())
+                }
+                _ => Err(format!("an E-stop level of {payload:?}, not [0] or [1]")),
             },
             other => Err(format!("unknown op {other:#04x}")),
         };

@@ -29,6 +29,12 @@ pub trait SpiTransfer {
     fn transfer(&mut self, tx: &[u8]) -> Result<Vec<u8>, BusError>;
     /// Lets `clocks` core clocks pass.
     fn wait(&mut self, clocks: u64) -> Result<(), BusError>;
+    /// Drives the chip's E-stop input to `level` where the link can (a simulated chip);
+    /// `Ok(false)` when it cannot (a board: the operator presses the button).
+    fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
+        let _ = level;
+        Ok(false)
+    }
 }
 
 impl<T: SpiTransfer + ?Sized> SpiTransfer for Box<T> {
@@ -38,6 +44,10 @@ impl<T: SpiTransfer + ?Sized> SpiTransfer for Box<T> {
 
     fn wait(&mut self, clocks: u64) -> Result<(), BusError> {
         (**self).wait(clocks)
+    }
+
+    fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
+        (**self).drive_estop(level)
     }
 }
 
