@@ -94,6 +94,16 @@ module motion_control #(
         cover ($past(consume) && !at_rest_reg && $past(consume, 2));
     end
     always @(*) if (rec_valid) assert (gate_reg && fifo_valid);
+    // The threshold once more on the ports, not through `reached` (a wrong comparator
+    // there passes the checks above): the gate opens only with at least
+    // max(START_LEVEL, 1) records, and opens as soon as a closed gate without an
+    // underrun sees that many.
+    wire [16:0] f_level = {{(17-LEVEL_W){1'b0}}, fifo_level};
+    wire [16:0] f_start = (start_level == 16'd0) ? 17'd1 : {1'b0, start_level};
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if ($rose(gate_reg)) assert ($past(f_level) >= $past(f_start));
+        if ($past(core_run && !gate_reg && !underrun_reg && f_level >= f_start)) assert (gate_reg);
+    end
 `endif
 
 endmodule
