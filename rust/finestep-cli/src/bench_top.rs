@@ -13,6 +13,7 @@ use finestep_model::{Increment, PeriodRecord};
 use finestep_planner::MachineConfig;
 
 use crate::bench::report;
+use crate::bus::BusTarget;
 use crate::machine_setup;
 
 const AXES: usize = 4;
@@ -48,6 +49,24 @@ fn streamed<T: PinTarget>(what: &str, target: T, periods: usize, cycles: impl Fn
     }
     let seconds = started.elapsed().as_secs_f64();
     report(&resolved, what, cycles(machine.bus().link().target()) - begin, seconds);
+    Ok(())
+}
+
+/// The same move on the chip at `target` (`finestep bench --bus`): a board's figure is
+/// its link's, cycles by the chip's LATCH_TIME against the wall clock.
+pub fn on_bus(target: &BusTarget, periods: usize) -> anyhow::Result<()> {
+    let mut machine = crate::bus::open(target, "bench", rtl_top_params().clock_hz)?;
+    let core = machine_setup::chip_limits(&machine.caps());
+    let (_, resolved) = machine_setup::resolve(MachineConfig::default(), core, "<built-in>")?;
+    machine_setup::configure(&mut machine, &resolved)?;
+    println!("finestep bench on {target}: {AXES} axes, P = {} clocks, {periods} periods", resolved.period_clocks);
+    let started = Instant::now();
+    let config = machine_setup::stream_config(&resolved);
+    let streamed = stream::run(&mut machine, records(periods), &config, |_, _| Ok(()))?;
+    if streamed.stream.underruns != 0 {
+        bail!("{} underruns while benchmarking on {target}", streamed.stream.underruns);
+    }
+    report(&resolved, &format!("streamed over SPI on {target}"), streamed.cycles, started.elapsed().as_secs_f64());
     Ok(())
 }
 

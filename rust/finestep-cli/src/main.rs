@@ -64,6 +64,10 @@ enum Command {
         /// Only the host side: parse, plan and interpolate.
         #[arg(long)]
         host_only: bool,
+        /// Only the chip-level move, streamed on this bus (lockstep, model,
+        /// spidev:/dev/spidevB.C[@SCK_HZ], sim:SOCKET).
+        #[arg(long)]
+        bus: Option<bus::BusTarget>,
     },
     /// The bring-up pass/fail table: identity, registers, CRC refusal, FIFO, watchdog,
     /// E-stop, a move counted back on an encoder. Exits non-zero on any failure.
@@ -104,8 +108,10 @@ fn main() -> anyhow::Result<()> {
         Command::Run { file, fast, bus, config, profile, out } => {
             run::run(&file, fast, bus, config.as_deref(), profile.as_deref(), &out)
         }
-        Command::Bench { cycles, host_only } => {
-            if host_only {
+        Command::Bench { cycles, host_only, bus } => {
+            if let Some(target) = bus {
+                bench_top::on_bus(&target, 200)
+            } else if host_only {
                 bench::front_end()
             } else {
                 bench::run(cycles)?;

@@ -12,7 +12,7 @@ use finestep_host::frame::{self, FrameResult};
 use finestep_host::regs::{
     crc_error_count, id, period_clocks, start_level, status, underrun_count, version, watchdog_timeout,
 };
-use finestep_host::{AxisSetup, Bus, EncoderSetup, Increment, PeriodRecord, SpiTransfer};
+use finestep_host::{AxisSetup, Bus, EncoderSetup, Increment, OutMode, PeriodRecord, SpiTransfer};
 
 use crate::bus::{self, BusMachine, BusTarget};
 
@@ -230,9 +230,21 @@ fn estop(machine: &mut BusMachine) -> Check {
     pass("pressed: ESTOP_ACTIVE, FAULT_ESTOP, HALT; held through a clear; released and cleared")
 }
 
+/// The move counted back with the plant on a simulated chip's pins (its drive follows
+/// step/dir, its grating counts one per step).
 fn loopback(machine: &mut BusMachine) -> Check {
+    loopback_in(machine, OutMode::StepDir)
+}
+
+/// The move counted back on a board with axis 0's pins A/B wired to encoder 0's A/B:
+/// axis 0 in quadrature output mode, one x4 count per step.
+fn loopback_wired(machine: &mut BusMachine) -> Check {
+    loopback_in(machine, OutMode::Quadrature)
+}
+
+fn loopback_in(machine: &mut BusMachine, out_mode: OutMode) -> Check {
     let caps = machine.caps();
-    machine.configure_axis(0, &AxisSetup::default())?;
+    machine.configure_axis(0, &AxisSetup { out_mode, ..AxisSetup::default() })?;
     machine.enable_axes((1 << caps.n_axes) - 1)?;
     machine.configure_encoder(0, &EncoderSetup::default())?;
     machine.set_period(PERIOD)?;
@@ -258,6 +270,7 @@ fn loopback(machine: &mut BusMachine) -> Check {
     machine.bus().wait(u64::from(PERIOD) * (periods as u64 + 8))?;
     let after = machine.feedback()?;
     quiesce(machine)?;
+    machine.configure_axis(0, &AxisSetup::default())?;
     let steps = after.steps[0].wrapping_sub(before.steps[0]);
     let counts = after.counts[0].wrapping_sub(before.counts[0]);
     if steps != LOOPBACK_STEPS {
@@ -270,7 +283,7 @@ fn loopback(machine: &mut BusMachine) -> Check {
 }
 
 /// Runs every check on `target` and prints the table; an error when any failed.
-pub fn run(target: Option<BusTarget>, loopback_wired: bool) -> anyhow::Result<()> {
+pub fn run(target: Option<BusTarget>, wired: bool) -> anyhow::Result<()> {
     let target = BusTarget::choose(target, None, "<command line>")?;
     let simulated = matches!(target, BusTarget::Lockstep | BusTarget::Model);
     let n_axes = finestep_cosim::rtl_top_params().n_axes;
@@ -300,14 +313,14 @@ pub fn run(target: Option<BusTarget>, loopback_wired: bool) -> anyhow::Result<()
                     caps.clock_hz
                 ),
             });
-            let has_loopback = simulated || loopback_wired;
+            let has_loopback = simulated || wired;
             let checks: [(&'static str, CheckFn); 6] = [
                 ("register read-back", registers),
                 ("bad CRC refused", bad_crc),
                 ("FIFO threshold, underrun", fifo),
                 ("watchdog halt, clear", watchdog),
                 ("E-stop input", estop),
-                ("loopback move", loopback),
+                ("loopback move", if matches!(target, BusTarget::Spidev { .. }) { loopback_wired } else { loopback }),
             ];
             for (check, run) in checks {
                 let (outcome, detail) = if check == "loopback move" && !has_loopback {

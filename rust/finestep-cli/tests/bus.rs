@@ -107,3 +107,12 @@ fn a_missing_device_a_dead_socket_and_a_wrong_identity_are_named() {
     assert!(text.contains(&format!("{bus}: the chip's identity")), "{text}");
     assert!(text.contains("not a finestep core: ID reads 0xdeadbeef"), "{text}");
 }
+
+#[test]
+fn the_bench_streams_on_a_served_chip() {
+    let server = serve("bench", &["--target", "model"]);
+    let bus = format!("sim:{}", server.socket.display());
+    let (ok, text) = finestep(&["bench", "--bus", &bus]);
+    assert!(ok, "{text}");
+    assert!(text.contains(&format!("streamed over SPI on {bus}")), "{text}");
+}
