@@ -2,7 +2,7 @@
 CARGO ?= cargo
 export VERILATOR ?= verilator
 
-.PHONY: all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
+.PHONY: flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
         bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick
 
 all: test
@@ -55,6 +55,13 @@ test-long: setup
 # hdl/interface.toml (cargo test fails while they are stale).
 regmap: setup
 	$(CARGO) run -q --release -p finestep-regmap -- docs
+
+# Load a board's bitstream with openFPGALoader: make flash BOARD=colorlight-5a75b|ice40-hx8k|icebreaker
+# [MODE=sram|flash]; prints the command instead when no cable answers (docs/boards/).
+BOARD ?=
+MODE ?= sram
+flash:
+	@./scripts/flash.sh $(BOARD) $(MODE)
 
 # Bitstreams with the open tools from PyPI (outputs under build/bitstream/, never
 # committed); each fails unless nextpnr meets the constrained clock. `make test` runs them
