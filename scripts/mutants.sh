@@ -196,6 +196,10 @@ for e in "${selected[@]}"; do
     if ((${#killers[@]})); then
         status=killed
         killer=$(IFS=', '; echo "${killers[*]}")
+    elif ((${#checks_run[@]} == 0)); then
+        # Under --only, a mutant with no check of that kind (e.g. no formal task).
+        status=no-check
+        killer="(no $only check for this mutant)"
     else
         status=SURVIVED
         killer="(ran: ${checks_run[*]})"
@@ -212,5 +216,9 @@ echo "common-mode mutants on $rev ($((${#selected[@]})) run, $total s; logs in b
 printf '%-26s %-24s %-9s %5s  %s\n' mutant block result time "killed by (first failing check)"
 for r in "${results[@]}"; do echo "$r"; done
 killed=$(printf '%s\n' "${results[@]}" | grep -c ' killed ' || true)
-echo "killed $killed of ${#selected[@]}"
+unchecked=$(printf '%s\n' "${results[@]}" | grep -c ' no-check ' || true)
+summary="killed $killed of $((${#selected[@]} - unchecked))"
+[[ -n "$only" ]] && summary+=" by $only checks alone"
+((unchecked)) && summary+=" ($unchecked without a $only check)"
+echo "$summary"
 exit $failed
