@@ -182,6 +182,8 @@ module position_fifo #(
     always @(*) if (f_past_valid && !rst) begin
         assert (free_reg == LEVEL_FULL - level_reg - staged_reg);
         assert ({1'b0, level_reg} + {1'b0, staged_reg} <= {1'b0, LEVEL_FULL});
+        // The capacity on the ports: full (and a write refused) exactly at DEPTH records.
+        assert (full == ({1'b0, level} + {1'b0, staged} == {1'b0, LEVEL_FULL}));
         assert ({1'b0, level_reg} == {1'b0, level_int_reg} + {{(DEPTH_LOG2+1){1'b0}}, out_valid_reg});
         assert (f_used == level_int_reg[DEPTH_LOG2-1:0] && f_staged == staged_reg[DEPTH_LOG2-1:0]);
         if (int_valid) assert (head_int == mem[rd_ptr_reg]);
