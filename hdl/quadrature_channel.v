@@ -195,6 +195,12 @@ module quadrature_channel #(
         if (!live_reg) assert (count_reg == 32'd0 && !illegal_reg);
         if (mode == FS_COUNT_MODE_X4 && f_clean && live_reg) assert (count_reg[1:0] == f_phase - f_phase0);
     end
+    // The index latch moves only on a rising edge of the index after polarity, stated
+    // on the z_level_active port's own history rather than through index_event.
+    reg f_z_before;
+    always @(posedge clk) f_z_before <= z_level_active;
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst)
+        if (index_latch_reg != $past(index_latch_reg)) assert ($past(z_level_active) && !$past(f_z_before));
 `endif
 
 endmodule
