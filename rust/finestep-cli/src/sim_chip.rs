@@ -29,33 +29,41 @@ pub enum Fault {
     WrongIdentity,
     /// The loopback encoder is unplugged (implies `--plant`): it never counts.
     DeadEncoder,
+    /// Bit 2 of every register read after the identity block is stuck at 1.
+    StuckBit,
 }
 
 /// The ID a chip with [`Fault::WrongIdentity`] answers.
 pub const WRONG_ID: u32 = 0xDEAD_BEEF;
 
-/// Rewrites the ID word of every READ frame that covers it, CRC included.
-struct WrongIdentity<L> {
+/// The register-file bit that [`Fault::StuckBit`] holds at 1 in every register read
+/// after the identity block (ID, VERSION, CAPS, CLOCK_HZ).
+pub const STUCK_BIT: u32 = 1 << 2;
+
+/// Rewrites the words of every READ answer through `rewrite(address, word)`, CRC
+/// included (a fault inside the chip, not on the wire).
+struct ReadRewrite<L> {
     link: L,
+    rewrite: fn(u8, u32) -> u32,
 }
 
-impl<L: SpiTransfer> SpiTransfer for WrongIdentity<L> {
+impl<L: SpiTransfer> SpiTransfer for ReadRewrite<L> {
     fn transfer(&mut self, tx: &[u8]) -> Result<Vec<u8>, BusError> {
         let mut rx = self.link.transfer(tx)?;
         let header = frame::HEADER_BYTES;
-        if tx.len() >= header + 6 && tx[0] == Command::Read.code() && rx.len() == tx.len() {
-            let (addr, count) = (usize::from(tx[1]), usize::from(tx[2]));
-            let id = usize::from(regs::id::ADDR);
-            if (addr..addr + count).contains(&id) && header + 4 * count + 2 == tx.len() {
-                let at = header + 4 * (id - addr);
-                rx[at..at + 4].copy_from_slice(&WRONG_ID.to_be_bytes());
-                let mut digest = FRAME_CRC.digest();
-                digest.update(&tx[..header]);
-                digest.update(&rx[header..rx.len() - 2]);
-                let crc = digest.finalize().to_be_bytes();
-                let end = rx.len();
-                rx[end - 2..].copy_from_slice(&crc);
+        let count = tx.get(2).map_or(0, |&c| usize::from(c));
+        if tx.first() == Some(&Command::Read.code()) && rx.len() == tx.len() && tx.len() == header + 4 * count + 2 {
+            for (i, word) in rx[header..header + 4 * count].chunks_exact_mut(4).enumerate() {
+                let addr = tx[1].wrapping_add(i as u8);
+                let value = (self.rewrite)(addr, u32::from_be_bytes([word[0], word[1], word[2], word[3]]));
+                word.copy_from_slice(&value.to_be_bytes());
             }
+            let mut digest = FRAME_CRC.digest();
+            digest.update(&tx[..header]);
+            digest.update(&rx[header..rx.len() - 2]);
+            let crc = digest.finalize().to_be_bytes();
+            let end = rx.len();
+            rx[end - 2..].copy_from_slice(&crc);
         }
         Ok(rx)
     }
@@ -66,6 +74,22 @@ impl<L: SpiTransfer> SpiTransfer for WrongIdentity<L> {
 
     fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
         self.link.drive_estop(level)
+    }
+}
+
+fn wrong_identity(addr: u8, word: u32) -> u32 {
+    if addr == regs::id::ADDR {
+        WRONG_ID
+    } else {
+        word
+    }
+}
+
+fn stuck_bit(addr: u8, word: u32) -> u32 {
+    if addr > regs::clock_hz::ADDR {
+        word | STUCK_BIT
+    } else {
+        word
     }
 }
 
@@ -88,7 +112,8 @@ pub fn run(socket: &Path, target: Target, plant: bool, faults: &[Fault], once: b
     let mut link = crate::bus::sim_link(target == Target::Lockstep, "sim-chip", plant)?;
     for fault in faults {
         link = match fault {
-            Fault::WrongIdentity => Box::new(WrongIdentity { link }),
+            Fault::WrongIdentity => Box::new(ReadRewrite { link, rewrite: wrong_identity }),
+            Fault::StuckBit => Box::new(ReadRewrite { link, rewrite: stuck_bit }),
             Fault::DeadEncoder => link,
         };
     }

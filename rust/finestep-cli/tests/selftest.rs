@@ -1,6 +1,6 @@
 //! `finestep selftest` against the simulated chip: every check passes in process and on
-//! `finestep sim-chip --plant`, and each fault the server injects is reported as a
-//! failure with a non-zero exit.
+//! `finestep sim-chip --plant`, and each fault the server injects (a wrong identity, a dead
+//! encoder, a stuck register bit) is reported as a failure with a non-zero exit.
 
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -103,4 +103,13 @@ fn a_missing_board_fails_naming_the_device() {
     let (ok, text) = finestep(&["selftest", "--bus", "spidev:/dev/spidev9.9"]);
     assert!(!ok, "{text}");
     assert!(row(&text, "identity, map, CAPS").contains("FAIL   spidev:/dev/spidev9.9: no such device"), "{text}");
+}
+
+#[test]
+fn a_stuck_register_bit_fails_the_read_back() {
+    let server = serve("stuck-bit", &["--fault", "stuck-bit", "--target", "model", "--plant"]);
+    let (ok, text) = finestep(&["selftest", "--loopback", "--bus", &format!("sim:{}", server.socket.display())]);
+    assert!(!ok, "{text}");
+    assert!(row(&text, "identity, map, CAPS").contains(" PASS "), "{text}");
+    assert!(row(&text, "register read-back").contains("FAIL   PERIOD_CLOCKS: wrote 0xaaaaa, read 0xaaaae"), "{text}");
 }
