@@ -2,54 +2,9 @@
 //! from the machine configuration, and the errors of a missing device, a socket with
 //! nothing listening and a chip answering a wrong identity.
 
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
-fn finestep(args: &[&str]) -> (bool, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_finestep")).args(args).output().expect("run finestep");
-    let text = String::from_utf8_lossy(&output.stdout).to_string() + &String::from_utf8_lossy(&output.stderr);
-    (output.status.success(), text)
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("finestep-bus-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-/// A `finestep sim-chip` process, killed when dropped.
-struct Server {
-    child: Child,
-    socket: PathBuf,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        let _ = std::fs::remove_file(&self.socket);
-    }
-}
-
-fn serve(name: &str, args: &[&str]) -> Server {
-    let socket = scratch(&format!("{name}.sock"));
-    let _ = std::fs::remove_file(&socket);
-    let child = Command::new(env!("CARGO_BIN_EXE_finestep"))
-        .arg("sim-chip")
-        .arg(&socket)
-        .args(args)
-        .stdout(Stdio::null())
-        .spawn()
-        .expect("start finestep sim-chip");
-    let server = Server { child, socket };
-    let started = Instant::now();
-    while !server.socket.exists() {
-        assert!(started.elapsed() < Duration::from_secs(60), "sim-chip never bound {}", server.socket.display());
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    server
-}
+use common::{finestep, scratch, serve};
 
 fn program() -> String {
     let path = scratch("square.ngc");

@@ -2,50 +2,9 @@
 //! `finestep sim-chip --plant`, and each fault the server injects (a wrong identity, a dead
 //! encoder, a stuck register bit) is reported as a failure with a non-zero exit.
 
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
-fn finestep(args: &[&str]) -> (bool, String) {
-    let output = Command::new(env!("CARGO_BIN_EXE_finestep")).args(args).output().expect("run finestep");
-    let text = String::from_utf8_lossy(&output.stdout).to_string() + &String::from_utf8_lossy(&output.stderr);
-    (output.status.success(), text)
-}
-
-/// A `finestep sim-chip` process, killed when dropped.
-struct Server {
-    child: Child,
-    socket: PathBuf,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        let _ = std::fs::remove_file(&self.socket);
-    }
-}
-
-fn serve(name: &str, args: &[&str]) -> Server {
-    let dir = std::env::temp_dir().join(format!("finestep-selftest-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let socket = dir.join(format!("{name}.sock"));
-    let _ = std::fs::remove_file(&socket);
-    let child = Command::new(env!("CARGO_BIN_EXE_finestep"))
-        .arg("sim-chip")
-        .arg(&socket)
-        .args(args)
-        .stdout(Stdio::null())
-        .spawn()
-        .expect("start finestep sim-chip");
-    let server = Server { child, socket };
-    let started = Instant::now();
-    while !server.socket.exists() {
-        assert!(started.elapsed() < Duration::from_secs(60), "sim-chip never bound {}", server.socket.display());
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    server
-}
+use common::{finestep, serve};
 
 fn row<'a>(text: &'a str, check: &str) -> &'a str {
     text.lines().find(|l| l.trim_start().starts_with(check)).unwrap_or_else(|| panic!("no row {check}:\n{text}"))

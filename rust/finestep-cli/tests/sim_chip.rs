@@ -2,55 +2,14 @@
 //! `SpiTransfer` a spidev board is driven through) reads the identity and CAPS and
 //! streams records with exactly the results of the same driver on the in-process chip.
 
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+mod common;
 
 use finestep_cosim::TopLockstep;
 use finestep_host::sim_link::SimSocket;
 use finestep_host::stream::{self, RunReport, StreamConfig};
 use finestep_host::{AxisSetup, Bus, DriveTiming, Machine, PeriodRecord, PinHost, PinTiming, SpiBus, SpiTransfer};
 
-/// A `finestep sim-chip` process, killed when dropped.
-struct Server {
-    child: Child,
-    socket: PathBuf,
-}
-
-impl Drop for Server {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        let _ = std::fs::remove_file(&self.socket);
-    }
-}
-
-fn scratch_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("finestep-sim-chip-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-/// Starts `finestep sim-chip` on a fresh socket named `name` with `args`, and waits
-/// until it accepts connections.
-fn serve(name: &str, args: &[&str]) -> Server {
-    let socket = scratch_dir().join(format!("{name}.sock"));
-    let _ = std::fs::remove_file(&socket);
-    let child = Command::new(env!("CARGO_BIN_EXE_finestep"))
-        .arg("sim-chip")
-        .arg(&socket)
-        .args(args)
-        .stdout(Stdio::null())
-        .spawn()
-        .expect("start finestep sim-chip");
-    let server = Server { child, socket };
-    let started = Instant::now();
-    while !server.socket.exists() {
-        assert!(started.elapsed() < Duration::from_secs(60), "sim-chip never bound {}", server.socket.display());
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    server
-}
+use common::serve;
 
 fn connect<T: SpiTransfer>(link: T) -> Machine<SpiBus<T>> {
     let mut machine = Machine::connect(SpiBus::new(link, 1)).unwrap();
