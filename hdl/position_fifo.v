@@ -83,8 +83,37 @@ module position_fifo #(
     wire [DEPTH_LOG2:0] staged_now = staged_reg + {{DEPTH_LOG2{1'b0}}, write};
     wire [DEPTH_LOG2:0] added      = commit ? staged_now : zero;
 
+    // The counts after this edge as selections between sums of registers only: the
+    // control decisions (a pop - the period timer's boundary, from across the die - a
+    // write refused when full, a commit, an abort) only choose between finished sums
+    // and never enter a carry chain. With staged_now = staged + write and added =
+    // commit ? staged_now : 0 (an abort frees staged_now, so free + staged is kept):
+    wire [DEPTH_LOG2:0] free_plus_staged = free_reg + staged_reg;
+    wire [DEPTH_LOG2:0] free_minus_one   = free_reg - one;
+    wire [DEPTH_LOG2:0] free_plus_one    = free_reg + one;
+    wire [DEPTH_LOG2:0] free_kept   = wr_abort ? free_plus_staged : (write ? free_minus_one : free_reg);
+    wire [DEPTH_LOG2:0] free_popped = wr_abort ? free_plus_staged + one : (write ? free_reg : free_plus_one);
+    // level + added - pop and level_int + added - pop_int, for the four cases of
+    // (commit, write) and both outcomes of the pop.
+    function [DEPTH_LOG2:0] count_next;
+        input [DEPTH_LOG2:0] count, staged_count;
+        input                commit_now, write_now, popped;
+        reg   [DEPTH_LOG2:0] sum;
+        begin
+            sum = count + staged_count;
+            if (!commit_now)      count_next = popped ? count - one : count;
+            else if (write_now)   count_next = popped ? sum : sum + one;
+            else                  count_next = popped ? sum - one : sum;
+        end
+    endfunction
+    wire [DEPTH_LOG2:0] level_kept       = count_next(level_reg, staged_reg, commit, write, 1'b0);
+    wire [DEPTH_LOG2:0] level_popped     = count_next(level_reg, staged_reg, commit, write, 1'b1);
+    wire [DEPTH_LOG2:0] level_int_kept   = count_next(level_int_reg, staged_reg, commit, write, 1'b0);
+    wire [DEPTH_LOG2:0] level_int_popped = count_next(level_int_reg, staged_reg, commit, write, 1'b1);
+    wire [DEPTH_LOG2-1:0] rd_ptr_next    = rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
+
     // The RAM's head after this edge: the next entry on an internal pop, else the same one.
-    wire [DEPTH_LOG2-1:0] head_addr = pop_int ? rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1} : rd_ptr_reg;
+    wire [DEPTH_LOG2-1:0] head_addr = pop_int ? rd_ptr_next : rd_ptr_reg;
     // The head entry is being written now exactly when it is the slot written.
     wire head_written = write && (head_addr == stage_ptr_reg);
 
@@ -119,11 +148,11 @@ module position_fifo #(
         end else begin
             // A write takes a slot, a pop frees one, an abort frees the staged ones
             // (this cycle's write included); a commit moves records, freeing none.
-            free_reg <= free_reg - (write ? one : zero) + (pop ? one : zero) + (wr_abort ? staged_now : zero);
-            if (pop_int) rd_ptr_reg <= rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
+            free_reg <= pop ? free_popped : free_kept;
+            if (pop_int) rd_ptr_reg <= rd_ptr_next;
             out_valid_reg <= pop_int || (out_valid_reg && !pop);
-            level_reg     <= level_reg + added - (pop ? one : zero);
-            level_int_reg <= level_int_reg + added - (pop_int ? one : zero);
+            level_reg     <= pop ? level_popped : level_kept;
+            level_int_reg <= pop_int ? level_int_popped : level_int_kept;
             if (wr_abort) begin
                 stage_ptr_reg <= wr_ptr_reg;
                 staged_reg    <= zero;
