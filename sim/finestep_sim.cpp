@@ -1,14 +1,20 @@
 // C ABI shim around the Verilated finestep_core (see finestep_sim.h).
 //
-// Two Verilations of the same RTL are linked: Vfinestep_core without tracing (fast)
-// and Vfinestep_core_traced with it; tracing support costs about a third of the speed
-// even when no waveform is open.
+// Four Verilations of the same RTL are linked: the core without the gantry block
+// (HAS_GANTRY = 0, what every test that does not exercise the gantry runs) and with it,
+// each without tracing (fast) and with it (Vfinestep_core*_traced); tracing support costs
+// about a third of the speed even when no waveform is open. Each is Verilated from
+// sim/finestep_core_sim.v: the core behind registers that hold its inputs, loaded by a
+// pulse of `load` whenever the inputs are set, so no logic depends combinationally on
+// a top-level input and Verilator evaluates the core once per clock.
 #include "finestep_sim.h"
 
 #include <cstring>
 #include <memory>
 
 #include "Vfinestep_core.h"
+#include "Vfinestep_core_gantry.h"
+#include "Vfinestep_core_gantry_traced.h"
 #include "Vfinestep_core_traced.h"
 #include "verilated_trace.h"
 
@@ -101,6 +107,7 @@ struct Sim final : fs_sim {
         if (TRACED) context->traceEverOn(true);
         top.reset(new Model(context.get()));
         top->clk = 0;
+        top->load = 0;
         top->eval();
         reset();
     }
@@ -138,7 +145,17 @@ struct Sim final : fs_sim {
             put_bits(top->invert, FS_INVERT_WIDTH * i, FS_INVERT_WIDTH, axis.invert);
             put_bits(top->axis_enable, i, 1, axis.enable);
         }
-        top->eval();  // settle the logic on the new inputs, clock low
+        load();
+    }
+
+    // The input registers take the inputs set since the last load (clock low). `load`
+    // falls in an evaluation of its own, so that the next load is a rising edge again
+    // (Verilator compares with the value at the previous evaluation).
+    void load() {
+        top->load = 1;
+        top->eval();
+        top->load = 0;
+        top->eval();
     }
 
     // Cycle c is drawn from time 2c (its rising edge) to 2c+2; its inputs, settled with
@@ -196,11 +213,11 @@ struct Sim final : fs_sim {
         trace_close();  // the cycle count restarts: a waveform cannot go on across it
         fs_inputs idle;
         std::memset(&idle, 0, sizeof idle);
-        apply(idle);
         top->rst = 1;
+        apply(idle);
         edge();
         top->rst = 0;
-        top->eval();
+        load();
         cycle = 0;
         raw = read_raw();
         last = pack(raw);
@@ -247,9 +264,10 @@ struct Sim final : fs_sim {
     void trace_close() override { finestep::close_trace(trace); }
 };
 
-// Only the traced model has trace(); give the untraced one a stub so one template fits.
-struct FastModel : Vfinestep_core {
-    using Vfinestep_core::Vfinestep_core;
+// Only the traced models have trace(); give the untraced ones a stub so one template fits.
+template <typename Base>
+struct Untraced : Base {
+    using Base::Base;
     void trace(TraceFile *, int) {}
 };
 
@@ -262,8 +280,14 @@ uint32_t fs_p_width(void) { return FS_P_WIDTH; }
 uint32_t fs_timing_width(void) { return FS_TIMING_W; }
 int fs_trace_is_fst(void) { return VM_TRACE_FST ? 1 : 0; }
 
-fs_sim *fs_new(void) { return new Sim<FastModel, false>; }
-fs_sim *fs_new_traced(void) { return new Sim<Vfinestep_core_traced, true>; }
+fs_sim *fs_new(int gantry) {
+    if (gantry) return new Sim<Untraced<Vfinestep_core_gantry>, false>;
+    return new Sim<Untraced<Vfinestep_core>, false>;
+}
+fs_sim *fs_new_traced(int gantry) {
+    if (gantry) return new Sim<Vfinestep_core_gantry_traced, true>;
+    return new Sim<Vfinestep_core_traced, true>;
+}
 void fs_free(fs_sim *sim) { delete sim; }
 void fs_reset(fs_sim *sim) { sim->reset(); }
 uint64_t fs_cycle(const fs_sim *sim) { return sim->cycle; }

@@ -86,10 +86,11 @@ uint32_t fs_timing_width(void);
 /* 1 when waveforms are written as FST, 0 for VCD. */
 int fs_trace_is_fst(void);
 
-/* A core built without waveform support (the fast one). */
-fs_sim *fs_new(void);
+/* A core built without waveform support (the fast one); with the gantry block
+ * (HAS_GANTRY = 1) when `gantry` is non-zero, else without it (HAS_GANTRY = 0). */
+fs_sim *fs_new(int gantry);
 /* A core that can write waveforms (fs_trace_open); slower. */
-fs_sim *fs_new_traced(void);
+fs_sim *fs_new_traced(int gantry);
 void fs_free(fs_sim *sim);
 
 /* One clock with rst high and all other inputs zero; the cycle count restarts at 0 and

@@ -49,9 +49,14 @@ fn main() {
     println!("cargo:rerun-if-env-changed=VERILATOR_ROOT");
     // hdl/ holds only sources (a new module appears here); of sim/ only the shim counts.
     println!("cargo:rerun-if-changed={}", hdl.display());
-    for shim in
-        ["finestep_sim.cpp", "finestep_sim.h", "finestep_top_sim.cpp", "finestep_top_sim.h", "verilated_trace.h"]
-    {
+    for shim in [
+        "finestep_sim.cpp",
+        "finestep_sim.h",
+        "finestep_top_sim.cpp",
+        "finestep_top_sim.h",
+        "verilated_trace.h",
+        "finestep_core_sim.v",
+    ] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
     // The Verilog headers (register map, interface constants, elaboration checks) and
@@ -106,16 +111,25 @@ fn main() {
     let trace_flag = if fst { "--trace-fst" } else { "--trace" };
     let mut globals = std::collections::BTreeSet::new();
     let mut defines = BTreeMap::new();
-    // The core alone (its own co-simulation) and the top behind the host interface.
+    // The core alone (its own co-simulation), without the gantry block (every test but the
+    // gantry's) and with it, behind the input registers of sim/finestep_core_sim.v; and
+    // the top behind the host interface.
+    let core_sim = sim.join("finestep_core_sim.v");
     let models = [
-        ("finestep_core", "Vfinestep_core", None),
-        ("finestep_core", "Vfinestep_core_traced", Some(trace_flag)),
-        ("finestep_top", "Vfinestep_top", None),
-        ("finestep_top", "Vfinestep_top_traced", Some(trace_flag)),
+        (Build::Core { gantry: false }, "Vfinestep_core", None),
+        (Build::Core { gantry: false }, "Vfinestep_core_traced", Some(trace_flag)),
+        (Build::Core { gantry: true }, "Vfinestep_core_gantry", None),
+        (Build::Core { gantry: true }, "Vfinestep_core_gantry_traced", Some(trace_flag)),
+        (Build::Top, "Vfinestep_top", None),
+        (Build::Top, "Vfinestep_top_traced", Some(trace_flag)),
     ];
-    for (top, prefix, trace) in models {
+    for (build_of, prefix, trace) in models {
         let dir = mdir.join(prefix);
-        let classes = verilate(&verilator, &sources, &gen, &params, top, prefix, trace, &dir);
+        let mut model_sources = sources.clone();
+        if let Build::Core { .. } = build_of {
+            model_sources.push(core_sim.clone());
+        }
+        let classes = verilate(&verilator, &model_sources, &gen, &params, build_of, prefix, trace, &dir);
         let list = |name: &str| -> Vec<String> {
             classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
         };
@@ -168,18 +182,32 @@ fn main() {
         .expect("write bindings");
 }
 
-/// Runs Verilator on module `top` into `dir` and returns the variables of its `*_classes.mk`.
+/// What one Verilation builds.
+#[derive(Clone, Copy)]
+enum Build {
+    /// `finestep_core` behind its input registers (`sim/finestep_core_sim.v`), with or
+    /// without the gantry block.
+    Core { gantry: bool },
+    /// `finestep_top`.
+    Top,
+}
+
+/// Runs Verilator on `build` into `dir` and returns the variables of its `*_classes.mk`.
 #[allow(clippy::too_many_arguments)]
 fn verilate(
     verilator: &str,
     sources: &[PathBuf],
     include: &Path,
     params: &Params,
-    top: &str,
+    build: Build,
     prefix: &str,
     trace: Option<&str>,
     dir: &Path,
 ) -> BTreeMap<String, String> {
+    let (top, gantry) = match build {
+        Build::Core { gantry } => ("finestep_core_sim", Some(gantry)),
+        Build::Top => ("finestep_top", None),
+    };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     let status = Command::new(verilator)
@@ -195,6 +223,7 @@ fn verilate(
         .arg(format!("-GN_AXES={}", params.n_axes))
         .arg(format!("-GP_WIDTH={}", params.p_width))
         .arg(format!("-GTIMING_W={}", params.timing_w))
+        .args(gantry.map(|g| format!("-GHAS_GANTRY={}", u8::from(g))))
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
         .args((top == "finestep_top").then(|| format!("-GHAS_MPG={}", params.has_mpg)))

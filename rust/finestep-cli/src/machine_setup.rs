@@ -62,8 +62,7 @@ pub fn model_limits() -> CoreLimits {
 
 /// The core parameters of the model of [`model_params`].
 pub fn model_core_params() -> CoreParams {
-    let params = model_params();
-    CoreParams { n_axes: params.n_axes, p_width: params.p_width, timing_width: params.timing_w }
+    model_params().core_params()
 }
 
 /// Resolves `config` (named `file` in errors) against `core`: the only place the CLI

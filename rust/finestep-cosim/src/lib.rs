@@ -64,10 +64,20 @@ pub struct Harness {
 }
 
 impl Harness {
-    /// Both sides fresh out of reset. `name` names the waveform of a failure.
+    /// Both sides fresh out of reset, without the gantry block (the gantry inputs are
+    /// ignored). `name` names the waveform of a failure.
     pub fn new(name: &str, path: ModelPath) -> Harness {
-        let rtl = Rtl::new();
-        let model = Core::new(finestep_rtl_sys::params());
+        Harness::for_params(name, path, finestep_rtl_sys::params())
+    }
+
+    /// Both sides fresh out of reset, with the gantry block.
+    pub fn with_gantry(name: &str, path: ModelPath) -> Harness {
+        Harness::for_params(name, path, finestep_rtl_sys::gantry_params())
+    }
+
+    fn for_params(name: &str, path: ModelPath, params: finestep_model::CoreParams) -> Harness {
+        let rtl = Rtl::for_params(&params, false);
+        let model = Core::new(params);
         let outputs = model.outputs();
         // Change lists are only equal outputs if both sides start equal.
         assert_eq!(rtl.outputs(), outputs, "RTL and model differ out of reset");
@@ -109,7 +119,7 @@ impl Harness {
         from: u64,
         to: u64,
     ) -> Result<(), WaveformError> {
-        let mut rtl = Rtl::new_traced();
+        let mut rtl = Rtl::for_params(&self.model.params(), true);
         let mut scratch = Vec::new();
         let mut tracing = false;
         for (inputs, cycles) in &self.log {

@@ -27,7 +27,7 @@ struct Outcome {
 /// motor loses `lost` steps at period `at`. The encoders are read once per period (the
 /// counts the chip sees lag the motors by up to a period, as a slow feedback path would).
 fn run(path: ModelPath, sync: bool, lost: i64, at: usize, periods: usize, limit: u16) -> Outcome {
-    let mut harness = Harness::new("gantry", path);
+    let mut harness = Harness::with_gantry("gantry", path);
     let axis = AxisConfig { timing: DriveTiming::new(2, 2, 2, 2), mode: 0, invert: 0, enable: true };
     let mut inputs = CoreInputs { run: true, period_clocks: PERIOD, ..Default::default() };
     inputs.axes[MASTER] = axis;
@@ -127,7 +127,7 @@ fn racking_past_the_limit_raises_the_alarm() {
 #[test]
 fn edge_values_of_the_error_agree() {
     for path in [ModelPath::PerClock, ModelPath::Fast] {
-        let mut harness = Harness::new("gantry_edges", path);
+        let mut harness = Harness::with_gantry("gantry_edges", path);
         let mut inputs = CoreInputs { run: true, period_clocks: PERIOD, ..Default::default() };
         inputs.axes[MASTER].enable = true;
         inputs.axes[SLAVE].enable = true;

@@ -71,6 +71,10 @@ pub struct CoreParams {
     /// `TIMING_W`: width of the step timing settings and counters in bits
     /// ([`finestep_core::TIMING_W`]).
     pub timing_width: u32,
+    /// `HAS_GANTRY`: the gantry block is built ([`finestep_core::HAS_GANTRY`]); without
+    /// it the gantry inputs are ignored, its outputs read 0 and every axis takes its own
+    /// DDA's requests.
+    pub has_gantry: bool,
 }
 
 impl Default for CoreParams {
@@ -80,6 +84,7 @@ impl Default for CoreParams {
             n_axes: finestep_core::N_AXES.default as usize,
             p_width: finestep_core::P_WIDTH.default,
             timing_width: finestep_core::TIMING_W.default,
+            has_gantry: finestep_core::HAS_GANTRY.default != 0,
         }
     }
 }
@@ -89,7 +94,8 @@ impl CoreParams {
     pub fn validate(&self) -> Result<(), ParamError> {
         finestep_core::N_AXES.check(self.n_axes as u64)?;
         finestep_core::P_WIDTH.check(self.p_width)?;
-        finestep_core::TIMING_W.check(self.timing_width)
+        finestep_core::TIMING_W.check(self.timing_width)?;
+        finestep_core::HAS_GANTRY.check(self.has_gantry)
     }
 
     /// All ones in the low `p_width` bits: the largest period in clocks.
@@ -168,9 +174,10 @@ impl TopParams {
         finestep_top::HAS_MPG.check(self.has_mpg)
     }
 
-    /// The parameters of the core inside.
+    /// The parameters of the core inside (`finestep_top` builds it without the gantry
+    /// block until the gantry has registers).
     pub fn core_params(&self) -> CoreParams {
-        CoreParams { n_axes: self.n_axes, p_width: self.p_width, timing_width: self.timing_w }
+        CoreParams { n_axes: self.n_axes, p_width: self.p_width, timing_width: self.timing_w, has_gantry: false }
     }
 }
 
@@ -185,7 +192,7 @@ mod tests {
         assert_eq!(p.timing_mask(), 0xFFF);
         assert_eq!(p.effective_period(0), 1);
         assert_eq!(p.effective_period(0x10_0005), 5);
-        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32 };
+        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32, has_gantry: true };
         assert_eq!(wide.period_mask(), u32::MAX);
         assert!(wide.validate().is_ok());
     }

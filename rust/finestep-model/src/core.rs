@@ -277,21 +277,29 @@ impl Core {
         let axes = self.shaper[..n].iter_mut().zip(&mut self.dda[..n]).zip(&self.timer.inc[..n]).enumerate();
         // The DDAs hold their phase at M/2 until the period timer is running.
         let running = inputs.run && self.timer.active;
-        for (i, ((shaper, dda), &d)) in axes {
-            let r = gantry.shaper_request(i, &reqs, &increments, &inputs.gantry);
-            changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
-            dda.step(running, period, d, m);
+        if self.params.has_gantry {
+            for (i, ((shaper, dda), &d)) in axes {
+                let r = gantry.shaper_request(i, &reqs, &increments, &inputs.gantry);
+                changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
+                dda.step(running, period, d, m);
+            }
+            changed |= self.gantry.step(
+                &inputs.gantry,
+                &GantryContext {
+                    n_axes: n,
+                    master_req: reqs[gantry.master()],
+                    inc: increments,
+                    halt: inputs.halt,
+                    clear_errors: inputs.clear_errors,
+                },
+            );
+        } else {
+            // No gantry block: every axis its own DDA's request; the gantry stays in reset.
+            for (i, ((shaper, dda), &d)) in axes {
+                changed |= shaper.step(reqs[i], &axis(i), self.counter_max, inputs.clear_errors);
+                dda.step(running, period, d, m);
+            }
         }
-        changed |= self.gantry.step(
-            &inputs.gantry,
-            &GantryContext {
-                n_axes: n,
-                master_req: reqs[gantry.master()],
-                inc: increments,
-                halt: inputs.halt,
-                clear_errors: inputs.clear_errors,
-            },
-        );
         let timer_before = self.timer.output_bits();
         self.timer.step(&TimerInputs {
             run: inputs.run,

@@ -131,6 +131,9 @@ impl Core {
     /// request, which [`Self::quiet_cycles`] checks): its edge changes nothing but
     /// `tick_cnt` counting, up to the cycle before its next tick.
     fn gantry_quiet_cycles(&self, inputs: &CoreInputs) -> u64 {
+        if !self.params.has_gantry {
+            return u64::MAX;
+        }
         let g = &self.gantry;
         if g.corr != 0 {
             return 0;
@@ -172,7 +175,9 @@ impl Core {
             sh.cnt = u64::from(sh.cnt).saturating_add(k).min(max) as u32;
             sh.dcnt = u64::from(sh.dcnt).saturating_add(k).min(max) as u32;
         }
-        self.gantry.skip(k);
+        if self.params.has_gantry {
+            self.gantry.skip(k);
+        }
         self.cycle = self.cycle.wrapping_add(k);
     }
 }

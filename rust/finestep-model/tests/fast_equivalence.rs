@@ -171,8 +171,14 @@ fn case() -> impl Strategy<Value = Case> {
         1..=MAX_AXES,
         prop_oneof![Just(20u32), 1..=24u32, Just(32u32)],
         prop_oneof![Just(12u32), Just(4u32), 1..=16u32, Just(32u32)],
+        prop::bool::weighted(0.8),
     )
-        .prop_map(|(n_axes, p_width, timing_width)| CoreParams { n_axes, p_width, timing_width });
+        .prop_map(|(n_axes, p_width, timing_width, has_gantry)| CoreParams {
+            n_axes,
+            p_width,
+            timing_width,
+            has_gantry,
+        });
     (params, period_value(), prop::array::uniform8(axis_config()), prop::collection::vec(chunk(), 1..40))
         .prop_map(|(params, period, axes, chunks)| Case { params, period, axes, chunks })
 }

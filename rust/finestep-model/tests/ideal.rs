@@ -108,7 +108,12 @@ impl Spec {
     }
 
     fn run(&self, records: Vec<PeriodRecord>, drain: u64) -> Run {
-        let params = CoreParams { n_axes: self.axes.len(), p_width: 20, timing_width: self.timing_width };
+        let params = CoreParams {
+            n_axes: self.axes.len(),
+            p_width: 20,
+            timing_width: self.timing_width,
+            ..CoreParams::default()
+        };
         let mut axes = [AxisConfig::default(); MAX_AXES];
         for (slot, &(t, mode, invert)) in axes.iter_mut().zip(&self.axes) {
             *slot = axis(t, mode, invert);

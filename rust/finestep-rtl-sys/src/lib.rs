@@ -1,15 +1,16 @@
 //! The Verilated finestep core behind a safe wrapper, and the Verilated bus-level top
 //! ([`RtlTop`], driven at its pins).
 //!
-//! `build.rs` runs Verilator on `hdl/` (tops `finestep_core` and `finestep_top`, 4
-//! axes), compiles the
-//! generated C++, Verilator's runtime and the shim `sim/finestep_sim.cpp` with `cc`, and
+//! `build.rs` runs Verilator on `hdl/` (tops `finestep_core`, without and with the gantry
+//! block, behind the input registers of `sim/finestep_core_sim.v`, and `finestep_top`; 4
+//! axes), compiles the generated C++, Verilator's runtime and the shim `sim/finestep_sim.cpp` with `cc`, and
 //! generates [`ffi`] from `sim/finestep_sim.h` with bindgen. [`Rtl`] speaks the same
 //! types as the reference model ([`finestep_model::Core`]) so the two run side by side:
 //!
 //! ```no_run
 //! use finestep_model::CoreInputs;
-//! let mut rtl = finestep_rtl_sys::Rtl::new(); // Rtl::new_traced() to write waveforms
+//! // Rtl::new_traced() to write waveforms, Rtl::with_gantry() for the gantry block
+//! let mut rtl = finestep_rtl_sys::Rtl::new();
 //! let mut events = Vec::new();
 //! let end = rtl.run_chunk(&CoreInputs::default(), 1000, &mut events);
 //! assert_eq!(end.cycles, 1000);
@@ -32,7 +33,7 @@ pub mod ffi {
     include!(concat!(env!("OUT_DIR"), "/bindings.rs"));
 }
 
-/// The parameters the Verilated core was built with.
+/// The parameters of the Verilated core [`Rtl::new`] makes: without the gantry block.
 pub fn params() -> CoreParams {
     // SAFETY: pure functions returning build-time constants.
     unsafe {
@@ -40,8 +41,15 @@ pub fn params() -> CoreParams {
             n_axes: ffi::fs_n_axes() as usize,
             p_width: ffi::fs_p_width(),
             timing_width: ffi::fs_timing_width(),
+            has_gantry: false,
         }
     }
+}
+
+/// The parameters of the Verilated core [`Rtl::with_gantry`] makes: the same with the
+/// gantry block.
+pub fn gantry_params() -> CoreParams {
+    CoreParams { has_gantry: true, ..params() }
 }
 
 /// Whether waveforms are written as FST (feature `fst`) rather than VCD.
@@ -95,16 +103,46 @@ impl Default for Rtl {
 }
 
 impl Rtl {
-    /// A core fresh out of reset, at cycle 0, built without waveform support (fast).
+    /// A core fresh out of reset, at cycle 0, built without waveform support (fast) and
+    /// without the gantry block ([`params`]).
     pub fn new() -> Rtl {
-        // SAFETY: fs_new returns a valid owned pointer, freed in Drop.
-        Self::from_raw(unsafe { ffi::fs_new() })
+        Self::build(false, false)
     }
 
-    /// A core that can write waveforms ([`Rtl::trace_open`]); about a third slower.
+    /// The same core, able to write waveforms ([`Rtl::trace_open`]); about a third slower.
     pub fn new_traced() -> Rtl {
-        // SAFETY: fs_new_traced returns a valid owned pointer, freed in Drop.
-        Self::from_raw(unsafe { ffi::fs_new_traced() })
+        Self::build(false, true)
+    }
+
+    /// A core with the gantry block ([`gantry_params`]), without waveform support.
+    pub fn with_gantry() -> Rtl {
+        Self::build(true, false)
+    }
+
+    /// The core built as `params` say (the gantry block or not), able to write
+    /// waveforms when `traced`.
+    ///
+    /// # Panics
+    /// If `params` differ from [`params`] in anything but `has_gantry`.
+    pub fn for_params(params: &CoreParams, traced: bool) -> Rtl {
+        assert_eq!(
+            CoreParams { has_gantry: false, ..*params },
+            self::params(),
+            "no Verilated core was built with these parameters"
+        );
+        Self::build(params.has_gantry, traced)
+    }
+
+    fn build(gantry: bool, traced: bool) -> Rtl {
+        let gantry = i32::from(gantry);
+        // SAFETY: fs_new and fs_new_traced return a valid owned pointer, freed in Drop.
+        Self::from_raw(unsafe {
+            if traced {
+                ffi::fs_new_traced(gantry)
+            } else {
+                ffi::fs_new(gantry)
+            }
+        })
     }
 
     fn from_raw(sim: *mut ffi::fs_sim) -> Rtl {

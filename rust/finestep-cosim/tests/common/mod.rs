@@ -142,9 +142,10 @@ pub fn scenario(max_actions: usize) -> impl Strategy<Value = Scenario> {
     })
 }
 
-/// Play a scenario on RTL and model side by side; the first difference is an error.
+/// Play a scenario on RTL and model side by side, both with the gantry block; the first
+/// difference is an error.
 pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
-    let mut harness = Harness::new(name, path);
+    let mut harness = Harness::with_gantry(name, path);
     let mut inputs =
         CoreInputs { run: true, period_clocks: scenario.period_clocks, gantry: scenario.gantry, ..Default::default() };
     inputs.axes[..AXES].copy_from_slice(&scenario.axes);
