@@ -81,7 +81,6 @@ module position_fifo #(
     wire pop_int   = int_valid && (!out_valid_reg || pop) && !flush;     // the RAM, into the out stage
     wire commit    = wr_commit && !wr_abort && !flush;
     wire [DEPTH_LOG2:0] staged_now = staged_reg + {{DEPTH_LOG2{1'b0}}, write};
-    wire [DEPTH_LOG2:0] added      = commit ? staged_now : zero;
 
     // The counts after this edge as selections between sums of registers only: the
     // control decisions (a pop - the period timer's boundary, from across the die - a
