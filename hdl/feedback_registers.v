@@ -3,9 +3,9 @@
 // Specification: docs/spec/feedback_registers.md
 // Host registers of the feedback blocks (encoders, probe, hand wheel, jog): their
 // configuration fields, their one-shot arms, and their read values. It sits beside
-// register_file on the same arbitrated register bus: writes take effect at the edge
-// ending the grant cycle, pulses are high in the cycle after, and register_file ORs
-// `rdata` into its read data (unmapped addresses read 0 here).
+// register_file on the same arbitrated register bus, served from its bus stage: writes
+// take effect at the edge ending the serving cycle, pulses are high in the cycle after,
+// and register_file ORs `rdata` into its read data (unmapped addresses read 0 here).
 module feedback_registers #(
     parameter N_ENC   = 4,
     parameter N_AXES  = 4,

@@ -8,8 +8,9 @@
 // the high half must be written right after the low half, so 32-bit accesses over the
 // 16-bit bus are coherent and a torn write is refused rather than applied.
 //
-// Latency: read data is driven 6 clocks after RD falls at the pins (5 when the high half
-// comes from the latch); a write reaches the register bus 4 clocks after WR rises.
+// Latency: read data is driven 7 clocks after RD falls at the pins (5 when the high half
+// comes from the latch); a write reaches the register bus 4 clocks after WR rises (and
+// takes effect one clock after its grant, from the register file's bus stage).
 module parallel_bus_slave (
     // clock, reset
     input  wire        clk,
@@ -55,7 +56,8 @@ module parallel_bus_slave (
     reg        we_reg;
     reg [6:0]  req_addr_reg;
     reg [31:0] req_wdata_reg;
-    reg        wait_data_reg;     // a read was granted: rdata is valid now
+    reg        wait_serve_reg;    // a read was granted: the register file serves it now
+    reg        wait_data_reg;     // a read was served: rdata is valid now
     reg        read_half_reg;
 
     wire cs_active  = !cs_n_sync_reg[1];
@@ -63,7 +65,7 @@ module parallel_bus_slave (
     wire rd_low     = !rd_n_sync_reg[1];
     wire write_end  = wr_n_sync_reg[1] && !wr_n_sync_reg[2] && cs_before;
     wire read_start = rd_low && rd_n_sync_reg[2] && cs_active;
-    wire busy       = req_reg || wait_data_reg;
+    wire busy       = req_reg || wait_serve_reg || wait_data_reg;
     wire [6:0] reg_addr = addr_reg[7:1];
     wire       half_hi  = addr_reg[0];
     wire lo_matches = lo_valid_reg && (lo_reg_reg == reg_addr);
@@ -84,12 +86,13 @@ module parallel_bus_slave (
         if (!wr_n_sync_reg[1]) wdata_reg <= ad_sync_reg;
         if (!rd_low) ad_oe_reg <= 1'b0;
 
+        wait_serve_reg <= 1'b0;
+        wait_data_reg  <= wait_serve_reg;
         if (bus_grant) begin
-            req_reg       <= 1'b0;
-            wait_data_reg <= !we_reg;
+            req_reg        <= 1'b0;
+            wait_serve_reg <= !we_reg;
         end
         if (wait_data_reg) begin
-            wait_data_reg <= 1'b0;
             ad_out_reg    <= read_half_reg ? bus_rdata[31:16] : bus_rdata[15:0];
             ad_oe_reg     <= rd_low;
             if (!read_half_reg) begin
@@ -148,6 +151,7 @@ module parallel_bus_slave (
             we_reg         <= 1'b0;
             req_addr_reg   <= 7'd0;
             req_wdata_reg  <= 32'd0;
+            wait_serve_reg <= 1'b0;
             wait_data_reg  <= 1'b0;
             read_half_reg  <= 1'b0;
         end
@@ -186,7 +190,8 @@ module parallel_bus_slave (
             assert (req_wdata_reg == {$past(wdata_reg), $past(lo_data_reg)} && req_addr_reg == $past(reg_addr));
         end
         if (ad_oe_reg) assert ($past(rd_low));
-        assert (!(req_reg && wait_data_reg));
+        assert (!(req_reg && wait_data_reg) && !(req_reg && wait_serve_reg) && !(wait_serve_reg && wait_data_reg));
+        if (wait_data_reg) assert ($past(wait_serve_reg));
         if (hi_valid_reg) assert (hi_data_reg == f_low_read_word[31:16] && hi_reg_reg == f_low_read_reg);
         if ($rose(ad_oe_reg) && $past(read_start && half_hi && hi_matches && !busy))
             assert (bus_ad_out == f_low_read_word[31:16]);

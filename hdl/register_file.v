@@ -8,9 +8,11 @@
 // live in feedback_registers on the same arbitrated bus; their read value comes in as
 // `feedback_rdata`.
 //
-// Latency: a write granted in cycle n takes effect at the edge ending n (its command
-// pulses, push and watchdog kick are high in n+1); a read granted in n returns rdata in
-// n+1, computed from the state of cycle n.
+// Latency: a request granted in cycle n is registered at the edge ending n (the bus
+// stage) and served in n+1: a write takes effect at the edge ending n+1 (its command
+// pulses, push and watchdog kick are high in n+2); a read returns rdata in n+2, computed
+// from the state of cycle n+1. Neither the grant nor the masters' multiplexer sits in
+// front of the read multiplexer or the write decode.
 module register_file #(
     parameter N_AXES          = 4,
     parameter P_WIDTH         = 20,
@@ -176,15 +178,35 @@ module register_file #(
     reg                        push_reg;
     reg [FS_REC_FLAGS_WIDTH-1:0] push_flags_reg;
 
-    // Arbiter: SPI first.
+    // Arbiter: SPI first. The granted request goes into the bus stage; the stage is
+    // what is served, in the next cycle.
     wire        grant_spi = spi_req;
     wire        grant_par = par_req && !spi_req;
     wire        granted   = grant_spi || grant_par;
-    wire        bus_we    = grant_spi ? spi_we : par_we;
-    wire [ADDR_W-1:0] bus_addr  = grant_spi ? spi_addr : par_addr;
-    wire [WORD_W-1:0] bus_wdata = grant_spi ? spi_wdata : par_wdata;
-    wire        write     = granted && bus_we;
-    wire        read      = granted && !bus_we;
+    reg               stage_valid_reg;
+    reg               stage_we_reg;
+    reg  [ADDR_W-1:0] stage_addr_reg;
+    reg  [WORD_W-1:0] stage_wdata_reg;
+    always @(posedge clk) begin
+        if (rst) begin
+            stage_valid_reg <= 1'b0;
+            stage_we_reg    <= 1'b0;
+            stage_addr_reg  <= {ADDR_W{1'b0}};
+            stage_wdata_reg <= {WORD_W{1'b0}};
+        end else begin
+            stage_valid_reg <= granted;
+            if (granted) begin
+                stage_we_reg    <= grant_spi ? spi_we : par_we;
+                stage_addr_reg  <= grant_spi ? spi_addr : par_addr;
+                stage_wdata_reg <= grant_spi ? spi_wdata : par_wdata;
+            end
+        end
+    end
+    wire              bus_we    = stage_we_reg;
+    wire [ADDR_W-1:0] bus_addr  = stage_addr_reg;
+    wire [WORD_W-1:0] bus_wdata = stage_wdata_reg;
+    wire              write     = stage_valid_reg && bus_we;
+    wire              read      = stage_valid_reg && !bus_we;
 
     wire any_rate_error = |rate_error;
     wire any_step_lost  = |step_lost;
@@ -516,6 +538,12 @@ module register_file #(
         if ($past(clear_counters_reg)) assert (underrun_count_reg == 16'd0 && crc_error_count_reg == 16'd0 &&
                                               refused_count_reg == 16'd0);
         if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
+        // The bus stage serves exactly the request granted in the cycle before.
+        assert (stage_valid_reg == $past(granted));
+        if ($past(grant_spi)) assert (bus_we == $past(spi_we) && bus_addr == $past(spi_addr) &&
+                                      bus_wdata == $past(spi_wdata));
+        if ($past(grant_par)) assert (bus_we == $past(par_we) && bus_addr == $past(par_addr) &&
+                                      bus_wdata == $past(par_wdata));
         cover (push_write);
         cover ($past(push_refused));
     end

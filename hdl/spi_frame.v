@@ -86,6 +86,7 @@ module spi_frame #(
     reg             bus_we_reg;
     reg [6:0]       bus_addr_reg;
     reg [31:0]      bus_wdata_reg;
+    reg             read_granted_reg;  // a read granted last cycle: the register file serves it now
     reg             capture_reg;       // bus_rdata holds a read for next_word
     reg             wr_en_reg;
     reg             wr_commit_reg;
@@ -143,7 +144,8 @@ module spi_frame #(
         wr_en_reg     <= 1'b0;
         wr_commit_reg <= 1'b0;
         wr_abort_reg  <= 1'b0;
-        capture_reg   <= bus_grant && !bus_we_reg;
+        read_granted_reg <= bus_grant && !bus_we_reg;
+        capture_reg      <= read_granted_reg;
         if (capture_reg) next_word_reg <= bus_rdata;
         if (bus_grant) bus_req_reg <= 1'b0;
 
@@ -279,6 +281,7 @@ module spi_frame #(
             bus_we_reg       <= 1'b0;
             bus_addr_reg     <= 7'd0;
             bus_wdata_reg    <= 32'd0;
+            read_granted_reg <= 1'b0;
             capture_reg      <= 1'b0;
             wr_en_reg        <= 1'b0;
             wr_commit_reg    <= 1'b0;

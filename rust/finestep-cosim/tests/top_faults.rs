@@ -472,8 +472,9 @@ fn watchdog_halts_mid_move() {
     let run_wd = control::ESTOP_ACTIVE_HIGH.mask() | control::WATCHDOG_ENABLE.mask() | control::RUN.mask();
     let last_rise = timed_write(host(&mut m), control::ADDR, run_wd, sck_half);
     // The CRC's last byte is received 3 clocks after its 8th rising SCK edge; the write
-    // it requests is granted in the next cycle and kicks in the one after.
-    let kick = last_rise + 3 + 1 + 1;
+    // it requests is granted in the next cycle, served from the register file's bus stage
+    // in the one after, and kicks in the one after that.
+    let kick = last_rise + 3 + 1 + 1 + 1;
     // Reads do not kick the watchdog.
     assert_eq!(read(&mut m, control::ADDR), run_wd);
     assert_eq!(status::STREAMING.get(ok(m.status())), 1);

@@ -10,8 +10,8 @@
 //! write); a read of the low half latches the high half, so a 32-bit read (low, then
 //! high) is coherent. Latency, counting the first cycle a strobe pin is low as `n`: a
 //! read strobe is seen in `n+2`, its register read requested in `n+3` and, granted at
-//! once, driven on `bus_ad` from `n+5` (from `n+3` for a latched high half); `bus_ad`
-//! is released 3 clocks after `bus_rd_n` rises.
+//! once (served by the register file in `n+4`), driven on `bus_ad` from `n+6` (from
+//! `n+3` for a latched high half); `bus_ad` is released 3 clocks after `bus_rd_n` rises.
 
 use crate::register_bus::BusRequest;
 
@@ -83,7 +83,9 @@ pub struct ParallelBusSlave {
     /// strobe started.
     read_half: bool,
     read_reg: u8,
-    /// The read granted last cycle: its `rdata` is taken at this edge.
+    /// The read granted last cycle: the register file serves it in this cycle.
+    read_served: bool,
+    /// The read served last cycle: its `rdata` is taken at this edge.
     read_returning: bool,
 }
 
@@ -109,6 +111,7 @@ impl Default for ParallelBusSlave {
             request: None,
             read_half: false,
             read_reg: 0,
+            read_served: false,
             read_returning: false,
         }
     }
@@ -141,7 +144,8 @@ impl ParallelBusSlave {
         let ad_s = self.ad_sync[1];
         let reg = (self.addr >> 1) & 0x7F;
         let half_high = self.addr & 1 != 0;
-        let busy = self.request.is_some();
+        // Requested, or granted with its read data not yet taken.
+        let busy = self.request.is_some() || self.read_served || self.read_returning;
         let write_end = wr_s && !self.wr.prev && !self.cs.prev;
         let read_start = !rd_s && self.rd.prev && !cs_s;
         let mut error = false;
@@ -166,9 +170,10 @@ impl ParallelBusSlave {
             }
             self.ad_oe = !rd_s;
         }
-        self.read_returning = false;
+        self.read_returning = self.read_served;
+        self.read_served = false;
         if granted {
-            self.read_returning = self.request.is_some_and(|r| !r.write);
+            self.read_served = self.request.is_some_and(|r| !r.write);
             self.request = None;
         }
         if rd_s {

@@ -11,10 +11,11 @@
 //! `TIMING_W`, `PERIOD_CLOCKS` to `P_WIDTH`, `WATCHDOG_TIMEOUT` to `WD_W`, per-axis
 //! registers and bits to `N_AXES`).
 //!
-//! Latency: a request granted in cycle `n` is served at the edge ending `n`: a read's
-//! value (from the state of cycle `n`) is in `rdata` in `n+1`; a write's `rw` bits hold
-//! from `n+1`, and its pulses (`COMMAND`, `RECORD_PUSH`, the encoder and probe arms, the
-//! watchdog kick) are high in `n+1` only.
+//! Latency: a request granted in cycle `g` goes into the bus stage and is served in
+//! cycle `n = g + 1` (the `served` input of [`RegisterFile::step`]; the stage is kept by
+//! `top`): a read's value (from the state of cycle `n`) is in `rdata` in `n+1`; a write's
+//! `rw` bits hold from `n+1`, and its pulses (`COMMAND`, `RECORD_PUSH`, the encoder and
+//! probe arms, the watchdog kick) are high in `n+1` only.
 //!
 //! The feedback registers (encoders, probe, hand wheel, jog) read the blocks' state
 //! through [`FeedbackStatus`]; their settings are `rw` bits here like any other.

@@ -131,7 +131,9 @@ pub struct SpiFrame {
     read_addr: u8,
     any_bits: bool,
     request: Option<BusRequest>,
-    /// The read granted last cycle: `rdata` goes to `next_word` at this edge.
+    /// The read granted last cycle: the register file serves it in this cycle.
+    read_served: bool,
+    /// The read served last cycle: `rdata` goes to `next_word` at this edge.
     read_returning: bool,
     port: SpiFifoPort,
 }
@@ -159,6 +161,7 @@ impl SpiFrame {
             read_addr: 0,
             any_bits: false,
             request: None,
+            read_served: false,
             read_returning: false,
             port: SpiFifoPort::default(),
         }
@@ -242,9 +245,10 @@ impl SpiFrame {
         if self.read_returning {
             self.next_word = inp.rdata;
         }
-        self.read_returning = false;
+        self.read_returning = self.read_served;
+        self.read_served = false;
         if inp.granted {
-            self.read_returning = self.request.is_some_and(|r| !r.write);
+            self.read_served = self.request.is_some_and(|r| !r.write);
             self.request = None;
         }
 

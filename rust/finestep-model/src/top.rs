@@ -37,7 +37,8 @@ use crate::motion_control::{MotionControl, MotionInputs};
 use crate::parallel_bus_slave::{ParallelBusSlave, ParallelPins};
 use crate::position_fifo::PositionFifo;
 use crate::register_file::{
-    arbitrate, position_latch, FeedbackStatus, Grant, HardwareStatus, RegisterFile, RegisterFileInputs, ADDRESSES,
+    arbitrate, position_latch, BusRequest, FeedbackStatus, Grant, HardwareStatus, RegisterFile, RegisterFileInputs,
+    ADDRESSES,
 };
 use crate::safety_monitor::{SafetyInputs, SafetyMonitor};
 use crate::spi_frame::{SpiFrame, SpiFrameInputs};
@@ -308,8 +309,11 @@ pub struct Top {
     jog: JogGenerator,
     cycle: u64,
     /// The SPI frame layer committed a FIFO frame last cycle: the kick's flip-flop
-    /// (`kick <- granted write || wr_commit`) for the commit half.
+    /// (`kick <- served write || wr_commit`) for the commit half.
     committed_last_cycle: bool,
+    /// The register file's bus stage: the request granted last cycle, served in this one
+    /// (docs/spec/register_file.md).
+    bus_stage: Option<BusRequest>,
 }
 
 impl Top {
@@ -345,6 +349,7 @@ impl Top {
             jog: JogGenerator::default(),
             cycle: 0,
             committed_last_cycle: false,
+            bus_stage: None,
         })
     }
 
@@ -526,7 +531,9 @@ impl Top {
         let spi_request = if p.has_spi { self.spi_frame.request() } else { None };
         let parallel_request = if p.has_parallel { self.parallel.request() } else { None };
         let grant = arbitrate(spi_request, parallel_request);
-        let served = grant.map(|(_, request)| request);
+        // The grant goes into the bus stage; what is served now was granted last cycle.
+        let served = self.bus_stage;
+        self.bus_stage = grant.map(|(_, request)| request);
         let rdata = self.registers.rdata();
 
         // The FIFO's write port and read side.

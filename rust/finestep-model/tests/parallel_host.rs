@@ -101,7 +101,7 @@ fn read_data_timing_is_as_documented() {
             assert_eq!(out.bus_ad_out, regs::id::MAGIC_VALUE as u16);
         }
     }
-    assert!(first_driven.is_some_and(|d| d <= 6), "driven {first_driven:?} clocks after bus_rd_n fell, spec: from 6");
+    assert_eq!(first_driven, Some(6), "driven {first_driven:?} clocks after bus_rd_n fell, spec: from cycle 6");
     bench.pins.bus_rd_n = true;
     let rise = bench.since_reset;
     let mut released = None;
