@@ -9,6 +9,20 @@
 // mode a detent that would put the target more than JOG_WINDOW from the commanded
 // position is dropped and counted; in follow mode every detent is followed, later.
 // The jog engages only while RUN is 0: the jog and the FIFO never drive the core at once.
+//
+// Area (the same function and schedule as the spec's registers, fewer and narrower ones):
+// - The spec's target and cmd are held as one 48-bit difference rem = target - cmd.
+// - |m * JOG_SCALE| <= 100 * 2^31 < 2^38: the travel is 39 bits signed; x10 = 2 * 5s and
+//   x100 = 4 * 25s come from two shift-adds in series (5s, then 5 * 5s). The window is
+//   held as its 16 bits (W = JOG_WINDOW * 65536).
+// - The detent check stays one carry chain from registers per bound (a detent can follow
+//   a detent on the next clock: hand_wheel sampled every clock moves `detents` back and
+//   forth on consecutive clocks when its contacts bounce): the bounds travel + W and
+//   travel - W - 1 are held, and the check for -travel uses the same two against ~rem.
+//   40 bits suffice: for |rem| >= 2^38 every detent is out of the window.
+// - -travel is never held: the step is travel ^ {down} with the 1 as a carry in.
+// - vel == 0 and next_vel == 0 are flags kept beside the registers, so the disengage
+//   decision (which restarts or drops the velocity computation) carries no 32-bit compare.
 module jog_generator #(
     parameter N_AXES  = 4,
     parameter P_WIDTH = 20
@@ -52,58 +66,74 @@ module jog_generator #(
     reg  [47:0] rem_reg;            // target - cmd: the spec's two positions held as their difference
     reg  [31:0] vel_reg;
     reg  [31:0] next_vel_reg;
+    reg         vel_zero_reg;       // vel == 0 and next_vel == 0, kept beside them so that the
+    reg         next_vel_zero_reg;  // disengage decision carries no 32-bit compare
     reg  [1:0]  last_det_reg;
     reg  [15:0] dropped_reg;
     reg         refused_reg;
-    // The detent configuration through two registers, so that no detent decision adds
-    // the shift-adds of the travel and the window to its own carry chains.
-    reg  [47:0] travel_cfg_reg;     // m * JOG_SCALE of the cycle before
-    reg  [47:0] window_cfg_reg;     // JOG_WINDOW * 65536 of the cycle before
-    reg  [47:0] travel_reg;         // the travel a detent uses (two cycles behind)
-    reg  [47:0] travel_neg_reg;     // its negative
-    // |rem + s| <= W for s = +travel and s = -travel, as two signs each (49 bits: exact):
-    // rem + s - W - 1 < 0 and rem + s + W >= 0.
-    reg  [48:0] up_over_reg, up_under_reg, down_over_reg, down_under_reg;
-
+    // The detent configuration through two registers (the spec's travel_cfg/window_cfg, then
+    // travel/window): the travel of a detent, m * JOG_SCALE (|.| < 2^38: 39 bits signed),
+    // and the window in units of 65536 (16 bits); then the travel and the two window
+    // bounds the detent check adds to the distance, travel + W and travel - W - 1 (40 bits
+    // signed; travel + W has the travel's low 16 bits, so only its high 24 are held).
+    reg  [38:0] travel_cfg_reg;
+    reg  [15:0] window_cfg_reg;
+    reg  [38:0] travel_reg;
+    reg  [39:16] bound_hi_reg;      // travel + W, bits 39..16
+    reg  [39:0] bound_lo_reg;       // travel - W - 1
     // `detents` moves by at most one a cycle (hand_wheel): its low two bits tell the way.
-    wire [1:0]  delta_low  = detents[1:0] - last_det_reg[1:0];
-    wire        det_up     = (delta_low == 2'd1);
-    wire        det_down   = (delta_low == 2'd3);
+    // (detents - last_det)[1:0] is 1 (up) or 3 (down): bit 0 moved, and bit 1 is last_det's
+    // bit 1 plus the carry (up) or the borrow (down) of bit 0. One LUT4 each.
+    wire        det_moved  = (detents[0] != last_det_reg[0]);
+    wire        det_high   = detents[1] ^ last_det_reg[1];
+    wire        det_up     = det_moved && (det_high == last_det_reg[0]);
+    wire        det_down   = det_moved && (det_high != last_det_reg[0]);
     wire        period_ok  = ({{(32-P_WIDTH){1'b0}}, period_clocks} >= MIN_PERIOD);
     wire        axis_ok    = ({29'd0, axis_select} < N_AXES);
     wire        engage     = !engaged_reg && enable && !run && !halt && period_ok && axis_ok;
     wire        boundary   = engaged_reg && rec_ready;
-    wire        disengage  = boundary && !enable && (vel_reg == 32'd0) && (next_vel_reg == 32'd0);
+    wire        disengage  = boundary && !enable && vel_zero_reg && next_vel_zero_reg;
 
-    // Travel of one detent: scale times 1, 10 or 100 (shift-adds), sign-extended.
-    wire [47:0] scale_x1   = {{16{scale[31]}}, scale};
-    wire [47:0] scale_x10  = (scale_x1 << 3) + (scale_x1 << 1);
-    wire [47:0] scale_x100 = (scale_x1 << 6) + (scale_x1 << 5) + (scale_x1 << 2);
-    wire [47:0] detent_travel = (multiplier == FS_JOG_MULTIPLIER_X1) ? scale_x1 :
-                                (multiplier == FS_JOG_MULTIPLIER_X10) ? scale_x10 : scale_x100;
-    wire [48:0] travel_cfg_49 = {travel_cfg_reg[47], travel_cfg_reg};
-    wire [48:0] window_cfg_49 = {1'b0, window_cfg_reg};
+    // Travel of one detent: 5s, 25s = 5 * 5s (two shift-adds in series), then s, 10s = 2 * 5s
+    // or 100s = 4 * 25s.
+    wire [38:0] scale_x1   = {{7{scale[31]}}, scale};
+    wire [38:0] scale_x5   = (scale_x1 << 2) + scale_x1;
+    wire [38:0] scale_x25  = (scale_x5 << 2) + scale_x5;
+    wire [38:0] detent_travel = (multiplier == FS_JOG_MULTIPLIER_X1) ? scale_x1 :
+                                (multiplier == FS_JOG_MULTIPLIER_X10) ? (scale_x5 << 1) : (scale_x25 << 2);
+    wire [39:0] travel_cfg_40 = {travel_cfg_reg[38], travel_cfg_reg};
+    wire [39:0] window_cfg_40 = {8'd0, window_cfg_reg, 16'd0};
 
-    wire [48:0] rem_49     = {rem_reg[47], rem_reg};
-    wire [48:0] up_over    = rem_49 + up_over_reg;
-    wire [48:0] up_under   = rem_49 + up_under_reg;
-    wire [48:0] down_over  = rem_49 + down_over_reg;
-    wire [48:0] down_under = rem_49 + down_under_reg;
-    wire        in_window  = det_up ? (up_over[48] && !up_under[48]) : (down_over[48] && !down_under[48]);
-    wire unused_sums = &{1'b0, up_over[47:0], up_under[47:0], down_over[47:0], down_under[47:0]};
+    // |rem + s| <= W for s = +travel and s = -travel, each as the signs of two carry
+    // chains from registers, with H = travel + W and L = travel - W - 1: up, rem + L < 0 and
+    // rem + H >= 0; down (rem - travel <= W is rem <= H, rem - travel >= -W is rem > L),
+    // H - rem >= 0 and L - rem < 0 (the down chains share ~rem). |travel| <= 100 (2^31) and
+    // W < 2^32 make |travel| + W + 1 < 2^38: in 40 bits the sums are exact for |rem| < 2^38,
+    // and a larger |rem| leaves |rem + s| > 2^38 - 100 (2^31) > W: out of the window.
+    wire        rem_small  = (rem_reg[47:38] == {10{rem_reg[38]}});
+    wire [39:0] rem_40     = {rem_reg[38], rem_reg[38:0]};
+    wire [39:0] bound_hi   = {bound_hi_reg, travel_reg[15:0]};
+    wire [39:0] up_over    = rem_40 + bound_lo_reg;
+    wire [39:0] up_under   = rem_40 + bound_hi;
+    wire [39:0] down_over  = bound_hi - rem_40;
+    wire [39:0] down_under = bound_lo_reg - rem_40;
+    wire        in_window  = rem_small && (det_up ? (up_over[39] && !up_under[39])
+                                                  : (!down_over[39] && down_under[39]));
+    wire unused_sums = &{1'b0, up_over[38:0], up_under[38:0], down_over[38:0], down_under[38:0]};
+    // The signed step of this cycle's detent, +travel or -travel (= ~travel + 1: the 1 is
+    // the carry into the sum below, made by a low bit that is 1 on both sides).
+    wire [47:0] step_inv   = {{9{travel_reg[38]}}, travel_reg} ^ {48{det_down}};
     wire        detent_now = engaged_reg && enable && !halt && (det_up || det_down);   // a halt wins
     wire        follows    = detent_now && (follow || in_window);
 
     // rem after this cycle: minus the record taken at a boundary, plus a followed detent.
-    // The four outcomes are summed side by side from registers (the three-input one is a
-    // carry-save layer and one chain) and chosen by the boundary and the window check.
     wire [47:0] vel_wide    = {{16{next_vel_reg[31]}}, next_vel_reg};
-    wire [47:0] travel_sel  = det_up ? travel_reg : travel_neg_reg;
-    wire [47:0] rem_taken   = rem_reg - vel_wide;
-    wire [47:0] rem_stepped = rem_reg + travel_sel;
-    wire [47:0] rem_both    = rem_reg - vel_wide + travel_sel;
+    wire [47:0] rem_inv     = ~rem_reg;                      // rem - v = ~(~rem + v): the
+    wire [47:0] rem_taken   = ~(rem_inv + vel_wide);         // down chains' ~rem, shared
     wire [47:0] rem_kept    = boundary ? rem_taken : rem_reg;
-    wire [47:0] rem_moved   = boundary ? rem_both : rem_stepped;
+    wire [48:0] moved_sum   = {rem_kept, 1'b1} + {step_inv, det_down};
+    wire [47:0] rem_moved   = moved_sum[48:1];
+    wire unused_moved = &{1'b0, moved_sum[0]};
 
     wire        result_valid;
     wire [31:0] result;
@@ -118,20 +148,23 @@ module jog_generator #(
     always @(posedge clk) begin
         last_det_reg   <= detents[1:0];
         travel_cfg_reg <= detent_travel;
-        window_cfg_reg <= {16'd0, window, 16'd0};
+        window_cfg_reg <= window;
         travel_reg     <= travel_cfg_reg;
-        travel_neg_reg <= -travel_cfg_reg;
-        up_over_reg    <= travel_cfg_49 - window_cfg_49 - 49'd1;
-        up_under_reg   <= travel_cfg_49 + window_cfg_49;
-        down_over_reg  <= -travel_cfg_49 - window_cfg_49 - 49'd1;
-        down_under_reg <= window_cfg_49 - travel_cfg_49;
+        bound_hi_reg   <= travel_cfg_40[39:16] + window_cfg_40[39:16];
+        bound_lo_reg   <= travel_cfg_40 + ~window_cfg_40;
 
         rem_reg <= follows ? rem_moved : rem_kept;
         if (detent_now && !follows) dropped_reg <= dropped_reg + 16'd1;
         if (clear_counters) dropped_reg <= 16'd0;
 
-        if (result_valid) next_vel_reg <= result;
-        if (boundary) vel_reg <= next_vel_reg;
+        if (result_valid) begin
+            next_vel_reg      <= result;
+            next_vel_zero_reg <= (result == 32'd0);
+        end
+        if (boundary) begin
+            vel_reg      <= next_vel_reg;
+            vel_zero_reg <= next_vel_zero_reg;
+        end
         if (disengage) engaged_reg <= 1'b0;
 
         if (engage) begin
@@ -147,28 +180,24 @@ module jog_generator #(
 
         if (halt) engaged_reg <= 1'b0;
         // Engaging starts from rest at position 0; a halt leaves the jog there.
-        if (engage || halt) begin
-            rem_reg      <= 48'd0;
-            vel_reg      <= 32'd0;
-            next_vel_reg <= 32'd0;
+        if (engage || halt || rst) begin
+            rem_reg           <= 48'd0;
+            vel_reg           <= 32'd0;
+            next_vel_reg      <= 32'd0;
+            vel_zero_reg      <= 1'b1;
+            next_vel_zero_reg <= 1'b1;
         end
         if (rst) begin
             engaged_reg    <= 1'b0;
             axis_reg       <= 3'd0;
-            rem_reg        <= 48'd0;
-            vel_reg        <= 32'd0;
-            next_vel_reg   <= 32'd0;
             last_det_reg   <= 2'd0;
             dropped_reg    <= 16'd0;
             refused_reg    <= 1'b0;
-            travel_cfg_reg <= 48'd0;
-            window_cfg_reg <= 48'd0;
-            travel_reg     <= 48'd0;
-            travel_neg_reg <= 48'd0;
-            up_over_reg    <= -49'd1;
-            up_under_reg   <= 49'd0;
-            down_over_reg  <= -49'd1;
-            down_under_reg <= 49'd0;
+            travel_cfg_reg <= 39'd0;
+            window_cfg_reg <= 16'd0;
+            travel_reg     <= 39'd0;
+            bound_hi_reg   <= 24'd0;
+            bound_lo_reg   <= -40'd1;
         end
     end
 
@@ -202,25 +231,30 @@ module jog_generator #(
     always @(posedge clk) f_prev_det <= rst ? 32'd0 : detents;
     wire [31:0] f_det_step = detents - f_prev_det;
     always @(*) if (f_past_valid) assume (f_det_step == 32'd0 || f_det_step == 32'd1 || f_det_step == 32'hFFFF_FFFF);
-    // The configuration the detents use: two cycles behind, consistent.
+    // The configuration the detents use: two cycles behind, consistent. The travel is the
+    // spec's m * JOG_SCALE as a product (not the RTL's shift-adds).
+    wire [47:0] f_scale_48  = {{16{scale[31]}}, scale};
+    wire [47:0] f_travel_0  = (multiplier == FS_JOG_MULTIPLIER_X1) ? f_scale_48 :
+                              (multiplier == FS_JOG_MULTIPLIER_X10) ? f_scale_48 * 48'd10 : f_scale_48 * 48'd100;
     reg  [47:0] f_travel_1, f_travel_2, f_window_1, f_window_2;
     always @(posedge clk) begin
-        f_travel_1 <= rst ? 48'd0 : detent_travel;
+        f_travel_1 <= rst ? 48'd0 : f_travel_0;
         f_travel_2 <= rst ? 48'd0 : f_travel_1;
         f_window_1 <= rst ? 48'd0 : {16'd0, window, 16'd0};
         f_window_2 <= rst ? 48'd0 : f_window_1;
     end
-    wire [47:0] f_cand_gap  = rem_reg + (det_up ? travel_reg : -travel_reg);
+    wire [47:0] f_cand_gap  = rem_reg + (det_up ? f_travel_2 : -f_travel_2);
     wire [47:0] f_gap_abs   = f_cand_gap[47] ? -f_cand_gap : f_cand_gap;
     wire [47:0] f_taken     = vel_wide;
+    wire [47:0] f_travel_cfg_48 = {{9{travel_cfg_reg[38]}}, travel_cfg_reg};
+    wire [47:0] f_travel_48     = {{9{travel_reg[38]}}, travel_reg};
+    // |m * JOG_SCALE| <= 100 * 2^31: the bound the 39-bit travel and the 40-bit window sums use.
+    wire [47:0] f_travel_max    = 48'd100 << 31;
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         begin
-            assert (travel_reg == f_travel_2);
-            assert (travel_neg_reg == -f_travel_2);
-            assert (up_over_reg == {f_travel_2[47], f_travel_2} - {1'b0, f_window_2} - 49'd1);
-            assert (up_under_reg == {f_travel_2[47], f_travel_2} + {1'b0, f_window_2});
-            assert (down_over_reg == -{f_travel_2[47], f_travel_2} - {1'b0, f_window_2} - 49'd1);
-            assert (down_under_reg == {1'b0, f_window_2} - {f_travel_2[47], f_travel_2});
+            assert (f_travel_48 == f_travel_2);
+            assert ({{8{bound_hi[39]}}, bound_hi} == f_travel_2 + f_window_2);
+            assert ({{8{bound_lo_reg[39]}}, bound_lo_reg} == f_travel_2 - f_window_2 - 48'd1);
             if (det_up || det_down) assert (in_window == (f_gap_abs <= f_window_2));
         end
         if (engaged_reg && !$past(engaged_reg))
@@ -230,24 +264,32 @@ module jog_generator #(
         if ($past(enable && run)) assert (refused_reg);
         if (!$past(engage) && !$past(halt))
             assert (rem_reg == $past(rem_reg) - ($past(boundary) ? $past(f_taken) : 48'd0) +
-                    (!$past(follows) ? 48'd0 : $past(det_up) ? $past(travel_reg) : -$past(travel_reg)));
+                    (!$past(follows) ? 48'd0 : $past(det_up) ? $past(f_travel_2) : -$past(f_travel_2)));
         if ($past(follows)) assert ($past(detent_now) && ($past(follow) || $past(f_gap_abs) <= $past(f_window_2)));
         if (!$past(engage) && !$past(halt) && !$past(clear_counters) && $past(detent_now) && !$past(follow) &&
             !($past(f_gap_abs) <= $past(f_window_2)))
             assert (dropped_reg == $past(dropped_reg) + 16'd1);
+        if (!$past(engage) && !$past(halt) && !$past(clear_counters) && !($past(detent_now) && !$past(follows)))
+            assert (dropped_reg == $past(dropped_reg));
         if ($past(boundary) && !$past(engage) && !$past(halt)) assert (vel_reg == $past(next_vel_reg));
         if (!$past(boundary) && !$past(engage) && !$past(halt)) assert (vel_reg == $past(vel_reg));
+        // The disengage decision: the spec's vel == 0 and next_vel == 0, from the flags.
+        if ($past(boundary) && !$past(enable) && $past(vel_reg) == 32'd0 && $past(next_vel_reg) == 32'd0 && !$past(engage))
+            assert (!engaged_reg);
+        if ($past(engaged_reg) && !$past(halt) && !($past(boundary) && !$past(enable) &&
+            $past(vel_reg) == 32'd0 && $past(next_vel_reg) == 32'd0))
+            assert (engaged_reg);
         cover (engaged_reg && rem_reg != 48'd0);
         cover ($past(engaged_reg) && !engaged_reg && !$past(halt));
-        cover ($past(detent_now) && !$past(follows) && $past(travel_reg) != 48'd0);
+        cover ($past(detent_now) && !$past(follows) && $past(travel_reg) != 39'd0);
     end
-    // The travel is sign-extended from at most 39 bits (|100 * JOG_SCALE| < 2^38), which
-    // keeps the 49-bit window sums exact.
     always @(*) if (f_past_valid && !rst) begin
-        assert (travel_cfg_reg[47:38] == {10{travel_cfg_reg[47]}});
-        assert (travel_reg[47:38] == {10{travel_reg[47]}});
-        assert (window_cfg_reg[15:0] == 16'd0 && window_cfg_reg[47:32] == 16'd0);
+        assert (f_travel_cfg_48 == f_travel_1);
+        assert ({16'd0, window_cfg_reg, 16'd0} == f_window_1);
+        assert (f_travel_1[47] ? (-f_travel_1 <= f_travel_max) : (f_travel_1 <= f_travel_max));
         assert (last_det_reg == f_prev_det[1:0]);
+        assert (vel_zero_reg == (vel_reg == 32'd0));
+        assert (next_vel_zero_reg == (next_vel_reg == 32'd0));
     end
     always @(*) if (f_past_valid && !rst && !engaged_reg) assert (rec_inc == {32*N_AXES{1'b0}} || next_vel_reg != 32'd0);
 `endif
