@@ -172,12 +172,17 @@ fn faults_beyond_the_filter_are_flagged() {
             let snapshot = machine.feedback().unwrap();
             for channel in 0..2 {
                 let encoder = plant_of(&machine).encoder(channel);
-                let log = encoder.faults();
-                prop_assert!(log.missing_edges + log.glitches > 0, "no fault injected: {log:?}");
+                let faulted = encoder.faults().missing_edges + encoder.faults().glitches > 0;
                 let held = encoder.levels() != encoder.ideal_levels();
                 let ideal = encoder.ideal_count();
                 let exact = i64::from(snapshot.counts[channel]) == ideal;
                 let (illegal, _) = machine.encoder_errors(channel).unwrap();
+                if !faulted {
+                    // The plant's random faults happened not to strike this channel (a
+                    // seed seen to do so: 0x463fd65889c68847): then it is a clean run.
+                    prop_assert!(exact && !illegal, "channel {channel}, no fault: {snapshot:?} vs {ideal}");
+                    continue;
+                }
                 prop_assert!(exact || illegal || held, "channel {channel}: silent miscount {snapshot:?} vs {ideal}");
             }
             Ok(())
