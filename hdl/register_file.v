@@ -339,7 +339,8 @@ module register_file #(
         end
     end
 
-    // The read port (one clock of latency) and the interrupt pin.
+    // The read port (the stage's read answers at the edge ending its serving cycle) and
+    // the interrupt pin.
     always @(posedge clk) begin
         if (rst) begin
             irq_reg   <= 1'b0;
