@@ -7,31 +7,14 @@
 //! computation's extremes: |target - cmd| >= 2^40 (JOG_SCALE near 2^31 at x100, several
 //! detents followed), JOG_ACCEL near 2^31 with a small JOG_VMAX, and JOG_VMAX = 0.
 
-use finestep_cosim::{PlantLoop, TopLockstep};
 use finestep_host::regs::{jog_control, jog_scale, jog_vmax, jog_window};
-use finestep_host::{AxisSetup, Bus, JogMultiplier, JogSetup, JogState, Machine, PinHost, PinTiming, SpiBus};
-use finestep_model::{DriveTiming, Increment};
+use finestep_host::{Bus, JogMultiplier, JogSetup, JogState};
+use finestep_model::Increment;
 use finestep_plant::{Bounce, DriveConfig, HandWheelConfig, Plant, PlantConfig};
 
-type Chip = Machine<SpiBus<PinHost<PlantLoop<TopLockstep>>>>;
+mod plant_chip;
 
-const PERIOD: u32 = 2000;
-
-fn connect(name: &str, plant: Plant) -> Chip {
-    let mut host = PinHost::new(PlantLoop::new(TopLockstep::new(name), plant), PinTiming::default());
-    host.reset(4).unwrap();
-    host.idle(8).unwrap();
-    let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
-    let axis = AxisSetup { timing: DriveTiming::new(20, 20, 10, 10), ..AxisSetup::default() };
-    for i in 0..machine.caps().n_axes {
-        machine.configure_axis(i, &axis).unwrap();
-    }
-    machine.enable_axes(0xF).unwrap();
-    machine.set_period(PERIOD).unwrap();
-    machine.set_start_level(4).unwrap();
-    machine.clear_faults_and_errors().unwrap();
-    machine
-}
+use plant_chip::{connect, turn, Chip, PERIOD};
 
 /// A wheel whose contacts bounce `extra` pairs of toggles within `within` cycles of each
 /// edge (none: a clean wheel).
@@ -52,11 +35,6 @@ fn wheel_plant(bounce: Option<Bounce>) -> Plant {
 /// clock and no filter, the count crosses a detent boundary back and forth on
 /// consecutive clocks.
 const FAST_BOUNCE: Option<Bounce> = Some(Bounce { extra: 2, within: 5 });
-
-fn turn(machine: &mut Chip, detents: i64, cycles_per_edge: u64) {
-    let wheel = machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().unwrap();
-    wheel.turn(detents, cycles_per_edge).unwrap();
-}
 
 fn wheel_done(machine: &Chip) -> bool {
     let plant_loop = machine.bus_ref().link().target();

@@ -4,14 +4,11 @@
 //! through the jog within its limits; the jog and a FIFO run exclude each other; faults
 //! outside the filter's specification are flagged, never silent.
 
-use finestep_cosim::{PlantLoop, TopLockstep};
 use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0};
 use finestep_host::regs::{control, fifo_level, jog_control, jog_velocity, period_count, probe_status, status};
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
-use finestep_host::{
-    AxisSetup, Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, Machine, PinHost, PinTarget, PinTiming, SpiBus,
-};
-use finestep_model::{DriveTiming, Increment, PeriodRecord};
+use finestep_host::{Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
+use finestep_model::{Increment, PeriodRecord};
 use finestep_plant::{
     Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Faults, Glitches, HandWheelConfig, Mechanics,
     Plant, PlantConfig, ProbeConfig,
@@ -19,29 +16,9 @@ use finestep_plant::{
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 
-type Chip = Machine<SpiBus<PinHost<PlantLoop<TopLockstep>>>>;
+mod plant_chip;
 
-const PERIOD: u32 = 2000;
-
-fn connect(name: &str, plant: Plant) -> Chip {
-    let mut host = PinHost::new(PlantLoop::new(TopLockstep::new(name), plant), PinTiming::default());
-    host.reset(4).unwrap();
-    host.idle(8).unwrap();
-    let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
-    let axis = AxisSetup { timing: DriveTiming::new(20, 20, 10, 10), ..AxisSetup::default() };
-    for i in 0..machine.caps().n_axes {
-        machine.configure_axis(i, &axis).unwrap();
-    }
-    machine.enable_axes(0xF).unwrap();
-    machine.set_period(PERIOD).unwrap();
-    machine.set_start_level(4).unwrap();
-    machine.clear_faults_and_errors().unwrap();
-    machine
-}
-
-fn plant_of(machine: &Chip) -> &Plant {
-    machine.bus_ref().link().target().plant()
-}
+use plant_chip::{connect, plant_of, turn, Chip, PERIOD};
 
 /// Streams `records` and waits until the drives are at rest.
 fn run_records(machine: &mut Chip, records: Vec<PeriodRecord>, settle: u64) {
@@ -308,11 +285,6 @@ fn jog_setup(follow: bool) -> JogSetup {
         accel: Increment::from_num(0.25),
         window: 30,
     }
-}
-
-fn turn(machine: &mut Chip, detents: i64, cycles_per_edge: u64) {
-    let wheel = machine.bus().link_mut().target_mut().plant_mut().hand_wheel_mut().unwrap();
-    wheel.turn(detents, cycles_per_edge).unwrap();
 }
 
 /// Polls the jog's velocity every period while waiting `periods` periods; checks the
