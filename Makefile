@@ -3,7 +3,8 @@ CARGO ?= cargo
 export VERILATOR ?= verilator
 
 .PHONY: flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
-        bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick
+        bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick \
+        linuxcnc linuxcnc-quick
 
 all: test
 
@@ -13,7 +14,7 @@ setup:
 demo: setup
 	$(CARGO) run --release -q -p finestep-cli -- demo
 
-test: setup lint cargo-test wheel-check formal mutants-quick flows
+test: setup lint cargo-test wheel-check formal mutants-quick linuxcnc-quick flows
 	@echo "make test: all passed"
 
 # Before a commit: fmt, clippy, Verilator lint and the unit tests (a few minutes warm).
@@ -93,6 +94,17 @@ report: setup
 
 bench: setup
 	$(CARGO) run --release -q -p finestep-cli -- bench
+
+# finestep as LinuxCNC's motion hardware (docs/linuxcnc.md): installs linuxcnc-uspace and
+# linuxcnc-uspace-dev with apt, builds and installs the finestep HAL module, and runs
+# tests/programs/ and some of LinuxCNC's shipped examples through headless LinuxCNC on
+# the simulated chip, every servo period checked.
+linuxcnc: setup
+	@./scripts/linuxcnc.sh
+
+# The quick slice of it in make test: one short program.
+linuxcnc-quick: setup
+	@./scripts/linuxcnc.sh --quick
 
 clean:
 	$(CARGO) clean

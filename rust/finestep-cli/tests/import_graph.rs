@@ -12,7 +12,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// Crates a product build is made of: none of them may depend on a verification crate.
-const PRODUCT: &[&str] = &["finestep-interface", "finestep-gcode", "finestep-planner", "finestep-host"];
+const PRODUCT: &[&str] =
+    &["finestep-interface", "finestep-gcode", "finestep-planner", "finestep-host", "finestep-hal", "finestep-linuxcnc"];
 /// The test oracle and its harness.
 const VERIFICATION: &[&str] =
     &["finestep-model", "finestep-rtl-sys", "finestep-cosim", "finestep-plant", "finestep-testkit"];

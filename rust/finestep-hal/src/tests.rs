@@ -1,0 +1,172 @@
+//! The driver against the reference model at its pins (in-process, behind the host
+//! driver's SPI master): the same SPI frames a board or `finestep sim-chip` gets.
+
+use super::*;
+use finestep_host::{PinHost, PinTarget, PinTiming};
+use finestep_model::top::{Top, TopInputs, TopParams};
+
+/// The reference model at its pins (finestep-cosim's `ModelPins`, without the crate's
+/// Verilated half).
+struct ModelPins(Top);
+
+impl PinTarget for ModelPins {
+    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+        let inputs = TopInputs::unpack(inputs);
+        for _ in 0..cycles {
+            self.0.step(&inputs);
+        }
+        Ok(())
+    }
+
+    fn outputs(&self) -> u64 {
+        self.0.outputs().pack()
+    }
+}
+
+/// A servo period of 0.2 ms (10 000 clocks at 50 MHz) keeps the tests quick.
+const PERIOD_NS: i64 = 200_000;
+
+fn driver() -> Driver {
+    let mut host = PinHost::new(ModelPins(Top::new(TopParams::default())), PinTiming::default());
+    host.reset(4).unwrap();
+    host.idle(8).unwrap();
+    Driver::connect(Box::new(host), true, "model").unwrap()
+}
+
+fn stepgen(position_cmd: f64, scale: f64) -> StepgenCommand {
+    StepgenCommand { position_cmd, position_scale: scale, enable: true, ..StepgenCommand::default() }
+}
+
+/// One servo period as LinuxCNC's thread runs it: read, then write.
+fn cycle(driver: &mut Driver, enable: bool, cmds: &[StepgenCommand]) -> Vec<i32> {
+    driver.read(PERIOD_NS).unwrap();
+    let counts = (0..driver.n_axes()).map(|a| driver.stepgen_feedback(a).unwrap().counts).collect();
+    driver.write(PERIOD_NS, enable, 0, cmds).unwrap();
+    counts
+}
+
+#[test]
+fn every_period_lands_the_commanded_position_in_steps() {
+    let mut driver = driver();
+    let scales = [800.0, -533.3, 1000.0 / 3.0, 100.0];
+    let n = driver.n_axes();
+    let mut history: Vec<Vec<f64>> = Vec::new();
+    let mut checked = 0;
+    for k in 0..400 {
+        let t = k as f64 * PERIOD_NS as f64 * 1e-9;
+        // Smooth moves with reversals: up to 40 mm/s at 800 steps/mm (6.4 steps a period).
+        let positions: Vec<f64> =
+            (0..n).map(|a| (1.0 + a as f64) * 0.5 * (1.0 - (t * 40.0 / (1.0 + a as f64)).cos())).collect();
+        let cmds: Vec<StepgenCommand> = (0..n).map(|a| stepgen(positions[a], scales[a])).collect();
+        let counts = cycle(&mut driver, true, &cmds);
+        if k > FEEDBACK_LAG_PERIODS {
+            let sent = &history[k - FEEDBACK_LAG_PERIODS];
+            for a in 0..n {
+                let expected = quantised_steps(command_fixed(sent[a], scales[a]).unwrap());
+                assert_eq!(i64::from(counts[a]), expected, "period {k} axis {a}");
+                checked += 1;
+            }
+        }
+        history.push(positions);
+    }
+    assert_eq!(checked, (400 - FEEDBACK_LAG_PERIODS - 1) * n);
+    for a in 0..n {
+        assert_eq!(driver.stepgen_feedback(a).unwrap().limited, 0, "axis {a}");
+    }
+    let status = driver.machine.status().unwrap();
+    assert_eq!(status::RATE_ERROR.get(status) | status::UNDERRUN.get(status) | status::HALT.get(status), 0);
+}
+
+#[test]
+fn a_jump_is_clamped_to_the_rated_rate_and_caught_up() {
+    let mut driver = driver();
+    let n = driver.n_axes();
+    let mut cmds = vec![stepgen(0.0, 1.0); n];
+    cycle(&mut driver, true, &cmds);
+    // 2 us + 2 us pulses: 50 steps in a 0.2 ms period at most; ask for 400 at once.
+    cmds[1].position_cmd = 400.0;
+    // maxvel 20 steps a period.
+    cmds[2] = StepgenCommand { maxvel: 100_000.0, ..stepgen(300.0, 1.0) };
+    let mut last = Vec::new();
+    for _ in 0..(300 / 20 + FEEDBACK_LAG_PERIODS) {
+        last = cycle(&mut driver, true, &cmds);
+    }
+    assert_eq!(last[1], 400);
+    assert_eq!(last[2], 300);
+    assert_eq!(driver.stepgen_feedback(1).unwrap().limited, 7, "50 steps x 8 periods");
+    assert_eq!(driver.stepgen_feedback(2).unwrap().limited, 14, "20 steps x 15 periods");
+    let status = driver.machine.status().unwrap();
+    assert_eq!(status::RATE_ERROR.get(status), 0);
+}
+
+#[test]
+fn e_stop_halts_the_chip_and_no_step_follows() {
+    let mut driver = driver();
+    let n = driver.n_axes();
+    let mut cmds = vec![stepgen(0.0, 1000.0); n];
+    for k in 0..20 {
+        cmds[0].position_cmd = k as f64 * 0.01;
+        cycle(&mut driver, true, &cmds);
+    }
+    assert!(driver.status().running && driver.status().estop_ok);
+    assert!(driver.link_mut().drive_estop(true).unwrap());
+    driver.read(PERIOD_NS).unwrap();
+    let at_stop = driver.stepgen_feedback(0).unwrap().counts;
+    let err = driver.write(PERIOD_NS, true, 0, &cmds).unwrap_err().to_string();
+    assert!(err.contains("E-stop"), "{err}");
+    assert!(!driver.status().running && !driver.status().estop_ok);
+    for k in 20..30 {
+        cmds[0].position_cmd = k as f64 * 0.01;
+        driver.read(PERIOD_NS).unwrap();
+        driver.write(PERIOD_NS, true, 0, &cmds).unwrap();
+    }
+    driver.read(PERIOD_NS).unwrap();
+    // Halted: at most the steps already requested before the filter saw the E-stop.
+    let held = driver.stepgen_feedback(0).unwrap().counts;
+    assert!((held - at_stop).abs() <= 10, "{at_stop} -> {held}");
+    // Released, LinuxCNC resets the E-stop and enables again: resynchronised, no jump.
+    assert!(driver.link_mut().drive_estop(false).unwrap());
+    driver.link_mut().wait(1000).unwrap();
+    cmds[0].position_cmd = f64::from(held) / 1000.0;
+    cycle(&mut driver, false, &cmds);
+    assert!(driver.status().estop_ok);
+    for _ in 0..4 {
+        cycle(&mut driver, true, &cmds);
+    }
+    assert!(driver.status().running);
+    assert_eq!(cycle(&mut driver, true, &cmds)[0], held);
+}
+
+#[test]
+fn bad_commands_and_settings_are_errors_not_panics() {
+    let mut driver = driver();
+    let n = driver.n_axes();
+    let mut cmds = vec![stepgen(0.0, 1.0); n];
+    cmds[0].step_type = 7;
+    let err = driver.write(PERIOD_NS, true, 0, &cmds).unwrap_err().to_string();
+    assert_eq!(err, "stepgen.00: step_type 7 is not 0 (step/dir), 1 (up/down) or 2 (quadrature)");
+    cmds[0].step_type = 0;
+    let err = driver.write(1, true, 0, &cmds).unwrap_err().to_string();
+    assert_eq!(err, "servo period 1 ns is 0 clocks of the 50000000 Hz core: outside 1..=1048575");
+    driver.write(PERIOD_NS, true, 0, &cmds).unwrap();
+    cmds[3].position_cmd = f64::NAN;
+    let err = driver.write(PERIOD_NS, true, 0, &cmds).unwrap_err().to_string();
+    assert_eq!(err, "stepgen.03: position-cmd NaN * position-scale 1 is not a position in steps");
+    assert!(driver.set_stepgen(n, cmds[0]).is_err());
+    for bad in ["usb", "sim:", "spidev:", "spidev:/dev/spidev0.0@fast"] {
+        assert!(bad.parse::<Transport>().is_err(), "{bad}");
+    }
+    assert_eq!(
+        "spidev:/dev/spidev0.1".parse::<Transport>().unwrap(),
+        Transport::Spidev { path: "/dev/spidev0.1".into(), sck_hz: DEFAULT_SCK_HZ }
+    );
+}
+
+#[test]
+fn quantisation_rounds_half_up_like_the_dda() {
+    assert_eq!(quantised_steps(command_fixed(0.5, 1.0).unwrap()), 1);
+    assert_eq!(quantised_steps(command_fixed(-0.5, 1.0).unwrap()), 0);
+    assert_eq!(quantised_steps(command_fixed(-0.50002, 1.0).unwrap()), -1);
+    assert_eq!(quantised_steps(command_fixed(2.4999, 1.0).unwrap()), 2);
+    assert_eq!(command_fixed(f64::INFINITY, 1.0), None);
+}

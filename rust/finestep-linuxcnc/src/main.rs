@@ -1,0 +1,62 @@
+//! `finestep-linuxcnc`: finestep under LinuxCNC from the same machine configuration
+//! (TOML) that `finestep run` reads. `config` writes the INI and HAL of a mill on the
+//! `finestep` HAL component; `check` runs the open-loop check over a recorded run
+//! (`scripts/linuxcnc_run.sh` does both around a headless LinuxCNC; docs/linuxcnc.md).
+
+mod config;
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "finestep-linuxcnc",
+    version,
+    about = "finestep as LinuxCNC's motion hardware: configuration and checks"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Write a LinuxCNC configuration (finestep.ini, finestep.hal, tool.tbl) for the
+    /// machine configuration: a mill in open loop on the `finestep` HAL component.
+    Config {
+        /// Machine configuration (TOML); the built-in machine when absent.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// The chip the HAL component opens: sim:SOCKET or spidev:/dev/spidevB.C[@SCK_HZ].
+        #[arg(long)]
+        bus: String,
+        /// The INI's DISPLAY program.
+        #[arg(long, default_value = "axis")]
+        display: String,
+        /// Also write record.hal (sampled command and step count every servo period).
+        #[arg(long)]
+        record: bool,
+        /// Where the files go.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// The open-loop check over a recording of record.hal (`halsampler -t`): every
+    /// period's step count against LinuxCNC's commanded position quantised to steps.
+    Check {
+        /// The recording.
+        samples: PathBuf,
+        /// Joints in the recording.
+        #[arg(long)]
+        joints: usize,
+    },
+}
+
+fn main() -> anyhow::Result<()> {
+    match Cli::parse().command {
+        Command::Config { config, bus, display, record, out } => {
+            config::write(config.as_deref(), &bus, &display, &out, record)
+        }
+        Command::Check { samples, joints } => config::check(&samples, joints),
+    }
+}
