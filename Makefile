@@ -2,7 +2,7 @@
 CARGO ?= cargo
 export VERILATOR ?= verilator
 
-.PHONY: flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
+.PHONY: conformance flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
         bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick \
         linuxcnc linuxcnc-quick
 
@@ -109,3 +109,9 @@ linuxcnc-quick: setup
 clean:
 	$(CARGO) clean
 	rm -rf build
+
+# The G-code dialect against LinuxCNC's own interpreter (installs linuxcnc-uspace with apt,
+# about 180 MB): every .ngc file the package ships through rs274 and finestep, one table
+# (agree / refused / disagree / crash), build/conformance/report.txt and diffs/.
+conformance: setup
+	@./scripts/conformance.sh

@@ -4,6 +4,7 @@
 mod bench;
 mod bench_top;
 mod bus;
+mod conformance;
 mod demo;
 mod demo_feedback;
 mod machine_setup;
@@ -35,7 +36,7 @@ enum Command {
     },
     /// Run a G-code part program: plan it (look-ahead, G64 blending, trapezoid or S-curve
     /// feed), check the periods independently, plot them, and stream them into the
-    /// co-simulated core (G41/G42 are refused until cutter compensation is wired in).
+    /// co-simulated core (G41/G42 cutter compensation is applied by the planner).
     Run {
         /// The part program.
         file: PathBuf,
@@ -54,6 +55,21 @@ enum Command {
         profile: Option<String>,
         /// Where the plots go.
         #[arg(long, default_value = "target/run")]
+        out: PathBuf,
+    },
+    /// Print finestep's canonical events for a part program (positions in the machine
+    /// frame in mm), the form `conformance` compares with LinuxCNC's rs274.
+    GcodeCanon {
+        /// The part program.
+        file: PathBuf,
+    },
+    /// Compare finestep's interpretation with rs274's outputs listed in MANIFEST (lines
+    /// `exit-status<TAB>program.ngc<TAB>rs274-output`, as scripts/conformance.sh writes).
+    Conformance {
+        /// The manifest.
+        manifest: PathBuf,
+        /// Where report.txt and diffs/ go.
+        #[arg(long, default_value = "build/conformance")]
         out: PathBuf,
     },
     /// Lockstep and fast-path throughput figures.
@@ -118,6 +134,8 @@ fn main() -> anyhow::Result<()> {
                 bench_top::run(200)
             }
         }
+        Command::GcodeCanon { file } => conformance::canon(&file),
+        Command::Conformance { manifest, out } => conformance::run(&manifest, &out),
         Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
         Command::Selftest { bus, loopback } => selftest::run(bus, loopback),
     }

@@ -54,7 +54,10 @@ pub(crate) struct State {
     mist: bool,
     flood: bool,
     tool: u32,
+    tool_in_spindle: u32,
     nurbs: Option<OpenNurbs>,
+    /// Numbered parameters #0-#5601 (#0 unused).
+    params: Vec<f64>,
     /// The 1-based source line being executed (set by the caller).
     pub(crate) line: usize,
 }
@@ -77,10 +80,25 @@ impl Default for State {
             mist: false,
             flood: false,
             tool: 0,
+            tool_in_spindle: 0,
             nurbs: None,
+            params: default_parameters(),
             line: 0,
         }
     }
+}
+
+/// #5220, the coordinate system in use (1 = G54).
+const PARAM_COORD_SYSTEM: usize = 5220;
+/// #5400, the tool in the spindle.
+const PARAM_TOOL: usize = 5400;
+/// #5420-#5425: the current position X Y Z A B C in program units.
+const PARAM_POSITION: usize = 5420;
+
+fn default_parameters() -> Vec<f64> {
+    let mut params = vec![0.0; crate::expr::MAX_PARAMETER + 1];
+    params[PARAM_COORD_SYSTEM] = 1.0;
+    params
 }
 
 /// Modal groups of the supported codes (LinuxCNC's numbering in comments).
@@ -240,6 +258,84 @@ pub(crate) struct Executed {
 }
 
 impl State {
+    /// `#n` (1 <= n <= 5601), with the predefined ones computed from the state.
+    pub(crate) fn parameter(&self, n: usize) -> f64 {
+        match n {
+            PARAM_TOOL => f64::from(self.tool_in_spindle),
+            PARAM_POSITION..=5423 => self.program_position(n - PARAM_POSITION),
+            5424..=5428 => 0.0,
+            _ => self.params.get(n).copied().unwrap_or(0.0),
+        }
+    }
+
+    /// Sets `#n`; the predefined read-only ones keep their computed values.
+    pub(crate) fn set_parameter(&mut self, n: usize, value: f64) {
+        if let Some(p) = self.params.get_mut(n) {
+            *p = value;
+        }
+    }
+
+    /// The current position of axis `axis` (X Y Z A) in program units.
+    fn program_position(&self, axis: usize) -> f64 {
+        let v = self.position[axis];
+        if axis < 3 && self.inches {
+            v / MM_PER_INCH
+        } else {
+            v
+        }
+    }
+
+    /// LinuxCNC's predefined named parameters (`#<_x>`, `#<_metric>`, ...), read-only.
+    pub(crate) fn predefined(&self, name: &str) -> Option<f64> {
+        let flag = |b: bool| f64::from(u8::from(b));
+        Some(match name {
+            "_vmajor" => 2.0,
+            "_vminor" => 9.0,
+            "_line" => self.line as f64,
+            "_motion_mode" => f64::from(self.motion.unwrap_or(800)),
+            "_plane" => match self.plane {
+                Plane::Xy => 170.0,
+                Plane::Zx => 180.0,
+                Plane::Yz => 190.0,
+            },
+            "_ccomp" => match self.comp {
+                CompSide::Off => 400.0,
+                CompSide::Left => 410.0,
+                CompSide::Right => 420.0,
+            },
+            "_metric" => flag(!self.inches),
+            "_imperial" => flag(self.inches),
+            "_absolute" => flag(!self.incremental),
+            "_incremental" => flag(self.incremental),
+            "_inverse_time" => 0.0,
+            "_units_per_minute" => 1.0,
+            "_units_per_rev" => 0.0,
+            "_coord_system" => 540.0,
+            "_ijk_absolute_mode" => flag(!self.arc_incremental),
+            "_lathe_diameter_mode" => 0.0,
+            "_lathe_radius_mode" => 1.0,
+            "_spindle_on" => flag(self.rotation != SpindleRotation::Off),
+            "_spindle_cw" => flag(self.rotation == SpindleRotation::Clockwise),
+            "_mist" => flag(self.mist),
+            "_flood" => flag(self.flood),
+            "_speed_override" | "_feed_override" => 1.0,
+            "_adaptive_feed" | "_feed_hold" => 0.0,
+            "_feed" => self.feed_mm_per_min.map_or(0.0, |f| if self.inches { f / MM_PER_INCH } else { f }),
+            "_rpm" => self.rpm,
+            "_x" | "_abs_x" => self.program_position(0),
+            "_y" | "_abs_y" => self.program_position(1),
+            "_z" | "_abs_z" => self.program_position(2),
+            "_a" | "_abs_a" => self.program_position(3),
+            "_b" | "_c" | "_u" | "_v" | "_w" | "_abs_b" | "_abs_c" | "_abs_u" | "_abs_v" | "_abs_w" => 0.0,
+            "_current_tool" => f64::from(self.tool_in_spindle),
+            "_current_pocket" => f64::from(self.tool_in_spindle),
+            "_selected_tool" => f64::from(self.tool),
+            "_selected_pocket" => f64::from(self.tool),
+            "_task" => 0.0,
+            _ => return None,
+        })
+    }
+
     fn length_mm(&self, value: f64) -> f64 {
         if self.inches {
             value * MM_PER_INCH
@@ -253,19 +349,13 @@ impl State {
         self.nurbs.as_ref().map(|n| n.opened_at)
     }
 
-    /// Executes one block in LinuxCNC's order, except that G20/G21 act first so that
-    /// every number of the block is read in the block's new units.
+    /// Executes one block (its values computed) in LinuxCNC's order.
     pub(crate) fn execute(&mut self, words: &[Word]) -> Result<Executed, LineError> {
         let w = sort_words(words)?;
         if self.nurbs.is_some() && !w.has(Group::Motion, G5_3) {
             return self.nurbs_point_line(words, &w);
         }
         let mut kinds = Vec::new();
-
-        // Units.
-        if let Some((code, _)) = w.group(Group::Units) {
-            self.inches = code == 200;
-        }
 
         // What will move, to check that every parameter word has a user.
         let motion = w.group(Group::Motion).map(|(c, _)| c).or(self.motion);
@@ -325,7 +415,11 @@ impl State {
             kinds.push(BlockKind::ToolSelect { tool: self.tool });
         }
         if w.group(Group::ToolChange).is_some() {
+            // LinuxCNC stops the spindle for a tool change.
+            self.rotation = SpindleRotation::Off;
+            kinds.push(BlockKind::Spindle { rotation: self.rotation, rpm: self.rpm });
             kinds.push(BlockKind::ToolChange { tool: self.tool });
+            self.tool_in_spindle = self.tool;
         }
 
         // Spindle and coolant.
@@ -358,6 +452,11 @@ impl State {
                 return Err(LineError::new(p_column, "negative dwell time"));
             }
             kinds.push(BlockKind::Dwell { seconds: p });
+        }
+
+        // Units, after F as in LinuxCNC (F is read in the units in force before the block).
+        if let Some((code, _)) = w.group(Group::Units) {
+            self.inches = code == 200;
         }
 
         // Plane and distance modes.

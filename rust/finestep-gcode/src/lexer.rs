@@ -1,19 +1,17 @@
-//! Lexing one source line into words (a letter and a number).
+//! Lexing one source line into its words, parameter assignments and O-word, with the
+//! values still expressions (computed when the block executes).
 //!
-//! As in LinuxCNC, spaces and tabs may appear anywhere outside comments, also inside a
-//! number (`G 1 X 1 0 . 5` is `G1 X10.5`). Letters are case-insensitive. Comments are
-//! `( ... )` (not nested, closed on the same line) and everything after `;`. A leading
-//! `/` (block delete) is accepted and ignored: the block runs, as with LinuxCNC's
-//! block-delete switch off. Numbers are an optional sign, digits and at most one
-//! decimal point (no exponent, at least one digit). Expressions `[...]`, parameters
-//! `#` and any other character are errors.
+//! As in LinuxCNC, blanks (spaces and tabs) are removed everywhere outside comments,
+//! also inside numbers and parameter names (`G 1 X 1 0 . 5` is `G1 X10.5`), and letters
+//! are case-insensitive. Comments are `( ... )` (not nested, closed on the same line)
+//! and everything after `;`. A leading `/` (block delete) is accepted and ignored: the
+//! block runs, as with LinuxCNC's block-delete switch off.
 
 use crate::error::LineError;
+use crate::expr::{read_expression, read_name, read_value, Chars, Expr, What};
 
-/// The largest magnitude a number in the program may have.
-pub(crate) const MAX_NUMBER: f64 = 1e9;
-
-/// One word: an upper-case letter, its value, and the 1-based column of the letter.
+/// One word with its value computed: an upper-case letter, its value, and the 1-based
+/// column of the letter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Word {
     pub letter: char,
@@ -21,89 +19,238 @@ pub(crate) struct Word {
     pub column: usize,
 }
 
-fn is_blank(c: char) -> bool {
-    c == ' ' || c == '\t'
+/// One word as written: its value an expression.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct RawWord {
+    pub letter: char,
+    pub value: Expr,
+    pub column: usize,
 }
 
-fn skip_blanks(chars: &[char], i: &mut usize) {
-    while chars.get(*i).is_some_and(|&c| is_blank(c)) {
-        *i += 1;
-    }
+/// The parameter an assignment sets.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Target {
+    /// `#expr = ...`
+    Numbered(Expr),
+    /// `#<name> = ...`
+    Named(Box<str>),
 }
 
-/// Lexes one line (without its line terminator) into words.
-pub(crate) fn lex_line(line: &str) -> Result<Vec<Word>, LineError> {
-    let chars: Vec<char> = line.chars().collect();
-    let mut words = Vec::new();
-    let mut i = 0;
-    skip_blanks(&chars, &mut i);
-    if chars.get(i) == Some(&'/') {
-        i += 1;
-    }
-    loop {
-        skip_blanks(&chars, &mut i);
-        let Some(&c) = chars.get(i) else { break };
-        match c {
-            '(' => i = skip_comment(&chars, i)?,
-            ';' => break,
-            c if c.is_ascii_alphabetic() => {
-                let column = i + 1;
-                let letter = c.to_ascii_uppercase();
-                i += 1;
-                let value = lex_number(&chars, &mut i, letter, column)?;
-                words.push(Word { letter, value, column });
+/// `#... = value`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Assign {
+    pub target: Target,
+    pub value: Expr,
+    pub column: usize,
+}
+
+/// What an O-word line does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum OKind {
+    Sub,
+    Endsub,
+    Call,
+    Return,
+    If,
+    Elseif,
+    Else,
+    Endif,
+    While,
+    Endwhile,
+    Do,
+    Repeat,
+    Endrepeat,
+    Break,
+    Continue,
+}
+
+const O_KEYWORDS: [(&str, OKind); 15] = [
+    ("endsub", OKind::Endsub),
+    ("endif", OKind::Endif),
+    ("endwhile", OKind::Endwhile),
+    ("endrepeat", OKind::Endrepeat),
+    ("elseif", OKind::Elseif),
+    ("else", OKind::Else),
+    ("sub", OKind::Sub),
+    ("call", OKind::Call),
+    ("return", OKind::Return),
+    ("if", OKind::If),
+    ("while", OKind::While),
+    ("do", OKind::Do),
+    ("repeat", OKind::Repeat),
+    ("break", OKind::Break),
+    ("continue", OKind::Continue),
+];
+
+/// An O-word statement: `o100 if [...]`, `o<name> call [1] [2]`.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct OWord {
+    /// `100` or `<name>` (lower case).
+    pub label: Box<str>,
+    pub kind: OKind,
+    /// The column of the `O`.
+    pub column: usize,
+    /// The bracketed expressions after the keyword.
+    pub args: Vec<Expr>,
+}
+
+/// One lexed line.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Line {
+    pub words: Vec<RawWord>,
+    pub assigns: Vec<Assign>,
+    pub oword: Option<OWord>,
+}
+
+/// The line without blanks and comments, lower case, each character with its column.
+fn normalize(line: &str, chars: &mut Vec<char>, columns: &mut Vec<usize>) -> Result<(), LineError> {
+    let mut comment_open: Option<usize> = None;
+    for (index, c) in line.chars().enumerate() {
+        let column = index + 1;
+        if let Some(open) = comment_open {
+            match c {
+                ')' => comment_open = None,
+                '(' => return Err(LineError::new(column, "nested comment")),
+                _ => {}
             }
-            '#' => return Err(LineError::new(i + 1, "parameters (#) are not supported")),
-            '[' => return Err(LineError::new(i + 1, "expressions ([...]) are not supported")),
-            c => return Err(LineError::new(i + 1, format!("unexpected character {c:?}"))),
+            let _ = open;
+            continue;
         }
-    }
-    Ok(words)
-}
-
-/// Skips the comment opening at `open`, returning the index after its `)`.
-fn skip_comment(chars: &[char], open: usize) -> Result<usize, LineError> {
-    for (j, &c) in chars.iter().enumerate().skip(open + 1) {
         match c {
-            ')' => return Ok(j + 1),
-            '(' => return Err(LineError::new(j + 1, "nested comment")),
-            _ => {}
+            ' ' | '\t' => {}
+            '(' => comment_open = Some(column),
+            ';' => break,
+            c => {
+                chars.push(c.to_ascii_lowercase());
+                columns.push(column);
+            }
         }
     }
-    Err(LineError::new(open + 1, "unclosed comment"))
+    match comment_open {
+        Some(open) => Err(LineError::new(open, "unclosed comment")),
+        None => Ok(()),
+    }
 }
 
-/// Lexes the number after a word's letter, with blanks allowed anywhere in it.
-fn lex_number(chars: &[char], i: &mut usize, letter: char, column: usize) -> Result<f64, LineError> {
-    let mut text = String::new();
-    skip_blanks(chars, i);
-    if let Some(&sign) = chars.get(*i).filter(|&&c| c == '+' || c == '-') {
-        text.push(sign);
-        *i += 1;
+/// Lexes one line (without its line terminator).
+#[cfg(test)]
+pub(crate) fn lex_line(line: &str) -> Result<Line, LineError> {
+    lex_line_into(line, &mut Vec::new(), &mut Vec::new())
+}
+
+/// Lexes one line, with `chars` and `columns` as scratch space (reused across lines).
+pub(crate) fn lex_line_into(line: &str, chars: &mut Vec<char>, columns: &mut Vec<usize>) -> Result<Line, LineError> {
+    let mut out = Line::default();
+    lex_into(line, chars, columns, &mut out)?;
+    Ok(out)
+}
+
+/// Lexes one line into `out` (cleared first), with scratch space as [`lex_line_into`].
+pub(crate) fn lex_into(
+    line: &str,
+    chars: &mut Vec<char>,
+    columns: &mut Vec<usize>,
+    out: &mut Line,
+) -> Result<(), LineError> {
+    chars.clear();
+    columns.clear();
+    out.words.clear();
+    out.assigns.clear();
+    out.oword = None;
+    normalize(line, chars, columns)?;
+    let (chars, columns) = (&chars[..], &columns[..]);
+    let mut s = Chars { chars, columns, i: 0 };
+    if s.peek() == Some('/') {
+        s.i += 1;
     }
-    let (mut digits, mut points) = (0usize, 0usize);
-    while let Some(&c) = chars.get(*i) {
-        if c.is_ascii_digit() {
-            digits += 1;
-            text.push(c);
-        } else if c == '.' {
-            points += 1;
-            text.push(c);
-        } else if !is_blank(c) {
-            break;
+    while let Some(c) = s.peek() {
+        let column = s.column();
+        match c {
+            'o' => {
+                if !out.assigns.is_empty() || out.words.iter().any(|w| w.letter != 'N') || out.oword.is_some() {
+                    return Err(LineError::new(column, "an O-word must stand alone on its line (after N at most)"));
+                }
+                s.i += 1;
+                out.oword = Some(read_oword(&mut s, column)?);
+            }
+            c if c.is_ascii_alphabetic() => {
+                if out.oword.is_some() {
+                    return Err(LineError::new(column, "nothing may follow an O-word statement on its line"));
+                }
+                let letter = c.to_ascii_uppercase();
+                s.i += 1;
+                let value = read_value(&mut s, What::Word(letter), 0)?;
+                out.words.push(RawWord { letter, value, column });
+            }
+            '#' => {
+                if out.oword.is_some() {
+                    return Err(LineError::new(column, "nothing may follow an O-word statement on its line"));
+                }
+                s.i += 1;
+                let target = if s.peek() == Some('<') {
+                    Target::Named(read_name(&mut s)?.into())
+                } else {
+                    Target::Numbered(read_value(&mut s, What::Named("the parameter number"), 0)?)
+                };
+                if s.peek() != Some('=') {
+                    return Err(LineError::new(
+                        s.column(),
+                        "expected '=' after a parameter at the start of an item (#n = value)",
+                    ));
+                }
+                s.i += 1;
+                let value = read_value(&mut s, What::Named("the parameter's value"), 0)?;
+                out.assigns.push(Assign { target, value, column });
+            }
+            c => return Err(LineError::new(column, format!("unexpected character {c:?}"))),
         }
-        *i += 1;
     }
-    if digits == 0 && points == 0 && text.is_empty() {
-        return Err(LineError::new(column, format!("missing value for word {letter}")));
+    Ok(())
+}
+
+fn read_oword(s: &mut Chars, column: usize) -> Result<OWord, LineError> {
+    let label: Box<str> = match s.peek() {
+        Some('<') => format!("<{}>", read_name(s)?).into(),
+        Some(c) if c.is_ascii_digit() => {
+            let start = s.i;
+            while s.peek().is_some_and(|c| c.is_ascii_digit()) {
+                s.i += 1;
+            }
+            let digits: String = s.chars[start..s.i].iter().collect();
+            let trimmed = digits.trim_start_matches('0');
+            (if trimmed.is_empty() { "0" } else { trimmed }).into()
+        }
+        _ => return Err(LineError::new(column, "O-word needs a number or a <name> (o100 sub, o<name> call)")),
+    };
+    let Some(&(keyword, kind)) = O_KEYWORDS.iter().find(|(k, _)| s.starts_with(k)) else {
+        return Err(LineError::new(
+            s.column(),
+            "O-word needs a keyword: sub, endsub, call, return, if, elseif, else, endif, while, endwhile, do, \
+             repeat, endrepeat, break or continue",
+        ));
+    };
+    s.i += keyword.len();
+    let mut args = Vec::new();
+    while s.peek() == Some('[') {
+        s.i += 1;
+        args.push(read_expression(s, 1)?);
     }
-    if digits == 0 || points > 1 {
-        return Err(LineError::new(column, format!("bad number for word {letter}")));
+    if let Some(c) = s.peek() {
+        return Err(LineError::new(s.column(), format!("unexpected character {c:?} after the O-word statement")));
     }
-    match text.parse::<f64>() {
-        Ok(value) if value.is_finite() && value.abs() <= MAX_NUMBER => Ok(value),
-        _ => Err(LineError::new(column, format!("number out of range for word {letter}"))),
+    let takes = match kind {
+        OKind::Call => usize::MAX,
+        OKind::If | OKind::Elseif | OKind::While | OKind::Repeat => 1,
+        OKind::Return | OKind::Endsub => 1,
+        _ => 0,
+    };
+    if args.len() > takes {
+        return Err(LineError::new(column, format!("too many [expressions] for O-word {keyword}")));
     }
+    if matches!(kind, OKind::If | OKind::Elseif | OKind::While | OKind::Repeat) && args.is_empty() {
+        return Err(LineError::new(column, format!("O-word {keyword} needs a [condition]")));
+    }
+    Ok(OWord { label, kind, column, args })
 }
 
 #[cfg(test)]
@@ -111,7 +258,13 @@ mod tests {
     use super::*;
 
     fn words(line: &str) -> Vec<(char, f64, usize)> {
-        lex_line(line).unwrap().into_iter().map(|w| (w.letter, w.value, w.column)).collect()
+        let params = crate::expr::NoParams;
+        lex_line(line)
+            .unwrap()
+            .words
+            .into_iter()
+            .map(|w| (w.letter, w.value.eval(&params).unwrap(), w.column))
+            .collect()
     }
 
     #[test]
@@ -120,8 +273,14 @@ mod tests {
         assert_eq!(words("g1x-.5Y+2."), vec![('G', 1.0, 1), ('X', -0.5, 3), ('Y', 2.0, 7)]);
         assert_eq!(words("X - 5"), vec![('X', -5.0, 1)]);
         assert_eq!(words("\tG0\t"), vec![('G', 0.0, 2)]);
-        // No exponent: `e5` is a word of its own (refused later as unknown).
-        assert_eq!(words("X1e5"), vec![('X', 1.0, 1), ('E', 5.0, 3)]);
+        assert_eq!(
+            words("X[1 + 2 * 3] Y[2 ** 3 ** 2] Z[-7 MOD 3]"),
+            vec![('X', 7.0, 1), ('Y', 64.0, 14), ('Z', 2.0, 29)]
+        );
+        assert_eq!(
+            words("X[1 + 2 GT 2 AND 1] Ysqrt[16] Zatan[1]/[1]"),
+            vec![('X', 1.0, 1), ('Y', 4.0, 21), ('Z', 45.0, 31)]
+        );
     }
 
     #[test]
@@ -133,22 +292,39 @@ mod tests {
     }
 
     #[test]
+    fn owords_and_assignments() {
+        let line = lex_line("N10 o<My Sub> call [1] [#2]").unwrap();
+        let o = line.oword.unwrap();
+        assert_eq!((&*o.label, o.kind, o.column, o.args.len()), ("<mysub>", OKind::Call, 5, 2));
+        let line = lex_line("o0100 endwhile").unwrap();
+        assert_eq!(&*line.oword.unwrap().label, "100");
+        let line = lex_line("#1 = 2 #<abc> = [#1 * 2]").unwrap();
+        assert_eq!(line.assigns.len(), 2);
+        assert_eq!(line.assigns[1].target, Target::Named("abc".into()));
+    }
+
+    #[test]
     fn lexical_errors_point_at_the_place() {
         let err = |s: &str| lex_line(s).unwrap_err();
         assert_eq!(err("G1 (abc"), LineError::new(4, "unclosed comment"));
         assert_eq!(err("G1 (a(b))"), LineError::new(6, "nested comment"));
-        assert_eq!(err("G1 X"), LineError::new(4, "missing value for word X"));
-        assert_eq!(err("G1 X-"), LineError::new(4, "bad number for word X"));
-        assert_eq!(err("G1 X."), LineError::new(4, "bad number for word X"));
-        assert_eq!(err("G1 X1.2.3"), LineError::new(4, "bad number for word X"));
-        assert_eq!(err("G1 #1=2"), LineError::new(4, "parameters (#) are not supported"));
-        assert_eq!(err("G1 X1 [1]"), LineError::new(7, "expressions ([...]) are not supported"));
-        assert_eq!(err("G1 X#1"), LineError::new(4, "missing value for word X"));
+        assert_eq!(err("G1 X"), LineError::new(5, "missing value for word X"));
+        assert_eq!(err("G1 X-"), LineError::new(6, "missing value for word X"));
+        assert_eq!(err("G1 X."), LineError::new(5, "bad number for word X"));
+        assert_eq!(err("G1 X1.2.3"), LineError::new(5, "bad number for word X"));
+        assert_eq!(
+            err("G1 #1"),
+            LineError::new(6, "expected '=' after a parameter at the start of an item (#n = value)")
+        );
+        assert_eq!(err("G1 X1 [1]"), LineError::new(7, "unexpected character '['"));
         assert_eq!(err("G1 X1 *"), LineError::new(7, "unexpected character '*'"));
         assert_eq!(err("G1 X1 %"), LineError::new(7, "unexpected character '%'"));
-        assert_eq!(err("G1 X1000000001"), LineError::new(4, "number out of range for word X"));
+        assert_eq!(err("G1 X1000000001"), LineError::new(5, "number out of range for word X"));
+        assert_eq!(err("G1 X[1"), LineError::new(7, "expression not closed with ']'"));
+        assert_eq!(err("o100"), LineError::new(5, "O-word needs a keyword: sub, endsub, call, return, if, elseif, else, endif, while, endwhile, do, repeat, endrepeat, break or continue"));
+        assert!(err("X1e308").message.starts_with("unsupported: exponent"));
         let huge = format!("X1{}", "0".repeat(400));
-        assert_eq!(err(&huge), LineError::new(1, "number out of range for word X"));
+        assert_eq!(err(&huge), LineError::new(2, "number out of range for word X"));
     }
 
     #[test]

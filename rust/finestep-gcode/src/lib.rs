@@ -8,12 +8,13 @@
 //!
 //! ```
 //! use finestep_gcode::{parse_str, BlockKind, Point};
-//! let program = parse_str("G20 G91 F10\nG1 X1 Y-0.5 (inches, incremental)\nM2\n", "part.ngc")
-//!     .unwrap();
+//! let source = "G20 G91 F10\n#<dy> = -0.25\nG1 X1 Y[2 * #<dy>] (inches, incremental)\nM2\n";
+//! let program = parse_str(source, "part.ngc").unwrap();
 //! let BlockKind::Linear { to, feed_mm_per_min } = program.blocks[0].kind else { panic!() };
 //! assert_eq!(to, Point { x_mm: 25.4, y_mm: -12.7, z_mm: 0.0, a_deg: 0.0 });
-//! assert_eq!(feed_mm_per_min, 254.0);
-//! assert_eq!(program.blocks[0].line, 2);
+//! // As in LinuxCNC, F is read before G20 acts on its block: 10 mm/min.
+//! assert_eq!(feed_mm_per_min, 10.0);
+//! assert_eq!(program.blocks[0].line, 3);
 //!
 //! let err = parse_str("G0 X1 X2\n", "part.ngc").unwrap_err();
 //! assert_eq!(err.to_string(), "part.ngc:1:7: word X appears twice");
@@ -21,28 +22,49 @@
 //!
 //! # Dialect
 //!
-//! - Words: a letter (any case) and a number (optional sign, digits, at most one decimal
-//!   point, no exponent, magnitude at most 1e9); spaces and tabs anywhere outside
-//!   comments, also inside numbers. Comments `( ... )` (one line, not nested) and after
-//!   `;`. `N` line number (integer, first word). A leading `/` (block delete) is
-//!   ignored and the block runs. A line holding only `%` opens the program if it is the
-//!   first non-blank line; any later `%` line ends it. Lines after M2/M30 are not read.
+//! - Words: a letter (any case) and a value: a number (optional sign, digits, at most one
+//!   decimal point, no exponent, magnitude at most 1e9), `[expression]`, `#parameter`
+//!   or a function, with an optional sign; spaces and tabs anywhere outside comments,
+//!   also inside numbers. Comments `( ... )` (one line, not nested; `(MSG,` `(DEBUG,`
+//!   `(PRINT,` are read as comments) and after `;`. `N` line number (integer, first
+//!   word). A leading `/` (block delete) is ignored and the block runs. A line holding
+//!   only `%` opens the program if it is the first non-blank line; any later `%` line
+//!   ends it. Lines after M2/M30 are not read. An empty program is refused.
+//! - Expressions as LinuxCNC's: `**`; `*` `/` `MOD`; `+` `-`; `EQ` `NE` `GT` `GE` `LT`
+//!   `LE`; `AND` `OR` `XOR` (that precedence, left to right), ABS ACOS ASIN COS EXP FIX
+//!   FUP ROUND LN SIN SQRT TAN (degrees), `ATAN[y]/[x]`, `EXISTS[#<name>]`.
+//! - Parameters: `#1`-`#5601` (`#5220` coordinate system 1, `#5400` tool, `#5420`-`#5423`
+//!   position), local `#<name>` (per subroutine call) and global `#<_name>` (a global
+//!   never set reads 0, as in rs274), LinuxCNC's predefined `#<_x>`, `#<_metric>`, ...
+//!   (read-only). `#n = value` on a line takes effect after the whole line is read.
+//! - O-words: `sub`/`endsub`/`call [args]`/`return [value]` (`#1`-`#30` local to the
+//!   call, the value in `#<_value>`), `if`/`elseif`/`else`/`endif`, `while`/`endwhile`,
+//!   `do`/`while`, `repeat`/`endrepeat`, `break`/`continue`; `o<name> call` of a
+//!   subroutine the file does not define loads `name.ngc` from the program's folder or
+//!   [`Options::subroutine_path`]. At most [`MAX_CALL_DEPTH`] nested calls and
+//!   [`MAX_ITERATIONS`] loop passes and calls in all.
 //! - G0 G1 G2 G3 G4 G5.2 G5.3 G17 G18 G19 G20 G21 G40 G41 G42 G61 G64 G90 G91 G90.1
 //!   G91.1; M0 M2 M3 M4 M5 M6 M7 M8 M9 M30; F S T D P R I J K L; axes X Y Z A. Anything
 //!   else is an error (`unsupported G-code G33`, `unknown word Q`).
 //! - NURBS blocks (G5.2 ... G5.3, G17 only): see [`BlockKind::Nurbs`].
+//! - Execution order in a block is LinuxCNC's: F, S, T, M6 (which stops the spindle),
+//!   M3-M5, M7-M9, G4, G17-G19, G20/G21, G40-G42, G61/G64, G90/G91, motion, M0/M2/M30.
 //! - Start state: G17 G21 G90 G91.1 G40 G64, no motion mode, at the origin, no feed
 //!   rate, spindle off at 0 rpm, coolant off, tool 0.
 //!
 //! See [`BlockKind`] for what each block means and [`GcodeError`] for the error format.
 
+pub mod conformance;
 mod error;
+mod expr;
 mod interp;
 mod lexer;
+mod program;
 
 use std::path::Path;
 
 pub use error::GcodeError;
+pub use program::{MAX_CALL_DEPTH, MAX_ITERATIONS};
 
 /// A position: named axis fields whose names carry their units. Linear axes are in
 /// millimetres, the rotary axis A in degrees.
@@ -268,48 +290,24 @@ pub struct Program {
     pub blocks: Vec<Block>,
 }
 
-/// Parses a part program held in memory. `file_name` is only used in errors.
+/// What the machine configuration tells the interpreter.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Options {
+    /// Folders searched, after the program's own folder, for `NAME.ngc` when
+    /// `o<NAME> call` names a subroutine the program does not define (LinuxCNC's
+    /// SUBROUTINE_PATH).
+    pub subroutine_path: Vec<std::path::PathBuf>,
+}
+
+/// Parses a part program held in memory. `file_name` is only used in errors;
+/// subroutine files are searched in the [`Options::subroutine_path`] only.
 pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
-    let mut state = interp::State::default();
-    let mut blocks = Vec::new();
-    let mut seen_content = false;
-    for (index, raw) in source.split('\n').enumerate() {
-        let line = index + 1;
-        state.line = line;
-        let text = raw.strip_suffix('\r').unwrap_or(raw);
-        let located = |e: error::LineError| GcodeError::Parse {
-            file: file_name.to_string(),
-            line,
-            column: e.column,
-            message: e.message,
-        };
-        if text.trim_matches([' ', '\t']) == "%" {
-            if seen_content {
-                break;
-            }
-            seen_content = true;
-            continue;
-        }
-        let words = lexer::lex_line(text).map_err(located)?;
-        if words.is_empty() {
-            continue;
-        }
-        seen_content = true;
-        let executed = state.execute(&words).map_err(located)?;
-        blocks.extend(executed.kinds.into_iter().map(|kind| Block { line, n: executed.n, kind }));
-        if executed.end {
-            break;
-        }
-    }
-    if let Some((line, column)) = state.open_nurbs() {
-        return Err(GcodeError::Parse {
-            file: file_name.to_string(),
-            line,
-            column,
-            message: "the program ends inside the NURBS block opened here (G5.3 missing)".into(),
-        });
-    }
-    Ok(Program { blocks })
+    program::run(source, file_name, None, &Options::default())
+}
+
+/// [`parse_str`] with the machine configuration's [`Options`].
+pub fn parse_str_with(source: &str, file_name: &str, options: &Options) -> Result<Program, GcodeError> {
+    program::run(source, file_name, None, options)
 }
 
 /// Parses raw bytes. Bytes that are not UTF-8 are refused where they stand outside a
@@ -319,11 +317,17 @@ pub fn parse_bytes(source: &[u8], file_name: &str) -> Result<Program, GcodeError
 }
 
 /// Reads and parses a part program file; errors name the file as `path` displays.
+/// Subroutine files are searched in the program's folder first.
 pub fn parse_file(path: impl AsRef<Path>) -> Result<Program, GcodeError> {
+    parse_file_with(path, &Options::default())
+}
+
+/// [`parse_file`] with the machine configuration's [`Options`].
+pub fn parse_file_with(path: impl AsRef<Path>, options: &Options) -> Result<Program, GcodeError> {
     let path = path.as_ref();
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|source| GcodeError::Io { file: file.clone(), source })?;
-    parse_bytes(&bytes, &file)
+    program::run(&String::from_utf8_lossy(&bytes), &file, path.parent(), options)
 }
 
 #[cfg(test)]

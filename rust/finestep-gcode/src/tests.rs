@@ -94,8 +94,8 @@ fn units_convert_to_mm_and_a_stays_in_degrees() {
             BlockKind::Linear { to: p(25.4, 50.8, 3.0, 10.0), feed_mm_per_min: 254.0 },
         ]
     );
-    // G20 acts on the whole block, also on F given before it.
-    assert_eq!(parse("F1 G20 G1 X1"), vec![BlockKind::Linear { to: p(25.4, 0.0, 0.0, 0.0), feed_mm_per_min: 25.4 }]);
+    // As in LinuxCNC, F is read before G20 acts: F1 in a G20 block from G21 is 1 mm/min.
+    assert_eq!(parse("F1 G20 G1 X1"), vec![BlockKind::Linear { to: p(25.4, 0.0, 0.0, 0.0), feed_mm_per_min: 1.0 }]);
 }
 
 #[test]
@@ -128,7 +128,10 @@ fn dwell_spindle_coolant_tools_comp_path() {
             BlockKind::Coolant { mist: true, flood: true },
             BlockKind::ToolSelect { tool: 3 },
             BlockKind::ToolSelect { tool: 4 },
+            // M6 stops the spindle, as in LinuxCNC.
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0 },
             BlockKind::ToolChange { tool: 4 },
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0 },
             BlockKind::ToolChange { tool: 4 },
             BlockKind::CutterComp { side: CompSide::Left, tool: Some(3) },
             BlockKind::CutterComp { side: CompSide::Off, tool: None },
@@ -149,6 +152,7 @@ fn one_block_runs_in_linuxcnc_order() {
         got,
         vec![
             BlockKind::ToolSelect { tool: 2 },
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 500.0 },
             BlockKind::ToolChange { tool: 2 },
             BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 500.0 },
             BlockKind::Coolant { mist: false, flood: true },
@@ -253,15 +257,18 @@ fn every_error_message_with_its_place() {
     let cases: &[(&str, &str)] = &[
         // Lexical (more in lexer.rs).
         ("G0 X1 (never closed", "1:7: unclosed comment"),
-        ("\n  G0 X", "2:6: missing value for word X"),
-        ("G0 X1.2.3", "1:4: bad number for word X"),
-        ("G0 X12345678901234", "1:4: number out of range for word X"),
-        ("N99999999999999 G0", "1:1: number out of range for word N"),
+        ("\n  G0 X", "2:7: missing value for word X"),
+        ("G0 X1.2.3", "1:5: bad number for word X"),
+        ("G0 X12345678901234", "1:5: number out of range for word X"),
+        ("N99999999999999 G0", "1:2: number out of range for word N"),
         ("G0 X1 @", "1:7: unexpected character '@'"),
         // Words.
         ("G0 X1 Q2", "1:7: unknown word Q"),
         ("G0 X1 B2", "1:7: unknown word B"),
-        ("G0 X1e5", "1:6: unknown word E"),
+        (
+            "G0 X1e5",
+            "1:6: unsupported: exponent in the number of word X (G-code numbers have no exponent: write the digits)",
+        ),
         ("G0 X1 x2", "1:7: word X appears twice"),
         ("F1 G1 X1 F2", "1:10: word F appears twice"),
         ("N1 N2", "1:4: word N appears twice"),
@@ -346,10 +353,10 @@ fn hostile_input_is_an_error_not_a_panic() {
     let long = format!("G0 {}", "X1 ".repeat(5_000));
     assert_eq!(err(&long), "t.ngc:1:7: word X appears twice");
     let digits = format!("G0 X{}", "9".repeat(10_000));
-    assert_eq!(err(&digits), "t.ngc:1:4: number out of range for word X");
-    assert_eq!(err("T99999999999"), "t.ngc:1:1: number out of range for word T");
-    assert_eq!(err("T4294967296"), "t.ngc:1:1: number out of range for word T");
-    assert!(parse_str("", FILE).unwrap().blocks.is_empty());
+    assert_eq!(err(&digits), "t.ngc:1:5: number out of range for word X");
+    assert_eq!(err("T99999999999"), "t.ngc:1:2: number out of range for word T");
+    assert_eq!(err("T4294967296"), "t.ngc:1:2: number out of range for word T");
+    assert_eq!(err(""), "t.ngc:1:1: the program is empty (no blocks)");
 }
 
 #[test]
@@ -396,14 +403,14 @@ fn nurbs_blocks_follow_linuxcnc() {
     assert!(close(to, p(0.0, 0.0, 2.0, 0.0)));
     // X Y on the G5.2 line is the second control point; weights default to 1; G20 and
     // G91 (relative to the NURBS's start) apply; the block comes on the G5.3 line.
-    let source = "G0 X1 Y1\nG20 G91 F1\nG5.2 X1 Y0 P0.5 L4\nX1 Y1\nX0 Y1 P2\nG5.3\nG1 X0.1\n";
+    let source = "G0 X1 Y1\nG20 G91\nF1\nG5.2 X1 Y0 P0.5 L4\nX1 Y1\nX0 Y1 P2\nG5.3\nG1 X0.1\n";
     let (points, order, knots, feed, to) = nurbs(source);
     let i = 25.4;
     assert_eq!(points, vec![(1.0, 1.0, 1.0), (1.0 + i, 1.0, 0.5), (1.0 + i, 1.0 + i, 1.0), (1.0, 1.0 + i, 2.0)]);
     assert_eq!((order, knots, feed), (4, vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0], i));
     assert!(close(to, p(1.0, 1.0 + i, 0.0, 0.0)));
     let program = parse_str(source, FILE).unwrap();
-    assert_eq!(program.blocks.iter().map(|b| b.line).collect::<Vec<_>>(), vec![1, 6, 7]);
+    assert_eq!(program.blocks.iter().map(|b| b.line).collect::<Vec<_>>(), vec![1, 7, 8]);
     let BlockKind::Linear { to, .. } = program.blocks[2].kind else { panic!() };
     assert!(close(to, p(1.0 + 0.1 * i, 1.0 + i, 0.0, 0.0)));
     // Order 2 is the control polygon; N words, comments and blank lines may stand inside.

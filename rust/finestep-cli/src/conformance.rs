@@ -1,0 +1,140 @@
+//! `finestep gcode-canon FILE` (finestep's canonical events for a program) and
+//! `finestep conformance MANIFEST` (the differential check against LinuxCNC's `rs274`,
+//! whose outputs scripts/conformance.sh gathers): one table of agree / refused / disagree
+//! / crash, a per-program list, and a diff per disagreement.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::Duration;
+
+use anyhow::{bail, Context};
+use finestep_gcode::conformance::{compare, events_of, rs274_events};
+
+/// A program interprets for at most this long before it counts as hung.
+const TIMEOUT: Duration = Duration::from_secs(10);
+
+/// Prints finestep's canonical events for `file`, one a line.
+pub fn canon(file: &Path) -> anyhow::Result<()> {
+    let program = finestep_gcode::parse_file(file)?;
+    for event in events_of(&program) {
+        println!("{event}");
+    }
+    Ok(())
+}
+
+/// How one program came out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Outcome {
+    Agree,
+    RefusedUnsupported,
+    RefusedOther,
+    Disagree,
+    Crash,
+    BothRefuse,
+    OnlyRs274Refuses,
+}
+
+impl Outcome {
+    const ALL: [Outcome; 7] = [
+        Outcome::Agree,
+        Outcome::RefusedUnsupported,
+        Outcome::RefusedOther,
+        Outcome::Disagree,
+        Outcome::Crash,
+        Outcome::BothRefuse,
+        Outcome::OnlyRs274Refuses,
+    ];
+
+    fn label(self) -> &'static str {
+        match self {
+            Outcome::Agree => "agree",
+            Outcome::RefusedUnsupported => "refused: unsupported (clean)",
+            Outcome::RefusedOther => "refused: other error (rs274 accepts)",
+            Outcome::Disagree => "disagree",
+            Outcome::Crash => "crash (panic or > 10 s)",
+            Outcome::BothRefuse => "rs274 refuses, finestep refuses",
+            Outcome::OnlyRs274Refuses => "rs274 refuses, finestep accepts",
+        }
+    }
+}
+
+/// finestep's interpretation of `file` on its own thread: Ok(events) or Err(message),
+/// or None when it panicked or ran past [`TIMEOUT`].
+fn interpret(file: &Path) -> Option<Result<Vec<finestep_gcode::conformance::Event>, String>> {
+    let (send, receive) = mpsc::channel();
+    let path = file.to_path_buf();
+    std::thread::spawn(move || {
+        let result = std::panic::catch_unwind(|| {
+            finestep_gcode::parse_file(&path).map(|p| events_of(&p)).map_err(|e| e.to_string())
+        });
+        // The receiver may have given up on a slow program.
+        let _ = send.send(result.ok());
+    });
+    receive.recv_timeout(TIMEOUT).ok().flatten()
+}
+
+/// Runs the comparison over MANIFEST's lines `rs274-exit-status<TAB>program.ngc<TAB>rs274-output`
+/// and writes `report.txt` and `diffs/` under `out`.
+pub fn run(manifest: &Path, out: &Path) -> anyhow::Result<()> {
+    let text = std::fs::read_to_string(manifest).with_context(|| format!("reading {}", manifest.display()))?;
+    let diffs = out.join("diffs");
+    std::fs::create_dir_all(&diffs)?;
+    let mut report = String::new();
+    let mut counts = [0usize; Outcome::ALL.len()];
+    // Quiet the default panic message: a panic is reported as a crash in the table.
+    std::panic::set_hook(Box::new(|_| {}));
+    for line in text.lines().filter(|l| !l.trim().is_empty()) {
+        let fields: Vec<&str> = line.split('\t').collect();
+        let [status, program, rs274] = fields[..] else { bail!("bad manifest line {line:?}") };
+        let program = PathBuf::from(program);
+        let rs274_accepts = status == "0";
+        let theirs = std::fs::read_to_string(rs274).with_context(|| format!("reading {rs274}"))?;
+        let (outcome, detail) = match (interpret(&program), rs274_accepts) {
+            (None, _) => (Outcome::Crash, "panicked or timed out".to_string()),
+            (Some(Err(e)), false) => (Outcome::BothRefuse, e),
+            (Some(Ok(_)), false) => {
+                let why = theirs.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").to_string();
+                (Outcome::OnlyRs274Refuses, format!("rs274: {}", why.trim()))
+            }
+            (Some(Err(e)), true) if e.contains(": unsupported") => (Outcome::RefusedUnsupported, e),
+            (Some(Err(e)), true) => (Outcome::RefusedOther, e),
+            (Some(Ok(ours)), true) => {
+                let theirs = rs274_events(&theirs).map_err(anyhow::Error::msg)?;
+                match compare(&ours, &theirs) {
+                    None => (Outcome::Agree, String::new()),
+                    Some(diff) => {
+                        let name = program.to_string_lossy().trim_start_matches('/').replace('/', "__");
+                        let path = diffs.join(format!("{name}.diff"));
+                        std::fs::write(&path, format!("{}\n{diff}", program.display()))?;
+                        (Outcome::Disagree, path.display().to_string())
+                    }
+                }
+            }
+        };
+        counts[outcome as usize] += 1;
+        let detail = detail.lines().next().unwrap_or("");
+        writeln!(report, "{:<38} {}  {detail}", outcome.label(), program.display())?;
+    }
+    let mut lines: Vec<&str> = report.lines().collect();
+    lines.sort();
+    std::fs::write(out.join("report.txt"), lines.join("\n") + "\n")?;
+    let accepted: usize = counts[..5].iter().sum();
+    println!(
+        "conformance against rs274 ({} programs; per program: {})",
+        text.lines().count(),
+        out.join("report.txt").display()
+    );
+    for outcome in Outcome::ALL {
+        println!("  {:<40} {:>4}", outcome.label(), counts[outcome as usize]);
+    }
+    if accepted > 0 {
+        println!(
+            "  agreement on programs rs274 accepts: {} of {} ({:.1} %)",
+            counts[0],
+            accepted,
+            100.0 * counts[0] as f64 / accepted as f64
+        );
+    }
+    Ok(())
+}

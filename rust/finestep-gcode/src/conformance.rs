@@ -1,0 +1,423 @@
+//! The differential check against LinuxCNC: a program's motion as a list of canonical
+//! events, from finestep's [`Program`] ([`events_of`]) or from the output of LinuxCNC's
+//! standalone interpreter `rs274 -g` ([`rs274_events`]), and their comparison
+//! ([`compare`]).
+//!
+//! Both sides are brought to one form: positions in the machine frame in millimetres
+//! (rs274 prints them in program units in the current coordinate system; its
+//! `SET_G5X_OFFSET`, `SET_G92_OFFSET`, `SET_XY_ROTATION`, `USE_TOOL_LENGTH_OFFSET` and
+//! `USE_LENGTH_UNITS` calls are applied as LinuxCNC's canonical layer applies them),
+//! feed rates in mm/min, and the spindle and coolant state each move runs under (so the
+//! order in which one block's spindle calls are printed does not matter). rs274 prints
+//! four decimals in program units: values agree when within half a printed digit
+//! (5e-5 program units, 1.27e-3 mm in G20) plus 1e-6 mm.
+
+use std::fmt;
+
+use crate::{BlockKind, Plane, Program, SpindleRotation};
+
+/// Millimetres per inch.
+const MM_PER_INCH: f64 = 25.4;
+
+/// The spindle and coolant state a move runs under.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Machine {
+    /// Rotation: -1 counter-clockwise, 0 off, 1 clockwise.
+    pub rotation: i8,
+    /// Speed in rpm.
+    pub rpm: f64,
+    /// Mist coolant on.
+    pub mist: bool,
+    /// Flood coolant on.
+    pub flood: bool,
+}
+
+impl Default for Machine {
+    fn default() -> Self {
+        Machine { rotation: 0, rpm: 0.0, mist: false, flood: false }
+    }
+}
+
+/// One canonical event, positions in the machine frame in mm (A in degrees).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// A rapid move.
+    Traverse {
+        /// End X Y Z A.
+        to: [f64; 4],
+    },
+    /// A straight feed move.
+    Feed {
+        /// End X Y Z A.
+        to: [f64; 4],
+        /// mm/min.
+        feed: f64,
+        /// Spindle and coolant.
+        machine: Machine,
+    },
+    /// An arc or helix.
+    Arc {
+        /// End X Y Z A.
+        to: [f64; 4],
+        /// The centre's in-plane coordinates, in rs274's order (G17 X Y, G18 Z X, G19 Y Z).
+        centre: [f64; 2],
+        /// 17, 18 or 19.
+        plane: u8,
+        /// LinuxCNC's turn: 1 for one counter-clockwise turn or part of one, -1 clockwise;
+        /// each extra full turn adds one in its direction.
+        turn: i32,
+        /// mm/min.
+        feed: f64,
+        /// Spindle and coolant.
+        machine: Machine,
+    },
+    /// A NURBS (compared by its end point).
+    Nurbs {
+        /// End X Y Z A.
+        to: [f64; 4],
+    },
+    /// A dwell.
+    Dwell {
+        /// Seconds.
+        seconds: f64,
+    },
+    /// A tool change (M6).
+    ToolChange {
+        /// The tool number.
+        tool: u32,
+    },
+    /// M0 (rs274 also prints M1 as an optional stop).
+    Pause,
+    /// M2/M30.
+    End,
+    /// A call finestep does not produce (probing, threading, ...): it cannot agree.
+    Other(String),
+}
+
+impl fmt::Display for Event {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", ");
+        let m = |m: &Machine| {
+            format!(
+                "spindle {} {:.1} rpm{}{}",
+                m.rotation,
+                m.rpm,
+                if m.mist { " mist" } else { "" },
+                if m.flood { " flood" } else { "" }
+            )
+        };
+        match self {
+            Event::Traverse { to } => write!(f, "TRAVERSE({})", p(to)),
+            Event::Feed { to, feed, machine } => write!(f, "FEED({}) F{feed:.4} {}", p(to), m(machine)),
+            Event::Arc { to, centre, plane, turn, feed, machine } => {
+                write!(f, "ARC({}) centre ({}) G{plane} turn {turn} F{feed:.4} {}", p(to), p(centre), m(machine))
+            }
+            Event::Nurbs { to } => write!(f, "NURBS({})", p(to)),
+            Event::Dwell { seconds } => write!(f, "DWELL({seconds:.4})"),
+            Event::ToolChange { tool } => write!(f, "TOOL_CHANGE({tool})"),
+            Event::Pause => write!(f, "PAUSE"),
+            Event::End => write!(f, "END"),
+            Event::Other(call) => write!(f, "{call}"),
+        }
+    }
+}
+
+fn point(p: crate::Point) -> [f64; 4] {
+    [p.x_mm, p.y_mm, p.z_mm, p.a_deg]
+}
+
+/// finestep's canonical events for `program`.
+pub fn events_of(program: &Program) -> Vec<Event> {
+    let mut machine = Machine::default();
+    let mut events = Vec::new();
+    for block in &program.blocks {
+        match &block.kind {
+            BlockKind::Rapid { to } => events.push(Event::Traverse { to: point(*to) }),
+            BlockKind::Linear { to, feed_mm_per_min } => {
+                events.push(Event::Feed { to: point(*to), feed: *feed_mm_per_min, machine })
+            }
+            BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
+                let (centre, plane) = match plane {
+                    Plane::Xy => ([centre.x_mm, centre.y_mm], 17),
+                    Plane::Zx => ([centre.z_mm, centre.x_mm], 18),
+                    Plane::Yz => ([centre.y_mm, centre.z_mm], 19),
+                };
+                let turns = 1 + *extra_turns as i32;
+                let turn = if *clockwise { -turns } else { turns };
+                events.push(Event::Arc { to: point(*to), centre, plane, turn, feed: *feed_mm_per_min, machine });
+            }
+            BlockKind::Nurbs { to, .. } => events.push(Event::Nurbs { to: point(*to) }),
+            BlockKind::Dwell { seconds } => events.push(Event::Dwell { seconds: *seconds }),
+            BlockKind::Spindle { rotation, rpm } => {
+                machine.rotation = match rotation {
+                    SpindleRotation::Off => 0,
+                    SpindleRotation::Clockwise => 1,
+                    SpindleRotation::CounterClockwise => -1,
+                };
+                machine.rpm = *rpm;
+            }
+            BlockKind::Coolant { mist, flood } => (machine.mist, machine.flood) = (*mist, *flood),
+            BlockKind::ToolChange { tool } => events.push(Event::ToolChange { tool: *tool }),
+            BlockKind::Pause => events.push(Event::Pause),
+            BlockKind::End => events.push(Event::End),
+            BlockKind::ToolSelect { .. } | BlockKind::CutterComp { .. } | BlockKind::PathControl(_) => {}
+        }
+    }
+    events
+}
+
+/// rs274's output read into events, with the tolerance each event's values carry (in mm).
+#[derive(Debug, Clone, Default)]
+pub struct Rs274Output {
+    /// The events in order.
+    pub events: Vec<Event>,
+    /// Per event, half a printed digit in mm (5e-5 program units) plus 1e-6.
+    pub tolerance: Vec<f64>,
+}
+
+/// The interpreter state rs274's calls set, to bring its values to the machine frame.
+struct Canon {
+    scale: f64,
+    g5x: [f64; 6],
+    g92: [f64; 6],
+    tool: [f64; 6],
+    rotation_deg: f64,
+    feed: f64,
+    plane: u8,
+    machine: Machine,
+}
+
+/// The numbers in a call's argument list (commas and blanks separate them).
+fn numbers(args: &str) -> Result<Vec<f64>, String> {
+    args.split([',', ' '])
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<f64>().map_err(|_| format!("bad number {s:?}")))
+        .collect()
+}
+
+impl Canon {
+    /// A position in program units (x y z a b c) to the machine frame in mm.
+    fn machine(&self, v: &[f64]) -> Result<[f64; 4], String> {
+        if v.len() < 6 {
+            return Err(format!("expected 6 coordinates, got {}", v.len()));
+        }
+        if v[4].abs() > 1e-9 || v[5].abs() > 1e-9 {
+            return Err("B or C moves".into());
+        }
+        let mut x = v[0] * self.scale + self.g92[0];
+        let mut y = v[1] * self.scale + self.g92[1];
+        let (s, c) = self.rotation_deg.to_radians().sin_cos();
+        (x, y) = (x * c - y * s, x * s + y * c);
+        Ok([
+            x + self.g5x[0] + self.tool[0],
+            y + self.g5x[1] + self.tool[1],
+            v[2] * self.scale + self.g92[2] + self.g5x[2] + self.tool[2],
+            v[3] + self.g92[3] + self.g5x[3] + self.tool[3],
+        ])
+    }
+
+    /// Offsets given in program units, stored in mm (rotary ones in degrees).
+    fn offsets(&self, v: &[f64]) -> [f64; 6] {
+        let mut out = [0.0; 6];
+        for (i, value) in v.iter().take(6).enumerate() {
+            out[i] = if i < 3 { value * self.scale } else { *value };
+        }
+        out
+    }
+}
+
+/// Reads rs274's standard output (its numbered `N..... CALL(args)` lines).
+pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
+    let mut canon = Canon {
+        scale: 1.0,
+        g5x: [0.0; 6],
+        g92: [0.0; 6],
+        tool: [0.0; 6],
+        rotation_deg: 0.0,
+        feed: 0.0,
+        plane: 17,
+        machine: Machine::default(),
+    };
+    let mut out = Rs274Output::default();
+    for (index, line) in output.lines().enumerate() {
+        let at = |e: String| format!("rs274 output line {}: {e}: {line}", index + 1);
+        let mut fields = line.trim_start().splitn(3, ' ');
+        let (Some(counter), Some(_n), Some(call)) = (fields.next(), fields.next(), fields.next()) else { continue };
+        if counter.parse::<u64>().is_err() {
+            continue;
+        }
+        let call = call.trim();
+        let (name, args) = match call.split_once('(') {
+            Some((name, rest)) => (name, rest.strip_suffix(')').unwrap_or(rest)),
+            None => (call, ""),
+        };
+        let nums = || numbers(args).map_err(at);
+        let event = match name {
+            "USE_LENGTH_UNITS" => {
+                canon.scale = if args.contains("INCHES") { MM_PER_INCH } else { 1.0 };
+                None
+            }
+            "SET_G5X_OFFSET" => {
+                let v = nums()?;
+                canon.g5x = canon.offsets(v.get(1..).unwrap_or(&[]));
+                None
+            }
+            "SET_G92_OFFSET" => {
+                canon.g92 = canon.offsets(&nums()?);
+                None
+            }
+            "SET_XY_ROTATION" => {
+                canon.rotation_deg = nums()?.first().copied().unwrap_or(0.0);
+                None
+            }
+            "USE_TOOL_LENGTH_OFFSET" => {
+                canon.tool = canon.offsets(&nums()?);
+                None
+            }
+            "SET_FEED_RATE" => {
+                canon.feed = nums()?.first().copied().unwrap_or(0.0) * canon.scale;
+                None
+            }
+            "SELECT_PLANE" => {
+                canon.plane = match args {
+                    "CANON_PLANE_XZ" => 18,
+                    "CANON_PLANE_YZ" => 19,
+                    _ => 17,
+                };
+                None
+            }
+            "SET_SPINDLE_SPEED" => {
+                canon.machine.rpm = nums()?.get(1).copied().unwrap_or(0.0);
+                None
+            }
+            "START_SPINDLE_CLOCKWISE" => {
+                canon.machine.rotation = 1;
+                None
+            }
+            "START_SPINDLE_COUNTERCLOCKWISE" => {
+                canon.machine.rotation = -1;
+                None
+            }
+            "STOP_SPINDLE_TURNING" => {
+                canon.machine.rotation = 0;
+                None
+            }
+            "MIST_ON" | "MIST_OFF" => {
+                canon.machine.mist = name == "MIST_ON";
+                None
+            }
+            "FLOOD_ON" | "FLOOD_OFF" => {
+                canon.machine.flood = name == "FLOOD_ON";
+                None
+            }
+            "STRAIGHT_TRAVERSE" => Some(Event::Traverse { to: canon.machine(&nums()?).map_err(at)? }),
+            "STRAIGHT_FEED" => {
+                Some(Event::Feed { to: canon.machine(&nums()?).map_err(at)?, feed: canon.feed, machine: canon.machine })
+            }
+            "ARC_FEED" => {
+                let v = nums()?;
+                if v.len() < 9 {
+                    return Err(at("ARC_FEED with fewer than 9 values".into()));
+                }
+                // first end, second end, first centre, second centre, turn, axis end, a b c
+                let (mut e, mut c) = ([0.0; 6], [0.0; 6]);
+                let (first, second, normal) = match canon.plane {
+                    18 => (2, 0, 1),
+                    19 => (1, 2, 0),
+                    _ => (0, 1, 2),
+                };
+                e[first] = v[0];
+                e[second] = v[1];
+                e[normal] = v[5];
+                e[3..6].copy_from_slice(&v[6..9]);
+                c[first] = v[2];
+                c[second] = v[3];
+                c[normal] = v[5];
+                let to = canon.machine(&e).map_err(at)?;
+                let centre3 = canon.machine(&c).map_err(at)?;
+                let centre = [centre3[first], centre3[second]];
+                Some(Event::Arc {
+                    to,
+                    centre,
+                    plane: canon.plane,
+                    turn: v[4] as i32,
+                    feed: canon.feed,
+                    machine: canon.machine,
+                })
+            }
+            "DWELL" => Some(Event::Dwell { seconds: nums()?.first().copied().unwrap_or(0.0) }),
+            "CHANGE_TOOL" => Some(Event::ToolChange { tool: nums()?.first().copied().unwrap_or(0.0) as u32 }),
+            "PROGRAM_STOP" | "OPTIONAL_PROGRAM_STOP" => Some(Event::Pause),
+            "PROGRAM_END" => Some(Event::End),
+            "NURBS_FEED" => Some(Event::Other(call.to_string())),
+            "STRAIGHT_PROBE" | "RIGID_TAP" | "START_SPEED_FEED_SYNCH" | "SPINDLE_RETRACT_TRAVERSE" => {
+                Some(Event::Other(call.to_string()))
+            }
+            _ => None,
+        };
+        if let Some(event) = event {
+            out.tolerance.push(5e-5 * canon.scale + 1e-6);
+            out.events.push(event);
+        }
+    }
+    Ok(out)
+}
+
+fn close(a: &[f64], b: &[f64], tolerance: f64) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tolerance)
+}
+
+fn machine_close(a: &Machine, b: &Machine) -> bool {
+    a.rotation == b.rotation && (a.rpm - b.rpm).abs() <= 5e-5 && a.mist == b.mist && a.flood == b.flood
+}
+
+/// Whether finestep's event `ours` agrees with rs274's `theirs` within `tolerance` mm.
+pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
+    // Feed rates are printed with four decimals in program units per minute too.
+    let feed_ok = |a: f64, b: f64| (a - b).abs() <= tolerance;
+    match (ours, theirs) {
+        (Event::Traverse { to: a }, Event::Traverse { to: b }) => close(a, b, tolerance),
+        (Event::Feed { to: a, feed: fa, machine: ma }, Event::Feed { to: b, feed: fb, machine: mb }) => {
+            close(a, b, tolerance) && feed_ok(*fa, *fb) && machine_close(ma, mb)
+        }
+        (
+            Event::Arc { to: a, centre: ca, plane: pa, turn: ta, feed: fa, machine: ma },
+            Event::Arc { to: b, centre: cb, plane: pb, turn: tb, feed: fb, machine: mb },
+        ) => {
+            close(a, b, tolerance)
+                && close(ca, cb, tolerance)
+                && pa == pb
+                && ta == tb
+                && feed_ok(*fa, *fb)
+                && machine_close(ma, mb)
+        }
+        (Event::Nurbs { to: a }, Event::Nurbs { to: b }) => close(a, b, tolerance),
+        (Event::Dwell { seconds: a }, Event::Dwell { seconds: b }) => (a - b).abs() <= 5e-5,
+        (Event::ToolChange { tool: a }, Event::ToolChange { tool: b }) => a == b,
+        (Event::Pause, Event::Pause) | (Event::End, Event::End) => true,
+        _ => false,
+    }
+}
+
+/// The first difference between finestep's events and rs274's, as a short unified
+/// listing around it; `None` when they agree.
+pub fn compare(ours: &[Event], theirs: &Rs274Output) -> Option<String> {
+    let n = ours.len().max(theirs.events.len());
+    let first = (0..n).find(|&i| match (ours.get(i), theirs.events.get(i)) {
+        (Some(a), Some(b)) => !agrees(a, b, theirs.tolerance[i]),
+        _ => true,
+    })?;
+    let mut text = format!(
+        "first difference at event {} (finestep {} events, rs274 {} events)\n",
+        first + 1,
+        ours.len(),
+        theirs.events.len()
+    );
+    for i in first.saturating_sub(3)..(first + 4).min(n) {
+        let show = |e: Option<&Event>| e.map_or("-".to_string(), Event::to_string);
+        let mark = if i == first { ">" } else { " " };
+        text.push_str(&format!("{mark} {:>5} finestep: {}\n", i + 1, show(ours.get(i))));
+        text.push_str(&format!("{mark} {:>5} rs274:    {}\n", i + 1, show(theirs.events.get(i))));
+    }
+    Some(text)
+}

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Regenerates tests/conformance/NAME.rs274, the expected output of the quick conformance
+# slice, from LinuxCNC's rs274 (installed by scripts/linuxcnc_setup.sh) for each
+# tests/conformance/NAME.ngc (or only those named as arguments). rs274 must accept each.
+set -euo pipefail
+cd "$(dirname "$0")/../tests/conformance"
+../../scripts/linuxcnc_setup.sh
+files=("$@")
+[ ${#files[@]} -eq 0 ] && files=(*.ngc)
+for f in "${files[@]}"; do
+    f=$(basename "$f")
+    if ! rs274 -g -t tool.tbl "$f" > "${f%.ngc}.rs274" 2>/dev/null < /dev/null; then
+        echo "rs274 refuses $f:"; tail -3 "${f%.ngc}.rs274"; exit 1
+    fi
+done
+echo "conformance_expect: ${#files[@]} expectations written"
