@@ -12,7 +12,8 @@
  *   finestep.0.stepgen.NN.{position-cmd (in), position-fb, velocity-fb, counts, limited (out), enable (in)}
  *     params position-scale, maxvel, step_type, steplen, stepspace, dirsetup, dirhold
  *   finestep.0.encoder.NN.{count, position, velocity (out), reset (in)}; params scale, counter-mode, filter
- *   finestep.0.enable (in: iocontrol.0.user-enable-out), finestep.0.estop-ok (out: iocontrol.0.emc-enable-in),
+ *   finestep.0.enable (in: iocontrol.0.user-enable-out), finestep.0.estop-ok (out: iocontrol.0.emc-enable-in:
+ *   enable, with the chip's E-stop input released and the watchdog bit clear),
  *   finestep.0.running, finestep.0.error (out), finestep.0.watchdog.has_bit (io), param
  *   finestep.0.watchdog.timeout_ns.
  */
@@ -117,7 +118,9 @@ static void read_fn(void *arg, long period)
     rc |= fs_hal_status(f->driver, f->reported_bit && !*f->has_bit, &estop_ok, &bit, &running);
     *f->has_bit = bit;
     f->reported_bit = bit;
-    *f->estop_ok = estop_ok && !bit;
+    /* The E-stop loop iocontrol expects (user-enable-out back into emc-enable-in), broken
+     * by the chip's E-stop input or the watchdog bit. */
+    *f->estop_ok = estop_ok && !bit && *f->enable;
     *f->running = running;
     report(f, rc);
 }

@@ -5,7 +5,9 @@ LinuxCNC starts it as `headless.py -ini FILE`. It records the servo thread with
 halsampler (when FINESTEP_SAMPLES names a file), resets the E-stop, turns the machine
 on, homes every joint, opens FINESTEP_PROGRAM in auto mode, runs it, polls until the
 interpreter is idle and motion has stopped, and writes "ok" or the first error to
-FINESTEP_RESULT. Needs Debian's /usr/bin/python3 (its `linuxcnc` module).
+FINESTEP_RESULT. With FINESTEP_ESTOP_AFTER (seconds), it presses LinuxCNC's E-stop that
+long after the start instead of waiting for the end. Needs Debian's /usr/bin/python3
+(its `linuxcnc` module).
 """
 
 import os
@@ -26,6 +28,7 @@ def main():
     result_path = os.environ["FINESTEP_RESULT"]
     samples = os.environ.get("FINESTEP_SAMPLES")
     timeout = float(os.environ.get("FINESTEP_TIMEOUT", "3600"))
+    estop_after = os.environ.get("FINESTEP_ESTOP_AFTER")
     stat, command, errors = linuxcnc.stat(), linuxcnc.command(), linuxcnc.error_channel()
     sampler = None
     if samples:
@@ -72,6 +75,18 @@ def main():
         started = time.time()
         command.auto(linuxcnc.AUTO_RUN, 0)
         wait_for(lambda: stat.interp_state != linuxcnc.INTERP_IDLE, "the program to start", 10.0)
+        if estop_after:
+            end = time.time() + float(estop_after)
+            while time.time() < end:
+                poll()
+                if stat.interp_state == linuxcnc.INTERP_IDLE:
+                    raise Failed("the program ended before the E-stop")
+                time.sleep(0.05)
+            command.state(linuxcnc.STATE_ESTOP)
+            wait_for(lambda: stat.task_state == linuxcnc.STATE_ESTOP, "the E-stop")
+            print("headless: E-stop pressed %.1f s after the start" % (time.time() - started), flush=True)
+            time.sleep(1.0)
+            return finish("ok", sampler, result_path, command)
         wait_for(
             lambda: stat.interp_state == linuxcnc.INTERP_IDLE and stat.queue == 0 and stat.inpos,
             "the program to end",
@@ -82,16 +97,20 @@ def main():
         time.sleep(0.5)
     except Failed as error:
         outcome = "error: %s" % error
-    finally:
-        if sampler:
-            sampler.send_signal(signal.SIGINT)
-            sampler.wait()
-        with open(result_path, "w") as out:
-            out.write(outcome + "\n")
-        try:
-            command.state(linuxcnc.STATE_ESTOP)
-        except Exception:  # LinuxCNC may already be going down
-            pass
+    return finish(outcome, sampler, result_path, command)
+
+
+def finish(outcome, sampler, result_path, command):
+    """Stops the recording, writes the outcome, leaves LinuxCNC in E-stop."""
+    if sampler:
+        sampler.send_signal(signal.SIGINT)
+        sampler.wait()
+    with open(result_path, "w") as out:
+        out.write(outcome + "\n")
+    try:
+        command.state(linuxcnc.STATE_ESTOP)
+    except Exception:  # LinuxCNC may already be going down
+        pass
     return 0 if outcome == "ok" else 1
 
 

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs one G-code program through headless LinuxCNC on the simulated finestep chip and
 # prints the figures: scripts/linuxcnc_run.sh PROGRAM.ngc [model|lockstep]
+# With FINESTEP_ESTOP_AFTER=SECONDS, LinuxCNC's E-stop is pressed that long after the start.
+# Exit status: 0 checked, 1 failed, 2 LinuxCNC's interpreter refused the program.
 # Expects what scripts/linuxcnc.sh builds and installs (the finestep HAL module, the
 # finestep and finestep-linuxcnc binaries, an ordinary user for rtapi). Outputs under
 # build/linuxcnc/run/<program>/ (the generated INI and HAL, LinuxCNC's log, the recording).
@@ -9,7 +11,13 @@ cd "$(dirname "$0")/.."
 repo=$(pwd)
 program=$(readlink -f "$1")
 target=${2:-model}
-config=${FINESTEP_LINUXCNC_CONFIG:-linuxcnc/mill.toml}
+# The 3-axis mill, or the same with a rotary A for a program that turns A (an A word
+# outside comments).
+config=linuxcnc/mill.toml
+if sed 's/([^)]*)//g; s/;.*//' "$program" | grep -qiE '(^|[^A-Z_#<])A *[-+]?[0-9.#[]'; then
+    config=linuxcnc/mill-a.toml
+fi
+config=${FINESTEP_LINUXCNC_CONFIG:-$config}
 rt_user=${FINESTEP_RT_USER:-finestep-rt}
 name=$(basename "$program" .ngc)
 work=$repo/build/linuxcnc/run/$name
@@ -41,7 +49,22 @@ periods=$(wc -l < "$work/samples.txt" 2>/dev/null || echo 0)
 rate=$(awk -v p="$periods" -v a="$start" -v b="$end" 'BEGIN { printf "%.0f", p / (b - a) }')
 echo "$name: LinuxCNC on the $target chip: $result; $periods servo periods in $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }') s ($rate periods/s incl. start-up)"
 if [ "$result" != "ok" ]; then
-    grep -iE "error|finestep" "$work/linuxcnc.log" | head -20 || true
+    grep -iE "error|finestep" "$work/linuxcnc.log" | grep -v "terminated with an error" | head -20 || true
+    # Exit status 2: LinuxCNC's own interpreter refused the program (not finestep's doing).
+    grep -q "interp_error" "$work/linuxcnc.log" && exit 2
     exit 1
 fi
+if [ -n "${FINESTEP_ESTOP_AFTER:-}" ]; then
+    # LinuxCNC's E-stop pressed mid-program (linuxcnc/headless.py): checked up to the
+    # stop, then no step after it and none beyond the command.
+    target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --expect-stop
+    exit 0
+fi
 target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints"
+# The same program planned by finestep's own planner under the same limits (the model's
+# fast path; its figure is the planned machining time).
+if target/release/finestep run --fast --config "$config" "$program" --out "$work/finestep-run" > "$work/finestep-run.log" 2>&1; then
+    sed -n 's/.* elements, \([0-9]*\) periods of [0-9.]* ms: \([0-9.]*\) s of machining.*/  finestep'"'"'s planner, same limits: \1 periods, \2 s of machining/p' "$work/finestep-run.log"
+else
+    echo "  finestep's planner: $(grep -m1 -iE "error|refused|unsupported" "$work/finestep-run.log" || tail -1 "$work/finestep-run.log")"
+fi

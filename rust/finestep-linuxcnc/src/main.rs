@@ -49,6 +49,9 @@ enum Command {
         /// Joints in the recording.
         #[arg(long)]
         joints: usize,
+        /// The run was stopped (LinuxCNC's E-stop): fail unless the recording shows it.
+        #[arg(long)]
+        expect_stop: bool,
     },
 }
 
@@ -57,6 +60,6 @@ fn main() -> anyhow::Result<()> {
         Command::Config { config, bus, display, record, out } => {
             config::write(config.as_deref(), &bus, &display, &out, record)
         }
-        Command::Check { samples, joints } => config::check(&samples, joints),
+        Command::Check { samples, joints, expect_stop } => config::check(&samples, joints, expect_stop),
     }
 }
