@@ -31,9 +31,9 @@ make -s -C linuxcnc
 modules=$(sed -n 's/^RTLIBDIR := //p' /usr/share/linuxcnc/Makefile.modinc | tail -1)
 install -m 0644 build/linuxcnc/finestep.so "$modules/finestep.so"
 
-# LinuxCNC's own examples that a 3-axis mill runs unattended (no M0 pause, probe, lathe
-# cycle or A axis; LinuxCNC converts the inch ones itself).
-shipped=(arcspiral.ngc spiral.ngc cds.ngc)
+# Two of LinuxCNC's own examples in its dialect beyond finestep's (inches, polar coordinates,
+# G81 drilling cycles), short enough to run here (cds.ngc and spiral.ngc take many minutes).
+shipped=(hole-circle.ngc polar.ngc)
 if [ "${1:-}" = "--quick" ]; then
     programs=(linuxcnc/quick.ngc)
 elif [ $# -gt 0 ]; then

@@ -2,6 +2,8 @@
 # Runs one G-code program through headless LinuxCNC on the simulated finestep chip and
 # prints the figures: scripts/linuxcnc_run.sh PROGRAM.ngc [model|lockstep]
 # With FINESTEP_ESTOP_AFTER=SECONDS, LinuxCNC's E-stop is pressed that long after the start.
+# With FINESTEP_KILL_AFTER=PERIODS, LinuxCNC's realtime process is killed that many servo
+# periods into the run and the chip's watchdog is checked (finestep-linuxcnc watchdog).
 # Exit status: 0 checked, 1 failed, 2 LinuxCNC's interpreter refused the program.
 # Expects what scripts/linuxcnc.sh builds and installs (the finestep HAL module, the
 # finestep and finestep-linuxcnc binaries, an ordinary user for rtapi). Outputs under
@@ -38,11 +40,51 @@ target/release/finestep-linuxcnc config --config "$config" --bus "sim:$work/chip
     --display "$repo/linuxcnc/headless.py" --record --out "$work" > /dev/null
 joints=$(sed -n 's/^JOINTS = //p' "$work/finestep.ini")
 
+# The process of this run whose environment holds $2 (found through /proc, so that
+# only this run's processes are ever signalled).
+run_process() {
+    local pid
+    for pid in $(ls /proc | grep -E '^[0-9]+$'); do
+        [ "$(cat "/proc/$pid/comm" 2>/dev/null)" = "$1" ] || continue
+        tr '\0' '\n' < "/proc/$pid/environ" 2>/dev/null | grep -qxF "$2" && echo "$pid"
+    done
+    true
+}
+
 start=$(date +%s.%N)
 status=0
-env RTAPI_UID="$(id -u "$rt_user")" RTAPI_FIFO_PATH="$work/rtapi_fifo" RUNTESTS=1 \
-    FINESTEP_PROGRAM="$program" FINESTEP_SAMPLES="$work/samples.txt" FINESTEP_RESULT="$work/result.txt" \
-    linuxcnc "$work/finestep.ini" > "$work/linuxcnc.log" 2>&1 || status=$?
+if [ -z "${FINESTEP_KILL_AFTER:-}" ]; then
+    env RTAPI_UID="$(id -u "$rt_user")" RTAPI_FIFO_PATH="$work/rtapi_fifo" RUNTESTS=1 \
+        FINESTEP_PROGRAM="$program" FINESTEP_SAMPLES="$work/samples.txt" FINESTEP_RESULT="$work/result.txt" \
+        linuxcnc "$work/finestep.ini" > "$work/linuxcnc.log" 2>&1 || status=$?
+else
+    # LinuxCNC killed mid-program: once the driver has run FINESTEP_KILL_AFTER servo
+    # periods, SIGKILL to this run's rtapi_app (the realtime process that holds the
+    # chip's socket); then the chip is watched, and the rest of LinuxCNC sent home.
+    env RTAPI_UID="$(id -u "$rt_user")" RTAPI_FIFO_PATH="$work/rtapi_fifo" RUNTESTS=1 \
+        FINESTEP_PROGRAM="$program" FINESTEP_SAMPLES="$work/samples.txt" FINESTEP_RESULT="$work/result.txt" \
+        linuxcnc "$work/finestep.ini" > "$work/linuxcnc.log" 2>&1 &
+    linuxcnc_pid=$!
+    for _ in $(seq 1200); do
+        running=0
+        [ -f "$work/samples.txt" ] && running=$(awk '$NF == 1' "$work/samples.txt" | wc -l)
+        [ "$running" -ge "$FINESTEP_KILL_AFTER" ] && break
+        sleep 0.1
+    done
+    rtapi=$(run_process rtapi_app "RTAPI_FIFO_PATH=$work/rtapi_fifo")
+    [ -n "$rtapi" ] || { echo "linuxcnc_run: no rtapi_app of this run"; exit 1; }
+    kill -KILL $rtapi
+    echo "$name: killed LinuxCNC's rtapi_app (pid $rtapi) after $running servo periods of the driver running"
+    sleep 0.5
+    watch=0
+    target/release/finestep-linuxcnc watchdog --socket "$work/chip.sock" || watch=$?
+    display=$(run_process headless.py "FINESTEP_RESULT=$work/result.txt")
+    display=${display:-$(run_process python3 "FINESTEP_RESULT=$work/result.txt")}
+    [ -n "$display" ] && kill -TERM $display
+    for _ in $(seq 300); do kill -0 "$linuxcnc_pid" 2>/dev/null || break; sleep 0.1; done
+    kill -0 "$linuxcnc_pid" 2>/dev/null && kill -TERM "$linuxcnc_pid"
+    exit $watch
+fi
 end=$(date +%s.%N)
 result=$(cat "$work/result.txt" 2>/dev/null || echo "no result (LinuxCNC exited $status)")
 periods=$(wc -l < "$work/samples.txt" 2>/dev/null || echo 0)

@@ -4,6 +4,7 @@
 //! (`scripts/linuxcnc_run.sh` does both around a headless LinuxCNC; docs/linuxcnc.md).
 
 mod config;
+mod watchdog;
 
 use std::path::PathBuf;
 
@@ -53,6 +54,17 @@ enum Command {
         #[arg(long)]
         expect_stop: bool,
     },
+    /// After LinuxCNC was killed: watch the simulated chip (reads only) for twice the
+    /// watchdog timeout; fails unless the watchdog trips within it and no step follows
+    /// the halt.
+    Watchdog {
+        /// The socket of `finestep sim-chip`.
+        #[arg(long)]
+        socket: String,
+        /// `finestep.0.watchdog.timeout_ns`.
+        #[arg(long, default_value_t = 5_000_000)]
+        timeout_ns: u64,
+    },
 }
 
 fn main() -> anyhow::Result<()> {
@@ -61,5 +73,6 @@ fn main() -> anyhow::Result<()> {
             config::write(config.as_deref(), &bus, &display, &out, record)
         }
         Command::Check { samples, joints, expect_stop } => config::check(&samples, joints, expect_stop),
+        Command::Watchdog { socket, timeout_ns } => watchdog::run(&socket, timeout_ns),
     }
 }
