@@ -1,4 +1,5 @@
-/* The C ABI of rust/finestep-hal (src/ffi.rs, where each function is documented):
+/* The C ABI of rust/finestep-hal (src/ffi.rs, where each function is documented; a test
+ * there checks these prototypes against the Rust ones):
  * the driver behind the finestep HAL component. Scalars and out-pointers only; every
  * int-returning call gives 0 on success and -1 on failure, the message then in
  * fs_hal_last_error. */

@@ -294,3 +294,74 @@ pub unsafe extern "C" fn fs_hal_last_error(handle: *const Handle, buf: *mut c_ch
     copy_message(&h.error, buf, len);
     h.errors
 }
+
+#[cfg(test)]
+mod tests {
+    /// The C prototypes in `linuxcnc/finestep_hal.h`, each as its name and parameter
+    /// types spelled the Rust way, against the `extern "C"` functions of this file: the
+    /// two sides of the ABI are written twice, so they are checked against each other.
+    fn c_type(param: &str) -> String {
+        let param = param.trim();
+        let (ty, pointer) = match param.rfind('*') {
+            Some(star) => (param[..star].trim(), true),
+            None => (param.rsplit_once(' ').map_or(param, |(ty, _)| ty).trim(), false),
+        };
+        let (ty, constant) = match ty.strip_prefix("const ") {
+            Some(rest) => (rest, true),
+            None => (ty, false),
+        };
+        let base = match ty {
+            "struct fs_hal" => "Handle",
+            "char" => "c_char",
+            "int" => "c_int",
+            "double" => "f64",
+            "uint32_t" => "u32",
+            "int32_t" => "i32",
+            "int64_t" => "i64",
+            "size_t" => "usize",
+            other => panic!("a C type the check does not know: {other}"),
+        };
+        match (pointer, constant) {
+            (true, true) => format!("*const {base}"),
+            (true, false) => format!("*mut {base}"),
+            (false, _) => base.to_string(),
+        }
+    }
+
+    fn prototypes(text: &str, start: &str, split: fn(&str) -> Vec<String>) -> Vec<(String, Vec<String>)> {
+        let mut found = Vec::new();
+        let mut rest = text;
+        while let Some(at) = rest.find(start) {
+            let tail = &rest[at + start.len()..];
+            let name_end = tail.find('(').expect("a parameter list");
+            let name = format!("fs_hal_{}", &tail[..name_end]);
+            let params_end = tail.find(')').expect("the end of the parameter list");
+            let params = tail[name_end + 1..params_end].trim().trim_end_matches(',');
+            found.push((name, if params.is_empty() { Vec::new() } else { split(params) }));
+            rest = &tail[params_end..];
+        }
+        found.sort();
+        found
+    }
+
+    #[test]
+    fn the_c_header_declares_exactly_these_functions() {
+        let header =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../linuxcnc/finestep_hal.h")).unwrap();
+        // Statements outside the comments, each prototype spelled with its name last.
+        let code: String =
+            header.split("/*").map(|part| part.split_once("*/").map_or(part, |(_, code)| code)).collect();
+        let statements: String = code
+            .split(';')
+            .filter(|s| s.contains("fs_hal_") && s.contains('('))
+            .map(|s| s.replace("*fs_hal_", "* fs_hal_"))
+            .collect::<Vec<_>>()
+            .join(";");
+        let c = prototypes(&statements, " fs_hal_", |params| params.split(',').map(c_type).collect());
+        let rust = prototypes(include_str!("ffi.rs"), "extern \"C\" fn fs_hal_", |params| {
+            params.split(',').map(|p| p.split_once(':').expect("name: type").1.trim().to_string()).collect()
+        });
+        assert_eq!(c.len(), 11, "{c:?}");
+        assert_eq!(c, rust);
+    }
+}
