@@ -6,7 +6,8 @@
 # module and installs it into LinuxCNC's modules folder, then runs G-code programs
 # through headless LinuxCNC on the simulated chip and checks every servo period.
 #   scripts/linuxcnc.sh            tests/programs/ and a set of LinuxCNC's shipped examples
-#   scripts/linuxcnc.sh --quick    one short program (the slice `make test` runs)
+#   scripts/linuxcnc.sh --quick    one short program, then the same stopped by LinuxCNC's E-stop
+#                                  and with LinuxCNC killed (the slice `make test` runs)
 #   scripts/linuxcnc.sh FILE.ngc...
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,7 +36,12 @@ install -m 0644 build/linuxcnc/finestep.so "$modules/finestep.so"
 # G81 drilling cycles), short enough to run here (cds.ngc and spiral.ngc take many minutes).
 shipped=(hole-circle.ngc polar.ngc)
 if [ "${1:-}" = "--quick" ]; then
-    programs=(linuxcnc/quick.ngc)
+    scripts/linuxcnc_run.sh linuxcnc/quick.ngc model
+    # The program's moves start about 0.3 s in and end about 1.2 s in.
+    FINESTEP_ESTOP_AFTER=0.6 scripts/linuxcnc_run.sh linuxcnc/quick.ngc model
+    FINESTEP_KILL_AFTER=600 scripts/linuxcnc_run.sh linuxcnc/quick.ngc model
+    echo "linuxcnc: quick slice passed"
+    exit 0
 elif [ $# -gt 0 ]; then
     programs=("$@")
 else

@@ -39,6 +39,7 @@ chmod 0666 "$work/chip.sock"
 target/release/finestep-linuxcnc config --config "$config" --bus "sim:$work/chip.sock" \
     --display "$repo/linuxcnc/headless.py" --record --out "$work" > /dev/null
 joints=$(sed -n 's/^JOINTS = //p' "$work/finestep.ini")
+period_ns=$(sed -n 's/^SERVO_PERIOD = //p' "$work/finestep.ini")
 
 # The process of this run whose environment holds $2 (found through /proc, so that
 # only this run's processes are ever signalled).
@@ -99,10 +100,10 @@ fi
 if [ -n "${FINESTEP_ESTOP_AFTER:-}" ]; then
     # LinuxCNC's E-stop pressed mid-program (linuxcnc/headless.py): checked up to the
     # stop, then no step after it and none beyond the command.
-    target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --expect-stop
+    target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --expect-stop
     exit 0
 fi
-target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints"
+target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns"
 # The same program planned by finestep's own planner under the same limits (the model's
 # fast path; its figure is the planned machining time).
 if target/release/finestep run --fast --config "$config" "$program" --out "$work/finestep-run" > "$work/finestep-run.log" 2>&1; then

@@ -50,6 +50,9 @@ enum Command {
         /// Joints in the recording.
         #[arg(long)]
         joints: usize,
+        /// The servo period (the INI's SERVO_PERIOD), ns.
+        #[arg(long, default_value_t = 1_000_000.0)]
+        period_ns: f64,
         /// The run was stopped (LinuxCNC's E-stop): fail unless the recording shows it.
         #[arg(long)]
         expect_stop: bool,
@@ -72,7 +75,9 @@ fn main() -> anyhow::Result<()> {
         Command::Config { config, bus, display, record, out } => {
             config::write(config.as_deref(), &bus, &display, &out, record)
         }
-        Command::Check { samples, joints, expect_stop } => config::check(&samples, joints, expect_stop),
+        Command::Check { samples, joints, period_ns, expect_stop } => {
+            config::check(&samples, joints, period_ns, expect_stop)
+        }
         Command::Watchdog { socket, timeout_ns } => watchdog::run(&socket, timeout_ns),
     }
 }
