@@ -23,4 +23,4 @@ for f in $(dpkg -L linuxcnc-uspace | grep -E '\.ngc$' | sort); do
     (cd "$(dirname "$f")" && timeout 10 rs274 -g -t "$OLDPWD/$table" "$f" > "$o" 2>/dev/null < /dev/null) || status=$?
     printf '%s\t%s\t%s\n' "$status" "$f" "$o" >> "$manifest"
 done
-cargo run --release -q -p finestep-cli -- conformance "$manifest" --out "$out"
+cargo run --release -q -p finestep-cli -- conformance "$manifest" --out "$out" --tool-table "$table"

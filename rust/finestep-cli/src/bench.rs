@@ -77,6 +77,18 @@ pub fn cam_program(moves: usize) -> String {
     text
 }
 
+/// A parameter- and expression-heavy program: a `while` loop of `moves` passes, each a
+/// G1 whose coordinates are expressions of a counter (a spiral), and the number of lines
+/// it executes.
+pub fn expression_program(moves: usize) -> (String, usize) {
+    let text = format!(
+        "G21 G90 G17 G64 P0.01\nF3000\n#<i> = 0\no1 while [#<i> LT {moves}]\n  \
+         G1 X[[20 + 5 * sin[#<i> * 4]] * cos[#<i> * 0.573]] Y[[20 + 5 * sin[#<i> * 4]] * sin[#<i> * 0.573]] \
+         Z[-0.001 * [#<i> MOD 5000]]\n  #<i> = [#<i> + 1]\no1 endwhile\nM2\n"
+    );
+    (text, 3 + moves * 3 + 2)
+}
+
 /// A chain of `blocks` cubic NURBS (G5.2 L4, seven control points each, weights 0.5 to
 /// 2) along a wave, each leaving its end along the direction it arrived in (tangent).
 pub fn nurbs_program(blocks: usize) -> String {
@@ -153,13 +165,31 @@ pub fn front_end() -> anyhow::Result<()> {
     use finestep_planner::ProfileKind;
     const MOVES: usize = 100_000;
     let text = cam_program(MOVES);
-    let start = Instant::now();
-    let program = finestep_gcode::parse_str(&text, "cam.ngc")?;
-    let parse_s = start.elapsed().as_secs_f64();
+    // The best of three: one cold run on a shared machine varies by a factor of two.
+    let mut parse_s = f64::INFINITY;
+    let mut program = None;
+    for _ in 0..3 {
+        let start = Instant::now();
+        program = Some(finestep_gcode::parse_str(&text, "cam.ngc")?);
+        parse_s = parse_s.min(start.elapsed().as_secs_f64());
+    }
+    let program = program.expect("parsed");
     println!(
         "  {:<44} {:>7.2} M lines/s",
         "parse G-code (100 000 short G1 segments)",
         (MOVES + 2) as f64 / parse_s / 1e6
+    );
+    let (text, executed) = expression_program(MOVES);
+    let mut loop_s = f64::INFINITY;
+    for _ in 0..3 {
+        let start = Instant::now();
+        finestep_gcode::parse_str(&text, "loop.ngc")?;
+        loop_s = loop_s.min(start.elapsed().as_secs_f64());
+    }
+    println!(
+        "  {:<44} {:>7.2} M lines/s",
+        "parse G-code (O-word loop, #params, [expr])",
+        executed as f64 / loop_s / 1e6
     );
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
         let Timed { elements, plan_s, interpolate_s, periods, period_s } = plan_timed(profile, &program)?;

@@ -9,14 +9,58 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 use anyhow::{bail, Context};
+use finestep_gcode::conformance::Event;
 use finestep_gcode::conformance::{compare, events_of, rs274_events};
+use finestep_gcode::Options;
+use finestep_planner::cutter_comp::{compensate, ToolTable};
 
 /// A program interprets for at most this long before it counts as hung.
 const TIMEOUT: Duration = Duration::from_secs(10);
 
+/// Interpreter options with the tool lengths of a LinuxCNC tool table in inches (as
+/// rs274 reads one without an INI file).
+pub fn options(tool_table: Option<&Path>) -> anyhow::Result<Options> {
+    // rs274 without an INI file keeps its offset parameters in inches.
+    let mut options = Options { machine_unit_mm: 25.4, ..Options::default() };
+    if let Some(path) = tool_table {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        options.tools = Options::read_tool_table(&text, 25.4).map_err(anyhow::Error::msg)?;
+    }
+    Ok(options)
+}
+
+/// The radii of a LinuxCNC tool table's tools (its D column, a diameter in inches).
+pub fn radii(tool_table: Option<&Path>) -> anyhow::Result<ToolTable> {
+    let mut table = ToolTable::new();
+    if let Some(path) = tool_table {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        for line in text.lines() {
+            let line = line.split(';').next().unwrap_or("");
+            let word = |letter: char| {
+                line.split_whitespace()
+                    .find(|w| w.starts_with(letter) || w.starts_with(letter.to_ascii_lowercase()))
+                    .and_then(|w| w[1..].parse::<f64>().ok())
+            };
+            if let (Some(tool), Some(diameter)) = (word('T'), word('D')) {
+                table.set_radius_mm(tool as u32, diameter * 25.4 / 2.0);
+            }
+        }
+    }
+    Ok(table)
+}
+
+/// finestep's events for `file`: interpreted, then cutter compensation applied as the
+/// planner applies it (rs274 prints the compensated path).
+fn events(file: &Path, options: &Options, radii: &ToolTable) -> Result<Vec<Event>, String> {
+    let program = finestep_gcode::parse_file_with(file, options).map_err(|e| e.to_string())?;
+    let program = compensate(&program, radii).map_err(|e| format!("{}: {e}", file.display()))?;
+    Ok(events_of(&program))
+}
+
 /// Prints finestep's canonical events for `file`, one a line.
-pub fn canon(file: &Path) -> anyhow::Result<()> {
-    let program = finestep_gcode::parse_file(file)?;
+pub fn canon(file: &Path, tool_table: Option<&Path>) -> anyhow::Result<()> {
+    let program = finestep_gcode::parse_file_with(file, &options(tool_table)?)?;
+    let program = compensate(&program, &radii(tool_table)?)?;
     for event in events_of(&program) {
         println!("{event}");
     }
@@ -61,13 +105,12 @@ impl Outcome {
 
 /// finestep's interpretation of `file` on its own thread: Ok(events) or Err(message),
 /// or None when it panicked or ran past [`TIMEOUT`].
-fn interpret(file: &Path) -> Option<Result<Vec<finestep_gcode::conformance::Event>, String>> {
+fn interpret(file: &Path, options: &Options, radii: &ToolTable) -> Option<Result<Vec<Event>, String>> {
     let (send, receive) = mpsc::channel();
     let path = file.to_path_buf();
+    let (options, radii) = (options.clone(), radii.clone());
     std::thread::spawn(move || {
-        let result = std::panic::catch_unwind(|| {
-            finestep_gcode::parse_file(&path).map(|p| events_of(&p)).map_err(|e| e.to_string())
-        });
+        let result = std::panic::catch_unwind(|| events(&path, &options, &radii));
         // The receiver may have given up on a slow program.
         let _ = send.send(result.ok());
     });
@@ -76,9 +119,13 @@ fn interpret(file: &Path) -> Option<Result<Vec<finestep_gcode::conformance::Even
 
 /// Runs the comparison over MANIFEST's lines `rs274-exit-status<TAB>program.ngc<TAB>rs274-output`
 /// and writes `report.txt` and `diffs/` under `out`.
-pub fn run(manifest: &Path, out: &Path) -> anyhow::Result<()> {
+pub fn run(manifest: &Path, out: &Path, tool_table: Option<&Path>) -> anyhow::Result<()> {
+    let (options, radii) = (options(tool_table)?, radii(tool_table)?);
     let text = std::fs::read_to_string(manifest).with_context(|| format!("reading {}", manifest.display()))?;
     let diffs = out.join("diffs");
+    if diffs.exists() {
+        std::fs::remove_dir_all(&diffs)?;
+    }
     std::fs::create_dir_all(&diffs)?;
     let mut report = String::new();
     let mut counts = [0usize; Outcome::ALL.len()];
@@ -90,14 +137,14 @@ pub fn run(manifest: &Path, out: &Path) -> anyhow::Result<()> {
         let program = PathBuf::from(program);
         let rs274_accepts = status == "0";
         let theirs = std::fs::read_to_string(rs274).with_context(|| format!("reading {rs274}"))?;
-        let (outcome, detail) = match (interpret(&program), rs274_accepts) {
+        let (outcome, detail) = match (interpret(&program, &options, &radii), rs274_accepts) {
             (None, _) => (Outcome::Crash, "panicked or timed out".to_string()),
             (Some(Err(e)), false) => (Outcome::BothRefuse, e),
             (Some(Ok(_)), false) => {
                 let why = theirs.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").to_string();
                 (Outcome::OnlyRs274Refuses, format!("rs274: {}", why.trim()))
             }
-            (Some(Err(e)), true) if e.contains(": unsupported") => (Outcome::RefusedUnsupported, e),
+            (Some(Err(e)), true) if e.contains(": unsupported: ") => (Outcome::RefusedUnsupported, e),
             (Some(Err(e)), true) => (Outcome::RefusedOther, e),
             (Some(Ok(ours)), true) => {
                 let theirs = rs274_events(&theirs).map_err(anyhow::Error::msg)?;

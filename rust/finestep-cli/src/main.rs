@@ -62,6 +62,9 @@ enum Command {
     GcodeCanon {
         /// The part program.
         file: PathBuf,
+        /// A LinuxCNC tool table (lengths in inches, as rs274 reads it), for G43.
+        #[arg(long)]
+        tool_table: Option<PathBuf>,
     },
     /// Compare finestep's interpretation with rs274's outputs listed in MANIFEST (lines
     /// `exit-status<TAB>program.ngc<TAB>rs274-output`, as scripts/conformance.sh writes).
@@ -71,6 +74,9 @@ enum Command {
         /// Where report.txt and diffs/ go.
         #[arg(long, default_value = "build/conformance")]
         out: PathBuf,
+        /// The tool table rs274 was given (lengths in inches), for G43.
+        #[arg(long)]
+        tool_table: Option<PathBuf>,
     },
     /// Lockstep and fast-path throughput figures.
     Bench {
@@ -134,8 +140,8 @@ fn main() -> anyhow::Result<()> {
                 bench_top::run(200)
             }
         }
-        Command::GcodeCanon { file } => conformance::canon(&file),
-        Command::Conformance { manifest, out } => conformance::run(&manifest, &out),
+        Command::GcodeCanon { file, tool_table } => conformance::canon(&file, tool_table.as_deref()),
+        Command::Conformance { manifest, out, tool_table } => conformance::run(&manifest, &out, tool_table.as_deref()),
         Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
         Command::Selftest { bus, loopback } => selftest::run(bus, loopback),
     }

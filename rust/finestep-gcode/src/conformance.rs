@@ -10,7 +10,8 @@
 //! feed rates in mm/min, and the spindle and coolant state each move runs under (so the
 //! order in which one block's spindle calls are printed does not matter). rs274 prints
 //! four decimals in program units: values agree when within half a printed digit
-//! (5e-5 program units, 1.27e-3 mm in G20) plus 1e-6 mm.
+//! (5e-5 program units, 1.27e-3 mm in G20) plus 1e-6 mm. Straight moves that end where
+//! they start are left out on both sides (rs274 prints one for a bare `G0`).
 
 use std::fmt;
 
@@ -399,9 +400,43 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
     }
 }
 
+/// The events without straight moves that do not move (rs274 prints one for a `G0` or
+/// a canned cycle's step that stays where it is; finestep does not).
+fn moving(events: &[Event], tolerance: impl Fn(usize) -> f64) -> Vec<(usize, &Event)> {
+    // Both start at the origin.
+    let mut at: Option<[f64; 4]> = Some([0.0; 4]);
+    let mut out = Vec::new();
+    for (i, e) in events.iter().enumerate() {
+        let to = match e {
+            Event::Traverse { to } | Event::Feed { to, .. } => Some(*to),
+            Event::Arc { to, .. } | Event::Nurbs { to } => {
+                at = Some(*to);
+                out.push((i, e));
+                continue;
+            }
+            _ => None,
+        };
+        match (to, at) {
+            (Some(to), Some(from)) if close(&to, &from, tolerance(i)) => {}
+            (Some(to), _) => {
+                at = Some(to);
+                out.push((i, e));
+            }
+            (None, _) => out.push((i, e)),
+        }
+    }
+    out
+}
+
 /// The first difference between finestep's events and rs274's, as a short unified
 /// listing around it; `None` when they agree.
 pub fn compare(ours: &[Event], theirs: &Rs274Output) -> Option<String> {
+    let ours: Vec<Event> = moving(ours, |_| 1e-9).into_iter().map(|(_, e)| e.clone()).collect();
+    let kept = moving(&theirs.events, |i| theirs.tolerance[i]);
+    let theirs = Rs274Output {
+        events: kept.iter().map(|(_, e)| (*e).clone()).collect(),
+        tolerance: kept.iter().map(|(i, _)| theirs.tolerance[*i]).collect(),
+    };
     let n = ours.len().max(theirs.events.len());
     let first = (0..n).find(|&i| match (ours.get(i), theirs.events.get(i)) {
         (Some(a), Some(b)) => !agrees(a, b, theirs.tolerance[i]),

@@ -56,8 +56,36 @@ pub(crate) struct State {
     tool: u32,
     tool_in_spindle: u32,
     nurbs: Option<OpenNurbs>,
-    /// Numbered parameters #0-#5601 (#0 unused).
+    /// Numbered parameters #0-#5601 (#0 unused); those the fields below hold are
+    /// computed from them when read.
     params: Vec<f64>,
+    /// G54-G59.3 offsets (mm, A in degrees) and XY rotations (degrees).
+    g5x: [[f64; 4]; 9],
+    rotation_deg: [f64; 9],
+    /// The coordinate system in use, 0 (G54) to 8 (G59.3).
+    system: usize,
+    /// The G92 offsets as #5211-#5214 hold them (mm), and whether they apply (#5210).
+    g92: [f64; 4],
+    g92_on: bool,
+    /// The offsets in force: G5x and its rotation, G92 (the parameters above act only
+    /// when a code loads them, as in LinuxCNC).
+    active_g5x: [f64; 4],
+    active_rotation_deg: f64,
+    active_g92: [f64; 4],
+    /// Millimetres per machine unit, the unit of the offset parameters (#5161-#5389).
+    machine_unit_mm: f64,
+    /// The tool length offset in force (G43), mm.
+    tool_offset: [f64; 4],
+    /// Tool lengths from the tool table, mm.
+    tools: std::collections::HashMap<u32, [f64; 4]>,
+    /// G28 and G30 positions (machine frame, mm).
+    home: [[f64; 4]; 2],
+    /// G99 (retract to R) rather than G98.
+    retract_to_r: bool,
+    /// The path control mode in force (G61/G64).
+    path: PathControl,
+    /// The sticky words of a canned cycle: R, Z (program frame, mm), P, Q (mm).
+    cycle: CycleWords,
     /// The 1-based source line being executed (set by the caller).
     pub(crate) line: usize,
 }
@@ -83,9 +111,36 @@ impl Default for State {
             tool_in_spindle: 0,
             nurbs: None,
             params: default_parameters(),
+            g5x: [[0.0; 4]; 9],
+            rotation_deg: [0.0; 9],
+            system: 0,
+            g92: [0.0; 4],
+            g92_on: false,
+            active_g5x: [0.0; 4],
+            active_rotation_deg: 0.0,
+            active_g92: [0.0; 4],
+            machine_unit_mm: 1.0,
+            tool_offset: [0.0; 4],
+            tools: std::collections::HashMap::new(),
+            home: [[0.0; 4]; 2],
+            // rs274 starts in G99.
+            retract_to_r: true,
+            path: PathControl::Blend { tolerance_mm: None },
+            cycle: CycleWords::default(),
             line: 0,
         }
     }
+}
+
+/// The words a canned cycle keeps from block to block.
+#[derive(Debug, Clone, Copy, Default)]
+struct CycleWords {
+    /// Z where the cycle began (program frame, mm): G98 retracts to it.
+    old_z: Option<f64>,
+    r: Option<f64>,
+    z: Option<f64>,
+    p: Option<f64>,
+    q: Option<f64>,
 }
 
 /// #5220, the coordinate system in use (1 = G54).
@@ -101,29 +156,50 @@ fn default_parameters() -> Vec<f64> {
     params
 }
 
+/// (x, y) turned by `degrees` counter-clockwise.
+fn rotate(x: f64, y: f64, degrees: f64) -> (f64, f64) {
+    if degrees == 0.0 {
+        return (x, y);
+    }
+    let (s, c) = degrees.to_radians().sin_cos();
+    (x * c - y * s, x * s + y * c)
+}
+
 /// Modal groups of the supported codes (LinuxCNC's numbering in comments).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Group {
-    NonModal,    // G group 0: G4
-    Motion,      // G group 1: G0 G1 G2 G3
+    NonModal,    // G group 0: G4 G10 G28 G28.1 G30 G30.1 G53 G92 G92.1 G92.2 G92.3
+    Motion,      // G group 1: G0 G1 G2 G3 G5.2 G5.3 G73 G80 G81 G82 G83 G85 G89
     Plane,       // G group 2: G17 G18 G19
     Distance,    // G group 3: G90 G91
     ArcDistance, // G group 4: G90.1 G91.1
     Units,       // G group 6: G20 G21
     Comp,        // G group 7: G40 G41 G42
+    FeedMode,    // G group 5: G94
+    ToolLength,  // G group 8: G43 G43.1 G49
+    ReturnMode,  // G group 10: G98 G99
+    Coord,       // G group 12: G54-G59.3
     Path,        // G group 13: G61 G64
-    Stop,        // M group 4: M0 M2 M30
-    ToolChange,  // M group 6: M6
+    Stop,        // M group 4: M0 M1 M2 M30
+    ToolChange,  // M group 6: M6 M61
     Spindle,     // M group 7: M3 M4 M5
     Coolant,     // M group 8: M7 M8 M9
 }
 
-const GROUPS: usize = 12;
+const GROUPS: usize = 16;
+
+/// The canned cycles implemented (in tenths).
+const CYCLES: [Code; 6] = [730, 810, 820, 830, 850, 890];
 
 fn g_group(code: Code) -> Option<Group> {
     Some(match code {
-        40 => Group::NonModal,
-        0 | 10 | 20 | 30 | G5_2 | G5_3 => Group::Motion,
+        40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
+        0 | 10 | 20 | 30 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 890 => Group::Motion,
+        430 | 431 | 490 => Group::ToolLength,
+        // G94 (units per minute) is the only feed mode and always in force.
+        940 => Group::FeedMode,
+        980 | 990 => Group::ReturnMode,
+        540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => Group::Coord,
         170 | 180 | 190 => Group::Plane,
         900 | 910 => Group::Distance,
         901 | 911 => Group::ArcDistance,
@@ -136,12 +212,49 @@ fn g_group(code: Code) -> Option<Group> {
 
 fn m_group(code: u32) -> Option<Group> {
     Some(match code {
-        0 | 2 | 30 => Group::Stop,
-        6 => Group::ToolChange,
+        0 | 1 | 2 | 30 => Group::Stop,
+        6 | 61 => Group::ToolChange,
         3..=5 => Group::Spindle,
         7..=9 => Group::Coolant,
         _ => return None,
     })
+}
+
+/// Why a G-code LinuxCNC knows is refused.
+fn g_unsupported(value: f64) -> String {
+    let tenths = (value * 10.0).round() as i64;
+    let why = match tenths {
+        330 | 331 | 760 | 840 | 740 | 842 | 843 => {
+            "spindle-synchronised motion needs the spindle feedback finestep does not have yet"
+        }
+        382..=385 => "probing needs a probe input, which finestep does not read",
+        70 | 80 => "lathe diameter/radius mode is not implemented yet",
+        50 | 51 => "G5/G5.1 splines are not implemented yet (G5.2/G5.3 NURBS are)",
+        411 | 421 => "dynamic cutter compensation is not implemented yet",
+        432 => "G43.2 is not implemented yet",
+        700..=720 => "lathe roughing cycles are not implemented yet",
+        860 | 870 | 880 => "canned cycles that stop or reverse the spindle are not implemented yet",
+        610 if false => "",
+        611 => "G61.1 is not implemented yet",
+        930 | 950 => "inverse-time and per-revolution feed are not implemented yet",
+        960 | 970 => "constant surface speed is not implemented yet",
+        _ => "not a G-code finestep implements",
+    };
+    format!("unsupported: G{value} ({why})")
+}
+
+/// Why an M-code is refused.
+fn m_unsupported(value: f64) -> String {
+    let why = match value as i64 {
+        19 => "spindle orientation is not implemented yet",
+        48..=53 => "override switches are not implemented yet",
+        60 => "pallet shuttle is not implemented",
+        62..=68 => "digital and analog I/O is not implemented yet",
+        70..=73 => "saving and restoring modal state is not implemented yet",
+        100..=199 => "user M-codes run external programs, which finestep does not",
+        _ => "not an M-code finestep implements",
+    };
+    format!("unsupported: M{value} ({why})")
 }
 
 /// `G2`, `G90.1`: a code in tenths as written.
@@ -158,7 +271,7 @@ fn as_u32(value: f64) -> Option<u32> {
 }
 
 /// The parameter letters a block may carry once each (besides G, M and N).
-const PARAMS: &str = "ADFIJKLPRSTXYZ";
+const PARAMS: &str = "ADFHIJKLPQRSTXYZ";
 const AXES: [char; 4] = ['X', 'Y', 'Z', 'A'];
 
 /// The words of one block, sorted by meaning.
@@ -207,11 +320,11 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 let tenths = value * 10.0;
                 let code = (tenths.round() == tenths).then(|| as_u32(tenths)).flatten();
                 let group = code.and_then(|c| g_group(c).map(|g| (c, g)));
-                group.ok_or_else(|| LineError::new(column, format!("unsupported G-code G{value}")))?
+                group.ok_or_else(|| LineError::new(column, g_unsupported(value)))?
             }
             'M' => {
                 let group = as_u32(value).and_then(|c| m_group(c).map(|g| (c * 10, g)));
-                group.ok_or_else(|| LineError::new(column, format!("unsupported M-code M{value}")))?
+                group.ok_or_else(|| LineError::new(column, m_unsupported(value)))?
             }
             l if PARAMS.contains(l) => {
                 let slot = &mut out.params[letter_index(l)];
@@ -220,6 +333,12 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 }
                 *slot = Some((value, column));
                 continue;
+            }
+            'B' | 'C' | 'U' | 'V' | 'W' => {
+                return Err(LineError::new(
+                    column,
+                    format!("unsupported: axis {letter} (finestep drives the axes X Y Z A)"),
+                ))
             }
             l => return Err(LineError::new(column, format!("unknown word {l}"))),
         };
@@ -260,29 +379,95 @@ pub(crate) struct Executed {
 impl State {
     /// `#n` (1 <= n <= 5601), with the predefined ones computed from the state.
     pub(crate) fn parameter(&self, n: usize) -> f64 {
+        let user = |axis: usize, mm: f64| if axis < 3 { mm / self.machine_unit_mm } else { mm };
         match n {
+            5161..=5164 => user(n - 5161, self.home[0][n - 5161]),
+            5181..=5184 => user(n - 5181, self.home[1][n - 5181]),
+            5210 => f64::from(u8::from(self.g92_on)),
+            5211..=5214 => user(n - 5211, self.g92[n - 5211]),
+            PARAM_COORD_SYSTEM => (self.system + 1) as f64,
+            5221..=5400 if (n - 5221) % 20 < 4 => user((n - 5221) % 20, self.g5x[(n - 5221) / 20][(n - 5221) % 20]),
+            5221..=5400 if (n - 5221) % 20 == 9 => self.rotation_deg[(n - 5221) / 20],
             PARAM_TOOL => f64::from(self.tool_in_spindle),
+            5401..=5404 => self.user_units(n - 5401, self.tool_offset[n - 5401]),
             PARAM_POSITION..=5423 => self.program_position(n - PARAM_POSITION),
             5424..=5428 => 0.0,
             _ => self.params.get(n).copied().unwrap_or(0.0),
         }
     }
 
-    /// Sets `#n`; the predefined read-only ones keep their computed values.
+    /// Sets `#n`; the offsets' parameters set the offsets, the computed read-only ones
+    /// (tool, position) keep their values.
     pub(crate) fn set_parameter(&mut self, n: usize, value: f64) {
-        if let Some(p) = self.params.get_mut(n) {
-            *p = value;
+        let mm = |axis: usize| if axis < 3 { value * self.machine_unit_mm } else { value };
+        match n {
+            5161..=5164 => self.home[0][n - 5161] = mm(n - 5161),
+            5181..=5184 => self.home[1][n - 5181] = mm(n - 5181),
+            5210 => self.g92_on = value != 0.0,
+            5211..=5214 => self.g92[n - 5211] = mm(n - 5211),
+            5221..=5400 if (n - 5221) % 20 < 4 => self.g5x[(n - 5221) / 20][(n - 5221) % 20] = mm((n - 5221) % 20),
+            5221..=5400 if (n - 5221) % 20 == 9 => self.rotation_deg[(n - 5221) / 20] = value,
+            _ => {
+                if let Some(p) = self.params.get_mut(n) {
+                    *p = value;
+                }
+            }
         }
     }
 
-    /// The current position of axis `axis` (X Y Z A) in program units.
-    fn program_position(&self, axis: usize) -> f64 {
-        let v = self.position[axis];
+    /// The tool table's lengths (mm, per axis X Y Z A).
+    pub(crate) fn set_tools(&mut self, tools: &std::collections::HashMap<u32, [f64; 4]>) {
+        self.tools = tools.clone();
+    }
+
+    /// A length in mm (or an angle) in program units.
+    fn user_units(&self, axis: usize, mm: f64) -> f64 {
         if axis < 3 && self.inches {
-            v / MM_PER_INCH
+            mm / MM_PER_INCH
         } else {
-            v
+            mm
         }
+    }
+
+    /// The G92 offsets in force.
+    fn g92_now(&self) -> [f64; 4] {
+        self.active_g92
+    }
+
+    /// Sets the unit of the offset parameters (25.4 for a machine in inches).
+    pub(crate) fn set_machine_unit(&mut self, mm: f64) {
+        self.machine_unit_mm = mm;
+    }
+
+    /// Loads the coordinate system `system` as the one in force.
+    fn select_system(&mut self, system: usize) {
+        self.system = system;
+        self.active_g5x = self.g5x[system];
+        self.active_rotation_deg = self.rotation_deg[system];
+    }
+
+    /// A point in the program frame (mm) to the machine frame, as LinuxCNC's canonical
+    /// layer does: G92, then the XY rotation, then the G5x and tool offsets.
+    fn to_machine(&self, p: [f64; 4]) -> [f64; 4] {
+        let g92 = self.g92_now();
+        let o = self.active_g5x;
+        let t = self.tool_offset;
+        let (x, y) = rotate(p[0] + g92[0], p[1] + g92[1], self.active_rotation_deg);
+        [x + o[0] + t[0], y + o[1] + t[1], p[2] + g92[2] + o[2] + t[2], p[3] + g92[3] + o[3] + t[3]]
+    }
+
+    /// The inverse of [`State::to_machine`].
+    fn to_program(&self, m: [f64; 4]) -> [f64; 4] {
+        let g92 = self.g92_now();
+        let o = self.active_g5x;
+        let t = self.tool_offset;
+        let (x, y) = rotate(m[0] - o[0] - t[0], m[1] - o[1] - t[1], -self.active_rotation_deg);
+        [x - g92[0], y - g92[1], m[2] - o[2] - t[2] - g92[2], m[3] - o[3] - t[3] - g92[3]]
+    }
+
+    /// The current position of axis `axis` (X Y Z A) in the program frame and units.
+    fn program_position(&self, axis: usize) -> f64 {
+        self.user_units(axis, self.to_program(self.position)[axis])
     }
 
     /// LinuxCNC's predefined named parameters (`#<_x>`, `#<_metric>`, ...), read-only.
@@ -310,7 +495,7 @@ impl State {
             "_inverse_time" => 0.0,
             "_units_per_minute" => 1.0,
             "_units_per_rev" => 0.0,
-            "_coord_system" => 540.0,
+            "_coord_system" => [540.0, 550.0, 560.0, 570.0, 580.0, 590.0, 591.0, 592.0, 593.0][self.system],
             "_ijk_absolute_mode" => flag(!self.arc_incremental),
             "_lathe_diameter_mode" => 0.0,
             "_lathe_radius_mode" => 1.0,
@@ -359,33 +544,78 @@ impl State {
 
         // What will move, to check that every parameter word has a user.
         let motion = w.group(Group::Motion).map(|(c, _)| c).or(self.motion);
+        let non_modal = w.group(Group::NonModal).map(|(c, _)| c);
         let first_axis = AXES.iter().filter_map(|&l| w.param(l)).map(|(_, c)| c).min();
+        // G10, G28, G30, G92 and G43.1 take the axis words themselves.
+        let axes_taken = matches!(non_modal, Some(100 | 280 | 300 | 920)) || w.has(Group::ToolLength, 431);
+        let moving = first_axis.is_some() && !axes_taken;
         let motion_column = w.group(Group::Motion).map(|(_, c)| c).or(first_axis);
         let arc_mode = matches!(motion, Some(20 | 30));
-        let arc_move = arc_mode && first_axis.is_some();
-        for letter in ['I', 'J', 'K', 'R'] {
+        // G2/G3 with I/J/K and no axis word: a full circle where it stands, as in LinuxCNC.
+        let full_circle = arc_mode
+            && w.group(Group::Motion).is_some()
+            && !moving
+            && !axes_taken
+            && ['I', 'J', 'K'].iter().any(|&l| w.param(l).is_some());
+        let arc_move = arc_mode && (moving || full_circle);
+        let cycle_mode = motion.is_some_and(|m| CYCLES.contains(&m));
+        let cycle_move = cycle_mode && moving;
+        let g10 = non_modal == Some(100);
+        let no_axes = |column: usize| {
+            let name = g_name(motion.unwrap_or(20));
+            LineError::new(motion_column.unwrap_or(column), format!("{name} with no axis words"))
+        };
+        for letter in ['I', 'J', 'K'] {
             if let Some((_, column)) = w.param(letter) {
                 if arc_mode && !arc_move {
-                    let name = g_name(motion.unwrap_or(20));
-                    return Err(LineError::new(motion_column.unwrap_or(column), format!("{name} with no axis words")));
+                    return Err(no_axes(column));
                 }
                 if !arc_move {
                     return Err(LineError::new(column, format!("{letter} word with no G2 or G3 to use it")));
                 }
             }
         }
+        if let Some((_, column)) = w.param('R') {
+            if !(arc_move || cycle_move || g10) {
+                if arc_mode {
+                    return Err(no_axes(column));
+                }
+                return Err(LineError::new(column, "R word with no G2, G3, canned cycle or G10 to use it"));
+            }
+        }
         if let Some((_, column)) = w.param('L') {
-            if !w.has(Group::Motion, G5_2) {
-                return Err(LineError::new(column, "L word with no G5.2 to use it"));
+            if !(w.has(Group::Motion, G5_2) || g10 || cycle_move) {
+                return Err(LineError::new(column, "L word with no G5.2, G10 or canned cycle to use it"));
             }
         }
         if let Some((_, column)) = w.param('P') {
-            let users =
-                [w.group(Group::NonModal).is_some(), w.has(Group::Path, 640), arc_move, w.has(Group::Motion, G5_2)];
+            let users = [
+                non_modal == Some(40),
+                w.has(Group::Path, 640),
+                arc_move,
+                w.has(Group::Motion, G5_2),
+                g10,
+                cycle_move && matches!(motion, Some(820 | 890)),
+            ];
             match users.iter().filter(|&&u| u).count() {
-                0 => return Err(LineError::new(column, "P word with no G4, G64, G2, G3 or G5.2 to use it")),
+                0 => {
+                    return Err(LineError::new(
+                        column,
+                        "P word with no G4, G64, G2, G3, G5.2, G10, G82 or G89 to use it",
+                    ))
+                }
                 1 => {}
                 _ => return Err(LineError::new(column, "P word is used by more than one code")),
+            }
+        }
+        if let Some((_, column)) = w.param('Q') {
+            if !(w.has(Group::ToolChange, 610) || cycle_move && matches!(motion, Some(730 | 830))) {
+                return Err(LineError::new(column, "Q word with no G73 or G83 to use it"));
+            }
+        }
+        if let Some((_, column)) = w.param('H') {
+            if !w.has(Group::ToolLength, 430) {
+                return Err(LineError::new(column, "H word with no G43 to use it"));
             }
         }
         if let Some((_, column)) = w.param('D') {
@@ -393,8 +623,17 @@ impl State {
                 return Err(LineError::new(column, "D word with no G41 or G42 to use it"));
             }
         }
-        if let (Some(column), None) = (first_axis, motion) {
-            return Err(LineError::new(column, "axis word with no motion mode (G0, G1, G2 or G3) to use it"));
+        if let (true, Some(column), None | Some(800)) = (moving, first_axis, motion) {
+            return Err(LineError::new(column, "axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"));
+        }
+        let g53 = non_modal == Some(530);
+        if let (true, Some((_, column))) = (g53, w.group(Group::NonModal)) {
+            if !matches!(motion, Some(0 | 10)) || !moving {
+                return Err(LineError::new(column, "G53 needs G0 or G1 and axis words"));
+            }
+            if self.incremental || w.has(Group::Distance, 910) {
+                return Err(LineError::new(column, "G53 in incremental distance mode (G91)"));
+            }
         }
 
         // Feed, speed, tool selection.
@@ -414,7 +653,11 @@ impl State {
             self.tool = as_u32(t).ok_or_else(|| LineError::new(column, "T word must be a non-negative integer"))?;
             kinds.push(BlockKind::ToolSelect { tool: self.tool });
         }
-        if w.group(Group::ToolChange).is_some() {
+        if let Some((610, column)) = w.group(Group::ToolChange) {
+            let (q, q_column) = w.param('Q').ok_or_else(|| LineError::new(column, "M61 needs a Q word (the tool)"))?;
+            self.tool_in_spindle =
+                as_u32(q).ok_or_else(|| LineError::new(q_column, "Q word must be a non-negative integer"))?;
+        } else if w.group(Group::ToolChange).is_some() {
             // LinuxCNC stops the spindle for a tool change.
             self.rotation = SpindleRotation::Off;
             kinds.push(BlockKind::Spindle { rotation: self.rotation, rpm: self.rpm });
@@ -446,7 +689,7 @@ impl State {
         }
 
         // Dwell.
-        if let Some((_, column)) = w.group(Group::NonModal) {
+        if let Some((40, column)) = w.group(Group::NonModal) {
             let (p, p_column) = w.param('P').ok_or_else(|| LineError::new(column, "G4 with no P word"))?;
             if p < 0.0 {
                 return Err(LineError::new(p_column, "negative dwell time"));
@@ -468,7 +711,10 @@ impl State {
             };
             // Compensation offsets in XY; another plane would cut an uncompensated path.
             if plane != Plane::Xy && self.comp != CompSide::Off {
-                return Err(LineError::new(column, "plane change while cutter compensation is on (G40 first)"));
+                return Err(LineError::new(
+                    column,
+                    "unsupported: plane change while cutter compensation is on (finestep compensates in G17 only)",
+                ));
             }
             self.plane = plane;
         }
@@ -490,7 +736,10 @@ impl State {
                 return Err(LineError::new(column, "cutter compensation is already on (G40 first)"));
             }
             if side != CompSide::Off && self.plane != Plane::Xy {
-                return Err(LineError::new(column, "cutter compensation is supported in G17 (XY) only"));
+                return Err(LineError::new(
+                    column,
+                    "unsupported: cutter compensation in G18/G19 (finestep compensates in G17 only)",
+                ));
             }
             let tool = match w.param('D') {
                 Some((d, d_column)) => {
@@ -500,6 +749,88 @@ impl State {
             };
             self.comp = side;
             kinds.push(BlockKind::CutterComp { side, tool });
+        }
+
+        // Tool length offset.
+        if let Some((code, column)) = w.group(Group::ToolLength) {
+            self.tool_offset = match code {
+                430 => {
+                    let tool = match w.param('H') {
+                        Some((h, c)) => {
+                            as_u32(h).ok_or_else(|| LineError::new(c, "H word must be a non-negative integer"))?
+                        }
+                        None => self.tool_in_spindle,
+                    };
+                    if tool == 0 {
+                        [0.0; 4]
+                    } else {
+                        *self.tools.get(&tool).ok_or_else(|| {
+                            LineError::new(column, format!("G43: tool {tool} is not in the tool table"))
+                        })?
+                    }
+                }
+                431 => {
+                    let mut offset = [0.0; 4];
+                    for (axis, &letter) in AXES.iter().enumerate() {
+                        if let Some((v, _)) = w.param(letter) {
+                            offset[axis] = if letter == 'A' { v } else { self.length_mm(v) };
+                        }
+                    }
+                    offset
+                }
+                _ => [0.0; 4],
+            };
+        }
+
+        // Coordinate system, return mode.
+        if let Some((code, column)) = w.group(Group::Coord) {
+            if self.comp != CompSide::Off {
+                return Err(LineError::new(column, "coordinate system change with cutter compensation on"));
+            }
+            let system = match code {
+                540 => 0,
+                550 => 1,
+                560 => 2,
+                570 => 3,
+                580 => 4,
+                590 => 5,
+                591 => 6,
+                592 => 7,
+                _ => 8,
+            };
+            // Selecting the system in use keeps its offsets (rs274: "continuing to use
+            // same coordinate system"), even if its parameters changed.
+            if system != self.system {
+                self.select_system(system);
+            }
+        }
+        if let Some((code, _)) = w.group(Group::ReturnMode) {
+            self.retract_to_r = code == 990;
+        }
+
+        // G10, G28.1, G30.1, G92 family (G28/G30 move, below).
+        match w.group(Group::NonModal) {
+            Some((100, column)) => self.g10(&w, column)?,
+            Some((281, _)) => self.home[0] = self.position,
+            Some((301, _)) => self.home[1] = self.position,
+            Some((920, column)) => {
+                if first_axis.is_none() {
+                    return Err(LineError::new(column, "G92 with no axis words"));
+                }
+                let mut g92 = self.g92_now();
+                let here = self.to_program(self.position);
+                for (axis, &letter) in AXES.iter().enumerate() {
+                    if let Some((v, _)) = w.param(letter) {
+                        let v = if letter == 'A' { v } else { self.length_mm(v) };
+                        g92[axis] = here[axis] + g92[axis] - v;
+                    }
+                }
+                (self.g92, self.g92_on, self.active_g92) = (g92, true, g92);
+            }
+            Some((921, _)) => (self.g92, self.g92_on, self.active_g92) = ([0.0; 4], false, [0.0; 4]),
+            Some((922, _)) => (self.g92_on, self.active_g92) = (false, [0.0; 4]),
+            Some((923, _)) => (self.g92_on, self.active_g92) = (true, self.g92),
+            _ => {}
         }
 
         // Path control.
@@ -514,10 +845,17 @@ impl State {
                 };
                 PathControl::Blend { tolerance_mm }
             };
+            self.path = mode;
             kinds.push(BlockKind::PathControl(mode));
         }
 
         // Motion.
+        // A canned cycle keeps its R, Z, P and Q only while it stays the motion mode.
+        if let Some((code, _)) = w.group(Group::Motion) {
+            if self.motion != Some(code) {
+                self.cycle = CycleWords::default();
+            }
+        }
         match w.group(Group::Motion) {
             Some((G5_2, column)) => {
                 self.open_nurbs_block(&w, column)?;
@@ -527,40 +865,26 @@ impl State {
                 kinds.push(self.close_nurbs_block(&w, column)?);
                 self.motion = None;
             }
+            Some((800, _)) => self.motion = None,
             Some((code, _)) => self.motion = Some(code),
             None => {}
         }
-        if let (Some(code), Some(column), None) = (self.motion, first_axis, &self.nurbs) {
-            let to = self.target(&w)?;
-            let feed = || match self.feed_mm_per_min {
-                Some(f) if f > 0.0 => Ok(f),
-                _ => Err(LineError::new(column_of(&w, column), format!("{} with no feed rate", g_name(code)))),
-            };
-            let kind = match code {
-                0 => BlockKind::Rapid { to: Point::from_array(to) },
-                10 => BlockKind::Linear { to: Point::from_array(to), feed_mm_per_min: feed()? },
-                _ => {
-                    let feed_mm_per_min = feed()?;
-                    let clockwise = code == 20;
-                    let (centre, extra_turns) = self.arc_centre(&w, to, g_name(code), column_of(&w, column))?;
-                    BlockKind::Arc {
-                        to: Point::from_array(to),
-                        centre: Point::from_array(centre),
-                        plane: self.plane,
-                        clockwise,
-                        extra_turns,
-                        feed_mm_per_min,
-                    }
+        if let Some((code @ (280 | 300), _)) = w.group(Group::NonModal) {
+            self.home_move(&w, if code == 280 { 0 } else { 1 }, first_axis.is_some(), &mut kinds)?;
+        } else if let (Some(code), Some(column), None) = (self.motion, first_axis.or(motion_column), &self.nurbs) {
+            if moving || full_circle {
+                if CYCLES.contains(&code) {
+                    self.canned_cycle(&w, code, column, &mut kinds)?;
+                } else {
+                    self.move_to(&w, code, column, g53, &mut kinds)?;
                 }
-            };
-            kinds.push(kind);
-            self.position = to;
+            }
         }
-
         // Stops.
         let mut end = false;
         if let Some((code, _)) = w.group(Group::Stop) {
-            if code == 0 {
+            if code == 0 || code == 10 {
+                // M1 (optional stop) stops as M0: finestep has no optional-stop switch.
                 kinds.push(BlockKind::Pause);
             } else {
                 kinds.push(BlockKind::End);
@@ -607,7 +931,7 @@ impl State {
     /// A control point's X and Y in mm: absolute, or in G91 relative to the start of the
     /// NURBS (the current position, which LinuxCNC updates only at G5.3).
     fn nurbs_target(&self, w: &Words) -> Result<(f64, f64), LineError> {
-        let to = self.target(w)?;
+        let to = self.to_machine(self.target(w, self.to_program(self.position))?);
         Ok((to[0], to[1]))
     }
 
@@ -693,9 +1017,10 @@ impl State {
         })
     }
 
-    /// The block's end point, absolute, in mm (and degrees for A).
-    fn target(&self, w: &Words) -> Result<[f64; 4], LineError> {
-        let mut to = self.position;
+    /// The block's end point in the program frame, absolute, in mm (and degrees for A),
+    /// from `from` (the current position in the program frame).
+    fn target(&self, w: &Words, from: [f64; 4]) -> Result<[f64; 4], LineError> {
+        let mut to = from;
         for (axis, &letter) in AXES.iter().enumerate() {
             if let Some((value, column)) = w.param(letter) {
                 let value = if letter == 'A' { value } else { self.length_mm(value) };
@@ -709,8 +1034,14 @@ impl State {
     }
 
     /// The centre of an arc from the current position to `to`, and its extra turns.
-    fn arc_centre(&self, w: &Words, to: [f64; 4], name: String, column: usize) -> Result<([f64; 4], u32), LineError> {
-        let from = self.position;
+    fn arc_centre(
+        &self,
+        w: &Words,
+        from: [f64; 4],
+        to: [f64; 4],
+        name: String,
+        column: usize,
+    ) -> Result<([f64; 4], u32), LineError> {
         // In-plane axes (p, q) and normal, right-handed; the centre-offset letters of
         // p and q, and the letter of the normal axis.
         let (p, q, [lp, lq, ln], plane_code) = match self.plane {
@@ -781,6 +1112,271 @@ impl State {
             None => 0,
         };
         Ok((centre, extra_turns))
+    }
+}
+
+impl State {
+    /// A G0/G1/G2/G3 move (G53: to machine coordinates).
+    fn move_to(
+        &mut self,
+        w: &Words,
+        code: Code,
+        column: usize,
+        g53: bool,
+        kinds: &mut Vec<BlockKind>,
+    ) -> Result<(), LineError> {
+        let from = self.to_program(self.position);
+        let (to_program, to) = if g53 {
+            let mut to = self.position;
+            for (axis, &letter) in AXES.iter().enumerate() {
+                if let Some((v, _)) = w.param(letter) {
+                    to[axis] = if letter == 'A' { v } else { self.length_mm(v) };
+                }
+            }
+            (self.to_program(to), to)
+        } else {
+            let p = self.target(w, from)?;
+            (p, self.to_machine(p))
+        };
+        if to.iter().any(|v| v.abs() > MAX_POSITION) {
+            return Err(LineError::new(column, "position out of range"));
+        }
+        let feed = || match self.feed_mm_per_min {
+            Some(f) if f > 0.0 => Ok(f),
+            _ => Err(LineError::new(column_of(w, column), format!("{} with no feed rate", g_name(code)))),
+        };
+        let kind = match code {
+            0 => BlockKind::Rapid { to: Point::from_array(to) },
+            10 => BlockKind::Linear { to: Point::from_array(to), feed_mm_per_min: feed()? },
+            _ => {
+                let feed_mm_per_min = feed()?;
+                let (centre, extra_turns) = self.arc_centre(w, from, to_program, g_name(code), column_of(w, column))?;
+                BlockKind::Arc {
+                    to: Point::from_array(to),
+                    centre: Point::from_array(self.to_machine(centre)),
+                    plane: self.plane,
+                    clockwise: code == 20,
+                    extra_turns,
+                    feed_mm_per_min,
+                }
+            }
+        };
+        kinds.push(kind);
+        self.position = to;
+        Ok(())
+    }
+
+    /// G28/G30: through the axis words' point if any, then to the stored position (only
+    /// the axes named, or all).
+    fn home_move(
+        &mut self,
+        w: &Words,
+        which: usize,
+        through: bool,
+        kinds: &mut Vec<BlockKind>,
+    ) -> Result<(), LineError> {
+        if through {
+            let mid = self.to_machine(self.target(w, self.to_program(self.position))?);
+            kinds.push(BlockKind::Rapid { to: Point::from_array(mid) });
+            self.position = mid;
+        }
+        let mut end = self.to_program(self.position);
+        let (o, g92) = (self.active_g5x, self.g92_now());
+        for (axis, &letter) in AXES.iter().enumerate() {
+            if !through || w.param(letter).is_some() {
+                end[axis] = self.home[which][axis] - o[axis] - g92[axis];
+            }
+        }
+        let end = self.to_machine(end);
+        kinds.push(BlockKind::Rapid { to: Point::from_array(end) });
+        self.position = end;
+        Ok(())
+    }
+
+    /// G10 L1 (tool table), L2 (coordinate system offsets and R rotation), L20 (offsets
+    /// that make the current position the given one).
+    fn g10(&mut self, w: &Words, column: usize) -> Result<(), LineError> {
+        let (l, l_column) = w.param('L').ok_or_else(|| LineError::new(column, "G10 with no L word"))?;
+        let (p, p_column) = w.param('P').ok_or_else(|| LineError::new(column, "G10 with no P word"))?;
+        let scale = if self.inches { MM_PER_INCH } else { 1.0 };
+        let value = move |letter: char, v: f64| if letter == 'A' { v } else { v * scale };
+        match as_u32(l) {
+            Some(1) => {
+                let tool = as_u32(p).ok_or_else(|| LineError::new(p_column, "G10 L1 P must be a tool number"))?;
+                let mut entry = self.tools.get(&tool).copied().unwrap_or_default();
+                for (axis, &letter) in AXES.iter().enumerate() {
+                    if let Some((v, _)) = w.param(letter) {
+                        entry[axis] = value(letter, v);
+                    }
+                }
+                self.tools.insert(tool, entry);
+            }
+            Some(k @ (2 | 20)) => {
+                let system = match as_u32(p) {
+                    Some(0) => self.system,
+                    Some(n @ 1..=9) => n as usize - 1,
+                    _ => return Err(LineError::new(p_column, "G10 P must be 0 to 9 (0: the system in use)")),
+                };
+                let (g92, here) = (self.g92_now(), self.position);
+                for (axis, &letter) in AXES.iter().enumerate() {
+                    if let Some((v, _)) = w.param(letter) {
+                        self.g5x[system][axis] = if k == 2 {
+                            value(letter, v)
+                        } else {
+                            here[axis] - self.tool_offset[axis] - g92[axis] - value(letter, v)
+                        };
+                    }
+                }
+                if let Some((r, _)) = w.param('R') {
+                    if k == 20 {
+                        return Err(LineError::new(
+                            column,
+                            "unsupported: G10 L20 R (rotation with L20 is not implemented)",
+                        ));
+                    }
+                    self.rotation_deg[system] = r;
+                }
+                if system == self.system {
+                    self.select_system(system);
+                }
+            }
+            _ => {
+                return Err(LineError::new(
+                    l_column,
+                    format!("unsupported: G10 L{l} (only L1, L2 and L20 are implemented)"),
+                ))
+            }
+        }
+        Ok(())
+    }
+
+    /// G73 G81 G82 G83 G85 G89 in G17, with G98/G99 and L repeats, as LinuxCNC runs them.
+    fn canned_cycle(
+        &mut self,
+        w: &Words,
+        code: Code,
+        column: usize,
+        kinds: &mut Vec<BlockKind>,
+    ) -> Result<(), LineError> {
+        let name = g_name(code);
+        if self.plane != Plane::Xy {
+            return Err(LineError::new(
+                column,
+                format!("unsupported: {name} in G18/G19 (canned cycles are implemented in G17 only)"),
+            ));
+        }
+        if self.comp != CompSide::Off {
+            return Err(LineError::new(column, format!("{name} with cutter compensation on")));
+        }
+        let feed = match self.feed_mm_per_min {
+            Some(f) if f > 0.0 => f,
+            _ => return Err(LineError::new(column, format!("{name} with no feed rate"))),
+        };
+        if let Some((r, _)) = w.param('R') {
+            self.cycle.r = Some(self.length_mm(r));
+        }
+        if let Some((z, _)) = w.param('Z') {
+            self.cycle.z = Some(self.length_mm(z));
+        }
+        if let Some((p, c)) = w.param('P') {
+            if p < 0.0 {
+                return Err(LineError::new(c, "negative dwell time"));
+            }
+            self.cycle.p = Some(p);
+        }
+        if let Some((q, c)) = w.param('Q') {
+            if q <= 0.0 {
+                return Err(LineError::new(c, format!("Q for {name} must be positive")));
+            }
+            self.cycle.q = Some(self.length_mm(q));
+        }
+        let r_word = self.cycle.r.ok_or_else(|| LineError::new(column, format!("{name} with no R (retract plane)")))?;
+        let z_word = self.cycle.z.ok_or_else(|| LineError::new(column, format!("{name} with no Z (depth)")))?;
+        let repeats = match w.param('L') {
+            None => 1,
+            Some((l, c)) => as_u32(l)
+                .filter(|&l| l <= 10_000)
+                .ok_or_else(|| LineError::new(c, "L for a canned cycle must be an integer from 0 to 10000"))?,
+        };
+        let mut cur = self.to_program(self.position);
+        let start_z = cur[2];
+        let old_z = *self.cycle.old_z.get_or_insert(start_z);
+        let (r, z) = if self.incremental { (start_z + r_word, start_z + r_word + z_word) } else { (r_word, z_word) };
+        if z > r {
+            return Err(LineError::new(column, format!("{name} with Z above R")));
+        }
+        let dwell = match code {
+            820 | 890 => Some(self.cycle.p.ok_or_else(|| LineError::new(column, format!("{name} with no P (dwell)")))?),
+            _ => None,
+        };
+        let q = match code {
+            730 | 830 => Some(self.cycle.q.ok_or_else(|| LineError::new(column, format!("{name} with no Q (peck)")))?),
+            _ => None,
+        };
+        /// LinuxCNC's rapid clearance above the last peck (0.010 in).
+        const PECK_CLEARANCE_MM: f64 = 0.254;
+        let restore = self.path;
+        kinds.push(BlockKind::PathControl(PathControl::ExactPath));
+        let mut out: Vec<BlockKind> = Vec::new();
+        let rapid = |state: &Self, out: &mut Vec<BlockKind>, p: [f64; 4]| {
+            out.push(BlockKind::Rapid { to: Point::from_array(state.to_machine(p)) })
+        };
+        let cut = |state: &Self, out: &mut Vec<BlockKind>, p: [f64; 4]| {
+            out.push(BlockKind::Linear { to: Point::from_array(state.to_machine(p)), feed_mm_per_min: feed })
+        };
+        // As rs274 does: up to R first when the cycle began below it; across at the
+        // clearance height or higher.
+        if old_z < r && cur[2] < r {
+            cur[2] = r;
+            rapid(self, &mut out, cur);
+        }
+        let clear = if self.retract_to_r { r } else { old_z.max(r) };
+        for _ in 0..repeats {
+            for (axis, letter) in [(0, 'X'), (1, 'Y'), (3, 'A')] {
+                if let Some((v, _)) = w.param(letter) {
+                    let v = if letter == 'A' { v } else { self.length_mm(v) };
+                    cur[axis] = if self.incremental { cur[axis] + v } else { v };
+                }
+            }
+            cur[2] = cur[2].max(clear);
+            rapid(self, &mut out, cur);
+            let at = |zz: f64| [cur[0], cur[1], zz, cur[3]];
+            rapid(self, &mut out, at(r));
+            match (code, q) {
+                (830, Some(q)) | (730, Some(q)) => {
+                    let mut depth = r - q;
+                    while depth > z {
+                        cut(self, &mut out, at(depth));
+                        if code == 830 {
+                            rapid(self, &mut out, at(r));
+                        }
+                        rapid(self, &mut out, at(depth + PECK_CLEARANCE_MM));
+                        depth -= q;
+                    }
+                    cut(self, &mut out, at(z));
+                }
+                _ => cut(self, &mut out, at(z)),
+            }
+            if let Some(seconds) = dwell {
+                out.push(BlockKind::Dwell { seconds });
+            }
+            if matches!(code, 850 | 890) {
+                cut(self, &mut out, at(r));
+            }
+            rapid(self, &mut out, at(clear));
+            cur[2] = clear;
+            if out.len() > 1_000_000 {
+                return Err(LineError::new(column, format!("{name} makes more than 10^6 moves")));
+            }
+        }
+        kinds.append(&mut out);
+        kinds.push(BlockKind::PathControl(restore));
+        let to = self.to_machine(cur);
+        if to.iter().any(|v| v.abs() > MAX_POSITION) {
+            return Err(LineError::new(column, "position out of range"));
+        }
+        self.position = to;
+        Ok(())
     }
 }
 

@@ -152,11 +152,15 @@ pub(crate) fn lex_into(
     columns: &mut Vec<usize>,
     out: &mut Line,
 ) -> Result<(), LineError> {
-    chars.clear();
-    columns.clear();
     out.words.clear();
     out.assigns.clear();
     out.oword = None;
+    if lex_plain(line, out) {
+        return Ok(());
+    }
+    out.words.clear();
+    chars.clear();
+    columns.clear();
     normalize(line, chars, columns)?;
     let (chars, columns) = (&chars[..], &columns[..]);
     let mut s = Chars { chars, columns, i: 0 };
@@ -202,10 +206,59 @@ pub(crate) fn lex_into(
                 let value = read_value(&mut s, What::Named("the parameter's value"), 0)?;
                 out.assigns.push(Assign { target, value, column });
             }
+            '@' | '^' => {
+                return Err(LineError::new(column, "unsupported: polar coordinates @ and ^ (not implemented yet)"))
+            }
             c => return Err(LineError::new(column, format!("unexpected character {c:?}"))),
         }
     }
     Ok(())
+}
+
+/// The fast path for the common line of plain words (`G1 X1.5 Y-2`): ASCII letters
+/// other than `O` and `E`, each followed by an optional sign, digits and at most one
+/// point, separated by blanks. Returns false, leaving `out` to be cleared, for
+/// anything else (the full lexer then reads the line and reports any error).
+fn lex_plain(line: &str, out: &mut Line) -> bool {
+    let bytes = line.as_bytes();
+    let mut i = 0;
+    loop {
+        while i < bytes.len() && (bytes[i] == b' ' || bytes[i] == b'\t') {
+            i += 1;
+        }
+        if i == bytes.len() {
+            return true;
+        }
+        let letter = bytes[i];
+        if !letter.is_ascii_alphabetic() || matches!(letter, b'o' | b'O' | b'e' | b'E') {
+            return false;
+        }
+        let column = i + 1;
+        i += 1;
+        let start = i;
+        if i < bytes.len() && (bytes[i] == b'-' || bytes[i] == b'+') {
+            i += 1;
+        }
+        let (mut digits, mut points) = (0, 0);
+        while i < bytes.len() {
+            match bytes[i] {
+                b'0'..=b'9' => digits += 1,
+                b'.' => points += 1,
+                _ => break,
+            }
+            i += 1;
+        }
+        // The word must end at a blank or the end of the line.
+        if digits == 0 || digits > 30 || points > 1 || (i < bytes.len() && bytes[i] != b' ' && bytes[i] != b'\t') {
+            return false;
+        }
+        match line[start..i].parse::<f64>() {
+            Ok(value) if value.abs() <= crate::expr::MAX_NUMBER => {
+                out.words.push(RawWord { letter: letter.to_ascii_uppercase() as char, value: Expr::Num(value), column })
+            }
+            _ => return false,
+        }
+    }
 }
 
 fn read_oword(s: &mut Chars, column: usize) -> Result<OWord, LineError> {

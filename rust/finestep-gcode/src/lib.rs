@@ -291,12 +291,54 @@ pub struct Program {
 }
 
 /// What the machine configuration tells the interpreter.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Options {
+    /// Millimetres per machine length unit: the unit of the offset parameters
+    /// (#5161-#5389, as LinuxCNC keeps them). 1 for a machine in mm (the default), 25.4
+    /// in inches (rs274 without an INI file).
+    pub machine_unit_mm: f64,
     /// Folders searched, after the program's own folder, for `NAME.ngc` when
     /// `o<NAME> call` names a subroutine the program does not define (LinuxCNC's
     /// SUBROUTINE_PATH).
     pub subroutine_path: Vec<std::path::PathBuf>,
+    /// Tool length offsets by tool number (X Y Z in mm, A in degrees), for G43.
+    pub tools: std::collections::HashMap<u32, [f64; 4]>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options { machine_unit_mm: 1.0, subroutine_path: Vec::new(), tools: std::collections::HashMap::new() }
+    }
+}
+
+impl Options {
+    /// Reads the tool lengths of a LinuxCNC tool table (`T1 P1 Z0.511 D0.125 ;comment`
+    /// lines) whose lengths are in `mm_per_unit` millimetres (25.4 for inches).
+    pub fn read_tool_table(text: &str, mm_per_unit: f64) -> Result<std::collections::HashMap<u32, [f64; 4]>, String> {
+        let mut tools = std::collections::HashMap::new();
+        for (index, line) in text.lines().enumerate() {
+            let line = line.split(';').next().unwrap_or("");
+            let mut tool = None;
+            let mut offset = [0.0; 4];
+            for word in line.split_whitespace() {
+                let (letter, number) = word.split_at(1);
+                let value =
+                    number.parse::<f64>().map_err(|_| format!("tool table line {}: bad word {word:?}", index + 1))?;
+                match letter.to_ascii_uppercase().as_str() {
+                    "T" => tool = Some(value as u32),
+                    "X" => offset[0] = value * mm_per_unit,
+                    "Y" => offset[1] = value * mm_per_unit,
+                    "Z" => offset[2] = value * mm_per_unit,
+                    "A" => offset[3] = value,
+                    _ => {}
+                }
+            }
+            if let Some(tool) = tool {
+                tools.insert(tool, offset);
+            }
+        }
+        Ok(tools)
+    }
 }
 
 /// Parses a part program held in memory. `file_name` is only used in errors;

@@ -286,6 +286,8 @@ pub(crate) fn run(
         chars: Vec::new(),
         columns: Vec::new(),
     };
+    runner.state.set_tools(&options.tools);
+    runner.state.set_machine_unit(options.machine_unit_mm);
     if runner.sources[0].entries.is_empty() {
         return Err(GcodeError::Parse {
             file: file_name.to_string(),

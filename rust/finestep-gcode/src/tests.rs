@@ -261,10 +261,10 @@ fn every_error_message_with_its_place() {
         ("G0 X1.2.3", "1:5: bad number for word X"),
         ("G0 X12345678901234", "1:5: number out of range for word X"),
         ("N99999999999999 G0", "1:2: number out of range for word N"),
-        ("G0 X1 @", "1:7: unexpected character '@'"),
+        ("G0 X1 @", "1:7: unsupported: polar coordinates @ and ^ (not implemented yet)"),
         // Words.
-        ("G0 X1 Q2", "1:7: unknown word Q"),
-        ("G0 X1 B2", "1:7: unknown word B"),
+        ("G0 X1 Q2", "1:7: Q word with no G73 or G83 to use it"),
+        ("G0 X1 B2", "1:7: unsupported: axis B (finestep drives the axes X Y Z A)"),
         (
             "G0 X1e5",
             "1:6: unsupported: exponent in the number of word X (G-code numbers have no exponent: write the digits)",
@@ -274,11 +274,14 @@ fn every_error_message_with_its_place() {
         ("N1 N2", "1:4: word N appears twice"),
         ("G0 N1", "1:4: N word must come first in the block"),
         ("N1.5 G0", "1:1: N word must be a non-negative integer"),
-        ("G33 X1", "1:1: unsupported G-code G33"),
-        ("G1.23 X1", "1:1: unsupported G-code G1.23"),
-        ("G-1", "1:1: unsupported G-code G-1"),
-        ("M98", "1:1: unsupported M-code M98"),
-        ("M3.5", "1:1: unsupported M-code M3.5"),
+        (
+            "G33 X1",
+            "1:1: unsupported: G33 (spindle-synchronised motion needs the spindle feedback finestep does not have yet)",
+        ),
+        ("G1.23 X1", "1:1: unsupported: G1.23 (not a G-code finestep implements)"),
+        ("G-1", "1:1: unsupported: G-1 (not a G-code finestep implements)"),
+        ("M98", "1:1: unsupported: M98 (not an M-code finestep implements)"),
+        ("M3.5", "1:1: unsupported: M3.5 (not an M-code finestep implements)"),
         // Modal groups.
         ("G0 G1 X1", "1:4: G0 and G1 are in the same modal group"),
         ("G1 G1 X1 F1", "1:4: G1 and G1 are in the same modal group"),
@@ -293,16 +296,17 @@ fn every_error_message_with_its_place() {
         ("M0 M2", "1:4: M0 and M2 are in the same modal group"),
         ("M6 M6", "1:4: M6 and M6 are in the same modal group"),
         // Words with nothing to use them.
-        ("X1", "1:1: axis word with no motion mode (G0, G1, G2 or G3) to use it"),
-        ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2 or G3) to use it"),
+        ("X1", "1:1: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
+        ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
         ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
-        ("R1", "1:1: R word with no G2 or G3 to use it"),
-        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3 or G5.2 to use it"),
+        ("R1", "1:1: R word with no G2, G3, canned cycle or G10 to use it"),
+        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5.2, G10, G82 or G89 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
         ("G40 D1", "1:5: D word with no G41 or G42 to use it"),
         ("D1", "1:1: D word with no G41 or G42 to use it"),
-        ("F1 G2 I1", "1:4: G2 with no axis words"),
+        ("F1 G2 R1", "1:4: G2 with no axis words"),
+        ("F1 G2 X1 I0.5\nI1", "2:1: G2 with no axis words"),
         ("F1 G3 X1 Y1 I1\nJ1", "2:1: G3 with no axis words"),
         // Values.
         ("F-1", "1:1: negative feed rate"),
@@ -362,9 +366,15 @@ fn hostile_input_is_an_error_not_a_panic() {
 #[test]
 fn compensation_only_in_the_xy_plane() {
     let err = parse_str("G18\nG41 D1\n", "p.ngc").unwrap_err();
-    assert_eq!(err.to_string(), "p.ngc:2:1: cutter compensation is supported in G17 (XY) only");
+    assert_eq!(
+        err.to_string(),
+        "p.ngc:2:1: unsupported: cutter compensation in G18/G19 (finestep compensates in G17 only)"
+    );
     let err = parse_str("G17 G41 D1\nG1 X1 F100\nG19\n", "p.ngc").unwrap_err();
-    assert_eq!(err.to_string(), "p.ngc:3:1: plane change while cutter compensation is on (G40 first)");
+    assert_eq!(
+        err.to_string(),
+        "p.ngc:3:1: unsupported: plane change while cutter compensation is on (finestep compensates in G17 only)"
+    );
     assert!(parse_str("G17 G41 D1\nG1 X1 F100\nG40\nG18\n", "p.ngc").is_ok());
 }
 
@@ -421,7 +431,7 @@ fn nurbs_blocks_follow_linuxcnc() {
     // No motion mode after G5.3 (LinuxCNC's motion mode -1).
     assert_eq!(
         err("F600\nG5.2 X1 Y0\nX1 Y1\nG5.3\nX2\n"),
-        "t.ngc:5:1: axis word with no motion mode (G0, G1, G2 or G3) to use it"
+        "t.ngc:5:1: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"
     );
 }
 
@@ -466,8 +476,8 @@ fn nurbs_errors_with_their_place() {
         ("G18 F600\nG5.2 X1 Y1\n", "2:1: G5.2 NURBS is supported in the G17 (XY) plane only"),
         ("F600\nG41 D1\nG5.2 X1 Y1\n", "3:1: G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"),
         ("G5.2 X1 Y1\n", "1:1: G5.2 with no feed rate"),
-        ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2 to use it"),
-        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n", "4:6: P word with no G4, G64, G2, G3 or G5.2 to use it"),
+        ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10 or canned cycle to use it"),
+        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n", "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82 or G89 to use it"),
         // The program ends inside the block: the error points at its G5.2.
         (
             "F600\nG0 X1\n G5.2 X1 Y1\nX2 Y2\nX3 Y1\n",

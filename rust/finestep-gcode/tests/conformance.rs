@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use finestep_gcode::conformance::{compare, events_of, rs274_events};
+use finestep_gcode::Options;
 
 #[test]
 fn programs_agree_with_rs274() {
@@ -15,12 +16,16 @@ fn programs_agree_with_rs274() {
         .filter(|p| p.extension().is_some_and(|e| e == "ngc"))
         .collect();
     programs.sort();
+    let table = std::fs::read_to_string(dir.join("tool.tbl")).unwrap();
+    // rs274 without an INI file reads the tool table in inches.
+    let options =
+        Options { tools: Options::read_tool_table(&table, 25.4).unwrap(), machine_unit_mm: 25.4, ..Options::default() };
     let mut failures = Vec::new();
     for program in &programs {
         let expected = program.with_extension("rs274");
         let theirs = std::fs::read_to_string(&expected).unwrap_or_else(|e| panic!("{}: {e}", expected.display()));
         let theirs = rs274_events(&theirs).unwrap();
-        match finestep_gcode::parse_file(program) {
+        match finestep_gcode::parse_file_with(program, &options) {
             Ok(ours) => {
                 if let Some(diff) = compare(&events_of(&ours), &theirs) {
                     failures.push(format!("{}: {diff}", program.display()));

@@ -634,7 +634,7 @@ fn bad_programs_and_tables_are_errors_naming_the_line() {
     // A plane change while compensating is refused by the front end already.
     assert_eq!(
         finestep_gcode::parse_str("G41 D1\nG1 X5 F100\nG18\nG2 X7 Z0 I1 K0\n", "t.ngc").unwrap_err().to_string(),
-        "t.ngc:3:1: plane change while cutter compensation is on (G40 first)"
+        "t.ngc:3:1: unsupported: plane change while cutter compensation is on (finestep compensates in G17 only)"
     );
     assert_eq!(
         err("G41 D1\nG1 X5 F100\nT2 M6\n", 0.5),
