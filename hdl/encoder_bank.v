@@ -1,15 +1,25 @@
 `timescale 1ns / 1ps
 `default_nettype none
 // Specification: docs/spec/encoder_bank.md
-// Encoder bank: N_ENC quadrature channels (gratings, motor encoders) on one sampling
-// prescaler, and the probe input that snapshots every channel's count, every axis's
-// step position and the timestamp on one clock. The counts and edge times the host
-// reads are copies taken together with the step positions (`latch_now`), so one set of
-// register reads describes one instant.
+// Encoder bank: N_ENC quadrature channels (gratings, motor encoders) served by one
+// decoder in turn, and the probe input. Slot s of S = max(N_ENC, 2) is a visit of
+// channel s: its state is read from the store (a RAM where the part has one) the clock
+// before, updated by the one quadrature_channel datapath, and written back at the
+// visit's edge. The copies the host reads (counts and edge times taken with the
+// position latch, index and probe latches) are written at the channel's first visit at
+// or after the cycle asking for them, from the values before the visit's update, which
+// are the values of that cycle: one instant for every channel, within S clocks.
+//
+// A register read of a channel's copy granted in the cycle of that channel's visit
+// stalls the engine one clock, so a RAM never reads and writes one word on one clock.
+//
+// Latency: a pin change reaches the count 2 clocks plus max(FILTER, 1) samples later,
+// samples of a channel coming every S * (PRESCALE + 1) clocks at its slot (plus stalls).
 module encoder_bank #(
     parameter N_ENC    = 4,
     parameter N_AXES   = 4,
-    parameter FILTER_W = 4
+    parameter FILTER_W = 4,
+    parameter RAM_BLOCK = 0      // 1: the stores in block RAM (store_ram)
 ) (
     // clock, reset
     input  wire                         clk,
@@ -32,15 +42,15 @@ module encoder_bank #(
     input  wire                         probe_arm,
     input  wire                         clear_errors,
     input  wire                         clear_counters,
+    // register bus: the read granted in this cycle (served in the next)
+    input  wire                         read_grant,
+    input  wire [6:0]                   read_addr,
+    output wire [31:0]                  copy_rdata,     // the served read's copy, else 0
     // shared state
     input  wire [31:0]                  timestamp,
     input  wire [32*N_AXES-1:0]         position,
     input  wire                         latch_now,
-    // channel state
-    output wire [32*N_ENC-1:0]          count_latched,
-    output wire [32*N_ENC-1:0]          edge_time_latched,
-    output wire [32*N_ENC-1:0]          index_latch,
-    output wire [32*N_ENC-1:0]          probe_latch,
+    // channel state (flip-flops)
     output wire [16*N_ENC-1:0]          illegal_count,
     output wire [N_ENC-1:0]             illegal,
     output wire [N_ENC-1:0]             index_seen,
@@ -48,7 +58,7 @@ module encoder_bank #(
     output wire [N_ENC-1:0]             index_clear_armed,
     output wire [N_ENC-1:0]             a_level,
     output wire [N_ENC-1:0]             b_level,
-    output wire [N_ENC-1:0]             z_level,
+    output wire [N_ENC-1:0]             z_level,        // after polarity
     // probe state
     output wire                         probe_armed,
     output wire                         probe_seen,
@@ -57,32 +67,222 @@ module encoder_bank #(
     output wire [32*N_AXES-1:0]         probe_position
 );
 
-    reg  [15:0] presc_reg;
-    wire        sample = (presc_reg == 16'd0);
+`include "finestep_regs.vh"
+
+    localparam S      = (N_ENC < 2) ? 2 : N_ENC;
+    localparam CH_W   = (S > 2) ? 2 : 1;
+    localparam LIVE_W = 64 + 3 * FILTER_W;      // count, edge time, three filter counters
+    localparam integer    LAST      = S - 1;
+    localparam [CH_W-1:0] LAST_SLOT = LAST[CH_W-1:0];
+    localparam [CH_W-1:0] CH_ONE    = {{(CH_W-1){1'b0}}, 1'b1};
+
+    // ---- The read side: which copy the granted read addresses -------------------------
+    // The four copy arrays, one word per channel each, at bases aligned to the four
+    // channels the map has room for (stride 1: both checked below), so the array is the
+    // address's high bits and the channel its low two.
+    localparam [1:0] KIND_COUNT = 2'd0, KIND_INDEX = 2'd1, KIND_PROBE = 2'd2, KIND_EDGE = 2'd3;
+    localparam [2:0] N_CH = N_ENC[2:0];
+    wire [1:0] rd_low    = read_addr[1:0];
+    wire hit_count = (read_addr[6:2] == FS_ENC_COUNT_ADDR[6:2]);
+    wire hit_index = (read_addr[6:2] == FS_ENC_INDEX_LATCH_ADDR[6:2]);
+    wire hit_probe = (read_addr[6:2] == FS_ENC_PROBE_LATCH_ADDR[6:2]);
+    wire hit_edge  = (read_addr[6:2] == FS_ENC_EDGE_TIME_ADDR[6:2]);
+    wire [CH_W-1:0] rd_ch   = rd_low[CH_W-1:0];
+    wire [1:0]      rd_kind = hit_count ? KIND_COUNT : hit_index ? KIND_INDEX : hit_probe ? KIND_PROBE : KIND_EDGE;
+    wire            rd_copy = read_grant && (hit_count || hit_index || hit_probe || hit_edge) && ({1'b0, rd_low} < N_CH);
+
+    // ---- Schedule -----------------------------------------------------------------------
+    reg  [CH_W-1:0] slot_reg;
+    reg  [15:0]     presc_reg;
+    reg             sampling_reg;
+    wire            slot_is_channel = ({{(32-CH_W){1'b0}}, slot_reg} < N_ENC);
+    wire            stall      = rd_copy && (rd_ch == slot_reg) && slot_is_channel;
+    wire            visit      = slot_is_channel && !stall;
+    wire            round_end  = (slot_reg == LAST_SLOT) && !stall;
+    wire [CH_W-1:0] slot_next  = stall ? slot_reg : (slot_reg == LAST_SLOT) ? {CH_W{1'b0}} : slot_reg + CH_ONE;
+    // The visit's datapath does not wait for the stall: only the writes do.
+    wire            sample_now = sampling_reg;
+    wire            probe_sample = (slot_reg == {CH_W{1'b0}}) && !stall && sampling_reg;
 
     always @(posedge clk) begin
-        presc_reg <= sample ? prescale : presc_reg - 16'd1;
-        // The first sample comes in the third cycle, when the synchronisers hold pins.
-        if (rst) presc_reg <= 16'd2;
+        slot_reg <= slot_next;
+        if (round_end) begin
+            sampling_reg <= (presc_reg == 16'd0);
+            presc_reg    <= (presc_reg == 16'd0) ? prescale : presc_reg - 16'd1;
+        end
+        if (rst) begin
+            slot_reg     <= {CH_W{1'b0}};
+            presc_reg    <= 16'd0;
+            sampling_reg <= 1'b0;
+        end
     end
 
-    // Probe: filtered, polarity, rising edge while armed.
-    wire probe_level, probe_primed;
-    input_filter #(.FILTER_W(FILTER_W)) probe_filter (
-        .clk(clk), .rst(rst), .filter_len(probe_filter_len), .sample(sample), .pin(probe_pin),
-        .level(probe_level), .primed(probe_primed)
+    // ---- Per-channel flip-flops ---------------------------------------------------------
+    reg [N_ENC-1:0] sync1_a_reg, sync1_b_reg, sync1_z_reg;   // two-flop synchronisers
+    reg [N_ENC-1:0] raw_a_reg, raw_b_reg, raw_z_reg;
+    reg [N_ENC-1:0] primed_reg, a_reg, b_reg, z_reg;
+    reg [N_ENC-1:0] illegal_reg, index_seen_reg, latch_armed_reg, clear_armed_reg;
+    reg [N_ENC-1:0] latch_pending_reg, probe_pending_reg;
+    reg [N_ENC-1:0] count_copied_reg, index_copied_reg, probe_copied_reg;   // copy written since reset
+    reg [16*N_ENC-1:0] illegal_count_reg;
+
+    // The visited channel's view of them (slot_reg < N_ENC at a visit).
+    wire [CH_W-1:0] ch = slot_reg;
+    wire [31:0]     ch_i = {{(32-CH_W){1'b0}}, ch};
+    wire [1:0]          v_mode   = mode[2*ch_i +: 2];
+    wire                v_zah    = z_active_high[ch_i];
+    wire [FILTER_W-1:0] v_filter = filter_len[FILTER_W*ch_i +: FILTER_W];
+    wire                v_primed = primed_reg[ch_i];
+
+    // ---- The store: live state, read the clock before the visit -------------------------
+    wire [LIVE_W-1:0] live_rd;
+    wire [LIVE_W-1:0] live_wr;
+    store_ram #(.WIDTH(LIVE_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) live_store (
+        .clk(clk), .wr_en(visit), .wr_addr(ch), .wr_data(live_wr), .rd_addr(slot_next), .rd_data(live_rd)
+    );
+    // Until its first sample a channel's live state is 0 (reset), whatever the RAM holds.
+    wire [LIVE_W-1:0] live = v_primed ? live_rd : {LIVE_W{1'b0}};
+    wire [31:0]         v_count = live[31:0];
+    wire [31:0]         v_edge  = live[63:32];
+    wire [FILTER_W-1:0] v_cnt_a = live[64 +: FILTER_W];
+    wire [FILTER_W-1:0] v_cnt_b = live[64 + FILTER_W +: FILTER_W];
+    wire [FILTER_W-1:0] v_cnt_z = live[64 + 2*FILTER_W +: FILTER_W];
+
+    wire                n_primed, n_a, n_b, n_z, illegal_event, index_event;
+    wire [FILTER_W-1:0] n_cnt_a, n_cnt_b, n_cnt_z;
+    wire [31:0]         n_count, n_edge;
+    quadrature_channel #(.FILTER_W(FILTER_W)) decoder (
+        .mode(v_mode), .z_active_high(v_zah), .filter_len(v_filter),
+        .sampling(sample_now), .raw_a(raw_a_reg[ch_i]), .raw_b(raw_b_reg[ch_i]),
+        .raw_z(raw_z_reg[ch_i]), .timestamp(timestamp),
+        .primed(v_primed), .a(a_reg[ch_i]), .b(b_reg[ch_i]), .z_level(z_reg[ch_i]),
+        .cnt_a(v_cnt_a), .cnt_b(v_cnt_b), .cnt_z(v_cnt_z),
+        .count(v_count), .edge_time(v_edge), .clear_armed(clear_armed_reg[ch_i]),
+        .primed_next(n_primed), .a_next(n_a), .b_next(n_b), .z_level_next(n_z),
+        .cnt_a_next(n_cnt_a), .cnt_b_next(n_cnt_b), .cnt_z_next(n_cnt_z),
+        .count_next(n_count), .edge_time_next(n_edge),
+        .illegal_event(illegal_event), .index_event(index_event)
     );
 
+    assign live_wr = {n_cnt_z, n_cnt_b, n_cnt_a, n_edge, n_count};
+
+    // ---- The copies ---------------------------------------------------------------------
+    // Probe: filtered at the first visit of each sampling round, rising edge while armed.
+    wire probe_level, probe_primed;
+    input_filter #(.FILTER_W(FILTER_W)) probe_filter (
+        .clk(clk), .rst(rst), .filter_len(probe_filter_len), .sample(probe_sample), .pin(probe_pin),
+        .level(probe_level), .primed(probe_primed)
+    );
     reg                  probe_live_reg;
     reg                  probe_active_prev_reg;
     reg                  probe_armed_reg;
     reg                  probe_seen_reg;
     reg [31:0]           probe_time_reg;
     reg [32*N_AXES-1:0]  probe_position_reg;
-
     wire active      = probe_active_high ? probe_level : !probe_level;
     wire probe_event = probe_live_reg && active && !probe_active_prev_reg && probe_armed_reg;
 
+    wire copy_latch = visit && (latch_pending_reg[ch_i] || latch_now);
+    wire copy_probe = visit && (probe_pending_reg[ch_i] || probe_event);
+    wire copy_index = visit && index_event && latch_armed_reg[ch_i];
+
+    wire [31:0] count_rd, edge_rd, index_rd, probe_rd;
+    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) count_store (
+        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_count), .rd_addr(rd_ch), .rd_data(count_rd)
+    );
+    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) edge_store (
+        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_edge), .rd_addr(rd_ch), .rd_data(edge_rd)
+    );
+    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) index_store (
+        .clk(clk), .wr_en(copy_index), .wr_addr(ch), .wr_data(v_count), .rd_addr(rd_ch), .rd_data(index_rd)
+    );
+    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) probe_store (
+        .clk(clk), .wr_en(copy_probe), .wr_addr(ch), .wr_data(v_count), .rd_addr(rd_ch), .rd_data(probe_rd)
+    );
+    // What the served read shows: the addressed copy, 0 before its first write.
+    reg        served_reg;
+    reg [1:0]  served_kind_reg;
+    reg        served_written_reg;
+    wire written = (rd_kind == KIND_INDEX) ? index_copied_reg[rd_ch] :
+                   (rd_kind == KIND_PROBE) ? probe_copied_reg[rd_ch] : count_copied_reg[rd_ch];
+    always @(posedge clk) begin
+        served_reg         <= rd_copy;
+        served_kind_reg    <= rd_kind;
+        // A copy written at this edge cannot be the read one (the stall), so the flag of
+        // this cycle is the flag of the serving cycle for the addressed word.
+        served_written_reg <= written;
+        if (rst) served_reg <= 1'b0;
+    end
+    assign copy_rdata = !(served_reg && served_written_reg) ? 32'd0 :
+                        (served_kind_reg == KIND_COUNT) ? count_rd :
+                        (served_kind_reg == KIND_INDEX) ? index_rd :
+                        (served_kind_reg == KIND_PROBE) ? probe_rd : edge_rd;
+
+    // ---- Flip-flop state updates ----------------------------------------------------------
+    wire [15:0] v_illegal_count = illegal_count_reg[16*ch_i +: 16];
+    integer c;
+    always @(posedge clk) begin
+        for (c = 0; c < N_ENC; c = c + 1) begin
+            if (visit && ch_i == c) begin
+                primed_reg[c] <= n_primed;
+                a_reg[c]      <= n_a;
+                b_reg[c]      <= n_b;
+                z_reg[c]      <= n_z;
+            end
+            // Sticky flags and counters: visits set, host pulses clear (a set wins, a
+            // clear of the counter wins).
+            if (visit && ch_i == c && illegal_event) illegal_reg[c] <= 1'b1;
+            else if (clear_errors) illegal_reg[c] <= 1'b0;
+            if (clear_counters) illegal_count_reg[16*c +: 16] <= 16'd0;
+            else if (visit && ch_i == c && illegal_event && v_illegal_count != 16'hFFFF)
+                illegal_count_reg[16*c +: 16] <= v_illegal_count + 16'd1;
+            // Index arms: an arm in the cycle of an event wins.
+            if (arm_index_latch[c]) index_seen_reg[c] <= 1'b0;
+            else if (copy_index && ch_i == c) index_seen_reg[c] <= 1'b1;
+            if (arm_index_latch[c]) latch_armed_reg[c] <= 1'b1;
+            else if (visit && ch_i == c && index_event) latch_armed_reg[c] <= 1'b0;
+            if (arm_index_clear[c]) clear_armed_reg[c] <= 1'b1;
+            else if (visit && ch_i == c && index_event) clear_armed_reg[c] <= 1'b0;
+            // Copies asked for wait for the channel's visit.
+            if (visit && ch_i == c) latch_pending_reg[c] <= 1'b0;
+            else if (latch_now) latch_pending_reg[c] <= 1'b1;
+            if (visit && ch_i == c) probe_pending_reg[c] <= 1'b0;
+            else if (probe_event) probe_pending_reg[c] <= 1'b1;
+            if (copy_latch && ch_i == c) count_copied_reg[c] <= 1'b1;
+            if (copy_index && ch_i == c) index_copied_reg[c] <= 1'b1;
+            if (copy_probe && ch_i == c) probe_copied_reg[c] <= 1'b1;
+        end
+        sync1_a_reg <= enc_a;
+        sync1_b_reg <= enc_b;
+        sync1_z_reg <= enc_z;
+        raw_a_reg   <= sync1_a_reg;
+        raw_b_reg   <= sync1_b_reg;
+        raw_z_reg   <= sync1_z_reg;
+        if (rst) begin
+            sync1_a_reg       <= {N_ENC{1'b0}};
+            sync1_b_reg       <= {N_ENC{1'b0}};
+            sync1_z_reg       <= {N_ENC{1'b0}};
+            raw_a_reg         <= {N_ENC{1'b0}};
+            raw_b_reg         <= {N_ENC{1'b0}};
+            raw_z_reg         <= {N_ENC{1'b0}};
+            illegal_count_reg <= {16*N_ENC{1'b0}};
+            primed_reg        <= {N_ENC{1'b0}};
+            a_reg             <= {N_ENC{1'b0}};
+            b_reg             <= {N_ENC{1'b0}};
+            z_reg             <= {N_ENC{1'b0}};
+            illegal_reg       <= {N_ENC{1'b0}};
+            index_seen_reg    <= {N_ENC{1'b0}};
+            latch_armed_reg   <= {N_ENC{1'b0}};
+            clear_armed_reg   <= {N_ENC{1'b0}};
+            latch_pending_reg <= {N_ENC{1'b0}};
+            probe_pending_reg <= {N_ENC{1'b0}};
+            count_copied_reg  <= {N_ENC{1'b0}};
+            index_copied_reg  <= {N_ENC{1'b0}};
+            probe_copied_reg  <= {N_ENC{1'b0}};
+        end
+    end
+
+    // Probe state (per clock).
     always @(posedge clk) begin
         probe_live_reg        <= probe_primed;
         probe_active_prev_reg <= active;
@@ -108,60 +308,82 @@ module encoder_bank #(
         end
     end
 
-    genvar c;
+    genvar g;
     generate
-        for (c = 0; c < N_ENC; c = c + 1) begin : channel
-            wire [31:0] count, edge_time;
-            reg  [31:0] count_latched_reg, edge_time_latched_reg;
-            quadrature_channel #(.FILTER_W(FILTER_W)) decoder (
-                .clk(clk), .rst(rst),
-                .enc_a(enc_a[c]), .enc_b(enc_b[c]), .enc_z(enc_z[c]),
-                .mode(mode[2*c +: 2]), .z_active_high(z_active_high[c]),
-                .filter_len(filter_len[FILTER_W*c +: FILTER_W]), .sample(sample),
-                .arm_index_latch(arm_index_latch[c]), .arm_index_clear(arm_index_clear[c]),
-                .clear_errors(clear_errors), .clear_counters(clear_counters),
-                .probe_event(probe_event), .timestamp(timestamp),
-                .count(count), .index_latch(index_latch[32*c +: 32]), .index_seen(index_seen[c]),
-                .index_latch_armed(index_latch_armed[c]), .index_clear_armed(index_clear_armed[c]),
-                .probe_latch(probe_latch[32*c +: 32]), .edge_time(edge_time),
-                .illegal(illegal[c]), .illegal_count(illegal_count[16*c +: 16]),
-                .a_level(a_level[c]), .b_level(b_level[c]), .z_level_active(z_level[c])
-            );
-            always @(posedge clk) begin
-                if (latch_now) begin
-                    count_latched_reg     <= count;
-                    edge_time_latched_reg <= edge_time;
-                end
-                if (rst) begin
-                    count_latched_reg     <= 32'd0;
-                    edge_time_latched_reg <= 32'd0;
-                end
-            end
-            assign count_latched[32*c +: 32]     = count_latched_reg;
-            assign edge_time_latched[32*c +: 32] = edge_time_latched_reg;
+        for (g = 0; g < N_ENC; g = g + 1) begin : view
+            assign z_level[g] = z_reg[g] ^ !z_active_high[g];
+        end
+        // The copy decode takes an array from the address's high bits, a channel from its low two.
+        if (FS_ENC_COUNT_STRIDE != 1 || FS_ENC_INDEX_LATCH_STRIDE != 1 || FS_ENC_PROBE_LATCH_STRIDE != 1 ||
+            FS_ENC_EDGE_TIME_STRIDE != 1 || FS_ENC_COUNT_ADDR[1:0] != 2'd0 || FS_ENC_INDEX_LATCH_ADDR[1:0] != 2'd0 ||
+            FS_ENC_PROBE_LATCH_ADDR[1:0] != 2'd0 || FS_ENC_EDGE_TIME_ADDR[1:0] != 2'd0 || N_ENC > 4) begin : stride_check
+            encoder_bank_copy_arrays_need_stride_1 unsupported_register_map ();
         end
     endgenerate
 
-    assign probe_armed    = probe_armed_reg;
-    assign probe_seen     = probe_seen_reg;
-    assign probe_active   = active;
-    assign probe_time     = probe_time_reg;
-    assign probe_position = probe_position_reg;
+    assign illegal_count     = illegal_count_reg;
+    assign illegal           = illegal_reg;
+    assign index_seen        = index_seen_reg;
+    assign index_latch_armed = latch_armed_reg;
+    assign index_clear_armed = clear_armed_reg;
+    assign a_level           = a_reg;
+    assign b_level           = b_reg;
+    assign probe_armed       = probe_armed_reg;
+    assign probe_seen        = probe_seen_reg;
+    assign probe_active      = active;
+    assign probe_time        = probe_time_reg;
+    assign probe_position    = probe_position_reg;
 
 `ifdef FORMAL
-    // Samples come every prescale + 1 clocks; the probe fires only while armed, once per
-    // arming, and then latches every channel on that clock.
+    // The engine against one state per channel: a shadow count and edge time per channel,
+    // updated at the channel's visits from the decoder's result, must be what the store
+    // hands the next visit of that channel (so the store neither loses nor mixes a
+    // channel's count); the stores never read and write one word on one clock (what
+    // store_ram's no_rw_check relies on); the schedule moves one slot per clock unless
+    // stalled. The register bus never grants reads in three cycles in a row (each master
+    // has one request at a time and spaces its reads).
     reg f_past_valid;
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
+    always @(posedge clk) if (f_past_valid) assume (!(read_grant && $past(read_grant) && $past(read_grant, 2)));
+    always @(posedge clk) if (f_past_valid) assume ($stable(mode) && $stable(filter_len) && $stable(z_active_high));
+
+    reg [31:0] f_count [0:N_ENC-1];
+    reg [31:0] f_edge  [0:N_ENC-1];
+    integer f;
+    always @(posedge clk) begin
+        for (f = 0; f < N_ENC; f = f + 1) begin
+            if (visit && ch_i == f) begin
+                f_count[f] <= n_count;
+                f_edge[f]  <= n_edge;
+            end
+            if (rst) begin
+                f_count[f] <= 32'd0;
+                f_edge[f]  <= 32'd0;
+            end
+        end
+    end
+    always @(*) if (f_past_valid && !rst) begin
+        // No read-during-write on any store.
+        if (visit) assert (slot_next != ch);
+        if (rd_copy && (copy_latch || copy_index || copy_probe)) assert (rd_ch != ch);
+        assert ({{(32-CH_W){1'b0}}, slot_reg} < S);
+        // Before its first sample a channel has count 0 and nothing decoded.
+        if (visit && !v_primed) assert (f_count[ch_i] == 32'd0 && f_edge[ch_i] == 32'd0);
+        if (visit) assert (v_count == f_count[ch_i] && v_edge == f_edge[ch_i]);
+    end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
-        if ($past(sample)) assert (presc_reg == $past(prescale));
-        else assert (presc_reg == $past(presc_reg) - 16'd1);
-        if ($past(probe_event)) assert (probe_seen_reg || $past(probe_arm));
-        if ($past(probe_event) && !$past(probe_arm)) assert (!probe_armed_reg && probe_time_reg == $past(timestamp));
-        if (!$past(probe_armed_reg)) assert (!$past(probe_event));
-        cover ($past(probe_event));
+        if ($past(stall)) assert (slot_reg == $past(slot_reg));
+        else assert (slot_reg == (($past(slot_reg) == LAST_SLOT) ? {CH_W{1'b0}} : $past(slot_reg) + CH_ONE));
+        if ($past(round_end)) assert (sampling_reg == ($past(presc_reg) == 16'd0));
+        else assert (sampling_reg == $past(sampling_reg) && presc_reg == $past(presc_reg));
+        // A copy asked for is taken at the channel's next visit: pending until then.
+        if ($past(latch_now) && !($past(visit) && $past(ch_i) == 0)) assert (latch_pending_reg[0]);
+        if ($past(probe_event)) assert (!probe_armed_reg || $past(probe_arm));
+        cover ($past(copy_latch) && $past(v_count) != 32'd0);
+        cover ($past(stall));
+        cover ($past(copy_probe) && $past(v_count) != 32'd0);
     end
 `endif
 

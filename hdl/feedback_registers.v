@@ -42,10 +42,7 @@ module feedback_registers #(
     output wire [30:0]           jog_accel,
     output wire [15:0]           jog_window,
     // encoder and probe state
-    input  wire [32*N_ENC-1:0]   enc_count,
-    input  wire [32*N_ENC-1:0]   enc_edge_time,
-    input  wire [32*N_ENC-1:0]   enc_index_latch,
-    input  wire [32*N_ENC-1:0]   enc_probe_latch,
+    input  wire [31:0]           enc_copy_rdata,   // the encoder bank's copy for this read, else 0
     input  wire [16*N_ENC-1:0]   enc_illegal_count,
     input  wire [N_ENC-1:0]      enc_illegal,
     input  wire [N_ENC-1:0]      enc_index_seen,
@@ -234,16 +231,12 @@ module feedback_registers #(
             enc_status_word[FS_ENC_STATUS_B_LSB]                   = enc_b[r];
             enc_status_word[FS_ENC_STATUS_Z_LSB]                   = enc_z[r];
             rdata = rdata
-                | ({32{{25'd0, addr} == {25'd0, FS_ENC_COUNT_ADDR} + r * FS_ENC_COUNT_STRIDE}} & enc_count[32*r +: 32])
-                | ({32{{25'd0, addr} == {25'd0, FS_ENC_INDEX_LATCH_ADDR} + r * FS_ENC_INDEX_LATCH_STRIDE}} &
-                   enc_index_latch[32*r +: 32])
-                | ({32{{25'd0, addr} == {25'd0, FS_ENC_PROBE_LATCH_ADDR} + r * FS_ENC_PROBE_LATCH_STRIDE}} &
-                   enc_probe_latch[32*r +: 32])
-                | ({32{{25'd0, addr} == {25'd0, FS_ENC_EDGE_TIME_ADDR} + r * FS_ENC_EDGE_TIME_STRIDE}} &
-                   enc_edge_time[32*r +: 32])
                 | ({32{{25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + r * FS_ENC_CONTROL_STRIDE}} & enc_control_word)
                 | ({32{{25'd0, addr} == {25'd0, FS_ENC_STATUS_ADDR} + r * FS_ENC_STATUS_STRIDE}} & enc_status_word);
         end
+        // ENC_COUNT, ENC_INDEX_LATCH, ENC_PROBE_LATCH, ENC_EDGE_TIME: the encoder bank's
+        // store answers them (it reads the word in the grant cycle).
+        rdata = rdata | enc_copy_rdata;
         for (r = 0; r < N_AXES; r = r + 1) begin
             rdata = rdata
                 | ({32{{25'd0, addr} == {25'd0, FS_PROBE_POSITION_ADDR} + r * FS_PROBE_POSITION_STRIDE}} &

@@ -20,7 +20,8 @@ module finestep_top #(
     parameter HAS_SPI         = 1,
     parameter HAS_PARALLEL    = 1,
     parameter N_ENC           = 4,
-    parameter HAS_MPG         = 1
+    parameter HAS_MPG         = 1,
+    parameter RAM_BLOCK       = 0
 ) (
     // clock, reset
     input  wire              clk,
@@ -133,7 +134,9 @@ module finestep_top #(
     wire [31:0]           jog_scale;
     wire [30:0]           jog_vmax, jog_accel;
     wire [15:0]           jog_window;
-    wire [32*N_ENC-1:0]   enc_count, enc_edge_time, enc_index_latch, enc_probe_latch;
+    wire                  grant_read;
+    wire [6:0]            grant_addr;
+    wire [31:0]           enc_copy_rdata;
     wire [16*N_ENC-1:0]   enc_illegal_count;
     wire [N_ENC-1:0]      enc_illegal, enc_index_seen, enc_latch_armed, enc_clear_armed;
     wire [N_ENC-1:0]      enc_a_level, enc_b_level, enc_z_level;
@@ -233,7 +236,7 @@ module finestep_top #(
         .par_req(par_req), .par_we(par_we), .par_addr(par_addr), .par_wdata(par_wdata), .par_grant(par_grant),
         .rdata(rdata),
         .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
-        .feedback_rdata(feedback_rdata),
+        .feedback_rdata(feedback_rdata), .grant_read(grant_read), .grant_addr(grant_addr),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
@@ -341,8 +344,7 @@ module finestep_top #(
         .jog_enable(jog_enable), .jog_axis(jog_axis), .jog_multiplier(jog_multiplier),
         .jog_follow(jog_follow), .jog_scale(jog_scale), .jog_vmax(jog_vmax), .jog_accel(jog_accel),
         .jog_window(jog_window),
-        .enc_count(enc_count), .enc_edge_time(enc_edge_time), .enc_index_latch(enc_index_latch),
-        .enc_probe_latch(enc_probe_latch), .enc_illegal_count(enc_illegal_count),
+        .enc_copy_rdata(enc_copy_rdata), .enc_illegal_count(enc_illegal_count),
         .enc_illegal(enc_illegal), .enc_index_seen(enc_index_seen), .enc_latch_armed(enc_latch_armed),
         .enc_clear_armed(enc_clear_armed), .enc_a(enc_a_level), .enc_b(enc_b_level), .enc_z(enc_z_level),
         .probe_armed(probe_armed), .probe_seen(probe_seen), .probe_active(probe_active),
@@ -354,7 +356,7 @@ module finestep_top #(
     );
 
     encoder_bank #(
-        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH)
+        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH), .RAM_BLOCK(RAM_BLOCK)
     ) encoders (
         .clk(clk), .rst(rst),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
@@ -362,9 +364,8 @@ module finestep_top #(
         .filter_len(enc_filter), .probe_active_high(probe_active_high), .probe_filter_len(probe_filter),
         .arm_index_latch(enc_arm_index_latch), .arm_index_clear(enc_arm_index_clear),
         .probe_arm(probe_arm), .clear_errors(clear_errors), .clear_counters(clear_counters),
+        .read_grant(grant_read), .read_addr(grant_addr), .copy_rdata(enc_copy_rdata),
         .timestamp(timestamp), .position(position), .latch_now(latch_now),
-        .count_latched(enc_count), .edge_time_latched(enc_edge_time),
-        .index_latch(enc_index_latch), .probe_latch(enc_probe_latch),
         .illegal_count(enc_illegal_count), .illegal(enc_illegal), .index_seen(enc_index_seen),
         .index_latch_armed(enc_latch_armed), .index_clear_armed(enc_clear_armed),
         .a_level(enc_a_level), .b_level(enc_b_level), .z_level(enc_z_level),

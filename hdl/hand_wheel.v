@@ -36,23 +36,62 @@ module hand_wheel #(
         if (rst) presc_reg <= 16'd2;
     end
 
-    wire [31:0] index_latch_unused, probe_latch_unused, edge_time_unused;
-    wire        index_seen_unused, latch_armed_unused, clear_armed_unused, z_unused;
+    // The channel's state in flip-flops of its own; it is visited in every cycle and
+    // samples when the prescaler says so (no index: Z rests low).
+    reg  [1:0]          sync_a_reg, sync_b_reg;
+    reg                 primed_reg, a_reg, b_reg;
+    reg  [FILTER_W-1:0] cnt_a_reg, cnt_b_reg;
+    reg  [31:0]         count_reg;
+    reg                 illegal_reg;
+    reg  [15:0]         illegal_count_reg;
+    wire                primed_next, a_next, b_next, z_unused, illegal_event, index_unused;
+    wire [FILTER_W-1:0] cnt_a_next, cnt_b_next, cnt_z_unused;
+    wire [31:0]         count_next, edge_time_unused;
     quadrature_channel #(.FILTER_W(FILTER_W)) decoder (
-        .clk(clk), .rst(rst),
-        .enc_a(mpg_a), .enc_b(mpg_b), .enc_z(1'b0),
-        .mode(2'd0), .z_active_high(1'b1), .filter_len(filter_len), .sample(sample),
-        .arm_index_latch(1'b0), .arm_index_clear(1'b0),
-        .clear_errors(clear_errors), .clear_counters(clear_counters),
-        .probe_event(1'b0), .timestamp(32'd0),
-        .count(count), .index_latch(index_latch_unused), .index_seen(index_seen_unused),
-        .index_latch_armed(latch_armed_unused), .index_clear_armed(clear_armed_unused),
-        .probe_latch(probe_latch_unused), .edge_time(edge_time_unused),
-        .illegal(illegal), .illegal_count(illegal_count),
-        .a_level(a_level), .b_level(b_level), .z_level_active(z_unused)
+        .mode(2'd0), .z_active_high(1'b1), .filter_len(filter_len),
+        .sampling(sample), .raw_a(sync_a_reg[1]), .raw_b(sync_b_reg[1]), .raw_z(1'b0),
+        .timestamp(32'd0),
+        .primed(primed_reg), .a(a_reg), .b(b_reg), .z_level(1'b0),
+        .cnt_a(cnt_a_reg), .cnt_b(cnt_b_reg), .cnt_z({FILTER_W{1'b0}}),
+        .count(count_reg), .edge_time(32'd0), .clear_armed(1'b0),
+        .primed_next(primed_next), .a_next(a_next), .b_next(b_next), .z_level_next(z_unused),
+        .cnt_a_next(cnt_a_next), .cnt_b_next(cnt_b_next), .cnt_z_next(cnt_z_unused),
+        .count_next(count_next), .edge_time_next(edge_time_unused),
+        .illegal_event(illegal_event), .index_event(index_unused)
     );
-    wire unused_hand_wheel = &{1'b0, index_latch_unused, probe_latch_unused, edge_time_unused,
-                               index_seen_unused, latch_armed_unused, clear_armed_unused, z_unused};
+    wire unused_hand_wheel = &{1'b0, z_unused, cnt_z_unused, edge_time_unused, index_unused};
+
+    always @(posedge clk) begin
+        sync_a_reg <= {sync_a_reg[0], mpg_a};
+        sync_b_reg <= {sync_b_reg[0], mpg_b};
+        primed_reg <= primed_next;
+        a_reg      <= a_next;
+        b_reg      <= b_next;
+        cnt_a_reg  <= cnt_a_next;
+        cnt_b_reg  <= cnt_b_next;
+        count_reg  <= count_next;
+        if (illegal_event) illegal_reg <= 1'b1;
+        else if (clear_errors) illegal_reg <= 1'b0;
+        if (clear_counters) illegal_count_reg <= 16'd0;
+        else if (illegal_event && illegal_count_reg != 16'hFFFF) illegal_count_reg <= illegal_count_reg + 16'd1;
+        if (rst) begin
+            sync_a_reg        <= 2'b00;
+            sync_b_reg        <= 2'b00;
+            primed_reg        <= 1'b0;
+            a_reg             <= 1'b0;
+            b_reg             <= 1'b0;
+            cnt_a_reg         <= {FILTER_W{1'b0}};
+            cnt_b_reg         <= {FILTER_W{1'b0}};
+            count_reg         <= 32'd0;
+            illegal_reg       <= 1'b0;
+            illegal_count_reg <= 16'd0;
+        end
+    end
+    assign count         = count_reg;
+    assign illegal       = illegal_reg;
+    assign illegal_count = illegal_count_reg;
+    assign a_level       = a_reg;
+    assign b_level       = b_reg;
 
     // count moves by at most one a clock, so its low bits going 1 -> 2 or 2 -> 1 is
     // crossing a detent boundary; a counter of those wraps with the count, where
@@ -90,6 +129,21 @@ module hand_wheel #(
         assert (count_low_prev_reg == f_prev_count[1:0]);
         assert (detents_prev_reg[29:0] == f_prev_plus2[31:2]);
         assert (detents[29:0] == f_plus2[31:2]);
+    end
+    // x4 decoding follows the Gray code: without illegal transitions, count mod 4 is the
+    // (A,B) phase (00 -> 10 -> 11 -> 01 is 0, 1, 2, 3) less the phase the first sample
+    // adopted (the count is 0 until then).
+    reg       f_clean;
+    reg [1:0] f_phase0;
+    wire [1:0] f_phase = {b_reg, a_reg ^ b_reg};
+    always @(posedge clk) begin
+        f_clean <= rst ? 1'b1 : (f_clean && !illegal_event);
+        if (rst) f_phase0 <= 2'd0;
+        else if (!primed_reg) f_phase0 <= {b_next, a_next ^ b_next};
+    end
+    always @(*) if (f_past_valid && !rst) begin
+        if (!primed_reg) assert (count_reg == 32'd0 && !illegal_reg && f_clean);
+        if (f_clean && primed_reg) assert (count_reg[1:0] == f_phase - f_phase0);
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (detents == $past(detents) || detents == $past(detents) + 32'd1 || detents == $past(detents) - 32'd1);

@@ -26,37 +26,26 @@ module input_filter #(
     output wire                primed
 );
 
-    localparam [FILTER_W-1:0] ONE = {{(FILTER_W-1){1'b0}}, 1'b1};
-
     reg [1:0]          sync_reg;
     reg                level_reg;
     reg                primed_reg;
     reg [FILTER_W-1:0] count_reg;
 
-    wire                raw        = sync_reg[1];
-    wire [FILTER_W-1:0] needed     = (filter_len == {FILTER_W{1'b0}}) ? ONE : filter_len;
-    wire                differs    = (raw != level_reg);
-    // count + 1 >= needed, without overflowing the counter (count < needed always).
-    wire                enough     = (count_reg >= needed - ONE);
+    wire                raw = sync_reg[1];
+    wire                level_next;
+    wire [FILTER_W-1:0] count_next;
+    filter_step #(.FILTER_W(FILTER_W)) rule (
+        .filter_len(filter_len), .sample(sample), .raw(raw), .primed(primed_reg),
+        .level(level_reg), .count(count_reg), .level_next(level_next), .count_next(count_next)
+    );
 
     always @(posedge clk) begin
-        sync_reg <= {sync_reg[0], pin};
-        if (sample) begin
-            primed_reg <= 1'b1;
-            if (!primed_reg) begin
-                level_reg <= raw;
-                count_reg <= {FILTER_W{1'b0}};
-            end else if (!differs) begin
-                count_reg <= {FILTER_W{1'b0}};
-            end else if (enough) begin
-                level_reg <= raw;
-                count_reg <= {FILTER_W{1'b0}};
-            end else begin
-                count_reg <= count_reg + ONE;
-            end
-        end
+        sync_reg   <= {sync_reg[0], pin};
+        level_reg  <= level_next;
+        count_reg  <= count_next;
+        if (sample) primed_reg <= 1'b1;
         if (rst) begin
-            sync_reg  <= 2'b00;
+            sync_reg   <= 2'b00;
             level_reg  <= 1'b0;
             primed_reg <= 1'b0;
             count_reg  <= {FILTER_W{1'b0}};
@@ -68,27 +57,31 @@ module input_filter #(
 
 `ifdef FORMAL
     // The level changes only at a sample, after `needed` samples of the other level in a
-    // row; the counter never reaches `needed`. The filter length is configuration.
+    // row; the counter never reaches `needed`. Stated here without filter_step's wires.
+    // The filter length is configuration.
+    localparam [FILTER_W-1:0] F_ONE = {{(FILTER_W-1){1'b0}}, 1'b1};
     reg f_past_valid;
     reg [FILTER_W:0] f_run;    // samples in a row showing the other level
+    wire [FILTER_W-1:0] f_needed  = (filter_len == {FILTER_W{1'b0}}) ? F_ONE : filter_len;
+    wire                f_differs = (raw != level_reg);
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
     always @(posedge clk) if (f_past_valid) assume ($stable(filter_len));
     always @(posedge clk) begin
         if (rst) f_run <= 0;
-        else if (sample) f_run <= (primed_reg && differs && !enough) ? f_run + 1'b1 : 0;
+        else if (sample) f_run <= (primed_reg && f_differs && f_run + 1'b1 < {1'b0, f_needed}) ? f_run + 1'b1 : 0;
     end
     always @(*) if (f_past_valid && !rst) begin
-        assert (count_reg < needed);
+        assert (count_reg < f_needed);
         assert ({1'b0, count_reg} == f_run);
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
-        if ($changed(level_reg)) assert ($past(sample) && $past(differs) &&
-                                         (!$past(primed_reg) || $past(count_reg) + ONE == $past(needed)));
+        if ($changed(level_reg)) assert ($past(sample) && $past(f_differs) &&
+                                         (!$past(primed_reg) || $past(count_reg) + F_ONE == $past(f_needed)));
         if ($past(primed_reg)) assert (primed_reg);
         if (!$past(sample)) assert ($stable(level_reg) && $stable(count_reg));
-        cover ($changed(level_reg) && needed == 3);
+        cover ($changed(level_reg) && f_needed == 3);
     end
 `endif
 

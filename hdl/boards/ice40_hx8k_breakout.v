@@ -2,15 +2,15 @@
 `default_nettype none
 // Board top for the Lattice iCE40-HX8K breakout board (iCE40HX8K-CT256): the 12 MHz
 // oscillator through the iCE40 PLL to 50.25 MHz, power-on and external reset and the
-// PLL lock through board_reset, and finestep_top with its SPI link, 4 axes, 2 encoder
+// PLL lock through board_reset, and finestep_top with its SPI link, 4 axes, 4 encoder
 // channels and the probe. Pins: constraints/ice40_hx8k_breakout.pcf.
 //
-// N_ENC is 2 and HAS_MPG 0 here: the full core (4 channels, hand wheel and jog) packs
-// into about 11 250 logic cells and does not fit the 7680 (docs/resources.md); the pins
-// of channels 2 and 3 and of the hand wheel stay constrained, unused.
+// HAS_MPG is 0 here: the full core (with the hand wheel and jog) packs into about 8 800
+// logic cells and does not fit the 7680 (docs/resources.md); the hand wheel's pins stay
+// constrained, unused. The encoder bank's stores are in block RAM (RAM_BLOCK).
 module ice40_hx8k_breakout #(
     parameter N_AXES          = 4,
-    parameter N_ENC           = 2,
+    parameter N_ENC           = 4,
     parameter HAS_MPG         = 0,
     parameter FIFO_DEPTH_LOG2 = 8
 ) (
@@ -55,7 +55,7 @@ module ice40_hx8k_breakout #(
 
     spi_board_chip #(
         .N_AXES(N_AXES), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
-        .CLOCK_HZ(CLOCK_HZ)
+        .CLOCK_HZ(CLOCK_HZ), .RAM_BLOCK(1)   // the iCE40 has no distributed RAM
     ) board (
         .clk(clk), .locked(pll_locked), .button_n(reset_n), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi), .spi_miso(spi_miso), .irq(irq),

@@ -287,8 +287,8 @@ struct Expect {
     /// The 8080 slave's low half waiting for its high half: (register, data).
     low_half: Option<(u8, u16)>,
     /// ENC_STATUS of each channel but its Z bit: INDEX_SEEN and the arms. The index pin
-    /// stays low, so the only index event is the one a switch to active-low polarity
-    /// makes (z after polarity rises).
+    /// stays low, so there is no index event: a visit compares the index before and after
+    /// its sample under the polarity of that cycle, so a polarity write is none either.
     enc_arms: [u32; 4],
 }
 
@@ -330,7 +330,6 @@ impl Expect {
 
     /// A register write that reached the register bus (either master).
     fn write(&mut self, addr: u8, value: u32) {
-        let old_z_active_high = enc_control::Z_ACTIVE_HIGH.get(self.rw[usize::from(addr)]) != 0;
         if let Some((mask, _)) = rw_register(addr) {
             self.rw[usize::from(addr)] = value & mask;
         }
@@ -353,14 +352,9 @@ impl Expect {
                 assert_eq!(value & command::CLEAR_FAULTS.mask(), 0, "the fuzzer keeps the machine halted");
             }
             0x70..=0x73 => {
-                // The rw part is stored above; `old` is what was there before.
+                // The rw part is stored above; the arms are pulses.
                 let status = &mut self.enc_arms[usize::from(addr - 0x70)];
                 let (seen, latch, clear) = (enc_status::INDEX_SEEN, enc_status::LATCH_ARMED, enc_status::CLEAR_ARMED);
-                if old_z_active_high && enc_control::Z_ACTIVE_HIGH.get(value) == 0 {
-                    // The event, in the cycle after the write, takes the arms held before.
-                    let was_armed = latch.get(*status);
-                    *status = seen.set(latch.set(clear.set(*status, 0), 0), seen.get(*status) | was_armed);
-                }
                 if enc_control::ARM_INDEX_LATCH.get(value) != 0 {
                     *status = seen.set(latch.set(*status, 1), 0);
                 }

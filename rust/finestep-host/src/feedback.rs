@@ -149,7 +149,9 @@ impl<B: Bus> Machine<B> {
         Ok(())
     }
 
-    /// The encoders' and the probe's sampling: every `prescale + 1` clocks.
+    /// The encoders' and the probe's sampling: every `prescale + 1` rounds of the encoder
+    /// bank's `S = max(N_ENC, 2)` slots, so a channel is sampled every `S * (prescale + 1)`
+    /// clocks (docs/spec/encoder_bank.md).
     pub fn set_encoder_prescale(&mut self, prescale: u16) -> Result<(), BusError> {
         self.bus.write(enc_prescale::ADDR, enc_prescale::PRESCALE.set(0, u32::from(prescale)))
     }

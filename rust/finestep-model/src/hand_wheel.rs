@@ -2,6 +2,9 @@
 //! index, on its own prescaler and filter (`MPG_CONTROL`): hand wheels have mechanical
 //! contacts whose bounce outlasts any encoder's edge, so they are sampled slowly
 //! (the reset setting, PRESCALE 499 and FILTER 4, rejects bounce under 40 us at 50 MHz).
+//! The channel is a [`QuadratureChannel`] in flip-flops of its own, visited in every
+//! cycle; the visit samples when the prescaler says `sample`, so the count changes at the
+//! edge ending the sample that decodes it.
 //!
 //! Specification: docs/spec/hand_wheel.md
 //!
@@ -9,7 +12,7 @@
 //! 4 edges per detent, and one resting where it was at reset sits in the middle of
 //! detent 0, two edges from either boundary, so bounce at rest never changes it.
 
-use crate::input_filter::{InputFilter, Prescaler};
+use crate::input_filter::{Prescaler, Synchroniser};
 use crate::quadrature_channel::{ChannelInputs, CountMode, QuadratureChannel};
 
 /// Edges per detent.
@@ -60,8 +63,8 @@ pub struct HandWheelStatus {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct HandWheel {
     prescaler: Prescaler,
-    /// `[a, b]`.
-    filters: [InputFilter; 2],
+    /// The synchronisers of `[a, b]`.
+    sync: [Synchroniser; 2],
     channel: QuadratureChannel,
     /// The count's low two bits in the previous cycle.
     count_low_prev: u32,
@@ -75,9 +78,9 @@ impl HandWheel {
         &self.channel
     }
 
-    /// The pin filters, `[a, b]`.
-    pub fn filters(&self) -> &[InputFilter; 2] {
-        &self.filters
+    /// The synchronisers of the pins, `[a, b]`.
+    pub fn synchronisers(&self) -> &[Synchroniser; 2] {
+        &self.sync
     }
 
     /// The prescaler.
@@ -108,8 +111,8 @@ impl HandWheel {
             detents: self.detents(),
             illegal: self.channel.illegal(),
             illegal_count: self.channel.illegal_count(),
-            a: self.filters[0].level(),
-            b: self.filters[1].level(),
+            a: self.channel.a(),
+            b: self.channel.b(),
         }
     }
 
@@ -119,19 +122,20 @@ impl HandWheel {
         self.detents_prev = self.detents();
         self.count_low_prev = self.count() & 3;
         self.channel.step(&ChannelInputs {
-            a: self.filters[0].level(),
-            b: self.filters[1].level(),
-            primed: self.filters.iter().all(InputFilter::primed),
-            mode: CountMode::X4,
+            sample,
+            raw_a: self.sync[0].raw(),
+            raw_b: self.sync[1].raw(),
             // No index: z stays inactive.
-            z_level: false,
+            raw_z: false,
             z_active_high: true,
+            mode: CountMode::X4,
+            filter: inp.filter,
             clear_errors: inp.clear_errors,
             clear_counters: inp.clear_counters,
             ..ChannelInputs::default()
         });
-        self.filters[0].step(inp.mpg_a, sample, inp.filter);
-        self.filters[1].step(inp.mpg_b, sample, inp.filter);
+        self.sync[0].step(inp.mpg_a);
+        self.sync[1].step(inp.mpg_b);
         self.prescaler.step(inp.prescale);
     }
 }
@@ -146,6 +150,22 @@ mod tests {
         assert_eq!([at(-3), at(-2), at(-1), at(0), at(1), at(2)], [-1, 0, 0, 0, 0, 1]);
         assert_eq!(at(i32::MAX), 1 << 29);
         assert_eq!(at(i32::MIN), -(1 << 29));
+    }
+
+    #[test]
+    fn the_count_changes_at_the_edge_ending_the_sample_that_decodes_it() {
+        // PRESCALE 2: samples in cycles 2, 5, 8, ...; A rises in cycle 4, raw from 6.
+        let mut wheel = HandWheel::default();
+        let mut counted = Vec::new();
+        for cycle in 0..20 {
+            let sample = wheel.prescaler().sample();
+            let before = wheel.count();
+            wheel.step(&HandWheelInputs { mpg_a: cycle >= 4, prescale: 2, filter: 1, ..Default::default() });
+            if wheel.count() != before {
+                counted.push((cycle, sample));
+            }
+        }
+        assert_eq!(counted, [(8, true)]);
     }
 
     #[test]

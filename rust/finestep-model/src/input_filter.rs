@@ -9,6 +9,12 @@
 //! reaches it. The first sample is adopted as it is (`primed`): an encoder resting in
 //! any state at power-on is not a transition. A change on a pin reaches `level` 2 clocks
 //! (the synchroniser) plus `max(FILTER, 1)` samples later.
+//!
+//! The rule itself is [`filter_step`], one statement for every filter of the core:
+//! [`InputFilter`] (the probe) applies it to its own state, the encoder bank's shared
+//! decoder and the hand wheel to the filter state a [`QuadratureChannel`] keeps.
+//!
+//! [`QuadratureChannel`]: crate::quadrature_channel::QuadratureChannel
 
 /// Width of a filter setting and of the filter's `count` (4 bits: up to 15 samples).
 pub const FILTER_WIDTH: u32 = 4;
@@ -50,30 +56,72 @@ impl Default for Prescaler {
     }
 }
 
-/// The synchroniser and glitch filter of one pin.
+/// The filter's state besides `primed`: the filtered `level` and `count`, the samples of
+/// the other level seen in a row so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FilterState {
+    /// The filtered level.
+    pub level: bool,
+    /// Samples of the other level in a row so far (4 bits).
+    pub count: u8,
+}
+
+/// The filter rule at one sample (`filter_step` in the HDL): the state after a sample of
+/// `raw`, with `primed` (the first sample has been adopted before this one) and the
+/// `FILTER` setting (low 4 bits; 0 acts as 1). Not primed: `level <- raw`, `count <- 0`;
+/// else `raw == level`: `count <- 0`; else `count + 1 >= max(FILTER, 1)`: `level <- raw`,
+/// `count <- 0`; else `count <- count + 1`. The caller sets `primed` after it.
+pub fn filter_step(state: FilterState, raw: bool, primed: bool, filter: u8) -> FilterState {
+    let needed = (filter & FILTER_MAX).max(1);
+    // Adopted, the same level again (`level <- raw` keeps it), or enough in a row.
+    if !primed || raw == state.level || state.count + 1 >= needed {
+        FilterState { level: raw, count: 0 }
+    } else {
+        FilterState { level: state.level, count: state.count + 1 }
+    }
+}
+
+/// A two-flop synchroniser (reset 0): `raw` is the pin two clocks before.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Synchroniser {
+    /// `sync[0]` takes the pin, `sync[1]` is `raw`.
+    sync: [bool; 2],
+}
+
+impl Synchroniser {
+    /// `raw`: the synchronised pin.
+    pub fn raw(&self) -> bool {
+        self.sync[1]
+    }
+
+    /// One rising clock edge with the pin of this cycle.
+    pub fn step(&mut self, pin: bool) {
+        self.sync = [pin, self.sync[0]];
+    }
+}
+
+/// The synchroniser and glitch filter of one pin, with its own `primed`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct InputFilter {
-    /// The synchroniser flops: `sync[0]` takes the pin, `sync[1]` is `raw`.
-    sync: [bool; 2],
-    level: bool,
-    count: u8,
+    sync: Synchroniser,
+    state: FilterState,
     primed: bool,
 }
 
 impl InputFilter {
     /// `raw`: the synchronised pin.
     pub fn raw(&self) -> bool {
-        self.sync[1]
+        self.sync.raw()
     }
 
     /// The filtered level.
     pub fn level(&self) -> bool {
-        self.level
+        self.state.level
     }
 
     /// Samples of the other level seen in a row so far.
     pub fn count(&self) -> u8 {
-        self.count
+        self.state.count
     }
 
     /// The first sample has been adopted: `level` is a pin value, not the reset 0.
@@ -85,22 +133,10 @@ impl InputFilter {
     /// `FILTER` setting (low 4 bits; 0 acts as 1).
     pub fn step(&mut self, pin: bool, sample: bool, filter: u8) {
         let raw = self.raw();
-        self.sync = [pin, self.sync[0]];
-        if !sample {
-            return;
-        }
-        let needed = (filter & FILTER_MAX).max(1);
-        if !self.primed {
-            self.level = raw;
-            self.count = 0;
+        self.sync.step(pin);
+        if sample {
+            self.state = filter_step(self.state, raw, self.primed, filter);
             self.primed = true;
-        } else if raw == self.level {
-            self.count = 0;
-        } else if self.count + 1 >= needed {
-            self.level = raw;
-            self.count = 0;
-        } else {
-            self.count += 1;
         }
     }
 }

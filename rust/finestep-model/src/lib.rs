@@ -29,10 +29,10 @@
 //! port), [`position_fifo`], [`motion_control`], [`safety_monitor`] and the core.
 //!
 //! The feedback blocks: [`input_filter`] (sampling prescaler, synchroniser and glitch
-//! filter), [`quadrature_channel`] (decoder, counter, index and probe snapshots),
-//! [`encoder_bank`] (the channels and the probe on one prescaler), [`hand_wheel`] (the
-//! MPG) and [`jog_generator`] (moves an axis after the wheel through the core), all in
-//! the top.
+//! filter rule), [`quadrature_channel`] (one visit of a channel: filters, decoder,
+//! counter, index), [`encoder_bank`] (the channels served in turn by one shared decoder,
+//! the probe, and the copies of counts and edge times), [`hand_wheel`] (the MPG) and
+//! [`jog_generator`] (moves an axis after the wheel through the core), all in the top.
 //!
 //! # Example
 //!

@@ -104,8 +104,10 @@ impl FeedbackStatus {
     }
 }
 
-/// Whether `POSITION` (and with it `LATCH_TIME`, `ENC_COUNT`, `ENC_EDGE_TIME`) is latched
-/// at this edge: `!latch_hold && (boundary || !running)`, with `running` the core's run.
+/// Whether `POSITION` (and with it `LATCH_TIME`) is latched at this edge, `latch_now`:
+/// `!latch_hold && (boundary || !running)`, with `running` the core's run. It also asks
+/// the encoder bank for this cycle's `ENC_COUNT` and `ENC_EDGE_TIME`, copied at each
+/// channel's next visit.
 pub fn position_latch(core_run: bool, rec_ready: bool, latch_hold: bool) -> bool {
     // `boundary || !running` with `boundary = running && rec_ready`.
     !latch_hold && (rec_ready || !core_run)

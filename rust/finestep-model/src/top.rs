@@ -626,6 +626,9 @@ impl Top {
             timestamp,
             positions: core_out.positions,
             latch: position_latch(hw.core_run, core_out.rec_ready(), latch_hold),
+            // This cycle's grant (not the bus stage's): a read of the visited channel's
+            // store stalls the visit, so the read served next cycle sees no write.
+            granted_read: grant.filter(|(_, request)| !request.write).map(|(_, request)| request.addr),
         });
         if p.has_mpg {
             let (prescale, filter) = self.registers.mpg_control();

@@ -2,8 +2,9 @@
 //! the feedback blocks' specs (docs/spec/): the hand wheel jogs an axis whose quadrature output
 //! an encoder channel reads back (the count must equal the step position, and both the
 //! rounded commanded position), the probe snapshots them on one clock, the index arms,
-//! illegal transitions, the jog's interplay with `CONTROL.RUN` and the FIFO, and the
-//! builds without channels or hand wheel.
+//! illegal transitions, the jog's interplay with `CONTROL.RUN` and the FIFO, the
+//! builds without channels or hand wheel, and host reads of the encoder bank's store
+//! (a read granted in the visited channel's slot stalls the shared decoder).
 
 mod host;
 
@@ -109,10 +110,17 @@ fn a_jogged_axis_read_back_by_an_encoder_lands_on_the_wheel_target() {
     bench.clock(2);
     assert_eq!(bench.reg(ps::ADDR), ps::ARMED.mask());
     let t = bench.since_reset;
+    // The probe is sampled at slot 0 of the bank's sampling rounds: with ENC_PRESCALE 0
+    // every round, every S = 4 clocks (no reads stall it here).
+    assert_eq!(get(&bench, regs::enc_prescale::ADDR, regs::enc_prescale::PRESCALE), 0);
+    let slots = bench.top.encoders().slots() as u64;
+    let slot_at_raw = (bench.top.encoders().slot() as u64 + 2) % slots;
     bench.pins.probe_pin = true;
     bench.clock(10);
-    // 2 synchroniser clocks and 1 sample: active, and the event, in cycle t + 3.
-    assert_eq!(get(&bench, regs::probe_time::ADDR, regs::probe_time::CLOCKS), t as u32 + 3);
+    // 2 synchroniser clocks, the next sample, and the event in the cycle after it.
+    let event = t + 2 + (slots - slot_at_raw) % slots + 1;
+    assert!((t + 3..=t + 2 + slots).contains(&event));
+    assert_eq!(get(&bench, regs::probe_time::ADDR, regs::probe_time::CLOCKS), event as u32);
     assert_eq!(bench.reg(ps::ADDR), ps::SEEN.mask() | ps::ACTIVE.mask());
     assert_eq!(get(&bench, regs::probe_position::addr(0), regs::probe_position::STEPS), 3);
     assert_eq!(get(&bench, regs::enc_probe_latch::addr(0), regs::enc_probe_latch::VALUE), 3);
@@ -262,4 +270,55 @@ fn builds_without_channels_or_hand_wheel_read_zero_there() {
     assert_eq!(bench.reg(regs::mpg_count::ADDR), 0);
     assert_eq!(get(&bench, regs::status::ADDR, regs::status::JOG_ENGAGED), 0);
     assert_eq!(get(&bench, regs::status::ADDR, regs::status::RUNNING), 0);
+}
+
+#[test]
+fn reads_of_the_visited_channel_stall_it_and_read_the_copies() {
+    use finestep_model::encoder_bank::store_channel;
+    use finestep_model::register_file::arbitrate;
+    let mut bench = Bench::new(TopParams::default());
+    bench.clock(10);
+    let moves = [3i64, -2, 7, 1];
+    for (c, &edges) in moves.iter().enumerate() {
+        let mut phase = 0;
+        turn_encoder(&mut bench, c, &mut phase, edges, 4);
+    }
+    bench.clock(8);
+    let spi = SpiMaster::default();
+    let mut tx = vec![CMD_READ, regs::enc_count::ADDR, 16];
+    tx.resize(3 + 4 * 16 + 2, 0);
+    let wave = spi.waveform(&tx, None);
+    let mut stalls = 0;
+    // Every alignment of the frame's reads with the bank's slots.
+    for offset in 0..8 {
+        bench.clock(offset);
+        let mut miso = Vec::new();
+        for (cycle, &(cs_n, sck, mosi)) in wave.pins.iter().enumerate() {
+            (bench.pins.spi_cs_n, bench.pins.spi_sck, bench.pins.spi_mosi) = (cs_n, sck, mosi);
+            if wave.samples.contains(&cycle) {
+                miso.push(bench.top.outputs().spi_miso);
+            }
+            let top = &bench.top;
+            let grant = arbitrate(top.spi_frame().request(), top.parallel().request());
+            let bank = top.encoders();
+            let (slot, slots) = (bank.slot(), bank.slots());
+            let read = grant.filter(|(_, r)| !r.write).map(|(_, r)| r.addr);
+            let stall = read.and_then(|addr| store_channel(addr, bank.n_enc())) == Some(slot);
+            assert_eq!(bank.stall(read), stall);
+            bench.clock(1);
+            let next = if stall { slot } else { (slot + 1) % slots };
+            assert_eq!(bench.top.encoders().slot(), next, "offset {offset} cycle {cycle}");
+            stalls += usize::from(stall);
+        }
+        let rx = bits_to_bytes(&miso);
+        let words: Vec<u32> = rx[3..3 + 64].chunks(4).map(|w| u32::from_be_bytes([w[0], w[1], w[2], w[3]])).collect();
+        for (c, &edges) in moves.iter().enumerate() {
+            let channel = bench.top.encoders().channel(c);
+            assert_eq!(words[c] as i32, edges as i32, "ENC_COUNT[{c}]");
+            assert_eq!((words[4 + c], words[8 + c]), (0, 0), "ENC_INDEX_LATCH, ENC_PROBE_LATCH [{c}]");
+            assert_eq!(words[12 + c], channel.edge_time(), "ENC_EDGE_TIME[{c}]");
+            assert!(channel.edge_time() > 10);
+        }
+    }
+    assert!(stalls > 0, "no read met its channel's slot");
 }
