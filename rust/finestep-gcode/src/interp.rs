@@ -184,9 +184,10 @@ enum Group {
     ToolChange,  // M group 6: M6 M61
     Spindle,     // M group 7: M3 M4 M5
     Coolant,     // M group 8: M7 M8 M9
+    ModalState,  // M group 10: M70 M71 M72 M73
 }
 
-const GROUPS: usize = 16;
+const GROUPS: usize = 17;
 
 /// The canned cycles implemented (in tenths).
 const CYCLES: [Code; 6] = [730, 810, 820, 830, 850, 890];
@@ -216,6 +217,7 @@ fn m_group(code: u32) -> Option<Group> {
         6 | 61 => Group::ToolChange,
         3..=5 => Group::Spindle,
         7..=9 => Group::Coolant,
+        70..=73 => Group::ModalState,
         _ => return None,
     })
 }
@@ -250,7 +252,6 @@ fn m_unsupported(value: f64) -> String {
         48..=53 => "override switches are not implemented yet",
         60 => "pallet shuttle is not implemented",
         62..=68 => "digital and analog I/O is not implemented yet",
-        70..=73 => "saving and restoring modal state is not implemented yet",
         100..=199 => "user M-codes run external programs, which finestep does not",
         _ => "not an M-code finestep implements",
     };
@@ -374,9 +375,81 @@ pub(crate) struct Executed {
     pub n: Option<u32>,
     pub kinds: Vec<BlockKind>,
     pub end: bool,
+    /// M70-M73: what the block does with the saved modal state (for the caller, which
+    /// keeps one per call level).
+    pub modal: Option<ModalOp>,
+}
+
+/// M70 (save), M71 (forget), M72 (restore), M73 (save, restored when the subroutine
+/// returns).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ModalOp {
+    Save,
+    Forget,
+    Restore,
+    SaveUntilReturn,
+}
+
+/// The modal state M70/M73 save and M72 restores (LinuxCNC's list, as far as finestep
+/// has it): units, plane, distance modes, feed, speed, spindle, coolant, path control,
+/// retract mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Modal {
+    inches: bool,
+    plane: Plane,
+    incremental: bool,
+    arc_incremental: bool,
+    feed_mm_per_min: Option<f64>,
+    rpm: f64,
+    rotation: SpindleRotation,
+    mist: bool,
+    flood: bool,
+    path: PathControl,
+    retract_to_r: bool,
 }
 
 impl State {
+    /// The modal state M70/M73 save.
+    pub(crate) fn save_modal(&self) -> Modal {
+        Modal {
+            inches: self.inches,
+            plane: self.plane,
+            incremental: self.incremental,
+            arc_incremental: self.arc_incremental,
+            feed_mm_per_min: self.feed_mm_per_min,
+            rpm: self.rpm,
+            rotation: self.rotation,
+            mist: self.mist,
+            flood: self.flood,
+            path: self.path,
+            retract_to_r: self.retract_to_r,
+        }
+    }
+
+    /// M72 (or a return after M73): the saved modal state back, with the blocks that
+    /// change the machine (spindle, coolant, path control) where it differs.
+    pub(crate) fn restore_modal(&mut self, saved: &Modal) -> Vec<BlockKind> {
+        let mut kinds = Vec::new();
+        if (saved.rotation, saved.rpm) != (self.rotation, self.rpm) {
+            kinds.push(BlockKind::Spindle { rotation: saved.rotation, rpm: saved.rpm });
+        }
+        if (saved.mist, saved.flood) != (self.mist, self.flood) {
+            kinds.push(BlockKind::Coolant { mist: saved.mist, flood: saved.flood });
+        }
+        if saved.path != self.path {
+            kinds.push(BlockKind::PathControl(saved.path));
+        }
+        self.inches = saved.inches;
+        self.plane = saved.plane;
+        self.incremental = saved.incremental;
+        self.arc_incremental = saved.arc_incremental;
+        self.feed_mm_per_min = saved.feed_mm_per_min;
+        (self.rpm, self.rotation, self.mist, self.flood) = (saved.rpm, saved.rotation, saved.mist, saved.flood);
+        self.path = saved.path;
+        self.retract_to_r = saved.retract_to_r;
+        kinds
+    }
+
     /// `#n` (1 <= n <= 5601), with the predefined ones computed from the state.
     pub(crate) fn parameter(&self, n: usize) -> f64 {
         let user = |axis: usize, mm: f64| if axis < 3 { mm / self.machine_unit_mm } else { mm };
@@ -891,7 +964,13 @@ impl State {
                 end = true;
             }
         }
-        Ok(Executed { n: w.n, kinds, end })
+        let modal = w.group(Group::ModalState).map(|(code, _)| match code {
+            700 => ModalOp::Save,
+            710 => ModalOp::Forget,
+            720 => ModalOp::Restore,
+            _ => ModalOp::SaveUntilReturn,
+        });
+        Ok(Executed { n: w.n, kinds, end, modal })
     }
 
     /// A line inside an open NURBS block: `X- Y- <P->` adds a control point; nothing
@@ -925,7 +1004,7 @@ impl State {
                 }
             }
         }
-        Ok(Executed { n: w.n, kinds: Vec::new(), end: false })
+        Ok(Executed { n: w.n, kinds: Vec::new(), end: false, modal: None })
     }
 
     /// A control point's X and Y in mm: absolute, or in G91 relative to the start of the

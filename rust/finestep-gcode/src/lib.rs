@@ -41,15 +41,28 @@
 //!   call, the value in `#<_value>`), `if`/`elseif`/`else`/`endif`, `while`/`endwhile`,
 //!   `do`/`while`, `repeat`/`endrepeat`, `break`/`continue`; `o<name> call` of a
 //!   subroutine the file does not define loads `name.ngc` from the program's folder or
-//!   [`Options::subroutine_path`]. At most [`MAX_CALL_DEPTH`] nested calls and
-//!   [`MAX_ITERATIONS`] loop passes and calls in all.
-//! - G0 G1 G2 G3 G4 G5.2 G5.3 G17 G18 G19 G20 G21 G40 G41 G42 G61 G64 G90 G91 G90.1
-//!   G91.1; M0 M2 M3 M4 M5 M6 M7 M8 M9 M30; F S T D P R I J K L; axes X Y Z A. Anything
-//!   else is an error (`unsupported G-code G33`, `unknown word Q`).
+//!   [`Options::subroutine_path`]. At most [`MAX_CALL_DEPTH`] nested calls,
+//!   [`MAX_ITERATIONS`] loop passes and calls in all, and [`MAX_REPEATED_LINES`] lines
+//!   run again by loops and calls (each an error at the line that reaches it).
+//! - G0 G1 G2 G3 G4 G5.2 G5.3 G10 L1/L2/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G40
+//!   G41 G42 G43 G43.1 G49 G53 G54-G59.3 G61 G64 G73 G80 G81 G82 G83 G85 G89 G90 G91
+//!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G94 G98 G99; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
+//!   M61 M70 M71 M72 M73; F S T D H P Q R I J K L; axes X Y Z A. What LinuxCNC has
+//!   beyond that is refused as `unsupported: <what> (<why>)` at its word (`unsupported:
+//!   G33 (spindle-synchronised motion ...)`, `unsupported: axis B (...)`); other letters
+//!   as `unknown word E`.
+//! - Positions come out in the machine frame: the program's coordinates through the G92
+//!   offset, the XY rotation (G10 L2 R), the G54-G59.3 offset and the tool length
+//!   offset (G43), as LinuxCNC's canonical layer applies them. The offset parameters
+//!   (#5161-#5389) are in [`Options::machine_unit_mm`] and act when a code loads them.
+//! - Canned cycles in G17 with G98/G99 (G99 at the start, as rs274), L repeats, R Z P Q
+//!   kept while the cycle stays the motion mode; M70/M73 save and M72 (or the return
+//!   after M73) restores units, plane, distance modes, feed, speed, spindle, coolant,
+//!   path control and retract mode.
 //! - NURBS blocks (G5.2 ... G5.3, G17 only): see [`BlockKind::Nurbs`].
 //! - Execution order in a block is LinuxCNC's: F, S, T, M6 (which stops the spindle),
 //!   M3-M5, M7-M9, G4, G17-G19, G20/G21, G40-G42, G61/G64, G90/G91, motion, M0/M2/M30.
-//! - Start state: G17 G21 G90 G91.1 G40 G64, no motion mode, at the origin, no feed
+//! - Start state: G17 G21 G90 G91.1 G40 G49 G54 G64 G80 G94 G99, no motion mode, at the origin, no feed
 //!   rate, spindle off at 0 rpm, coolant off, tool 0.
 //!
 //! See [`BlockKind`] for what each block means and [`GcodeError`] for the error format.
@@ -64,7 +77,7 @@ mod program;
 use std::path::Path;
 
 pub use error::GcodeError;
-pub use program::{MAX_CALL_DEPTH, MAX_ITERATIONS};
+pub use program::{MAX_CALL_DEPTH, MAX_ITERATIONS, MAX_REPEATED_LINES};
 
 /// A position: named axis fields whose names carry their units. Linear axes are in
 /// millimetres, the rotary axis A in degrees.

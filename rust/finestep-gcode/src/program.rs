@@ -7,13 +7,16 @@ use std::path::{Path, PathBuf};
 
 use crate::error::LineError;
 use crate::expr::{parameter_index, Params};
-use crate::interp::State;
+use crate::interp::{Modal, ModalOp, State};
 use crate::lexer::{lex_into, lex_line_into, Line, OKind, OWord, Target, Word};
 use crate::{Block, GcodeError, Options, Program};
 
 /// Loop iterations (backward jumps) and subroutine calls a program may make in all
 /// before it is refused as running away (`while` without end).
 pub const MAX_ITERATIONS: u64 = 1_000_000;
+/// Lines a program may execute beyond one pass over its files (lines that loops and
+/// calls run again), so that no program interprets for long (about a second).
+pub const MAX_REPEATED_LINES: u64 = 1_000_000;
 /// Subroutine calls nest at most this deep (LinuxCNC's limit).
 pub const MAX_CALL_DEPTH: usize = 10;
 /// Subroutine parameters #1-#30 are saved around a call.
@@ -204,11 +207,14 @@ struct Frame {
     source: usize,
     pc: usize,
     /// The caller's #1-#30.
-    saved: Option<[f64; SUB_PARAMS]>,
+    params_saved: Option<[f64; SUB_PARAMS]>,
     /// Named parameters without a leading `_`.
     locals: HashMap<Box<str>, f64>,
     /// Remaining passes of the `repeat` loops open in this frame, by entry.
     repeats: HashMap<usize, u64>,
+    /// The modal state M70 saved at this level, and whether M73 saved it (restored on
+    /// return).
+    saved: Option<(Modal, bool)>,
 }
 
 /// The parameters a block reads: numbered ones from the state, named ones from the
@@ -244,6 +250,9 @@ struct Runner<'o> {
     state: State,
     blocks: Vec<Block>,
     iterations: u64,
+    /// Lines executed so far, and how many the files hold.
+    executed: u64,
+    lines_held: u64,
     options: &'o Options,
     /// The main program's folder, searched first for subroutine files.
     folder: Option<PathBuf>,
@@ -274,11 +283,20 @@ pub(crate) fn run(
     let main = Source::new(text, file_name);
     let mut runner = Runner {
         sources: vec![main],
-        frames: vec![Frame { source: 0, pc: 0, saved: None, locals: HashMap::new(), repeats: HashMap::new() }],
+        frames: vec![Frame {
+            source: 0,
+            pc: 0,
+            params_saved: None,
+            locals: HashMap::new(),
+            repeats: HashMap::new(),
+            saved: None,
+        }],
         globals: HashMap::new(),
         state: State::default(),
         blocks: Vec::new(),
         iterations: 0,
+        executed: 0,
+        lines_held: 0,
         options,
         folder: folder.map(Path::to_path_buf),
         line: Line::default(),
@@ -286,6 +304,7 @@ pub(crate) fn run(
         chars: Vec::new(),
         columns: Vec::new(),
     };
+    runner.lines_held = runner.sources[0].entries.len() as u64;
     runner.state.set_tools(&options.tools);
     runner.state.set_machine_unit(options.machine_unit_mm);
     if runner.sources[0].entries.is_empty() {
@@ -336,6 +355,23 @@ impl Runner<'_> {
                 None => false,
             };
             self.state.line = entry.line;
+            self.executed += 1;
+            if self.executed > self.lines_held + MAX_REPEATED_LINES {
+                let column = entry
+                    .lexed
+                    .as_ref()
+                    .and_then(|l| l.as_ref().ok())
+                    .and_then(|l| l.oword.as_ref())
+                    .map_or(1, |o| o.column);
+                return Err(located(
+                    source,
+                    pc,
+                    LineError::new(
+                        column,
+                        format!("execution limit reached: loops and calls ran {MAX_REPEATED_LINES} lines again (a loop that never ends?)"),
+                    ),
+                ));
+            }
             let step = if is_oword { self.oword(s, pc) } else { self.block(s, pc) };
             match step {
                 Ok(true) => {}
@@ -421,6 +457,22 @@ impl Runner<'_> {
         let executed = executed?;
         let line = self.state.line;
         self.blocks.extend(executed.kinds.into_iter().map(|kind| Block { line, n: executed.n, kind }));
+        if let Some(op) = executed.modal {
+            // M70/M73 save the state as the block leaves it; M72 restores at its end.
+            let frame = self.frames.last_mut().expect("frame");
+            match op {
+                ModalOp::Save => frame.saved = Some((self.state.save_modal(), false)),
+                ModalOp::SaveUntilReturn => frame.saved = Some((self.state.save_modal(), true)),
+                ModalOp::Forget => frame.saved = None,
+                ModalOp::Restore => {
+                    let (modal, _) = frame
+                        .saved
+                        .ok_or_else(|| LineError::new(1, "M72 with no state saved by M70 at this call level"))?;
+                    let kinds = self.state.restore_modal(&modal);
+                    self.blocks.extend(kinds.into_iter().map(|kind| Block { line, n: executed.n, kind }));
+                }
+            }
+        }
         Ok(!executed.end)
     }
 
@@ -453,10 +505,15 @@ impl Runner<'_> {
                     return Err(LineError::new(column, format!("o{} return outside a subroutine", o.label)));
                 }
                 let frame = self.frames.pop().expect("frame");
-                if let Some(saved) = frame.saved {
+                if let Some(saved) = frame.params_saved {
                     for (i, v) in saved.iter().enumerate() {
                         self.state.set_parameter(i + 1, *v);
                     }
+                }
+                if let Some((modal, true)) = frame.saved {
+                    let line = self.state.line;
+                    let kinds = self.state.restore_modal(&modal);
+                    self.blocks.extend(kinds.into_iter().map(|kind| Block { line, n: None, kind }));
                 }
                 match values.first() {
                     Some(&v) => {
@@ -593,9 +650,10 @@ impl Runner<'_> {
         self.frames.push(Frame {
             source: s,
             pc: entry + 1,
-            saved: Some(saved),
+            params_saved: Some(saved),
             locals: HashMap::new(),
             repeats: HashMap::new(),
+            saved: None,
         });
         Ok(())
     }
@@ -617,6 +675,7 @@ impl Runner<'_> {
             if let Ok(bytes) = std::fs::read(&path) {
                 let source = Source::new(&String::from_utf8_lossy(&bytes), &path.display().to_string());
                 let entry = source.subs.get(&o.label).copied();
+                self.lines_held += source.entries.len() as u64;
                 self.sources.push(source);
                 let s = self.sources.len() - 1;
                 return entry.map(|e| (s, e)).ok_or_else(|| {

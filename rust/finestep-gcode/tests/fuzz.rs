@@ -257,3 +257,132 @@ fn nurbs_notations_agree() {
         })
         .unwrap();
 }
+
+/// Lines of the LinuxCNC dialect: O-word statements on a few labels, parameter
+/// assignments, expressions, subroutine calls, coordinate systems, offsets and cycles.
+fn dialect_line() -> impl Strategy<Value = String> {
+    let label = prop::sample::select(vec!["o1", "o2", "o<s>", "o3"]);
+    let keyword = prop::sample::select(vec![
+        "sub",
+        "endsub",
+        "call [1] [2]",
+        "return [#1]",
+        "if [#1 GT 2]",
+        "elseif [#2]",
+        "else",
+        "endif",
+        "while [#1 LT 5]",
+        "while [1]",
+        "endwhile",
+        "do",
+        "repeat [3]",
+        "endrepeat",
+        "break",
+        "continue",
+        "call",
+        "repeat [99999999]",
+    ]);
+    let oword = (label, keyword).prop_map(|(l, k)| format!("{l} {k}"));
+    let value = prop::sample::select(vec![
+        "1",
+        "-2.5",
+        "#1",
+        "#<a>",
+        "#<_g>",
+        "[#1 + 1]",
+        "[#2 * -3 MOD 4]",
+        "[1 / #3]",
+        "sqrt[#1]",
+        "atan[#1]/[2]",
+        "[2 ** #1]",
+        "##1",
+        "#5221",
+        "#5420",
+        "#<_x>",
+        "[exists[#<a>]]",
+        "ln[#2]",
+        "[#1 EQ 1 OR #2]",
+    ]);
+    let assign =
+        (prop::sample::select(vec!["#1", "#2", "#3", "#<a>", "#<_g>", "#5221", "#5211", "#[#1]"]), value.clone())
+            .prop_map(|(p, v)| format!("{p} = {v}"));
+    let code = prop::sample::select(vec![
+        "G0",
+        "G1",
+        "G2",
+        "G3",
+        "G4",
+        "G10 L2 P1",
+        "G10 L20 P2",
+        "G10 L1 P1",
+        "G28",
+        "G28.1",
+        "G30",
+        "G43 H1",
+        "G43.1",
+        "G49",
+        "G53 G0",
+        "G54",
+        "G55",
+        "G59.3",
+        "G80",
+        "G81",
+        "G82",
+        "G83",
+        "G73",
+        "G85",
+        "G89",
+        "G92",
+        "G92.1",
+        "G92.2",
+        "G92.3",
+        "G98",
+        "G99",
+        "G91",
+        "G90",
+        "G20",
+        "G21",
+        "M1",
+        "M61 Q1",
+        "M6 T1",
+        "F100",
+    ])
+    .prop_map(str::to_string);
+    let letter = prop::sample::select("XYZAIJKRPQLFHS".chars().collect::<Vec<_>>());
+    let word = (letter, value).prop_map(|(l, v)| format!("{l}{v}"));
+    let block = proptest::collection::vec(prop_oneof![1 => code, 3 => word], 0..6).prop_map(|w| w.join(" "));
+    prop_oneof![2 => oword, 2 => assign, 4 => block]
+}
+
+/// Random programs of the dialect never panic, every error is located, and none
+/// interprets for more than a second (runaway loops hit the iteration limits).
+#[test]
+fn dialect_soup_never_panics_or_hangs() {
+    let mut runner = finestep_testkit::runner("dialect_soup_never_panics_or_hangs", 3000);
+    runner
+        .run(&proptest::collection::vec(dialect_line(), 0..16), |lines| {
+            let source = lines.join("\n");
+            let start = std::time::Instant::now();
+            let result = parse_str(&source, "fuzz.ngc");
+            let took = start.elapsed().as_secs_f64();
+            prop_assert!(took < 1.0, "{took:.2} s for\n{source}");
+            check_location(&source, &result)
+        })
+        .unwrap();
+}
+
+#[test]
+fn runaway_loops_stop_with_a_clear_error() {
+    for (source, message) in [
+        ("o1 while [1]\no1 endwhile\n", "limit reached"),
+        ("o1 while [1]\nG0 X1\no1 endwhile\n", "limit reached"),
+        ("#1 = 0\no1 do\n#1 = [#1 + 1]\no1 while [1]\n", "limit reached"),
+        ("o1 repeat [1000000000]\n#2 = 1\n#3 = 2\n#4 = 3\n#5 = 4\no1 endrepeat\n", "execution limit reached"),
+        ("o1 sub\no1 call\no1 endsub\no1 call\n", "2:1: subroutine calls nest more than 10 deep"),
+    ] {
+        let start = std::time::Instant::now();
+        let err = parse_str(source, "loop.ngc").unwrap_err().to_string();
+        assert!(err.contains(message), "{source:?}: {err}");
+        assert!(start.elapsed().as_secs_f64() < 2.0, "{source:?} took {:?}", start.elapsed());
+    }
+}
