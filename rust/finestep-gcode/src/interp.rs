@@ -176,6 +176,8 @@ enum Group {
     Units,       // G group 6: G20 G21
     Comp,        // G group 7: G40 G41 G42
     FeedMode,    // G group 5: G94
+    SpindleMode, // G group 14: G97
+    LatheMode,   // G group 15: G8
     ToolLength,  // G group 8: G43 G43.1 G49
     ReturnMode,  // G group 10: G98 G99
     Coord,       // G group 12: G54-G59.3
@@ -187,7 +189,7 @@ enum Group {
     ModalState,  // M group 10: M70 M71 M72 M73
 }
 
-const GROUPS: usize = 17;
+const GROUPS: usize = 19;
 
 /// The canned cycles implemented (in tenths).
 const CYCLES: [Code; 6] = [730, 810, 820, 830, 850, 890];
@@ -197,8 +199,11 @@ fn g_group(code: Code) -> Option<Group> {
         40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
         0 | 10 | 20 | 30 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 890 => Group::Motion,
         430 | 431 | 490 => Group::ToolLength,
-        // G94 (units per minute) is the only feed mode and always in force.
+        // G94 (units per minute) is the only feed mode and always in force; likewise G97
+        // (spindle in rpm) and G8 (lathe radius mode).
         940 => Group::FeedMode,
+        970 => Group::SpindleMode,
+        80 => Group::LatheMode,
         980 | 990 => Group::ReturnMode,
         540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => Group::Coord,
         170 | 180 | 190 => Group::Plane,
@@ -230,7 +235,7 @@ fn g_unsupported(value: f64) -> String {
             "spindle-synchronised motion needs the spindle feedback finestep does not have yet"
         }
         382..=385 => "probing needs a probe input, which finestep does not read",
-        70 | 80 => "lathe diameter/radius mode is not implemented yet",
+        70 => "lathe diameter mode is not implemented yet",
         50 | 51 => "G5/G5.1 splines are not implemented yet (G5.2/G5.3 NURBS are)",
         411 | 421 => "dynamic cutter compensation is not implemented yet",
         432 => "G43.2 is not implemented yet",
@@ -239,7 +244,7 @@ fn g_unsupported(value: f64) -> String {
         610 if false => "",
         611 => "G61.1 is not implemented yet",
         930 | 950 => "inverse-time and per-revolution feed are not implemented yet",
-        960 | 970 => "constant surface speed is not implemented yet",
+        960 => "constant surface speed is not implemented yet",
         _ => "not a G-code finestep implements",
     };
     format!("unsupported: G{value} ({why})")
