@@ -104,7 +104,9 @@ fn ini(joints: &[Joint], config: &MachineConfig, period_s: f64, display: &str, n
          MAX_FEED_OVERRIDE = 1.0\n\n\
          [TASK]\nTASK = milltask\nCYCLE_TIME = 0.010\n\n\
          [RS274NGC]\nPARAMETER_FILE = finestep.var\n\n\
-         [EMCMOT]\nEMCMOT = motmod\nCOMM_TIMEOUT = 1.0\nSERVO_PERIOD = {servo_ns}\n\n\
+         [EMCMOT]\nEMCMOT = motmod\n\
+         # A simulated chip's servo period can take a second of wall time on a loaded machine.\n\
+         COMM_TIMEOUT = 10.0\nSERVO_PERIOD = {servo_ns}\n\n\
          [EMCIO]\nEMCIO = io\nCYCLE_TIME = 0.100\nTOOL_TABLE = tool.tbl\n\n\
          [HAL]\nHALFILE = finestep.hal\n{record_line}\n\
          [TRAJ]\nCOORDINATES = {coordinates}\nLINEAR_UNITS = mm\nANGULAR_UNITS = degree\n\
