@@ -277,7 +277,7 @@ fn as_u32(value: f64) -> Option<u32> {
 }
 
 /// The parameter letters a block may carry once each (besides G, M and N).
-const PARAMS: &str = "ADFHIJKLPQRSTXYZ";
+const PARAMS: &str = "ADFHIJKLPQRSTXYZ@^";
 const AXES: [char; 4] = ['X', 'Y', 'Z', 'A'];
 
 /// The words of one block, sorted by meaning.
@@ -287,7 +287,7 @@ struct Words {
     /// Per group: the code and its column. The coolant group may hold M7 and M8.
     groups: [Option<(Code, usize)>; GROUPS],
     mist_and_flood: Option<usize>,
-    params: [Option<(f64, usize)>; 26],
+    params: [Option<(f64, usize)>; 28],
 }
 
 impl Words {
@@ -302,8 +302,13 @@ impl Words {
     }
 }
 
+/// The slot of a parameter letter: A-Z, then the polar words `@` (26) and `^` (27).
 fn letter_index(letter: char) -> usize {
-    (letter as usize).wrapping_sub('A' as usize)
+    match letter {
+        '@' => 26,
+        '^' => 27,
+        l => (l as usize).wrapping_sub('A' as usize),
+    }
 }
 
 fn sort_words(words: &[Word]) -> Result<Words, LineError> {
@@ -623,7 +628,16 @@ impl State {
         // What will move, to check that every parameter word has a user.
         let motion = w.group(Group::Motion).map(|(c, _)| c).or(self.motion);
         let non_modal = w.group(Group::NonModal).map(|(c, _)| c);
-        let first_axis = AXES.iter().filter_map(|&l| w.param(l)).map(|(_, c)| c).min();
+        let first_axis = AXES.iter().chain(&['@', '^']).filter_map(|&l| w.param(l)).map(|(_, c)| c).min();
+        let polar = w.param('@').or(w.param('^'));
+        if let Some((_, column)) = polar {
+            if let Some((_, c)) = w.param('X').or(w.param('Y')) {
+                return Err(LineError::new(c.max(column), "X or Y with polar coordinates @ ^ in one block"));
+            }
+            if self.plane != Plane::Xy {
+                return Err(LineError::new(column, "polar coordinates @ ^ are for the G17 (XY) plane"));
+            }
+        }
         // G10, G28, G30, G92 and G43.1 take the axis words themselves.
         let axes_taken = matches!(non_modal, Some(100 | 280 | 300 | 920)) || w.has(Group::ToolLength, 431);
         let moving = first_axis.is_some() && !axes_taken;
@@ -1105,16 +1119,48 @@ impl State {
     /// from `from` (the current position in the program frame).
     fn target(&self, w: &Words, from: [f64; 4]) -> Result<[f64; 4], LineError> {
         let mut to = from;
+        self.apply_xy(w, &mut to);
         for (axis, &letter) in AXES.iter().enumerate() {
             if let Some((value, column)) = w.param(letter) {
-                let value = if letter == 'A' { value } else { self.length_mm(value) };
-                to[axis] = if self.incremental { to[axis] + value } else { value };
+                if axis != 0 && axis != 1 {
+                    let value = if letter == 'A' { value } else { self.length_mm(value) };
+                    to[axis] = if self.incremental { to[axis] + value } else { value };
+                }
                 if to[axis].abs() > MAX_POSITION {
                     return Err(LineError::new(column, "position out of range"));
                 }
             }
         }
+        if let Some((_, column)) = w.param('@').or(w.param('^')) {
+            if to[..2].iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
+                return Err(LineError::new(column, "position out of range"));
+            }
+        }
         Ok(to)
+    }
+
+    /// X and Y from the block's X Y words, or from its polar words `@` (radius) and `^`
+    /// (angle in degrees) around the program origin: in G90 each replaces the current
+    /// radius or angle, in G91 each adds to it (LinuxCNC's rule).
+    fn apply_xy(&self, w: &Words, p: &mut [f64; 4]) {
+        if w.param('@').is_some() || w.param('^').is_some() {
+            let (r, a) = (p[0].hypot(p[1]), p[1].atan2(p[0]).to_degrees());
+            let (r, a) = match (self.incremental, w.param('@'), w.param('^')) {
+                (false, at, caret) => (at.map_or(r, |(v, _)| self.length_mm(v)), caret.map_or(a, |(v, _)| v)),
+                (true, at, caret) => {
+                    (r + at.map_or(0.0, |(v, _)| self.length_mm(v)), a + caret.map_or(0.0, |(v, _)| v))
+                }
+            };
+            let (sin, cos) = a.to_radians().sin_cos();
+            (p[0], p[1]) = (r * cos, r * sin);
+            return;
+        }
+        for (axis, letter) in [(0, 'X'), (1, 'Y')] {
+            if let Some((v, _)) = w.param(letter) {
+                let v = self.length_mm(v);
+                p[axis] = if self.incremental { p[axis] + v } else { v };
+            }
+        }
     }
 
     /// The centre of an arc from the current position to `to`, and its extra turns.
@@ -1385,7 +1431,8 @@ impl State {
         let mut cur = self.to_program(self.position);
         let start_z = cur[2];
         let old_z = *self.cycle.old_z.get_or_insert(start_z);
-        let (r, z) = if self.incremental { (start_z + r_word, start_z + r_word + z_word) } else { (r_word, z_word) };
+        // In G91, R is relative to the Z the cycle began at (as rs274 does), Z to R.
+        let (r, z) = if self.incremental { (old_z + r_word, old_z + r_word + z_word) } else { (r_word, z_word) };
         if z > r {
             return Err(LineError::new(column, format!("{name} with Z above R")));
         }
@@ -1416,11 +1463,12 @@ impl State {
         }
         let clear = if self.retract_to_r { r } else { old_z.max(r) };
         for _ in 0..repeats {
-            for (axis, letter) in [(0, 'X'), (1, 'Y'), (3, 'A')] {
-                if let Some((v, _)) = w.param(letter) {
-                    let v = if letter == 'A' { v } else { self.length_mm(v) };
-                    cur[axis] = if self.incremental { cur[axis] + v } else { v };
-                }
+            self.apply_xy(w, &mut cur);
+            if let Some((v, _)) = w.param('A') {
+                cur[3] = if self.incremental { cur[3] + v } else { v };
+            }
+            if cur.iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
+                return Err(LineError::new(column, "position out of range"));
             }
             cur[2] = cur[2].max(clear);
             rapid(self, &mut out, cur);

@@ -206,8 +206,14 @@ pub(crate) fn lex_into(
                 let value = read_value(&mut s, What::Named("the parameter's value"), 0)?;
                 out.assigns.push(Assign { target, value, column });
             }
+            // The polar words: radius and angle.
             '@' | '^' => {
-                return Err(LineError::new(column, "unsupported: polar coordinates @ and ^ (not implemented yet)"))
+                if out.oword.is_some() {
+                    return Err(LineError::new(column, "nothing may follow an O-word statement on its line"));
+                }
+                s.i += 1;
+                let value = read_value(&mut s, What::Word(c), 0)?;
+                out.words.push(RawWord { letter: c, value, column });
             }
             c => return Err(LineError::new(column, format!("unexpected character {c:?}"))),
         }

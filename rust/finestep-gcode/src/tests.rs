@@ -261,7 +261,8 @@ fn every_error_message_with_its_place() {
         ("G0 X1.2.3", "1:5: bad number for word X"),
         ("G0 X12345678901234", "1:5: number out of range for word X"),
         ("N99999999999999 G0", "1:2: number out of range for word N"),
-        ("G0 X1 @", "1:7: unsupported: polar coordinates @ and ^ (not implemented yet)"),
+        ("G0 X1 @", "1:8: missing value for word @"),
+        ("G0 X1 @1", "1:7: X or Y with polar coordinates @ ^ in one block"),
         // Words.
         ("G0 X1 Q2", "1:7: Q word with no G73 or G83 to use it"),
         ("G0 X1 B2", "1:7: unsupported: axis B (finestep drives the axes X Y Z A)"),
