@@ -376,7 +376,8 @@ module encoder_bank #(
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(stall)) assert (slot_reg == $past(slot_reg));
         else assert (slot_reg == (($past(slot_reg) == LAST_SLOT) ? {CH_W{1'b0}} : $past(slot_reg) + CH_ONE));
-        if ($past(round_end)) assert (sampling_reg == ($past(presc_reg) == 16'd0));
+        if ($past(round_end)) assert (sampling_reg == ($past(presc_reg) == 16'd0) &&
+                                      presc_reg == (($past(presc_reg) == 16'd0) ? $past(prescale) : $past(presc_reg) - 16'd1));
         else assert (sampling_reg == $past(sampling_reg) && presc_reg == $past(presc_reg));
         // A copy asked for is taken at the channel's next visit: pending until then.
         if ($past(latch_now) && !($past(visit) && $past(ch_i) == 0)) assert (latch_pending_reg[0]);

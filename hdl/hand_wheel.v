@@ -146,6 +146,9 @@ module hand_wheel #(
         if (f_clean && primed_reg) assert (count_reg[1:0] == f_phase - f_phase0);
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        // Samples every PRESCALE + 1 clocks: a sample reloads PRESCALE, others count down.
+        if ($past(sample)) assert (presc_reg == $past(prescale));
+        else assert (presc_reg == $past(presc_reg) - 16'd1);
         assert (detents == $past(detents) || detents == $past(detents) + 32'd1 || detents == $past(detents) - 32'd1);
         cover (detents == 32'd1);
         cover (detents == 32'hFFFF_FFFF);
