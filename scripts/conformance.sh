@@ -20,7 +20,7 @@ for f in $(dpkg -L linuxcnc-uspace | grep -E '\.ngc$' | sort); do
     i=$((i + 1))
     o="$PWD/$out/rs274/$(printf '%03d' "$i").out"
     status=0
-    (cd "$(dirname "$f")" && timeout 10 rs274 -g -t "$OLDPWD/$table" "$f" > "$o" 2>/dev/null < /dev/null) || status=$?
+    (cd "$(dirname "$f")" && timeout 10 rs274 -g -t "$OLDPWD/$table" "$f" > "$o" 2> "$o.err" < /dev/null) || status=$?
     printf '%s\t%s\t%s\n' "$status" "$f" "$o" >> "$manifest"
 done
 cargo run --release -q -p finestep-cli -- conformance "$manifest" --out "$out" --tool-table "$table"

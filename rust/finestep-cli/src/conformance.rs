@@ -141,7 +141,9 @@ pub fn run(manifest: &Path, out: &Path, tool_table: Option<&Path>) -> anyhow::Re
             (None, _) => (Outcome::Crash, "panicked or timed out".to_string()),
             (Some(Err(e)), false) => (Outcome::BothRefuse, e),
             (Some(Ok(_)), false) => {
-                let why = theirs.lines().rev().find(|l| !l.trim().is_empty()).unwrap_or("").to_string();
+                // rs274 prints its error on standard error (kept beside its output).
+                let err = std::fs::read_to_string(format!("{rs274}.err")).unwrap_or_default();
+                let why = err.lines().find(|l| !l.trim().is_empty() && l.trim() != "executing").unwrap_or("?");
                 (Outcome::OnlyRs274Refuses, format!("rs274: {}", why.trim()))
             }
             (Some(Err(e)), true) if e.contains(": unsupported: ") => (Outcome::RefusedUnsupported, e),

@@ -28,7 +28,7 @@ const SUB_PARAMS: usize = 30;
 struct Entry {
     line: usize,
     text: std::ops::Range<usize>,
-    lexed: Option<Result<Line, LineError>>,
+    lexed: Option<Box<Result<Line, LineError>>>,
 }
 
 /// Whether a line holds anything outside comments, and whether an `O` stands there.
@@ -62,9 +62,9 @@ struct Links {
 }
 
 /// A lexed file with its O-word structure.
-struct Source {
+struct Source<'t> {
     name: String,
-    text: String,
+    text: std::borrow::Cow<'t, str>,
     entries: Vec<Entry>,
     links: Vec<Links>,
     /// A structure error found at an entry, raised if it is reached.
@@ -74,11 +74,11 @@ struct Source {
 }
 
 fn oword(entry: &Entry) -> Option<&OWord> {
-    entry.lexed.as_ref().and_then(|l| l.as_ref().ok()).and_then(|l| l.oword.as_ref())
+    entry.lexed.as_deref().and_then(|l| l.as_ref().ok()).and_then(|l| l.oword.as_ref())
 }
 
-impl Source {
-    fn new(text: &str, name: &str) -> Source {
+impl<'t> Source<'t> {
+    fn new(text: std::borrow::Cow<'t, str>, name: &str) -> Source<'t> {
         let mut entries = Vec::new();
         let mut seen_content = false;
         let (mut chars, mut columns) = (Vec::new(), Vec::new());
@@ -100,12 +100,12 @@ impl Source {
                 continue;
             }
             seen_content = true;
-            let lexed = o.then(|| lex_line_into(text, &mut chars, &mut columns));
+            let lexed = o.then(|| Box::new(lex_line_into(text, &mut chars, &mut columns)));
             entries.push(Entry { line: index + 1, text: range, lexed });
         }
         let mut source = Source {
             name: name.to_string(),
-            text: text.to_string(),
+            text,
             links: vec![Links::default(); entries.len()],
             broken: vec![None; entries.len()],
             entries,
@@ -243,8 +243,8 @@ impl Params for Scope<'_> {
     }
 }
 
-struct Runner<'o> {
-    sources: Vec<Source>,
+struct Runner<'o, 't> {
+    sources: Vec<Source<'t>>,
     frames: Vec<Frame>,
     globals: HashMap<Box<str>, f64>,
     state: State,
@@ -264,7 +264,7 @@ struct Runner<'o> {
 }
 
 /// An error at an entry of a source.
-fn located(source: &Source, entry: usize, e: LineError) -> GcodeError {
+fn located(source: &Source<'_>, entry: usize, e: LineError) -> GcodeError {
     GcodeError::Parse {
         file: source.name.clone(),
         line: source.entries.get(entry).map_or(0, |e| e.line),
@@ -280,7 +280,7 @@ pub(crate) fn run(
     folder: Option<&Path>,
     options: &Options,
 ) -> Result<Program, GcodeError> {
-    let main = Source::new(text, file_name);
+    let main = Source::new(std::borrow::Cow::Borrowed(text), file_name);
     let mut runner = Runner {
         sources: vec![main],
         frames: vec![Frame {
@@ -327,7 +327,7 @@ pub(crate) fn run(
     Ok(Program { blocks: runner.blocks })
 }
 
-impl Runner<'_> {
+impl Runner<'_, '_> {
     fn run(&mut self) -> Result<(), GcodeError> {
         loop {
             let frame = self.frames.last().expect("a frame");
@@ -344,7 +344,7 @@ impl Runner<'_> {
                 }
                 return Ok(());
             };
-            let is_oword = match &entry.lexed {
+            let is_oword = match entry.lexed.as_deref() {
                 Some(Ok(line)) => {
                     if let (Some(o), Some(message)) = (&line.oword, &source.broken[pc]) {
                         return Err(located(source, pc, LineError::new(o.column, message.clone())));
@@ -359,7 +359,7 @@ impl Runner<'_> {
             if self.executed > self.lines_held + MAX_REPEATED_LINES {
                 let column = entry
                     .lexed
-                    .as_ref()
+                    .as_deref()
                     .and_then(|l| l.as_ref().ok())
                     .and_then(|l| l.oword.as_ref())
                     .map_or(1, |o| o.column);
@@ -408,7 +408,7 @@ impl Runner<'_> {
         let mut words = std::mem::take(&mut self.words);
         words.clear();
         let entry = &self.sources[s].entries[pc];
-        let line = match &entry.lexed {
+        let line = match entry.lexed.as_deref() {
             Some(Ok(line)) => line,
             _ => {
                 let text = &self.sources[s].text[entry.text.clone()];
@@ -673,7 +673,8 @@ impl Runner<'_> {
         for dir in dirs {
             let path = dir.join(&file);
             if let Ok(bytes) = std::fs::read(&path) {
-                let source = Source::new(&String::from_utf8_lossy(&bytes), &path.display().to_string());
+                let text = String::from_utf8_lossy(&bytes).into_owned();
+                let source = Source::new(std::borrow::Cow::Owned(text), &path.display().to_string());
                 let entry = source.subs.get(&o.label).copied();
                 self.lines_held += source.entries.len() as u64;
                 self.sources.push(source);
