@@ -103,10 +103,10 @@ fi
 if [ -n "${FINESTEP_ESTOP_AFTER:-}" ]; then
     # LinuxCNC's E-stop pressed mid-program (linuxcnc/headless.py): checked up to the
     # stop, then no step after it and none beyond the command.
-    target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --expect-stop
+    target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --config "$config" --expect-stop
     exit 0
 fi
-target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns"
+target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --config "$config"
 # The same program planned by finestep's own planner under the same limits (the model's
 # fast path; its figure is the planned machining time).
 if target/release/finestep run --fast --config "$config" "$program" --out "$work/finestep-run" > "$work/finestep-run.log" 2>&1; then

@@ -248,8 +248,10 @@ pub struct CheckReport {
     pub disagreements: usize,
     /// Of those, the ones the chip's pulse latency explains: one step short in the
     /// direction of motion, the command having crossed that step's rounding point within
-    /// the last [`LATCH_LAG_CLOCKS`] clocks of the period (requested, not yet counted
-    /// when the boundary latched the positions).
+    /// the last `window` clocks of the period (requested, not yet counted when the
+    /// boundary latched the positions): [`LATCH_LAG_CLOCKS`], plus the longest the step
+    /// shaper may hold a request for the drive timing (a reversal's direction hold and
+    /// set-up) when the check knows the timing.
     pub in_flight: usize,
     /// Joint-periods whose recorded command lies within the recording's resolution of a
     /// rounding point (not decidable from the text; expected 0).
@@ -330,7 +332,13 @@ fn steps_of(scaled: f64, what: &str) -> anyhow::Result<Option<i64>> {
 /// bit per row): while the driver runs, row k's step count against row
 /// k - [`FEEDBACK_LAG_PERIODS`]'s command; after it stops (an E-stop), that no step
 /// follows and none went beyond the last two commands.
-pub fn check_text(text: &str, joints: usize, period_clocks: f64, file: &str) -> anyhow::Result<CheckReport> {
+pub fn check_text(
+    text: &str,
+    joints: usize,
+    period_clocks: f64,
+    window: f64,
+    file: &str,
+) -> anyhow::Result<CheckReport> {
     let rows = parse_rows(text, joints, file)?;
     let mut report = CheckReport::default();
     for window in rows.windows(2) {
@@ -368,7 +376,7 @@ pub fn check_text(text: &str, joints: usize, period_clocks: f64, file: &str) -> 
                 let sign = d.signum() as i64;
                 let point = (expected as f64 - 0.5 * sign as f64) * 65536.0;
                 let crossed = (point - start) / d * period_clocks;
-                if d != 0.0 && diff == -sign && period_clocks - crossed <= LATCH_LAG_CLOCKS {
+                if d != 0.0 && diff == -sign && period_clocks - crossed <= window {
                     report.in_flight += 1;
                 }
             }
@@ -408,11 +416,30 @@ pub fn check_text(text: &str, joints: usize, period_clocks: f64, file: &str) -> 
 /// `finestep-linuxcnc check SAMPLES --joints N [--expect-stop]`: prints the open-loop
 /// figures, fails on any disagreement or lost sample, on a step after a stop or beyond
 /// the command, and with `expect_stop` when the recording shows no stop.
-pub fn check(samples: &Path, joints: usize, period_ns: f64, expect_stop: bool) -> anyhow::Result<()> {
+pub fn check(
+    samples: &Path,
+    joints: usize,
+    period_ns: f64,
+    config_path: Option<&Path>,
+    expect_stop: bool,
+) -> anyhow::Result<()> {
     let name = samples.display().to_string();
     let text = std::fs::read_to_string(samples).with_context(|| format!("reading {name}"))?;
-    let period_clocks = period_ns * 1e-9 * f64::from(TopParams::default().clock_hz);
-    let report = check_text(&text, joints, period_clocks, &name)?;
+    let clock_hz = f64::from(TopParams::default().clock_hz);
+    let period_clocks = period_ns * 1e-9 * clock_hz;
+    // With the drive timing: the longest a requested step may wait in the step shaper
+    // (docs/spec/rated_rate.md: L + max(S, H + U) - 1 clocks, against the direction).
+    let hold = match config_path {
+        Some(path) => {
+            let config = MachineConfig::load(path)?;
+            let timing = finestep_interface::DriveTiming::from_ns(config.drive.to_array(), clock_hz, u32::MAX)
+                .with_context(|| format!("{}: drive timing", path.display()))?;
+            finestep_interface::rate::reversal_wait(&timing) as f64
+        }
+        None => 0.0,
+    };
+    let window = LATCH_LAG_CLOCKS + hold;
+    let report = check_text(&text, joints, period_clocks, window, &name)?;
     println!(
         "  open loop: {} servo periods, {} joint-periods compared ({} moving): {} disagreements \
          (step count vs commanded position quantised to steps, {} periods later; {} of them one step \
@@ -423,7 +450,7 @@ pub fn check(samples: &Path, joints: usize, period_ns: f64, expect_stop: bool) -
         report.disagreements,
         FEEDBACK_LAG_PERIODS,
         report.in_flight,
-        LATCH_LAG_CLOCKS,
+        window,
         report.worst,
         report.undecidable,
         report.lost
@@ -475,22 +502,22 @@ mod tests {
         // One joint at 800 steps/mm: 0.5 mm = 400 steps = 26 214 400 in 2^-16 steps.
         let text = "0 0.000000 0 1\n1 26214400.000000 0 1\n2 26214400.000000 0 1\n3 26214400.000000 400 1\n\
                     4 52428800.000000 400 1\n5 52428800.000000 400 1\n6 52428800.000000 799 1\n";
-        let report = check_text(text, 1, 50_000.0, "t").unwrap();
+        let report = check_text(text, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!((report.periods, report.disagreements, report.worst, report.lost), (5, 1, 1, 0));
         assert_eq!(report.first, Some((6, 0, 799, 800)));
         assert_eq!(report.in_flight, 0, "400 steps a period: the 800th crossed far from the end");
         assert_eq!(report.motion, Some((1, 4)));
         assert_eq!(report.stop, None);
         let gap = "0 0 0 1\n1 0 0 1\n3 0 0 1\n4 0 0 1\n5 0 0 1\n";
-        let report = check_text(gap, 1, 50_000.0, "t").unwrap();
+        let report = check_text(gap, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!((report.periods, report.lost), (1, 1));
-        let err = check_text("0 1.0 0\n", 1, 50_000.0, "s.txt").unwrap_err().to_string();
+        let err = check_text("0 1.0 0\n", 1, 50_000.0, 2.0, "s.txt").unwrap_err().to_string();
         assert_eq!(err, "s.txt:1: expected a sample number, 1 pairs and the running bit");
         // Half a step rounds up, as the DDA does: 32768 in 2^-16 steps is step 1.
-        let report = check_text("0 32768.0 0 1\n1 0 0 1\n2 0 1 1\n", 1, 50_000.0, "t").unwrap();
+        let report = check_text("0 32768.0 0 1\n1 0 0 1\n2 0 1 1\n", 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!(report.disagreements, 0);
         // Not running: nothing compared.
-        let report = check_text("0 655360 0 0\n1 655360 0 0\n2 655360 0 0\n", 1, 50_000.0, "t").unwrap();
+        let report = check_text("0 655360 0 0\n1 655360 0 0\n2 655360 0 0\n", 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!((report.periods, report.disagreements), (0, 0));
     }
 
@@ -502,15 +529,15 @@ mod tests {
         let row = |k: u64, steps: f64, count: i64| format!("{k} {} {count} 1\n", (steps * 65536.0).round());
         let text: String =
             [row(0, 100.0, 100), row(1, 117.50002, 100), row(2, 117.50002, 100), row(3, 117.50002, 117)].concat();
-        let report = check_text(&text, 1, 50_000.0, "t").unwrap();
+        let report = check_text(&text, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!((report.disagreements, report.in_flight), (1, 1));
         let text: String = [row(0, 100.0, 100), row(1, 117.6, 100), row(2, 117.6, 100), row(3, 117.6, 117)].concat();
-        let report = check_text(&text, 1, 50_000.0, "t").unwrap();
+        let report = check_text(&text, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!((report.disagreements, report.in_flight), (1, 0));
         // Moving down, one step short is one above.
         let text: String =
             [row(0, 100.0, 100), row(1, 82.49998, 100), row(2, 82.49998, 100), row(3, 82.49998, 83)].concat();
-        let report = check_text(&text, 1, 50_000.0, "t").unwrap();
+        let report = check_text(&text, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!((report.disagreements, report.in_flight), (1, 1));
     }
 
@@ -521,12 +548,12 @@ mod tests {
         let row = |k: u64, cmd: i64, count: i64, running: u8| format!("{k} {} {count} {running}\n", cmd * 65536);
         let text: String =
             [row(0, 10, 10, 1), row(1, 11, 10, 1), row(2, 12, 10, 1), row(3, 11, 11, 0), row(4, 11, 11, 0)].concat();
-        let report = check_text(&text, 1, 50_000.0, "t").unwrap();
+        let report = check_text(&text, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!(report.stop, Some(StopReport { sample: 3, steps_after: 0, beyond: 0 }));
         // A step after the stop, and one beyond the command.
         let text: String =
             [row(0, 10, 10, 1), row(1, 11, 10, 1), row(2, 12, 10, 1), row(3, 12, 11, 0), row(4, 12, 13, 0)].concat();
-        let report = check_text(&text, 1, 50_000.0, "t").unwrap();
+        let report = check_text(&text, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!(report.stop, Some(StopReport { sample: 3, steps_after: 0, beyond: 2 }));
         let text: String = [
             row(0, 10, 10, 1),
@@ -537,7 +564,7 @@ mod tests {
             row(5, 12, 11, 0),
         ]
         .concat();
-        let report = check_text(&text, 1, 50_000.0, "t").unwrap();
+        let report = check_text(&text, 1, 50_000.0, 2.0, "t").unwrap();
         assert_eq!(report.stop, Some(StopReport { sample: 3, steps_after: 1, beyond: 0 }));
     }
 

@@ -53,6 +53,10 @@ enum Command {
         /// The servo period (the INI's SERVO_PERIOD), ns.
         #[arg(long, default_value_t = 1_000_000.0)]
         period_ns: f64,
+        /// The machine configuration (TOML) of the run: its drive timing widens the window
+        /// in which a step counts as in flight at the latch by the step shaper's longest hold.
+        #[arg(long)]
+        config: Option<PathBuf>,
         /// The run was stopped (LinuxCNC's E-stop): fail unless the recording shows it.
         #[arg(long)]
         expect_stop: bool,
@@ -75,8 +79,8 @@ fn main() -> anyhow::Result<()> {
         Command::Config { config, bus, display, record, out } => {
             config::write(config.as_deref(), &bus, &display, &out, record)
         }
-        Command::Check { samples, joints, period_ns, expect_stop } => {
-            config::check(&samples, joints, period_ns, expect_stop)
+        Command::Check { samples, joints, period_ns, config, expect_stop } => {
+            config::check(&samples, joints, period_ns, config.as_deref(), expect_stop)
         }
         Command::Watchdog { socket, timeout_ns } => watchdog::run(&socket, timeout_ns),
     }
