@@ -72,10 +72,11 @@ pub enum Event {
         /// Spindle and coolant.
         machine: Machine,
     },
-    /// A NURBS (compared by its end point).
+    /// A NURBS (G5.1, G5.2/G5.3), compared by its end point where both sides know it:
+    /// rs274 prints `NURBS_FEED(3, ...)` without its control points.
     Nurbs {
-        /// End X Y Z A.
-        to: [f64; 4],
+        /// End X Y Z A, if known.
+        to: Option<[f64; 4]>,
     },
     /// A dwell.
     Dwell {
@@ -113,7 +114,8 @@ impl fmt::Display for Event {
             Event::Arc { to, centre, plane, turn, feed, machine } => {
                 write!(f, "ARC({}) centre ({}) G{plane} turn {turn} F{feed:.4} {}", p(to), p(centre), m(machine))
             }
-            Event::Nurbs { to } => write!(f, "NURBS({})", p(to)),
+            Event::Nurbs { to: Some(to) } => write!(f, "NURBS({})", p(to)),
+            Event::Nurbs { to: None } => write!(f, "NURBS(...)"),
             Event::Dwell { seconds } => write!(f, "DWELL({seconds:.4})"),
             Event::ToolChange { tool } => write!(f, "TOOL_CHANGE({tool})"),
             Event::Pause => write!(f, "PAUSE"),
@@ -147,7 +149,7 @@ pub fn events_of(program: &Program) -> Vec<Event> {
                 let turn = if *clockwise { -turns } else { turns };
                 events.push(Event::Arc { to: point(*to), centre, plane, turn, feed: *feed_mm_per_min, machine });
             }
-            BlockKind::Nurbs { to, .. } => events.push(Event::Nurbs { to: point(*to) }),
+            BlockKind::Nurbs { to, .. } => events.push(Event::Nurbs { to: Some(point(*to)) }),
             BlockKind::Dwell { seconds } => events.push(Event::Dwell { seconds: *seconds }),
             BlockKind::Spindle { rotation, rpm } => {
                 machine.rotation = match rotation {
@@ -350,7 +352,7 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
             "CHANGE_TOOL" => Some(Event::ToolChange { tool: nums()?.first().copied().unwrap_or(0.0) as u32 }),
             "PROGRAM_STOP" | "OPTIONAL_PROGRAM_STOP" => Some(Event::Pause),
             "PROGRAM_END" => Some(Event::End),
-            "NURBS_FEED" => Some(Event::Other(call.to_string())),
+            "NURBS_FEED" => Some(Event::Nurbs { to: None }),
             "STRAIGHT_PROBE" | "RIGID_TAP" | "START_SPEED_FEED_SYNCH" | "SPINDLE_RETRACT_TRAVERSE" => {
                 Some(Event::Other(call.to_string()))
             }
@@ -392,7 +394,8 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
                 && feed_ok(*fa, *fb)
                 && machine_close(ma, mb)
         }
-        (Event::Nurbs { to: a }, Event::Nurbs { to: b }) => close(a, b, tolerance),
+        (Event::Nurbs { to: Some(a) }, Event::Nurbs { to: Some(b) }) => close(a, b, tolerance),
+        (Event::Nurbs { .. }, Event::Nurbs { .. }) => true,
         (Event::Dwell { seconds: a }, Event::Dwell { seconds: b }) => (a - b).abs() <= 5e-5,
         (Event::ToolChange { tool: a }, Event::ToolChange { tool: b }) => a == b,
         (Event::Pause, Event::Pause) | (Event::End, Event::End) => true,
@@ -409,8 +412,13 @@ fn moving(events: &[Event], tolerance: impl Fn(usize) -> f64) -> Vec<(usize, &Ev
     for (i, e) in events.iter().enumerate() {
         let to = match e {
             Event::Traverse { to } | Event::Feed { to, .. } => Some(*to),
-            Event::Arc { to, .. } | Event::Nurbs { to } => {
+            Event::Arc { to, .. } | Event::Nurbs { to: Some(to) } => {
                 at = Some(*to);
+                out.push((i, e));
+                continue;
+            }
+            Event::Nurbs { to: None } => {
+                at = None;
                 out.push((i, e));
                 continue;
             }

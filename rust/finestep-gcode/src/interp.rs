@@ -197,7 +197,7 @@ const CYCLES: [Code; 6] = [730, 810, 820, 830, 850, 890];
 fn g_group(code: Code) -> Option<Group> {
     Some(match code {
         40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
-        0 | 10 | 20 | 30 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 890 => Group::Motion,
+        0 | 10 | 20 | 30 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 890 => Group::Motion,
         430 | 431 | 490 => Group::ToolLength,
         // G94 (units per minute) is the only feed mode and always in force; likewise G97
         // (spindle in rpm) and G8 (lathe radius mode).
@@ -236,7 +236,7 @@ fn g_unsupported(value: f64) -> String {
         }
         382..=385 => "probing needs a probe input, which finestep does not read",
         70 => "lathe diameter mode is not implemented yet",
-        50 | 51 => "G5/G5.1 splines are not implemented yet (G5.2/G5.3 NURBS are)",
+        50 => "G5 cubic splines are not implemented yet (G5.1, G5.2/G5.3 are)",
         411 | 421 => "dynamic cutter compensation is not implemented yet",
         432 => "G43.2 is not implemented yet",
         700..=720 => "lathe roughing cycles are not implemented yet",
@@ -657,8 +657,13 @@ impl State {
             let name = g_name(motion.unwrap_or(20));
             LineError::new(motion_column.unwrap_or(column), format!("{name} with no axis words"))
         };
+        // G5.1 is not modal in rs274: its I J need the G5.1 word in the block.
+        let spline_move = w.has(Group::Motion, 51) && moving;
         for letter in ['I', 'J', 'K'] {
             if let Some((_, column)) = w.param(letter) {
+                if spline_move && letter != 'K' {
+                    continue;
+                }
                 if arc_mode && !arc_move {
                     return Err(no_axes(column));
                 }
@@ -958,6 +963,12 @@ impl State {
                 self.motion = None;
             }
             Some((800, _)) => self.motion = None,
+            Some((51, column)) => {
+                if !moving {
+                    return Err(LineError::new(column, "G5.1 with no axis words"));
+                }
+                self.motion = Some(51);
+            }
             Some((code, _)) => self.motion = Some(code),
             None => {}
         }
@@ -967,6 +978,10 @@ impl State {
             if moving || full_circle {
                 if CYCLES.contains(&code) {
                     self.canned_cycle(&w, code, column, &mut kinds)?;
+                } else if code == 51 {
+                    kinds.push(self.quadratic_spline(&w, column)?);
+                    // Axis words alone do not continue a G5.1 (as in rs274).
+                    self.motion = None;
                 } else {
                     self.move_to(&w, code, column, g53, &mut kinds)?;
                 }
@@ -1294,6 +1309,51 @@ impl State {
         kinds.push(kind);
         self.position = to;
         Ok(())
+    }
+
+    /// G5.1: a quadratic B-spline in G17 from the current point to X Y, its control point
+    /// at I J from the start; given as the equivalent NURBS of order 3.
+    fn quadratic_spline(&mut self, w: &Words, column: usize) -> Result<BlockKind, LineError> {
+        if self.plane != Plane::Xy {
+            return Err(LineError::new(column, "G5.1 is for the G17 (XY) plane"));
+        }
+        if self.comp != CompSide::Off {
+            return Err(LineError::new(column, "G5.1 with cutter compensation on"));
+        }
+        for letter in ['Z', 'A'] {
+            if let Some((_, c)) = w.param(letter) {
+                return Err(LineError::new(c, format!("axis {letter} in a G5.1 spline: only X and Y move")));
+            }
+        }
+        let feed_mm_per_min = match self.feed_mm_per_min {
+            Some(f) if f > 0.0 => f,
+            _ => return Err(LineError::new(column_of(w, column), "G5.1 with no feed rate")),
+        };
+        let from = self.to_program(self.position);
+        let end = self.target(w, from)?;
+        let (Some((i, _)), Some((j, _))) = (w.param('I'), w.param('J')) else {
+            return Err(LineError::new(column_of(w, column), "G5.1 needs both I and J"));
+        };
+        let mut control = from;
+        control[0] += self.length_mm(i);
+        control[1] += self.length_mm(j);
+        let to = self.to_machine(end);
+        if to.iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
+            return Err(LineError::new(column, "position out of range"));
+        }
+        let point = |p: [f64; 4]| {
+            let m = self.to_machine(p);
+            NurbsPoint { x_mm: m[0], y_mm: m[1], weight: 1.0 }
+        };
+        let control_points = vec![point(from), point(control), point(end)];
+        self.position = to;
+        Ok(BlockKind::Nurbs {
+            to: Point::from_array(to),
+            control_points,
+            order: 3,
+            knots: nurbs_knots(3, 3),
+            feed_mm_per_min,
+        })
     }
 
     /// G28/G30: through the axis words' point if any, then to the stored position (only
