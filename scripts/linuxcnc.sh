@@ -12,15 +12,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(linuxcnc-uspace linuxcnc-uspace-dev)
-missing=()
-for p in "${packages[@]}"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
-if [ ${#missing[@]} -gt 0 ]; then
-    echo "linuxcnc: apt-get install ${missing[*]}"
-    sudo=""; [ "$(id -u)" -ne 0 ] && sudo=sudo
-    $sudo apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-fi
+# LinuxCNC from Debian, and its -dev package for the component's headers (the installer
+# make conformance uses too).
+scripts/linuxcnc_setup.sh linuxcnc-uspace-dev
 rt_user=${FINESTEP_RT_USER:-finestep-rt}
 if ! id -u "$rt_user" >/dev/null 2>&1; then
     echo "linuxcnc: creating the system user $rt_user (rtapi runs as it)"
