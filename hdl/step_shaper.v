@@ -65,10 +65,10 @@ module step_shaper #(
     reg                     pin_en_reg;
 
     // The spec's arithmetic is e = pending + request (pending in [-127, 127], request in
-    // {-1, 0, +1}), then pending <- e - issued, saturated at +-127. Here it is decoded
-    // from a few constant compares of pending instead, and the new pending chosen from
-    // pending + {-2 .. 2} computed in parallel, so that no carry chain waits for the
-    // request or the rise (the formal section checks it against the spec's sums).
+    // {-1, 0, +1}), then pending <- e - issued, saturated at +-127. Here the decisions
+    // are decoded from a few constant compares of pending (no carry chain before them),
+    // and the new pending is pending + (request - issued), one 8-bit adder (the formal
+    // section checks both against the spec's sums).
     wire               req_up    = req_valid && !req_negative;
     wire               req_down  = req_valid && req_negative;
     wire               p_neg     = pending_reg[PEND_W-1];
@@ -98,21 +98,17 @@ module step_shaper #(
     wire change_m2  = req_down && issue_up;
     wire change_p1  = (req_up && !rise) || (!req_valid && issue_down);
     wire change_m1  = (req_down && !rise) || (!req_valid && issue_up);
-    wire signed [PEND_W-1:0] pending_p2 = pending_reg + 8'sd2;
-    wire signed [PEND_W-1:0] pending_p1 = pending_reg + 8'sd1;
-    wire signed [PEND_W-1:0] pending_m1 = pending_reg - 8'sd1;
-    wire signed [PEND_W-1:0] pending_m2 = pending_reg - 8'sd2;
+    // request - issued, one of -2 .. 2.
+    wire signed [PEND_W-1:0] change = change_p2 ? 8'sd2 : change_p1 ? 8'sd1 :
+                                      change_m1 ? -8'sd1 : change_m2 ? -8'sd2 : 8'sd0;
+    wire signed [PEND_W-1:0] pending_sum = pending_reg + change;
     wire clamp_high = !halt && p_is_max && change_p1;   // 127 + 1 (a +2 needs e < 0)
     wire clamp_low  = !halt && p_is_min && change_m1;   // -127 - 1 (a -2 needs e > 0)
     wire behind     = !halt && far;
     wire signed [PEND_W-1:0] pending_next =
         halt       ? {PEND_W{1'b0}} :
         clamp_high ? PEND_MAX :
-        clamp_low  ? -PEND_MAX :
-        change_p2  ? pending_p2 :
-        change_p1  ? pending_p1 :
-        change_m1  ? pending_m1 :
-        change_m2  ? pending_m2 : pending_reg;
+        clamp_low  ? -PEND_MAX : pending_sum;
 
     // Pin functions of the current state, registered into the pins.
     reg a_now, b_now;
@@ -154,7 +150,7 @@ module step_shaper #(
         pending_reg <= pending_next;
 
         if (rise) begin
-            position_reg <= dir_reg ? position_reg + 32'd1 : position_reg - 32'd1;
+            position_reg <= position_reg + {{31{!dir_reg}}, 1'b1};
             quad_reg     <= dir_reg ? quad_reg + 2'd1 : quad_reg - 2'd1;
         end
 
