@@ -15,7 +15,9 @@ module finestep_core #(
     parameter N_AXES   = 4,
     parameter P_WIDTH  = 20,
     parameter TIMING_W = 12,
-    parameter HAS_GANTRY = 1     // 0: no gantry block (its outputs read 0, every axis its own)
+    parameter HAS_GANTRY = 1,    // 0: no gantry block (its outputs read 0, every axis its own)
+    parameter STEP_SHARED = 0,   // 1: one step engine visits the axes (no gantry block then)
+    parameter RAM_BLOCK  = 0     // 1: the step engine's stores in block RAM
 ) (
     // clock, reset
     input  wire                       clk,
@@ -69,19 +71,31 @@ module finestep_core #(
 `include "finestep_interface.vh"
 `include "finestep_core_checks.vh"
 
+    // log2 of the step engine's slots (0: a DDA and a shaper per axis).
+    localparam SL = (STEP_SHARED == 0) ? 0 : ((N_AXES <= 2) ? 1 : ((N_AXES <= 4) ? 2 : 3));
+    generate
+        if (STEP_SHARED != 0 && P_WIDTH <= SL) begin : fs_check_shared_p_width
+            finestep_core_STEP_SHARED_needs_P_WIDTH_above_log2_slots out_of_range ();
+        end
+    endgenerate
+
     wire                 timer_active;
     wire [P_WIDTH-1:0]   p_active;
     // The DDAs hold their phase at M/2 until the period timer runs.
     wire                 dda_run = run && timer_active;
     wire [32*N_AXES-1:0] inc;
 
+    wire start_ok;
+
     period_timer #(
         .N_AXES(N_AXES),
-        .P_WIDTH(P_WIDTH)
+        .P_WIDTH(P_WIDTH),
+        .SL(SL)
     ) timer (
         .clk(clk),
         .rst(rst),
         .run(run),
+        .start_ok(start_ok),
         .period_clocks(period_clocks),
         .clear_errors(clear_errors),
         .rec_valid(rec_valid),
@@ -101,7 +115,7 @@ module finestep_core #(
     wire [2:0]        slave_axis;
 
     generate
-        if (HAS_GANTRY) begin : with_gantry
+        if (HAS_GANTRY != 0 && STEP_SHARED == 0) begin : with_gantry
             gantry_sync #(
                 .N_AXES(N_AXES),
                 .TICK_W(24)
@@ -149,48 +163,73 @@ module finestep_core #(
 
     genvar i;
     generate
-        for (i = 0; i < N_AXES; i = i + 1) begin : axis
-            // The gantry's slave takes the gantry's request, every other axis its DDA's.
-            wire is_slave     = gantry_engaged && (slave_axis == i);
-            wire req_valid    = is_slave ? slave_req_valid : dda_req_valid[i];
-            wire req_negative = is_slave ? slave_req_negative : dda_req_negative[i];
-
-            dda_axis #(
-                .P_WIDTH(P_WIDTH)
-            ) dda (
-                .clk(clk),
-                .rst(rst),
-                .run(dda_run),
-                .period_clocks(period_clocks),
-                .p_active(p_active),
-                .inc(inc[32*i +: 32]),
-                .req_valid(dda_req_valid[i]),
-                .req_negative(dda_req_negative[i])
+        if (STEP_SHARED != 0) begin : shared
+            step_engine #(
+                .N_AXES(N_AXES),
+                .P_WIDTH(P_WIDTH),
+                .TIMING_W(TIMING_W),
+                .RAM_BLOCK(RAM_BLOCK)
+            ) engine (
+                .clk(clk), .rst(rst),
+                .run(dda_run), .p_active(p_active), .inc(inc),
+                .start_ok(start_ok),
+                .axis_enable(axis_enable),
+                .step_len(step_len), .step_space(step_space), .dir_setup(dir_setup), .dir_hold(dir_hold),
+                .out_mode(out_mode), .invert(invert),
+                .clear_errors(clear_errors), .halt(halt),
+                .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
+                .position(position), .rate_error(rate_error), .step_lost(step_lost)
             );
+            // No gantry block with the engine: no axis takes another's requests.
+            wire unused_slave = &{1'b0, slave_req_valid, slave_req_negative, slave_axis};
+            assign dda_req_valid    = {N_AXES{1'b0}};
+            assign dda_req_negative = {N_AXES{1'b0}};
+            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative};
+        end else begin : per_axis
+            assign start_ok = 1'b1;
+            for (i = 0; i < N_AXES; i = i + 1) begin : axis
+                // The gantry's slave takes the gantry's request, every other axis its DDA's.
+                wire is_slave     = gantry_engaged && (slave_axis == i);
+                wire req_valid    = is_slave ? slave_req_valid : dda_req_valid[i];
+                wire req_negative = is_slave ? slave_req_negative : dda_req_negative[i];
 
-            step_shaper #(
-                .TIMING_W(TIMING_W)
-            ) shaper (
-                .clk(clk),
-                .rst(rst),
-                .step_len(step_len[TIMING_W*i +: TIMING_W]),
-                .step_space(step_space[TIMING_W*i +: TIMING_W]),
-                .dir_setup(dir_setup[TIMING_W*i +: TIMING_W]),
-                .dir_hold(dir_hold[TIMING_W*i +: TIMING_W]),
-                .out_mode(out_mode[FS_OUT_MODE_WIDTH*i +: FS_OUT_MODE_WIDTH]),
-                .invert(invert[FS_INVERT_WIDTH*i +: FS_INVERT_WIDTH]),
-                .axis_enable(axis_enable[i]),
-                .clear_errors(clear_errors),
-                .halt(halt),
-                .req_valid(req_valid),
-                .req_negative(req_negative),
-                .pin_a(pin_a[i]),
-                .pin_b(pin_b[i]),
-                .pin_en(pin_en[i]),
-                .position(position[32*i +: 32]),
-                .rate_error(rate_error[i]),
-                .step_lost(step_lost[i])
-            );
+                dda_axis #(
+                    .P_WIDTH(P_WIDTH)
+                ) dda (
+                    .clk(clk),
+                    .rst(rst),
+                    .run(dda_run),
+                    .period_clocks(period_clocks),
+                    .p_active(p_active),
+                    .inc(inc[32*i +: 32]),
+                    .req_valid(dda_req_valid[i]),
+                    .req_negative(dda_req_negative[i])
+                );
+
+                step_shaper #(
+                    .TIMING_W(TIMING_W)
+                ) shaper (
+                    .clk(clk),
+                    .rst(rst),
+                    .step_len(step_len[TIMING_W*i +: TIMING_W]),
+                    .step_space(step_space[TIMING_W*i +: TIMING_W]),
+                    .dir_setup(dir_setup[TIMING_W*i +: TIMING_W]),
+                    .dir_hold(dir_hold[TIMING_W*i +: TIMING_W]),
+                    .out_mode(out_mode[FS_OUT_MODE_WIDTH*i +: FS_OUT_MODE_WIDTH]),
+                    .invert(invert[FS_INVERT_WIDTH*i +: FS_INVERT_WIDTH]),
+                    .axis_enable(axis_enable[i]),
+                    .clear_errors(clear_errors),
+                    .halt(halt),
+                    .req_valid(req_valid),
+                    .req_negative(req_negative),
+                    .pin_a(pin_a[i]),
+                    .pin_b(pin_b[i]),
+                    .pin_en(pin_en[i]),
+                    .position(position[32*i +: 32]),
+                    .rate_error(rate_error[i]),
+                    .step_lost(step_lost[i])
+                );
+            end
         end
     endgenerate
 

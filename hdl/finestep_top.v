@@ -21,7 +21,8 @@ module finestep_top #(
     parameter HAS_PARALLEL    = 1,
     parameter N_ENC           = 4,
     parameter HAS_MPG         = 1,
-    parameter RAM_BLOCK       = 0
+    parameter RAM_BLOCK       = 0,
+    parameter STEP_SHARED     = 0
 ) (
     // clock, reset
     input  wire              clk,
@@ -306,7 +307,9 @@ module finestep_top #(
         .N_AXES(N_AXES),
         .P_WIDTH(P_WIDTH),
         .TIMING_W(TIMING_W),
-        .HAS_GANTRY(0)    // not in the register map yet
+        .HAS_GANTRY(0),   // not in the register map yet
+        .STEP_SHARED(STEP_SHARED),
+        .RAM_BLOCK(RAM_BLOCK)
     ) core (
         .clk(clk), .rst(rst),
         .run(core_run), .period_clocks(period_clocks), .clear_errors(clear_errors), .halt(halt),

@@ -12,16 +12,23 @@
 // (all increments zero); the latter sets the sticky record_error.
 //
 // P is sampled in every cycle before a run starts.
+//
+// With the shared step engine (SL > 0, S = 2^SL slots, `start_ok` = the engine's slot is
+// S - 2): P is rounded down to a multiple of S (at least S), a run starts only when
+// start_ok so that every boundary falls on slot S - 1, and a record is acceptable when
+// every |D| < P / S (one step per visit). SL = 0 is the per-axis engine (start_ok tied 1).
 // Invariants: remaining < p_act; every loaded increment satisfies |inc| < p_act * 2^16.
 module period_timer #(
     parameter N_AXES  = 4,
-    parameter P_WIDTH = 20
+    parameter P_WIDTH = 20,
+    parameter SL      = 0        // log2 of the step engine's slots; 0: per-axis engine
 ) (
     // clock, reset
     input  wire                 clk,
     input  wire                 rst,
     // control
     input  wire                 run,
+    input  wire                 start_ok,      // a run may start in this cycle
     input  wire [P_WIDTH-1:0]   period_clocks,
     input  wire                 clear_errors,
     // record port (valid/ready)
@@ -45,6 +52,7 @@ module period_timer #(
     reg [P_WIDTH-1:0]   remaining_reg;
     reg [P_WIDTH-1:0]   p_act_reg;
     reg [P_WIDTH-1:0]   p_act_minus_one_reg;
+    reg [P_WIDTH-1:0]   visits_minus_one_reg;   // p_act / 2^SL - 1
     reg [32*N_AXES-1:0] inc_reg;
     reg                 cur_end_reg;
     reg                 block_end_reg;
@@ -54,8 +62,13 @@ module period_timer #(
     reg                 boundary_reg;
 
     wire boundary = boundary_reg;
+    // max(P with its low SL bits cleared, 2^SL); with SL = 0, max(P, 1).
+    localparam [P_WIDTH-1:0] P_MIN = {{(P_WIDTH-1){1'b0}}, 1'b1} << SL;
+    wire [P_WIDTH-1:0] period_rounded = (period_clocks >> SL) << SL;
     wire [P_WIDTH-1:0] period_sampled =
-        (period_clocks == {P_WIDTH{1'b0}}) ? {{(P_WIDTH-1){1'b0}}, 1'b1} : period_clocks;
+        (period_rounded == {P_WIDTH{1'b0}}) ? P_MIN : period_rounded;
+    // Visits per period V = p_act / 2^SL and V - 1, for the record check.
+    wire [P_WIDTH-1:0] visits_act = p_act_reg >> SL;
 
     // A record is acceptable when every |D| < P, i.e. floor(|d| / 2^16) < P. No negation
     // on the way from the FIFO's RAM: for d < 0, |d| = ~d + 1, so floor(|d| / 2^16) is
@@ -69,8 +82,8 @@ module period_timer #(
         for (axis = 0; axis < N_AXES; axis = axis + 1) begin
             whole_steps = rec_inc[32*axis+31] ? ~rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16] : rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16];
             carries     = rec_inc[32*axis+31] && (rec_inc[32*axis +: FS_REC_INC_FRAC_BITS] == {FS_REC_INC_FRAC_BITS{1'b0}});
-            if (carries ? ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, p_act_minus_one_reg})
-                        : ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, p_act_reg}))
+            if (carries ? ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, visits_minus_one_reg})
+                        : ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, visits_act}))
                 record_ok = 1'b0;
         end
     end
@@ -93,11 +106,13 @@ module period_timer #(
             cur_end_reg   <= 1'b0;
             p_act_reg     <= period_sampled;
             p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            visits_minus_one_reg <= (period_sampled >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else if (!active_reg) begin
-            active_reg   <= 1'b1;
-            boundary_reg <= 1'b1;           // remaining is 0 while stopped
+            active_reg   <= start_ok;
+            boundary_reg <= start_ok;       // remaining is 0 while stopped
             p_act_reg    <= period_sampled;
             p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            visits_minus_one_reg <= (period_sampled >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1};
         end else if (!boundary) begin
             remaining_reg <= remaining_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
             boundary_reg  <= (remaining_reg == {{(P_WIDTH-1){1'b0}}, 1'b1});
@@ -117,8 +132,9 @@ module period_timer #(
             active_reg       <= 1'b0;
             boundary_reg     <= 1'b0;
             remaining_reg    <= {P_WIDTH{1'b0}};
-            p_act_reg        <= {{(P_WIDTH-1){1'b0}}, 1'b1};
-            p_act_minus_one_reg <= {P_WIDTH{1'b0}};
+            p_act_reg        <= P_MIN;
+            p_act_minus_one_reg <= P_MIN - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            visits_minus_one_reg <= {P_WIDTH{1'b0}};
             inc_reg          <= {32*N_AXES{1'b0}};
             cur_end_reg      <= 1'b0;
             block_end_reg    <= 1'b0;
@@ -155,11 +171,14 @@ module period_timer #(
         f_record_ok = 1'b1;
         for (f_rec_axis = 0; f_rec_axis < N_AXES; f_rec_axis = f_rec_axis + 1) begin
             f_rec_magnitude = rec_inc[32*f_rec_axis+31] ? (~rec_inc[32*f_rec_axis +: 32] + 32'd1) : rec_inc[32*f_rec_axis +: 32];
-            if ({{P_WIDTH{1'b0}}, f_rec_magnitude[31:FS_REC_INC_FRAC_BITS]} >= {16'd0, p_act_reg}) f_record_ok = 1'b0;
+            if ({{P_WIDTH{1'b0}}, f_rec_magnitude[31:FS_REC_INC_FRAC_BITS]} >= {16'd0, p_act_reg >> SL}) f_record_ok = 1'b0;
         end
     end
     always @(*) if (f_past_valid && !rst) begin
         assert (p_act_minus_one_reg == p_act_reg - {{(P_WIDTH-1){1'b0}}, 1'b1});
+        assert (visits_minus_one_reg == (p_act_reg >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1});
+        // With the shared engine a running period is a whole number of visits.
+        if (active_reg && SL > 0) assert (((p_act_reg >> SL) << SL) == p_act_reg && (p_act_reg >> SL) != {P_WIDTH{1'b0}});
         assert (boundary_reg == (active_reg && remaining_reg == {P_WIDTH{1'b0}}));
         assert (record_ok == f_record_ok);
         assert (p_act_reg != {P_WIDTH{1'b0}});
@@ -169,12 +188,14 @@ module period_timer #(
         if (!active_reg) assert (remaining_reg == {P_WIDTH{1'b0}} && inc_reg == {32*N_AXES{1'b0}});
         for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) begin
             f_magnitude = inc_reg[32*f_axis+31] ? (~inc_reg[32*f_axis +: 32] + 32'd1) : inc_reg[32*f_axis +: 32];
-            assert ({{P_WIDTH{1'b0}}, f_magnitude[31:FS_REC_INC_FRAC_BITS]} < {16'd0, p_act_reg});
+            if (active_reg) assert ({{P_WIDTH{1'b0}}, f_magnitude[31:FS_REC_INC_FRAC_BITS]} < {16'd0, p_act_reg >> SL});
         end
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(run) && $past(active_reg)) assert (p_act_reg == $past(p_act_reg));
         if (!$past(active_reg)) assert (p_act_reg == $past(period_sampled));
+        // A run starts only when start_ok.
+        if (!$past(active_reg) && active_reg) assert ($past(start_ok));
         // A boundary after a running period comes exactly P cycles after the last one.
         if (boundary && $past(active_reg) && $past(run) && !$past(boundary))
             assert (f_since_boundary == {1'b0, p_act_reg});

@@ -9,7 +9,8 @@ module spi_board_chip #(
     parameter HAS_MPG         = 1,
     parameter FIFO_DEPTH_LOG2 = 8,
     parameter CLOCK_HZ        = 50000000,
-    parameter RAM_BLOCK       = 0
+    parameter RAM_BLOCK       = 0,
+    parameter STEP_SHARED     = 0
 ) (
     // clock, reset
     input  wire              clk,
@@ -46,7 +47,7 @@ module spi_board_chip #(
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG),
-        .RAM_BLOCK(RAM_BLOCK)
+        .RAM_BLOCK(RAM_BLOCK), .STEP_SHARED(STEP_SHARED)
     ) chip (
         .clk(clk), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),

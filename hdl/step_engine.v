@@ -1,0 +1,396 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Specification: docs/spec/step_engine.md
+// Step engine: one DDA and one step shaper visiting the axes in turn (finestep_core with
+// STEP_SHARED = 1), instead of a dda_axis and a step_shaper per axis. S = 2^SL slots; a
+// free-running slot counter gives each axis a DDA visit every S cycles (slot == a) and a
+// shaper visit the cycle after (slot == a + 1 mod S). The rules are dda_axis's and
+// step_shaper's applied once per visit: the DDA's modulus is V = P / S visits, the
+// shaper's counters count visits and compare cnt * S against the timings in clocks.
+//
+// Each axis's DDA accumulator and shaper state live in a store (store_ram: block RAM on
+// the iCE40 with RAM_BLOCK = 1, distributed RAM or flip-flops elsewhere), read the cycle
+// before the visit (address = the next cycle's axis) and written at the visit; a store
+// never reads and writes one word on one clock (the schedule moves one slot a cycle; the
+// formal section proves it). Positions, sticky flags and pins stay in flip-flops per
+// axis: the registers and the probe read every axis's position in any cycle.
+//
+// Latency: a DDA visit in cycle n gives the shaper's decision in n+1 and the pin edge and
+// position in n+2.
+module step_engine #(
+    parameter N_AXES    = 4,
+    parameter P_WIDTH   = 20,
+    parameter TIMING_W  = 12,
+    parameter RAM_BLOCK = 0
+) (
+    // clock, reset
+    input  wire                       clk,
+    input  wire                       rst,
+    // from the period timer
+    input  wire                       run,             // the period timer runs (run && active)
+    input  wire [P_WIDTH-1:0]         p_active,        // period of the running move, a multiple of S
+    input  wire [32*N_AXES-1:0]       inc,             // Q16.16 steps per period, per axis
+    output wire                       start_ok,        // slot == S - 2: a run may start now
+    // per-axis configuration
+    input  wire [N_AXES-1:0]          axis_enable,
+    input  wire [TIMING_W*N_AXES-1:0] step_len,
+    input  wire [TIMING_W*N_AXES-1:0] step_space,
+    input  wire [TIMING_W*N_AXES-1:0] dir_setup,
+    input  wire [TIMING_W*N_AXES-1:0] dir_hold,
+    input  wire [2*N_AXES-1:0]        out_mode,
+    input  wire [3*N_AXES-1:0]        invert,
+    input  wire                       clear_errors,
+    input  wire                       halt,
+    // pins and status
+    output wire [N_AXES-1:0]          pin_a,
+    output wire [N_AXES-1:0]          pin_b,
+    output wire [N_AXES-1:0]          pin_en,
+    output wire [32*N_AXES-1:0]       position,
+    output wire [N_AXES-1:0]          rate_error,
+    output wire [N_AXES-1:0]          step_lost
+);
+
+`include "finestep_interface.vh"
+
+    localparam SL        = (N_AXES <= 2) ? 1 : ((N_AXES <= 4) ? 2 : 3);
+    localparam S         = 1 << SL;
+    localparam V_W       = P_WIDTH - SL;          // bits of the visits per period
+    localparam FRAC_BITS = 16;
+    localparam ACC_W     = V_W + FRAC_BITS;
+    localparam SUM_W     = ACC_W + 2;             // sign + one carry bit
+    localparam PEND_W    = 8;
+    localparam [PEND_W-1:0] PEND_MAX = 8'sd127;
+    localparam CMP_W     = TIMING_W + SL;         // cnt * S against a timing
+    localparam [TIMING_W-1:0] COUNT_MAX = {TIMING_W{1'b1}};
+    localparam [TIMING_W-1:0] COUNT_ONE = {{(TIMING_W-1){1'b0}}, 1'b1};
+    localparam SH_W      = PEND_W + 2 + 2 * TIMING_W + 2;   // pending, level, dir, cnt, dcnt, quad
+    localparam [SL-1:0] SLOT_ONE = {{(SL-1){1'b0}}, 1'b1};
+
+    // ---- Schedule --------------------------------------------------------------------
+    reg  [SL-1:0] slot_reg;
+    wire [SL-1:0] slot_next = slot_reg + SLOT_ONE;
+    wire [SL-1:0] dda_axis  = slot_reg;               // DDA visit of this axis
+    wire [SL-1:0] sh_axis   = slot_reg - SLOT_ONE;    // shaper visit of this axis
+    wire dda_visit = ({{(32-SL){1'b0}}, dda_axis} < N_AXES);
+    wire sh_visit  = ({{(32-SL){1'b0}}, sh_axis} < N_AXES);
+    // The axis whose configuration and flip-flops a visit reads: 0 in an idle slot (whose
+    // results are never used), so no select runs past the per-axis vectors.
+    wire [SL-1:0] dda_ix = dda_visit ? dda_axis : {SL{1'b0}};
+    wire [SL-1:0] sh_ix  = sh_visit ? sh_axis : {SL{1'b0}};
+    // The visited axes one-hot (none in an idle slot).
+    wire [N_AXES-1:0] dda_hot;
+    wire [N_AXES-1:0] sh_hot;
+    genvar h;
+    generate
+        for (h = 0; h < N_AXES; h = h + 1) begin : hot
+            assign dda_hot[h] = ({{(32-SL){1'b0}}, dda_axis} == h);
+            assign sh_hot[h]  = ({{(32-SL){1'b0}}, sh_axis} == h);
+        end
+    endgenerate
+    assign start_ok = (slot_reg == {SL{1'b1}} - SLOT_ONE);    // S - 2 (mod S)
+
+    always @(posedge clk) begin
+        slot_reg <= rst ? {SL{1'b0}} : slot_next;
+    end
+
+    // Per-axis flags: the DDA store holds the axis's accumulator of this run (its last
+    // visit ran); the shaper store holds the axis's state (written at a visit since
+    // reset). Otherwise a visit starts from M/2, or from the shaper's reset values.
+    reg [N_AXES-1:0] dda_live_reg;
+    reg [N_AXES-1:0] sh_init_reg;
+
+    // ---- DDA visit -------------------------------------------------------------------
+    // M = V * 2^16 with V = p_active / S, and M/2, where the first running visit starts.
+    wire [SL-1:0] unused_p_low = p_active[SL-1:0];
+    wire signed [SUM_W-1:0] modulus      = {2'b00, p_active[P_WIDTH-1:SL], {FRAC_BITS{1'b0}}};
+    wire [ACC_W-1:0]        half_modulus = {1'b0, p_active[P_WIDTH-1:SL], {(FRAC_BITS-1){1'b0}}};
+    wire [ACC_W-1:0] acc_rd;
+    wire [ACC_W-1:0] acc_cur = dda_live_reg[dda_ix] ? acc_rd : half_modulus;
+    wire [31:0]      inc_cur = inc[32*dda_ix +: 32];
+    wire [SUM_W-1:0] inc_resized;
+    generate
+        if (SUM_W > 32) begin : widen
+            assign inc_resized = {{(SUM_W-32){inc_cur[31]}}, inc_cur};
+        end else if (SUM_W == 32) begin : same
+            assign inc_resized = inc_cur;
+        end else begin : narrow
+            assign inc_resized = inc_cur[SUM_W-1:0];
+            wire [31:0] unused_inc_top = {{SUM_W{1'b0}}, inc_cur[31:SUM_W]};
+        end
+    endgenerate
+    // acc + d, acc + d - M and acc + d + M side by side, then a choice (as dda_axis).
+    wire signed [SUM_W-1:0] acc_wide  = $signed({2'b00, acc_cur});
+    wire signed [SUM_W-1:0] sum       = acc_wide + $signed(inc_resized);
+    wire signed [SUM_W-1:0] sum_minus = acc_wide + $signed(inc_resized) - modulus;
+    wire signed [SUM_W-1:0] sum_plus  = acc_wide + $signed(inc_resized) + modulus;
+    wire wrap_up   = !sum_minus[SUM_W-1];   // acc + d >= M
+    wire wrap_down = sum[SUM_W-1];
+    wire signed [SUM_W-1:0] sum_wrapped = wrap_up ? sum_minus : (wrap_down ? sum_plus : sum);
+    wire [1:0] unused_wrapped_top = sum_wrapped[SUM_W-1:ACC_W];
+    wire [ACC_W-1:0] acc_next = sum_wrapped[ACC_W-1:0];   // used only after a running visit
+
+    store_ram #(.WIDTH(ACC_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) dda_store (
+        .clk(clk), .wr_en(dda_visit), .wr_addr(dda_axis), .wr_data(acc_next),
+        .rd_addr(slot_next), .rd_data(acc_rd)
+    );
+
+    // The visit's request, taken by the shaper visit of the same axis in the next cycle.
+    reg req_valid_reg;
+    reg req_negative_reg;
+    always @(posedge clk) begin
+        req_valid_reg    <= !rst && dda_visit && run && (wrap_up || wrap_down);
+        req_negative_reg <= !rst && wrap_down;
+    end
+
+    // ---- Shaper visit ----------------------------------------------------------------
+    wire [SH_W-1:0] sh_rd;
+    wire [SH_W-1:0] sh_reset = {2'd0, COUNT_MAX, COUNT_MAX, 1'b1, 1'b0, {PEND_W{1'b0}}};
+    wire [SH_W-1:0] sh_cur = sh_init_reg[sh_ix] ? sh_rd : sh_reset;
+    wire signed [PEND_W-1:0] pending = sh_cur[PEND_W-1:0];
+    wire                     level   = sh_cur[PEND_W];
+    wire                     dir     = sh_cur[PEND_W+1];
+    wire [TIMING_W-1:0]      cnt     = sh_cur[PEND_W+2 +: TIMING_W];
+    wire [TIMING_W-1:0]      dcnt    = sh_cur[PEND_W+2+TIMING_W +: TIMING_W];
+    wire [1:0]               quad    = sh_cur[PEND_W+2+2*TIMING_W +: 2];
+
+    wire [TIMING_W-1:0] len_cur   = step_len[TIMING_W*sh_ix +: TIMING_W];
+    wire [TIMING_W-1:0] space_cur = step_space[TIMING_W*sh_ix +: TIMING_W];
+    wire [TIMING_W-1:0] setup_cur = dir_setup[TIMING_W*sh_ix +: TIMING_W];
+    wire [TIMING_W-1:0] hold_cur  = dir_hold[TIMING_W*sh_ix +: TIMING_W];
+    wire [1:0]          mode_cur  = out_mode[FS_OUT_MODE_WIDTH*sh_ix +: FS_OUT_MODE_WIDTH];
+    wire [2:0]          inv_cur   = invert[FS_INVERT_WIDTH*sh_ix +: FS_INVERT_WIDTH];
+
+    // Elapsed clocks of the counted visits: cnt * S, dcnt * S (exact).
+    wire [CMP_W-1:0] cnt_clocks  = {cnt, {SL{1'b0}}};
+    wire [CMP_W-1:0] dcnt_clocks = {dcnt, {SL{1'b0}}};
+
+    // e = pending + request decoded from constant compares of pending (as step_shaper).
+    wire req_up   = req_valid_reg && !req_negative_reg;
+    wire req_down = req_valid_reg && req_negative_reg;
+    wire p_neg    = pending[PEND_W-1];
+    wire p_is_m2  = (pending == -8'sd2);
+    wire p_is_m1  = (pending == -8'sd1);
+    wire p_is_0   = (pending == 8'sd0);
+    wire p_is_1   = (pending == 8'sd1);
+    wire p_is_2   = (pending == 8'sd2);
+    wire p_is_max = (pending == PEND_MAX);
+    wire p_is_min = (pending == -PEND_MAX);
+    wire want_step    = req_up ? !p_is_m1 : (req_down ? !p_is_1 : !p_is_0);
+    wire want_forward = req_up ? (!p_neg || p_is_m1) : (req_down ? (!p_neg && !p_is_0) : !p_neg);
+    wire far          = req_up ? !(p_is_m2 || p_is_m1 || p_is_0) :
+                        (req_down ? !(p_is_0 || p_is_1 || p_is_2) : !(p_is_m1 || p_is_0 || p_is_1));
+    wire dir_matches  = (want_forward == dir);
+
+    wire fall       = level && (cnt_clocks >= {{SL{1'b0}}, len_cur});
+    wire rise       = !halt && !level && want_step && dir_matches &&
+                      (cnt_clocks >= {{SL{1'b0}}, space_cur}) && (dcnt_clocks >= {{SL{1'b0}}, setup_cur});
+    wire dir_change = !halt && !level && want_step && !dir_matches && (cnt_clocks >= {{SL{1'b0}}, hold_cur});
+
+    wire issue_up   = rise && dir;
+    wire issue_down = rise && !dir;
+    wire change_p2  = req_up && issue_down;
+    wire change_m2  = req_down && issue_up;
+    wire change_p1  = (req_up && !rise) || (!req_valid_reg && issue_down);
+    wire change_m1  = (req_down && !rise) || (!req_valid_reg && issue_up);
+    wire signed [PEND_W-1:0] change = change_p2 ? 8'sd2 : change_p1 ? 8'sd1 :
+                                      change_m1 ? -8'sd1 : change_m2 ? -8'sd2 : 8'sd0;
+    wire signed [PEND_W-1:0] pending_sum = pending + change;
+    wire clamp_high = !halt && p_is_max && change_p1;
+    wire clamp_low  = !halt && p_is_min && change_m1;
+    wire behind     = !halt && far;
+    wire signed [PEND_W-1:0] pending_next =
+        halt       ? {PEND_W{1'b0}} :
+        clamp_high ? PEND_MAX :
+        clamp_low  ? -PEND_MAX : pending_sum;
+
+    wire                level_next = rise ? 1'b1 : (fall ? 1'b0 : level);
+    wire                dir_next   = dir_change ? !dir : dir;
+    wire [TIMING_W-1:0] cnt_next   = (rise || fall) ? COUNT_ONE :
+                                     ((cnt != COUNT_MAX) ? cnt + COUNT_ONE : cnt);
+    wire [TIMING_W-1:0] dcnt_next  = dir_change ? COUNT_ONE :
+                                     ((dcnt != COUNT_MAX) ? dcnt + COUNT_ONE : dcnt);
+    wire [1:0]          quad_next  = rise ? quad + {!dir, 1'b1} : quad;
+    wire [SH_W-1:0]     sh_next    = {quad_next, dcnt_next, cnt_next, dir_next, level_next, pending_next};
+
+    store_ram #(.WIDTH(SH_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) shaper_store (
+        .clk(clk), .wr_en(sh_visit), .wr_addr(sh_axis), .wr_data(sh_next),
+        .rd_addr(slot_reg), .rd_data(sh_rd)
+    );
+
+    // Pin functions of the state the visit leaves.
+    reg a_next, b_next;
+    always @* begin
+        case (mode_cur)
+            FS_OUT_MODE_UP_DOWN: begin
+                a_next = level_next && dir_next;
+                b_next = level_next && !dir_next;
+            end
+            FS_OUT_MODE_QUADRATURE: begin
+                a_next = quad_next[0] ^ quad_next[1];
+                b_next = quad_next[1];
+            end
+            default: begin
+                a_next = level_next;
+                b_next = dir_next;
+            end
+        endcase
+    end
+
+    // ---- Per-axis flip-flops: positions, flags, pins -------------------------------
+    reg [32*N_AXES-1:0] position_reg;
+    reg [N_AXES-1:0]    rate_error_reg;
+    reg [N_AXES-1:0]    step_lost_reg;
+    reg [N_AXES-1:0]    pin_a_reg;
+    reg [N_AXES-1:0]    pin_b_reg;
+    reg [N_AXES-1:0]    pin_en_reg;
+    wire [31:0] position_cur  = position_reg[32*sh_ix +: 32];
+    wire [31:0] position_next = position_cur + {{31{!dir}}, 1'b1};
+
+    integer a;
+    always @(posedge clk) begin
+        for (a = 0; a < N_AXES; a = a + 1) begin
+            pin_en_reg[a] <= (axis_enable[a] && !halt) ^ invert[FS_INVERT_WIDTH*a + FS_INVERT_PIN_EN_BIT];
+            if (sh_hot[a] && behind) rate_error_reg[a] <= 1'b1;
+            else if (clear_errors) rate_error_reg[a] <= 1'b0;
+            if (sh_hot[a] && (clamp_high || clamp_low)) step_lost_reg[a] <= 1'b1;
+            else if (clear_errors) step_lost_reg[a] <= 1'b0;
+            if (sh_hot[a]) begin
+                pin_a_reg[a] <= a_next ^ inv_cur[FS_INVERT_PIN_A_BIT];
+                pin_b_reg[a] <= b_next ^ inv_cur[FS_INVERT_PIN_B_BIT];
+                sh_init_reg[a] <= 1'b1;
+                if (rise) position_reg[32*a +: 32] <= position_next;
+            end
+            if (!run) dda_live_reg[a] <= 1'b0;
+            else if (dda_hot[a]) dda_live_reg[a] <= 1'b1;
+        end
+        if (rst) begin
+            position_reg   <= {32*N_AXES{1'b0}};
+            rate_error_reg <= {N_AXES{1'b0}};
+            step_lost_reg  <= {N_AXES{1'b0}};
+            pin_a_reg      <= {N_AXES{1'b0}};
+            pin_b_reg      <= {N_AXES{1'b0}};
+            pin_en_reg     <= {N_AXES{1'b0}};
+            dda_live_reg   <= {N_AXES{1'b0}};
+            sh_init_reg    <= {N_AXES{1'b0}};
+        end
+    end
+
+    assign pin_a      = pin_a_reg;
+    assign pin_b      = pin_b_reg;
+    assign pin_en     = pin_en_reg;
+    assign position   = position_reg;
+    assign rate_error = rate_error_reg;
+    assign step_lost  = step_lost_reg;
+
+`ifdef FORMAL
+    // The engine against one state per axis: shadow copies of every axis's DDA and shaper
+    // state, updated at that axis's visits, must be what the stores hand its next visit
+    // (the stores neither lose nor mix an axis's state); the stores never read and write
+    // one word on one clock (what store_ram's no_rw_check relies on); the visit's
+    // arithmetic is the spec's (e = pending + request, cnt * S >= timing, the DDA's wrap
+    // against M = P / S * 2^16); no step is lost or made up: per axis, position + pending
+    // equals the net requests of its DDA visits (until a clamp; a halt drops the pending
+    // ones); pins move only at their axis's shaper visits.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+    // Configuration is constant during the proof; the period timer's environment: p_active
+    // is a whole number of visits while running and every increment is below one step per
+    // visit (the record check).
+    always @(posedge clk) if (f_past_valid) begin
+        assume ($stable(step_len) && $stable(step_space) && $stable(dir_setup) && $stable(dir_hold));
+        if (run && $past(run)) assume ($stable(p_active));
+    end
+    wire [V_W-1:0] f_visits = p_active[P_WIDTH-1:SL];
+    always @(*) begin
+        assume (p_active[SL-1:0] == {SL{1'b0}} && f_visits != {V_W{1'b0}});
+    end
+
+    reg [ACC_W-1:0]  f_acc  [0:N_AXES-1];
+    reg [SH_W-1:0]   f_sh   [0:N_AXES-1];
+    reg [31:0]       f_net  [0:N_AXES-1];   // net requests taken by the shaper, per axis
+    reg [N_AXES-1:0] f_clamped;
+    reg [N_AXES-1:0] f_live;                // the axis's last DDA visit ran
+    integer f;
+    wire signed [PEND_W:0] f_request = req_valid_reg ? (req_negative_reg ? -9'sd1 : 9'sd1) : 9'sd0;
+    always @(posedge clk) begin
+        for (f = 0; f < N_AXES; f = f + 1) begin
+            if (dda_hot[f]) f_acc[f] <= acc_next;
+            if (!run) f_live[f] <= 1'b0;
+            else if (dda_hot[f]) f_live[f] <= 1'b1;
+            if (sh_hot[f]) begin
+                f_sh[f]  <= sh_next;
+                f_net[f] <= halt ? position_cur : f_net[f] + {{23{f_request[PEND_W]}}, f_request};
+                if (clamp_high || clamp_low) f_clamped[f] <= 1'b1;
+            end
+            if (rst) begin
+                f_acc[f]     <= {ACC_W{1'b0}};
+                f_live[f]    <= 1'b0;
+                f_sh[f]      <= sh_reset;
+                f_net[f]     <= 32'd0;
+                f_clamped[f] <= 1'b0;
+            end
+        end
+    end
+
+    // The spec's arithmetic of a shaper visit, in its own words.
+    wire signed [PEND_W:0] f_e      = {pending[PEND_W-1], pending} + f_request;
+    wire signed [PEND_W:0] f_issued = rise ? (dir ? 9'sd1 : -9'sd1) : 9'sd0;
+    wire signed [PEND_W:0] f_left   = f_e - f_issued;
+    wire [31:0] f_cnt_clk  = {{(32-TIMING_W){1'b0}}, cnt} * S;
+    wire [31:0] f_dcnt_clk = {{(32-TIMING_W){1'b0}}, dcnt} * S;
+    wire f_rise = !halt && !level && f_e != 9'sd0 && (!f_e[PEND_W] == dir) &&
+                  f_cnt_clk >= {{(32-TIMING_W){1'b0}}, space_cur} && f_dcnt_clk >= {{(32-TIMING_W){1'b0}}, setup_cur};
+    wire f_fall = level && f_cnt_clk >= {{(32-TIMING_W){1'b0}}, len_cur};
+    wire f_dir_change = !halt && !level && f_e != 9'sd0 && (!f_e[PEND_W] != dir) &&
+                        f_cnt_clk >= {{(32-TIMING_W){1'b0}}, hold_cur};
+    wire [PEND_W-1:0] f_pending_next = halt ? {PEND_W{1'b0}} : (f_left > 9'sd127) ? PEND_MAX :
+                                       (f_left < -9'sd127) ? -PEND_MAX : f_left[PEND_W-1:0];
+    // The DDA's: s = acc + d against M.
+    wire signed [SUM_W+1:0] f_s = $signed({4'b0000, acc_cur}) + $signed({{2{inc_resized[SUM_W-1]}}, inc_resized});
+    wire signed [SUM_W+1:0] f_m = $signed({2'b00, modulus});
+
+    always @(*) if (f_past_valid && !rst) begin
+        // No read-during-write on either store.
+        if (dda_visit) assert (slot_next != dda_axis);
+        if (sh_visit) assert (slot_reg != sh_axis);
+        assert (start_ok == (slot_reg == S - 2));
+        // Each visit starts from what the axis's last visit left.
+        if (dda_visit && run) assert (acc_cur == (f_live[dda_ix] ? f_acc[dda_ix] : half_modulus));
+        if (sh_visit) assert (sh_cur == f_sh[sh_ix]);
+        if (sh_visit) begin
+            assert (rise == f_rise && fall == f_fall && dir_change == f_dir_change);
+            assert (pending_next == f_pending_next);
+            assert (behind == (!halt && (f_e > 9'sd1 || f_e < -9'sd1)));
+            assert ((clamp_high || clamp_low) == (!halt && (f_left > 9'sd127 || f_left < -9'sd127)));
+            assert (pending <= 8'sd127 && pending >= -8'sd127);
+            // Steps are conserved: what was issued plus what waits is what was asked.
+            if (!f_clamped[sh_ix]) assert (position_cur + {{24{pending[PEND_W-1]}}, pending} == f_net[sh_ix]);
+        end
+        if (dda_visit && run) begin
+            assert ({2'b00, acc_cur} < {2'b00, f_visits, {FRAC_BITS{1'b0}}});
+            assume (f_s - $signed({4'b0000, acc_cur}) < f_m && $signed({4'b0000, acc_cur}) - f_s < f_m);
+            assert (wrap_up == (f_s >= f_m) && wrap_down == (f_s < 0));
+        end
+    end
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        assert (slot_reg == $past(slot_reg) + SLOT_ONE);
+        // Pins move only at the edge ending their axis's shaper visit; enables every cycle.
+        for (f = 0; f < N_AXES; f = f + 1) begin
+            if (!$past(sh_hot[f])) assert (pin_a[f] == $past(pin_a[f]) && pin_b[f] == $past(pin_b[f]) &&
+                                           position_reg[32*f +: 32] == $past(position_reg[32*f +: 32]));
+            assert (pin_en[f] == $past((axis_enable[f] && !halt) ^ invert[FS_INVERT_WIDTH*f + FS_INVERT_PIN_EN_BIT]));
+        end
+        // A request comes only from a running DDA visit that wrapped.
+        assert (req_valid_reg == ($past(dda_visit) && $past(run) && ($past(wrap_up) || $past(wrap_down))));
+        cover (req_valid_reg && !req_negative_reg);
+        cover ($past(rise) && $past(sh_axis) == N_AXES - 1);
+        cover ($past(dir_change));
+        cover (|rate_error_reg);
+    end
+`endif
+
+endmodule
+
+`default_nettype wire
