@@ -20,10 +20,16 @@
 //!   A NURBS is evaluated here from its own definition, the Cox-de Boor recursion of
 //!   the rational basis functions (the planner uses de Boor's algorithm on homogeneous
 //!   points), and the distance to it is found by dense sampling and a golden-section
-//!   refinement around the nearest sample;
+//!   refinement around the nearest sample. The path is followed through the program in
+//!   order (the current piece while the point is close enough to it, else the first
+//!   close enough after it), so a later piece passing close by never takes over. The
+//!   deviation reported is the distance in space (X, Y, Z, mm), to every piece the path
+//!   may be on: A's degrees are checked, not added to millimetres;
 //! - the position exactly (in Q16.16 steps) on every exact stop and the program end (a
 //!   stop counts once the machine has moved since the previous one, unless its piece
-//!   needs no motion: a program returning to its start has not ended before it begins);
+//!   needs no motion: a program returning to its start has not ended before it begins;
+//!   and only where the path can be at it (`stops_reached`): a line crossing the end
+//!   point mid-program has not ended it);
 //! - every record within the drive's rated rate (the model's `RateChecker`).
 //!
 //! # Quantisation tolerance
@@ -73,7 +79,9 @@ pub struct CheckReport {
     pub path_max: [f64; 3],
     /// Largest ratio of path speed to the feed allowed there.
     pub max_feed_ratio: f64,
-    /// Largest distance of a period boundary or chord midpoint from the programmed path, units.
+    /// Largest distance of a period boundary or chord midpoint from the programmed path
+    /// in space (X, Y, Z), mm. The A axis is held to the path within the same allowance
+    /// (in degrees) but not counted in this figure.
     pub max_deviation: f64,
     /// The source line where it occurs.
     pub max_deviation_line: usize,
@@ -483,6 +491,88 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
     (out, stops)
 }
 
+impl Piece {
+    /// A length the machine's period chords cover at least along the piece: its length
+    /// over the present axes, less what chords cut off (a chord within `chord` of a
+    /// circle of radius r is at least `1 - chord / (3 r)` of its arc, never less than 2/3
+    /// of it; a NURBS is taken at 2/3).
+    fn chord_floor(&self, present: &[bool; 4], chord: f64) -> f64 {
+        if self.still {
+            return 0.0;
+        }
+        let span = |p: [f64; 4], q: [f64; 4]| -> f64 {
+            (0..4).filter(|&a| present[a]).map(|a| (q[a] - p[a]).powi(2)).sum::<f64>().sqrt()
+        };
+        if let Some(curve) = &self.nurbs {
+            let planar: f64 =
+                curve.samples.windows(2).map(|w| (w[1].1[0] - w[0].1[0]).hypot(w[1].1[1] - w[0].1[1])).sum();
+            return planar * 2.0 / 3.0;
+        }
+        match self.arc {
+            None => span(self.start, self.end),
+            Some(((u, v), (cu, cv), r0, _, sweep)) => {
+                let r1 = (self.end[u] - cu).hypot(self.end[v] - cv);
+                let n = (64.0 * (sweep.abs() / TAU).ceil()) as usize + 64;
+                let polyline: f64 =
+                    (0..n).map(|i| span(self.point(i as f64 / n as f64), self.point((i + 1) as f64 / n as f64))).sum();
+                polyline * (1.0 - (chord / (3.0 * r0.min(r1).max(1e-12))).min(1.0 / 3.0))
+            }
+        }
+    }
+}
+
+/// Counts the exact stops reached at the position `raw` (Q16.16 steps), from
+/// `stops[*next_stop]` on, and moves the tracker past them.
+///
+/// A stop is reached on its point (exactly, in steps) after the machine has moved since
+/// the last one (a program returning to its start is not at its end before it begins),
+/// unless its piece asks for no motion, and only where the path can be at that stop:
+/// the tracker on its piece or the one before, or every piece in between passing within
+/// its allowance of the stop's point (short pieces the tracker stepped over), or the
+/// machine having travelled since the last stop at least the chord floor of the pieces
+/// up to this one less three allowances and two half steps a junction (a blend cuts at
+/// most two P off a corner: the tracker stays on a piece the path reverses along).
+/// Crossing
+/// a later stop's point on the way elsewhere (a line through the point where the
+/// program ends) is not reaching it.
+#[allow(clippy::too_many_arguments)]
+fn stops_reached(
+    pieces: &[Piece],
+    stops: &[usize],
+    next_stop: &mut usize,
+    piece: &mut usize,
+    moved: &mut bool,
+    raw: &[i64; 4],
+    present: &[bool; 4],
+    scale: &[f64; 4],
+    base_allowance: f64,
+    travelled: &mut f64,
+    floor: &[f64],
+) -> usize {
+    let mut reached = 0;
+    while let Some(&stop) = stops.get(*next_stop) {
+        let target: [i64; 4] = std::array::from_fn(|a| ((pieces[stop].end[a] * scale[a]).round() as i64) << 16);
+        let on_point = (0..4).all(|a| !present[a] || raw[a] == target[a]);
+        let point: [f64; 4] = std::array::from_fn(|a| raw[a] as f64 / 65536.0 / scale[a]);
+        let since = if *next_stop == 0 { 0 } else { stops[*next_stop - 1] + 1 };
+        let on_the_way = || {
+            stop <= *piece + 1
+                || (*piece + 1..stop)
+                    .all(|i| pieces[i].distance(&point, present) <= pieces[i].allowance + base_allowance)
+                || *travelled >= floor[stop + 1] - floor[since]
+        };
+        if !((*moved || pieces[stop].still) && on_point && on_the_way()) {
+            break;
+        }
+        reached += 1;
+        *next_stop += 1;
+        *moved = false;
+        *travelled = 0.0;
+        *piece = (stop + 1).min(pieces.len() - 1);
+    }
+    reached
+}
+
 /// Checks `records` as the plan of `program` on the machine `config` (module docs). The
 /// geometry the records must follow is the tool-centre path: the program after cutter
 /// compensation with the configuration's tool table (a program that cannot be
@@ -520,6 +610,7 @@ pub fn check_program(
             + (0..4).filter(|&a| present[a]).map(|a| tolerance[a][k]).sum::<f64>()
     };
     let path_limit = [0.0, norm_limit(1), norm_limit(2)];
+    let linear: [bool; 4] = std::array::from_fn(|a| present[a] && a < 3);
     let rounding: f64 = (0..4).filter(|&a| present[a]).map(|a| (0.5 / scale[a]).powi(2)).sum::<f64>().sqrt();
     let base_allowance = machine.chord_tolerance_mm + rounding + 1e-9;
 
@@ -531,6 +622,27 @@ pub fn check_program(
     let mut piece = 0usize;
     let mut next_stop = 0usize;
     let mut moved = false;
+    // floor[i]: how far the machine travels at least over the pieces before i.
+    let mut floor = vec![0.0; pieces.len() + 1];
+    for (i, p) in pieces.iter().enumerate() {
+        floor[i + 1] = floor[i]
+            + (p.chord_floor(&present, machine.chord_tolerance_mm) - 3.0 * p.allowance - 2.0 * rounding).max(0.0);
+    }
+    let mut travelled = 0.0f64;
+    // Stops of pieces that need no motion, reached before the first period.
+    report.exact_stops += stops_reached(
+        &pieces,
+        &stops,
+        &mut next_stop,
+        &mut piece,
+        &mut moved,
+        &raw,
+        &present,
+        &scale,
+        base_allowance,
+        &mut travelled,
+        &floor,
+    );
     // Two rest periods after the end: the machine stops there.
     let rest = [PeriodRecord::default(); 2];
     for (k, record) in records.iter().chain(rest.iter()).enumerate() {
@@ -585,27 +697,15 @@ pub fn check_program(
         if emitted && !pieces.is_empty() {
             let from_piece = piece;
             // The path moves on through the program in order: the current piece while the
-            // point is close enough to it, else the nearest close enough among the next
-            // three, else the first close enough further on (never the nearest of many: a
-            // later piece can pass through the same point, two circles crossing).
+            // point is close enough to it, else the first close enough among the next 64
+            // (never the nearest of many: a later piece can pass close by, a line coming
+            // back past a corner the path is rounding, or two circles crossing).
             let fits = |i: usize| {
                 let d = pieces[i].distance(&point, &present);
                 (d <= pieces[i].allowance + base_allowance).then_some(d)
             };
-            let near = (piece + 3).min(pieces.len() - 1);
             let last = (piece + 64).min(pieces.len() - 1);
-            let found = fits(piece)
-                .map(|_| piece)
-                .or_else(|| {
-                    (piece + 1..=near)
-                        .filter_map(|i| fits(i).map(|d| (i, d)))
-                        .fold(None, |best: Option<(usize, f64)>, (i, d)| match best {
-                            Some((_, bd)) if bd <= d + 1e-9 => best,
-                            _ => Some((i, d)),
-                        })
-                        .map(|(i, _)| i)
-                })
-                .or_else(|| (near + 1..=last).find(|&i| fits(i).is_some()));
+            let found = (piece..=last).find(|&i| fits(i).is_some());
             let within = found.is_some();
             let best = found.unwrap_or(piece);
             let deviation = (best.saturating_sub(1)..=(best + 1).min(pieces.len() - 1))
@@ -618,8 +718,17 @@ pub fn check_program(
             let around = &pieces[lo..=(best + 1).min(pieces.len() - 1)];
             let d_mid = around.iter().map(|p| p.distance(&midpoint, &present)).fold(f64::INFINITY, f64::min);
             let mid_fits = around.iter().any(|p| p.distance(&midpoint, &present) <= p.allowance + base_allowance);
-            if deviation.max(d_mid) > report.max_deviation {
-                report.max_deviation = deviation.max(d_mid);
+            // The figure reported is the tool's distance in space: over X, Y and Z in mm.
+            // A in degrees is held by the check above (its half step in the allowance)
+            // but is no distance to add to millimetres. It is measured to every piece the
+            // path may be on, up to three ahead of the tracker: after a reversal the
+            // tracker stays on the piece the path came along while the point fits it,
+            // and the piece the path is on is the one coming back.
+            let ahead = &pieces[lo..=(best + 3).min(pieces.len() - 1)];
+            let nearest = |q: &[f64; 4]| ahead.iter().map(|p| p.distance(q, &linear)).fold(f64::INFINITY, f64::min);
+            let spatial = nearest(&point).max(nearest(&midpoint));
+            if spatial > report.max_deviation {
+                report.max_deviation = spatial;
                 report.max_deviation_line = pieces[best].line;
             }
             if !within || !mid_fits {
@@ -653,20 +762,22 @@ pub fn check_program(
                 ));
                 next_stop += 1;
             }
-            // A stop is reached on its point after the machine has moved since the last
-            // one (a program returning to its start is not at its end before it begins),
-            // unless its piece asks for no motion.
             moved |= record.inc.iter().any(|d| d.to_bits() != 0);
-            while let Some(&stop) = stops.get(next_stop) {
-                let target: [i64; 4] = std::array::from_fn(|a| ((pieces[stop].end[a] * scale[a]).round() as i64) << 16);
-                if !((moved || pieces[stop].still) && (0..4).all(|a| !present[a] || raw[a] == target[a])) {
-                    break;
-                }
-                report.exact_stops += 1;
-                next_stop += 1;
-                moved = false;
-                piece = (stop + 1).min(pieces.len() - 1);
-            }
+            travelled +=
+                (0..4).filter(|&a| present[a]).map(|a| (point[a] - previous_point[a]).powi(2)).sum::<f64>().sqrt();
+            report.exact_stops += stops_reached(
+                &pieces,
+                &stops,
+                &mut next_stop,
+                &mut piece,
+                &mut moved,
+                &raw,
+                &present,
+                &scale,
+                base_allowance,
+                &mut travelled,
+                &floor,
+            );
         }
         report.samples.push(Sample { position: point, speed: path[0], acceleration: path[1], jerk: path[2] });
         previous_point = point;

@@ -216,7 +216,12 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
             None => None,
         };
         if arc.is_none() && curve.is_none() && to == at {
-            continue; // nothing to do; keeps neighbouring corners blendable
+            // Nothing to move on this machine; keeps neighbouring corners blendable. In
+            // G61 the move still ends in an exact stop, here: where the move before ends.
+            if blend.is_none() {
+                stop_previous(&mut out, 0, block.line);
+            }
+            continue;
         }
         // G61 stops at the end of every move.
         out.push(Move {

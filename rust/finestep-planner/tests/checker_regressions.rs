@@ -1,0 +1,149 @@
+//! Regressions of the independent checker (issue 18): false violations and deviation
+//! figures that the planner's records did not deserve, each on the program that showed
+//! it, and a property over programs with reversals at corners.
+
+mod common;
+
+use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, ProfileKind};
+use proptest::prelude::*;
+
+use common::{config, parse, plan_and_check, PROFILES};
+
+/// The checker's rounding allowance over the linear axes of the default machine: half a
+/// step of X, Y (800 steps/mm) and Z (400 steps/mm).
+fn linear_rounding() -> f64 {
+    (2.0 * (0.5f64 / 800.0).powi(2) + (0.5f64 / 400.0).powi(2)).sqrt()
+}
+
+/// The most the reported deviation may be for a largest G64 tolerance `p` on the default
+/// machine: P, the chord tolerance, half a step per linear axis.
+fn deviation_bound(p: f64) -> f64 {
+    p + MachineConfig::default().chord_tolerance_mm + linear_rounding() + 1e-9
+}
+
+fn x_positions(planned: &finestep_planner::PlannedProgram) -> Vec<i64> {
+    let mut x = 0i64;
+    planned
+        .records
+        .iter()
+        .map(|r| {
+            x += i64::from(r.inc[0].to_bits());
+            x
+        })
+        .collect()
+}
+
+#[test]
+fn a_switch_from_g61_to_g64_is_no_violation() {
+    // The issue's program: the X25 move passes through the origin, where the program
+    // ends. The trapezoid lands a period exactly on it, which the checker took for the
+    // final stop (1 241 violations and a 35.9 mm "deviation").
+    let program = parse("g61g64.ngc", "G61\nG1 X-25 F6000\nG64\nG1 X25\nG1 Y25\nX0\nY0\nM2\n");
+    for profile in PROFILES {
+        let (planned, report) = plan_and_check("g61g64.ngc", &program, &config(profile));
+        assert_eq!(report.exact_stops, 2, "{profile:?}");
+        assert!(report.max_deviation <= deviation_bound(0.01), "{profile:?}: {}", report.max_deviation);
+        if profile == ProfileKind::Trapezoid {
+            // The case that broke it: a period boundary exactly on the end point, mid-program.
+            let x = x_positions(&planned);
+            let y0 = planned.records.iter().position(|r| r.inc[1].to_bits() != 0).unwrap();
+            assert!(x[..y0].iter().skip(1).any(|&x| x == 0), "no period ends on the origin on the way");
+        }
+    }
+}
+
+#[test]
+fn a_move_shorter_than_a_step_is_an_exact_stop_reached() {
+    // G61 moves of less than half a step on X and on A need no motion; their stops are
+    // reached where the machine already is (before the first period, or mid-program).
+    for (source, stops) in [
+        ("G61\nG1 X0.0005 F600\nG1 X10\nM2\n", 2),
+        ("G61\nG1 A0.004 F600\nG1 X10\nM2\n", 2),
+        ("G61\nG1 X10 F600\nG1 X10.0004\nG1 X10.0001\nG64\nG1 X20\nM2\n", 4),
+    ] {
+        let program = parse("short.ngc", source);
+        for profile in PROFILES {
+            let (_, report) = plan_and_check("short.ngc", &program, &config(profile));
+            assert_eq!(report.exact_stops, stops, "{profile:?}: {source}");
+        }
+    }
+    // A G61 move that rounds to nothing after a G64 move: the machine stops where it
+    // ends (the planner had dropped the stop with the move, and passed X10 at speed).
+    let program = parse("short.ngc", "G64\nG1 X10 F600\nG61\nG1 X10.0004\nG64\nG1 X20\nM2\n");
+    for profile in PROFILES {
+        let (planned, report) = plan_and_check("short.ngc", &program, &config(profile));
+        assert_eq!(report.exact_stops, 2, "{profile:?}");
+        assert!(x_positions(&planned).contains(&((10 * 800) << 16)));
+    }
+}
+
+#[test]
+fn the_deviation_is_in_millimetres_and_within_p() {
+    // A in degrees: its half step (0.005 degrees) was counted as millimetres, 0.004 "mm"
+    // reported at P = 0.001.
+    let program = parse("a.ngc", "G64 P0.001\nG1 X10 A1.003 F3000\nG1 X20 A0.004\nG1 Y10 A0.001\nM2\n");
+    for profile in PROFILES {
+        let (_, report) = plan_and_check("a.ngc", &program, &config(profile));
+        assert!(report.max_deviation <= deviation_bound(0.001), "{profile:?}: {}", report.max_deviation);
+    }
+    // A reversal at a corner: the tracker stays on the piece the path came along while
+    // the point fits it, and the deviation was measured to that piece (0.148 mm at P
+    // 0.1451) while the path was on the piece coming back.
+    let program =
+        parse("reversal.ngc", "G64 P0.1451\nF3000\nG1 X12.6633 Y0\nG1 X12.7129 Y0.0061\nG1 X-0.7994 Y-1.6554\nM2\n");
+    for profile in PROFILES {
+        let (_, report) = plan_and_check("reversal.ngc", &program, &config(profile));
+        assert!(report.max_deviation <= deviation_bound(0.1451), "{profile:?}: {}", report.max_deviation);
+    }
+    // A line coming back close past a corner being rounded: the tracker took the nearest
+    // of the next three pieces, that line, and reported 114 violations.
+    let program = parse(
+        "past.ngc",
+        "G64 P0.0547\nF3000\nG1 X1.3464 Y0\nG1 X3.8205 Y0.2959\nG1 X7.1498 Y1.5484\nG1 X-8.8179 Y-2.6903\nM2\n",
+    );
+    for profile in PROFILES {
+        let (_, report) = plan_and_check("past.ngc", &program, &config(profile));
+        assert!(report.max_deviation <= deviation_bound(0.0547), "{profile:?}: {}", report.max_deviation);
+    }
+}
+
+fn check(program: &finestep_gcode::Program, profile: ProfileKind) -> Result<CheckReport, TestCaseError> {
+    let config = config(profile);
+    let planned = plan_program(&config, program).map_err(|e| TestCaseError::fail(e.to_string()))?;
+    Ok(check_program(&config, program, &planned.records).unwrap())
+}
+
+#[test]
+fn reversals_at_corners_pass_within_p() {
+    // Chains of lines turning by a small angle or nearly back on themselves, with Z
+    // and A moving a little, at random G64 P: the checker passes them and the reported
+    // deviation stays within P plus the chord tolerance and the linear half steps.
+    let turn = (0.0..0.3f64, 0.05..20.0f64, any::<bool>(), -1.0..1.0f64, -1.0..1.0f64);
+    let mut runner = finestep_testkit::runner("reversals_at_corners_pass_within_p", 200);
+    runner
+        .run(&(prop::collection::vec(turn, 2..12), 0.0005..0.2f64, any::<bool>()), |(turns, p, scurve)| {
+            let mut text = format!("G64 P{p:.4}\nF3000\n");
+            let p: f64 = format!("{p:.4}").parse().unwrap();
+            let (mut x, mut y, mut z, mut a, mut dir) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+            for (eps, len, back, dz, da) in turns {
+                dir += if back { std::f64::consts::PI - eps } else { eps };
+                x += len * dir.cos();
+                y += len * dir.sin();
+                z += dz * 0.01;
+                a += da * 0.02;
+                text.push_str(&format!("G1 X{x:.4} Y{y:.4} Z{z:.4} A{a:.4}\n"));
+            }
+            let program = finestep_gcode::parse_str(&text, "reversals.ngc").unwrap();
+            let profile = if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid };
+            let report = check(&program, profile)?;
+            prop_assert!(report.passed(), "{profile:?}: {:#?}\n{text}", report.violations);
+            prop_assert!(
+                report.max_deviation <= deviation_bound(p),
+                "{profile:?}: deviation {} over {}\n{text}",
+                report.max_deviation,
+                deviation_bound(p)
+            );
+            Ok(())
+        })
+        .unwrap();
+}
