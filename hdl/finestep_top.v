@@ -22,7 +22,8 @@ module finestep_top #(
     parameter N_ENC           = 4,
     parameter HAS_MPG         = 1,
     parameter RAM_BLOCK       = 0,
-    parameter STEP_SHARED     = 0
+    parameter STEP_SHARED     = 0,
+    parameter READ_STORE      = 1
 ) (
     // clock, reset
     input  wire              clk,
@@ -230,7 +231,7 @@ module finestep_top #(
     register_file #(
         .N_AXES(N_AXES), .P_WIDTH(P_WIDTH), .TIMING_W(TIMING_W), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
-        .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
+        .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),

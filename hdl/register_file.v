@@ -23,7 +23,9 @@ module register_file #(
     parameter HAS_SPI         = 1,
     parameter HAS_PARALLEL    = 1,
     parameter N_ENC           = 4,
-    parameter HAS_MPG         = 1
+    parameter HAS_MPG         = 1,
+    parameter READ_STORE      = 1,    // 1: the per-axis arrays read back from a store (RAM)
+    parameter RAM_BLOCK       = 0     // 1: that store in block RAM
 ) (
     // clock, reset
     input  wire                         clk,
@@ -186,6 +188,7 @@ module register_file #(
     wire        grant_par = par_req && !spi_req;
     wire        granted   = grant_spi || grant_par;
     wire [ADDR_W-1:0] granted_addr = grant_spi ? spi_addr : par_addr;
+    wire [WORD_W-1:0] granted_wdata = grant_spi ? spi_wdata : par_wdata;
     reg               stage_valid_reg;
     reg               stage_we_reg;
     reg  [ADDR_W-1:0] stage_addr_reg;
@@ -201,10 +204,127 @@ module register_file #(
             if (granted) begin
                 stage_we_reg    <= grant_spi ? spi_we : par_we;
                 stage_addr_reg  <= granted_addr;
-                stage_wdata_reg <= grant_spi ? spi_wdata : par_wdata;
+                stage_wdata_reg <= granted_wdata;
             end
         end
     end
+    // The readback store (READ_STORE = 1): what a read of AXIS_TIMING_A/B[i],
+    // AXIS_MODE[i] or RECORD_INC[i] (i < N_AXES) returns comes from a RAM of 32 words,
+    // word {i, k} with k = 0, 1, 2 for the axis block (address 0x20 + 4i + k) and 3 for
+    // RECORD_INC[i], instead of a multiplexer over their flip-flops (which stay: they feed
+    // the core). The store is written with the readable fields of the word at the edge
+    // ending the write's grant cycle and read at the edge ending a read's grant cycle, so
+    // a read granted after a write sees it, as the registers do (they take a write at the
+    // end of its serving cycle, the grant cycle + 1, and a read returns the state of its
+    // serving cycle); one grant a cycle, so the store never reads and writes one word on
+    // one clock for a read. `written` marks the words written since reset (the others
+    // read their reset values).
+    localparam [ADDR_W-6:0] BLOCK_HIGH = FS_AXIS_TIMING_A_ADDR[ADDR_W-1:5];   // the axis block's 32 words
+    localparam [ADDR_W-4:0] INC_HIGH   = FS_RECORD_INC_ADDR[ADDR_W-1:3];      // RECORD_INC's 8
+    function [5:0] store_map;   // {shadowed, word}
+        input [ADDR_W-1:0] addr;
+        begin
+            store_map = 6'd0;
+            if (addr[ADDR_W-1:5] == BLOCK_HIGH && {29'd0, addr[4:2]} < N_AXES && addr[1:0] != 2'd3)
+                store_map = {1'b1, addr[4:0]};
+            if (addr[ADDR_W-1:3] == INC_HIGH && {29'd0, addr[2:0]} < N_AXES)
+                store_map = {1'b1, addr[2:0], 2'd3};
+        end
+    endfunction
+    // The readable fields of a word written to a stored register (k = word[1:0]).
+    function [WORD_W-1:0] store_fields;
+        input [1:0]        k;
+        input [WORD_W-1:0] w;
+        begin
+            store_fields = {WORD_W{1'b0}};
+            case (k)
+                2'd0: begin
+                    store_fields[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = w[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W];
+                    store_fields[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = w[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W];
+                end
+                2'd1: begin
+                    store_fields[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = w[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W];
+                    store_fields[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = w[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W];
+                end
+                2'd2: begin
+                    store_fields[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH] = w[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH];
+                    store_fields[FS_AXIS_MODE_INVERT_A_LSB]  = w[FS_AXIS_MODE_INVERT_A_LSB];
+                    store_fields[FS_AXIS_MODE_INVERT_B_LSB]  = w[FS_AXIS_MODE_INVERT_B_LSB];
+                    store_fields[FS_AXIS_MODE_INVERT_EN_LSB] = w[FS_AXIS_MODE_INVERT_EN_LSB];
+                end
+                default: store_fields[INC_W-1:0] = w[INC_W-1:0];
+            endcase
+        end
+    endfunction
+    // The reset value of a stored register, as the register file's reset sets it.
+    function [WORD_W-1:0] store_reset;
+        input [1:0] k;
+        reg   [WORD_W-1:0] r;
+        begin
+            r = {WORD_W{1'b0}};
+            case (k)
+                2'd0: begin
+                    r[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = FS_AXIS_TIMING_A_STEP_LEN_RESET[TIMING_W-1:0];
+                    r[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = FS_AXIS_TIMING_A_STEP_SPACE_RESET[TIMING_W-1:0];
+                end
+                2'd1: begin
+                    r[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = FS_AXIS_TIMING_B_DIR_SETUP_RESET[TIMING_W-1:0];
+                    r[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = FS_AXIS_TIMING_B_DIR_HOLD_RESET[TIMING_W-1:0];
+                end
+                2'd2: begin
+                    r[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH] = FS_AXIS_MODE_OUT_MODE_RESET;
+                    r[FS_AXIS_MODE_INVERT_A_LSB]  = FS_AXIS_MODE_INVERT_A_RESET;
+                    r[FS_AXIS_MODE_INVERT_B_LSB]  = FS_AXIS_MODE_INVERT_B_RESET;
+                    r[FS_AXIS_MODE_INVERT_EN_LSB] = FS_AXIS_MODE_INVERT_EN_RESET;
+                end
+                default: r[INC_W-1:0] = FS_RECORD_INC_INC_RESET;
+            endcase
+            store_reset = r;
+        end
+    endfunction
+    localparam STORED = (READ_STORE != 0);
+    // The word numbering above relies on the map's layout of the axis block and RECORD_INC.
+    generate
+        if (FS_AXIS_TIMING_A_ADDR % 32 != 0 || FS_AXIS_TIMING_A_STRIDE != 4 || FS_AXIS_TIMING_B_STRIDE != 4 ||
+                FS_AXIS_MODE_STRIDE != 4 || FS_AXIS_TIMING_B_ADDR != FS_AXIS_TIMING_A_ADDR + 1 ||
+                FS_AXIS_MODE_ADDR != FS_AXIS_TIMING_A_ADDR + 2 || FS_RECORD_INC_ADDR % 8 != 0 ||
+                FS_RECORD_INC_STRIDE != 1) begin : fs_check_store_layout
+            register_file_readback_store_needs_the_axis_block_layout out_of_range ();
+        end
+    endgenerate
+    wire [5:0]        grant_map  = store_map(granted_addr);
+    wire [5:0]        stage_map  = store_map(stage_addr_reg);
+    wire              store_write = STORED && granted && (grant_spi ? spi_we : par_we) && grant_map[5];
+    wire [WORD_W-1:0] store_rd;
+    reg  [31:0]       written_reg;
+`ifdef FORMAL
+    (* anyconst *) reg [4:0] f_word;      // the store word the invariants look at
+    wire [WORD_W-1:0] f_word_data;
+`endif
+    generate
+        if (STORED) begin : readback
+            store_ram #(.WIDTH(WORD_W), .DEPTH(32), .ADDR_W(5), .BLOCK(RAM_BLOCK)) store (
+                .clk(clk), .wr_en(store_write), .wr_addr(grant_map[4:0]),
+                .wr_data(store_fields(grant_map[1:0], granted_wdata)),
+                .rd_addr(grant_map[4:0]), .rd_data(store_rd)
+`ifdef FORMAL
+                , .f_peek_addr(f_word), .f_peek_data(f_word_data)
+`endif
+            );
+        end else begin : no_readback
+            assign store_rd = {WORD_W{1'b0}};
+`ifdef FORMAL
+            assign f_word_data = {WORD_W{1'b0}};
+`endif
+        end
+    endgenerate
+    always @(posedge clk) begin
+        if (rst || !STORED) written_reg <= 32'd0;
+        else if (store_write) written_reg[grant_map[4:0]] <= 1'b1;
+    end
+    wire              stage_stored = STORED && stage_map[5];
+    wire [WORD_W-1:0] stored_word  = written_reg[stage_map[4:0]] ? store_rd : store_reset(stage_map[1:0]);
+
     wire              bus_we    = stage_we_reg;
     wire [ADDR_W-1:0] bus_addr  = stage_addr_reg;
     wire [WORD_W-1:0] bus_wdata = stage_wdata_reg;
@@ -307,11 +427,13 @@ module register_file #(
                 mode_word[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_B_BIT];
                 mode_word[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_EN_BIT];
                 read_value = read_value
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE}} &
+                       position_latch_reg[POS_W*index +: POS_W]);
+                // Without the readback store the per-axis arrays from their flip-flops.
+                if (!STORED) read_value = read_value
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word)
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE}} &
-                       position_latch_reg[POS_W*index +: POS_W])
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE}} &
                        record_inc_reg[INC_W*index +: INC_W]);
             end
@@ -350,7 +472,7 @@ module register_file #(
             rdata_reg <= {WORD_W{1'b0}};
         end else begin
             irq_reg <= |(irq_status & irq_mask_reg);
-            if (read) rdata_reg <= read_word(bus_addr) | feedback_rdata;
+            if (read) rdata_reg <= (stage_stored ? stored_word : read_word(bus_addr)) | feedback_rdata;
         end
     end
 
@@ -552,6 +674,77 @@ module register_file #(
                                       bus_wdata == $past(par_wdata));
         cover (push_write);
         cover ($past(push_refused));
+        cover (read && stage_stored && written_reg[stage_map[4:0]] && stored_word != 32'd0);
+        // The store's read register holds the word read at the grant.
+        if (STORED && $past(granted && grant_map[5] && grant_map[4:0] == f_word && !store_write))
+            assert (store_rd == $past(f_word_data));
+    end
+
+    // The readback store answers what the registers hold: a served read of a stored
+    // register gets the word its flip-flops make (the multiplexer it replaces).
+    reg [WORD_W-1:0] f_ff_word;
+    integer f_axis;
+    always @(*) begin
+        f_ff_word = {WORD_W{1'b0}};
+        for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) begin
+            if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + f_axis * FS_AXIS_TIMING_A_STRIDE) begin
+                f_ff_word[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*f_axis +: TIMING_W];
+                f_ff_word[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*f_axis +: TIMING_W];
+            end
+            if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + f_axis * FS_AXIS_TIMING_B_STRIDE) begin
+                f_ff_word[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*f_axis +: TIMING_W];
+                f_ff_word[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*f_axis +: TIMING_W];
+            end
+            if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + f_axis * FS_AXIS_MODE_STRIDE) begin
+                f_ff_word[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH] = out_mode_reg[FS_OUT_MODE_WIDTH*f_axis +: FS_OUT_MODE_WIDTH];
+                f_ff_word[FS_AXIS_MODE_INVERT_A_LSB]  = invert_reg[FS_INVERT_WIDTH*f_axis + FS_INVERT_PIN_A_BIT];
+                f_ff_word[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*f_axis + FS_INVERT_PIN_B_BIT];
+                f_ff_word[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*f_axis + FS_INVERT_PIN_EN_BIT];
+            end
+            if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + f_axis * FS_RECORD_INC_STRIDE)
+                f_ff_word[INC_W-1:0] = record_inc_reg[INC_W*f_axis +: INC_W];
+        end
+    end
+    // The word f_word of the store, once written, holds its register's readable fields
+    // (the invariant that makes the read property inductive): the register behind f_word
+    // is the one a write granted now would land in, decoded by f_word_reg below.
+    reg [WORD_W-1:0] f_word_reg;
+    integer f_a;
+    always @(*) begin
+        f_word_reg = {WORD_W{1'b0}};
+        for (f_a = 0; f_a < N_AXES; f_a = f_a + 1) begin
+            if ({29'd0, f_word[4:2]} == f_a) begin
+                case (f_word[1:0])
+                    2'd0: begin
+                        f_word_reg[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*f_a +: TIMING_W];
+                        f_word_reg[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*f_a +: TIMING_W];
+                    end
+                    2'd1: begin
+                        f_word_reg[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W] = dir_setup_reg[TIMING_W*f_a +: TIMING_W];
+                        f_word_reg[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]  = dir_hold_reg[TIMING_W*f_a +: TIMING_W];
+                    end
+                    2'd2: begin
+                        f_word_reg[FS_AXIS_MODE_OUT_MODE_LSB +: FS_OUT_MODE_WIDTH] = out_mode_reg[FS_OUT_MODE_WIDTH*f_a +: FS_OUT_MODE_WIDTH];
+                        f_word_reg[FS_AXIS_MODE_INVERT_A_LSB]  = invert_reg[FS_INVERT_WIDTH*f_a + FS_INVERT_PIN_A_BIT];
+                        f_word_reg[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*f_a + FS_INVERT_PIN_B_BIT];
+                        f_word_reg[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*f_a + FS_INVERT_PIN_EN_BIT];
+                    end
+                    default: f_word_reg[INC_W-1:0] = record_inc_reg[INC_W*f_a +: INC_W];
+                endcase
+            end
+        end
+    end
+    // A write granted in the last cycle is in the store but not yet in its register.
+    wire f_word_pending = stage_valid_reg && stage_we_reg && stage_map[5] && stage_map[4:0] == f_word;
+    always @(*) if (f_past_valid && !rst && STORED) begin
+        if ({29'd0, f_word[4:2]} < N_AXES && written_reg[f_word] && !f_word_pending)
+            assert (f_word_data == f_word_reg);
+        if (!({29'd0, f_word[4:2]} < N_AXES)) assert (!written_reg[f_word]);
+        else if (!written_reg[f_word]) assert (f_word_reg == store_reset(f_word[1:0]));
+        if (f_word_pending) assert (f_word_data == store_fields(f_word[1:0], bus_wdata));
+        if (read && stage_stored && stage_map[4:0] == f_word) assert (stored_word == f_ff_word);
+        // The store never reads and writes one word for a read in one clock.
+        if (store_write) assert (!(granted && !(grant_spi ? spi_we : par_we)));
     end
 `endif
 

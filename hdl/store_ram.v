@@ -24,6 +24,12 @@ module store_ram #(
     input  wire [WIDTH-1:0]  wr_data,
     input  wire [ADDR_W-1:0] rd_addr,
     output wire [WIDTH-1:0]  rd_data
+`ifdef FORMAL
+    ,
+    // Formal only: the word at f_peek_addr, unregistered, for the owner's invariants.
+    input  wire [ADDR_W-1:0] f_peek_addr,
+    output wire [WIDTH-1:0]  f_peek_data
+`endif
 );
 
     generate
@@ -33,12 +39,18 @@ module store_ram #(
             always @(posedge clk) if (wr_en) mem[wr_addr] <= wr_data;
             always @(posedge clk) rd_reg <= mem[rd_addr];
             assign rd_data = rd_reg;
+`ifdef FORMAL
+            assign f_peek_data = mem[f_peek_addr];
+`endif
         end else begin : any
             (* no_rw_check *) reg [WIDTH-1:0] mem [0:DEPTH-1];
             reg [WIDTH-1:0] rd_reg;
             always @(posedge clk) if (wr_en) mem[wr_addr] <= wr_data;
             always @(posedge clk) rd_reg <= mem[rd_addr];
             assign rd_data = rd_reg;
+`ifdef FORMAL
+            assign f_peek_data = mem[f_peek_addr];
+`endif
         end
     endgenerate
 
