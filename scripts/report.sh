@@ -62,6 +62,8 @@ ooc() {
 }
 ooc step1 finestep_core "-set N_AXES 1 -set HAS_GANTRY 0"
 ooc step4 finestep_core "-set N_AXES 4 -set HAS_GANTRY 0"
+ooc step1s finestep_core "-set N_AXES 1 -set HAS_GANTRY 0 -set STEP_SHARED 1" "-set RAM_BLOCK 1"
+ooc step4s finestep_core "-set N_AXES 4 -set HAS_GANTRY 0 -set STEP_SHARED 1" "-set RAM_BLOCK 1"
 ooc enc1 encoder_bank "-set N_ENC 1" "-set RAM_BLOCK 1"
 ooc enc4 encoder_bank "-set N_ENC 4" "-set RAM_BLOCK 1"
 
@@ -87,6 +89,7 @@ run_target ice40-up5k ice40-up5k
 run_target machxo3-6900 machxo3-6900
 run_target machxo2-1200 machxo2-1200
 run_target ice40-hx8k-full ice40-hx8k --pack-only --variant full -set N_ENC 4 -set HAS_MPG 1
+run_target ice40-hx8k-full-shared ice40-hx8k --pack-only --variant full-shared -set N_ENC 4 -set HAS_MPG 1 -set STEP_SHARED 1
 # Each clocked target on two more placement seeds: a board is shipped at a clock met on all
 # three (`make test` builds each once, on the first).
 for target in ecp5 ice40-hx8k ice40-up5k machxo3-6900; do
@@ -255,6 +258,7 @@ TARGETS = [
     ("ecp5", "LFE5U-25F-6BG256C (Colorlight 5A-75B v8)", "4 axes, 4 enc, MPG, SPI, FIFO 256"),
     ("ice40-hx8k", "iCE40HX8K-CT256 (HX8K breakout)", "4 axes, 4 enc, no MPG, SPI, FIFO 256"),
     ("ice40-hx8k-full", "iCE40HX8K-CT256, packed only", "4 axes, 4 enc, MPG, SPI, FIFO 256"),
+    ("ice40-hx8k-full-shared", "iCE40HX8K-CT256, packed only", "the same with the step engine (STEP_SHARED)"),
     ("ice40-up5k", "iCE40UP5K-SG48 (iCEBreaker)", "2 axes, 1 enc, no MPG, SPI, FIFO 256"),
     ("machxo3-6900", "LCMXO3LF-6900C-5BG256C", "4 axes, 2 enc, no MPG, SPI, FIFO 16"),
     ("machxo2-1200", "LCMXO2-1200HC-4TG100C", "CPLD: 4 axes, 2 enc, MPG, 8080, FIFO 4"),
@@ -325,6 +329,7 @@ def fmt(x, div=1):
     return "-" if x is None else (f"{x / div:.0f}" if div != 1 else f"{x}")
 
 step1, step4, enc1, enc4 = ooc("step1"), ooc("step4"), ooc("enc1"), ooc("enc4")
+step1s, step4s = ooc("step1s"), ooc("step4s")
 p("## One channel against the peers")
 p()
 p("Out of context: `finestep_core` (period timer with the record and rate checks, DDA, step")
@@ -339,6 +344,8 @@ p("| channel | iCE40 LC | ECP5 logic cells | ECP5 Fmax MHz |")
 p("| --- | ---: | ---: | ---: |")
 p(f"| finestep step channel, alone | {fmt(step1['ice40_cells'])} | {fmt(step1['ecp5_cells'])} | {fmt(step1['ecp5_fmax'])} |")
 p(f"| finestep step channel, per channel of 4 | {fmt(step4['ice40_cells'], 4)} | {fmt(step4['ecp5_cells'], 4)} | {fmt(step4['ecp5_fmax'])} |")
+p(f"| finestep step engine (STEP_SHARED), alone | {fmt(step1s['ice40_cells'])} | {fmt(step1s['ecp5_cells'])} | {fmt(step1s['ecp5_fmax'])} |")
+p(f"| finestep step engine (STEP_SHARED), per channel of 4 | {fmt(step4s['ice40_cells'], 4)} | {fmt(step4s['ecp5_cells'], 4)} | {fmt(step4s['ecp5_fmax'])} |")
 p("| hostmot2 stepgen | 411 | 304 LUT4 | 157 |")
 p("| LinuxCNC-RIO stepdir (velocity mode) | 353 | 347 LUT4 + 100 FF | 152 |")
 p("| LiteX-CNC stepgen | 950 | - | 59-62 (iCE40) |")
@@ -355,6 +362,7 @@ ecp5_rows = seeds("ecp5")
 e_low = min((r[1] for r in ecp5_rows), default=None)
 hx = seeds("ice40-hx8k")
 full = summary("ice40-hx8k-full")
+full_shared = summary("ice40-hx8k-full-shared")
 cpld_xo2 = ecp5(inclusive(load("xo2_cpld"))["finestep_top"])
 xo2 = summary("machxo2-1200")
 max2 = inclusive(load("lut4_max2"))["finestep_top"]
@@ -369,6 +377,8 @@ p(f"| full: 4 axes, 4 encoders + probe, MPG + jog, SPI, FIFO 256 | ECP5-25F -6 |
   f"lowest of {len(ecp5_rows)} seeds {e_low if e_low is not None else '-'} MHz; shipped at {clk:.1f} MHz | {yes(e_low is not None and e_low >= 125 and len(ecp5_rows) >= 3)} |")
 p(f"| full (same) | iCE40 HX8K | fits, >= 50 MHz (80) | {full.get('used_ICESTORM_LC', '?')} of {full.get('avail_ICESTORM_LC', '?')} logic cells packed | "
   f"{yes(full.get('used_ICESTORM_LC') and int(full['used_ICESTORM_LC']) <= int(full.get('avail_ICESTORM_LC', 0)))} |")
+p(f"| full with the step engine (STEP_SHARED) | iCE40 HX8K | fits, >= 50 MHz (80) | {full_shared.get('used_ICESTORM_LC', '?')} of {full_shared.get('avail_ICESTORM_LC', '?')} logic cells packed | "
+  f"{yes(full_shared.get('used_ICESTORM_LC') and int(full_shared['used_ICESTORM_LC']) <= int(full_shared.get('avail_ICESTORM_LC', 0)))} |")
 p(f"| CPLD: 4 axes, 2 encoders, MPG + jog, 8080, FIFO 4 | MachXO2-1200 | packs, bitstream, meets its clock (>= 50 MHz with a PLL) | "
   f"{xo2.get('used_TRELLIS_COMB', '?')} of {xo2.get('avail_TRELLIS_COMB', '?')} logic cells packed | "
   f"{yes(xo2.get('used_TRELLIS_COMB') and int(xo2['used_TRELLIS_COMB']) <= int(xo2.get('avail_TRELLIS_COMB', 0)))} |")
@@ -379,6 +389,9 @@ def peer(x, bound):
 p(f"| one step channel | iCE40 / ECP5 | fewer than hostmot2 stepgen and RIO stepdir (353 LC / 304 LUT4) (half) | "
   f"alone {fmt(step1['ice40_cells'])} LC / {fmt(step1['ecp5_cells'])} cells; per channel of 4 {fmt(step4['ice40_cells'], 4)} / {fmt(step4['ecp5_cells'], 4)} | "
   f"{yes(peer(step4['ice40_cells'] and step4['ice40_cells'] / 4, 353) and peer(step4['ecp5_cells'] and step4['ecp5_cells'] / 4, 304))} |")
+p(f"| one step channel, step engine (STEP_SHARED) | iCE40 / ECP5 | (same) | "
+  f"alone {fmt(step1s['ice40_cells'])} LC / {fmt(step1s['ecp5_cells'])} cells; per channel of 4 {fmt(step4s['ice40_cells'], 4)} / {fmt(step4s['ecp5_cells'], 4)} | "
+  f"{yes(peer(step4s['ice40_cells'] and step4s['ice40_cells'] / 4, 353) and peer(step4s['ecp5_cells'] and step4s['ecp5_cells'] / 4, 304))} |")
 p(f"| one encoder channel | iCE40 / ECP5 | fewer than hostmot2 qcounter (215 LC / 151 LUT4) (RIO's 104 / 97) | "
   f"alone {fmt(enc1['ice40_cells'])} LC / {fmt(enc1['ecp5_cells'])} cells; per channel of 4 {fmt(enc4['ice40_cells'], 4)} / {fmt(enc4['ecp5_cells'], 4)} | "
   f"{yes(peer(enc4['ice40_cells'] and enc4['ice40_cells'] / 4, 215) and peer(enc4['ecp5_cells'] and enc4['ecp5_cells'] / 4, 151))} |")
