@@ -31,15 +31,21 @@ impl ParamRange {
         if self.contains(value) {
             Ok(())
         } else {
-            Err(ParamError { module: self.module, name: self.name, value, min: self.min, max: self.max })
+            Err(ParamError { module: self.module, name: self.name, value, min: self.min, max: self.max, because: None })
         }
+    }
+
+    /// The error for `value` when another parameter's setting `because` narrows the
+    /// legal range to `min..=max`.
+    fn narrowed(&self, value: u64, min: u32, max: u32, because: &'static str) -> ParamError {
+        ParamError { module: self.module, name: self.name, value, min, max, because: Some(because) }
     }
 }
 
 /// A build parameter outside what the core supports (the build the RTL's elaboration
-/// check refuses).
+/// check refuses), alone or given another parameter ([`ParamError::because`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("{module}: {name} = {value} is outside {min}..={max}")]
+#[error("{module}: {name} = {value} is outside {min}..={max}{}", because.map(|b| format!(" with {b}")).unwrap_or_default())]
 pub struct ParamError {
     /// The module.
     pub module: &'static str,
@@ -51,6 +57,9 @@ pub struct ParamError {
     pub min: u32,
     /// Greatest legal value.
     pub max: u32,
+    /// When the range is narrowed by another parameter: that parameter's setting
+    /// (`"STEP_SHARED = 1 ..."`); `None` for the parameter's own range.
+    pub because: Option<&'static str>,
 }
 
 fn low_ones(width: u32) -> u32 {
@@ -75,6 +84,11 @@ pub struct CoreParams {
     /// it the gantry inputs are ignored, its outputs read 0 and every axis takes its own
     /// DDA's requests.
     pub has_gantry: bool,
+    /// `STEP_SHARED`: one DDA and one step shaper visit the axes in turn (the step
+    /// engine, [`finestep_core::STEP_SHARED`]) instead of one of each per axis. No gantry
+    /// block is built then, whatever `has_gantry` says (docs/spec/step_engine.md): see
+    /// [`CoreParams::gantry_built`].
+    pub step_shared: bool,
 }
 
 impl Default for CoreParams {
@@ -85,17 +99,55 @@ impl Default for CoreParams {
             p_width: finestep_core::P_WIDTH.default,
             timing_width: finestep_core::TIMING_W.default,
             has_gantry: finestep_core::HAS_GANTRY.default != 0,
+            step_shared: finestep_core::STEP_SHARED.default != 0,
         }
     }
 }
 
 impl CoreParams {
-    /// Checks the parameters are in the supported ranges.
+    /// Checks the parameters are in the supported ranges, and that with the step engine
+    /// (`STEP_SHARED = 1`) the period register holds the shortest period it runs,
+    /// `S = 2^SL` clocks (`P_WIDTH > SL`; the RTL's elaboration check).
     pub fn validate(&self) -> Result<(), ParamError> {
         finestep_core::N_AXES.check(self.n_axes as u64)?;
         finestep_core::P_WIDTH.check(self.p_width)?;
         finestep_core::TIMING_W.check(self.timing_width)?;
-        finestep_core::HAS_GANTRY.check(self.has_gantry)
+        finestep_core::HAS_GANTRY.check(self.has_gantry)?;
+        finestep_core::STEP_SHARED.check(self.step_shared)?;
+        let least_width = self.step_slot_bits() + 1;
+        if self.step_shared && self.p_width < least_width {
+            let because = "STEP_SHARED = 1 (the shortest period, S = 2^SL clocks, must fit P_WIDTH bits)";
+            let max = finestep_core::P_WIDTH.max;
+            return Err(finestep_core::P_WIDTH.narrowed(self.p_width.into(), least_width, max, because));
+        }
+        Ok(())
+    }
+
+    /// Whether the gantry block is built: `has_gantry` without the step engine (with it
+    /// the gantry inputs are ignored and its outputs read 0, docs/spec/step_engine.md).
+    pub fn gantry_built(&self) -> bool {
+        self.has_gantry && !self.step_shared
+    }
+
+    /// `SL`: the step engine's slot bits for `n_axes` axes (docs/spec/step_engine.md):
+    /// 1 for up to 2 axes, 2 for up to 4, 3 for up to 8 (`ceil(log2(n_axes))`, at least
+    /// 1). Defined whether or not the core is built with the engine (and, for any
+    /// `n_axes`, at most 31).
+    pub fn step_slot_bits(&self) -> u32 {
+        let ceil_log2 = usize::BITS - (self.n_axes.max(2) - 1).leading_zeros();
+        ceil_log2.min(31)
+    }
+
+    /// `S`, the clocks between two visits of an axis: `2^SL` with the step engine
+    /// (`step_shared`), 1 with a DDA and a shaper per axis (every axis served every
+    /// clock). The rated rate ([`crate::rate`]) and the step timing at the pins are in
+    /// multiples of it.
+    pub fn step_slots(&self) -> u32 {
+        if self.step_shared {
+            1 << self.step_slot_bits()
+        } else {
+            1
+        }
     }
 
     /// All ones in the low `p_width` bits: the largest period in clocks.
@@ -109,10 +161,13 @@ impl CoreParams {
         low_ones(self.timing_width)
     }
 
-    /// The effective period in clocks for a `period_clocks` input: masked to `p_width`
-    /// bits, 0 acting as 1.
+    /// The effective period in clocks for a `period_clocks` input, the period the core
+    /// runs: masked to `p_width` bits, 0 acting as 1; with the step engine rounded down
+    /// to a multiple of [`Self::step_slots`] `S`, at least `S`
+    /// (`Ps = max(P with its low SL bits cleared, S)`, docs/spec/period_timer.md).
     pub fn effective_period(&self, period_clocks: u32) -> u32 {
-        (period_clocks & self.period_mask()).max(1)
+        let slots = self.step_slots();
+        ((period_clocks & self.period_mask()) & !(slots - 1)).max(slots)
     }
 }
 
@@ -177,7 +232,13 @@ impl TopParams {
     /// The parameters of the core inside (`finestep_top` builds it without the gantry
     /// block until the gantry has registers).
     pub fn core_params(&self) -> CoreParams {
-        CoreParams { n_axes: self.n_axes, p_width: self.p_width, timing_width: self.timing_w, has_gantry: false }
+        CoreParams {
+            n_axes: self.n_axes,
+            p_width: self.p_width,
+            timing_width: self.timing_w,
+            has_gantry: false,
+            step_shared: false,
+        }
     }
 }
 
@@ -192,9 +253,27 @@ mod tests {
         assert_eq!(p.timing_mask(), 0xFFF);
         assert_eq!(p.effective_period(0), 1);
         assert_eq!(p.effective_period(0x10_0005), 5);
-        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32, has_gantry: true };
+        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32, has_gantry: true, step_shared: false };
         assert_eq!(wide.period_mask(), u32::MAX);
         assert!(wide.validate().is_ok());
+    }
+
+    #[test]
+    fn step_engine_slots_and_period() {
+        let slots =
+            |n_axes, step_shared| CoreParams { n_axes, step_shared, has_gantry: false, ..CoreParams::default() };
+        let want = [(1, 1, 2), (2, 1, 2), (3, 2, 4), (4, 2, 4), (5, 3, 8), (8, 3, 8)];
+        for (n, sl, s) in want {
+            assert_eq!(slots(n, true).step_slot_bits(), sl, "N_AXES {n}");
+            assert_eq!(slots(n, true).step_slots(), s, "N_AXES {n}");
+            assert_eq!(slots(n, false).step_slots(), 1, "per-axis: every clock");
+        }
+        let p = slots(3, true);
+        // Ps = max(P with the low SL bits cleared, S).
+        for (input, ps) in [(0, 4), (1, 4), (3, 4), (4, 4), (7, 4), (9, 8), (1003, 1000), (0x10_0006, 4)] {
+            assert_eq!(p.effective_period(input), ps, "P = {input}");
+        }
+        assert_eq!(slots(3, false).effective_period(7), 7);
     }
 
     #[test]
@@ -204,6 +283,17 @@ mod tests {
         assert_eq!(bad(CoreParams { p_width: 0, ..CoreParams::default() }).name, "P_WIDTH");
         let e = bad(CoreParams { timing_width: 33, ..CoreParams::default() });
         assert_eq!(e.to_string(), "finestep_core: TIMING_W = 33 is outside 1..=32");
+        let shared = CoreParams { step_shared: true, has_gantry: false, ..CoreParams::default() };
+        assert!(shared.validate().is_ok());
+        // No gantry with the engine, whatever HAS_GANTRY says.
+        let with_gantry = CoreParams { has_gantry: true, ..shared };
+        assert!(with_gantry.validate().is_ok() && !with_gantry.gantry_built());
+        assert!(CoreParams::default().gantry_built());
+        let e = bad(CoreParams { p_width: 2, n_axes: 3, ..shared });
+        assert_eq!((e.name, e.value, e.min), ("P_WIDTH", 2, 3));
+        assert!(e.to_string().starts_with("finestep_core: P_WIDTH = 2 is outside 3..=32 with STEP_SHARED = 1"), "{e}");
+        assert!(CoreParams { p_width: 3, n_axes: 3, ..shared }.validate().is_ok());
+        assert!(CoreParams { p_width: 2, n_axes: 2, ..shared }.validate().is_ok());
         let top = |p: TopParams| p.validate().unwrap_err().name;
         let d = TopParams::default();
         assert!(d.validate().is_ok());

@@ -12,36 +12,74 @@
 //! increment whose sign differs from the last non-zero one until the increments of the
 //! new sign add up to at least 2 steps (the period that reaches 2 steps included). After
 //! reset the axis counts as settled in the positive direction (`dir` resets to 1).
+//!
+//! # With the shared step engine
+//!
+//! A core built with `STEP_SHARED = 1` serves each axis once every `S = 2^SL` clocks
+//! ([`CoreParams::step_slots`](crate::CoreParams::step_slots)); its pulse train is the
+//! one above in visits, with each timing rounded up to whole visits,
+//! `L_v = max(ceil(L / S), 1)` and likewise `S_v`, `U_v`, `H_v`:
+//! `I_fwd = S * (L_v + S_v)` and `I_rev = 2 * S * (L_v + max(S_v, H_v + U_v) - 1)` clocks,
+//! with the same conditions and `P` the period the core runs (a multiple of `S`,
+//! [`CoreParams::effective_period`](crate::CoreParams::effective_period)). The `*_in`
+//! functions and [`RateChecker::with_slots`] take `S` (`slots`, 0 acting as 1); `S = 1`
+//! is a DDA and a shaper per axis, what the functions without `slots` state.
 
-use crate::{DriveTiming, Increment, PeriodRecord, MAX_AXES};
+use crate::{CoreParams, DriveTiming, Increment, PeriodRecord, MAX_AXES};
 
-fn at_least_one(x: u32) -> u64 {
-    u64::from(x.max(1))
+/// A timing value in whole visits of `slots` clocks: `max(ceil(x / slots), 1)`.
+fn visits(x: u32, slots: u32) -> u64 {
+    u64::from(x.div_ceil(slots.max(1)).max(1))
 }
 
-/// `I_fwd = L + S` clocks: the shortest step interval the pulse train can follow.
+/// `I_fwd = L + S` clocks: the shortest step interval the pulse train can follow
+/// (a DDA and a shaper per axis: [`forward_interval_in`] with one slot).
 pub fn forward_interval(t: &DriveTiming) -> u64 {
-    at_least_one(t.step_len) + at_least_one(t.step_space)
+    forward_interval_in(t, 1)
+}
+
+/// `I_fwd = S * (L_v + S_v)` clocks for an engine visiting each axis every `slots`
+/// clocks (0 acts as 1).
+pub fn forward_interval_in(t: &DriveTiming, slots: u32) -> u64 {
+    u64::from(slots.max(1)) * (visits(t.step_len, slots) + visits(t.step_space, slots))
 }
 
 /// `W = L + max(S, H + U) - 1` clocks: the longest a step request against the current
 /// direction waits before its rising edge is decided (when it comes right after a rise).
 pub fn reversal_wait(t: &DriveTiming) -> u64 {
-    let hold_setup = at_least_one(t.dir_hold) + at_least_one(t.dir_setup);
-    at_least_one(t.step_len) + at_least_one(t.step_space).max(hold_setup) - 1
+    reversal_wait_in(t, 1)
+}
+
+/// `W = S * (L_v + max(S_v, H_v + U_v) - 1)` clocks for an engine visiting each axis
+/// every `slots` clocks (0 acts as 1): [`reversal_wait`] in visits.
+pub fn reversal_wait_in(t: &DriveTiming, slots: u32) -> u64 {
+    let hold_setup = visits(t.dir_hold, slots) + visits(t.dir_setup, slots);
+    u64::from(slots.max(1)) * (visits(t.step_len, slots) + visits(t.step_space, slots).max(hold_setup) - 1)
 }
 
 /// `I_rev = 2 * (L + max(S, H + U) - 1)` clocks: the shortest step interval allowed
 /// while the axis is reversing. Never below [`forward_interval`].
 pub fn reversal_interval(t: &DriveTiming) -> u64 {
-    2 * reversal_wait(t)
+    reversal_interval_in(t, 1)
+}
+
+/// `I_rev = 2 * S * (L_v + max(S_v, H_v + U_v) - 1)` clocks for an engine visiting each
+/// axis every `slots` clocks (0 acts as 1). Never below [`forward_interval_in`].
+pub fn reversal_interval_in(t: &DriveTiming, slots: u32) -> u64 {
+    2 * reversal_wait_in(t, slots)
 }
 
 /// The largest increment (raw value `floor(65536 * P / I)`, at most [`Increment::MAX`])
 /// within the rated maximum for a period of `period_clocks` (0 acts as 1), with
 /// `I = I_rev` if `reversing`, else `I_fwd`. Its negation is the most negative one.
 pub fn max_increment(t: &DriveTiming, period_clocks: u32, reversing: bool) -> Increment {
-    let interval = if reversing { reversal_interval(t) } else { forward_interval(t) };
+    max_increment_in(t, period_clocks, reversing, 1)
+}
+
+/// [`max_increment`] for an engine visiting each axis every `slots` clocks (0 acts as
+/// 1); `period_clocks` is the period the core runs (a multiple of `slots`).
+pub fn max_increment_in(t: &DriveTiming, period_clocks: u32, reversing: bool, slots: u32) -> Increment {
+    let interval = if reversing { reversal_interval_in(t, slots) } else { forward_interval_in(t, slots) };
     max_raw(period_clocks, interval)
 }
 
@@ -98,9 +136,21 @@ pub fn check_increment(
     last_nonzero_sign: i8,
     d: Increment,
 ) -> Result<(), RateError> {
+    check_increment_in(t, period_clocks, last_nonzero_sign, d, 1)
+}
+
+/// [`check_increment`] for an engine visiting each axis every `slots` clocks (0 acts as
+/// 1); `period_clocks` is the period the core runs (a multiple of `slots`).
+pub fn check_increment_in(
+    t: &DriveTiming,
+    period_clocks: u32,
+    last_nonzero_sign: i8,
+    d: Increment,
+    slots: u32,
+) -> Result<(), RateError> {
     let magnitude = u64::from(d.to_bits().unsigned_abs());
     let p = u64::from(period_clocks.max(1));
-    let forward = forward_interval(t);
+    let forward = forward_interval_in(t, slots);
     if magnitude * forward > p << 16 {
         return Err(RateError::Forward {
             increment: d,
@@ -110,7 +160,7 @@ pub fn check_increment(
         });
     }
     let reversing = magnitude != 0 && sign(d) != last_nonzero_sign;
-    let reversal = reversal_interval(t);
+    let reversal = reversal_interval_in(t, slots);
     if reversing && magnitude * reversal > p << 16 {
         return Err(RateError::Reversal {
             increment: d,
@@ -167,6 +217,8 @@ impl Direction {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct RateChecker {
     period_clocks: u32,
+    /// `S`: the clocks between two visits of an axis (1: a DDA and a shaper per axis).
+    slots: u32,
     timings: Vec<DriveTiming>,
     axes: [Direction; MAX_AXES],
 }
@@ -178,11 +230,30 @@ impl RateChecker {
     /// [`CoreParams::effective_period`](crate::CoreParams::effective_period) first (it
     /// masks the input to `P_WIDTH` bits, as the core does).
     pub fn new(period_clocks: u32, timings: &[DriveTiming]) -> Self {
+        Self::with_slots(period_clocks, timings, 1)
+    }
+
+    /// A checker for a core whose engine visits each axis every `slots` clocks (0 acts as
+    /// 1; [`CoreParams::step_slots`]), with `period_clocks` the period it runs (a
+    /// multiple of `slots`, [`CoreParams::effective_period`]).
+    pub fn with_slots(period_clocks: u32, timings: &[DriveTiming], slots: u32) -> Self {
         RateChecker {
             period_clocks,
+            slots: slots.max(1),
             timings: timings.iter().take(MAX_AXES).copied().collect(),
             axes: [Direction { last: 1, travel: REVERSAL_TRAVEL }; MAX_AXES],
         }
+    }
+
+    /// A checker for a core built with `params` and given `period_clocks` as its input:
+    /// the period it runs and its slots are taken from `params`.
+    pub fn for_core(params: &CoreParams, period_clocks: u32, timings: &[DriveTiming]) -> Self {
+        Self::with_slots(params.effective_period(period_clocks), timings, params.step_slots())
+    }
+
+    /// `S`: the clocks between two visits of an axis (1 for a DDA and a shaper per axis).
+    pub fn slots(&self) -> u32 {
+        self.slots
     }
 
     /// Checks `record` (axis by axis, the first failure reported). On success the
@@ -190,7 +261,7 @@ impl RateChecker {
     pub fn check(&mut self, record: &PeriodRecord) -> Result<(), (usize, RateError)> {
         for (axis, t) in self.timings.iter().enumerate() {
             let settled = self.axes[axis].settled_sign();
-            check_increment(t, self.period_clocks, settled, record.inc[axis]).map_err(|e| (axis, e))?;
+            check_increment_in(t, self.period_clocks, settled, record.inc[axis], self.slots).map_err(|e| (axis, e))?;
         }
         for (dir, d) in self.axes.iter_mut().zip(&record.inc).take(self.timings.len()) {
             dir.apply(*d);
@@ -222,7 +293,7 @@ impl RateChecker {
     /// If `axis` is not one of the checker's axes.
     pub fn max_increment(&self, axis: usize, sign: i8) -> Increment {
         let reversing = sign != self.settled_sign(axis);
-        max_increment(&self.timings[axis], self.period_clocks, reversing)
+        max_increment_in(&self.timings[axis], self.period_clocks, reversing, self.slots)
     }
 }
 
@@ -249,6 +320,34 @@ mod tests {
         assert_eq!(forward_interval(&zero), 2);
         assert_eq!(reversal_interval(&zero), 4);
         assert!(reversal_interval(&timing(7, 9, 1, 1)) >= forward_interval(&timing(7, 9, 1, 1)));
+    }
+
+    #[test]
+    fn intervals_in_visits() {
+        // S = 4: L 5 -> 2 visits, S 1 -> 1, U 0 -> 1, H 8 -> 2.
+        let t = timing(5, 1, 0, 8);
+        assert_eq!(forward_interval_in(&t, 4), 4 * 3);
+        assert_eq!(reversal_wait_in(&t, 4), 4 * (2 + 3 - 1));
+        assert_eq!(reversal_interval_in(&t, 4), 32);
+        for slots in [0, 1] {
+            assert_eq!(forward_interval_in(&t, slots), forward_interval(&t));
+            assert_eq!(reversal_interval_in(&t, slots), reversal_interval(&t));
+        }
+        // Multiples of S: I_fwd unchanged; the wait's "- 1" is one visit, S clocks.
+        let even = timing(4, 8, 2, 6);
+        assert_eq!(forward_interval_in(&even, 2), forward_interval(&even));
+        assert_eq!(reversal_interval_in(&even, 2), 2 * 2 * (2 + 4 - 1));
+        assert_eq!(max_increment_in(&t, 1000, false, 4), Increment::from_bits((1000 << 16) / 12));
+        let params = CoreParams { n_axes: 3, step_shared: true, has_gantry: false, ..CoreParams::default() };
+        let mut c = RateChecker::for_core(&params, 99, &[t]);
+        assert_eq!(c.slots(), 4);
+        // P runs as 96: 96 / 12 = 8 steps forward, 96 / 32 = 3 reversing.
+        assert_eq!(c.max_increment(0, 1), Increment::from_num(8));
+        assert_eq!(c.max_increment(0, -1), Increment::from_num(3));
+        let rec = |x: f64| PeriodRecord { inc: [Increment::from_num(x); MAX_AXES], flags: 0 };
+        assert!(matches!(c.check(&rec(8.5)), Err((0, RateError::Forward { interval: 12, period_clocks: 96, .. }))));
+        assert!(c.check(&rec(8.0)).is_ok());
+        assert!(matches!(c.check(&rec(-3.5)), Err((0, RateError::Reversal { interval: 32, .. }))));
     }
 
     #[test]

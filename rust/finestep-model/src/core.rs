@@ -1,17 +1,20 @@
 //! `finestep_core`: the composition of one [`PeriodTimer`], per axis one [`DdaAxis`]
 //! and one [`StepShaper`], and the [`GantrySync`] between the DDAs and the shapers, with
-//! the packed outputs.
+//! the packed outputs; or, built with `step_shared` (`STEP_SHARED = 1`), the period
+//! timer and one [`StepEngine`] visiting the axes' DDA and shaper stores in turn.
 //!
-//! Specification: docs/spec/finestep_core.md
+//! Specification: docs/spec/finestep_core.md, docs/spec/step_engine.md
 //!
 //! Latency: a DDA update in cycle `n` gives `req` in `n+1`, the earliest rise decision
-//! in `n+1` (level and `position` in `n+2`) and the pin edge in `n+3`. Every output is a
-//! function of the state only.
+//! in `n+1` (level and `position` in `n+2`) and the pin edge in `n+3`; with the step
+//! engine a DDA visit in `n`, the rise decision in `n+1`, `position` and the pin edge
+//! in `n+2`. Every output is a function of the state only.
 
 use crate::config::{AxisSettings, CoreInputs, CoreParams, ParamError};
 use crate::dda_axis::{DdaAxis, ONE_STEP};
 use crate::gantry_sync::{GantryContext, GantrySync};
 use crate::period_timer::{PeriodTimer, TimerInputs};
+use crate::step_engine::{EngineInputs, StepEngine};
 use crate::step_shaper::StepShaper;
 use crate::MAX_AXES;
 
@@ -130,7 +133,8 @@ pub struct ChunkEnd {
 /// The inputs of one cycle masked and decoded, shared by the per-clock and fast paths.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Settings {
-    /// `max(period_clocks & P_MASK, 1)`.
+    /// The period sampled: `max(period_clocks & P_MASK, 1)`, with the step engine
+    /// `Ps = max(P with its low SL bits cleared, S)` ([`CoreParams::effective_period`]).
     pub(crate) period: u32,
     pub(crate) axes: [AxisSettings; MAX_AXES],
 }
@@ -145,6 +149,9 @@ pub struct Core {
     pub(crate) dda: [DdaAxis; MAX_AXES],
     pub(crate) shaper: [StepShaper; MAX_AXES],
     pub(crate) gantry: GantrySync,
+    /// The step engine's schedule when built with `step_shared`; the `dda` and `shaper`
+    /// arrays are then its stores, visited in turn.
+    pub(crate) engine: Option<StepEngine>,
     pub(crate) cycle: u64,
 }
 
@@ -161,17 +168,25 @@ impl Core {
         }
     }
 
-    /// A core in its reset state at cycle 0, or why `params` are not supported.
+    /// A core in its reset state at cycle 0, or why `params` are not supported (see
+    /// [`CoreParams::validate`]).
+    ///
+    /// With `params.step_shared` the core is built with the step engine
+    /// (docs/spec/step_engine.md): one DDA and one shaper visiting the axes every
+    /// `S = params.step_slots()` clocks, and no gantry block whatever `has_gantry` says
+    /// (its inputs are ignored, its outputs read 0).
     pub fn try_new(params: CoreParams) -> Result<Core, ParamError> {
         params.validate()?;
         let counter_max = params.timing_mask();
         Ok(Core {
             params,
             counter_max,
-            timer: PeriodTimer::default(),
+            // p_act resets to S (1 without the engine).
+            timer: PeriodTimer::with_reset_period(params.step_slots()),
             dda: [DdaAxis::default(); MAX_AXES],
             shaper: [StepShaper::new(counter_max); MAX_AXES],
             gantry: GantrySync::default(),
+            engine: params.step_shared.then(|| StepEngine::new(params.step_slot_bits())),
             cycle: 0,
         })
     }
@@ -196,7 +211,12 @@ impl Core {
         &self.timer
     }
 
-    /// The DDA state of `axis`.
+    /// The step engine's schedule (its `slot`), when built with `step_shared`.
+    pub fn engine(&self) -> Option<&StepEngine> {
+        self.engine.as_ref()
+    }
+
+    /// The DDA state of `axis` (with the step engine: the axis's DDA store).
     ///
     /// # Panics
     /// If `axis >= MAX_AXES`.
@@ -204,7 +224,7 @@ impl Core {
         &self.dda[axis]
     }
 
-    /// The step shaper state of `axis`.
+    /// The step shaper state of `axis` (with the step engine: the axis's shaper store).
     ///
     /// # Panics
     /// If `axis >= MAX_AXES`.
@@ -264,6 +284,9 @@ impl Core {
     /// those before it).
     #[inline(always)]
     fn edge(&mut self, inputs: &CoreInputs, period: u32, axis: impl Fn(usize) -> AxisSettings) -> bool {
+        if let Some(engine) = self.engine {
+            return self.engine_edge(engine, inputs, period, axis);
+        }
         let n = self.params.n_axes;
         let m = i64::from(self.timer.p_act) * ONE_STEP;
         let mut changed = false;
@@ -277,7 +300,7 @@ impl Core {
         let axes = self.shaper[..n].iter_mut().zip(&mut self.dda[..n]).zip(&self.timer.inc[..n]).enumerate();
         // The DDAs hold their phase at M/2 until the period timer is running.
         let running = inputs.run && self.timer.active;
-        if self.params.has_gantry {
+        if self.params.gantry_built() {
             for (i, ((shaper, dda), &d)) in axes {
                 let r = gantry.shaper_request(i, &reqs, &increments, &inputs.gantry);
                 changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
@@ -300,6 +323,41 @@ impl Core {
                 dda.step(running, period, d, m);
             }
         }
+        changed | self.timer_edge(inputs, period, 0, 0)
+    }
+
+    /// One rising edge of a core with the step engine (`engine` is its schedule in this
+    /// cycle): the engine's visits, then the period timer with this cycle's slot.
+    #[inline(always)]
+    fn engine_edge(
+        &mut self,
+        mut engine: StepEngine,
+        inputs: &CoreInputs,
+        period: u32,
+        axis: impl Fn(usize) -> AxisSettings,
+    ) -> bool {
+        let n = self.params.n_axes;
+        let slot = engine.slot;
+        let changed = engine.step(
+            &EngineInputs {
+                running: inputs.run && self.timer.active,
+                p_act: self.timer.p_act,
+                inc: &self.timer.inc,
+                clear_errors: inputs.clear_errors,
+                counter_max: self.counter_max,
+            },
+            axis,
+            &mut self.dda[..n],
+            &mut self.shaper[..n],
+        );
+        self.engine = Some(engine);
+        changed | self.timer_edge(inputs, period, engine.slot_bits, slot)
+    }
+
+    /// The period timer's edge (with the engine's `SL` and this cycle's `slot`, 0 and 0
+    /// without it) and the cycle count; returns whether the timer's outputs changed.
+    #[inline(always)]
+    fn timer_edge(&mut self, inputs: &CoreInputs, period: u32, slot_bits: u32, slot: u32) -> bool {
         let timer_before = self.timer.output_bits();
         self.timer.step(&TimerInputs {
             run: inputs.run,
@@ -307,10 +365,12 @@ impl Core {
             clear_errors: inputs.clear_errors,
             rec_valid: inputs.rec_valid,
             record: &inputs.record,
-            n_axes: n,
+            n_axes: self.params.n_axes,
+            slot_bits,
+            slot,
         });
         self.cycle = self.cycle.wrapping_add(1);
-        changed || self.timer.output_bits() != timer_before
+        self.timer.output_bits() != timer_before
     }
 
     /// One edge of a chunk: pushes an [`Event`] when the outputs change and returns
@@ -460,5 +520,13 @@ mod tests {
         let params = CoreParams { n_axes: 0, ..CoreParams::default() };
         assert_eq!(Core::try_new(params).unwrap_err().name, "N_AXES");
         assert!(std::panic::catch_unwind(|| Core::new(params)).is_err());
+        // The step engine needs P_WIDTH > SL; it builds no gantry, whatever HAS_GANTRY.
+        let shared = CoreParams { step_shared: true, has_gantry: true, n_axes: 3, ..CoreParams::default() };
+        let e = Core::try_new(CoreParams { p_width: 2, ..shared }).unwrap_err();
+        assert_eq!((e.name, e.min), ("P_WIDTH", 3));
+        let core = Core::try_new(shared).unwrap();
+        assert_eq!(core.engine().map(|e| e.slots()), Some(4));
+        assert_eq!(core.timer().p_act(), 4, "p_act resets to S");
+        assert!(Core::new(CoreParams::default()).engine().is_none());
     }
 }

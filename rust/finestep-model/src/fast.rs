@@ -19,10 +19,22 @@
 //! run lasts until the tick (`corr != 0` is never quiet: it is applied or dropped; a
 //! count change is not, `diff` follows it). Every other cycle is run by the per-clock
 //! [`Core::step`], so the cost is O(output changes + requests + periods), not O(cycles).
+//!
+//! With the step engine (`step_shared`) the same holds visit by visit, and the skip is
+//! exact too: a quiet run ends before the first cycle in which the engine would change
+//! more than counting, i.e. before a stopped cycle that clears a `live` bit, before the
+//! DDA visit of an axis that wraps (or starts from `M / 2`, or clears a request), and
+//! before the shaper visit that sees a request, decides a rise, fall or direction
+//! change, moves pins A/B, drops `pending` while halted or sets `rate_error`. In `k`
+//! cycles from `slot`, an axis whose visit is `c` cycles away is visited
+//! `ceil((k - c) / S)` times (0 when `k <= c`): `acc` adds `d` per DDA visit, `cnt` and
+//! `dcnt` count (saturating) per shaper visit, and `slot` moves on by `k`.
 
 use crate::core::{ChunkEnd, Core, Event, Settings};
 use crate::dda_axis::{HALF_STEP, ONE_STEP};
 use crate::gantry_sync::GantryContext;
+use crate::step_engine::StepEngine;
+use crate::step_shaper::{enable_pin, PIN_A, PIN_B, PIN_EN};
 use crate::CoreInputs;
 
 impl Core {
@@ -33,9 +45,16 @@ impl Core {
         let set = self.settings(inputs);
         let mut ran = 0;
         while ran < max_cycles {
-            let quiet = self.quiet_cycles(&set, inputs).min(max_cycles - ran);
+            let quiet = match self.engine {
+                Some(engine) => self.engine_quiet_cycles(&engine, &set, inputs),
+                None => self.quiet_cycles(&set, inputs),
+            }
+            .min(max_cycles - ran);
             if quiet > 0 {
-                self.skip_quiet(quiet, inputs);
+                match self.engine {
+                    Some(engine) => self.engine_skip_quiet(engine, quiet, inputs),
+                    None => self.skip_quiet(quiet, inputs),
+                }
                 ran += quiet;
                 continue;
             }
@@ -131,7 +150,7 @@ impl Core {
     /// request, which [`Self::quiet_cycles`] checks): its edge changes nothing but
     /// `tick_cnt` counting, up to the cycle before its next tick.
     fn gantry_quiet_cycles(&self, inputs: &CoreInputs) -> u64 {
-        if !self.params.has_gantry {
+        if !self.params.gantry_built() {
             return u64::MAX;
         }
         let g = &self.gantry;
@@ -175,9 +194,147 @@ impl Core {
             sh.cnt = u64::from(sh.cnt).saturating_add(k).min(max) as u32;
             sh.dcnt = u64::from(sh.dcnt).saturating_add(k).min(max) as u32;
         }
-        if self.params.has_gantry {
+        if self.params.gantry_built() {
             self.gantry.skip(k);
         }
+        self.cycle = self.cycle.wrapping_add(k);
+    }
+}
+
+/// Of the next `k` cycles, how many are visits of an axis whose next visit is `c`
+/// cycles away (`c < slots`), one every `slots` cycles.
+fn visits_within(k: u64, c: u64, slots: u64) -> u64 {
+    if k > c {
+        (k - 1 - c) / slots + 1
+    } else {
+        0
+    }
+}
+
+impl Core {
+    /// [`Self::quiet_cycles`] for a core with the step engine (schedule `e`).
+    fn engine_quiet_cycles(&self, e: &StepEngine, set: &Settings, inputs: &CoreInputs) -> u64 {
+        let n = self.params.n_axes;
+        let clear = inputs.clear_errors;
+        let t = &self.timer;
+        let idle = t.inc[..n].iter().all(|&d| d == 0) && !t.cur_end;
+        if t.block_end || (t.record_error && clear) {
+            return 0;
+        }
+        let running = inputs.run && t.active;
+        let mut quiet = u64::MAX;
+        if !inputs.run {
+            // Stopped: quiet once the edge changes nothing in the timer.
+            if t.active || t.remaining != 0 || !idle || t.p_act != set.period {
+                return 0;
+            }
+        } else if !t.active || t.remaining < 2 {
+            // Waiting for the start slot, rec_ready rising, or a boundary (P >= S >= 2).
+            return 0;
+        } else {
+            quiet = u64::from(t.remaining - 1);
+        }
+        if !running && e.live != 0 {
+            // This edge clears the live bits.
+            return 0;
+        }
+        let sl = e.slot_bits;
+        let slots = u64::from(e.slots());
+        let mask = slots - 1;
+        let slot = u64::from(e.slot);
+        let m = i64::from(t.p_act >> sl) * ONE_STEP;
+        // Visits in whole visits: the least v with (count + v) * S >= x.
+        let visits_to = |count: u32, x: u32| u64::from(x.div_ceil(1 << sl)).saturating_sub(u64::from(count));
+        for i in 0..n {
+            // Cycles to the axis's next DDA visit and next shaper visit (0: this cycle).
+            let to_dda = (i as u64).wrapping_sub(slot) & mask;
+            let to_shaper = (i as u64 + 1).wrapping_sub(slot) & mask;
+            let dda = &self.dda[i];
+            if dda.req != 0 {
+                // The shaper visit takes it, or the DDA visit replaces it.
+                quiet = quiet.min(to_dda.min(to_shaper));
+            }
+            if !running {
+                // A stopped visit only clears `req` (above); `live` is 0 (below).
+            } else if !e.live(i) {
+                // The first running visit starts the accumulator.
+                quiet = quiet.min(to_dda);
+            } else {
+                let d = i64::from(t.inc[i]);
+                // Visits that do not wrap (acc in [0, M), else the next one may).
+                let plain = if dda.acc < 0 || dda.acc >= m {
+                    Some(0)
+                } else if d > 0 {
+                    Some(((m - dda.acc + d - 1) / d - 1) as u64)
+                } else if d < 0 {
+                    Some((dda.acc / -d) as u64)
+                } else {
+                    None
+                };
+                if let Some(v) = plain {
+                    quiet = quiet.min(to_dda.saturating_add(v.saturating_mul(slots)));
+                }
+            }
+
+            let sh = &self.shaper[i];
+            let axis = &set.axes[i];
+            if sh.pins & PIN_EN != enable_pin(axis) || (clear && (sh.rate_error || sh.step_lost)) {
+                return 0;
+            }
+            // At the next shaper visit (no request seen before the run ends): pins A/B,
+            // a halt's drop of `pending` and `rate_error` must stay.
+            let e = sh.pending;
+            if sh.pins & (PIN_A | PIN_B) != sh.step_pins(axis)
+                || (axis.halt && e != 0)
+                || (e.unsigned_abs() >= 2 && !sh.rate_error)
+            {
+                quiet = quiet.min(to_shaper);
+            }
+            let to_decision = if sh.level {
+                Some(visits_to(sh.cnt, axis.timing.step_len))
+            } else if e == 0 || axis.halt {
+                None
+            } else if (e > 0) == sh.dir {
+                Some(visits_to(sh.cnt, axis.timing.step_space).max(visits_to(sh.dcnt, axis.timing.dir_setup)))
+            } else {
+                Some(visits_to(sh.cnt, axis.timing.dir_hold))
+            };
+            if let Some(v) = to_decision {
+                quiet = quiet.min(to_shaper.saturating_add(v.saturating_mul(slots)));
+            }
+            if quiet == 0 {
+                return 0;
+            }
+        }
+        quiet
+    }
+
+    /// Advances `k` quiet cycles (as found by [`Self::engine_quiet_cycles`]) at once.
+    fn engine_skip_quiet(&mut self, mut e: StepEngine, k: u64, inputs: &CoreInputs) {
+        let n = self.params.n_axes;
+        let slots = u64::from(e.slots());
+        let slot = u64::from(e.slot);
+        let running = inputs.run && self.timer.active;
+        if running {
+            // k <= remaining - 1 here.
+            self.timer.remaining -= k as u32;
+        }
+        let max = u64::from(self.counter_max);
+        for i in 0..n {
+            let to_dda = (i as u64).wrapping_sub(slot) & (slots - 1);
+            let to_shaper = (i as u64 + 1).wrapping_sub(slot) & (slots - 1);
+            let d = self.timer.inc[i];
+            if running && d != 0 {
+                // None of these visits wraps.
+                self.dda[i].acc += visits_within(k, to_dda, slots) as i64 * i64::from(d);
+            }
+            let seen = visits_within(k, to_shaper, slots);
+            let sh = &mut self.shaper[i];
+            sh.cnt = u64::from(sh.cnt).saturating_add(seen).min(max) as u32;
+            sh.dcnt = u64::from(sh.dcnt).saturating_add(seen).min(max) as u32;
+        }
+        e.slot = (slot.wrapping_add(k) & (slots - 1)) as u32;
+        self.engine = Some(e);
         self.cycle = self.cycle.wrapping_add(k);
     }
 }

@@ -9,8 +9,10 @@
 //! block), against which the Verilog is checked bit for bit in co-simulation.
 //!
 //! Modules mirror the HDL blocks: [`period_timer`], [`dda_axis`], [`step_shaper`],
-//! [`gantry_sync`] (a slave axis following a master, with encoder corrections) and
-//! [`core`](mod@core) (`finestep_core`, their composition). [`Core::step`] is one clock
+//! [`gantry_sync`] (a slave axis following a master, with encoder corrections),
+//! [`step_engine`] (with `CoreParams::step_shared`: one DDA and one shaper visiting the
+//! axes in turn instead of one of each per axis) and [`core`](mod@core)
+//! (`finestep_core`, their composition). [`Core::step`] is one clock
 //! edge and is the definition; [`Core::run_chunk`] runs many edges with the same inputs
 //! and reports output changes, and [`Core::run_chunk_fast`] gives the same results by
 //! skipping quiet cycles ([`fast`]).
@@ -82,6 +84,7 @@ pub mod register_file;
 pub mod safety_monitor;
 pub mod spi_frame;
 pub mod spi_slave_phy;
+pub mod step_engine;
 pub mod step_shaper;
 pub mod top;
 

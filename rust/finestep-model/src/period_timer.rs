@@ -7,6 +7,14 @@
 //! A record taken at boundary `b` is applied in cycles `b+1 ..= b+P` and the next
 //! boundary is `b+P`. A missing or unacceptable record gives an idle period (all
 //! increments 0); an unacceptable one also sets the sticky `record_error`.
+//!
+//! With the shared [step engine](crate::step_engine) (`STEP_SHARED = 1`, `S = 2^SL`
+//! slots) three rules change: the sampled period is `Ps = max(P with its low SL bits
+//! cleared, S)` (the core passes it as `TimerInputs::period`); the run starts
+//! (`active <- 1`) only in a cycle with `slot == S - 2 (mod S)`, so every boundary has
+//! `slot == S - 1`; and a record is acceptable when `|D| < P / S` for every axis. A
+//! timer without the engine is the case `SL = 0` (`S = 1`): every cycle may start, and
+//! `|D| < P`. With the engine `p_act` resets to `S`.
 
 use crate::record::{raw_acceptable, PeriodRecord};
 use crate::MAX_AXES;
@@ -26,10 +34,17 @@ pub struct PeriodTimer {
 impl Default for PeriodTimer {
     /// The reset state: inactive, `p_act = 1`, idle.
     fn default() -> Self {
+        Self::with_reset_period(1)
+    }
+}
+
+impl PeriodTimer {
+    /// The reset state with `p_act = reset_period`: 1, or `S` with the step engine.
+    pub(crate) fn with_reset_period(reset_period: u32) -> Self {
         PeriodTimer {
             active: false,
             remaining: 0,
-            p_act: 1,
+            p_act: reset_period,
             inc: [0; MAX_AXES],
             cur_end: false,
             block_end: false,
@@ -48,6 +63,10 @@ pub(crate) struct TimerInputs<'a> {
     pub(crate) rec_valid: bool,
     pub(crate) record: &'a PeriodRecord,
     pub(crate) n_axes: usize,
+    /// `SL`: the step engine's slot bits, 0 without the engine (`S = 2^SL`).
+    pub(crate) slot_bits: u32,
+    /// The engine's `slot` in this cycle (0 without the engine).
+    pub(crate) slot: u32,
 }
 
 impl PeriodTimer {
@@ -112,7 +131,10 @@ impl PeriodTimer {
             self.cur_end = false;
             self.p_act = inp.period;
         } else if !self.active {
-            self.active = true;
+            // With the engine only in a cycle with slot == S - 2 (mod S): the first
+            // boundary, the next cycle, has slot == S - 1.
+            let last_slot = (1u32 << inp.slot_bits) - 1;
+            self.active = inp.slot == last_slot.wrapping_sub(1) & last_slot;
             self.p_act = inp.period;
         } else if self.remaining != 0 {
             self.remaining -= 1;
@@ -120,7 +142,9 @@ impl PeriodTimer {
             self.remaining = self.p_act - 1;
             let n = inp.n_axes;
             let record = inp.record;
-            let accept = inp.rec_valid && record.inc[..n].iter().all(|d| raw_acceptable(d.to_bits(), self.p_act));
+            // At most one step per visit: |D| < P / S (S = 1 without the engine).
+            let visits = self.p_act >> inp.slot_bits;
+            let accept = inp.rec_valid && record.inc[..n].iter().all(|d| raw_acceptable(d.to_bits(), visits));
             if accept {
                 for (slot, d) in self.inc[..n].iter_mut().zip(&record.inc[..n]) {
                     *slot = d.to_bits();
@@ -142,7 +166,44 @@ mod tests {
     use crate::record::flags::BLOCK_END;
 
     fn inputs(run: bool, rec_valid: bool, record: &PeriodRecord) -> TimerInputs<'_> {
-        TimerInputs { run, period: 3, clear_errors: false, rec_valid, record, n_axes: 2 }
+        TimerInputs { run, period: 3, clear_errors: false, rec_valid, record, n_axes: 2, slot_bits: 0, slot: 0 }
+    }
+
+    #[test]
+    fn with_the_engine_the_run_starts_at_slot_s_minus_2_and_records_need_d_below_p_over_s() {
+        let rec = PeriodRecord::from_raw(&[2 * 65536 - 1, -2 * 65536], 0);
+        for (slot_bits, start_slot) in [(1u32, 0u32), (2, 2), (3, 6)] {
+            let s = 1u32 << slot_bits;
+            let mut t = PeriodTimer::default();
+            let engine = |slot: u32, run: bool, rec_valid: bool| TimerInputs {
+                period: 2 * s,
+                slot_bits,
+                slot: slot % s,
+                ..inputs(run, rec_valid, &rec)
+            };
+            t.step(&engine(0, false, false));
+            let mut slot = 1;
+            while !t.active() {
+                t.step(&engine(slot, true, false));
+                assert!(slot < 1 + s, "started by slot {slot}");
+                slot += 1;
+            }
+            assert_eq!((slot - 1) % s, start_slot, "S = {s}");
+            assert_eq!(slot % s, s - 1, "the first boundary has slot S - 1");
+            assert!(t.rec_ready());
+            // P / S = 2 visits: 2 - 1/65536 steps is accepted, -2 is not.
+            t.step(&engine(slot, true, true));
+            assert!(t.record_error(), "S = {s}: |D| = 2 refused");
+            assert_eq!(t.increments()[..2], [0, 0]);
+            let ok = PeriodRecord::from_raw(&[2 * 65536 - 1, -(2 * 65536 - 1)], 0);
+            for _ in 0..2 * s - 1 {
+                t.step(&engine(0, true, false));
+            }
+            assert!(t.rec_ready());
+            t.step(&TimerInputs { record: &ok, clear_errors: true, ..engine(0, true, true) });
+            assert!(!t.record_error());
+            assert_eq!(t.increments()[..2], [2 * 65536 - 1, -(2 * 65536 - 1)]);
+        }
     }
 
     #[test]

@@ -38,6 +38,22 @@ pub(crate) const PIN_A: u8 = 1 << 0;
 pub(crate) const PIN_B: u8 = 1 << 1;
 pub(crate) const PIN_EN: u8 = 1 << 2;
 
+/// The enable pin bit ([`PIN_EN`]) for `set`: `(axis_enable && !halt) ^ invert[2]`.
+#[inline]
+pub(crate) fn enable_pin(set: &AxisSettings) -> u8 {
+    (u8::from(set.enable) * PIN_EN) ^ (set.invert & PIN_EN)
+}
+
+/// What one edge of a shaper decides: `e = pending + r`, and whether the step level
+/// falls, rises, or `dir` turns (at most one of them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Decision {
+    pub(crate) e: i32,
+    pub(crate) rise: bool,
+    pub(crate) fall: bool,
+    pub(crate) turn: bool,
+}
+
 impl StepShaper {
     /// The reset state: no pending step, level low, `dir` positive, both counters all
     /// ones (`counter_max`), position 0, flags and pins 0.
@@ -109,14 +125,87 @@ impl StepShaper {
     /// The pin bits the next cycle shows for the current state and settings.
     #[inline]
     pub(crate) fn next_pins(&self, set: &AxisSettings) -> u8 {
+        self.step_pins(set) | enable_pin(set)
+    }
+
+    /// Pins A and B (the bits [`PIN_A`], [`PIN_B`]) for the state's `level`, `dir` and
+    /// `quad` in the mode and with the inversion of `set` (the table of the spec).
+    #[inline]
+    pub(crate) fn step_pins(&self, set: &AxisSettings) -> u8 {
         let (a, b) = match set.mode {
             mode::UP_DOWN => (self.level && self.dir, self.level && !self.dir),
             // quad 0..3 -> A 0,1,1,0 and B 0,0,1,1.
             mode::QUADRATURE => ((self.quad ^ (self.quad >> 1)) & 1 != 0, self.quad & 2 != 0),
             _ => (self.level, self.dir),
         };
-        let pins = (u8::from(a) * PIN_A) | (u8::from(b) * PIN_B) | (u8::from(set.enable) * PIN_EN);
-        pins ^ set.invert
+        ((u8::from(a) * PIN_A) | (u8::from(b) * PIN_B)) ^ (set.invert & (PIN_A | PIN_B))
+    }
+
+    /// The decisions of one edge for the request `r` (docs/spec/step_shaper.md): `e`, and
+    /// whether the level falls, rises or `dir` turns. `reached(count, x)` is the
+    /// counter compare `cnt >= x` (and `dcnt >= x`): `count >= x` for a shaper of its
+    /// own, `count * S >= x` for the [step engine](crate::step_engine), whose counters
+    /// count visits of `S` clocks.
+    #[inline(always)]
+    pub(crate) fn decide(&self, r: i8, set: &AxisSettings, reached: impl Fn(u32, u32) -> bool) -> Decision {
+        let e = i32::from(self.pending) + i32::from(r);
+        let mut d = Decision { e, rise: false, fall: false, turn: false };
+        if self.level {
+            d.fall = reached(self.cnt, set.timing.step_len);
+        } else if set.halt {
+            // Halted: only a running pulse may end.
+        } else if e != 0 {
+            if (e > 0) == self.dir {
+                d.rise = reached(self.cnt, set.timing.step_space) && reached(self.dcnt, set.timing.dir_setup);
+            } else {
+                d.turn = reached(self.cnt, set.timing.dir_hold);
+            }
+        }
+        d
+    }
+
+    /// The next state after the decisions `d` (everything but the pins): level,
+    /// counters, direction, `pending` (zeroed when `halt`), position, quadrature phase
+    /// and the sticky flags, `clear` clearing them (a set wins).
+    #[inline(always)]
+    pub(crate) fn apply(&mut self, d: Decision, halt: bool, counter_max: u32, clear: bool) {
+        let step: i32 = match (d.rise, self.dir) {
+            (false, _) => 0,
+            (true, true) => 1,
+            (true, false) => -1,
+        };
+        if d.rise || d.fall {
+            self.level = d.rise;
+            self.cnt = 1;
+        } else if self.cnt < counter_max {
+            self.cnt += 1;
+        }
+        if d.turn {
+            self.dir = !self.dir;
+            self.dcnt = 1;
+        } else if self.dcnt < counter_max {
+            self.dcnt += 1;
+        }
+        self.position = self.position.wrapping_add_signed(step);
+        self.quad = (i32::from(self.quad) + step) as u8 & 0b11;
+        if halt {
+            // The dropped requests flag nothing.
+            self.pending = 0;
+            self.clear_flags(clear);
+        } else {
+            let left = d.e - step;
+            let kept = left.clamp(-PENDING_MAX, PENDING_MAX);
+            self.pending = kept as i8;
+            self.rate_error = d.e.abs() >= 2 || (self.rate_error && !clear);
+            self.step_lost = kept != left || (self.step_lost && !clear);
+        }
+    }
+
+    /// `clear_errors` in a cycle that sets no flag.
+    #[inline(always)]
+    pub(crate) fn clear_flags(&mut self, clear: bool) {
+        self.rate_error &= !clear;
+        self.step_lost &= !clear;
     }
 
     /// One rising edge: `r` is the DDA's request in this cycle, `counter_max` the
@@ -126,58 +215,14 @@ impl StepShaper {
     pub(crate) fn step(&mut self, r: i8, set: &AxisSettings, counter_max: u32, clear: bool) -> bool {
         let outputs_before = self.output_bits();
         self.pins = self.next_pins(set);
-        let e = i32::from(self.pending) + i32::from(r);
-        let mut rise = false;
-        let mut fall = false;
-        let mut turn = false;
-        if self.level {
-            fall = self.cnt >= set.timing.step_len;
-        } else if set.halt {
-            // Halted: only a running pulse may end.
-        } else if e != 0 {
-            if (e > 0) == self.dir {
-                rise = self.cnt >= set.timing.step_space && self.dcnt >= set.timing.dir_setup;
-            } else {
-                turn = self.cnt >= set.timing.dir_hold;
-            }
-        }
-        let step: i32 = match (rise, self.dir) {
-            (false, _) => 0,
-            (true, true) => 1,
-            (true, false) => -1,
-        };
-        if rise || fall {
-            self.level = rise;
-            self.cnt = 1;
-        } else if self.cnt < counter_max {
-            self.cnt += 1;
-        }
-        if turn {
-            self.dir = !self.dir;
-            self.dcnt = 1;
-        } else if self.dcnt < counter_max {
-            self.dcnt += 1;
-        }
-        self.position = self.position.wrapping_add_signed(step);
-        self.quad = (i32::from(self.quad) + step) as u8 & 0b11;
-        if set.halt {
-            // The dropped requests flag nothing.
-            self.pending = 0;
-            self.rate_error &= !clear;
-            self.step_lost &= !clear;
-        } else {
-            let left = e - step;
-            let kept = left.clamp(-PENDING_MAX, PENDING_MAX);
-            self.pending = kept as i8;
-            self.rate_error = e.abs() >= 2 || (self.rate_error && !clear);
-            self.step_lost = kept != left || (self.step_lost && !clear);
-        }
-        rise || self.output_bits() != outputs_before
+        let d = self.decide(r, set, |count, x| count >= x);
+        self.apply(d, set.halt, counter_max, clear);
+        d.rise || self.output_bits() != outputs_before
     }
 
     /// Pins and flags in one word, to see whether they changed.
     #[inline]
-    fn output_bits(&self) -> u8 {
+    pub(crate) fn output_bits(&self) -> u8 {
         self.pins | (u8::from(self.rate_error) << 3) | (u8::from(self.step_lost) << 4)
     }
 }

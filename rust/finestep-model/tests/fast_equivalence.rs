@@ -2,7 +2,8 @@
 //! against a literal loop of `step` and `outputs`): for random parameters, settings and
 //! chunk sequences, identical events, chunk ends and states, with the gantry pair
 //! engaging, disengaging and being refused mid-run and its channel counts changing
-//! between chunks.
+//! between chunks; and for cores built with the step engine (`step_shared`, no gantry
+//! block), whose visits the fast path skips as exactly.
 
 use finestep_model::{
     AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, DriveTiming, Event, GantryInputs, Increment, PeriodRecord,
@@ -172,12 +173,18 @@ fn case() -> impl Strategy<Value = Case> {
         prop_oneof![Just(20u32), 1..=24u32, Just(32u32)],
         prop_oneof![Just(12u32), Just(4u32), 1..=16u32, Just(32u32)],
         prop::bool::weighted(0.8),
+        prop::bool::weighted(0.4),
     )
-        .prop_map(|(n_axes, p_width, timing_width, has_gantry)| CoreParams {
-            n_axes,
-            p_width,
-            timing_width,
-            has_gantry,
+        .prop_map(|(n_axes, p_width, timing_width, has_gantry, step_shared)| {
+            let params = CoreParams { n_axes, p_width, timing_width, has_gantry, step_shared: false };
+            if step_shared {
+                // The engine needs a period register holding S = 2^SL; it builds no
+                // gantry whatever has_gantry says (the gantry inputs still change).
+                let p_width = p_width.max(params.step_slot_bits() + 1);
+                CoreParams { step_shared, p_width, ..params }
+            } else {
+                params
+            }
         });
     (params, period_value(), prop::array::uniform8(axis_config()), prop::collection::vec(chunk(), 1..40))
         .prop_map(|(params, period, axes, chunks)| Case { params, period, axes, chunks })
@@ -283,6 +290,41 @@ fn fast_path_is_identical_to_per_clock() {
             Ok(())
         })
         .unwrap();
+}
+
+/// With the step engine the fast path skips as well: a long slow move of 4 axes
+/// (S = 4) identical to per-clock, and a billion idle running cycles at once.
+#[test]
+fn fast_path_skips_with_the_step_engine() {
+    let axis = AxisConfig { timing: DriveTiming::new(9, 7, 3, 5), enable: true, ..AxisConfig::default() };
+    let params = CoreParams { step_shared: true, has_gantry: false, ..CoreParams::default() };
+    let mut inputs = CoreInputs { period_clocks: 100_003, axes: [axis; MAX_AXES], ..CoreInputs::default() };
+    let mut slow = Core::new(params);
+    let mut fast = slow.clone();
+    let (mut ev_slow, mut ev_fast) = (vec![], vec![]);
+    inputs.record = PeriodRecord::from_raw(&[37 << 16, -(5 << 16) - 123, 0, 1], 1);
+    for (run, valid, max) in [(false, false, 10), (true, false, 3), (true, true, u64::MAX), (true, false, 250_000)] {
+        inputs.run = run;
+        inputs.rec_valid = valid;
+        let a = slow.run_chunk(&inputs, max, &mut ev_slow);
+        let b = fast.run_chunk_fast(&inputs, max, &mut ev_fast);
+        assert_eq!(a, b);
+        assert_eq!(ev_slow, ev_fast);
+        assert_eq!(slow, fast);
+    }
+    assert_eq!(fast.outputs().position(0), 37);
+    assert_eq!(fast.outputs().position(1), -5);
+    assert_eq!(fast.timer().p_act(), 100_000, "P rounded down to a multiple of S = 4");
+    // Idle periods of 2^20 - 4 clocks: a billion cycles in about a thousand boundaries.
+    inputs.run = false;
+    inputs.period_clocks = (1 << 20) - 1;
+    fast.run_chunk_fast(&inputs, 1, &mut ev_fast);
+    inputs.run = true;
+    ev_fast.clear();
+    let end = fast.run_chunk_fast(&inputs, 1_000_000_000, &mut ev_fast);
+    assert_eq!(end.cycles, 1_000_000_000);
+    assert!(ev_fast.iter().all(|e| e.outputs.positions[..2] == [37, (-5i32) as u32]));
+    assert!((1900..=1920).contains(&ev_fast.len()), "rec_ready up and down per period: {}", ev_fast.len());
 }
 
 /// Long quiet stretches cost the fast path nothing: a billion idle cycles, and a long
