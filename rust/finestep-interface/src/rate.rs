@@ -367,6 +367,18 @@ mod tests {
         }
         let huge = max_increment(&timing(1, 1, 1, 1), u32::MAX, false);
         assert_eq!(huge, Increment::MAX);
+        // Likewise in visits, for every slot count.
+        for slots in [1, 2, 4, 8] {
+            for p in [slots, 7 * slots, 1000 * slots] {
+                for reversing in [false, true] {
+                    let max = max_increment_in(&t, p, reversing, slots);
+                    let last = if reversing { -1 } else { 1 };
+                    assert!(check_increment_in(&t, p, last, max, slots).is_ok());
+                    let above = Increment::from_bits(max.to_bits() + 1);
+                    assert!(check_increment_in(&t, p, last, above, slots).is_err(), "S {slots}, P {p}");
+                }
+            }
+        }
     }
 
     #[test]
