@@ -4,7 +4,9 @@
 //! The curve is split at its knots into spans, and each span into sub-pieces of nearly
 //! constant speed limit ([`pieces`]): the span is sampled at [`SAMPLES_PER_SPAN`] + 1
 //! parameters, bisected wherever the tangent turns more than [`MAX_SAMPLE_TURN`]
-//! between neighbours (a cusp, where the curve stops and turns back, is refused), and
+//! between neighbours (a cusp, where the curve stops and turns back, is refused) or the
+//! curvature changes by more than [`MAX_SAMPLE_CURVATURE_CHANGE`] where the curve
+//! bends, and
 //! at each sample the curvature `k = |C' x C''| / |C'|^3` limits the speed
 //!
 //! - by the chord tolerance delta: a chord `v T` on the osculating circle of radius
@@ -37,6 +39,10 @@ pub const SAMPLES_PER_SPAN: usize = 64;
 /// Consecutive intervals form one sub-piece while their speed limits stay within this ratio.
 pub const PIECE_SPEED_RATIO: f64 = 1.25;
 
+/// Largest relative change of the curvature between neighbouring samples where the
+/// curve bends there (module docs).
+pub const MAX_SAMPLE_CURVATURE_CHANGE: f64 = 0.25;
+
 /// Largest turn of the tangent between neighbouring samples, radians (5 degrees).
 pub const MAX_SAMPLE_TURN: f64 = 5.0 * std::f64::consts::PI / 180.0;
 
@@ -66,11 +72,24 @@ fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, N
         })
         .collect();
     while let Some((a, b, depth)) = stack.pop() {
-        let (ta, _) = tangent(a);
+        let (ta, da) = tangent(a);
         let (tb, db) = tangent(b);
         let cos = (ta[0] * tb[0] + ta[1] * tb[1]).clamp(-1.0, 1.0);
         if cos.is_nan() {
             return Err(cusp_error(&db));
+        }
+        // The curvature changing fast between samples (a heavy weight bends the curve
+        // within a sliver of the parameter): halve until it changes by at most
+        // MAX_SAMPLE_CURVATURE_CHANGE, where the bend there is more than a thousandth of
+        // a radian, so that no peak of the normal acceleration hides between samples.
+        let (ka, kb) = (da.curvature().abs(), db.curvature().abs());
+        let chord = (db.point[0] - da.point[0]).hypot(db.point[1] - da.point[1]);
+        let steep = (ka - kb).abs() > MAX_SAMPLE_CURVATURE_CHANGE * ka.max(kb) && ka.max(kb) * chord > 1e-3;
+        if steep && depth < 48 && b - a > 1e-13 * (ub - ua) {
+            let mid = 0.5 * (a + b);
+            stack.push((mid, b, depth + 1));
+            stack.push((a, mid, depth + 1));
+            continue;
         }
         if cos.acos() > MAX_SAMPLE_TURN {
             if depth < 48 && b - a > 1e-13 * (ub - ua) {
@@ -136,8 +155,7 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 back.max(ahead)
             })
             .collect();
-        for (j, sample) in samples.iter_mut().enumerate() {
-            let k = sample.k;
+        let cap_of = |k: f64, dk: f64| {
             let mut cap = f64::INFINITY;
             if k > 1e-12 {
                 let rho = 1.0 / k;
@@ -152,13 +170,27 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 if k > 1e-12 {
                     cap = cap.min((GEOMETRIC_ACCEL_SHARE * limits.max_acceleration / k).sqrt());
                 }
-                let turning = k * k + dk[j];
+                let turning = k * k + dk;
                 if scurve && turning > 1e-12 {
                     cap = cap.min((ARC_JERK_SHARE * limits.max_jerk / turning).cbrt());
                 }
             }
-            sample.cap = cap;
+            cap
+        };
+        for (j, sample) in samples.iter_mut().enumerate() {
+            sample.cap = cap_of(sample.k, dk[j]);
         }
+        // The curvature inside each interval too, at the three points the tangent bound
+        // below evaluates: a peak between samples lowers the interval's cap.
+        let inner_cap: Vec<f64> = (0..m)
+            .map(|j| {
+                let (a, b) = (samples[j].u, samples[j + 1].u);
+                let k = (1..4)
+                    .map(|i| curve.derivatives_on(a + (b - a) * i as f64 / 4.0, ua).curvature().abs())
+                    .fold(0.0, f64::max);
+                cap_of(k, dk[j].max(dk[j + 1]))
+            })
+            .collect();
         // Per interval and axis, the largest tangent component: parabolas through the
         // values at five points of the interval, at their vertices where those are inside
         // (an inflection between samples lets the tangent swing past both ends), kept a
@@ -189,9 +221,9 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 })
             })
             .collect();
-        // Per interval: the smallest cap of the four samples around it.
+        // Per interval: the smallest cap of the four samples around it and of its inside.
         let interval_cap: Vec<f64> = (0..m)
-            .map(|j| samples[j.saturating_sub(1)..=(j + 2).min(m)].iter().map(|s| s.cap).fold(f64::INFINITY, f64::min))
+            .map(|j| samples[j.saturating_sub(1)..=(j + 2).min(m)].iter().map(|s| s.cap).fold(inner_cap[j], f64::min))
             .collect();
         let mut j = 0;
         while j < m {

