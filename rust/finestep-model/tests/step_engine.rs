@@ -929,3 +929,49 @@ fn no_gantry_with_the_engine() {
     assert_eq!(out.position(3), 0, "no correction reached the slave");
     assert_ne!(out.position(0), 0);
 }
+
+/// (c) in visits: a constant increment gives step intervals of `floor(M / |d|)` or
+/// `ceil(M / |d|)` visits, `S` clocks each (`M = (P / S) * 65536`), the first step of a
+/// reversal excepted.
+#[test]
+fn constant_increment_gives_even_step_intervals() {
+    let mut runner = finestep_testkit::runner("step_engine_constant_increment_even_intervals", 500);
+    let strategy = (
+        1..=4usize,
+        timing_strategy(40),
+        prop_oneof![2..=64u32, 64..=2000u32],
+        100..=1000i64,
+        any::<bool>(),
+        2..=20usize,
+    );
+    runner
+        .run(&strategy, |(n, t, p, per_mille, negative, periods)| {
+            let s = slots_for(n);
+            let ps = (u64::from(p) - u64::from(p) % s).max(s);
+            let checker = RateChecker::with_slots(ps as u32, &[t], s as u32);
+            let sign = if negative { -1 } else { 1 };
+            let d = raw(checker.max_increment(0, sign)) * per_mille / 1000 * i64::from(sign);
+            prop_assume!(d != 0);
+            let periods = periods.max((5 * 65536 / d.abs() + 1) as usize);
+            let mut raw_inc = [0i32; MAX_AXES];
+            raw_inc[n - 1] = d as i32;
+            let records = vec![PeriodRecord::from_raw(&raw_inc, 0); periods];
+            let spec = Spec { n, timing_width: 12, p, start: 1, axes: vec![(t, 0, 0); n], quantum: 1, choices: vec![] };
+            let mut drive = spec.drive(records, None);
+            drive.drain = 0;
+            let trace = drive.run();
+            let a = n - 1;
+            let changes: Vec<u64> =
+                (1..trace.len()).filter(|&c| trace.position(c, a) != trace.position(c - 1, a)).collect();
+            let intervals: Vec<u64> = changes.windows(2).map(|w| w[1] - w[0]).skip(usize::from(negative)).collect();
+            prop_assert!(intervals.len() >= 2, "steps at {:?}", changes);
+            let m = ((ps / s) << 16) as i64;
+            let lo = s * (m / d.abs()) as u64;
+            let hi = s * ((m + d.abs() - 1) / d.abs()) as u64;
+            for &x in &intervals {
+                prop_assert!(lo <= x && x <= hi, "interval {} outside [{}, {}]: {:?}", x, lo, hi, intervals);
+            }
+            Ok(())
+        })
+        .unwrap();
+}
