@@ -12,7 +12,8 @@ module finestep_core_sim #(
     parameter N_AXES     = 4,
     parameter P_WIDTH    = 20,
     parameter TIMING_W   = 12,
-    parameter HAS_GANTRY = 1
+    parameter HAS_GANTRY = 1,
+    parameter STEP_SHARED = 0
 ) (
     input  wire                       load,
     input  wire                       clk,
@@ -115,7 +116,8 @@ module finestep_core_sim #(
         .N_AXES(N_AXES),
         .P_WIDTH(P_WIDTH),
         .TIMING_W(TIMING_W),
-        .HAS_GANTRY(HAS_GANTRY)
+        .HAS_GANTRY(HAS_GANTRY),
+        .STEP_SHARED(STEP_SHARED)
     ) core (
         .clk(clk),
         .rst(rst_q),

@@ -111,9 +111,10 @@ fn main() {
     let trace_flag = if fst { "--trace-fst" } else { "--trace" };
     let mut globals = std::collections::BTreeSet::new();
     let mut defines = BTreeMap::new();
-    // The core alone (its own co-simulation), without the gantry block (every test but the
-    // gantry's) and with it, behind the input registers of sim/finestep_core_sim.v; and
-    // the top behind the host interface.
+    // The core alone (its own co-simulation), behind the input registers of
+    // sim/finestep_core_sim.v: without the gantry block and with the shared step engine
+    // (every test but the gantry's), and with the gantry block and a DDA and a shaper per
+    // axis; and the top behind the host interface (a DDA and a shaper per axis).
     let core_sim = sim.join("finestep_core_sim.v");
     let models = [
         (Build::Core { gantry: false }, "Vfinestep_core", None),
@@ -185,8 +186,9 @@ fn main() {
 /// What one Verilation builds.
 #[derive(Clone, Copy)]
 enum Build {
-    /// `finestep_core` behind its input registers (`sim/finestep_core_sim.v`), with or
-    /// without the gantry block.
+    /// `finestep_core` behind its input registers (`sim/finestep_core_sim.v`): with the
+    /// gantry block and a DDA and a shaper per axis, or without it and with the shared
+    /// step engine.
     Core { gantry: bool },
     /// `finestep_top`.
     Top,
@@ -224,6 +226,7 @@ fn verilate(
         .arg(format!("-GP_WIDTH={}", params.p_width))
         .arg(format!("-GTIMING_W={}", params.timing_w))
         .args(gantry.map(|g| format!("-GHAS_GANTRY={}", u8::from(g))))
+        .args(gantry.map(|g| format!("-GSTEP_SHARED={}", u8::from(!g))))
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
         .args((top == "finestep_top").then(|| format!("-GHAS_MPG={}", params.has_mpg)))

@@ -1,8 +1,9 @@
 //! The Verilated finestep core behind a safe wrapper, and the Verilated bus-level top
 //! ([`RtlTop`], driven at its pins).
 //!
-//! `build.rs` runs Verilator on `hdl/` (tops `finestep_core`, without and with the gantry
-//! block, behind the input registers of `sim/finestep_core_sim.v`, and `finestep_top`; 4
+//! `build.rs` runs Verilator on `hdl/` (tops `finestep_core` behind the input registers
+//! of `sim/finestep_core_sim.v`, once with the shared step engine and no gantry block and
+//! once with a DDA and a shaper per axis and the gantry block, and `finestep_top`; 4
 //! axes), compiles the generated C++, Verilator's runtime and the shim `sim/finestep_sim.cpp` with `cc`, and
 //! generates [`ffi`] from `sim/finestep_sim.h` with bindgen. [`Rtl`] speaks the same
 //! types as the reference model ([`finestep_model::Core`]) so the two run side by side:
@@ -33,7 +34,8 @@ pub mod ffi {
     include!(concat!(env!("OUT_DIR"), "/bindings.rs"));
 }
 
-/// The parameters of the Verilated core [`Rtl::new`] makes: without the gantry block.
+/// The parameters of the Verilated core [`Rtl::new`] makes: without the gantry block,
+/// with the shared step engine.
 pub fn params() -> CoreParams {
     // SAFETY: pure functions returning build-time constants.
     unsafe {
@@ -42,14 +44,15 @@ pub fn params() -> CoreParams {
             p_width: ffi::fs_p_width(),
             timing_width: ffi::fs_timing_width(),
             has_gantry: false,
+            step_shared: true,
         }
     }
 }
 
 /// The parameters of the Verilated core [`Rtl::with_gantry`] makes: the same with the
-/// gantry block.
+/// gantry block and a DDA and a shaper per axis.
 pub fn gantry_params() -> CoreParams {
-    CoreParams { has_gantry: true, ..params() }
+    CoreParams { has_gantry: true, step_shared: false, ..params() }
 }
 
 /// Whether waveforms are written as FST (feature `fst`) rather than VCD.
@@ -119,15 +122,14 @@ impl Rtl {
         Self::build(true, false)
     }
 
-    /// The core built as `params` say (the gantry block or not), able to write
+    /// The core built as `params` say ([`params`] or [`gantry_params`]), able to write
     /// waveforms when `traced`.
     ///
     /// # Panics
-    /// If `params` differ from [`params`] in anything but `has_gantry`.
+    /// If `params` are neither.
     pub fn for_params(params: &CoreParams, traced: bool) -> Rtl {
-        assert_eq!(
-            CoreParams { has_gantry: false, ..*params },
-            self::params(),
+        assert!(
+            *params == self::params() || *params == gantry_params(),
             "no Verilated core was built with these parameters"
         );
         Self::build(params.has_gantry, traced)

@@ -142,10 +142,19 @@ pub fn scenario(max_actions: usize) -> impl Strategy<Value = Scenario> {
     })
 }
 
-/// Play a scenario on RTL and model side by side, both with the gantry block; the first
-/// difference is an error.
+/// Play a scenario on RTL and model side by side, both with the gantry block (and a DDA
+/// and a shaper per axis); the first difference is an error.
 pub fn play(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
-    let mut harness = Harness::with_gantry(name, path);
+    play_on(Harness::with_gantry(name, path), scenario)
+}
+
+/// The same on the core with the shared step engine (no gantry block: its inputs are
+/// ignored by both sides).
+pub fn play_engine(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
+    play_on(Harness::new(name, path), scenario)
+}
+
+fn play_on(mut harness: Harness, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
     let mut inputs =
         CoreInputs { run: true, period_clocks: scenario.period_clocks, gantry: scenario.gantry, ..Default::default() };
     inputs.axes[..AXES].copy_from_slice(&scenario.axes);
