@@ -112,8 +112,12 @@ pub fn nurbs_program(blocks: usize) -> String {
 /// One program planned and interpolated with the default machine and `profile`, timed.
 struct Timed {
     elements: usize,
-    plan_s: f64,
-    interpolate_s: f64,
+    /// Path and blends, s.
+    path_s: f64,
+    /// The look-ahead over the whole path at once, s.
+    speeds_s: f64,
+    /// The record stream (its windowed look-ahead included), s.
+    stream_s: f64,
     periods: f64,
     period_s: f64,
 }
@@ -124,17 +128,86 @@ fn plan_timed(profile: finestep_planner::ProfileKind, program: &finestep_gcode::
     let (_, config) = machine_setup::resolve(profiled, machine_setup::model_limits(), "<built-in>")?;
     let start = Instant::now();
     let path = geometry::elements(&config, program)?;
-    let speeds = lookahead::junction_speeds(&config, &path.elements);
-    let plan_s = start.elapsed().as_secs_f64();
+    let path_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    let out = interpolate::interpolate(&config, &path.elements, &speeds, path.leading_dwell)?;
-    Ok(Timed {
-        elements: path.elements.len(),
-        plan_s,
-        interpolate_s: start.elapsed().as_secs_f64(),
-        periods: out.records.len() as f64,
-        period_s: config.period_s,
+    let speeds = lookahead::junction_speeds(&config, &path.elements);
+    let speeds_s = start.elapsed().as_secs_f64();
+    drop(speeds);
+    let elements = path.elements.len();
+    let period_s = config.period_s;
+    let start = Instant::now();
+    let mut periods = 0u64;
+    for period in interpolate::Periods::new(config, path.elements, path.leading_dwell) {
+        period?;
+        periods += 1;
+    }
+    Ok(Timed { elements, path_s, speeds_s, stream_s: start.elapsed().as_secs_f64(), periods: periods as f64, period_s })
+}
+
+/// The programs of the memory figures: a straight move of about 10 h, a 1 000 000 mm
+/// half circle, and the 100 000-segment CAM program.
+fn memory_program(case: &str) -> anyhow::Result<String> {
+    Ok(match case {
+        "line" => "G21 G90 G1 X1000000 F1666\nM2\n".to_string(),
+        "arc" => "G21 G90 G17 G2 X1000000 Y0 I500000 J0 F6000\nM2\n".to_string(),
+        "program" => cam_program(100_000) + "M2\n",
+        other => anyhow::bail!("no memory case {other:?} (line, arc, program)"),
     })
+}
+
+/// The process's peak resident set so far, kB (Linux `VmHWM`).
+fn peak_rss_kb() -> anyhow::Result<u64> {
+    let status = std::fs::read_to_string("/proc/self/status")?;
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse().ok())
+        .ok_or_else(|| anyhow::anyhow!("no VmHWM in /proc/self/status"))
+}
+
+/// Plans one memory case through the record stream on the built-in machine, reading
+/// every record and keeping none, and prints: periods, seconds to the first record,
+/// seconds in all, peak RSS in kB (run in a process of its own by [`memory_figures`]).
+pub fn plan_memory(case: &str) -> anyhow::Result<()> {
+    let text = memory_program(case)?;
+    let start = Instant::now();
+    let program = finestep_gcode::parse_str(&text, "memory.ngc")?;
+    drop(text);
+    let stream = finestep_planner::plan_stream(&MachineConfig::default(), &program)
+        .map_err(|e| anyhow::anyhow!("memory.ngc:{}: {}", e.line, e.reason))?;
+    let (mut periods, mut first) = (0u64, None);
+    for period in stream.periods {
+        period.map_err(|e| anyhow::anyhow!("memory.ngc:{}: {}", e.line, e.reason))?;
+        first.get_or_insert_with(|| start.elapsed().as_secs_f64());
+        periods += 1;
+    }
+    println!("{periods} {} {} {}", first.unwrap_or(f64::NAN), start.elapsed().as_secs_f64(), peak_rss_kb()?);
+    Ok(())
+}
+
+/// Peak memory of planning, each case in a fresh process (`finestep plan-memory CASE`).
+fn memory_figures() -> anyhow::Result<()> {
+    let exe = std::env::current_exe()?;
+    for (case, what) in [
+        ("line", "G1 X1000000 F1666 (10.0 h)"),
+        ("arc", "G2 X1000000 I500000 F6000"),
+        ("program", "100 000 short G1 segments"),
+    ] {
+        let out = std::process::Command::new(&exe).args(["plan-memory", case]).output()?;
+        anyhow::ensure!(out.status.success(), "plan-memory {case}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8_lossy(&out.stdout);
+        let fields: Vec<f64> = text.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+        anyhow::ensure!(fields.len() == 4, "plan-memory {case} printed {text:?}");
+        println!(
+            "  {:<44} {:>7.1} MB peak RSS  {:>11.0} periods  first record {:.3} s, all {:.1} s",
+            format!("plan, streamed: {what}"),
+            fields[3] / 1024.0,
+            fields[0],
+            fields[1],
+            fields[2]
+        );
+    }
+    Ok(())
 }
 
 /// Plan and interpolate throughput on a chain of NURBS, per profile.
@@ -143,17 +216,17 @@ fn nurbs_figures() -> anyhow::Result<()> {
     const BLOCKS: usize = 500;
     let program = finestep_gcode::parse_str(&nurbs_program(BLOCKS), "nurbs.ngc")?;
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
-        let Timed { elements, plan_s, interpolate_s, periods, period_s } = plan_timed(profile, &program)?;
+        let Timed { elements, path_s, speeds_s, stream_s, periods, period_s } = plan_timed(profile, &program)?;
         println!(
             "  {:<44} {:>7.0} NURBS/s   ({} sub-pieces)",
             format!("plan NURBS: sub-pieces, look-ahead ({profile:?})"),
-            BLOCKS as f64 / plan_s,
+            BLOCKS as f64 / (path_s + speeds_s),
             elements
         );
         println!(
             "  {:<44} {:>7.2} M periods/s  ({:.1} s of machining)",
             format!("interpolate NURBS directly ({profile:?})"),
-            periods / interpolate_s / 1e6,
+            periods / stream_s / 1e6,
             periods * period_s
         );
     }
@@ -192,29 +265,30 @@ pub fn front_end() -> anyhow::Result<()> {
         executed as f64 / loop_s / 1e6
     );
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
-        let Timed { elements, plan_s, interpolate_s, periods, period_s } = plan_timed(profile, &program)?;
+        let Timed { elements, path_s, speeds_s, stream_s, periods, period_s } = plan_timed(profile, &program)?;
         let name = format!("{profile:?}");
         println!(
             "  {:<44} {:>7.0} k moves/s  ({} elements with blends)",
             format!("plan: path, blends, look-ahead ({name})"),
-            MOVES as f64 / plan_s / 1e3,
+            MOVES as f64 / (path_s + speeds_s) / 1e3,
             elements
         );
         println!(
             "  {:<44} {:>7.0} k moves/s  {:>9.2} M periods/s",
-            format!("interpolate ({name})"),
-            MOVES as f64 / interpolate_s / 1e3,
-            periods / interpolate_s / 1e6
+            format!("stream: look-ahead + interpolate ({name})"),
+            MOVES as f64 / stream_s / 1e3,
+            periods / stream_s / 1e6
         );
         println!(
             "  {:<44} {:>7.0} k moves/s  {:>9.2} M periods/s  ({:.1} s of machining)",
             format!("plan + interpolate ({name})"),
-            MOVES as f64 / (plan_s + interpolate_s) / 1e3,
-            periods / (plan_s + interpolate_s) / 1e6,
+            MOVES as f64 / (path_s + stream_s) / 1e3,
+            periods / (path_s + stream_s) / 1e6,
             periods * period_s
         );
     }
-    nurbs_figures()
+    nurbs_figures()?;
+    memory_figures()
 }
 
 pub fn run(cycles: u64) -> anyhow::Result<()> {

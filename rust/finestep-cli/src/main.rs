@@ -78,6 +78,14 @@ enum Command {
         #[arg(long)]
         tool_table: Option<PathBuf>,
     },
+    /// One case of `bench --host-only`'s memory figures (line, arc, program): plans it
+    /// through the record stream and prints periods, seconds to the first record, seconds
+    /// in all and the peak RSS in kB.
+    #[command(hide = true)]
+    PlanMemory {
+        /// line, arc or program.
+        case: String,
+    },
     /// Lockstep and fast-path throughput figures.
     Bench {
         /// Simulated clock cycles per measurement.
@@ -140,6 +148,7 @@ fn main() -> anyhow::Result<()> {
                 bench_top::run(200)
             }
         }
+        Command::PlanMemory { case } => bench::plan_memory(&case),
         Command::GcodeCanon { file, tool_table } => conformance::canon(&file, tool_table.as_deref()),
         Command::Conformance { manifest, out, tool_table } => conformance::run(&manifest, &out, tool_table.as_deref()),
         Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),

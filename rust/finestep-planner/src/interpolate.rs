@@ -7,6 +7,11 @@
 //! starts with the next period. Every record is checked against the drive's rated rate
 //! ([`RateChecker`]) before it is emitted.
 //!
+//! [`Periods`] produces the records one at a time as they are consumed, planning the
+//! junction speeds a look-ahead window at a time ([`WindowedSpeeds`]): nothing grows with
+//! the number of periods, so a move or a program of any duration streams in the same
+//! memory, and the first record is out after the first window is planned.
+//!
 //! NURBS sub-pieces are interpolated directly: a [`NurbsCursor`] carries the curve
 //! parameter from period to period and steps it by the arc length the profile asks
 //! for (second-order Taylor step and Newton correction, [`crate::nurbs`]).
@@ -17,37 +22,73 @@ use finestep_interface::{Increment, PeriodRecord};
 use crate::config::{Resolved, AXIS_NAMES};
 use crate::element::{Element, Shape};
 use crate::error::ProgramError;
-use crate::lookahead::element_limits;
+use crate::lookahead::{element_limits, WindowedSpeeds};
 use crate::nurbs::NurbsCursor;
 use crate::vec4::Vec4;
 use crate::velocity::Profile;
 use finestep_interface::flags::BLOCK_END;
 
-/// Periods and where they came from.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Interpolated {
-    /// One record per period.
-    pub records: Vec<PeriodRecord>,
-    /// The source line being executed at the end of each period.
-    pub lines: Vec<usize>,
-}
-
-struct Emitter<'a> {
-    config: &'a Resolved,
+/// The records of a path, one per period, produced as they are asked for (module docs):
+/// `(record, source line being executed at the end of the period)`, or the error that
+/// stops the stream (a record over the rated rate: a planner bug, refused).
+#[derive(Debug)]
+pub struct Periods {
+    config: Resolved,
+    elements: Vec<Element>,
+    speeds: WindowedSpeeds,
     checker: RateChecker,
+    /// Position at the end of the last record, Q16.16 steps.
     last: [i64; 4],
-    out: Interpolated,
+    /// Idle periods still owed (a dwell), and their line.
+    idle: u64,
+    idle_line: usize,
+    index: usize,
+    profile: Profile,
+    t: f64,
+    cursor: NurbsCursor,
+    started: bool,
+    done: bool,
 }
 
-/// The most periods one program may take (about 5.5 hours at 1 ms), so that a program
-/// asking for absurd times is refused instead of exhausting memory.
-pub const MAX_PERIODS: usize = 20_000_000;
-
-impl Emitter<'_> {
-    fn emit(&mut self, grid: [i64; 4], flags: u8, line: usize) -> Result<(), ProgramError> {
-        if self.out.records.len() >= MAX_PERIODS {
-            return Err(ProgramError { line, reason: format!("the program takes more than {MAX_PERIODS} periods") });
+impl Periods {
+    /// The periods of `elements`, after `leading_dwell` idle periods, from rest at the origin.
+    pub fn new(config: Resolved, elements: Vec<Element>, leading_dwell: u64) -> Periods {
+        let checker = RateChecker::new(config.period_clocks, &config.timing);
+        let speeds = WindowedSpeeds::new(&config);
+        let idle_line = elements.first().map_or(0, |e| e.line);
+        Periods {
+            config,
+            elements,
+            speeds,
+            checker,
+            last: [0; 4],
+            idle: leading_dwell,
+            idle_line,
+            index: 0,
+            profile: Profile::default(),
+            t: 0.0,
+            cursor: NurbsCursor::new(usize::MAX, 0.0),
+            started: false,
+            done: false,
         }
+    }
+
+    /// The elements being interpolated.
+    pub fn elements(&self) -> &[Element] {
+        &self.elements
+    }
+
+    fn profile_of(&mut self, i: usize) -> Profile {
+        let (v0, v1) = (
+            self.speeds.speed(&self.config, &self.elements, i),
+            self.speeds.speed(&self.config, &self.elements, i + 1),
+        );
+        self.speeds.release(i);
+        let e = &self.elements[i];
+        Profile::new(&element_limits(&self.config, e), e.length, v0, v1, e.v_cap)
+    }
+
+    fn emit(&mut self, grid: [i64; 4], flags: u8, line: usize) -> Result<(PeriodRecord, usize), ProgramError> {
         let mut record = PeriodRecord { flags, ..PeriodRecord::default() };
         for a in 0..4 {
             let delta = grid[a] - self.last[a];
@@ -62,9 +103,7 @@ impl Emitter<'_> {
             reason: format!("axis {}: {why} (planner bug: refusing to emit)", AXIS_NAMES.get(axis).unwrap_or(&"?")),
         })?;
         self.last = grid;
-        self.out.records.push(record);
-        self.out.lines.push(line);
-        Ok(())
+        Ok((record, line))
     }
 
     fn grid(&self, p: Vec4) -> [i64; 4] {
@@ -82,88 +121,84 @@ impl Emitter<'_> {
         }
         g
     }
-}
 
-/// Periods for `elements` run at junction speeds `speeds` (`elements.len() + 1` of them),
-/// after `leading_dwell` idle periods, starting at the origin.
-pub fn interpolate(
-    config: &Resolved,
-    elements: &[Element],
-    speeds: &[f64],
-    leading_dwell: u64,
-) -> Result<Interpolated, ProgramError> {
-    let mut emitter = Emitter {
-        config,
-        checker: RateChecker::new(config.period_clocks, &config.timing),
-        last: [0; 4],
-        out: Interpolated::default(),
-    };
-    let idle = |emitter: &mut Emitter, periods: u64, line: usize| -> Result<(), ProgramError> {
-        for _ in 0..periods {
-            emitter.emit(emitter.last, 0, line)?;
+    /// The next moving period (or the stop that ends an element), `None` at the end.
+    fn step(&mut self) -> Option<Result<(PeriodRecord, usize), ProgramError>> {
+        if !self.started {
+            self.started = true;
+            if self.elements.is_empty() {
+                self.done = true;
+                return None;
+            }
+            self.profile = self.profile_of(0);
         }
-        Ok(())
-    };
-    idle(&mut emitter, leading_dwell, elements.first().map_or(0, |e| e.line))?;
-    let profile_of = |i: usize| {
-        let e = &elements[i];
-        Profile::new(&element_limits(config, e), e.length, speeds[i], speeds[i + 1], e.v_cap)
-    };
-    let period = config.period_s;
-    let mut index = 0;
-    if elements.is_empty() {
-        return Ok(emitter.out);
-    }
-    let mut profile = profile_of(0);
-    let mut t = 0.0;
-    let mut cursor = NurbsCursor::new(usize::MAX, 0.0);
-    'periods: loop {
-        t += period;
+        self.t += self.config.period_s;
         let mut flags = 0;
-        while t >= profile.duration {
-            let element = &elements[index];
-            if element.block_end {
+        while self.t >= self.profile.duration {
+            let (block_end, stop_after, end, line) = {
+                let e = &self.elements[self.index];
+                (e.block_end, e.stop_after, e.end, e.line)
+            };
+            if block_end {
                 flags |= BLOCK_END;
             }
-            if element.stop_after {
-                let grid = emitter.grid_exact(element.end);
-                emitter.emit(grid, flags, element.line)?;
-                idle(&mut emitter, element.dwell_periods, element.dwell_line)?;
-                index += 1;
-                if index == elements.len() {
-                    break 'periods;
+            let last_element = self.index + 1 == self.elements.len();
+            if stop_after || last_element {
+                // An exact stop (the last element always stops): the period ends on it.
+                let grid = self.grid_exact(end);
+                let out = self.emit(grid, flags, line);
+                let e = &self.elements[self.index];
+                (self.idle, self.idle_line) = (e.dwell_periods, e.dwell_line);
+                self.index += 1;
+                if self.index == self.elements.len() {
+                    self.done = true;
+                } else {
+                    self.profile = self.profile_of(self.index);
+                    self.t = 0.0;
                 }
-                profile = profile_of(index);
-                t = 0.0;
-                continue 'periods;
+                return Some(out);
             }
-            t -= profile.duration;
-            index += 1;
-            if index == elements.len() {
-                // Unreachable: the last element always stops; end on it all the same.
-                let grid = emitter.grid_exact(element.end);
-                emitter.emit(grid, flags, element.line)?;
-                break 'periods;
-            }
-            profile = profile_of(index);
+            self.t -= self.profile.duration;
+            self.index += 1;
+            self.profile = self.profile_of(self.index);
         }
-        let element = &elements[index];
-        let s = profile.distance_at(t);
+        let s = self.profile.distance_at(self.t);
+        let element = &self.elements[self.index];
         let point = match element.shape {
             Shape::Nurbs { ref curve, u0, u1 } => {
-                if cursor.element != index {
-                    cursor = NurbsCursor::new(index, u0);
+                if self.cursor.element != self.index {
+                    self.cursor = NurbsCursor::new(self.index, u0);
                 }
                 if s >= element.length {
                     element.end
                 } else {
-                    curve.point(cursor.advance(curve, u1, s))
+                    curve.point(self.cursor.advance(curve, u1, s))
                 }
             }
             _ => element.position(s),
         };
-        let grid = emitter.grid(point);
-        emitter.emit(grid, flags, element.line)?;
+        let line = element.line;
+        let grid = self.grid(point);
+        Some(self.emit(grid, flags, line))
     }
-    Ok(emitter.out)
+}
+
+impl Iterator for Periods {
+    type Item = Result<(PeriodRecord, usize), ProgramError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.idle > 0 {
+            self.idle -= 1;
+            return Some(self.emit(self.last, 0, self.idle_line));
+        }
+        if self.done {
+            return None;
+        }
+        let out = self.step();
+        if matches!(out, Some(Err(_))) {
+            self.done = true;
+            self.idle = 0;
+        }
+        out
+    }
 }

@@ -20,6 +20,13 @@
 //!    record checked against the drive's rated rate before it is emitted. On a NURBS the
 //!    curve parameter is stepped directly every period ([`nurbs::NurbsCursor`]).
 //!
+//! [`plan_stream`] gives the records as a stream ([`interpolate::Periods`]): the
+//! look-ahead runs a window at a time as the records are read, and no record is kept, so
+//! a move or program of any duration plans in the same memory (no period cap). The
+//! path itself (steps 1-2) is still built for the whole program first: memory grows with
+//! the number of programmed moves (about 1.1 kB a move with the parsed program), not
+//! with their duration. [`plan_program`] collects the stream.
+//!
 //! [`checker`] checks the result independently, from the records and the program alone.
 //!
 //! ```
@@ -72,4 +79,4 @@ pub mod velocity;
 
 pub use checker::{check_program, CheckReport};
 pub use config::{ConfigError, MachineConfig, ProfileKind};
-pub use program::{plan_program, PlannedProgram, ProgramError};
+pub use program::{plan_program, plan_stream, PlanStream, PlannedProgram, ProgramError};

@@ -80,32 +80,87 @@ pub fn junction_cap(config: &Resolved, before: &Element, after: &Element) -> f64
 }
 
 /// Junction speeds `v[0..=n]` for `n` elements (`v[0]` is the start, `v[n]` the end,
-/// both 0), by windowed backward and forward passes (module docs).
+/// both 0), by windowed backward and forward passes (module docs): all of them at once.
 pub fn junction_speeds(config: &Resolved, elements: &[Element]) -> Vec<f64> {
-    let n = elements.len();
-    let mut caps = vec![0.0; n + 1];
-    for i in 1..n {
-        caps[i] = junction_cap(config, &elements[i - 1], &elements[i]);
+    let mut windows = WindowedSpeeds::new(config);
+    (0..=elements.len()).map(|i| windows.speed(config, elements, i)).collect()
+}
+
+/// The junction speeds computed a window at a time, as the interpolation reaches them
+/// (module docs): the first is known after one window of `4 * lookahead_moves` elements,
+/// whatever the program's length, and only the junctions of the current window and those
+/// not yet released are kept.
+#[derive(Clone, Debug)]
+pub struct WindowedSpeeds {
+    window: usize,
+    /// Speeds of junctions `base..=fixed`.
+    speeds: std::collections::VecDeque<f64>,
+    base: usize,
+    fixed: usize,
+    /// Caps of junctions `fixed..fixed + caps.len()` (computed once per junction).
+    caps: std::collections::VecDeque<f64>,
+    backward: Vec<f64>,
+}
+
+impl WindowedSpeeds {
+    /// At the start of a program (junction 0 at rest).
+    pub fn new(config: &Resolved) -> WindowedSpeeds {
+        WindowedSpeeds {
+            window: 4 * config.lookahead_moves.max(1),
+            speeds: std::collections::VecDeque::from([0.0]),
+            base: 0,
+            fixed: 0,
+            caps: std::collections::VecDeque::new(),
+            backward: Vec::new(),
+        }
     }
-    let limits: Vec<Limits> = elements.iter().map(|e| element_limits(config, e)).collect();
-    let window = 4 * config.lookahead_moves.max(1);
-    let mut speeds = vec![0.0; n + 1];
-    let mut backward = vec![0.0; n + 1];
-    let mut fixed = 0;
-    while fixed < n {
-        let end = (fixed + window).min(n);
-        backward[end] = 0.0;
+
+    /// The speed at junction `i` (`0..=elements.len()`), planning further windows as needed.
+    pub fn speed(&mut self, config: &Resolved, elements: &[Element], i: usize) -> f64 {
+        assert!(i >= self.base && i <= elements.len(), "junction {i} released or beyond the path");
+        while i > self.fixed {
+            self.advance(config, elements);
+        }
+        self.speeds[i - self.base]
+    }
+
+    /// Forgets the junctions before `i`.
+    pub fn release(&mut self, i: usize) {
+        while self.base < i.min(self.fixed) {
+            self.speeds.pop_front();
+            self.base += 1;
+        }
+    }
+
+    /// One window: backward from rest at its end, forward from the last fixed junction,
+    /// the first half committed (all of it at the path's end).
+    fn advance(&mut self, config: &Resolved, elements: &[Element]) {
+        let n = elements.len();
+        let fixed = self.fixed;
+        let end = (fixed + self.window).min(n);
+        while fixed + self.caps.len() <= end {
+            let i = fixed + self.caps.len();
+            let cap = if i == 0 || i == n { 0.0 } else { junction_cap(config, &elements[i - 1], &elements[i]) };
+            self.caps.push_back(cap);
+        }
+        self.backward.clear();
+        self.backward.resize(end - fixed + 1, 0.0);
         for i in (fixed..end).rev() {
             // A hair below the exact reach, so that rounding never leaves a profile short.
-            let reach = limits[i].reachable(backward[i + 1], elements[i].length * (1.0 - 1e-12));
-            backward[i] = caps[i].min(reach);
+            let limits = element_limits(config, &elements[i]);
+            let reach = limits.reachable(self.backward[i + 1 - fixed], elements[i].length * (1.0 - 1e-12));
+            self.backward[i - fixed] = self.caps[i - fixed].min(reach);
         }
-        let commit = if end == n { n } else { fixed + window / 2 };
-        for i in fixed..commit {
-            let reach = limits[i].reachable(speeds[i], elements[i].length * (1.0 - 1e-12));
-            speeds[i + 1] = backward[i + 1].min(reach);
+        let commit = if end == n { n } else { fixed + self.window / 2 };
+        for (i, element) in elements.iter().enumerate().take(commit).skip(fixed) {
+            let limits = element_limits(config, element);
+            let from = self.speeds[i - self.base];
+            let reach = limits.reachable(from, element.length * (1.0 - 1e-12));
+            self.speeds.push_back(self.backward[i + 1 - fixed].min(reach));
         }
-        fixed = commit;
+        for _ in fixed..commit {
+            self.caps.pop_front();
+        }
+        self.fixed = commit;
     }
-    speeds
 }

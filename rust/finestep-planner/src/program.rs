@@ -13,8 +13,7 @@ use crate::config::MachineConfig;
 use crate::cutter_comp::compensate;
 pub use crate::error::ProgramError;
 use crate::geometry::elements;
-use crate::interpolate::interpolate;
-use crate::lookahead::junction_speeds;
+use crate::interpolate::Periods;
 
 /// A whole program's periods.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -31,8 +30,23 @@ pub struct PlannedProgram {
     pub notes: Vec<String>,
 }
 
-/// Plan and interpolate `program` on the machine `config`, starting at rest at the origin.
-pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<PlannedProgram, ProgramError> {
+/// A program's periods as a stream ([`Periods`]): records are produced as they are
+/// consumed, so memory does not grow with the program's duration.
+#[derive(Debug)]
+pub struct PlanStream {
+    /// The records, each with the source line executed at the end of its period.
+    pub periods: Periods,
+    /// Where the program ends, in axis units (X, Y, Z, A), on whole steps.
+    pub end: [f64; 4],
+    /// Path elements planned (programmed moves plus corner blends).
+    pub elements: usize,
+    /// What was adjusted or not carried out as programmed, for the report.
+    pub notes: Vec<String>,
+}
+
+/// Plans `program` on the machine `config`, starting at rest at the origin: the path is
+/// built and checked here, the look-ahead and the periods run as the stream is read.
+pub fn plan_stream(config: &MachineConfig, program: &Program) -> Result<PlanStream, ProgramError> {
     let resolved = config.resolve()?;
     let compensated =
         compensate(program, &config.tool_table()).map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
@@ -42,11 +56,29 @@ pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<Planned
             return Err(ProgramError { line: e.line, reason: format!("no usable speed limits for this move ({e:?})") });
         }
     }
-    let speeds = junction_speeds(&resolved, &path.elements);
-    let out = interpolate(&resolved, &path.elements, &speeds, path.leading_dwell)?;
-    let mut notes = resolved.notes;
+    let mut notes = resolved.notes.clone();
     notes.extend(path.notes);
-    Ok(PlannedProgram { records: out.records, lines: out.lines, end: path.end, elements: path.elements.len(), notes })
+    let count = path.elements.len();
+    Ok(PlanStream {
+        periods: Periods::new(resolved, path.elements, path.leading_dwell),
+        end: path.end,
+        elements: count,
+        notes,
+    })
+}
+
+/// Plan and interpolate `program` on the machine `config`, starting at rest at the
+/// origin, every record collected ([`plan_stream`] streams them instead).
+pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<PlannedProgram, ProgramError> {
+    let stream = plan_stream(config, program)?;
+    let mut records = Vec::new();
+    let mut lines = Vec::new();
+    for period in stream.periods {
+        let (record, line) = period?;
+        records.push(record);
+        lines.push(line);
+    }
+    Ok(PlannedProgram { records, lines, end: stream.end, elements: stream.elements, notes: stream.notes })
 }
 
 #[cfg(test)]

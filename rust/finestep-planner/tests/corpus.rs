@@ -364,3 +364,50 @@ fn a_wide_tolerance_does_not_hold_the_path_to_the_feed_of_a_piece_it_has_left() 
     assert!(fastest > 653.0 / 60.0 * 1.2, "{fastest}");
     assert!(report.max_feed_ratio <= 1.0 + 1e-6, "{}", report.max_feed_ratio);
 }
+
+/// A straight move of about 10 h (36 million periods at 1 ms) streams to its exact end:
+/// the planner kept every record and refused any program over 20 million periods (a long
+/// move allocated 864 MB before that). The memory it takes is a `make bench` figure.
+#[test]
+fn a_ten_hour_move_streams_to_its_exact_end() {
+    let program = parse("long.ngc", "G21 G90 G1 X1000000 F1666\nM2\n");
+    let stream = finestep_planner::plan_stream(&MachineConfig::default(), &program).unwrap();
+    let (mut periods, mut x, mut top) = (0u64, 0i64, 0i32);
+    for period in stream.periods {
+        let (record, _) = period.unwrap();
+        x += i64::from(record.inc[0].to_bits());
+        top = top.max(record.inc[0].to_bits());
+        periods += 1;
+    }
+    assert_eq!(x, (1_000_000 * 800) << 16);
+    assert!(periods > 20_000_000, "{periods}");
+    // At the feed: 1666 mm/min is 22.2 steps a period on X.
+    assert!((f64::from(top) / 65536.0 - 1666.0 / 60.0 * 0.8).abs() < 0.01, "{top}");
+}
+
+/// The stream gives the records `plan_program` collects, and the windowed look-ahead,
+/// releasing junctions as it goes, the speeds it gives when nothing is released
+/// (`junction_speeds`), with a window far shorter than the program (the CAM program at a
+/// look-ahead of 50 moves), never stopping on the way.
+#[test]
+fn the_stream_and_its_windows_agree_with_the_whole_plan() {
+    use finestep_planner::config::ProfileKind::{SCurve, Trapezoid};
+    use finestep_planner::lookahead::{junction_speeds, WindowedSpeeds};
+    let program = parse("cam.ngc", &cam_program(3000));
+    for profile in [Trapezoid, SCurve] {
+        let config = MachineConfig { profile, lookahead_moves: 50, ..MachineConfig::default() };
+        let planned = plan_program(&config, &program).unwrap();
+        let streamed: Vec<_> =
+            finestep_planner::plan_stream(&config, &program).unwrap().periods.map(|p| p.unwrap().0).collect();
+        assert_eq!(planned.records, streamed);
+        let resolved = config.resolve().unwrap();
+        let path = finestep_planner::geometry::elements(&resolved, &program).unwrap();
+        let whole = junction_speeds(&resolved, &path.elements);
+        let mut windows = WindowedSpeeds::new(&resolved);
+        for (i, &v) in whole.iter().enumerate() {
+            assert_eq!(windows.speed(&resolved, &path.elements, i), v, "junction {i}");
+            windows.release(i);
+        }
+        assert!(whole[1..whole.len() - 1].iter().all(|&v| v > 0.0));
+    }
+}
