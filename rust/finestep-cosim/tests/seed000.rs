@@ -45,7 +45,12 @@ fn run_line(to: &[f64], feed_mm_s: f64, accel_mm_s2: f64, path: ModelPath) -> Re
     let axis = AxisConfig { timing: DriveTiming::new(5, 5, 10, 10), mode: 0, invert: 0, enable: true };
     let mut inputs = CoreInputs { run: true, period_clocks: PERIOD_CLOCKS, ..Default::default() };
     inputs.axes[..3].copy_from_slice(&[axis; 3]);
-    let mut checker = RateChecker::new(PERIOD_CLOCKS, &inputs.axes.iter().map(|axis| axis.timing).collect::<Vec<_>>());
+    // The core this test runs (Harness::new: the shared step engine) and its rated rate.
+    let mut checker = RateChecker::for_core(
+        &finestep_rtl_sys::params(),
+        PERIOD_CLOCKS,
+        &inputs.axes.iter().map(|axis| axis.timing).collect::<Vec<_>>(),
+    );
     // The parameter ranges below keep every line within the rated rate: a refusal is a
     // planner defect, not a case to skip.
     for (index, record) in records.iter().enumerate() {
