@@ -40,32 +40,15 @@ module dda_axis #(
         (period_clocks == {P_WIDTH{1'b0}}) ? {{(P_WIDTH-1){1'b0}}, 1'b1} : period_clocks;
     wire [ACC_W-1:0] half_modulus = {1'b0, period_sampled, {(FRAC_BITS-1){1'b0}}};
 
-    wire signed [SUM_W-1:0] modulus = {2'b00, p_active, {FRAC_BITS{1'b0}}};
-    // The increment sign-extended (or, for the narrow proofs, truncated: |inc| < M
-    // always fits) to the sum's width.
-    wire [SUM_W-1:0] inc_resized;
-    generate
-        if (SUM_W > 32) begin : widen
-            assign inc_resized = {{(SUM_W-32){inc[31]}}, inc};
-        end else if (SUM_W == 32) begin : same
-            assign inc_resized = inc;
-        end else begin : narrow
-            assign inc_resized = inc[SUM_W-1:0];
-            wire [31:0] unused_inc_top = {{SUM_W{1'b0}}, inc[31:SUM_W]};
-        end
-    endgenerate
-    // acc + d, acc + d - M and acc + d + M side by side (each a three-input sum: one
-    // carry chain), then a choice: no carry chain waits for another.
-    wire signed [SUM_W-1:0] acc_wide = $signed({2'b00, acc_reg});
-    wire signed [SUM_W-1:0] sum       = acc_wide + $signed(inc_resized);
-    wire signed [SUM_W-1:0] sum_minus = acc_wide + $signed(inc_resized) - modulus;
-    wire signed [SUM_W-1:0] sum_plus  = acc_wide + $signed(inc_resized) + modulus;
-    wire wrap_up   = !sum_minus[SUM_W-1];   // acc + d >= M
-    wire wrap_down = sum[SUM_W-1];
-    wire signed [SUM_W-1:0] sum_wrapped =
-        wrap_up ? sum_minus : (wrap_down ? sum_plus : sum);
-    // The wrapped sum is in [0, M): its sign and carry bits are always zero.
-    wire [1:0] unused_wrapped_top = sum_wrapped[SUM_W-1:ACC_W];
+    // One update (dda_step): acc + d against M = P * 2^16.
+    wire [ACC_W-1:0] acc_wrapped;
+    wire             wrap_up, wrap_down;
+    wire [SUM_W-1:0] sum;               // acc + d, for the formal section
+    wire             unused_sum = &{1'b0, sum};
+    dda_step #(.M_W(P_WIDTH)) update (
+        .acc(acc_reg), .inc(inc), .m(p_active),
+        .acc_next(acc_wrapped), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(sum)
+    );
 
     always @(posedge clk) begin
         if (!run) begin
@@ -73,7 +56,7 @@ module dda_axis #(
             req_valid_reg    <= 1'b0;
             req_negative_reg <= 1'b0;
         end else begin
-            acc_reg          <= sum_wrapped[ACC_W-1:0];
+            acc_reg          <= acc_wrapped;
             req_valid_reg    <= wrap_up || wrap_down;
             req_negative_reg <= wrap_down;
         end

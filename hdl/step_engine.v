@@ -59,7 +59,6 @@ module step_engine #(
     localparam ACC_W     = V_W + FRAC_BITS;
     localparam SUM_W     = ACC_W + 2;             // sign + one carry bit
     localparam PEND_W    = 8;
-    localparam [PEND_W-1:0] PEND_MAX = 8'sd127;
     localparam CMP_W     = TIMING_W + SL;         // cnt * S against a timing
     localparam [TIMING_W-1:0] COUNT_MAX = {TIMING_W{1'b1}};
     localparam [TIMING_W-1:0] COUNT_ONE = {{(TIMING_W-1){1'b0}}, 1'b1};
@@ -102,32 +101,18 @@ module step_engine #(
     // ---- DDA visit -------------------------------------------------------------------
     // M = V * 2^16 with V = p_active / S, and M/2, where the first running visit starts.
     wire [SL-1:0] unused_p_low = p_active[SL-1:0];
-    wire signed [SUM_W-1:0] modulus      = {2'b00, p_active[P_WIDTH-1:SL], {FRAC_BITS{1'b0}}};
     wire [ACC_W-1:0]        half_modulus = {1'b0, p_active[P_WIDTH-1:SL], {(FRAC_BITS-1){1'b0}}};
     wire [ACC_W-1:0] acc_rd;
     wire [ACC_W-1:0] acc_cur = dda_live_reg[dda_ix] ? acc_rd : half_modulus;
     wire [31:0]      inc_cur = inc[32*dda_ix +: 32];
-    wire [SUM_W-1:0] inc_resized;
-    generate
-        if (SUM_W > 32) begin : widen
-            assign inc_resized = {{(SUM_W-32){inc_cur[31]}}, inc_cur};
-        end else if (SUM_W == 32) begin : same
-            assign inc_resized = inc_cur;
-        end else begin : narrow
-            assign inc_resized = inc_cur[SUM_W-1:0];
-            wire [31:0] unused_inc_top = {{SUM_W{1'b0}}, inc_cur[31:SUM_W]};
-        end
-    endgenerate
-    // acc + d, acc + d - M and acc + d + M side by side, then a choice (as dda_axis).
-    wire signed [SUM_W-1:0] acc_wide  = $signed({2'b00, acc_cur});
-    wire signed [SUM_W-1:0] sum       = acc_wide + $signed(inc_resized);
-    wire signed [SUM_W-1:0] sum_minus = acc_wide + $signed(inc_resized) - modulus;
-    wire signed [SUM_W-1:0] sum_plus  = acc_wide + $signed(inc_resized) + modulus;
-    wire wrap_up   = !sum_minus[SUM_W-1];   // acc + d >= M
-    wire wrap_down = sum[SUM_W-1];
-    wire signed [SUM_W-1:0] sum_wrapped = wrap_up ? sum_minus : (wrap_down ? sum_plus : sum);
-    wire [1:0] unused_wrapped_top = sum_wrapped[SUM_W-1:ACC_W];
-    wire [ACC_W-1:0] acc_next = sum_wrapped[ACC_W-1:0];   // used only after a running visit
+    // One update (dda_step): acc + d against M = V * 2^16.
+    wire [ACC_W-1:0] acc_next;   // used only after a running visit
+    wire             wrap_up, wrap_down;
+    wire [SUM_W-1:0] unused_sum;
+    dda_step #(.M_W(V_W)) update (
+        .acc(acc_cur), .inc(inc_cur), .m(p_active[P_WIDTH-1:SL]),
+        .acc_next(acc_next), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(unused_sum)
+    );
 
     store_ram #(.WIDTH(ACC_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) dda_store (
         .clk(clk), .wr_en(dda_visit), .wr_addr(dda_axis), .wr_data(acc_next),
@@ -164,44 +149,17 @@ module step_engine #(
     wire [CMP_W-1:0] cnt_clocks  = {cnt, {SL{1'b0}}};
     wire [CMP_W-1:0] dcnt_clocks = {dcnt, {SL{1'b0}}};
 
-    // e = pending + request decoded from constant compares of pending (as step_shaper).
-    wire req_up   = req_valid_reg && !req_negative_reg;
-    wire req_down = req_valid_reg && req_negative_reg;
-    wire p_neg    = pending[PEND_W-1];
-    wire p_is_m2  = (pending == -8'sd2);
-    wire p_is_m1  = (pending == -8'sd1);
-    wire p_is_0   = (pending == 8'sd0);
-    wire p_is_1   = (pending == 8'sd1);
-    wire p_is_2   = (pending == 8'sd2);
-    wire p_is_max = (pending == PEND_MAX);
-    wire p_is_min = (pending == -PEND_MAX);
-    wire want_step    = req_up ? !p_is_m1 : (req_down ? !p_is_1 : !p_is_0);
-    wire want_forward = req_up ? (!p_neg || p_is_m1) : (req_down ? (!p_neg && !p_is_0) : !p_neg);
-    wire far          = req_up ? !(p_is_m2 || p_is_m1 || p_is_0) :
-                        (req_down ? !(p_is_0 || p_is_1 || p_is_2) : !(p_is_m1 || p_is_0 || p_is_1));
-    wire dir_matches  = (want_forward == dir);
-
-    wire fall       = level && (cnt_clocks >= {{SL{1'b0}}, len_cur});
-    wire rise       = !halt && !level && want_step && dir_matches &&
-                      (cnt_clocks >= {{SL{1'b0}}, space_cur}) && (dcnt_clocks >= {{SL{1'b0}}, setup_cur});
-    wire dir_change = !halt && !level && want_step && !dir_matches && (cnt_clocks >= {{SL{1'b0}}, hold_cur});
-
-    wire issue_up   = rise && dir;
-    wire issue_down = rise && !dir;
-    wire change_p2  = req_up && issue_down;
-    wire change_m2  = req_down && issue_up;
-    wire change_p1  = (req_up && !rise) || (!req_valid_reg && issue_down);
-    wire change_m1  = (req_down && !rise) || (!req_valid_reg && issue_up);
-    wire signed [PEND_W-1:0] change = change_p2 ? 8'sd2 : change_p1 ? 8'sd1 :
-                                      change_m1 ? -8'sd1 : change_m2 ? -8'sd2 : 8'sd0;
-    wire signed [PEND_W-1:0] pending_sum = pending + change;
-    wire clamp_high = !halt && p_is_max && change_p1;
-    wire clamp_low  = !halt && p_is_min && change_m1;
-    wire behind     = !halt && far;
-    wire signed [PEND_W-1:0] pending_next =
-        halt       ? {PEND_W{1'b0}} :
-        clamp_high ? PEND_MAX :
-        clamp_low  ? -PEND_MAX : pending_sum;
+    // The visit's decisions and next pending count (shaper_step).
+    wire rise, fall, dir_change, clamp_high, clamp_low, behind;
+    wire signed [PEND_W-1:0] pending_next;
+    shaper_step decide (
+        .pending(pending), .level(level), .dir(dir),
+        .req_valid(req_valid_reg), .req_negative(req_negative_reg), .halt(halt),
+        .len_reached(cnt_clocks >= {{SL{1'b0}}, len_cur}), .space_reached(cnt_clocks >= {{SL{1'b0}}, space_cur}),
+        .setup_reached(dcnt_clocks >= {{SL{1'b0}}, setup_cur}), .hold_reached(cnt_clocks >= {{SL{1'b0}}, hold_cur}),
+        .rise(rise), .fall(fall), .dir_change(dir_change), .pending_next(pending_next),
+        .clamp_high(clamp_high), .clamp_low(clamp_low), .behind(behind)
+    );
 
     wire                level_next = rise ? 1'b1 : (fall ? 1'b0 : level);
     wire                dir_next   = dir_change ? !dir : dir;
@@ -313,6 +271,7 @@ module step_engine #(
     reg [N_AXES-1:0] f_clamped;
     reg [N_AXES-1:0] f_live;                // the axis's last DDA visit ran
     integer f;
+    localparam [PEND_W-1:0] PEND_MAX = 8'sd127;
     wire signed [PEND_W:0] f_request = req_valid_reg ? (req_negative_reg ? -9'sd1 : 9'sd1) : 9'sd0;
     always @(posedge clk) begin
         for (f = 0; f < N_AXES; f = f + 1) begin
@@ -348,8 +307,17 @@ module step_engine #(
     wire [PEND_W-1:0] f_pending_next = halt ? {PEND_W{1'b0}} : (f_left > 9'sd127) ? PEND_MAX :
                                        (f_left < -9'sd127) ? -PEND_MAX : f_left[PEND_W-1:0];
     // The DDA's: s = acc + d against M.
-    wire signed [SUM_W+1:0] f_s = $signed({4'b0000, acc_cur}) + $signed({{2{inc_resized[SUM_W-1]}}, inc_resized});
-    wire signed [SUM_W+1:0] f_m = $signed({2'b00, modulus});
+    wire [SUM_W+1:0] f_inc_ext;
+    generate
+        // d as the DDA sees it (its low SUM_W bits: |d| < M always fits), sign-extended.
+        if (SUM_W >= 32) begin : f_widen
+            assign f_inc_ext = {{(SUM_W+2-32){inc_cur[31]}}, inc_cur};
+        end else begin : f_narrow
+            assign f_inc_ext = {{2{inc_cur[SUM_W-1]}}, inc_cur[SUM_W-1:0]};
+        end
+    endgenerate
+    wire signed [SUM_W+1:0] f_s = $signed({4'b0000, acc_cur}) + $signed(f_inc_ext);
+    wire signed [SUM_W+1:0] f_m = $signed({4'b0000, p_active[P_WIDTH-1:SL], {FRAC_BITS{1'b0}}});
 
     always @(*) if (f_past_valid && !rst) begin
         // No read-during-write on either store.

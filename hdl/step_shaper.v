@@ -45,7 +45,6 @@ module step_shaper #(
 );
 
     localparam PEND_W = 8;
-    localparam [PEND_W-1:0] PEND_MAX = 8'sd127;
     // The output modes (out_mode) and inversion bits (invert): FS_OUT_MODE_*, FS_INVERT_*.
 `include "finestep_interface.vh"
     localparam [TIMING_W-1:0] COUNT_MAX = {TIMING_W{1'b1}};
@@ -64,51 +63,17 @@ module step_shaper #(
     reg                     pin_b_reg;
     reg                     pin_en_reg;
 
-    // The spec's arithmetic is e = pending + request (pending in [-127, 127], request in
-    // {-1, 0, +1}), then pending <- e - issued, saturated at +-127. Here the decisions
-    // are decoded from a few constant compares of pending (no carry chain before them),
-    // and the new pending is pending + (request - issued), one 8-bit adder (the formal
-    // section checks both against the spec's sums).
-    wire               req_up    = req_valid && !req_negative;
-    wire               req_down  = req_valid && req_negative;
-    wire               p_neg     = pending_reg[PEND_W-1];
-    wire               p_is_m2   = (pending_reg == -8'sd2);
-    wire               p_is_m1   = (pending_reg == -8'sd1);
-    wire               p_is_0    = (pending_reg == 8'sd0);
-    wire               p_is_1    = (pending_reg == 8'sd1);
-    wire               p_is_2    = (pending_reg == 8'sd2);
-    wire               p_is_max  = (pending_reg == PEND_MAX);
-    wire               p_is_min  = (pending_reg == -PEND_MAX);
-    // e != 0; e >= 0; |e| >= 2.
-    wire want_step    = req_up ? !p_is_m1 : (req_down ? !p_is_1 : !p_is_0);
-    wire want_forward = req_up ? (!p_neg || p_is_m1) : (req_down ? (!p_neg && !p_is_0) : !p_neg);
-    wire far          = req_up ? !(p_is_m2 || p_is_m1 || p_is_0) :
-                        (req_down ? !(p_is_0 || p_is_1 || p_is_2) : !(p_is_m1 || p_is_0 || p_is_1));
-    wire dir_matches  = (want_forward == dir_reg);
-
-    wire fall       = level_reg && (cnt_reg >= step_len);
-    wire rise       = !halt && !level_reg && want_step && dir_matches &&
-                      (cnt_reg >= step_space) && (dcnt_reg >= dir_setup);
-    wire dir_change = !halt && !level_reg && want_step && !dir_matches && (cnt_reg >= dir_hold);
-
-    // pending + request - issued: the change is one of -2 .. 2.
-    wire issue_up   = rise && dir_reg;
-    wire issue_down = rise && !dir_reg;
-    wire change_p2  = req_up && issue_down;
-    wire change_m2  = req_down && issue_up;
-    wire change_p1  = (req_up && !rise) || (!req_valid && issue_down);
-    wire change_m1  = (req_down && !rise) || (!req_valid && issue_up);
-    // request - issued, one of -2 .. 2.
-    wire signed [PEND_W-1:0] change = change_p2 ? 8'sd2 : change_p1 ? 8'sd1 :
-                                      change_m1 ? -8'sd1 : change_m2 ? -8'sd2 : 8'sd0;
-    wire signed [PEND_W-1:0] pending_sum = pending_reg + change;
-    wire clamp_high = !halt && p_is_max && change_p1;   // 127 + 1 (a +2 needs e < 0)
-    wire clamp_low  = !halt && p_is_min && change_m1;   // -127 - 1 (a -2 needs e > 0)
-    wire behind     = !halt && far;
-    wire signed [PEND_W-1:0] pending_next =
-        halt       ? {PEND_W{1'b0}} :
-        clamp_high ? PEND_MAX :
-        clamp_low  ? -PEND_MAX : pending_sum;
+    // One edge's decisions and next pending count (shaper_step).
+    wire rise, fall, dir_change, clamp_high, clamp_low, behind;
+    wire signed [PEND_W-1:0] pending_next;
+    shaper_step decide (
+        .pending(pending_reg), .level(level_reg), .dir(dir_reg),
+        .req_valid(req_valid), .req_negative(req_negative), .halt(halt),
+        .len_reached(cnt_reg >= step_len), .space_reached(cnt_reg >= step_space),
+        .setup_reached(dcnt_reg >= dir_setup), .hold_reached(cnt_reg >= dir_hold),
+        .rise(rise), .fall(fall), .dir_change(dir_change), .pending_next(pending_next),
+        .clamp_high(clamp_high), .clamp_low(clamp_low), .behind(behind)
+    );
 
     // Pin functions of the current state, registered into the pins.
     reg a_now, b_now;
@@ -187,6 +152,7 @@ module step_shaper #(
     // high exactly max(L,1) cycles, low at least S between pulses, dir changes only while
     // low and at least H cycles after a fall, and a rise comes at least U cycles after a
     // dir change. No step is lost: position + pending == net requests unless step_lost.
+    localparam [PEND_W-1:0] PEND_MAX = 8'sd127;
     localparam F_TW = TIMING_W + 2;
     localparam [F_TW-1:0] F_MAX = {F_TW{1'b1}};
     reg f_past_valid;

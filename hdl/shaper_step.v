@@ -1,0 +1,78 @@
+`timescale 1ns / 1ps
+`default_nettype none
+// Specification: docs/spec/step_shaper.md (the rules of one edge), docs/spec/step_engine.md
+// One step-shaper decision, combinational: from the pending count, the level, the
+// direction, this edge's DDA request and the counter compares (made by the caller:
+// cnt >= X for step_shaper, cnt * S >= X for step_engine), whether the level falls,
+// rises or the direction turns, the next pending count (clamped at +-127) and the
+// sticky flags' causes. Used by step_shaper (every clock) and step_engine (every visit),
+// so the rule is written once.
+//
+// The spec's arithmetic is e = pending + request (pending in [-127, 127], request in
+// {-1, 0, +1}), then pending <- e - issued, saturated at +-127. Here the decisions are
+// decoded from a few constant compares of pending (no carry chain before them), and the
+// new pending is pending + (request - issued), one 8-bit adder (the callers' formal
+// sections check both against the spec's sums).
+module shaper_step (
+    input  wire [7:0] pending,          // signed, in [-127, 127]
+    input  wire       level,
+    input  wire       dir,              // 1 = positive
+    input  wire       req_valid,
+    input  wire       req_negative,
+    input  wire       halt,
+    input  wire       len_reached,      // the level has lasted step_len
+    input  wire       space_reached,    // ... step_space (low)
+    input  wire       setup_reached,    // dir has lasted dir_setup
+    input  wire       hold_reached,     // the level has lasted dir_hold (low)
+    output wire       rise,
+    output wire       fall,
+    output wire       dir_change,
+    output wire [7:0] pending_next,
+    output wire       clamp_high,       // 127 + 1: a step lost
+    output wire       clamp_low,        // -127 - 1: a step lost
+    output wire       behind            // |e| >= 2: the pulses fell behind the DDA
+);
+
+    localparam [7:0] PEND_MAX = 8'sd127;
+
+    wire req_up   = req_valid && !req_negative;
+    wire req_down = req_valid && req_negative;
+    wire p_neg    = pending[7];
+    wire p_is_m2  = (pending == -8'sd2);
+    wire p_is_m1  = (pending == -8'sd1);
+    wire p_is_0   = (pending == 8'sd0);
+    wire p_is_1   = (pending == 8'sd1);
+    wire p_is_2   = (pending == 8'sd2);
+    wire p_is_max = (pending == PEND_MAX);
+    wire p_is_min = (pending == -PEND_MAX);
+    // e != 0; e >= 0; |e| >= 2.
+    wire want_step    = req_up ? !p_is_m1 : (req_down ? !p_is_1 : !p_is_0);
+    wire want_forward = req_up ? (!p_neg || p_is_m1) : (req_down ? (!p_neg && !p_is_0) : !p_neg);
+    wire far          = req_up ? !(p_is_m2 || p_is_m1 || p_is_0) :
+                        (req_down ? !(p_is_0 || p_is_1 || p_is_2) : !(p_is_m1 || p_is_0 || p_is_1));
+    wire dir_matches  = (want_forward == dir);
+
+    assign fall       = level && len_reached;
+    assign rise       = !halt && !level && want_step && dir_matches && space_reached && setup_reached;
+    assign dir_change = !halt && !level && want_step && !dir_matches && hold_reached;
+
+    // request - issued, one of -2 .. 2.
+    wire issue_up   = rise && dir;
+    wire issue_down = rise && !dir;
+    wire change_p2  = req_up && issue_down;
+    wire change_m2  = req_down && issue_up;
+    wire change_p1  = (req_up && !rise) || (!req_valid && issue_down);
+    wire change_m1  = (req_down && !rise) || (!req_valid && issue_up);
+    wire [7:0] change = change_p2 ? 8'sd2 : change_p1 ? 8'sd1 :
+                        change_m1 ? -8'sd1 : change_m2 ? -8'sd2 : 8'sd0;
+    wire [7:0] pending_sum = pending + change;
+    assign clamp_high = !halt && p_is_max && change_p1;   // a +2 needs e < 0
+    assign clamp_low  = !halt && p_is_min && change_m1;   // a -2 needs e > 0
+    assign behind     = !halt && far;
+    assign pending_next = halt       ? 8'd0 :
+                          clamp_high ? PEND_MAX :
+                          clamp_low  ? -PEND_MAX : pending_sum;
+
+endmodule
+
+`default_nettype wire
