@@ -4,7 +4,7 @@ export VERILATOR ?= verilator
 
 .PHONY: conformance flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
         bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick \
-        linuxcnc linuxcnc-quick
+        linuxcnc linuxcnc-quick netlist netlist-quick
 
 all: test
 
@@ -14,7 +14,7 @@ setup:
 demo: setup
 	$(CARGO) run --release -q -p finestep-cli -- demo
 
-test: setup lint cargo-test wheel-check formal mutants-quick linuxcnc-quick flows
+test: setup lint cargo-test wheel-check formal mutants-quick netlist-quick linuxcnc-quick flows
 	@echo "make test: all passed"
 
 # Before a commit: fmt, clippy, Verilator lint and the unit tests (a few minutes warm).
@@ -49,8 +49,19 @@ mutants-quick: setup
 flows: setup
 	@./scripts/bitstream_check.sh
 
-test-long: setup
+test-long: setup netlist
 	FINESTEP_CASES=2000 $(CARGO) test --release --workspace
+
+# The synthesised netlist in lockstep (docs/verification.md): finestep_top after Yosys's
+# synth_ecp5 and synth_ice40 (scripts/netlist.sh, into build/netlist/), Verilated with
+# Yosys's cell models and run against the model on the pin-level lockstep tests
+# (streaming, faults, feedback), every pin every clock; prints clocks/s per family.
+netlist: setup
+	@./scripts/netlist_check.sh
+
+# The quick slice of it in make test: the iCE40 netlist, a stream, an E-stop, the encoders.
+netlist-quick: setup
+	@./scripts/netlist_check.sh --quick
 
 # Regenerate docs/registers.md and docs/interface.md from hdl/registers.toml and
 # hdl/interface.toml (cargo test fails while they are stale).

@@ -1,11 +1,15 @@
 // C ABI shim around the Verilated finestep_top (see finestep_top_sim.h). As for the
-// core, two Verilations are linked: Vfinestep_top (fast) and Vfinestep_top_traced.
+// core, two Verilations are linked: Vfinestep_top (fast) and Vfinestep_top_traced. A
+// synthesised netlist (FT_NETLIST, rust/finestep-rtl-sys's netlist features) is Verilated
+// once, without tracing: ft_new_traced makes the same top, and ft_trace_open fails on it.
 #include "finestep_top_sim.h"
 
 #include <memory>
 
 #include "Vfinestep_top.h"
+#ifndef FT_NETLIST
 #include "Vfinestep_top_traced.h"
+#endif
 #include "verilated_trace.h"
 
 #ifndef FT_N_AXES
@@ -142,7 +146,11 @@ uint32_t ft_n_enc(void) { return FT_N_ENC; }
 uint32_t ft_has_mpg(void) { return FT_HAS_MPG; }
 
 ft_sim *ft_new(void) { return new TopSim<FastTop, false>; }
+#ifndef FT_NETLIST
 ft_sim *ft_new_traced(void) { return new TopSim<Vfinestep_top_traced, true>; }
+#else
+ft_sim *ft_new_traced(void) { return new TopSim<FastTop, false>; }
+#endif
 void ft_free(ft_sim *sim) { delete sim; }
 uint64_t ft_cycle(const ft_sim *sim) { return sim->cycle; }
 uint64_t ft_outputs(const ft_sim *sim) { return sim->outputs; }

