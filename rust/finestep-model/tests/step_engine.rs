@@ -7,6 +7,8 @@
 //! intervals are computed here from the spec's formulas and compared with
 //! `finestep_interface::rate`.
 
+mod common;
+
 use finestep_model::limits::{forward_interval_in, max_increment_in, reversal_interval_in, reversal_wait_in};
 use finestep_model::{
     AxisConfig, Core, CoreInputs, CoreOutputs, CoreParams, DriveTiming, Increment, PeriodRecord, RateChecker, MAX_AXES,
@@ -227,28 +229,9 @@ fn first_pin_mismatch(trace: &Trace, drive: &Drive, axis: usize) -> Option<Strin
     let c0 = settled(trace);
     let mut pos = trace.position(c0, axis);
     for c in c0 as usize + 1..p.len() {
-        let ((a0, b0), (a1, b1)) = (p[c - 1], p[c]);
-        match mode {
-            1 => pos += i64::from(a1 && !a0) - i64::from(b1 && !b0),
-            2 => {
-                let phase = |a: bool, b: bool| match (a, b) {
-                    (false, false) => 0i32,
-                    (true, false) => 1,
-                    (true, true) => 2,
-                    (false, true) => 3,
-                };
-                pos += match (phase(a1, b1) - phase(a0, b0)).rem_euclid(4) {
-                    0 => 0,
-                    1 => 1,
-                    3 => -1,
-                    _ => return Some(format!("axis {axis}: cycle {c}: quadrature skipped a phase")),
-                };
-            }
-            _ => {
-                if a1 && !a0 {
-                    pos += if b1 { 1 } else { -1 };
-                }
-            }
+        match common::pin_step(mode, p[c - 1], p[c]) {
+            Some(step) => pos += step,
+            None => return Some(format!("axis {axis}: cycle {c}: quadrature skipped a phase")),
         }
         let want = trace.position(c as u64, axis);
         if pos != want {

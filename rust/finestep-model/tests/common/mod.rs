@@ -191,33 +191,42 @@ impl Run {
         let mut pos = 0i64;
         let mut out = vec![0];
         for w in pins.windows(2) {
-            let ((a0, b0), (a1, b1)) = (w[0], w[1]);
-            match mode {
-                1 => pos += i64::from(a1 && !a0) - i64::from(b1 && !b0),
-                2 => {
-                    let phase = |a: bool, b: bool| match (a, b) {
-                        (false, false) => 0i32,
-                        (true, false) => 1,
-                        (true, true) => 2,
-                        (false, true) => 3,
-                    };
-                    let delta = (phase(a1, b1) - phase(a0, b0)).rem_euclid(4);
-                    assert_ne!(delta, 2, "axis {axis}: quadrature skipped a phase");
-                    pos += match delta {
-                        1 => 1,
-                        3 => -1,
-                        _ => 0,
-                    };
-                }
-                _ => {
-                    if a1 && !a0 {
-                        pos += if b1 { 1 } else { -1 };
-                    }
-                }
-            }
+            pos += pin_step(mode, w[0], w[1]).unwrap_or_else(|| panic!("axis {axis}: quadrature skipped a phase"));
             out.push(pos);
         }
         out
+    }
+}
+
+/// One cycle of the steps the pins A, B show in output mode `mode` (0/3 step/dir, 1
+/// up/down, 2 quadrature), from `(a0, b0)` to `(a1, b1)`: -1, 0 or +1; `None` when a
+/// quadrature output skips a phase.
+pub fn pin_step(mode: u8, (a0, b0): (bool, bool), (a1, b1): (bool, bool)) -> Option<i64> {
+    match mode {
+        1 => Some(i64::from(a1 && !a0) - i64::from(b1 && !b0)),
+        2 => {
+            let phase = |a: bool, b: bool| match (a, b) {
+                (false, false) => 0i32,
+                (true, false) => 1,
+                (true, true) => 2,
+                (false, true) => 3,
+            };
+            match (phase(a1, b1) - phase(a0, b0)).rem_euclid(4) {
+                0 => Some(0),
+                1 => Some(1),
+                3 => Some(-1),
+                _ => None,
+            }
+        }
+        _ => Some(if a1 && !a0 {
+            if b1 {
+                1
+            } else {
+                -1
+            }
+        } else {
+            0
+        }),
     }
 }
 
