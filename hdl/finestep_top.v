@@ -61,6 +61,10 @@ module finestep_top #(
 `include "finestep_interface.vh"
 `include "finestep_top_checks.vh"
 
+    // log2 of the step engine's slots, reported in CAPS.STEP_SLOTS_LOG2 (0: a DDA and a
+    // shaper per axis); finestep_core and step_engine derive the same from N_AXES.
+    localparam STEP_SLOTS_LOG2 = (STEP_SHARED == 0) ? 0 : ((N_AXES <= 2) ? 1 : ((N_AXES <= 4) ? 2 : 3));
+
     // A FIFO record: the increments, then the flags (FS_REC_*).
     localparam INC_W   = FS_REC_INC_WIDTH * N_AXES;
     localparam REC_W   = INC_W + FS_REC_FLAGS_WIDTH;
@@ -231,7 +235,8 @@ module finestep_top #(
     register_file #(
         .N_AXES(N_AXES), .P_WIDTH(P_WIDTH), .TIMING_W(TIMING_W), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
-        .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK)
+        .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK),
+        .STEP_SLOTS_LOG2(STEP_SLOTS_LOG2)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),

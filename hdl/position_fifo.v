@@ -55,7 +55,10 @@ module position_fifo #(
     localparam DEPTH = 1 << DEPTH_LOG2;
     localparam [DEPTH_LOG2:0] LEVEL_FULL = DEPTH[DEPTH_LOG2:0];
 
-    reg [WIDTH-1:0]      mem [0:DEPTH-1];
+    // The forwarding below answers every read of the slot being written, so the RAM's own
+    // read-during-write result is never used: no_rw_check spares the tools' emulation of
+    // it (a second copy of the forwarding register and its multiplexer, WIDTH wide).
+    (* no_rw_check *) reg [WIDTH-1:0] mem [0:DEPTH-1];
     reg [DEPTH_LOG2-1:0] wr_ptr_reg;      // end of the committed records
     reg [DEPTH_LOG2-1:0] stage_ptr_reg;   // end of the staged records
     reg [DEPTH_LOG2-1:0] rd_ptr_reg;

@@ -13,7 +13,7 @@
 #include "verilated_trace.h"
 
 #ifndef FT_N_AXES
-#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W, FT_FIFO_DEPTH_LOG2, FT_N_ENC and FT_HAS_MPG must match the Verilated parameters"
+#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W, FT_FIFO_DEPTH_LOG2, FT_N_ENC, FT_HAS_MPG and FT_STEP_SHARED must match the Verilated parameters"
 #endif
 
 struct ft_sim {
@@ -144,6 +144,7 @@ uint32_t ft_timing_width(void) { return FT_TIMING_W; }
 uint32_t ft_fifo_depth_log2(void) { return FT_FIFO_DEPTH_LOG2; }
 uint32_t ft_n_enc(void) { return FT_N_ENC; }
 uint32_t ft_has_mpg(void) { return FT_HAS_MPG; }
+uint32_t ft_step_shared(void) { return FT_STEP_SHARED; }
 
 ft_sim *ft_new(void) { return new TopSim<FastTop, false>; }
 #ifndef FT_NETLIST

@@ -57,6 +57,7 @@ uint32_t ft_timing_width(void);
 uint32_t ft_fifo_depth_log2(void);
 uint32_t ft_n_enc(void);
 uint32_t ft_has_mpg(void);
+uint32_t ft_step_shared(void);
 
 /* A top built without waveform support (the fast one). */
 ft_sim *ft_new(void);

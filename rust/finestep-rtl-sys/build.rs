@@ -27,6 +27,7 @@ struct Params {
     fifo_depth_log2: i64,
     n_enc: i64,
     has_mpg: i64,
+    step_shared: i64,
 }
 
 impl Params {
@@ -40,6 +41,7 @@ impl Params {
             fifo_depth_log2: default("FIFO_DEPTH_LOG2"),
             n_enc: default("N_ENC"),
             has_mpg: default("HAS_MPG"),
+            step_shared: default("STEP_SHARED"),
         }
     }
 }
@@ -187,7 +189,8 @@ fn main() {
         .define("FT_TIMING_W", params.timing_w.to_string().as_str())
         .define("FT_FIFO_DEPTH_LOG2", params.fifo_depth_log2.to_string().as_str())
         .define("FT_N_ENC", params.n_enc.to_string().as_str())
-        .define("FT_HAS_MPG", params.has_mpg.to_string().as_str());
+        .define("FT_HAS_MPG", params.has_mpg.to_string().as_str())
+        .define("FT_STEP_SHARED", params.step_shared.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -375,6 +378,7 @@ fn verilate(
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
         .args((top == "finestep_top").then(|| format!("-GHAS_MPG={}", params.has_mpg)))
+        .args((top == "finestep_top").then(|| format!("-GSTEP_SHARED={}", params.step_shared)))
         .args(sources)
         .status()
         .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));

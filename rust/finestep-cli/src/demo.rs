@@ -36,7 +36,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     let feed_mm_s = 20.0;
     let records = machine_setup::plan_line(&config, [target[0], target[1], target[2], 0.0], feed_mm_s)?;
     let period_clocks = resolved.period_clocks;
-    let mut checker = RateChecker::new(period_clocks, &resolved.timing[..AXIS_NAMES.len()]);
+    let mut checker = RateChecker::with_slots(period_clocks, &resolved.timing[..AXIS_NAMES.len()], resolved.step_slots);
     for (index, record) in records.iter().enumerate() {
         if let Err((axis, why)) = checker.check(record) {
             bail!("period {index}: axis {}: {why}", AXIS_NAMES.get(axis).unwrap_or(&"?"));

@@ -40,6 +40,7 @@ pub fn chip_limits(caps: &Caps) -> CoreLimits {
         p_width: caps.p_width,
         timing_w: caps.timing_w,
         n_axes: caps.n_axes,
+        step_slots: caps.step_slots,
     }
 }
 
@@ -51,13 +52,7 @@ pub fn model_params() -> TopParams {
 
 /// What a configuration must fit on the model of [`model_params`].
 pub fn model_limits() -> CoreLimits {
-    let params = model_params();
-    CoreLimits {
-        clock_hz: f64::from(params.clock_hz),
-        p_width: params.p_width,
-        timing_w: params.timing_w,
-        n_axes: params.n_axes,
-    }
+    CoreLimits::of_build(&model_params())
 }
 
 /// The core parameters of the model of [`model_params`].

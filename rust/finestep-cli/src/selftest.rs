@@ -301,7 +301,7 @@ pub fn run(target: Option<BusTarget>, wired: bool) -> anyhow::Result<()> {
                 check: "identity, map, CAPS",
                 outcome: Outcome::Pass,
                 detail: format!(
-                    "ID {:#010x}, map {}.{}, {} axes, FIFO {}, P_WIDTH {}, TIMING_W {}, {} encoders, {} Hz",
+                    "ID {:#010x}, map {}.{}, {} axes, FIFO {}, P_WIDTH {}, TIMING_W {}, {} encoders, step slots {}, {} Hz",
                     words[0],
                     version::MAJOR.get(words[1]),
                     version::MINOR.get(words[1]),
@@ -310,6 +310,7 @@ pub fn run(target: Option<BusTarget>, wired: bool) -> anyhow::Result<()> {
                     caps.p_width,
                     caps.timing_w,
                     caps.n_enc,
+                    caps.step_slots,
                     caps.clock_hz
                 ),
             });

@@ -90,3 +90,27 @@ fn a_server_with_a_wrong_identity_is_refused_naming_what_id_read() {
     let err = Machine::connect(SpiBus::new(link, 4)).err().expect("refused").to_string();
     assert!(err.contains("ID reads 0xdeadbeef"), "{err}");
 }
+
+#[test]
+fn a_step_engine_build_reports_its_slots_and_refuses_a_period_off_them() {
+    use finestep_cosim::{rtl_top_params, ModelPins};
+    use finestep_host::BusError;
+    use finestep_model::top::Top;
+    // The model of a chip built with STEP_SHARED = 1 (4 axes: S = 4 slots).
+    let mut params = rtl_top_params();
+    params.step_shared = true;
+    let mut host = PinHost::new(ModelPins(Top::new(params)), PinTiming::default());
+    host.reset(4).unwrap();
+    host.idle(8).unwrap();
+    let mut machine = connect(host);
+    assert_eq!(machine.caps().step_slots, 4, "{:?}", machine.caps());
+    // The core would run 777 clocks as 776: refused before anything is written.
+    match machine.set_period(777) {
+        Err(BusError::PeriodSlots { clocks: 777, slots: 4 }) => {}
+        other => panic!("a period of 777 clocks on 4 slots: {other:?}"),
+    }
+    let before = machine.bus().read_one(finestep_host::regs::period_clocks::ADDR).unwrap();
+    assert_ne!(before, 777);
+    machine.set_period(776).unwrap();
+    assert_eq!(machine.bus().read_one(finestep_host::regs::period_clocks::ADDR).unwrap(), 776);
+}

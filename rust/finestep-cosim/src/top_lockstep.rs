@@ -97,6 +97,9 @@ pub fn rtl_top_params() -> TopParams {
         p_width: build.p_width,
         timing_w: build.timing_width,
         fifo_depth_log2: build.fifo_depth_log2,
+        n_enc: build.n_enc,
+        has_mpg: build.has_mpg,
+        step_shared: build.step_shared,
         ..TopParams::default()
     }
 }

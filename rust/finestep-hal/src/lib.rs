@@ -653,7 +653,8 @@ impl Driver {
         m.enable_axes(mask).map_err(err)?;
         m.set_control(true, watchdog_timeout_ns > 0, true).map_err(err)?;
         self.enabled_mask = mask;
-        self.rate = Some(RateChecker::new(period_clocks, &timings.iter().map(|t| t.0).collect::<Vec<_>>()));
+        let timings_clocks: Vec<_> = timings.iter().map(|t| t.0).collect();
+        self.rate = Some(RateChecker::with_slots(period_clocks, &timings_clocks, self.machine.caps().step_slots));
         self.applied = timings;
         self.period_clocks = period_clocks;
         self.running = true;

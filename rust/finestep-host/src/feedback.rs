@@ -2,7 +2,7 @@
 //! wheel and the jog, at the level a machine builder thinks in, plus velocity estimation
 //! from the counters' edge timestamps.
 
-use finestep_interface::rate::max_increment;
+use finestep_interface::rate::max_increment_in;
 use finestep_interface::{DriveTiming, Increment};
 
 use crate::regs::{
@@ -306,7 +306,7 @@ impl<B: Bus> Machine<B> {
             return Err(FeedbackError::Period(self.period_clocks).into());
         }
         let timing: DriveTiming = self.timings[setup.axis];
-        let max = max_increment(&timing, self.period_clocks, true);
+        let max = max_increment_in(&timing, self.period_clocks, true, self.caps.step_slots);
         if setup.vmax > max {
             return Err(FeedbackError::Rate { vmax: setup.vmax, max, period: self.period_clocks }.into());
         }

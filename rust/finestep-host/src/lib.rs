@@ -94,6 +94,17 @@ pub enum BusError {
         /// The first parameter outside its range.
         error: finestep_interface::ParamError,
     },
+    /// `CAPS.STEP_SLOTS_LOG2` disagrees with the slots a step engine for `CAPS.N_AXES`
+    /// axes has (the link is broken, or this is not a finestep core).
+    #[error("CAPS reads {word:#010x}: {found} step slots (CAPS.STEP_SLOTS_LOG2), but that build has {built}")]
+    StepSlots {
+        /// The CAPS word read.
+        word: u32,
+        /// The slots CAPS reports.
+        found: u32,
+        /// The slots of the build CAPS otherwise describes.
+        built: u32,
+    },
     /// An axis the core was not built with (`CAPS.N_AXES`).
     #[error("axis {axis}: the core has {n_axes} axes (CAPS.N_AXES)")]
     NoSuchAxis {
@@ -121,6 +132,14 @@ pub enum BusError {
         clocks: u32,
         /// The longest period the core holds, clocks.
         max: u32,
+    },
+    /// A period that is not a multiple of the step engine's slots (`CAPS.STEP_SLOTS_LOG2`).
+    #[error("a period of {clocks} clocks is not a multiple of the core's {slots} step slots (CAPS.STEP_SLOTS_LOG2)")]
+    PeriodSlots {
+        /// The period asked for, clocks.
+        clocks: u32,
+        /// The step engine's slots.
+        slots: u32,
     },
     /// More records than one FIFO frame carries.
     #[error("{records} records in one burst (at most {max})")]

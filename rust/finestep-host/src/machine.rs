@@ -25,6 +25,10 @@ pub struct Caps {
     pub n_enc: usize,
     /// The hand wheel and the jog generator are built.
     pub has_mpg: bool,
+    /// `S`: the step engine's slots (`2^CAPS.STEP_SLOTS_LOG2`; 1 with a DDA and a shaper
+    /// per axis). Step edges and drive timings fall on multiples of `S` clocks, and the
+    /// period must be a multiple of `S` (docs/spec/step_engine.md).
+    pub step_slots: u32,
 }
 
 impl Caps {
@@ -94,6 +98,7 @@ impl<B: Bus> Machine<B> {
             clock_hz: clock,
             n_enc: caps::N_ENC.get(caps_word) as usize,
             has_mpg: caps::HAS_MPG.get(caps_word) != 0,
+            step_slots: 1 << caps::STEP_SLOTS_LOG2.get(caps_word),
         };
         let build = finestep_interface::TopParams {
             n_axes: caps.n_axes,
@@ -103,9 +108,15 @@ impl<B: Bus> Machine<B> {
             clock_hz: clock,
             n_enc: caps.n_enc,
             has_mpg: caps.has_mpg,
+            step_shared: caps.step_slots > 1,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
+        // The slots follow from N_AXES: any other value is no build the RTL makes.
+        let built_slots = build.core_params().step_slots();
+        if built_slots != caps.step_slots {
+            return Err(BusError::StepSlots { word: caps_word, found: caps.step_slots, built: built_slots });
+        }
         let timings = vec![DriveTiming::RESET; caps.n_axes];
         Ok(Machine { bus, caps, timings, period_clocks: period_clocks::CLOCKS_RESET })
     }
@@ -168,11 +179,17 @@ impl<B: Bus> Machine<B> {
     }
 
     /// The interpolation period in clocks (taken when a run starts); a period outside
-    /// `1..=` [`Caps::period_max`] is refused before anything is written.
+    /// `1..=` [`Caps::period_max`], or not a multiple of the step engine's slots
+    /// ([`Caps::step_slots`]: the core would run it rounded down), is refused before
+    /// anything is written.
     pub fn set_period(&mut self, clocks: u32) -> Result<(), BusError> {
         let max = self.caps.period_max();
         if !(1..=max).contains(&clocks) {
             return Err(BusError::PeriodRange { clocks, max });
+        }
+        let slots = self.caps.step_slots;
+        if !clocks.is_multiple_of(slots) {
+            return Err(BusError::PeriodSlots { clocks, slots });
         }
         self.bus.write(period_clocks::ADDR, period_clocks::CLOCKS.set(0, clocks))?;
         self.period_clocks = clocks;

@@ -194,6 +194,9 @@ pub struct TopParams {
     pub n_enc: usize,
     /// `HAS_MPG`: the hand wheel and the jog generator are built.
     pub has_mpg: bool,
+    /// `STEP_SHARED`: the core's step engine (`CAPS.STEP_SLOTS_LOG2` =
+    /// [`CoreParams::step_slot_bits`] of [`Self::core_params`]).
+    pub step_shared: bool,
 }
 
 impl Default for TopParams {
@@ -210,6 +213,7 @@ impl Default for TopParams {
             has_parallel: finestep_top::HAS_PARALLEL.default != 0,
             n_enc: finestep_top::N_ENC.default as usize,
             has_mpg: finestep_top::HAS_MPG.default != 0,
+            step_shared: finestep_top::STEP_SHARED.default != 0,
         }
     }
 }
@@ -226,7 +230,9 @@ impl TopParams {
         finestep_top::HAS_SPI.check(self.has_spi)?;
         finestep_top::HAS_PARALLEL.check(self.has_parallel)?;
         finestep_top::N_ENC.check(self.n_enc as u64)?;
-        finestep_top::HAS_MPG.check(self.has_mpg)
+        finestep_top::HAS_MPG.check(self.has_mpg)?;
+        finestep_top::STEP_SHARED.check(self.step_shared)?;
+        self.core_params().validate()
     }
 
     /// The parameters of the core inside (`finestep_top` builds it without the gantry
@@ -237,7 +243,7 @@ impl TopParams {
             p_width: self.p_width,
             timing_width: self.timing_w,
             has_gantry: false,
-            step_shared: false,
+            step_shared: self.step_shared,
         }
     }
 }

@@ -36,13 +36,7 @@ struct Joint {
 fn joints(config: MachineConfig, file: &str) -> anyhow::Result<(Vec<Joint>, MachineConfig, f64)> {
     // The default build's limits (the chip's CAPS are checked again when the HAL
     // component connects).
-    let build = TopParams::default();
-    let core = CoreLimits {
-        clock_hz: f64::from(build.clock_hz),
-        p_width: build.p_width,
-        timing_w: build.timing_w,
-        n_axes: build.n_axes,
-    };
+    let core = CoreLimits::of_build(&TopParams::default());
     let config = config.for_core(core);
     let resolved = config.resolve_in(file)?;
     let joints: Vec<Joint> = (0..AXIS_NAMES.len())
@@ -425,16 +419,19 @@ pub fn check(
 ) -> anyhow::Result<()> {
     let name = samples.display().to_string();
     let text = std::fs::read_to_string(samples).with_context(|| format!("reading {name}"))?;
-    let clock_hz = f64::from(TopParams::default().clock_hz);
+    let build = TopParams::default();
+    let clock_hz = f64::from(build.clock_hz);
     let period_clocks = period_ns * 1e-9 * clock_hz;
     // With the drive timing: the longest a requested step may wait in the step shaper
-    // (docs/spec/rated_rate.md: L + max(S, H + U) - 1 clocks, against the direction).
+    // (docs/spec/rated_rate.md: L + max(S, H + U) - 1 clocks against the direction, in
+    // the step engine's slots), and up to one round of slots more until its visit.
+    let slots = build.core_params().step_slots();
     let hold = match config_path {
         Some(path) => {
             let config = MachineConfig::load(path)?;
             let timing = finestep_interface::DriveTiming::from_ns(config.drive.to_array(), clock_hz, u32::MAX)
                 .with_context(|| format!("{}: drive timing", path.display()))?;
-            finestep_interface::rate::reversal_wait(&timing) as f64
+            (finestep_interface::rate::reversal_wait_in(&timing, slots) + u64::from(slots - 1)) as f64
         }
         None => 0.0,
     };

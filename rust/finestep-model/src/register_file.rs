@@ -591,6 +591,8 @@ impl RegisterFile {
                     (c::HAS_SPI, u32::from(p.has_spi)),
                     (c::HAS_PARALLEL, u32::from(p.has_parallel)),
                     (c::HAS_MPG, u32::from(p.has_mpg)),
+                    // log2 S: 0 without the step engine (S = 1).
+                    (c::STEP_SLOTS_LOG2, p.core_params().step_slots().trailing_zeros()),
                 ]
                 .iter()
                 .fold(0, |word, &(field, value)| field.set(word, value & field.max()))

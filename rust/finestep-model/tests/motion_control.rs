@@ -15,6 +15,8 @@ use proptest::prelude::*;
 #[derive(Clone, Debug)]
 struct Scenario {
     n_axes: usize,
+    /// Built with the step engine (`STEP_SHARED`): `S` slots, else 1.
+    step_shared: bool,
     period: u32,
     start_level: u32,
     step_len: u32,
@@ -23,27 +25,56 @@ struct Scenario {
     records: Vec<[i32; MAX_AXES]>,
 }
 
+/// The step engine's slots `S` of the build (docs/spec/step_engine.md: 2 for up to 2
+/// axes, 4 for up to 4), 1 with a DDA and a shaper per axis.
+fn slots(n_axes: usize, step_shared: bool) -> u32 {
+    match (step_shared, n_axes) {
+        (false, _) => 1,
+        (true, 1..=2) => 2,
+        (true, _) => 4,
+    }
+}
+
+/// A drive timing as the core runs it: rounded up to whole visits of `s` clocks, at
+/// least one (docs/spec/step_engine.md#what-sharing-changes-at-the-pins).
+fn in_visits(timing: u32, s: u32) -> u32 {
+    timing.max(1).div_ceil(s) * s
+}
+
+/// The period the core runs: `P` rounded down to a multiple of `S`, at least `S`.
+fn period_run(sc: &Scenario) -> usize {
+    let s = slots(sc.n_axes, sc.step_shared);
+    (sc.period - sc.period % s).max(s) as usize
+}
+
 fn scenario() -> impl Strategy<Value = Scenario> {
-    (1..=4usize, 60..300u32, 0..5u32, 1..4u32, 1..4u32).prop_flat_map(|(n_axes, period, start_level, l, s)| {
-        // Within the rated rate: D * (L + S) <= P.
-        let max_raw = (i64::from(period / (l + s)) << 16).min(i64::from(i32::MAX)) as i32;
-        let records = prop::collection::vec(prop::array::uniform8(0..=max_raw), start_level.max(1) as usize..8);
-        (Just(n_axes), Just(period), Just(start_level), Just(l), Just(s), records).prop_map(
-            |(n_axes, period, start_level, step_len, step_space, records)| Scenario {
-                n_axes,
-                period,
-                start_level,
-                step_len,
-                step_space,
-                records,
-            },
-        )
-    })
+    (1..=4usize, any::<bool>(), 60..300u32, 0..5u32, 1..4u32, 1..4u32).prop_flat_map(
+        |(n_axes, step_shared, period, start_level, l, s)| {
+            // Within the rated rate: D * (L + S) <= P, the timings and the period as the
+            // core runs them.
+            let slot = slots(n_axes, step_shared);
+            let run = (period - period % slot).max(slot);
+            let max_raw =
+                (i64::from(run / (in_visits(l, slot) + in_visits(s, slot))) << 16).min(i64::from(i32::MAX)) as i32;
+            let records = prop::collection::vec(prop::array::uniform8(0..=max_raw), start_level.max(1) as usize..8);
+            (Just(n_axes), Just(step_shared), Just(period), Just(start_level), Just(l), Just(s), records).prop_map(
+                |(n_axes, step_shared, period, start_level, step_len, step_space, records)| Scenario {
+                    n_axes,
+                    step_shared,
+                    period,
+                    start_level,
+                    step_len,
+                    step_space,
+                    records,
+                },
+            )
+        },
+    )
 }
 
 /// A brought-up machine configured for `sc`, running (RUN = 1) with an empty FIFO.
 fn running(sc: &Scenario) -> (Bench, ParallelMaster, SpiMaster) {
-    let p = TopParams { n_axes: sc.n_axes, ..TopParams::default() };
+    let p = TopParams { n_axes: sc.n_axes, step_shared: sc.step_shared, ..TopParams::default() };
     let bus = ParallelMaster::default();
     let spi = SpiMaster::default();
     let mut bench = Bench::new(p);
@@ -84,10 +115,11 @@ fn threshold_period_grid_and_underrun_timing() {
             bench.clock(u64::from(sc.period) * (records.len() as u64 + 3) + 50);
             let trace = bench.trace.take().unwrap();
 
-            // Boundaries lie on the period grid from the first one.
+            // Boundaries lie on the grid of the period run from the first one.
+            let period = period_run(&sc);
             let b0 = first(&trace, 0, Sample::boundary).expect("no boundary");
             for (i, s) in trace.iter().enumerate().skip(b0) {
-                prop_assert_eq!(s.boundary(), (i - b0) % sc.period as usize == 0, "boundary grid at {}", i);
+                prop_assert_eq!(s.boundary(), (i - b0) % period == 0, "boundary grid at {}", i);
             }
             // Nothing is consumed before the threshold is reached.
             let reached = first(&trace, 0, |s| s.fifo_level >= start).expect("threshold never reached");
@@ -96,15 +128,15 @@ fn threshold_period_grid_and_underrun_timing() {
             prop_assert_eq!(pops.len(), records.len(), "every record consumed once");
             // The gate opens at the edge after the threshold; the first pop is at the
             // first boundary from then on.
-            let first_boundary = (reached + 1..).find(|&i| i >= b0 && (i - b0) % sc.period as usize == 0).unwrap();
+            let first_boundary = (reached + 1..).find(|&i| i >= b0 && (i - b0) % period == 0).unwrap();
             prop_assert_eq!(pops[0], first_boundary + 1);
             // Then one record per period, on consecutive boundaries.
             for (j, &pop) in pops.iter().enumerate() {
-                prop_assert_eq!(pop, pops[0] + j * sc.period as usize, "pop {}", j);
+                prop_assert_eq!(pop, pops[0] + j * period, "pop {}", j);
             }
             let last_pop = *pops.last().unwrap();
             // The boundary after the last record finds the FIFO dry mid-block.
-            let dry = last_pop - 1 + sc.period as usize;
+            let dry = last_pop - 1 + period;
             prop_assert_eq!(trace[dry].underrun_count, 0);
             prop_assert_eq!(trace[dry + 1].underrun_count, 1, "counted one clock after boundary {}", dry);
             prop_assert!(!trace[dry + 1].gate);
@@ -122,7 +154,14 @@ fn threshold_period_grid_and_underrun_timing() {
 
 #[test]
 fn a_block_end_is_a_normal_stop_and_an_underrun_waits_for_clear_errors() {
-    let sc = Scenario { n_axes: 2, period: 200, start_level: 2, step_len: 2, step_space: 2, records: vec![] };
+    for step_shared in [false, true] {
+        block_end_and_underrun(step_shared);
+    }
+}
+
+fn block_end_and_underrun(step_shared: bool) {
+    let sc =
+        Scenario { n_axes: 2, step_shared, period: 200, start_level: 2, step_len: 2, step_space: 2, records: vec![] };
     let (mut bench, bus, spi) = running(&sc);
     let step = 1 << 16; // one step per period
     let block = [record(&[step, 2 * step], 0, 2), record(&[step, 2 * step], regs_block_end(), 2)];
@@ -165,7 +204,14 @@ fn regs_block_end() -> u8 {
 
 #[test]
 fn record_push_queues_the_record_inc_registers() {
-    let sc = Scenario { n_axes: 3, period: 100, start_level: 1, step_len: 1, step_space: 1, records: vec![] };
+    for step_shared in [false, true] {
+        record_push(step_shared);
+    }
+}
+
+fn record_push(step_shared: bool) {
+    let sc =
+        Scenario { n_axes: 3, step_shared, period: 100, start_level: 1, step_len: 1, step_space: 1, records: vec![] };
     let (mut bench, bus, _spi) = running(&sc);
     bus.write32(&mut bench, regs::control::ADDR, regs::control::reset_word()); // stop: keep the record
     for (axis, raw) in [0x0001_8000u32, 0xFFFF_0000, 0x0000_0001].iter().enumerate() {

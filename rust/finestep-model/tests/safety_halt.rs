@@ -1,7 +1,7 @@
 //! The watchdog and the E-stop halting `finestep_top` in the middle of a move, through
 //! the pins: halted within the latencies of docs/spec/safety_monitor.md, no runt pulse
-//! (every step high phase
-//! lasts exactly `L`), no new pulse and no direction change after the halt, enables
+//! (every step high phase lasts exactly `L`, rounded up to whole visits with the step
+//! engine), no new pulse and no direction change after the halt, enables
 //! inactive from the clock after it, the FIFO flushed, `CONTROL.RUN` cleared, and a
 //! fault that cannot be cleared while its cause persists.
 
@@ -18,6 +18,8 @@ const PERIOD: u32 = 400;
 
 #[derive(Clone, Debug)]
 struct Case {
+    /// Built with the step engine (`STEP_SHARED`, `S` = 2 slots for 2 axes).
+    step_shared: bool,
     /// Step high time `L` per axis.
     step_len: [u32; N_AXES],
     /// Halt by the watchdog (else by the E-stop pin).
@@ -32,16 +34,35 @@ struct Case {
     records: Vec<[i32; N_AXES]>,
 }
 
+/// The step engine's slots for [`N_AXES`] axes (docs/spec/step_engine.md), 1 without it.
+fn slots(step_shared: bool) -> u32 {
+    if step_shared {
+        2
+    } else {
+        1
+    }
+}
+
+/// The step high time the pins show: `L` rounded up to whole visits of `S` clocks
+/// (docs/spec/step_engine.md#what-sharing-changes-at-the-pins; `S` = 1: `L`).
+fn high_time(step_len: u32, step_shared: bool) -> u32 {
+    let s = slots(step_shared);
+    step_len.max(1).div_ceil(s) * s
+}
+
 fn case() -> impl Strategy<Value = Case> {
-    (prop::array::uniform2(1..40u32), prop::bool::ANY, 0..6000u64, 1500..6000u32, 0..20u32)
-        .prop_flat_map(|(step_len, watchdog, estop_after, timeout, filter)| {
-            // Within the rated rate with S = U = H = 1: |D| * 2 * (L + 1) <= P.
-            let max = |l: u32| (i64::from(PERIOD / (2 * (l + 1))) << 16) as i32;
+    (prop::array::uniform2(1..40u32), any::<bool>(), prop::bool::ANY, 0..6000u64, 1500..6000u32, 0..20u32)
+        .prop_flat_map(|(step_len, step_shared, watchdog, estop_after, timeout, filter)| {
+            // Within the rated rate with S = U = H = 1 (docs/spec/rated_rate.md): |D| *
+            // 2 * (L + 1) <= P, in visits of S clocks with the step engine.
+            let s = slots(step_shared);
+            let max = |l: u32| (i64::from(PERIOD / (2 * (high_time(l, step_shared) + s))) << 16) as i32;
             let (m0, m1) = (max(step_len[0]), max(step_len[1]));
             let records = prop::collection::vec((-m0..=m0, -m1..=m1).prop_map(|(a, b)| [a, b]), 20..40);
-            (Just(step_len), Just(watchdog), Just(estop_after), Just(timeout), Just(filter), records)
+            (Just(step_len), Just(step_shared), Just(watchdog), Just(estop_after), Just(timeout), Just(filter), records)
         })
-        .prop_map(|(step_len, watchdog, estop_after, timeout, filter, records)| Case {
+        .prop_map(|(step_len, step_shared, watchdog, estop_after, timeout, filter, records)| Case {
+            step_shared,
             step_len,
             watchdog,
             estop_after,
@@ -74,7 +95,7 @@ fn halt_stops_pulses_cleanly_and_in_time() {
     let mut runner = finestep_testkit::runner("safety_halt_stops_pulses_cleanly", 96);
     runner
         .run(&case(), |case| {
-            let p = TopParams { n_axes: N_AXES, ..TopParams::default() };
+            let p = TopParams { n_axes: N_AXES, step_shared: case.step_shared, ..TopParams::default() };
             let bus = ParallelMaster::default();
             let spi = SpiMaster::default();
             let mut bench = Bench::new(p);
@@ -115,7 +136,7 @@ fn halt_stops_pulses_cleanly_and_in_time() {
             }
             prop_assert!(trace[h..].iter().all(|s| s.halt), "the fault is sticky");
             for axis in 0..N_AXES {
-                let l = case.step_len[axis] as usize;
+                let l = high_time(case.step_len[axis], case.step_shared) as usize;
                 for (rise, len) in high_phases(&trace, axis) {
                     prop_assert_eq!(len, l, "axis {} high phase from {} (halt at {})", axis, rise, h);
                     prop_assert!(rise <= h + 1, "axis {} rose at {} after the halt at {}", axis, rise, h);

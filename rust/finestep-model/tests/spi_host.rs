@@ -14,7 +14,11 @@ use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
     use finestep_interface::params::finestep_top::{N_AXES, P_WIDTH, TIMING_W, WD_W};
-    let feedback = (prop_oneof![Just(MAX_CHANNELS), 1..=MAX_CHANNELS], prop_oneof![Just(true), any::<bool>()]);
+    let feedback = (
+        prop_oneof![Just(MAX_CHANNELS), 1..=MAX_CHANNELS],
+        prop_oneof![Just(true), any::<bool>()],
+        prop_oneof![Just(true), any::<bool>()],
+    );
     (
         N_AXES.min as usize..=N_AXES.max as usize,
         prop_oneof![Just(P_WIDTH.default), P_WIDTH.min..=P_WIDTH.max],
@@ -23,15 +27,19 @@ fn params() -> impl Strategy<Value = TopParams> {
         WD_W.min..=WD_W.max,
         feedback,
     )
-        .prop_map(|(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg))| TopParams {
-            n_axes,
-            p_width,
-            timing_w,
-            fifo_depth_log2,
-            wd_w,
-            n_enc,
-            has_mpg,
-            ..TopParams::default()
+        .prop_map(|(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg, step_shared))| {
+            let p = TopParams {
+                n_axes,
+                p_width,
+                timing_w,
+                fifo_depth_log2,
+                wd_w,
+                n_enc,
+                has_mpg,
+                step_shared,
+                ..TopParams::default()
+            };
+            engine_if_valid(p)
         })
 }
 
@@ -93,6 +101,14 @@ fn register_writes_read_back_as_stored() {
             prop_assert_eq!(regs::caps::TIMING_W.get(words[2]), p.timing_w);
             prop_assert_eq!(regs::caps::N_ENC.get(words[2]) as usize, p.n_enc);
             prop_assert_eq!(regs::caps::HAS_MPG.get(words[2]), u32::from(p.has_mpg));
+            // The step engine's slots: 2 for up to 2 axes, 4 for up to 4, 8 beyond.
+            let slots_log2 = match (p.step_shared, p.n_axes) {
+                (false, _) => 0,
+                (true, 1..=2) => 1,
+                (true, 3..=4) => 2,
+                (true, _) => 3,
+            };
+            prop_assert_eq!(regs::caps::STEP_SLOTS_LOG2.get(words[2]), slots_log2);
             Ok(())
         })
         .unwrap();

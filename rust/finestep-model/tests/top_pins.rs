@@ -9,19 +9,23 @@ use finestep_model::MAX_AXES;
 use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
-    let links = (any::<bool>(), any::<bool>(), 1..=MAX_CHANNELS, any::<bool>());
+    let links = (any::<bool>(), any::<bool>(), 1..=MAX_CHANNELS, any::<bool>(), any::<bool>());
     (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links).prop_map(
-        |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (has_spi, has_parallel, n_enc, has_mpg))| TopParams {
-            n_axes,
-            p_width,
-            timing_w,
-            fifo_depth_log2,
-            wd_w,
-            clock_hz: 1,
-            has_spi,
-            has_parallel,
-            n_enc,
-            has_mpg,
+        |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (has_spi, has_parallel, n_enc, has_mpg, step_shared))| {
+            let p = TopParams {
+                n_axes,
+                p_width,
+                timing_w,
+                fifo_depth_log2,
+                wd_w,
+                clock_hz: 1,
+                has_spi,
+                has_parallel,
+                n_enc,
+                has_mpg,
+                step_shared,
+            };
+            host::engine_if_valid(p)
         },
     )
 }

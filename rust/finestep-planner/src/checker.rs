@@ -614,7 +614,7 @@ pub fn check_program(
     let rounding: f64 = (0..4).filter(|&a| present[a]).map(|a| (0.5 / scale[a]).powi(2)).sum::<f64>().sqrt();
     let base_allowance = machine.chord_tolerance_mm + rounding + 1e-9;
 
-    let mut rate = RateChecker::new(machine.period_clocks, &machine.timing);
+    let mut rate = RateChecker::with_slots(machine.period_clocks, &machine.timing, machine.step_slots);
     let mut raw = [0i64; 4];
     let mut velocity = [0.0f64; 4];
     let mut accel = [0.0f64; 4];

@@ -31,7 +31,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use finestep_interface::rate::{forward_interval, reversal_interval};
+use finestep_interface::rate::{forward_interval_in, reversal_interval_in};
 use finestep_interface::{DriveTiming, TopParams};
 use serde::Deserialize;
 
@@ -150,23 +150,32 @@ pub struct CoreLimits {
     pub timing_w: u32,
     /// Step/dir axes (`CAPS.N_AXES`).
     pub n_axes: usize,
+    /// The step engine's slots `S` (`2^CAPS.STEP_SLOTS_LOG2`, 1 without it): the period
+    /// must be a multiple of `S`, and the rated rates are those of timings rounded up to
+    /// multiples of `S` (docs/spec/rated_rate.md).
+    pub step_slots: u32,
 }
 
 impl Default for CoreLimits {
-    /// The default build (`finestep_top`'s defaults in `hdl/interface.toml`): its
-    /// `CLOCK_HZ`, `P_WIDTH`, `TIMING_W` and `N_AXES`.
+    /// The default build (`finestep_top`'s defaults in `hdl/interface.toml`).
     fn default() -> Self {
-        let params = TopParams::default();
+        CoreLimits::of_build(&TopParams::default())
+    }
+}
+
+impl CoreLimits {
+    /// The limits of the build `params` (its `CLOCK_HZ`, `P_WIDTH`, `TIMING_W`, `N_AXES`
+    /// and step slots).
+    pub fn of_build(params: &TopParams) -> CoreLimits {
         CoreLimits {
             clock_hz: f64::from(params.clock_hz),
             p_width: params.p_width,
             timing_w: params.timing_w,
             n_axes: params.n_axes,
+            step_slots: params.core_params().step_slots(),
         }
     }
-}
 
-impl CoreLimits {
     /// The longest period in clocks, `2^P_WIDTH - 1`.
     pub fn period_max(&self) -> u32 {
         ((1u64 << self.p_width.min(32)) - 1) as u32
@@ -257,8 +266,10 @@ pub struct Resolved {
     pub clock_hz: f64,
     /// Period T, s.
     pub period_s: f64,
-    /// Period in FPGA clocks (as the core runs it).
+    /// Period in FPGA clocks (as the core runs it: a multiple of `step_slots`).
     pub period_clocks: u32,
+    /// The core's step slots `S` ([`CoreLimits::step_slots`]).
+    pub step_slots: u32,
     /// The drive timing in clocks, one per record slot.
     pub timing: [DriveTiming; 4],
     /// Axes X, Y, Z, A.
@@ -354,6 +365,18 @@ impl MachineConfig {
             ));
         }
         let period_clocks = clocks as u32;
+        if !period_clocks.is_multiple_of(core.step_slots) {
+            return Err(fail(
+                "period_ms".into(),
+                format!(
+                    "{} ms is {period_clocks} clocks at {} MHz, not a multiple of the core's {} step slots \
+                     (CAPS.STEP_SLOTS_LOG2)",
+                    self.period_ms,
+                    clock_hz / 1e6,
+                    core.step_slots
+                ),
+            ));
+        }
         for (index, tool) in self.tools.iter().enumerate() {
             if !(tool.radius_mm.is_finite() && tool.radius_mm >= 0.0) {
                 return Err(fail(
@@ -414,8 +437,8 @@ impl MachineConfig {
             let max_jerk = positive(&key("max_jerk"), limits.max_jerk)?;
             // Rated rates in steps per period (docs/spec/rated_rate.md), with 5 % kept back
             // for the Q16.16 rounding of positions.
-            let forward = f64::from(period_clocks) / forward_interval(&timing) as f64 * 0.95;
-            let reverse = f64::from(period_clocks) / reversal_interval(&timing) as f64 * 0.95;
+            let forward = f64::from(period_clocks) / forward_interval_in(&timing, core.step_slots) as f64 * 0.95;
+            let reverse = f64::from(period_clocks) / reversal_interval_in(&timing, core.step_slots) as f64 * 0.95;
             let rated_velocity = forward / period_s / steps_per_unit;
             if max_velocity > rated_velocity {
                 notes.push(format!(
@@ -442,6 +465,7 @@ impl MachineConfig {
             clock_hz,
             period_s,
             period_clocks,
+            step_slots: core.step_slots,
             timing: [timing; 4],
             axes,
             profile: self.profile,

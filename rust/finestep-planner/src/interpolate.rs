@@ -53,7 +53,7 @@ pub struct Periods {
 impl Periods {
     /// The periods of `elements`, after `leading_dwell` idle periods, from rest at the origin.
     pub fn new(config: Resolved, elements: Vec<Element>, leading_dwell: u64) -> Periods {
-        let checker = RateChecker::new(config.period_clocks, &config.timing);
+        let checker = RateChecker::with_slots(config.period_clocks, &config.timing, config.step_slots);
         let speeds = WindowedSpeeds::new(&config);
         let idle_line = elements.first().map_or(0, |e| e.line);
         Periods {

@@ -8,7 +8,7 @@ mod common;
 use finestep_planner::{check_program, plan_program, MachineConfig, PlannedProgram, ProfileKind};
 use proptest::prelude::*;
 
-use common::{config, parse, plan_and_check, programs_dir, read, PROFILES};
+use common::{config, parse, period_in_slots, plan_and_check, programs_dir, read, PROFILES};
 
 /// Path speed in each period, from the increments, units/s.
 fn speeds(planned: &PlannedProgram, config: &MachineConfig) -> Vec<f64> {
@@ -284,7 +284,7 @@ fn random_machines_plan_or_refuse_and_pass_the_checker() {
             &(machine, random_program()),
             |((axes, period_ms, scurve, path_tolerance, chord_tolerance, lookahead), text)| {
                 let mut config = MachineConfig {
-                    period_ms,
+                    period_ms: period_in_slots(period_ms),
                     profile: if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid },
                     path_tolerance_mm: path_tolerance,
                     chord_tolerance_mm: chord_tolerance,

@@ -13,7 +13,7 @@ use num_rational::BigRational;
 use num_traits::ToPrimitive;
 use proptest::prelude::*;
 
-use common::{config, parse, plan_and_check, read, PROFILES};
+use common::{config, parse, period_in_slots, plan_and_check, read, PROFILES};
 
 fn positions_and_speeds(planned: &PlannedProgram, config: &MachineConfig) -> (Vec<[f64; 2]>, Vec<f64>) {
     let resolved = config.resolve().unwrap();
@@ -419,7 +419,7 @@ fn random_nurbs_on_random_machines_plan_or_refuse_and_pass_the_checker() {
     runner
         .run(&(machine, random_nurbs_program()), |((axes, period_ms, scurve, chord_tolerance), text)| {
             let mut config = MachineConfig {
-                period_ms,
+                period_ms: period_in_slots(period_ms),
                 profile: if scurve { ProfileKind::SCurve } else { ProfileKind::Trapezoid },
                 chord_tolerance_mm: chord_tolerance,
                 ..MachineConfig::default()

@@ -23,6 +23,8 @@ pub struct TopBuild {
     pub n_enc: usize,
     /// The hand wheel and the jog generator are built.
     pub has_mpg: bool,
+    /// The core's step engine is built (`STEP_SHARED`).
+    pub step_shared: bool,
 }
 
 /// The build parameters of the Verilated top.
@@ -36,6 +38,7 @@ pub fn top_build() -> TopBuild {
             fifo_depth_log2: ffi::ft_fifo_depth_log2(),
             n_enc: ffi::ft_n_enc() as usize,
             has_mpg: ffi::ft_has_mpg() != 0,
+            step_shared: ffi::ft_step_shared() != 0,
         }
     }
 }

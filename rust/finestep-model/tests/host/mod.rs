@@ -418,6 +418,16 @@ impl ParallelMaster {
     }
 }
 
+/// `p` as drawn if its parameters allow the step engine it asks for, else `p` with a DDA
+/// and a shaper per axis (the engine needs `P_WIDTH` above log2 of its slots).
+pub fn engine_if_valid(p: TopParams) -> TopParams {
+    if p.validate().is_ok() {
+        p
+    } else {
+        TopParams { step_shared: false, ..p }
+    }
+}
+
 /// The bits a write to `addr` stores, from docs/spec/register_file.md ("timing fields keep only
 /// `TIMING_W` bits, `PERIOD_CLOCKS` only `P_WIDTH`, `WATCHDOG_TIMEOUT` only `WD_W`";
 /// fields of axes at and above `N_AXES` read 0), or `None` for an address that is not a

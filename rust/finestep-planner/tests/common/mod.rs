@@ -14,6 +14,15 @@ pub fn programs_dir() -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"))
 }
 
+/// `ms` rounded to a whole number of the default core's step slots: the periods a
+/// machine can be configured with (the core runs periods in multiples of its `S`
+/// clocks, and the configuration refuses any other).
+pub fn period_in_slots(ms: f64) -> f64 {
+    let core = finestep_planner::config::CoreLimits::default();
+    let slot_ms = f64::from(core.step_slots) / core.clock_hz * 1e3;
+    (ms / slot_ms).round().max(1.0) * slot_ms
+}
+
 pub fn config(profile: ProfileKind) -> MachineConfig {
     MachineConfig { profile, ..MachineConfig::default() }
 }
