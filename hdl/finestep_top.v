@@ -22,7 +22,7 @@ module finestep_top #(
     parameter N_ENC           = 4,
     parameter HAS_MPG         = 1,
     parameter RAM_BLOCK       = 0,
-    parameter STEP_SHARED     = 0,
+    parameter STEP_SHARED     = 1,
     parameter READ_STORE      = 1
 ) (
     // clock, reset

@@ -13,7 +13,7 @@ module ice40_hx8k_breakout #(
     parameter N_ENC           = 4,
     parameter HAS_MPG         = 0,
     parameter FIFO_DEPTH_LOG2 = 8,
-    parameter STEP_SHARED     = 0
+    parameter STEP_SHARED     = 1
 ) (
     // clock, reset
     input  wire              clk12,      // 12 MHz oscillator

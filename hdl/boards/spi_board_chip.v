@@ -10,7 +10,7 @@ module spi_board_chip #(
     parameter FIFO_DEPTH_LOG2 = 8,
     parameter CLOCK_HZ        = 50000000,
     parameter RAM_BLOCK       = 0,
-    parameter STEP_SHARED     = 0
+    parameter STEP_SHARED     = 1
 ) (
     // clock, reset
     input  wire              clk,
