@@ -69,7 +69,7 @@ case $target in
         pnr_args=(--hx8k --package ct256 --pcf constraints/ice40_hx8k_breakout.pcf)
         pnr_out=(--asc) ; pnr_ext=asc
         pack=yowasp-icepack ; bit_ext=bin
-        target_mhz=50 ;;
+        target_mhz=51 ;;        # the PLL in hdl/boards/ice40_hx8k_breakout.v
     ice40-up5k)
         default_seed=1
         top=icebreaker

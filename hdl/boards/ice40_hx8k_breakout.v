@@ -1,11 +1,11 @@
 `timescale 1ns / 1ps
 `default_nettype none
 // Board top for the Lattice iCE40-HX8K breakout board (iCE40HX8K-CT256): the 12 MHz
-// oscillator through the iCE40 PLL to 50.25 MHz, power-on and external reset and the
+// oscillator through the iCE40 PLL to 51 MHz, power-on and external reset and the
 // PLL lock through board_reset, and finestep_top with its SPI link, 4 axes, 4 encoder
 // channels and the probe. Pins: constraints/ice40_hx8k_breakout.pcf.
 //
-// HAS_MPG is 0 here: the full core (with the hand wheel and jog) packs into about 8 800
+// HAS_MPG is 0 here: the full core (with the hand wheel and jog) packs into about 7 830
 // logic cells and does not fit the 7680 (docs/resources.md); the hand wheel's pins stay
 // constrained, unused. The encoder bank's stores are in block RAM (RAM_BLOCK).
 module ice40_hx8k_breakout #(
@@ -38,15 +38,17 @@ module ice40_hx8k_breakout #(
     output wire [N_AXES-1:0] pin_en
 );
 
-    // 12 MHz * (DIVF + 1) / 2**DIVQ = 50.25 MHz (icepll -i 12 -o 50); VCO 804 MHz.
-    localparam CLOCK_HZ = 50250000;
+    // 12 MHz * (DIVF + 1) / 2**DIVQ = 51 MHz; VCO 816 MHz. Not icepll's nearest to 50 MHz
+    // (50.25): with the step engine's 4 slots a period must be a multiple of 4 clocks,
+    // and 1 ms is 51 000 clocks here (50 250 at 50.25 MHz is not).
+    localparam CLOCK_HZ = 51000000;
 
     wire clk, pll_locked, rst;
 
     SB_PLL40_CORE #(
         .FEEDBACK_PATH("SIMPLE"),
         .DIVR(4'd0),
-        .DIVF(7'd66),
+        .DIVF(7'd67),
         .DIVQ(3'd4),
         .FILTER_RANGE(3'd1)
     ) pll (

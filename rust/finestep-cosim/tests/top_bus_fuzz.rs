@@ -33,7 +33,8 @@ const N_AXES: usize = 4;
 const FIFO_DEPTH: u32 = 256;
 const RECORD_BYTES: usize = 4 * N_AXES + 1;
 /// Largest |increment| of a generated record, in steps: within the rated rate of the
-/// run-out (L = S = U = H = 1: I_rev = 4 clocks; 4 * 4 <= RUN_PERIOD).
+/// run-out (L = S = U = H = 1: I_rev = 4 clocks, 16 with the step engine's 4 slots;
+/// 4 * 16 <= RUN_PERIOD).
 const MAX_STEPS: i32 = 4;
 const RUN_PERIOD: u32 = 64;
 

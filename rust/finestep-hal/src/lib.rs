@@ -161,6 +161,22 @@ pub enum HalError {
         /// The longest period the core holds.
         max: u32,
     },
+    /// A servo period that is not a whole number of the step engine's slots: the core
+    /// would run it rounded down, and its periods would drift from the servo thread's.
+    #[error(
+        "servo period {period_ns} ns is {clocks} clocks of the {clock_hz} Hz core, not a multiple of its {slots} \
+         step slots (CAPS.STEP_SLOTS_LOG2): choose a servo period of a multiple of {slots} clocks"
+    )]
+    PeriodSlots {
+        /// The servo thread's period.
+        period_ns: i64,
+        /// In core clocks.
+        clocks: i64,
+        /// The core clock.
+        clock_hz: u32,
+        /// The step engine's slots.
+        slots: u32,
+    },
     /// Drive timing or step type changed while running (taken at the start only).
     #[error("stepgen.{axis:02}: steplen/stepspace/dirsetup/dirhold/step_type changed while running; they are taken when the machine is enabled")]
     ChangedWhileRunning {
@@ -608,6 +624,11 @@ impl Driver {
         let max = caps.period_max();
         if !(1..=i64::from(max)).contains(&clocks) {
             return Err(HalError::Period { period_ns, clocks, clock_hz: caps.clock_hz, max });
+        }
+        // Checked here, before start() stops and configures the chip.
+        let slots = caps.step_slots;
+        if clocks % i64::from(slots) != 0 {
+            return Err(HalError::PeriodSlots { period_ns, clocks, clock_hz: caps.clock_hz, slots });
         }
         Ok(clocks as u32)
     }

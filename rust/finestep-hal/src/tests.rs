@@ -148,6 +148,12 @@ fn bad_commands_and_settings_are_errors_not_panics() {
     cmds[0].step_type = 0;
     let err = driver.write(1, true, 0, &cmds).unwrap_err().to_string();
     assert_eq!(err, "servo period 1 ns is 0 clocks of the 50000000 Hz core: outside 1..=1048575");
+    // 200 020 ns is 10 001 clocks: the step engine (4 slots) would run 10 000.
+    let err = driver.write(PERIOD_NS + 20, true, 0, &cmds).unwrap_err().to_string();
+    assert!(
+        err.starts_with("servo period 200020 ns is 10001 clocks of the 50000000 Hz core, not a multiple of its 4"),
+        "{err}"
+    );
     driver.write(PERIOD_NS, true, 0, &cmds).unwrap();
     cmds[3].position_cmd = f64::NAN;
     let err = driver.write(PERIOD_NS, true, 0, &cmds).unwrap_err().to_string();

@@ -424,17 +424,19 @@ pub fn check(
     let period_clocks = period_ns * 1e-9 * clock_hz;
     // With the drive timing: the longest a requested step may wait in the step shaper
     // (docs/spec/rated_rate.md: L + max(S, H + U) - 1 clocks against the direction, in
-    // the step engine's slots), and up to one round of slots more until its visit.
+    // the step engine's slots), and, timing known or not, up to one round of slots more
+    // until its visit.
     let slots = build.core_params().step_slots();
-    let hold = match config_path {
+    let shaper_wait = match config_path {
         Some(path) => {
             let config = MachineConfig::load(path)?;
             let timing = finestep_interface::DriveTiming::from_ns(config.drive.to_array(), clock_hz, u32::MAX)
                 .with_context(|| format!("{}: drive timing", path.display()))?;
-            (finestep_interface::rate::reversal_wait_in(&timing, slots) + u64::from(slots - 1)) as f64
+            finestep_interface::rate::reversal_wait_in(&timing, slots)
         }
-        None => 0.0,
+        None => 0,
     };
+    let hold = (shaper_wait + u64::from(slots - 1)) as f64;
     let window = LATCH_LAG_CLOCKS + hold;
     let report = check_text(&text, joints, period_clocks, window, &name)?;
     println!(

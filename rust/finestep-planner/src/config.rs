@@ -288,8 +288,10 @@ pub struct Resolved {
 
 impl MachineConfig {
     /// Parses and validates TOML text; `file` names it in errors. With no chip to ask,
-    /// the file is checked against the default build at its own `clock_hz`; the chip's
-    /// CAPS and clock are checked when it is resolved for the chip ([`Self::for_core`]).
+    /// the file is checked against the default build at its own `clock_hz` and without
+    /// step slots (a period that is a whole number of the chip's slots depends on the
+    /// chip: 2 on a 2-axis build, 4 on the default); the chip's CAPS and clock are checked
+    /// when it is resolved for the chip ([`Self::for_core`]).
     pub fn from_toml_str(text: &str, file: &str) -> Result<MachineConfig, ConfigError> {
         let config: MachineConfig = toml::from_str(text).map_err(|e| ConfigError {
             file: file.to_string(),
@@ -297,7 +299,8 @@ impl MachineConfig {
             reason: e.to_string().trim_end().replace('\n', " "),
         })?;
         let default_build = config.core;
-        let at_its_clock = CoreLimits { clock_hz: config.clock_hz.unwrap_or(default_build.clock_hz), ..default_build };
+        let at_its_clock =
+            CoreLimits { clock_hz: config.clock_hz.unwrap_or(default_build.clock_hz), step_slots: 1, ..default_build };
         let config = config.for_core(at_its_clock);
         config.resolve_in(file)?;
         Ok(config.for_core(default_build))
@@ -539,6 +542,17 @@ mod tests {
         assert_eq!(config.for_core(other_clock).resolve().unwrap().period_clocks, 48_000);
         let err = MachineConfig::from_toml_str("clock_hz = 48e6\n", "m.toml").unwrap().resolve_in("m.toml");
         assert_eq!(err.unwrap_err().key, "clock_hz");
+        // A period off the chip's step slots is refused by key; which periods are whole
+        // slots depends on the chip, so a file for a 2-slot build loads.
+        let two_slots = CoreLimits { step_slots: 2, ..core };
+        let four_slots = CoreLimits { step_slots: 4, ..core };
+        let config = MachineConfig::from_toml_str("period_ms = 0.10002\n", "m.toml").unwrap(); // 5 001 clocks
+        assert_eq!(config.clone().for_core(four_slots).resolve().unwrap_err().key, "period_ms");
+        assert_eq!(config.clone().for_core(two_slots).resolve().unwrap_err().key, "period_ms");
+        let config = MachineConfig::from_toml_str("period_ms = 0.10004\n", "m.toml").unwrap(); // 5 002 clocks
+        assert_eq!(config.clone().for_core(two_slots).resolve().unwrap().period_clocks, 5_002);
+        let err = config.for_core(four_slots).resolve_in("m.toml").unwrap_err().to_string();
+        assert!(err.contains("5002 clocks") && err.contains("not a multiple of the core's 4 step slots"), "{err}");
     }
 
     #[test]
