@@ -23,7 +23,8 @@ module finestep_top #(
     parameter HAS_MPG         = 1,
     parameter RAM_BLOCK       = 0,
     parameter STEP_SHARED     = 1,
-    parameter READ_STORE      = 1
+    parameter READ_STORE      = 1,
+    parameter FIFO_HEAD_REG   = 1
 ) (
     // clock, reset
     input  wire              clk,
@@ -95,8 +96,11 @@ module finestep_top #(
     // FIFO
     wire               spi_wr_en, spi_wr_commit, spi_wr_abort, spi_fifo_busy;
     wire [REC_W-1:0]   spi_wr_data;
-    wire               push_write;
-    wire [REC_W-1:0]   push_data;
+    wire [N_AXES:0]    spi_wr_lane;      // the FIFO lanes (axes, then flags) the SPI frame layer writes
+    wire [N_AXES:0]    push_lane;        // the FIFO lanes a RECORD_PUSH writes (one a cycle)
+    wire [31:0]        push_word;
+    wire [7:0]         push_flags;
+    wire               push_wr_en, push_commit, push_in_flight;
     wire               fifo_valid, fifo_pop, fifo_full, fifo_overflow_unused;
     wire [REC_W-1:0]   fifo_head;
     wire [LEVEL_W-1:0] fifo_level, fifo_staged;
@@ -181,11 +185,11 @@ module finestep_top #(
                 .frame_start(frame_start), .frame_end(frame_end), .frame_whole(frame_whole),
                 .rx_valid(rx_valid), .rx_byte(rx_byte), .tx_byte(tx_byte),
                 .status_byte(status_byte),
-                .fifo_free(fifo_free),
+                .fifo_free(push_in_flight ? {LEVEL_W{1'b0}} : fifo_free),   // no room while a RECORD_PUSH writes
                 .fifo_flush(flush),
                 .bus_req(spi_req), .bus_we(spi_we), .bus_addr(spi_addr), .bus_wdata(spi_wdata),
                 .bus_grant(spi_grant), .bus_rdata(rdata),
-                .fifo_wr_en(spi_wr_en), .fifo_wr_data(spi_wr_data),
+                .fifo_wr_lane(spi_wr_lane), .fifo_wr_data(spi_wr_data), .fifo_wr_en(spi_wr_en),
                 .fifo_wr_commit(spi_wr_commit), .fifo_wr_abort(spi_wr_abort),
                 .fifo_busy(spi_fifo_busy),
                 .latch_hold(latch_hold), .crc_error(spi_crc_error), .frame_error(spi_frame_error),
@@ -200,6 +204,7 @@ module finestep_top #(
             assign spi_addr = 7'd0;
             assign spi_wdata = 32'd0;
             assign spi_wr_en = 1'b0;
+            assign spi_wr_lane = {(N_AXES+1){1'b0}};
             assign spi_wr_data = {REC_W{1'b0}};
             assign spi_wr_commit = 1'b0;
             assign spi_wr_abort = 1'b0;
@@ -258,11 +263,12 @@ module finestep_top #(
         .position(position), .fifo_level(fifo_level), .fifo_staged(fifo_staged), .fifo_full(fifo_full),
         .latch_hold(latch_hold), .spi_crc_error(spi_crc_error), .spi_frame_error(spi_frame_error),
         .spi_refused(spi_refused), .spi_refused_count(spi_refused_count),
-        .spi_fifo_in_use(spi_fifo_busy || spi_wr_en || spi_wr_commit || spi_wr_abort),
+        .spi_fifo_in_use(spi_fifo_busy || (|spi_wr_lane) || spi_wr_commit || spi_wr_abort),
         .spi_fifo_commit(spi_wr_commit), .par_error(par_error),
         .feedback_error(feedback_error), .jog_engaged(jog_engaged), .jog_refused(jog_refused),
         .timestamp(timestamp), .latch_now(latch_now),
-        .push_write(push_write), .push_data(push_data),
+        .fifo_flush(flush), .push_lane(push_lane), .push_word(push_word), .push_flags(push_flags),
+        .push_wr_en(push_wr_en), .push_commit(push_commit), .push_in_flight(push_in_flight),
         .status_byte(status_byte), .irq(irq)
     );
 
@@ -278,16 +284,20 @@ module finestep_top #(
         .halt(halt)
     );
 
-    // The SPI frame layer owns the write port while it uses it; RECORD_PUSH is refused
-    // then (register_file), so the two never meet.
+    // The SPI frame layer owns the write port while it uses it, and RECORD_PUSH is
+    // refused then (register_file); while a push writes its record the frame layer sees
+    // no room (a FIFO frame's header is refused). So the two never meet.
     position_fifo #(
         .WIDTH(REC_W),
-        .DEPTH_LOG2(FIFO_DEPTH_LOG2)
+        .DEPTH_LOG2(FIFO_DEPTH_LOG2),
+        .LANE_W(FS_REC_INC_WIDTH),
+        .HEAD_REG(FIFO_HEAD_REG)
     ) fifo (
         .clk(clk), .rst(rst), .flush(flush), .clear_errors(clear_errors),
-        .wr_en(spi_wr_en || push_write),
-        .wr_data(spi_wr_en ? spi_wr_data : push_data),
-        .wr_commit(spi_wr_commit || push_write),
+        .wr_lane(push_lane | spi_wr_lane),
+        .wr_data(push_in_flight ? {push_flags[FS_REC_FLAGS_WIDTH-1:0], {N_AXES{push_word}}} : spi_wr_data),
+        .wr_en(spi_wr_en || push_wr_en),
+        .wr_commit(spi_wr_commit || push_commit),
         .wr_abort(spi_wr_abort),
         .rd_valid(fifo_valid), .rd_pop(fifo_pop), .rd_data(fifo_head),
         .level(fifo_level), .staged(fifo_staged), .free(fifo_free), .full(fifo_full),

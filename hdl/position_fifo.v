@@ -6,29 +6,42 @@
 // buffer). First-word-fall-through: the head record is on rd_data whenever rd_valid.
 //
 // The store is a simple dual-port RAM with a registered read, so it infers block RAM;
-// the read address looks one entry ahead on an internal pop, and a write to the entry
-// being read is forwarded. In front of it sits an output register (out stage) that holds
-// the head record: the RAM's read data only ever goes (through the forwarding mux) to
-// that register, never into the consumer's logic. The out stage is loaded from the store
-// whenever the store has a committed record and the out stage is empty or popped by
-// rd_pop in this cycle, so a pop with another committed record behind the head keeps
-// rd_valid high (no bubble). A write to a full FIFO is refused (nothing is overwritten)
-// and sets the sticky overflow; a pop of an empty FIFO does nothing.
+// the read address looks one entry ahead on an internal pop. In front of it sits an
+// output register (out stage) that holds the head record: the RAM's read data only ever
+// goes to that register, never into the consumer's logic. The out stage is loaded from
+// the store whenever the store has a committed record and the out stage is empty or
+// popped by rd_pop in this cycle, so a pop with another committed record behind the head
+// keeps rd_valid high (no bubble). A write to a full FIFO is refused (nothing is
+// overwritten) and sets the sticky overflow; a pop of an empty FIFO does nothing.
+//
+// A record is written into the slot behind the staged ones in lanes of LANE_W bits
+// (wr_lane, the last lane the remaining bits), in any cycles and order, and staged by
+// wr_en together with that cycle's lanes: a bus slave writes a record's words as they
+// arrive and holds no copy of the record. A lane written while the FIFO is full (or
+// flushing) is lost, and the record it belongs to is refused at its wr_en as a write to
+// a full FIFO is (overflow).
 //
 // Writes are staged: they enter the RAM behind the committed records and become
-// readable (and count in level) only at wr_commit; wr_abort drops every staged record.
-// A bus slave writes a frame's records as they arrive and commits them only when the
-// frame's CRC checks, so a corrupted or aborted frame never reaches the period timer.
+// readable (and count in level) only at a wr_commit in a later cycle (a commit takes the
+// records staged before its cycle: one written in the same cycle stays staged);
+// wr_abort drops every staged record, this cycle's included. A bus slave writes a
+// frame's records as they arrive and commits them only when the frame's CRC checks, so
+// a corrupted or aborted frame never reaches the period timer. Because a record is
+// committed at least one edge after it was written, the RAM is never read at the edge
+// that writes a committed entry: no read-during-write forwarding.
 // level and full count the record in the out stage: the capacity is exactly DEPTH.
 //
-// Latency: write (with commit) to rd_valid 2 clocks when the FIFO is empty. With L the
-// committed records (out stage included) and v = rd_valid before an edge, and
+// Latency: commit to rd_valid 2 clocks when the FIFO is empty (write to rd_valid 3).
+// With L the committed records (out stage included) and v = rd_valid before an edge, and
 // pop = rd_pop && v && !flush: after the edge rd_valid = !flush && (pop ? L >= 2 :
 // (v || L >= 1)). Invariants: level == written - read, level + staged <= DEPTH, and
 // rd_data is the oldest unread record whenever rd_valid.
 module position_fifo #(
     parameter WIDTH      = 136,
-    parameter DEPTH_LOG2 = 8
+    parameter DEPTH_LOG2 = 8,
+    parameter LANE_W     = 32,
+    parameter HEAD_REG   = 1,     // 1: the out stage a fabric register; 0: the RAM's read register
+    parameter LANES      = (WIDTH + LANE_W - 1) / LANE_W   // derived
 ) (
     // clock, reset
     input  wire                clk,
@@ -36,9 +49,10 @@ module position_fifo #(
     input  wire                flush,          // empty the FIFO (pointers and out stage)
     input  wire                clear_errors,
     // write side
-    input  wire                wr_en,          // stage a record
+    input  wire [LANES-1:0]    wr_lane,        // write these lanes of wr_data into the record being written
     input  wire [WIDTH-1:0]    wr_data,
-    input  wire                wr_commit,      // make the staged records (and this cycle's) readable
+    input  wire                wr_en,          // stage that record (with this cycle's lanes)
+    input  wire                wr_commit,      // make the records staged before this cycle readable
     input  wire                wr_abort,       // drop the staged records (and this cycle's)
     // read side
     output wire                rd_valid,
@@ -55,9 +69,10 @@ module position_fifo #(
     localparam DEPTH = 1 << DEPTH_LOG2;
     localparam [DEPTH_LOG2:0] LEVEL_FULL = DEPTH[DEPTH_LOG2:0];
 
-    // The forwarding below answers every read of the slot being written, so the RAM's own
-    // read-during-write result is never used: no_rw_check spares the tools' emulation of
-    // it (a second copy of the forwarding register and its multiplexer, WIDTH wide).
+    // A slot read at the edge that writes it is staged, never committed, after that edge
+    // (a commit does not take this cycle's write), and the RAM is read again at every
+    // edge: the RAM's own read-during-write result is never used. no_rw_check spares the
+    // tools' emulation of it (a second register and multiplexer, WIDTH wide).
     (* no_rw_check *) reg [WIDTH-1:0] mem [0:DEPTH-1];
     reg [DEPTH_LOG2-1:0] wr_ptr_reg;      // end of the committed records
     reg [DEPTH_LOG2-1:0] stage_ptr_reg;   // end of the staged records
@@ -66,11 +81,10 @@ module position_fifo #(
     reg [DEPTH_LOG2:0]   level_int_reg;      // committed records in the RAM
     reg [DEPTH_LOG2:0]   staged_reg;
     reg [WIDTH-1:0]      ram_q_reg;          // the RAM's registered read port
-    reg [WIDTH-1:0]      bypass_reg;         // a record written into the head slot
-    reg                  use_bypass_reg;
     reg                  out_valid_reg;      // the out stage holds the head record
     reg [WIDTH-1:0]      out_data_reg;
     reg                  overflow_reg;
+    reg                  lane_lost_reg;      // a lane of the record being written was refused
 
     wire [DEPTH_LOG2:0] zero = {(DEPTH_LOG2+1){1'b0}};
     wire [DEPTH_LOG2:0] one  = {{DEPTH_LOG2{1'b0}}, 1'b1};
@@ -79,7 +93,9 @@ module position_fifo #(
     // slave checks comes from a register, not from two subtractions.
     reg  [DEPTH_LOG2:0] free_reg;
     wire is_full   = (free_reg == zero);
-    wire write     = wr_en && !is_full && !flush;
+    wire write     = wr_en && !is_full && !lane_lost_reg && !flush;
+    wire [LANES-1:0] lane_write = wr_lane & {LANES{!is_full && !flush}};
+    localparam LAST_LO = (LANES - 1) * LANE_W;   // the last lane: bits WIDTH-1 .. LAST_LO
     wire pop       = rd_pop && out_valid_reg && !flush;                  // the out stage
     wire pop_int   = int_valid && (!out_valid_reg || pop) && !flush;     // the RAM, into the out stage
     wire commit    = wr_commit && !wr_abort && !flush;
@@ -89,53 +105,60 @@ module position_fifo #(
     // control decisions (a pop - the period timer's boundary, from across the die - a
     // write refused when full, a commit, an abort) only choose between finished sums
     // and never enter a carry chain. With staged_now = staged + write and added =
-    // commit ? staged_now : 0 (an abort frees staged_now, so free + staged is kept):
+    // commit ? staged : 0 (an abort frees staged_now, so free + staged is kept):
     wire [DEPTH_LOG2:0] free_plus_staged = free_reg + staged_reg;
     wire [DEPTH_LOG2:0] free_minus_one   = free_reg - one;
     wire [DEPTH_LOG2:0] free_plus_one    = free_reg + one;
     wire [DEPTH_LOG2:0] free_kept   = wr_abort ? free_plus_staged : (write ? free_minus_one : free_reg);
     wire [DEPTH_LOG2:0] free_popped = wr_abort ? free_plus_staged + one : (write ? free_reg : free_plus_one);
-    // level + added - pop and level_int + added - pop_int, for the four cases of
-    // (commit, write) and both outcomes of the pop.
+    // level + added - pop and level_int + added - pop_int, for both commit outcomes and
+    // both outcomes of the pop.
     function [DEPTH_LOG2:0] count_next;
         input [DEPTH_LOG2:0] count, staged_count;
-        input                commit_now, write_now, popped;
+        input                commit_now, popped;
         reg   [DEPTH_LOG2:0] sum;
         begin
             sum = count + staged_count;
-            if (!commit_now)      count_next = popped ? count - one : count;
-            else if (write_now)   count_next = popped ? sum : sum + one;
-            else                  count_next = popped ? sum - one : sum;
+            if (!commit_now) count_next = popped ? count - one : count;
+            else             count_next = popped ? sum - one : sum;
         end
     endfunction
-    wire [DEPTH_LOG2:0] level_kept       = count_next(level_reg, staged_reg, commit, write, 1'b0);
-    wire [DEPTH_LOG2:0] level_popped     = count_next(level_reg, staged_reg, commit, write, 1'b1);
-    wire [DEPTH_LOG2:0] level_int_kept   = count_next(level_int_reg, staged_reg, commit, write, 1'b0);
-    wire [DEPTH_LOG2:0] level_int_popped = count_next(level_int_reg, staged_reg, commit, write, 1'b1);
+    wire [DEPTH_LOG2:0] level_kept       = count_next(level_reg, staged_reg, commit, 1'b0);
+    wire [DEPTH_LOG2:0] level_popped     = count_next(level_reg, staged_reg, commit, 1'b1);
+    wire [DEPTH_LOG2:0] level_int_kept   = count_next(level_int_reg, staged_reg, commit, 1'b0);
+    wire [DEPTH_LOG2:0] level_int_popped = count_next(level_int_reg, staged_reg, commit, 1'b1);
     wire [DEPTH_LOG2-1:0] rd_ptr_next    = rd_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
 
     // The RAM's head after this edge: the next entry on an internal pop, else the same one.
     wire [DEPTH_LOG2-1:0] head_addr = pop_int ? rd_ptr_next : rd_ptr_reg;
-    // The head entry is being written now exactly when it is the slot written.
-    wire head_written = write && (head_addr == stage_ptr_reg);
 
+    integer lane;
     always @(posedge clk) begin
-        if (write) mem[stage_ptr_reg] <= wr_data;
-        ram_q_reg <= mem[head_addr];
+        for (lane = 0; lane < LANES - 1; lane = lane + 1)
+            if (lane_write[lane]) mem[stage_ptr_reg][lane*LANE_W +: LANE_W] <= wr_data[lane*LANE_W +: LANE_W];
+        if (lane_write[LANES-1]) mem[stage_ptr_reg][WIDTH-1:LAST_LO] <= wr_data[WIDTH-1:LAST_LO];
     end
 
-    // The forwarding sits outside the RAM so that the read port is a plain registered
-    // read, which every block RAM has, whatever drives the address.
-    always @(posedge clk) begin
-        bypass_reg     <= wr_data;
-        use_bypass_reg <= head_written;
-    end
-    wire [WIDTH-1:0] head_int = use_bypass_reg ? bypass_reg : ram_q_reg;
-
-    // The out stage: RAM -> forwarding mux -> this register, nothing else.
-    always @(posedge clk) begin
-        if (pop_int) out_data_reg <= head_int;
-    end
+    // The out stage. HEAD_REG = 1: the RAM reads its head at every edge (ram_q), and
+    // the out stage, a fabric register, takes it on an internal pop: the RAM's read data
+    // goes only into that register. HEAD_REG = 0: the RAM's read register is the out
+    // stage, read (enabled) on an internal pop from the head slot: the same contents at
+    // the same edges, without a second copy of the record.
+    generate
+        if (HEAD_REG != 0) begin : fabric_head
+            always @(posedge clk) begin
+                ram_q_reg <= mem[head_addr];
+                if (pop_int) out_data_reg <= ram_q_reg;
+            end
+        end else begin : ram_head
+            always @(posedge clk) begin
+                if (pop_int) out_data_reg <= mem[rd_ptr_reg];
+            end
+`ifdef FORMAL
+            always @(*) ram_q_reg = mem[rd_ptr_reg];   // for the properties' sake
+`endif
+        end
+    endgenerate
 
     always @(posedge clk) begin
         if (flush) begin
@@ -159,17 +182,21 @@ module position_fifo #(
                 stage_ptr_reg <= wr_ptr_reg;
                 staged_reg    <= zero;
             end else if (commit) begin
-                wr_ptr_reg    <= stage_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, write};
+                wr_ptr_reg    <= stage_ptr_reg;
                 stage_ptr_reg <= stage_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, write};
-                staged_reg    <= zero;
+                staged_reg    <= {{DEPTH_LOG2{1'b0}}, write};
             end else begin
                 stage_ptr_reg <= stage_ptr_reg + {{(DEPTH_LOG2-1){1'b0}}, write};
                 staged_reg    <= staged_now;
             end
         end
 
-        if (wr_en && is_full && !flush) overflow_reg <= 1'b1;
+        if (wr_en && (is_full || lane_lost_reg) && !flush) overflow_reg <= 1'b1;
         else if (clear_errors) overflow_reg <= 1'b0;
+        // A lane lost while full spoils the record being written until it is staged
+        // (refused) or dropped.
+        if (flush || wr_en || wr_abort) lane_lost_reg <= 1'b0;
+        if (|wr_lane && is_full && !flush && !wr_en && !wr_abort) lane_lost_reg <= 1'b1;
 
         if (rst) begin
             wr_ptr_reg    <= {DEPTH_LOG2{1'b0}};
@@ -181,6 +208,7 @@ module position_fifo #(
             out_valid_reg <= 1'b0;
             free_reg      <= LEVEL_FULL;
             overflow_reg  <= 1'b0;
+            lane_lost_reg <= 1'b0;
         end
     end
 
@@ -207,7 +235,7 @@ module position_fifo #(
     wire [DEPTH_LOG2-1:0] f_used   = wr_ptr_reg - rd_ptr_reg;
     wire [DEPTH_LOG2-1:0] f_staged = stage_ptr_reg - wr_ptr_reg;
     // The out stage's shadow: the RAM's oldest committed entry, as the spec says, when
-    // it was moved (not the forwarding path's idea of it).
+    // it was moved (not the read port's idea of it).
     reg [WIDTH-1:0] f_out_shadow;
     always @(posedge clk) if (pop_int) f_out_shadow <= mem[rd_ptr_reg];
     always @(*) if (f_past_valid && !rst) begin
@@ -217,16 +245,21 @@ module position_fifo #(
         assert (full == ({1'b0, level} + {1'b0, staged} == {1'b0, LEVEL_FULL}));
         assert ({1'b0, level_reg} == {1'b0, level_int_reg} + {{(DEPTH_LOG2+1){1'b0}}, out_valid_reg});
         assert (f_used == level_int_reg[DEPTH_LOG2-1:0] && f_staged == staged_reg[DEPTH_LOG2-1:0]);
-        if (int_valid) assert (head_int == mem[rd_ptr_reg]);
+        if (int_valid) assert (ram_q_reg == mem[rd_ptr_reg]);
         if (out_valid_reg) assert (out_data_reg == f_out_shadow);
     end
 
-    // Track one record: f_tag is written when chosen, then must come out unchanged.
+    // Track one record: f_tag is staged when chosen (the slot with this cycle's lanes
+    // written), then must come out unchanged.
     (* anyconst *) reg [WIDTH-1:0] f_tag;
     (* anyseq *) reg f_choose;
     reg f_armed, f_inside, f_committed, f_out;
     reg [DEPTH_LOG2-1:0] f_slot;
-    wire f_take = write && !f_armed && (wr_data == f_tag) && f_choose;
+    reg [WIDTH-1:0] f_lane_mask;
+    integer f_bit;
+    always @(*) for (f_bit = 0; f_bit < WIDTH; f_bit = f_bit + 1) f_lane_mask[f_bit] = lane_write[f_bit / LANE_W];
+    wire [WIDTH-1:0] f_staging = (mem[stage_ptr_reg] & ~f_lane_mask) | (wr_data & f_lane_mask);
+    wire f_take = write && !f_armed && (f_staging == f_tag) && f_choose;
     always @(posedge clk) begin
         if (rst || flush) begin
             f_armed     <= 1'b0;
@@ -238,7 +271,7 @@ module position_fifo #(
                 f_armed  <= 1'b1;
                 f_inside <= !wr_abort;
                 f_slot   <= stage_ptr_reg;
-                f_committed <= commit;
+                f_committed <= 1'b0;   // a commit takes the records staged before its cycle
             end else if (f_inside && !f_committed) begin
                 if (wr_abort) f_inside <= 1'b0;
                 else if (commit) f_committed <= 1'b1;
@@ -262,7 +295,7 @@ module position_fifo #(
             if (f_committed) begin
                 // Behind the out stage and the f_ahead records in the RAM.
                 assert ({1'b0, f_ahead} < level_int_reg);
-                if (f_ahead == {DEPTH_LOG2{1'b0}}) assert (head_int == f_tag);
+                if (f_ahead == {DEPTH_LOG2{1'b0}}) assert (ram_q_reg == f_tag);
             end else begin
                 assert ({1'b0, f_behind_commit} < staged_reg);
             end
@@ -271,6 +304,9 @@ module position_fifo #(
 
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(wr_en && is_full && !flush)) assert (overflow_reg);
+        // A record with a lane lost while full is refused whole, and flagged.
+        if ($past(|wr_lane && is_full && !flush && !wr_en && !wr_abort)) assert (lane_lost_reg);
+        if ($past(wr_en && lane_lost_reg && !flush)) assert (overflow_reg && staged_reg <= $past(staged_reg));
         // Only a commit makes records readable.
         if (!$past(commit)) assert (level_reg <= $past(level_reg) || $past(flush));
         if ($past(wr_abort) && !$past(flush)) assert (staged_reg == 0);
@@ -281,6 +317,7 @@ module position_fifo #(
         assert (rd_valid == (!$past(flush) && ($past(pop) ? ($past(level_reg) >= 2)
                                                           : ($past(rd_valid) || $past(level_reg) >= 1))));
         cover (is_full && staged_reg != 0 && level_reg != 0);
+        cover ($past(write && wr_lane != {LANES{1'b1}}) && f_armed);
         cover (f_armed && !f_inside && f_committed);
         cover ($past(write && pop && commit && level_reg == 1));
         cover ($past(wr_abort && staged_reg == 2));

@@ -106,9 +106,15 @@ module register_file #(
     input  wire                         jog_refused,
     output wire [31:0]                  timestamp,
     output wire                         latch_now,
-    // RECORD_PUSH into the FIFO (write and commit together)
-    output wire                         push_write,
-    output wire [32*N_AXES+7:0]         push_data,
+    // RECORD_PUSH into the FIFO: its record's lanes written one a cycle (RECORD_INC[k]
+    // from the store in lane k, then the flags with wr_en), committed in the next cycle
+    input  wire                         fifo_flush,
+    output wire [N_AXES:0]              push_lane,
+    output wire [31:0]                  push_word,      // every increment lane's data
+    output wire [7:0]                   push_flags,     // the flags lane's
+    output wire                         push_wr_en,
+    output wire                         push_commit,
+    output wire                         push_in_flight, // a push writes the FIFO's record now
     // out
     output wire [7:0]                   status_byte,
     output wire                         irq
@@ -182,19 +188,31 @@ module register_file #(
     reg                        clear_counters_reg;
     reg                        kick_reg;
     reg                        push_reg;
+    reg                        push_commit_reg;   // the record push_wr_en staged last cycle
+    reg                        push_active_reg;   // the push accepted in cycle 1 goes on
     reg [FS_REC_FLAGS_WIDTH-1:0] push_flags_reg;
 
     // Arbiter: SPI first. The granted request goes into the bus stage; the stage is
-    // what is served, in the next cycle.
-    wire        grant_spi = spi_req;
-    wire        grant_par = par_req && !spi_req;
-    wire        granted   = grant_spi || grant_par;
-    wire [ADDR_W-1:0] granted_addr = grant_spi ? spi_addr : par_addr;
-    wire [WORD_W-1:0] granted_wdata = grant_spi ? spi_wdata : par_wdata;
+    // what is served, in the next cycle. No grant while a push reads RECORD_INC from the
+    // store (below): the masters hold their requests.
     reg               stage_valid_reg;
     reg               stage_we_reg;
     reg  [ADDR_W-1:0] stage_addr_reg;
     reg  [WORD_W-1:0] stage_wdata_reg;
+    // The push sequence: push_seq = k in the k-th cycle after the cycle serving a
+    // RECORD_PUSH write (1..N_AXES), 0 when idle. The store is read for RECORD_INC[k] in
+    // cycle k (0..N_AXES-1: no grants then), and that word goes into the FIFO record's
+    // lane k in cycle k + 1; the flags and wr_en come in cycle N_AXES, the commit in the
+    // next. The push is decided (accepted or refused) in cycle 1.
+    localparam SEQ_W = 4;
+    reg  [SEQ_W-1:0]  push_seq_reg;
+    wire              push_served = stage_valid_reg && stage_we_reg && (stage_addr_reg == FS_RECORD_PUSH_ADDR);
+    wire              bus_hold    = push_served || (push_seq_reg != {SEQ_W{1'b0}} && {28'd0, push_seq_reg} < N_AXES);
+    wire        grant_spi = spi_req && !bus_hold;
+    wire        grant_par = par_req && !spi_req && !bus_hold;
+    wire        granted   = grant_spi || grant_par;
+    wire [ADDR_W-1:0] granted_addr = grant_spi ? spi_addr : par_addr;
+    wire [WORD_W-1:0] granted_wdata = grant_spi ? spi_wdata : par_wdata;
     always @(posedge clk) begin
         if (rst) begin
             stage_valid_reg <= 1'b0;
@@ -295,6 +313,9 @@ module register_file #(
         end
     endgenerate
     wire [5:0]        grant_map  = store_map(granted_addr);
+    // RECORD_INC[k]'s store word, k = the push sequence's cycle (0 while serving the write).
+    wire [2:0]        push_read_axis = push_served ? 3'd0 : push_seq_reg[2:0];
+    wire [4:0]        push_read_word = {push_read_axis, 2'd3};
     wire [5:0]        stage_map  = store_map(stage_addr_reg);
     wire              store_write = STORED && granted && (grant_spi ? spi_we : par_we) && grant_map[5];
     wire [WORD_W-1:0] store_rd;
@@ -308,7 +329,7 @@ module register_file #(
             store_ram #(.WIDTH(WORD_W), .DEPTH(32), .ADDR_W(5), .BLOCK(RAM_BLOCK)) store (
                 .clk(clk), .wr_en(store_write), .wr_addr(grant_map[4:0]),
                 .wr_data(store_fields(grant_map[1:0], granted_wdata)),
-                .rd_addr(grant_map[4:0]), .rd_data(store_rd)
+                .rd_addr(bus_hold ? push_read_word : grant_map[4:0]), .rd_data(store_rd)
 `ifdef FORMAL
                 , .f_peek_addr(f_word), .f_peek_data(f_word_data)
 `endif
@@ -446,6 +467,25 @@ module register_file #(
     integer axis;
 
     wire push_refused = push_reg && (fifo_full || spi_fifo_in_use);
+    wire push_accept  = push_reg && !push_refused;
+    // The push sequence's FIFO writes: lane k - 1 in cycle k, the flags and wr_en in
+    // cycle N_AXES, while the push is accepted (cycle 1) or goes on (no flush since).
+    wire push_go   = push_reg ? push_accept : push_active_reg;
+    wire push_last = ({28'd0, push_seq_reg} == N_AXES);
+    genvar lane;
+    generate
+        for (lane = 0; lane < N_AXES; lane = lane + 1) begin : push_lanes
+            assign push_lane[lane] = push_go && ({28'd0, push_seq_reg} == lane + 1);
+        end
+    endgenerate
+    assign push_lane[N_AXES] = push_go && push_last;
+    // RECORD_INC[k - 1]: the store word read in the cycle before (its reset value until
+    // written), or its flip-flops in a build without the store.
+    wire [2:0]        push_axis      = push_seq_reg[2:0] - 3'd1;
+    wire [4:0]        push_word_addr = {push_axis, 2'd3};
+    wire [WORD_W-1:0] push_stored    = written_reg[push_word_addr] ? store_rd : store_reset(2'd3);
+    wire [INC_W-1:0]  push_ff_word   = record_inc_reg[INC_W*push_axis +: INC_W];
+    wire [INC_W-1:0]  push_inc       = STORED ? push_stored[INC_W-1:0] : push_ff_word;
     wire [COUNT_W-1:0] refused_now = (push_refused ? {{(COUNT_W-1){1'b0}}, 1'b1} : {COUNT_W{1'b0}}) +
                                      (spi_refused ? {{(COUNT_W-8){1'b0}}, spi_refused_count} : {COUNT_W{1'b0}});
 
@@ -558,8 +598,14 @@ module register_file #(
             clear_counters_reg <= 1'b0;
             kick_reg           <= 1'b0;
             push_reg           <= 1'b0;
+            push_commit_reg    <= 1'b0;
+            push_active_reg    <= 1'b0;
+            push_seq_reg       <= {SEQ_W{1'b0}};
             push_flags_reg     <= {FS_REC_FLAGS_WIDTH{1'b0}};
         end else begin
+            push_commit_reg    <= push_go && push_last;
+            push_active_reg    <= push_go && !push_last && !fifo_flush;
+            push_seq_reg       <= (bus_hold && !push_last) ? push_seq_reg + 1'b1 : {SEQ_W{1'b0}};
             clear_errors_reg   <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_CLEAR_ERRORS_LSB];
             clear_faults_reg   <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_CLEAR_FAULTS_LSB];
             flush_reg          <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_FLUSH_FIFO_LSB];
@@ -640,15 +686,18 @@ module register_file #(
     assign clear_faults      = clear_faults_reg;
     assign flush_cmd         = flush_reg;
     assign kick              = kick_reg;
-    assign push_write        = push_reg && !push_refused;
-    assign push_data         = {push_flags_reg, record_inc_reg};
+    assign push_word         = push_inc;
+    assign push_flags        = push_flags_reg;
+    assign push_wr_en        = push_go && push_last;
+    assign push_commit       = push_commit_reg;
+    assign push_in_flight    = push_go;
     assign status_byte       = status_word[7:0];
     assign irq               = irq_reg;
 
 `ifdef FORMAL
     // One master served at a time and only on request; a record is pushed only when
     // the FIFO has room and the SPI frame layer is not using its port, else refused
-    // and flagged; a halt always clears RUN; every served write and every SPI commit
+    // and flagged, and committed exactly in the next cycle; a halt always clears RUN; every served write and every SPI commit
     // kicks the watchdog, and nothing else does; sticky flags hold until cleared.
     reg f_past_valid;
     initial f_past_valid = 1'b0;
@@ -658,7 +707,18 @@ module register_file #(
         assert (!(grant_spi && grant_par));
         if (grant_spi) assert (spi_req);
         if (grant_par) assert (par_req);
-        if (push_write) assert (push_reg && !fifo_full && !spi_fifo_in_use);
+        if (push_accept) assert (push_reg && !fifo_full && !spi_fifo_in_use);
+        // No grant while the push reads the store.
+        if (bus_hold) assert (!granted);
+    end
+    always @(*) if (f_past_valid && !rst) begin
+        // The sequence counts 1..N_AXES after the cycle serving the write.
+        assert ({28'd0, push_seq_reg} <= N_AXES);
+        assert (push_reg == (push_seq_reg == {{(SEQ_W-1){1'b0}}, 1'b1}));
+        if (push_active_reg) assert (push_seq_reg > {{(SEQ_W-1){1'b0}}, 1'b1});
+        // The word a push writes is RECORD_INC[k - 1] (its register).
+        if (push_go && (!STORED || push_word_addr == f_word))
+            assert (push_word == record_inc_reg[INC_W*push_axis +: INC_W]);
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(halt) || $past(jog_engaged)) assert (!run_reg);
@@ -668,13 +728,16 @@ module register_file #(
         if ($past(clear_counters_reg)) assert (underrun_count_reg == 16'd0 && crc_error_count_reg == 16'd0 &&
                                               refused_count_reg == 16'd0);
         if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
+        assert (push_commit == $past(push_go && push_last));
+        if ($past(push_go) && !$past(push_last) && !$past(fifo_flush)) assert (push_go);
         // The bus stage serves exactly the request granted in the cycle before.
         assert (stage_valid_reg == $past(granted));
         if ($past(grant_spi)) assert (bus_we == $past(spi_we) && bus_addr == $past(spi_addr) &&
                                       bus_wdata == $past(spi_wdata));
         if ($past(grant_par)) assert (bus_we == $past(par_we) && bus_addr == $past(par_addr) &&
                                       bus_wdata == $past(par_wdata));
-        cover (push_write);
+        cover (push_accept);
+        cover (push_commit);
         cover ($past(push_refused));
         cover (read && stage_stored && written_reg[stage_map[4:0]] && stored_word != 32'd0);
         // The store's read register holds the word read at the grant.

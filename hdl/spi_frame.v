@@ -36,9 +36,11 @@ module spi_frame #(
     output wire [31:0]              bus_wdata,
     input  wire                     bus_grant,
     input  wire [31:0]              bus_rdata,
-    // position FIFO write port
-    output wire                     fifo_wr_en,
+    // position FIFO write port: a record's words go into its lanes as they complete
+    // (lane i = axis i, lane N_AXES = the flags), and wr_en stages it
+    output wire [N_AXES:0]          fifo_wr_lane,
     output wire [32*N_AXES+7:0]     fifo_wr_data,
+    output wire                     fifo_wr_en,
     output wire                     fifo_wr_commit,
     output wire                     fifo_wr_abort,
     output wire                     fifo_busy,      // a FIFO frame owns the write port
@@ -54,7 +56,12 @@ module spi_frame #(
 
     // Command and result bytes, the record layout and the CRC: FS_SPI_*, FS_REC_*.
     localparam REC_BYTES = (FS_REC_INC_WIDTH / 8) * N_AXES + FS_REC_FLAGS_WIDTH / 8;
-    localparam REC_W     = 8 * REC_BYTES;
+    // The FIFO lanes are the 32-bit word register's: one increment each.
+    generate
+        if (FS_REC_INC_WIDTH != 32 || FS_REC_FLAGS_WIDTH > 32) begin : fs_check_lanes
+            spi_frame_needs_32_bit_increments out_of_range ();
+        end
+    endgenerate
 
     localparam [3:0] PHASE_IDLE        = 4'd0;
     localparam [3:0] PHASE_ADDR        = 4'd1;
@@ -75,8 +82,7 @@ module spi_frame #(
     reg [5:0]       byte_in_item_reg;
     reg [15:0]      crc_reg;
     reg [7:0]       result_reg;
-    reg [31:0]      word_reg;          // the data word of a WRITE frame
-    reg [REC_W-1:0] record_reg;        // the record being received, first byte on top
+    reg [31:0]      word_reg;          // the data word of a WRITE frame, a record's last 4 bytes
     reg [31:0]      tx_word_reg;       // the word being sent by a READ frame
     reg [31:0]      next_word_reg;     // the word after it, read ahead
     reg [6:0]       read_addr_reg;     // address of the next read ahead
@@ -89,6 +95,7 @@ module spi_frame #(
     reg             read_granted_reg;  // a read granted last cycle: the register file serves it now
     reg             capture_reg;       // bus_rdata holds a read for next_word
     reg             wr_en_reg;
+    reg [N_AXES:0]  wr_lane_reg;
     reg             wr_commit_reg;
     reg             wr_abort_reg;
 
@@ -138,10 +145,21 @@ module spi_frame #(
     wire bad_header  = count_byte && !(is_read && count_nonzero) && !(is_write && rx_byte == 8'd1) &&
                        !(is_fifo && count_nonzero);
     wire crc_checked = do_byte && (phase_reg == PHASE_CRC_LO);
+    // The FIFO lane a record byte completes: axis k's word at its byte 4k + 3, the flags
+    // at the record's last byte (4 N_AXES).
+    wire [N_AXES:0] lane_done;
+    genvar lane;
+    generate
+        for (lane = 0; lane < N_AXES; lane = lane + 1) begin : lanes
+            assign lane_done[lane] = (byte_in_item_reg == 4 * lane + 3);
+        end
+    endgenerate
+    assign lane_done[N_AXES] = (byte_in_item_reg == item_last);
     wire crc_good    = (crc_with_rx == 16'h0000);
 
     always @(posedge clk) begin
         wr_en_reg     <= 1'b0;
+        wr_lane_reg   <= {(N_AXES+1){1'b0}};
         wr_commit_reg <= 1'b0;
         wr_abort_reg  <= 1'b0;
         read_granted_reg <= bus_grant && !bus_we_reg;
@@ -206,7 +224,7 @@ module spi_frame #(
                 PHASE_DATA: begin
                     crc_reg    <= crc_with_rx;
                     word_reg   <= {word_reg[23:0], rx_byte};
-                    record_reg <= {record_reg[REC_W-9:0], rx_byte};
+                    if (is_fifo) wr_lane_reg <= lane_done;
                     if (byte_in_item_reg == item_last) begin
                         byte_in_item_reg <= 6'd0;
                         items_left_reg   <= items_left_reg - 8'd1;
@@ -271,7 +289,6 @@ module spi_frame #(
             crc_reg          <= FS_SPI_CRC_INITIAL;
             result_reg       <= 8'h00;
             word_reg         <= 32'd0;
-            record_reg       <= {REC_W{1'b0}};
             tx_word_reg      <= 32'd0;
             next_word_reg    <= 32'd0;
             read_addr_reg    <= 7'd0;
@@ -284,21 +301,16 @@ module spi_frame #(
             read_granted_reg <= 1'b0;
             capture_reg      <= 1'b0;
             wr_en_reg        <= 1'b0;
+            wr_lane_reg      <= {(N_AXES+1){1'b0}};
             wr_commit_reg    <= 1'b0;
             wr_abort_reg     <= 1'b0;
         end
     end
 
     // The record's bytes are axis 0, 1, ... (each most significant first), then flags;
-    // in the FIFO axis i sits at [32i +: 32] and the flags on top.
-    genvar axis;
-    generate
-        for (axis = 0; axis < N_AXES; axis = axis + 1) begin : unpack
-            assign fifo_wr_data[FS_REC_INC_WIDTH*axis +: FS_REC_INC_WIDTH] =
-                record_reg[REC_W-1-FS_REC_INC_WIDTH*axis -: FS_REC_INC_WIDTH];
-        end
-    endgenerate
-    assign fifo_wr_data[FS_REC_INC_WIDTH*N_AXES +: FS_REC_FLAGS_WIDTH] = record_reg[FS_REC_FLAGS_WIDTH-1:0];
+    // in the FIFO axis i sits at [32i +: 32] and the flags on top. The word register
+    // holds the bytes of the lane just completed, so every lane is offered the word.
+    assign fifo_wr_data = {word_reg[FS_REC_FLAGS_WIDTH-1:0], {N_AXES{word_reg}}};
 
     assign tx_byte        = tx_now;
     assign bus_req        = bus_req_reg;
@@ -306,6 +318,7 @@ module spi_frame #(
     assign bus_addr       = bus_addr_reg;
     assign bus_wdata      = bus_wdata_reg;
     assign fifo_wr_en     = wr_en_reg;
+    assign fifo_wr_lane   = wr_lane_reg;
     assign fifo_wr_commit = wr_commit_reg;
     assign fifo_wr_abort  = wr_abort_reg;
     assign fifo_busy      = fifo_busy_reg;
@@ -341,12 +354,23 @@ module spi_frame #(
         else if (wr_en_reg) f_staged <= f_staged + 9'd1;
         if (fifo_accept_now) f_count <= rx_byte;
     end
+    // The lanes written since the last staged record (or the frame's header): a record
+    // is staged only with every lane of it written in its own frame, in order.
+    reg [N_AXES:0] f_lanes;
+    always @(posedge clk) begin
+        if (rst || fifo_accept_now || wr_en_reg) f_lanes <= {(N_AXES+1){1'b0}};
+        else f_lanes <= f_lanes | wr_lane_reg;
+    end
     wire fifo_accept_now = count_byte && is_fifo && count_nonzero && fifo_room && !bad_header;
 
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if (wr_commit_reg) assert ($past(crc_checked && crc_good && is_fifo));
         if (wr_commit_reg) assert (f_staged == {1'b0, f_count} && !wr_abort_reg);
         if (wr_en_reg) assert ($past(fifo_busy_reg) && $past(do_byte) && $past(phase_reg) == PHASE_DATA);
+        if (wr_lane_reg != 0) assert ($past(fifo_busy_reg) && $past(do_byte) && $past(phase_reg) == PHASE_DATA);
+        assert (wr_en_reg == wr_lane_reg[N_AXES]);
+        if (wr_en_reg) assert ((f_lanes | wr_lane_reg) == {(N_AXES+1){1'b1}});
+        if (wr_lane_reg != 0) assert ((f_lanes & wr_lane_reg) == 0 && (f_lanes & (wr_lane_reg - 1'b1)) == (wr_lane_reg - 1'b1));
         if (bus_req_reg && bus_we_reg && !$past(bus_req_reg))
             assert ($past(crc_checked && crc_good && is_write));
         if ($past(fifo_busy_reg) && !fifo_busy_reg) assert (wr_commit_reg || wr_abort_reg);

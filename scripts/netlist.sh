@@ -6,8 +6,9 @@
 #
 #   ecp5   synth_ecp5, finestep_top's defaults (the Colorlight build's core: stores in
 #          distributed RAM, the FIFO in DP16KD)   -> build/netlist/finestep_top_ecp5.v
-#   ice40  synth_ice40 with RAM_BLOCK 1 as the iCE40 board tops set it (the encoder
-#          bank's stores and the FIFO in SB_RAM40_4K) -> build/netlist/finestep_top_ice40.v
+#   ice40  synth_ice40 with RAM_BLOCK 1 and FIFO_HEAD_REG 0 as the iCE40 board tops set
+#          them (the encoder bank's stores and the FIFO in SB_RAM40_4K, the FIFO's head
+#          in the RAM's read register) -> build/netlist/finestep_top_ice40.v
 #
 # The other parameters stay finestep_top's defaults so that every pin-level test applies
 # (the HX8K board top also drops the hand wheel and the 8080 bus, which only removes
@@ -26,7 +27,7 @@ export TMPDIR="$PWD/build/tmp"
 for family in "$@"; do
     case $family in
         ecp5)  synth="synth_ecp5 -top finestep_top"; chparam="" ;;
-        ice40) synth="synth_ice40 -top finestep_top"; chparam="chparam -set RAM_BLOCK 1 finestep_top" ;;
+        ice40) synth="synth_ice40 -top finestep_top"; chparam="chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG 0 finestep_top" ;;
         *) echo "netlist: unknown family '$family' (ecp5 or ice40)"; exit 2 ;;
     esac
     netlist=$out/finestep_top_$family.v

@@ -7,7 +7,8 @@
 //
 // HAS_MPG is 0 here: the full core (with the hand wheel and jog) packs into about 7 830
 // logic cells and does not fit the 7680 (docs/resources.md); the hand wheel's pins stay
-// constrained, unused. The encoder bank's stores are in block RAM (RAM_BLOCK).
+// constrained, unused. The encoder bank's stores are in block RAM (RAM_BLOCK), and the
+// FIFO's head record is the RAM's read register (FIFO_HEAD_REG 0).
 module ice40_hx8k_breakout #(
     parameter N_AXES          = 4,
     parameter N_ENC           = 4,
@@ -58,7 +59,7 @@ module ice40_hx8k_breakout #(
 
     spi_board_chip #(
         .N_AXES(N_AXES), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
-        .CLOCK_HZ(CLOCK_HZ), .RAM_BLOCK(1),  // the iCE40 has no distributed RAM
+        .CLOCK_HZ(CLOCK_HZ), .RAM_BLOCK(1), .FIFO_HEAD_REG(0),  // the iCE40 has no distributed RAM
         .STEP_SHARED(STEP_SHARED)
     ) board (
         .clk(clk), .locked(pll_locked), .button_n(reset_n), .rst(rst),

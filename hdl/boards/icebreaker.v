@@ -57,7 +57,7 @@ module icebreaker #(
 
     spi_board_chip #(
         .N_AXES(N_AXES), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
-        .CLOCK_HZ(CLOCK_HZ), .RAM_BLOCK(1)   // the iCE40 has no distributed RAM
+        .CLOCK_HZ(CLOCK_HZ), .RAM_BLOCK(1), .FIFO_HEAD_REG(0)   // the iCE40 has no distributed RAM
     ) board (
         .clk(clk), .locked(pll_locked), .button_n(button_n), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi), .spi_miso(spi_miso), .irq(irq),

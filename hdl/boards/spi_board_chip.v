@@ -10,7 +10,8 @@ module spi_board_chip #(
     parameter FIFO_DEPTH_LOG2 = 8,
     parameter CLOCK_HZ        = 50000000,
     parameter RAM_BLOCK       = 0,
-    parameter STEP_SHARED     = 1
+    parameter STEP_SHARED     = 1,
+    parameter FIFO_HEAD_REG   = 1
 ) (
     // clock, reset
     input  wire              clk,
@@ -47,7 +48,7 @@ module spi_board_chip #(
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG),
-        .RAM_BLOCK(RAM_BLOCK), .STEP_SHARED(STEP_SHARED)
+        .RAM_BLOCK(RAM_BLOCK), .STEP_SHARED(STEP_SHARED), .FIFO_HEAD_REG(FIFO_HEAD_REG)
     ) chip (
         .clk(clk), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),

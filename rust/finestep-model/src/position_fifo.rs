@@ -18,6 +18,10 @@
 //! or not. The block is proven in `make formal` (never overwrites, never reads empty,
 //! level right, order kept, the `rd_valid` rule); the co-simulation of it comes with the
 //! host-interface top that instantiates it.
+//!
+//! The RTL's write lanes (`wr_lane`: a record written a word at a time) are not modelled:
+//! every writer writes every lane of a record before staging it (the SPI frame layer's
+//! formal proof), so a write here is the whole record.
 
 use std::collections::VecDeque;
 
@@ -32,7 +36,7 @@ pub struct FifoInputs {
     pub clear_errors: bool,
     /// A record staged this cycle.
     pub write: Option<PeriodRecord>,
-    /// Make the staged records, this cycle's included, readable.
+    /// Make the records staged before this cycle readable (this cycle's write stays staged).
     pub commit: bool,
     /// Drop the staged records, this cycle's included (wins over `commit`).
     pub abort: bool,
@@ -125,13 +129,15 @@ impl PositionFifo {
             if pop {
                 self.entries.pop_front();
             }
-            if let (Some(record), false) = (inputs.write, was_full) {
-                self.staged.push(record);
-            }
             if inputs.abort {
                 self.staged.clear();
-            } else if inputs.commit {
-                self.entries.extend(self.staged.drain(..));
+            } else {
+                if inputs.commit {
+                    self.entries.extend(self.staged.drain(..));
+                }
+                if let (Some(record), false) = (inputs.write, was_full) {
+                    self.staged.push(record);
+                }
             }
         }
         self.overflow = refused || (self.overflow && !inputs.clear_errors);
@@ -149,8 +155,13 @@ mod tests {
         r
     }
 
+    /// Stages `n` and commits what was staged before (as a run of RECORD_PUSH writes does).
     fn write(n: i32) -> FifoInputs {
         FifoInputs { write: Some(record(n)), commit: true, ..Default::default() }
+    }
+
+    fn commit() -> FifoInputs {
+        FifoInputs { commit: true, ..Default::default() }
     }
 
     #[test]
@@ -159,9 +170,12 @@ mod tests {
         for n in 0..3 {
             fifo.step(&write(n));
         }
-        assert_eq!(fifo.level(), 3);
+        assert_eq!((fifo.level(), fifo.staged()), (2, 1), "a commit does not take its own cycle's write");
+        fifo.step(&commit());
+        assert_eq!((fifo.level(), fifo.staged()), (3, 0));
         assert_eq!(fifo.head(), Some(&record(0)));
-        fifo.step(&FifoInputs { pop: true, write: Some(record(3)), commit: true, ..Default::default() });
+        fifo.step(&FifoInputs { pop: true, write: Some(record(3)), ..Default::default() });
+        fifo.step(&commit());
         assert_eq!((fifo.level(), fifo.head()), (3, Some(&record(1))));
         for n in 1..4 {
             assert_eq!(fifo.head(), Some(&record(n)));
@@ -179,11 +193,13 @@ mod tests {
         for n in 0..4 {
             fifo.step(&write(n));
         }
+        assert!(fifo.full() && !fifo.overflow(), "staged records count towards full");
+        fifo.step(&commit());
         assert!(fifo.full() && !fifo.overflow());
         // Refused even with a pop in the same cycle: fullness is that before the edge.
         fifo.step(&FifoInputs { pop: true, write: Some(record(99)), commit: true, ..Default::default() });
         assert!(fifo.overflow());
-        assert_eq!(fifo.level(), 3);
+        assert_eq!((fifo.level(), fifo.staged()), (3, 0));
         let drained: Vec<_> = std::iter::from_fn(|| {
             let head = fifo.head().copied();
             fifo.step(&FifoInputs { pop: true, ..Default::default() });
@@ -202,13 +218,15 @@ mod tests {
         let mut fifo = PositionFifo::new(2);
         fifo.step(&write(0));
         let stage = |n| FifoInputs { write: Some(record(n)), ..Default::default() };
-        fifo.step(&stage(1));
+        fifo.step(&FifoInputs { commit: true, ..stage(1) });
         fifo.step(&stage(2));
         assert_eq!((fifo.level(), fifo.staged(), fifo.full()), (1, 2, false));
-        fifo.step(&FifoInputs { abort: true, ..stage(3) });
-        assert_eq!((fifo.level(), fifo.staged()), (1, 0));
+        fifo.step(&FifoInputs { abort: true, commit: true, ..stage(3) });
+        assert_eq!((fifo.level(), fifo.staged()), (1, 0), "an abort wins and drops its own cycle's write");
         fifo.step(&stage(4));
         fifo.step(&FifoInputs { commit: true, ..stage(5) });
+        assert_eq!((fifo.level(), fifo.staged()), (2, 1));
+        fifo.step(&commit());
         assert_eq!((fifo.level(), fifo.staged()), (3, 0));
         let drained: Vec<_> = std::iter::from_fn(|| {
             let head = fifo.head().copied();
@@ -225,15 +243,18 @@ mod tests {
         let idle = FifoInputs::default();
         let mut fifo = PositionFifo::new(2);
         fifo.step(&write(0));
+        assert_eq!((fifo.level(), fifo.staged(), fifo.rd_valid()), (0, 1, false), "staged by its write");
+        fifo.step(&write(1));
         // Committed and counted, not readable yet; a pop now does nothing.
         assert_eq!((fifo.level(), fifo.rd_valid(), fifo.head()), (1, false, None));
-        fifo.step(&FifoInputs { write: Some(record(1)), commit: true, pop: true, ..Default::default() });
+        fifo.step(&FifoInputs { commit: true, pop: true, ..Default::default() });
         assert_eq!((fifo.level(), fifo.head()), (2, Some(&record(0))), "the second cycle after the commit");
         // A pop with a record behind the head (committed a cycle ago): no bubble.
         fifo.step(&pop);
         assert_eq!((fifo.level(), fifo.head()), (1, Some(&record(1))));
         // The last record popped while another is committed: that one waits a cycle.
         fifo.step(&FifoInputs { pop: true, ..write(2) });
+        fifo.step(&FifoInputs { pop: true, ..commit() });
         assert_eq!((fifo.level(), fifo.head()), (1, None));
         fifo.step(&idle);
         assert_eq!((fifo.level(), fifo.head()), (1, Some(&record(2))));
@@ -241,6 +262,7 @@ mod tests {
         assert_eq!((fifo.level(), fifo.rd_valid()), (0, false));
         // A flush in the cycle after a commit: nothing becomes readable.
         fifo.step(&write(3));
+        fifo.step(&commit());
         fifo.step(&FifoInputs { flush: true, ..Default::default() });
         fifo.step(&idle);
         assert_eq!((fifo.level(), fifo.rd_valid()), (0, false));
@@ -251,6 +273,7 @@ mod tests {
         let mut fifo = PositionFifo::new(3);
         fifo.step(&write(1));
         fifo.step(&write(2));
+        fifo.step(&commit());
         assert!(fifo.rd_valid());
         fifo.step(&FifoInputs { flush: true, write: Some(record(3)), commit: true, pop: true, ..Default::default() });
         assert_eq!((fifo.level(), fifo.staged(), fifo.rd_valid(), fifo.overflow()), (0, 0, false, false));

@@ -136,6 +136,8 @@ pub struct RegisterFileInputs {
     pub underrun: bool,
     /// The FIFO port refused a `push` (see [`RegisterFile::fifo_port`]).
     pub push_refused: bool,
+    /// The FIFO is flushed in this cycle (a push in flight is dropped).
+    pub fifo_flush: bool,
 }
 
 /// State of the register file.
@@ -153,6 +155,17 @@ pub struct RegisterFile {
     clear_counters: bool,
     push: bool,
     push_flags: u8,
+    /// The push sequence: `k` in the `k`-th cycle after the cycle serving a `RECORD_PUSH`
+    /// write (`1..=N_AXES`), 0 when idle. The register file reads `RECORD_INC[k]` from
+    /// its store in cycle `k` (no grant in cycles `0..N_AXES`) and writes it into the
+    /// FIFO's record in cycle `k + 1`.
+    push_seq: usize,
+    /// The push accepted in cycle 1 goes on (no flush since).
+    push_active: bool,
+    /// The record being pushed (`RECORD_INC` and the flags as of cycle 1).
+    push_flight: PeriodRecord,
+    /// The record a push wrote (staged) in the previous cycle: committed in this one.
+    push_commit: bool,
     kick: bool,
     /// `ENC_CONTROL.ARM_INDEX_LATCH` pulses, bit `c` for channel `c`.
     arm_index_latch: u8,
@@ -275,6 +288,10 @@ impl RegisterFile {
             clear_counters: false,
             push: false,
             push_flags: 0,
+            push_seq: 0,
+            push_active: false,
+            push_flight: PeriodRecord::default(),
+            push_commit: false,
             kick: false,
             arm_index_latch: 0,
             arm_index_clear: 0,
@@ -486,28 +503,52 @@ impl RegisterFile {
         self.irq
     }
 
-    /// The FIFO's inputs in this cycle, and whether a `push` is refused: the SPI frame
-    /// layer has the write port whenever it is busy or strobes; otherwise a `push`
-    /// writes and commits `{push_flags, RECORD_INC}` unless the FIFO is full. A push
-    /// while the SPI layer has the port is refused too (the port cannot take it).
-    pub fn fifo_port(&self, spi: &SpiFifoPort, fifo_full: bool, halt: bool, pop: bool) -> (FifoInputs, bool) {
-        let mut inputs =
-            FifoInputs { flush: self.fifo_flush(halt), clear_errors: self.clear_errors, pop, ..FifoInputs::default() };
+    /// No grant in this cycle: the register file reads `RECORD_INC` from its store for a
+    /// push (the cycle serving the `RECORD_PUSH` write, `served`, and the `N_AXES - 1`
+    /// after it); the masters hold their requests.
+    pub fn bus_hold(&self, served: Option<BusRequest>) -> bool {
+        let push_served = matches!(served, Some(r) if r.write
+            && r.addr & (ADDRESSES - 1) as u8 == regs::record_push::ADDR);
+        push_served || (self.push_seq != 0 && self.push_seq < self.params.n_axes)
+    }
+
+    /// A push writes the FIFO's record in this cycle (accepted in its first cycle and not
+    /// flushed since): the SPI frame layer sees no room (a FIFO frame's header is refused).
+    pub fn push_in_flight(&self, accepted: bool) -> bool {
+        if self.push_seq == 1 {
+            accepted
+        } else {
+            self.push_active && self.push_seq != 0
+        }
+    }
+
+    /// The FIFO's inputs in this cycle, whether a `push` is refused and whether a push is
+    /// in flight ([`Self::push_in_flight`]): the SPI frame layer has the write port
+    /// whenever it is busy or strobes; a `push` (the cycle after the `RECORD_PUSH` write
+    /// was served) is refused when the FIFO is full or the SPI layer has the port, else
+    /// accepted: its record `{push_flags, RECORD_INC}` is written (staged) in cycle
+    /// `N_AXES` of the sequence and committed in the next (a commit takes the records
+    /// staged before its cycle). A flush in between drops it.
+    pub fn fifo_port(&self, spi: &SpiFifoPort, fifo_full: bool, halt: bool, pop: bool) -> (FifoInputs, bool, bool) {
+        let flush = self.fifo_flush(halt);
+        let mut inputs = FifoInputs { flush, clear_errors: self.clear_errors, pop, ..FifoInputs::default() };
         let mut refused = false;
+        let mut accepted = false;
         if spi.owns_port() {
             inputs.write = spi.write;
             inputs.commit = spi.commit;
             inputs.abort = spi.abort;
             refused = self.push;
         } else if self.push {
-            if fifo_full {
-                refused = true;
-            } else {
-                inputs.write = Some(self.push_record(self.push_flags));
-                inputs.commit = true;
-            }
+            refused = fifo_full;
+            accepted = !fifo_full;
         }
-        (inputs, refused)
+        let in_flight = self.push_in_flight(accepted);
+        if in_flight && self.push_seq == self.params.n_axes {
+            inputs.write = Some(if self.push_seq == 1 { self.push_record(self.push_flags) } else { self.push_flight });
+        }
+        inputs.commit |= self.push_commit;
+        (inputs, refused, in_flight)
     }
 
     /// `STATUS` from this cycle's state.
@@ -714,6 +755,16 @@ impl RegisterFile {
         let clear_errors = self.clear_errors;
         let clear_counters = self.clear_counters;
 
+        // The push sequence (see `fifo_port`).
+        let n_axes = self.params.n_axes;
+        let in_flight = self.push_in_flight(self.push && !inp.push_refused);
+        self.push_commit = in_flight && self.push_seq == n_axes;
+        if self.push_seq == 1 {
+            self.push_flight = self.push_record(self.push_flags);
+        }
+        self.push_active = in_flight && !inp.fifo_flush && self.push_seq < n_axes;
+        self.push_seq = if self.bus_hold(inp.served) && self.push_seq < n_axes { self.push_seq + 1 } else { 0 };
+
         // Pulses last one cycle.
         self.clear_errors = false;
         self.clear_faults = false;
@@ -818,6 +869,68 @@ mod tests {
         assert!(rf.kick(), "every served write kicks the watchdog");
         rf.step(&write(0x7F, 0xFFFF_FFFF));
         assert_eq!(rf.read(0x7F, &hw), 0, "unmapped");
+    }
+
+    /// One cycle of the push sequence: what the FIFO port and the bus see, then the edge.
+    fn push_cycle(
+        rf: &mut RegisterFile,
+        served: Option<BusRequest>,
+        full: bool,
+        flush_cmd: bool,
+    ) -> (bool, FifoInputs, bool) {
+        let spi = SpiFifoPort::default();
+        let hold = rf.bus_hold(served);
+        let (mut inputs, refused, in_flight) = rf.fifo_port(&spi, full, false, false);
+        inputs.flush |= flush_cmd;
+        rf.step(&RegisterFileInputs { served, push_refused: refused, fifo_flush: inputs.flush, ..Default::default() });
+        (hold, inputs, in_flight)
+    }
+
+    #[test]
+    fn a_push_holds_the_bus_writes_its_record_after_n_cycles_and_commits_it_in_the_next() {
+        let params = TopParams { n_axes: 3, ..TopParams::default() };
+        let mut rf = RegisterFile::new(&params);
+        for (axis, raw) in [7u32, 0xFFFF_FFF0, 0x0001_0000].iter().enumerate() {
+            rf.step(&write(regs::record_inc::addr(axis), *raw));
+        }
+        let push = Some(BusRequest { write: true, addr: regs::record_push::ADDR, wdata: 0x5A });
+        let expected = rf.push_record(0x5A);
+        // Cycle s serves the write: no grant; s+1, s+2: no grant (the store is read),
+        // s+3 = s+N: the record is written; s+4: committed.
+        let (hold, inputs, _) = push_cycle(&mut rf, push, false, false);
+        assert!(hold && inputs.write.is_none() && !inputs.commit);
+        for k in 1..=2 {
+            let (hold, inputs, in_flight) = push_cycle(&mut rf, None, false, false);
+            assert!(hold && in_flight && inputs.write.is_none() && !inputs.commit, "cycle s+{k}");
+        }
+        let (hold, inputs, in_flight) = push_cycle(&mut rf, None, false, false);
+        assert!(!hold && in_flight && !inputs.commit);
+        assert_eq!(inputs.write, Some(expected));
+        let (hold, inputs, in_flight) = push_cycle(&mut rf, None, false, false);
+        assert!(!hold && !in_flight && inputs.write.is_none() && inputs.commit);
+        let (_, inputs, _) = push_cycle(&mut rf, None, false, false);
+        assert!(!inputs.commit, "one commit");
+
+        // Refused when full: the bus is still held, nothing written, nothing in flight.
+        let (hold, _, _) = push_cycle(&mut rf, push, false, false);
+        assert!(hold);
+        let (hold, inputs, in_flight) = push_cycle(&mut rf, None, true, false);
+        assert!(hold && !in_flight && inputs.write.is_none());
+        assert!(rf.read(regs::status::ADDR, &HardwareStatus::default()) & regs::status::OVERFLOW.mask() != 0);
+        for _ in 0..3 {
+            let (_, inputs, in_flight) = push_cycle(&mut rf, None, false, false);
+            assert!(!in_flight && inputs.write.is_none() && !inputs.commit);
+        }
+
+        // A flush in s+2 drops the push.
+        push_cycle(&mut rf, push, false, false);
+        push_cycle(&mut rf, None, false, false);
+        let (_, _, in_flight) = push_cycle(&mut rf, None, false, true);
+        assert!(in_flight);
+        for _ in 0..3 {
+            let (_, inputs, in_flight) = push_cycle(&mut rf, None, false, false);
+            assert!(!in_flight && inputs.write.is_none() && !inputs.commit);
+        }
     }
 
     #[test]

@@ -530,9 +530,10 @@ impl Top {
         // The register bus: SPI has priority.
         let spi_request = if p.has_spi { self.spi_frame.request() } else { None };
         let parallel_request = if p.has_parallel { self.parallel.request() } else { None };
-        let grant = arbitrate(spi_request, parallel_request);
-        // The grant goes into the bus stage; what is served now was granted last cycle.
+        // The grant goes into the bus stage; what is served now was granted last cycle. A
+        // push reading RECORD_INC from the register file's store holds the grants.
         let served = self.bus_stage;
+        let grant = if self.registers.bus_hold(served) { None } else { arbitrate(spi_request, parallel_request) };
         self.bus_stage = grant.map(|(_, request)| request);
         let rdata = self.registers.rdata();
 
@@ -550,7 +551,8 @@ impl Top {
         };
         // While the jog drives the core the FIFO waits.
         let pop = !engaged && self.motion.pop(&motion_inputs);
-        let (fifo_inputs, push_refused) = self.registers.fifo_port(&spi_port, self.fifo.full(), halt, pop);
+        let (fifo_inputs, push_refused, push_in_flight) =
+            self.registers.fifo_port(&spi_port, self.fifo.full(), halt, pop);
 
         let mut core_inputs = CoreInputs {
             run: hw.core_run,
@@ -581,7 +583,8 @@ impl Top {
                 frame_whole: phy.frame_whole(),
                 rx_valid: phy.rx_valid(),
                 rx_byte: phy.rx_byte(),
-                fifo_free: hw.fifo_free,
+                // While a RECORD_PUSH writes the FIFO, no room for a FIFO frame.
+                fifo_free: if push_in_flight { 0 } else { hw.fifo_free },
                 fifo_flush: fifo_inputs.flush,
                 granted: matches!(grant, Some((Grant::Spi, _))),
                 rdata,
@@ -664,6 +667,7 @@ impl Top {
             parallel_error,
             underrun,
             push_refused,
+            fifo_flush: fifo_inputs.flush,
         });
         self.fifo.step(&fifo_inputs);
         self.safety.step(&safety_inputs);

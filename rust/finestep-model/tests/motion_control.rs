@@ -218,7 +218,8 @@ fn record_push(step_shared: bool) {
         bus.write32(&mut bench, regs::record_inc::addr(axis), *raw);
     }
     bus.write32(&mut bench, regs::record_push::ADDR, 0xA5);
-    bench.clock(2);
+    // The push writes the FIFO's record a RECORD_INC a cycle, then commits it.
+    bench.clock(sc.n_axes as u64 + 2);
     let held: Vec<PeriodRecord> = bench.top.fifo().records().copied().collect();
     let raw = [0x0001_8000u32 as i32, 0xFFFF_0000u32 as i32, 1];
     assert_eq!(held, vec![record(&raw, 0xA5, 3)]);
@@ -226,7 +227,7 @@ fn record_push(step_shared: bool) {
     for _ in 0..(1usize << TopParams::default().fifo_depth_log2) {
         bus.write32(&mut bench, regs::record_push::ADDR, 0);
     }
-    bench.clock(2);
+    bench.clock(sc.n_axes as u64 + 2);
     assert_eq!(bench.top.fifo_level(), 1 << TopParams::default().fifo_depth_log2);
     assert_eq!(bench.reg(regs::refused_record_count::ADDR), 1);
     assert_eq!(regs::status::OVERFLOW.get(bench.reg(regs::status::ADDR)), 1);
