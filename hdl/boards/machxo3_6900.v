@@ -41,7 +41,7 @@ module machxo3_6900 #(
 
     spi_board_chip #(
         .N_AXES(N_AXES), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
-        .CLOCK_HZ(CLOCK_HZ)
+        .CLOCK_HZ(CLOCK_HZ), .FIFO_HEAD_REG(0)   // the FIFO in distributed RAM: one register holds its head
     ) board (
         .clk(clk), .locked(1'b1), .button_n(button_n), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi), .spi_miso(spi_miso), .irq(irq),
