@@ -212,7 +212,6 @@ module register_file #(
     reg  [SEQ_W-1:0]  push_seq_reg;
     reg               push_served_reg;
     reg               seq_hold_reg;
-    wire              push_served = push_served_reg;
     wire              bus_hold    = push_served_reg || seq_hold_reg;
     wire        grant_spi = spi_req && !bus_hold;
     wire        grant_par = par_req && !spi_req && !bus_hold;
@@ -231,7 +230,7 @@ module register_file #(
             stage_valid_reg <= granted;
             push_served_reg <= granted && granted_we && (granted_addr == FS_RECORD_PUSH_ADDR);
             if (granted) begin
-                stage_we_reg    <= grant_spi ? spi_we : par_we;
+                stage_we_reg    <= granted_we;
                 stage_addr_reg  <= granted_addr;
                 stage_wdata_reg <= granted_wdata;
             end
@@ -323,10 +322,9 @@ module register_file #(
     endgenerate
     wire [5:0]        grant_map  = store_map(granted_addr);
     // RECORD_INC[k]'s store word, k = the push sequence's cycle (0 while serving the write).
-    wire [2:0]        push_read_axis = push_served ? 3'd0 : push_seq_reg[2:0];
-    wire [4:0]        push_read_word = {push_read_axis, 2'd3};
+    wire [4:0]        push_read_word = {push_seq_reg[2:0], 2'd3};
     wire [5:0]        stage_map  = store_map(stage_addr_reg);
-    wire              store_write = STORED && granted && (grant_spi ? spi_we : par_we) && grant_map[5];
+    wire              store_write = STORED && granted && granted_we && grant_map[5];
     wire [WORD_W-1:0] store_rd;
     reg  [31:0]       written_reg;
 `ifdef FORMAL
@@ -487,7 +485,8 @@ module register_file #(
             assign push_lane[lane] = push_go && ({28'd0, push_seq_reg} == lane + 1);
         end
     endgenerate
-    assign push_lane[N_AXES] = push_go && push_last;
+    wire push_stage = push_go && push_last;   // the flags lane and wr_en
+    assign push_lane[N_AXES] = push_stage;
     // RECORD_INC[k - 1]: the store word read in the cycle before (its reset value until
     // written), or its flip-flops in a build without the store.
     wire [2:0]        push_axis      = push_seq_reg[2:0] - 3'd1;
@@ -613,7 +612,7 @@ module register_file #(
             seq_hold_reg       <= 1'b0;
             push_flags_reg     <= {FS_REC_FLAGS_WIDTH{1'b0}};
         end else begin
-            push_commit_reg    <= push_go && push_last;
+            push_commit_reg    <= push_stage;
             push_active_reg    <= push_go && !push_last && !fifo_flush;
             push_seq_reg       <= (bus_hold && !push_last) ? push_seq_reg + 1'b1 : {SEQ_W{1'b0}};
             // push_seq after this edge is 1 .. N_AXES - 1
@@ -677,7 +676,7 @@ module register_file #(
     assign bus_write_data    = bus_wdata;
     assign spi_grant         = grant_spi;
     assign par_grant         = grant_par;
-    assign grant_read        = granted && !(grant_spi ? spi_we : par_we);
+    assign grant_read        = granted && !granted_we;
     assign grant_addr        = granted_addr;
     assign rdata             = rdata_reg;
     assign run               = run_reg;
@@ -700,7 +699,7 @@ module register_file #(
     assign kick              = kick_reg;
     assign push_word         = push_inc;
     assign push_flags        = push_flags_reg;
-    assign push_wr_en        = push_go && push_last;
+    assign push_wr_en        = push_stage;
     assign push_commit       = push_commit_reg;
     assign push_in_flight    = push_go;
     assign status_byte       = status_word[7:0];
@@ -743,7 +742,7 @@ module register_file #(
         if ($past(clear_counters_reg)) assert (underrun_count_reg == 16'd0 && crc_error_count_reg == 16'd0 &&
                                               refused_count_reg == 16'd0);
         if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
-        assert (push_commit == $past(push_go && push_last));
+        assert (push_commit == $past(push_stage));
         if ($past(push_go) && !$past(push_last) && !$past(fifo_flush)) assert (push_go);
         // The bus stage serves exactly the request granted in the cycle before.
         assert (stage_valid_reg == $past(granted));
@@ -824,7 +823,7 @@ module register_file #(
         if (f_word_pending) assert (f_word_data == store_fields(f_word[1:0], bus_wdata));
         if (read && stage_stored && stage_map[4:0] == f_word) assert (stored_word == f_ff_word);
         // The store never reads and writes one word for a read in one clock.
-        if (store_write) assert (!(granted && !(grant_spi ? spi_we : par_we)));
+        if (store_write) assert (!(granted && !granted_we));
     end
 `endif
 
