@@ -193,15 +193,16 @@ module register_file #(
     reg [FS_REC_FLAGS_WIDTH-1:0] push_flags_reg;
 
     // Arbiter: SPI first. The granted request goes into the bus stage; the stage is
-    // what is served, in the next cycle. No grant while a push reads RECORD_INC from the
-    // store (below): the masters hold their requests.
+    // what is served, in the next cycle. While a push reads RECORD_INC from the store
+    // (bus_hold, below) a request that touches the push is not granted (its master holds
+    // it) and the others pass: see push_touch.
     reg               stage_valid_reg;
     reg               stage_we_reg;
     reg  [ADDR_W-1:0] stage_addr_reg;
     reg  [WORD_W-1:0] stage_wdata_reg;
     // The push sequence: push_seq = k in the k-th cycle after the cycle serving a
     // RECORD_PUSH write (1..N_AXES), 0 when idle. The store is read for RECORD_INC[k] in
-    // cycle k (0..N_AXES-1: no grants then), and that word goes into the FIFO record's
+    // cycle k (0..N_AXES-1: bus_hold), and that word goes into the FIFO record's
     // lane k in cycle k + 1; the flags and wr_en come in cycle N_AXES, the commit in the
     // next. The push is decided (accepted or refused) in cycle 1.
     // The hold comes from flip-flops (the stage's decode would put the address compare in
@@ -213,8 +214,21 @@ module register_file #(
     reg               push_served_reg;
     reg               seq_hold_reg;
     wire              bus_hold    = push_served_reg || seq_hold_reg;
-    wire        grant_spi = spi_req && !bus_hold;
-    wire        grant_par = par_req && !spi_req && !bus_hold;
+    localparam [ADDR_W-6:0] BLOCK_HIGH = FS_AXIS_TIMING_A_ADDR[ADDR_W-1:5];   // the axis block's 32 words
+    localparam [ADDR_W-4:0] INC_HIGH   = FS_RECORD_INC_ADDR[ADDR_W-1:3];      // RECORD_INC's 8
+    // A request that touches the push: a read of the axis block (AXIS_TIMING_A/B,
+    // AXIS_MODE) or of RECORD_INC, whose words the store answers through the port the
+    // push reads, and a write of RECORD_INC or RECORD_PUSH (the record is RECORD_INC as
+    // written before the push; one push at a time). Whole address blocks, so that a few
+    // address bits decide it.
+    function push_touch(input we, input [ADDR_W-1:0] addr);
+        push_touch = we ? (addr[ADDR_W-1:3] == INC_HIGH || addr == FS_RECORD_PUSH_ADDR)
+                        : (addr[ADDR_W-1:5] == BLOCK_HIGH || addr[ADDR_W-1:3] == INC_HIGH);
+    endfunction
+    wire        spi_held  = bus_hold && push_touch(spi_we, spi_addr);
+    wire        par_held  = bus_hold && push_touch(par_we, par_addr);
+    wire        grant_spi = spi_req && !spi_held;
+    wire        grant_par = par_req && !par_held && !grant_spi;
     wire        granted   = grant_spi || grant_par;
     wire [ADDR_W-1:0] granted_addr = grant_spi ? spi_addr : par_addr;
     wire [WORD_W-1:0] granted_wdata = grant_spi ? spi_wdata : par_wdata;
@@ -247,8 +261,6 @@ module register_file #(
     // serving cycle); one grant a cycle, so the store never reads and writes one word on
     // one clock for a read. `written` marks the words written since reset (the others
     // read their reset values).
-    localparam [ADDR_W-6:0] BLOCK_HIGH = FS_AXIS_TIMING_A_ADDR[ADDR_W-1:5];   // the axis block's 32 words
-    localparam [ADDR_W-4:0] INC_HIGH   = FS_RECORD_INC_ADDR[ADDR_W-1:3];      // RECORD_INC's 8
     function [5:0] store_map;   // {shadowed, word}
         input [ADDR_W-1:0] addr;
         begin
@@ -719,8 +731,13 @@ module register_file #(
         if (grant_spi) assert (spi_req);
         if (grant_par) assert (par_req);
         if (push_accept) assert (push_reg && !fifo_full && !spi_fifo_in_use);
-        // No grant while the push reads the store.
-        if (bus_hold) assert (!granted);
+        // No request that touches the push is granted while it reads the store; the
+        // others are (SPI first).
+        if (bus_hold && granted) assert (!push_touch(granted_we, granted_addr));
+        if (spi_req && !spi_held) assert (grant_spi);
+        if (par_req && !par_held && !spi_req) assert (grant_par);
+        // The store's port the push reads is not written on the word it reads.
+        if (bus_hold && store_write) assert (grant_map[4:0] != push_read_word);
     end
     always @(*) if (f_past_valid && !rst) begin
         // The sequence counts 1..N_AXES after the cycle serving the write; the hold's

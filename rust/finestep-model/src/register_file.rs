@@ -45,12 +45,31 @@ pub enum Grant {
     Parallel,
 }
 
-/// The arbiter: the SPI frame layer if it requests, else the parallel slave if it does.
-pub fn arbitrate(spi: Option<BusRequest>, parallel: Option<BusRequest>) -> Option<(Grant, BusRequest)> {
-    match (spi, parallel) {
+/// The arbiter: the SPI frame layer if it requests, else the parallel slave if it does;
+/// while a push holds the bus (`hold`, [`RegisterFile::bus_hold`]) a request that
+/// touches the push ([`touches_push`]) is not granted (its master keeps it) and the
+/// others are, in the same order.
+pub fn arbitrate(spi: Option<BusRequest>, parallel: Option<BusRequest>, hold: bool) -> Option<(Grant, BusRequest)> {
+    let grantable = |request: &BusRequest| !(hold && touches_push(request));
+    match (spi.filter(grantable), parallel.filter(grantable)) {
         (Some(request), _) => Some((Grant::Spi, request)),
         (None, Some(request)) => Some((Grant::Parallel, request)),
         (None, None) => None,
+    }
+}
+
+/// A request that a push's hold keeps waiting: a read of the axis block
+/// (`AXIS_TIMING_A/B`, `AXIS_MODE`: the 32 words from `AXIS_TIMING_A`) or of the 8 words
+/// of `RECORD_INC` (the register file's readback store answers them, and the push reads
+/// that store), and a write of `RECORD_INC` or `RECORD_PUSH` (the pushed record is
+/// `RECORD_INC` as written before the push; one push at a time).
+pub fn touches_push(request: &BusRequest) -> bool {
+    let addr = request.addr & (ADDRESSES - 1) as u8;
+    let in_inc = addr >> 3 == regs::record_inc::ADDR >> 3;
+    if request.write {
+        in_inc || addr == regs::record_push::ADDR
+    } else {
+        in_inc || addr >> 5 == regs::axis_timing_a::ADDR >> 5
     }
 }
 
@@ -503,9 +522,9 @@ impl RegisterFile {
         self.irq
     }
 
-    /// No grant in this cycle: the register file reads `RECORD_INC` from its store for a
-    /// push (the cycle serving the `RECORD_PUSH` write, `served`, and the `N_AXES - 1`
-    /// after it); the masters hold their requests.
+    /// A push holds the bus in this cycle: the register file reads `RECORD_INC` from its
+    /// store for it (the cycle serving the `RECORD_PUSH` write, `served`, and the
+    /// `N_AXES - 1` after it); requests that touch the push wait ([`arbitrate`]).
     pub fn bus_hold(&self, served: Option<BusRequest>) -> bool {
         let push_served = matches!(served, Some(r) if r.write
             && r.addr & (ADDRESSES - 1) as u8 == regs::record_push::ADDR);
@@ -869,6 +888,33 @@ mod tests {
         assert!(rf.kick(), "every served write kicks the watchdog");
         rf.step(&write(0x7F, 0xFFFF_FFFF));
         assert_eq!(rf.read(0x7F, &hw), 0, "unmapped");
+    }
+
+    #[test]
+    fn a_push_holds_only_the_requests_that_touch_it() {
+        let read = |addr| BusRequest { write: false, addr, wdata: 0 };
+        let write = |addr| BusRequest { write: true, addr, wdata: 0 };
+        // Held: reads of the axis block and RECORD_INC, writes of RECORD_INC and RECORD_PUSH.
+        for axis in 0..8 {
+            for addr in [regs::axis_timing_a::addr(axis), regs::axis_timing_b::addr(axis), regs::axis_mode::addr(axis)]
+            {
+                assert!(touches_push(&read(addr)), "read {addr:#x}");
+                assert!(!touches_push(&write(addr)), "write {addr:#x}");
+            }
+            assert!(touches_push(&read(regs::record_inc::addr(axis))));
+            assert!(touches_push(&write(regs::record_inc::addr(axis))));
+        }
+        assert!(touches_push(&write(regs::record_push::ADDR)));
+        for addr in [regs::status::ADDR, regs::fifo_level::ADDR, regs::position::addr(0), regs::command::ADDR] {
+            assert!(!touches_push(&read(addr)) && !touches_push(&write(addr)), "{addr:#x}");
+        }
+        // The arbiter: SPI first, the parallel master's request when the SPI one waits.
+        let (inc, status) = (read(regs::record_inc::addr(0)), read(regs::status::ADDR));
+        assert_eq!(arbitrate(Some(inc), Some(status), false), Some((Grant::Spi, inc)));
+        assert_eq!(arbitrate(Some(inc), Some(status), true), Some((Grant::Parallel, status)));
+        assert_eq!(arbitrate(Some(status), Some(inc), true), Some((Grant::Spi, status)));
+        assert_eq!(arbitrate(Some(inc), Some(inc), true), None);
+        assert_eq!(arbitrate(None, Some(status), true), Some((Grant::Parallel, status)));
     }
 
     /// One cycle of the push sequence: what the FIFO port and the bus see, then the edge.

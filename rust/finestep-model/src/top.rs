@@ -531,9 +531,10 @@ impl Top {
         let spi_request = if p.has_spi { self.spi_frame.request() } else { None };
         let parallel_request = if p.has_parallel { self.parallel.request() } else { None };
         // The grant goes into the bus stage; what is served now was granted last cycle. A
-        // push reading RECORD_INC from the register file's store holds the grants.
+        // push reading RECORD_INC from the register file's store holds the requests that
+        // touch it.
         let served = self.bus_stage;
-        let grant = if self.registers.bus_hold(served) { None } else { arbitrate(spi_request, parallel_request) };
+        let grant = arbitrate(spi_request, parallel_request, self.registers.bus_hold(served));
         self.bus_stage = grant.map(|(_, request)| request);
         let rdata = self.registers.rdata();
 

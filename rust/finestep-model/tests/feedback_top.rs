@@ -299,7 +299,7 @@ fn reads_of_the_visited_channel_stall_it_and_read_the_copies() {
                 miso.push(bench.top.outputs().spi_miso);
             }
             let top = &bench.top;
-            let grant = arbitrate(top.spi_frame().request(), top.parallel().request());
+            let grant = arbitrate(top.spi_frame().request(), top.parallel().request(), false);
             let bank = top.encoders();
             let (slot, slots) = (bank.slot(), bank.slots());
             let read = grant.filter(|(_, r)| !r.write).map(|(_, r)| r.addr);
