@@ -4,6 +4,7 @@
 mod bench;
 mod bench_top;
 mod bus;
+mod config_file;
 mod conformance;
 mod demo;
 mod demo_feedback;
@@ -111,6 +112,13 @@ enum Command {
         #[arg(long)]
         loopback: bool,
     },
+    /// Machine configuration files, crash-safe: `save` checks a configuration and writes
+    /// it atomically with a checksum, keeping the previous good copy (FILE.bak); `check`
+    /// says which copy loads and what is wrong with the others.
+    Config {
+        #[command(subcommand)]
+        action: ConfigAction,
+    },
     /// Serve the simulated chip on a Unix socket at the byte level of the SPI link (the
     /// framing of finestep_host::sim_link), for host tools on `--bus sim:SOCKET`.
     SimChip {
@@ -129,6 +137,22 @@ enum Command {
         /// Exit when the first client disconnects.
         #[arg(long)]
         once: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum ConfigAction {
+    /// Check SOURCE (TOML) and save it to FILE crash-safe.
+    Save {
+        /// The configuration to save.
+        source: PathBuf,
+        /// Where it goes (its last good copy is FILE.bak).
+        file: PathBuf,
+    },
+    /// Load FILE as `run --config` does and report.
+    Check {
+        /// The configuration file.
+        file: PathBuf,
     },
 }
 
@@ -153,5 +177,7 @@ fn main() -> anyhow::Result<()> {
         Command::Conformance { manifest, out, tool_table } => conformance::run(&manifest, &out, tool_table.as_deref()),
         Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
         Command::Selftest { bus, loopback } => selftest::run(bus, loopback),
+        Command::Config { action: ConfigAction::Save { source, file } } => config_file::save(&source, &file),
+        Command::Config { action: ConfigAction::Check { file } } => config_file::check(&file),
     }
 }

@@ -59,7 +59,7 @@ pub fn run(
     out: &Path,
 ) -> anyhow::Result<()> {
     let (mut config, config_name) = match config_path {
-        Some(path) => (MachineConfig::load(path)?, path.display().to_string()),
+        Some(path) => (crate::config_file::load(path)?, path.display().to_string()),
         None => (MachineConfig::default(), "<built-in>".to_string()),
     };
     match profile {
