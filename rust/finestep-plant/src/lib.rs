@@ -78,6 +78,7 @@ pub mod encoder;
 pub mod hand_wheel;
 pub mod plant;
 pub mod probe;
+pub mod roller;
 
 #[cfg(test)]
 mod testutil;
@@ -87,6 +88,7 @@ pub use encoder::{Decoded, Encoder, EncoderConfig, FaultLog, Faults, Glitches, I
 pub use hand_wheel::{Bounce, HandWheel, HandWheelConfig};
 pub use plant::{ChannelConfig, Plant, PlantConfig, PlantPins, MAX_CHANNELS};
 pub use probe::{Probe, ProbeConfig};
+pub use roller::{Roller, RollerConfig, RollerMode, Surface};
 
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
@@ -153,6 +155,12 @@ pub enum PlantError {
         cycles_per_edge: u64,
         /// The bounce window (0 without bounce).
         within: u64,
+    },
+    /// A roller the plant cannot simulate.
+    #[error("roller: {why}")]
+    Roller {
+        /// What is wrong.
+        why: String,
     },
     /// A scripted turn or pause would end past the last representable cycle.
     #[error("hand wheel script ends past cycle 2^64")]

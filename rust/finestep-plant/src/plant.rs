@@ -8,6 +8,7 @@
 
 use crate::{
     Drive, DriveConfig, Encoder, EncoderConfig, HandWheel, HandWheelConfig, Levels, PlantError, Probe, ProbeConfig,
+    Roller, RollerConfig, RollerMode,
 };
 
 /// Encoder channels the pin masks hold.
@@ -64,10 +65,13 @@ pub struct Plant {
     channels: Vec<(usize, Encoder)>,
     probe: Option<(usize, Probe)>,
     hand_wheel: Option<HandWheel>,
+    roller: Option<Roller>,
 }
 
 /// Seed components: channel `c` is `c`, the hand wheel this.
 const HAND_WHEEL_COMPONENT: u64 = 0x100;
+/// Mixed into the seed of a roller's gauge.
+const ROLLER_SALT: u64 = 0x5011_E500;
 
 impl Plant {
     /// The machine at rest in cycle 0, every position 0, faults drawn from `seed`.
@@ -93,7 +97,23 @@ impl Plant {
             Some(h) => Some(HandWheel::new(h, sub_seed(HAND_WHEEL_COMPONENT))?),
             None => None,
         };
-        Ok(Plant { cycle: 0, drives, channels, probe, hand_wheel })
+        Ok(Plant { cycle: 0, drives, channels, probe, hand_wheel, roller: None })
+    }
+
+    /// The plant with a roller on its table (see [`crate::roller`]). A measuring roller's
+    /// gauge is the encoder channel after the configured ones (channel
+    /// [`Plant::channels`]).
+    pub fn with_roller(mut self, config: RollerConfig, seed: u64) -> Result<Plant, PlantError> {
+        if matches!(config.mode, RollerMode::Measure { .. }) && self.channels.len() >= MAX_CHANNELS {
+            return Err(PlantError::Channels { channels: self.channels.len() + 1 });
+        }
+        self.roller = Some(Roller::new(config, &self.drives, seed ^ ROLLER_SALT, self.cycle)?);
+        Ok(self)
+    }
+
+    /// The roller.
+    pub fn roller(&self) -> Option<&Roller> {
+        self.roller.as_ref()
     }
 
     /// The plant's current cycle.
@@ -106,6 +126,12 @@ impl Plant {
         let mut pins = PlantPins::default();
         for (c, (_, encoder)) in self.channels.iter().enumerate() {
             let Levels { a, b, z } = encoder.levels();
+            pins.enc_a |= u8::from(a) << c;
+            pins.enc_b |= u8::from(b) << c;
+            pins.enc_z |= u8::from(z) << c;
+        }
+        if let Some(Levels { a, b, z }) = self.roller.as_ref().and_then(Roller::levels) {
+            let c = self.channels.len();
             pins.enc_a |= u8::from(a) << c;
             pins.enc_b |= u8::from(b) << c;
             pins.enc_z |= u8::from(z) << c;
@@ -124,7 +150,8 @@ impl Plant {
         let encoders = self.channels.iter().filter_map(|(axis, encoder)| encoder.next_change(&self.drives[*axis]));
         let probe = self.probe.iter().filter_map(|(axis, p)| p.next_change(&self.drives[*axis]));
         let wheel = self.hand_wheel.iter().filter_map(HandWheel::next_change);
-        encoders.chain(probe).chain(wheel).min()
+        let roller = self.roller.iter().filter_map(|r| r.next_change(&self.drives));
+        encoders.chain(probe).chain(wheel).chain(roller).min()
     }
 
     /// Move to `cycle` (every change up to and including it).
@@ -142,6 +169,9 @@ impl Plant {
         }
         if let Some(w) = &mut self.hand_wheel {
             w.advance_to(cycle);
+        }
+        if let Some(roller) = &mut self.roller {
+            roller.advance_to(cycle, &self.drives);
         }
         for drive in &mut self.drives {
             drive.advance_to(cycle);
