@@ -139,7 +139,8 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
     let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
     run_program(&program, "demo-part.ngc", false, MachineConfig::default(), "<built-in>", out)?;
-    crate::demo_feedback::run()
+    crate::demo_feedback::run()?;
+    crate::roller::demo(out)
 }
 
 /// The demo's part program: an outside contour cut with cutter compensation (tool 3,

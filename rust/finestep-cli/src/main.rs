@@ -10,6 +10,7 @@ mod demo;
 mod demo_feedback;
 mod machine_setup;
 mod plot;
+mod roller;
 mod run;
 mod selftest;
 mod sim_chip;
@@ -112,6 +113,40 @@ enum Command {
         #[arg(long)]
         loopback: bool,
     },
+    /// A measuring traverse over the simulated roller (seed 000): the Z grating and the
+    /// gauge latched on one clock at every period boundary; writes the profile file.
+    Measure {
+        /// The profile file.
+        #[arg(long, default_value = "target/roller/profile.csv")]
+        out: PathBuf,
+    },
+    /// The demo's part 4 alone: measure the roller, compensate, grind, measure again.
+    #[command(hide = true)]
+    RollerDemo {
+        /// Where the profiles, the program and the plot go.
+        #[arg(long, default_value = "target/demo")]
+        out: PathBuf,
+    },
+    /// A compensated X(Z) grinding program from a measured profile and a target.
+    Compensate {
+        /// The measured profile (`finestep measure`).
+        profile: PathBuf,
+        /// The target profile (CSV with z_mm,x_mm); a cylinder at --target-x without one.
+        #[arg(long)]
+        target: Option<PathBuf>,
+        /// The target cylinder's X, mm.
+        #[arg(long, default_value_t = -0.02, allow_hyphen_values = true)]
+        target_x: f64,
+        /// The noise filter's window, mm.
+        #[arg(long, default_value_t = 1.5)]
+        window: f64,
+        /// Largest distance of the program's path from the compensated curve, mm.
+        #[arg(long, default_value_t = 0.0002)]
+        tolerance: f64,
+        /// Where the program goes (stdout without).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Machine configuration files, crash-safe: `save` checks a configuration and writes
     /// it atomically with a checksum, keeping the previous good copy (FILE.bak); `check`
     /// says which copy loads and what is wrong with the others.
@@ -177,6 +212,19 @@ fn main() -> anyhow::Result<()> {
         Command::Conformance { manifest, out, tool_table } => conformance::run(&manifest, &out, tool_table.as_deref()),
         Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
         Command::Selftest { bus, loopback } => selftest::run(bus, loopback),
+        Command::Measure { out } => {
+            if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir)?;
+            }
+            roller::measure(&out)
+        }
+        Command::RollerDemo { out } => {
+            std::fs::create_dir_all(&out)?;
+            roller::demo(&out)
+        }
+        Command::Compensate { profile, target, target_x, window, tolerance, out } => {
+            roller::compensate_file(&profile, target.as_deref(), target_x, window, tolerance, out.as_deref())
+        }
         Command::Config { action: ConfigAction::Save { source, file } } => config_file::save(&source, &file),
         Command::Config { action: ConfigAction::Check { file } } => config_file::check(&file),
     }

@@ -157,3 +157,44 @@ pub fn plot_motion(path: &Path, samples: &[finestep_planner::checker::Sample], p
     root.present().with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
+
+/// Measured roller profiles (deviation less its mean, um, against Z) as lines, and the
+/// compensated program's X(Z) less its mean.
+pub fn plot_profiles(
+    path: &Path,
+    profiles: &[(&str, &finestep_profile::Profile)],
+    compensated: &[(f64, f64)],
+) -> anyhow::Result<()> {
+    register_font()?;
+    let root = BitMapBackend::new(path, (1200, 600)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let centred = |points: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
+        let mean = points.iter().map(|p| p.1).sum::<f64>() / points.len().max(1) as f64;
+        points.into_iter().map(|(z, x)| (z, (x - mean) * 1e3)).collect()
+    };
+    let mut series: Vec<(String, Vec<(f64, f64)>)> = profiles
+        .iter()
+        .map(|(name, p)| (format!("measured {name}"), centred(p.samples.iter().map(|s| (s.z_mm, s.x_mm)).collect())))
+        .collect();
+    series.push(("compensated program X(Z)".to_string(), centred(compensated.to_vec())));
+    let all = series.iter().flat_map(|s| s.1.iter());
+    let (zlo, zhi, lo, hi) = all
+        .fold((f64::MAX, f64::MIN, 0.0f64, 0.0f64), |(a, b, c, d), &(z, x)| (a.min(z), b.max(z), c.min(x), d.max(x)));
+    let mut chart = ChartBuilder::on(&root)
+        .caption("roller form error: measured before and after the compensated pass, um", ("sans-serif", 20))
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(60)
+        .build_cartesian_2d(zlo.min(zhi)..zhi.max(zlo + 1e-3), (lo - 0.5)..(hi + 0.5))?;
+    chart.configure_mesh().x_desc("Z, mm").y_desc("X deviation less its mean, um").draw()?;
+    for (i, (name, points)) in series.into_iter().enumerate() {
+        let colour = COLOURS[i % COLOURS.len()];
+        chart
+            .draw_series(LineSeries::new(points, colour.stroke_width(2)))?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+    }
+    chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+    root.present().with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}

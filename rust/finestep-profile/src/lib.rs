@@ -489,7 +489,7 @@ pub fn compensate(
     path.dedup();
 
     let mut p = String::new();
-    let _ = writeln!(p, "( finestep compensate: a compensated X(Z) grinding pass, seed 000 )");
+    let _ = writeln!(p, "( finestep compensate: a compensated grinding pass, X against Z, seed 000 )");
     let _ = writeln!(
         p,
         "( {} samples over Z {lo:.3} to {hi:.3} mm; noise filter: local quadratic fit, {} mm window )",
