@@ -337,6 +337,11 @@ impl EncoderBank {
         status
     }
 
+    /// Some channel's `ILLEGAL` (what [`Self::status`] shows, without building it).
+    pub fn any_illegal(&self) -> bool {
+        self.channels.iter().take(self.n_enc).any(|channel| channel.illegal())
+    }
+
     /// One rising clock edge.
     pub fn step(&mut self, inp: &EncoderBankInputs) {
         let stall = self.stall(inp.granted_read);

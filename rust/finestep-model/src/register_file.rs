@@ -108,8 +108,11 @@ pub struct HardwareStatus {
 /// The feedback blocks' register view in one cycle (all 0 for blocks not built).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FeedbackStatus {
-    /// The encoder channels and the probe.
+    /// The encoder channels and the probe: only what a read of their registers shows, so
+    /// `top` fills it only in a cycle that serves a read (all 0 otherwise).
     pub encoders: EncoderBankStatus,
+    /// Some encoder channel's `ILLEGAL` (every cycle: `STATUS` and the interrupt use it).
+    pub encoder_illegal: bool,
     /// The hand wheel.
     pub hand_wheel: HandWheelStatus,
     /// The jog generator.
@@ -119,7 +122,7 @@ pub struct FeedbackStatus {
 impl FeedbackStatus {
     /// `STATUS.FEEDBACK_ERROR`: some channel's or the hand wheel's `ILLEGAL`.
     pub fn feedback_error(&self) -> bool {
-        self.encoders.any_illegal() || self.hand_wheel.illegal
+        self.encoder_illegal || self.hand_wheel.illegal
     }
 }
 

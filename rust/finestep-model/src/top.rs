@@ -30,7 +30,7 @@
 use finestep_interface::regs;
 
 use crate::core::Core;
-use crate::encoder_bank::{EncoderBank, EncoderBankInputs};
+use crate::encoder_bank::{EncoderBank, EncoderBankInputs, EncoderBankStatus};
 use crate::hand_wheel::{HandWheel, HandWheelInputs};
 use crate::jog_generator::JogGenerator;
 use crate::motion_control::{MotionControl, MotionInputs};
@@ -441,7 +441,7 @@ impl Top {
 
     /// The value a register-bus read of `addr` would latch now.
     pub fn register(&self, addr: u8) -> u32 {
-        self.registers.read(addr, &self.hardware_status())
+        self.registers.read(addr, &self.hardware_status(true))
     }
 
     /// The outputs in the current cycle (a function of the state only).
@@ -466,7 +466,9 @@ impl Top {
     }
 
     /// The hardware values register reads show in this cycle.
-    fn hardware_status(&self) -> HardwareStatus {
+    /// `read_served`: a read is served in this cycle (the encoders' register view is
+    /// built only then; nothing else reads it).
+    fn hardware_status(&self, read_served: bool) -> HardwareStatus {
         let core_out = self.core.outputs();
         let mut rate_error = 0;
         let mut step_lost = 0;
@@ -488,18 +490,24 @@ impl Top {
             step_lost,
             fifo_level: self.fifo.level(),
             fifo_free: self.fifo.depth() - self.fifo.level() - self.fifo.staged(),
-            feedback: self.feedback_status(),
+            feedback: self.feedback_status(read_served),
         }
     }
 
     /// The feedback blocks' register view in this cycle.
-    fn feedback_status(&self) -> FeedbackStatus {
-        let encoders = self.encoders.status(&self.registers.encoder_configs(), &self.registers.probe_config());
+    fn feedback_status(&self, read_served: bool) -> FeedbackStatus {
+        let encoders = if read_served {
+            self.encoders.status(&self.registers.encoder_configs(), &self.registers.probe_config())
+        } else {
+            EncoderBankStatus::default()
+        };
+        let encoder_illegal = self.encoders.any_illegal();
         if !self.params.has_mpg {
-            return FeedbackStatus { encoders, ..FeedbackStatus::default() };
+            return FeedbackStatus { encoders, encoder_illegal, ..FeedbackStatus::default() };
         }
         FeedbackStatus {
             encoders,
+            encoder_illegal,
             hand_wheel: self.hand_wheel.status(),
             jog: self.jog.status(self.registers.jog_enable()),
         }
@@ -523,7 +531,8 @@ impl Top {
             return;
         }
         let p = self.params;
-        let hw = self.hardware_status();
+        let served = self.bus_stage;
+        let hw = self.hardware_status(served.is_some_and(|request| !request.write));
         let halt = hw.halt;
         let core_out = self.core.outputs();
 
@@ -533,7 +542,6 @@ impl Top {
         // The grant goes into the bus stage; what is served now was granted last cycle. A
         // push reading RECORD_INC from the register file's store holds the requests that
         // touch it.
-        let served = self.bus_stage;
         let grant = arbitrate(spi_request, parallel_request, self.registers.bus_hold(served));
         self.bus_stage = grant.map(|(_, request)| request);
         let rdata = self.registers.rdata();
