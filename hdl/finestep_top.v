@@ -7,7 +7,9 @@
 // motion control (start threshold, underrun); the safety monitor (watchdog, E-stop)
 // halts the core, drops the enables and stops the run. The feedback blocks count encoders
 // and gratings, latch them on the probe, and decode the hand wheel, whose jog generator
-// drives the core in place of the FIFO while RUN is 0.
+// drives the core in place of the FIFO while RUN is 0. The spindle (PWM or SPI DAC) and
+// the logic outputs (coolant, light, general outputs, the interlock input) hang on the
+// same register bus [HAS_SPINDLE, HAS_OUTPUTS]; a halt turns them off or safe.
 //
 // Every output is a flip-flop. rst must be held for at least 2 cycles.
 module finestep_top #(
@@ -24,7 +26,10 @@ module finestep_top #(
     parameter RAM_BLOCK       = 0,
     parameter STEP_SHARED     = 1,
     parameter READ_STORE      = 1,
-    parameter FIFO_HEAD_REG   = 1
+    parameter FIFO_HEAD_REG   = 1,
+    parameter HAS_SPINDLE     = 1,
+    parameter HAS_OUTPUTS     = 1,
+    parameter N_GPIO          = 4
 ) (
     // clock, reset
     input  wire              clk,
@@ -55,7 +60,20 @@ module finestep_top #(
     output wire              irq,
     output wire [N_AXES-1:0] pin_a,
     output wire [N_AXES-1:0] pin_b,
-    output wire [N_AXES-1:0] pin_en
+    output wire [N_AXES-1:0] pin_en,
+    // spindle: PWM, or a 12-bit SPI DAC (MCP4921 frame)
+    output wire              spindle_pwm,
+    output wire              spindle_dir,
+    output wire              spindle_en,
+    output wire              dac_cs_n,
+    output wire              dac_sck,
+    output wire              dac_sdi,
+    // logic outputs and the interlock (asynchronous)
+    input  wire              interlock_pin,
+    output wire              coolant_mist,
+    output wire              coolant_flood,
+    output wire              light,
+    output wire [((N_GPIO > 0) ? N_GPIO : 1)-1:0] gpio
 );
 
 `include "finestep_regs.vh"
@@ -160,6 +178,10 @@ module finestep_top #(
     wire                  run_write_one, clear_counters;
 
     wire                  fifo_pop_request;
+    // Spindle and logic outputs
+    localparam GPIO_W = (N_GPIO > 0) ? N_GPIO : 1;
+    wire [31:0]           spindle_rdata, outputs_rdata;
+    wire                  interlock_inhibit, start_blocked;
 
     // The halt's rising edge empties the FIFO: its records belong to the motion that
     // was stopped.
@@ -248,7 +270,7 @@ module finestep_top #(
         .par_req(par_req), .par_we(par_we), .par_addr(par_addr), .par_wdata(par_wdata), .par_grant(par_grant),
         .rdata(rdata),
         .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
-        .feedback_rdata(feedback_rdata), .grant_read(grant_read), .grant_addr(grant_addr),
+        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata), .grant_read(grant_read), .grant_addr(grant_addr),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
@@ -309,10 +331,12 @@ module finestep_top #(
     ) motion (
         .clk(clk), .rst(rst),
         .core_run(fifo_run), .start_level(start_level), .clear_errors(clear_errors),
+        .inhibit(interlock_inhibit),
         .fifo_level(fifo_level), .fifo_valid(fifo_valid), .head_block_end(fifo_head[INC_W + FS_REC_FLAG_BLOCK_END_BIT]),
         .fifo_pop(fifo_pop_request),
         .rec_ready(rec_ready), .rec_valid(fifo_rec_valid),
-        .gate(gate), .underrun(underrun), .underrun_event(underrun_event)
+        .gate(gate), .underrun(underrun), .underrun_event(underrun_event),
+        .start_blocked(start_blocked)
     );
 
     wire        gantry_engaged_unused, gantry_alarm_unused, gantry_refused_unused;
@@ -428,6 +452,45 @@ module finestep_top #(
             assign jog_dropped = 16'd0;
             assign jog_remaining = 32'd0;
             assign jog_velocity = 32'd0;
+        end
+    endgenerate
+
+    generate
+        if (HAS_SPINDLE != 0) begin : spindle_block
+            spindle #(.LEVEL_W(FS_SPINDLE_LEVEL_LEVEL_WIDTH)) spindle_out (
+                .clk(clk), .rst(rst),
+                .write(bus_write), .addr(bus_address), .wdata(bus_write_data), .rdata(spindle_rdata),
+                .halt(halt),
+                .spindle_pwm(spindle_pwm), .spindle_dir(spindle_dir), .spindle_en(spindle_en),
+                .dac_cs_n(dac_cs_n), .dac_sck(dac_sck), .dac_sdi(dac_sdi)
+            );
+        end else begin : no_spindle
+            assign spindle_rdata = 32'd0;
+            assign spindle_pwm   = 1'b0;
+            assign spindle_dir   = 1'b0;
+            assign spindle_en    = 1'b0;
+            assign dac_cs_n      = 1'b1;
+            assign dac_sck       = 1'b0;
+            assign dac_sdi       = 1'b0;
+        end
+
+        if (HAS_OUTPUTS != 0) begin : outputs_block
+            logic_outputs #(.N_GPIO(N_GPIO)) outputs (
+                .clk(clk), .rst(rst),
+                .write(bus_write), .addr(bus_address), .wdata(bus_write_data), .rdata(outputs_rdata),
+                .halt(halt), .clear_errors(clear_errors), .start_blocked(start_blocked),
+                .inhibit(interlock_inhibit),
+                .interlock_pin(interlock_pin),
+                .coolant_mist(coolant_mist), .coolant_flood(coolant_flood), .light(light), .gpio(gpio)
+            );
+        end else begin : no_outputs
+            wire unused_outputs = &{1'b0, interlock_pin, start_blocked};
+            assign outputs_rdata     = 32'd0;
+            assign interlock_inhibit = 1'b0;
+            assign coolant_mist      = 1'b0;
+            assign coolant_flood     = 1'b0;
+            assign light             = 1'b0;
+            assign gpio              = {GPIO_W{1'b0}};
         end
     endgenerate
 

@@ -8,6 +8,9 @@
 // underrun: every axis holds, the sticky flag is set and the gate stays shut until the
 // host clears the flag.
 //
+// An inhibit (the interlock, logic_outputs) keeps a shut gate shut: start_blocked pulses
+// in each cycle where the gate would have opened but for it. An open gate is not closed.
+//
 // Latency: the gate opens the cycle after the level reaches the threshold; the core
 // takes the head record at the next boundary.
 module motion_control #(
@@ -20,6 +23,7 @@ module motion_control #(
     input  wire               core_run,
     input  wire [15:0]        start_level,
     input  wire               clear_errors,
+    input  wire               inhibit,
     // position FIFO
     input  wire [LEVEL_W-1:0] fifo_level,
     input  wire               fifo_valid,
@@ -31,7 +35,8 @@ module motion_control #(
     // status
     output wire               gate,
     output wire               underrun,
-    output wire               underrun_event
+    output wire               underrun_event,
+    output wire               start_blocked
 );
 
     reg gate_reg;
@@ -44,6 +49,7 @@ module motion_control #(
     wire [15:0] threshold = (start_level == 16'd0) ? 16'd1 : start_level;
     wire reached   = ({{(16-LEVEL_W){1'b0}}, fifo_level} >= threshold);   // LEVEL_W <= 16
     wire underrun_now = core_run && ran_dry && !at_rest_reg;
+    wire would_open   = core_run && !gate_reg && !underrun_reg && reached;   // the gate opens unless inhibited
 
     always @(posedge clk) begin
         if (!core_run) begin
@@ -53,7 +59,7 @@ module motion_control #(
             gate_reg <= 1'b0;
         end else if (consume) begin
             at_rest_reg <= head_block_end;
-        end else if (!gate_reg && !underrun_reg && reached) begin
+        end else if (!gate_reg && !underrun_reg && reached && !inhibit) begin
             gate_reg <= 1'b1;
         end
 
@@ -72,6 +78,7 @@ module motion_control #(
     assign gate           = gate_reg;
     assign underrun       = underrun_reg;
     assign underrun_event = underrun_now;
+    assign start_blocked  = would_open && inhibit;
 
 `ifdef FORMAL
     // The core is offered a record only through the open gate, the gate opens only at
@@ -84,7 +91,7 @@ module motion_control #(
     // The FIFO shows a record only when it holds one (a committed record may not be readable yet).
     always @(*) if (fifo_valid) assume (fifo_level != {LEVEL_W{1'b0}});
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
-        if ($rose(gate_reg)) assert ($past(reached) && !$past(underrun_reg) && $past(core_run));
+        if ($rose(gate_reg)) assert ($past(reached) && !$past(underrun_reg) && $past(core_run) && !$past(inhibit));
         if ($past(!core_run)) assert (!gate_reg && at_rest_reg);
         if ($past(underrun_now)) assert (underrun_reg && !gate_reg);
         if ($past(consume)) assert (at_rest_reg == $past(head_block_end));
@@ -102,7 +109,11 @@ module motion_control #(
     wire [16:0] f_start = (start_level == 16'd0) ? 17'd1 : {1'b0, start_level};
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($rose(gate_reg)) assert ($past(f_level) >= $past(f_start));
-        if ($past(core_run && !gate_reg && !underrun_reg && f_level >= f_start)) assert (gate_reg);
+        if ($past(core_run && !gate_reg && !underrun_reg && f_level >= f_start && !inhibit)) assert (gate_reg);
+        // The inhibit: a gate it holds shut is reported, and a gate that opens was not held.
+        if ($past(core_run && !gate_reg && !underrun_reg && f_level >= f_start && inhibit)) assert (!gate_reg && $past(start_blocked));
+        if ($past(start_blocked)) assert ($past(inhibit) && $past(!gate_reg));
+        cover ($past(start_blocked, 2) && gate_reg);
     end
 `endif
 

@@ -74,6 +74,7 @@ struct TopSim final : ft_sim {
         top->probe_pin = bit(in, FT_IN_PROBE);
         top->mpg_a = bit(in, FT_IN_MPG_A);
         top->mpg_b = bit(in, FT_IN_MPG_B);
+        top->interlock_pin = bit(in, FT_IN_INTERLOCK);
         top->eval();  // settle on the new inputs, clock low
     }
 
@@ -87,6 +88,16 @@ struct TopSim final : ft_sim {
         out |= static_cast<uint64_t>(top->irq & 1) << FT_OUT_IRQ;
         out |= static_cast<uint64_t>(top->bus_ad_oe & 1) << FT_OUT_BUS_AD_OE;
         out |= static_cast<uint64_t>(top->bus_ad_out & 0xFFFF) << FT_OUT_BUS_AD0;
+        out |= static_cast<uint64_t>(top->coolant_mist & 1) << FT_OUT_COOLANT_MIST;
+        out |= static_cast<uint64_t>(top->coolant_flood & 1) << FT_OUT_COOLANT_FLOOD;
+        out |= static_cast<uint64_t>(top->light & 1) << FT_OUT_LIGHT;
+        out |= static_cast<uint64_t>(top->spindle_pwm & 1) << FT_OUT_SPINDLE_PWM;
+        out |= static_cast<uint64_t>(top->spindle_dir & 1) << FT_OUT_SPINDLE_DIR;
+        out |= static_cast<uint64_t>(top->spindle_en & 1) << FT_OUT_SPINDLE_EN;
+        out |= static_cast<uint64_t>(top->dac_cs_n & 1) << FT_OUT_DAC_CS_N;
+        out |= static_cast<uint64_t>(top->dac_sck & 1) << FT_OUT_DAC_SCK;
+        out |= static_cast<uint64_t>(top->dac_sdi & 1) << FT_OUT_DAC_SDI;
+        out |= static_cast<uint64_t>(top->gpio & 0xFF) << FT_OUT_GPIO0;
         return out;
     }
 

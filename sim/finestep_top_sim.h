@@ -13,7 +13,7 @@ extern "C" {
 #endif
 
 /* Packed inputs: bit 0 rst, 1 spi_cs_n, 2 spi_sck, 3 spi_mosi, 4 bus_cs_n, 5 bus_adv_n,
- * 6 bus_rd_n, 7 bus_wr_n, 8 estop_pin, bits 16..31 bus_ad_in, 32..39 enc_a[c],
+ * 6 bus_rd_n, 7 bus_wr_n, 8 estop_pin, 9 interlock_pin, bits 16..31 bus_ad_in, 32..39 enc_a[c],
  * 40..47 enc_b[c], 48..55 enc_z[c], 56 probe_pin, 57 mpg_a, 58 mpg_b. */
 #define FT_IN_RST 0
 #define FT_IN_SPI_CS_N 1
@@ -24,6 +24,7 @@ extern "C" {
 #define FT_IN_BUS_RD_N 6
 #define FT_IN_BUS_WR_N 7
 #define FT_IN_ESTOP 8
+#define FT_IN_INTERLOCK 9
 #define FT_IN_BUS_AD0 16
 #define FT_IN_ENC_A0 32
 #define FT_IN_ENC_B0 40
@@ -32,7 +33,9 @@ extern "C" {
 #define FT_IN_MPG_A 57
 #define FT_IN_MPG_B 58
 /* Packed outputs: bits 0..7 pin_a[i], 8..15 pin_b[i], 16..23 pin_en[i], 24 spi_miso,
- * 25 spi_miso_oe, 26 irq, 27 bus_ad_oe, bits 32..47 bus_ad_out. */
+ * 25 spi_miso_oe, 26 irq, 27 bus_ad_oe, 28 coolant_mist, 29 coolant_flood, 30 light,
+ * bits 32..47 bus_ad_out, 48 spindle_pwm, 49 spindle_dir, 50 spindle_en, 51 dac_cs_n,
+ * 52 dac_sck, 53 dac_sdi, bits 56..63 gpio[i]. */
 #define FT_OUT_PIN_A0 0
 #define FT_OUT_PIN_B0 8
 #define FT_OUT_PIN_EN0 16
@@ -40,7 +43,17 @@ extern "C" {
 #define FT_OUT_SPI_MISO_OE 25
 #define FT_OUT_IRQ 26
 #define FT_OUT_BUS_AD_OE 27
+#define FT_OUT_COOLANT_MIST 28
+#define FT_OUT_COOLANT_FLOOD 29
+#define FT_OUT_LIGHT 30
 #define FT_OUT_BUS_AD0 32
+#define FT_OUT_SPINDLE_PWM 48
+#define FT_OUT_SPINDLE_DIR 49
+#define FT_OUT_SPINDLE_EN 50
+#define FT_OUT_DAC_CS_N 51
+#define FT_OUT_DAC_SCK 52
+#define FT_OUT_DAC_SDI 53
+#define FT_OUT_GPIO0 56
 
 /* The outputs after the edge that ended cycle `cycle - 1`, recorded when they changed. */
 typedef struct ft_event {

@@ -49,9 +49,13 @@ module machxo2_1200 #(
         .clk(clk), .button_n(button_n), .locked(1'b1), .rst(rst)
     );
 
+    wire [8:0] io_unused;
+    wire [3:0] gpio_unused;
+    wire unused_io = &{1'b0, io_unused, gpio_unused};
+
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
-        .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG),
+        .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
         .FIFO_HEAD_REG(0)   // the FIFO in distributed RAM: one register holds its head
     ) chip (
         .clk(clk), .rst(rst),
@@ -62,7 +66,13 @@ module machxo2_1200 #(
         .estop_pin(estop_pin),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
         .mpg_a(mpg_a), .mpg_b(mpg_b),
-        .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
+        .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
+        // the spindle and the logic outputs are not built in this board (HAS_SPINDLE,
+        // HAS_OUTPUTS 0): their pins are constants
+        .spindle_pwm(io_unused[0]), .spindle_dir(io_unused[1]), .spindle_en(io_unused[2]),
+        .dac_cs_n(io_unused[3]), .dac_sck(io_unused[4]), .dac_sdi(io_unused[5]),
+        .interlock_pin(1'b0), .coolant_mist(io_unused[6]), .coolant_flood(io_unused[7]),
+        .light(io_unused[8]), .gpio(gpio_unused)
     );
 
     assign bus_ad = bus_ad_oe ? bus_ad_out : 16'bz;

@@ -44,7 +44,17 @@ fn output_name(index: u32) -> String {
         o::SPI_MISO_OE => "spi_miso_oe".into(),
         o::IRQ => "irq".into(),
         o::BUS_AD_OE => "bus_ad_oe".into(),
+        o::COOLANT_MIST => "coolant_mist".into(),
+        o::COOLANT_FLOOD => "coolant_flood".into(),
+        o::LIGHT => "light".into(),
         32..=47 => format!("bus_ad_out[{}]", index - o::BUS_AD_OUT),
+        o::SPINDLE_PWM => "spindle_pwm".into(),
+        o::SPINDLE_DIR => "spindle_dir".into(),
+        o::SPINDLE_EN => "spindle_en".into(),
+        o::DAC_CS_N => "dac_cs_n".into(),
+        o::DAC_SCK => "dac_sck".into(),
+        o::DAC_SDI => "dac_sdi".into(),
+        56..=63 => format!("gpio[{}]", index - o::GPIO),
         _ => format!("outputs bit {index}"),
     }
 }

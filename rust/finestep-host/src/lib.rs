@@ -18,6 +18,7 @@
 pub mod feedback;
 pub mod frame;
 pub mod machine;
+pub mod machine_io;
 pub mod parallel;
 pub mod pins;
 #[cfg(unix)]
@@ -33,6 +34,7 @@ pub use feedback::{
 };
 pub use finestep_interface::regs;
 pub use machine::{AxisSetup, Caps, Machine, Positions};
+pub use machine_io::{InterlockSetup, Outputs, SpindleSetup, SpindleStatus};
 pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};
 pub use spi::{SpiBus, SpiTransfer};
@@ -42,6 +44,9 @@ pub use finestep_interface::{DriveTiming, Increment, OutMode, PeriodRecord};
 /// Why a bus operation failed. Nothing is applied by a failed write.
 #[derive(Debug, thiserror::Error)]
 pub enum BusError {
+    /// The core was built without the block a call needs (its `CAPS` bit is 0).
+    #[error("the core has no {0} (CAPS)")]
+    NotBuilt(&'static str),
     /// A write or FIFO frame was answered with this result instead of ACK.
     #[error("frame refused by the core: {0:?}")]
     Refused(frame::FrameResult),

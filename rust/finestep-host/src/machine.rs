@@ -1,6 +1,7 @@
 //! [`Machine`]: one finestep core behind a [`Bus`], at the level a machine builder
 //! thinks in: identity, axis setup, faults, run, positions.
 
+use crate::machine_io::SpindleSetup;
 use crate::regs::{
     axis_enable, axis_mode, caps, clock_hz, command, control, fifo_level, id, latch_time, period_clocks, position,
     start_level, status, version,
@@ -29,6 +30,10 @@ pub struct Caps {
     /// per axis). Step edges and drive timings fall on multiples of `S` clocks, and the
     /// period must be a multiple of `S` (docs/spec/step_engine.md).
     pub step_slots: u32,
+    /// The spindle block is built (`CAPS.HAS_SPINDLE`).
+    pub has_spindle: bool,
+    /// The logic outputs and the interlock are built (`CAPS.HAS_OUTPUTS`).
+    pub has_outputs: bool,
 }
 
 impl Caps {
@@ -73,6 +78,8 @@ pub struct Machine<B> {
     pub(crate) timings: Vec<DriveTiming>,
     /// The period last written (the reset value until then).
     pub(crate) period_clocks: u32,
+    /// The spindle's output configuration last written (the reset values until then).
+    pub(crate) spindle: SpindleSetup,
 }
 
 impl<B: Bus> Machine<B> {
@@ -99,6 +106,8 @@ impl<B: Bus> Machine<B> {
             n_enc: caps::N_ENC.get(caps_word) as usize,
             has_mpg: caps::HAS_MPG.get(caps_word) != 0,
             step_slots: 1 << caps::STEP_SLOTS_LOG2.get(caps_word),
+            has_spindle: caps::HAS_SPINDLE.get(caps_word) != 0,
+            has_outputs: caps::HAS_OUTPUTS.get(caps_word) != 0,
         };
         let build = finestep_interface::TopParams {
             n_axes: caps.n_axes,
@@ -109,6 +118,8 @@ impl<B: Bus> Machine<B> {
             n_enc: caps.n_enc,
             has_mpg: caps.has_mpg,
             step_shared: caps.step_slots > 1,
+            has_spindle: caps.has_spindle,
+            has_outputs: caps.has_outputs,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
@@ -118,7 +129,7 @@ impl<B: Bus> Machine<B> {
             return Err(BusError::StepSlots { word: caps_word, found: caps.step_slots, built: built_slots });
         }
         let timings = vec![DriveTiming::RESET; caps.n_axes];
-        Ok(Machine { bus, caps, timings, period_clocks: period_clocks::CLOCKS_RESET })
+        Ok(Machine { bus, caps, timings, period_clocks: period_clocks::CLOCKS_RESET, spindle: SpindleSetup::default() })
     }
 
     /// The capabilities read at connection.

@@ -26,6 +26,8 @@ pub mod layout {
     pub const IN_BUS_WR_N: u32 = 7;
     /// Input: E-stop.
     pub const IN_ESTOP: u32 = 8;
+    /// Input: the interlock (e.g. a door).
+    pub const IN_INTERLOCK: u32 = 9;
     /// Input: lowest bit of the 16-bit multiplexed address/data bus.
     pub const IN_BUS_AD0: u32 = 16;
     /// Input: encoder A of channel `c` is bit `IN_ENC_A0 + c`.
@@ -56,6 +58,26 @@ pub mod layout {
     pub const OUT_BUS_AD_OE: u32 = 27;
     /// Output: lowest bit of the 16-bit read data.
     pub const OUT_BUS_AD0: u32 = 32;
+    /// Output: mist coolant.
+    pub const OUT_COOLANT_MIST: u32 = 28;
+    /// Output: flood coolant.
+    pub const OUT_COOLANT_FLOOD: u32 = 29;
+    /// Output: the work light.
+    pub const OUT_LIGHT: u32 = 30;
+    /// Output: the spindle's PWM.
+    pub const OUT_SPINDLE_PWM: u32 = 48;
+    /// Output: the spindle's direction.
+    pub const OUT_SPINDLE_DIR: u32 = 49;
+    /// Output: the spindle's enable.
+    pub const OUT_SPINDLE_EN: u32 = 50;
+    /// Output: the spindle DAC's chip select, active low.
+    pub const OUT_DAC_CS_N: u32 = 51;
+    /// Output: the spindle DAC's clock.
+    pub const OUT_DAC_SCK: u32 = 52;
+    /// Output: the spindle DAC's data.
+    pub const OUT_DAC_SDI: u32 = 53;
+    /// Output: general output `i` is bit `OUT_GPIO0 + i`.
+    pub const OUT_GPIO0: u32 = 56;
 
     /// The inputs of an idle host: chip selects and strobes high, reset low, E-stop
     /// pin low (released for the default active-high polarity).
@@ -171,6 +193,11 @@ impl<T: PinTarget> PinHost<T> {
     /// Sets the E-stop pin level (held until changed).
     pub fn set_estop_pin(&mut self, level: bool) {
         self.set(IN_ESTOP, level);
+    }
+
+    /// Sets the interlock pin (held until changed).
+    pub fn set_interlock_pin(&mut self, level: bool) {
+        self.set(IN_INTERLOCK, level);
     }
 
     /// Runs `cycles` clocks with the pins as they are.

@@ -197,6 +197,12 @@ pub struct TopParams {
     /// `STEP_SHARED`: the core's step engine (`CAPS.STEP_SLOTS_LOG2` =
     /// [`CoreParams::step_slot_bits`] of [`Self::core_params`]).
     pub step_shared: bool,
+    /// `HAS_SPINDLE`: the spindle block (PWM or SPI DAC) is built.
+    pub has_spindle: bool,
+    /// `HAS_OUTPUTS`: the logic outputs and the interlock are built.
+    pub has_outputs: bool,
+    /// `N_GPIO`: general outputs (with `has_outputs`).
+    pub n_gpio: usize,
 }
 
 impl Default for TopParams {
@@ -214,6 +220,9 @@ impl Default for TopParams {
             n_enc: finestep_top::N_ENC.default as usize,
             has_mpg: finestep_top::HAS_MPG.default != 0,
             step_shared: finestep_top::STEP_SHARED.default != 0,
+            has_spindle: finestep_top::HAS_SPINDLE.default != 0,
+            has_outputs: finestep_top::HAS_OUTPUTS.default != 0,
+            n_gpio: finestep_top::N_GPIO.default as usize,
         }
     }
 }
@@ -232,6 +241,9 @@ impl TopParams {
         finestep_top::N_ENC.check(self.n_enc as u64)?;
         finestep_top::HAS_MPG.check(self.has_mpg)?;
         finestep_top::STEP_SHARED.check(self.step_shared)?;
+        finestep_top::HAS_SPINDLE.check(self.has_spindle)?;
+        finestep_top::HAS_OUTPUTS.check(self.has_outputs)?;
+        finestep_top::N_GPIO.check(self.n_gpio as u64)?;
         self.core_params().validate()
     }
 

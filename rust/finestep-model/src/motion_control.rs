@@ -26,6 +26,8 @@ pub struct MotionInputs<'a> {
     pub start_level: u32,
     /// `clear_errors`: clears `UNDERRUN` (an underrun in the same cycle wins).
     pub clear_errors: bool,
+    /// The interlock holds a shut gate shut (`logic_outputs`'s `inhibit`).
+    pub inhibit: bool,
 }
 
 /// State of motion control.
@@ -70,6 +72,16 @@ impl MotionControl {
         inp.rec_ready && self.rec_valid(inp)
     }
 
+    /// `start_blocked`: in this cycle the gate would open (running, shut, no underrun,
+    /// the threshold reached) but the inhibit holds it.
+    pub fn start_blocked(&self, inp: &MotionInputs<'_>) -> bool {
+        inp.inhibit
+            && inp.core_run
+            && !self.gate
+            && !self.underrun
+            && inp.level as u64 >= u64::from(inp.start_level.max(1))
+    }
+
     /// One rising clock edge. Returns whether an underrun is counted in this cycle.
     pub fn step(&mut self, inp: &MotionInputs<'_>) -> bool {
         let boundary = inp.core_run && inp.rec_ready;
@@ -83,7 +95,7 @@ impl MotionControl {
             underrun_now = !self.at_rest;
         } else if let (true, true, Some(record)) = (boundary, self.gate, inp.head) {
             self.at_rest = record.flags & BLOCK_END != 0;
-        } else if !self.gate && !self.underrun && inp.level as u64 >= u64::from(start) {
+        } else if !self.gate && !self.underrun && !inp.inhibit && inp.level as u64 >= u64::from(start) {
             self.gate = true;
         }
         self.underrun = underrun_now || (self.underrun && !inp.clear_errors);

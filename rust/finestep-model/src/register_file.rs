@@ -26,10 +26,12 @@ use finestep_interface::{invert, Access, CountMode, DriveTiming, Field};
 use crate::encoder_bank::{ChannelConfig, EncoderBankStatus, ProbeConfig, MAX_CHANNELS};
 use crate::hand_wheel::HandWheelStatus;
 use crate::jog_generator::{JogInputs, JogStatus};
+use crate::logic_outputs::InterlockConfig;
 use crate::position_fifo::FifoInputs;
 use crate::record::PeriodRecord;
 pub use crate::register_bus::BusRequest;
 use crate::spi_frame::{SpiFifoPort, SpiFrameEvents};
+use crate::spindle::SpindleConfig;
 use crate::TopParams;
 use crate::{Increment, MAX_AXES};
 
@@ -103,6 +105,23 @@ pub struct HardwareStatus {
     pub fifo_free: usize,
     /// The encoders, probe, hand wheel and jog.
     pub feedback: FeedbackStatus,
+    /// The spindle and the interlock.
+    pub io: IoStatus,
+}
+
+/// The spindle's and the logic outputs' register view in one cycle (0 for blocks not built).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct IoStatus {
+    /// `SPINDLE_STATUS.LEVEL`.
+    pub spindle_level: u32,
+    /// `SPINDLE_STATUS.AT_SPEED`.
+    pub spindle_at_speed: bool,
+    /// `SPINDLE_STATUS.ENABLED`: the enable pin.
+    pub spindle_enabled: bool,
+    /// `INTERLOCK.ACTIVE`.
+    pub interlock_active: bool,
+    /// `INTERLOCK.BLOCKED`.
+    pub interlock_blocked: bool,
 }
 
 /// The feedback blocks' register view in one cycle (all 0 for blocks not built).
@@ -263,6 +282,18 @@ const HAND_WHEEL_REGISTERS: [u8; 12] = [
     regs::jog_velocity::ADDR,
 ];
 
+/// The spindle's registers: absent, reading 0, without `HAS_SPINDLE`.
+const SPINDLE_REGISTERS: [u8; 5] = [
+    regs::spindle_control::ADDR,
+    regs::spindle_period::ADDR,
+    regs::spindle_level::ADDR,
+    regs::spindle_ramp::ADDR,
+    regs::spindle_status::ADDR,
+];
+
+/// The logic outputs' and the interlock's registers: absent without `HAS_OUTPUTS`.
+const OUTPUT_REGISTERS: [u8; 3] = [regs::outputs::ADDR, regs::outputs_safe::ADDR, regs::interlock::ADDR];
+
 /// The `rw` bits this build implements, per address, and their reset values.
 fn implemented_rw(params: &TopParams) -> ([u32; ADDRESSES], [u32; ADDRESSES]) {
     let mut mask = [0u32; ADDRESSES];
@@ -271,6 +302,12 @@ fn implemented_rw(params: &TopParams) -> ([u32; ADDRESSES], [u32; ADDRESSES]) {
         let per_axis = PER_AXIS_ARRAYS.contains(&register.addr);
         let per_channel = PER_CHANNEL_ARRAYS.contains(&register.addr);
         if !params.has_mpg && HAND_WHEEL_REGISTERS.contains(&register.addr) {
+            continue;
+        }
+        if !params.has_spindle && SPINDLE_REGISTERS.contains(&register.addr) {
+            continue;
+        }
+        if !params.has_outputs && OUTPUT_REGISTERS.contains(&register.addr) {
             continue;
         }
         for index in 0..register.count() {
@@ -284,6 +321,9 @@ fn implemented_rw(params: &TopParams) -> ([u32; ADDRESSES], [u32; ADDRESSES]) {
                     regs::period_clocks::ADDR => params.p_width,
                     regs::watchdog_timeout::ADDR => params.wd_w,
                     regs::axis_enable::ADDR => params.n_axes as u32,
+                    regs::outputs::ADDR | regs::outputs_safe::ADDR if info.field == regs::outputs::GPIO => {
+                        params.n_gpio as u32
+                    }
                     _ => info.field.width,
                 };
                 let field = narrowed(info.field, width);
@@ -344,6 +384,37 @@ impl RegisterFile {
     /// `rdata`: the value of the last read served.
     pub fn rdata(&self) -> u32 {
         self.rdata
+    }
+
+    /// The spindle's configuration (`SPINDLE_*`).
+    pub fn spindle_config(&self) -> SpindleConfig {
+        use regs::spindle_control as c;
+        let control = self.rw[usize::from(c::ADDR)];
+        SpindleConfig {
+            enable: c::ENABLE.get(control) != 0,
+            dir: c::DIR.get(control) != 0,
+            dac: c::DAC.get(control) != 0,
+            dac_div: c::DAC_DIV.get(control),
+            period: self.rw_field(regs::spindle_period::ADDR, regs::spindle_period::CLOCKS),
+            command: self.rw_field(regs::spindle_level::ADDR, regs::spindle_level::LEVEL),
+            ramp: self.rw_field(regs::spindle_ramp::ADDR, regs::spindle_ramp::STEP),
+        }
+    }
+
+    /// The `OUTPUTS` word (mist, flood, light, the general outputs at their fields).
+    pub fn outputs(&self) -> u32 {
+        self.rw[usize::from(regs::outputs::ADDR)]
+    }
+
+    /// The interlock's configuration (`INTERLOCK`).
+    pub fn interlock_config(&self) -> InterlockConfig {
+        use regs::interlock as i;
+        let word = self.rw[usize::from(i::ADDR)];
+        InterlockConfig {
+            enable: i::ENABLE.get(word) != 0,
+            active_high: i::ACTIVE_HIGH.get(word) != 0,
+            filter: i::FILTER.get(word),
+        }
     }
 
     /// `CONTROL.RUN`.
@@ -656,6 +727,8 @@ impl RegisterFile {
                     (c::HAS_MPG, u32::from(p.has_mpg)),
                     // log2 S: 0 without the step engine (S = 1).
                     (c::STEP_SLOTS_LOG2, p.core_params().step_slots().trailing_zeros()),
+                    (c::HAS_SPINDLE, u32::from(p.has_spindle)),
+                    (c::HAS_OUTPUTS, u32::from(p.has_outputs)),
                 ]
                 .iter()
                 .fold(0, |word, &(field, value)| field.set(word, value & field.max()))
@@ -687,10 +760,29 @@ impl RegisterFile {
             }
             _ => match element_index(addr, regs::position::ADDR, regs::position::STRIDE, n) {
                 Some(axis) => regs::position::STEPS.set(0, self.positions[axis]),
-                None => self.read_feedback(addr, &hw.feedback),
+                None => self.read_feedback(addr, &hw.feedback) | self.read_io(addr, &hw.io),
             },
         };
         stored | hardware
+    }
+
+    /// The read value of the spindle's and the logic outputs' hardware fields.
+    fn read_io(&self, addr: u8, io: &IoStatus) -> u32 {
+        let p = &self.params;
+        match addr {
+            regs::spindle_status::ADDR if p.has_spindle => {
+                use regs::spindle_status as s;
+                let word = s::LEVEL.set(0, io.spindle_level);
+                let word = s::AT_SPEED.set(word, u32::from(io.spindle_at_speed));
+                s::ENABLED.set(word, u32::from(io.spindle_enabled))
+            }
+            regs::outputs::ADDR if p.has_outputs => regs::outputs::N_GPIO.set(0, p.n_gpio as u32),
+            regs::interlock::ADDR if p.has_outputs => {
+                use regs::interlock as i;
+                i::BLOCKED.set(i::ACTIVE.set(0, u32::from(io.interlock_active)), u32::from(io.interlock_blocked))
+            }
+            _ => 0,
+        }
     }
 
     /// The read value of a feedback register's hardware fields (0 for other addresses).
@@ -798,6 +890,7 @@ impl RegisterFile {
         self.arm_index_clear = 0;
         self.probe_arm = false;
 
+        let safe_before = self.rw[usize::from(regs::outputs_safe::ADDR)];
         let mut irq_clear = 0;
         match inp.served {
             Some(BusRequest { write: false, addr, .. }) => self.rdata = self.read(addr, hw),
@@ -840,6 +933,11 @@ impl RegisterFile {
         if hw.halt {
             let jog = usize::from(regs::jog_control::ADDR);
             self.rw[jog] = regs::jog_control::ENABLE.set(self.rw[jog], 0);
+            // The spindle stops and the logic outputs go safe; the host turns them on
+            // again after the fault (the safe levels as they were before this edge).
+            let spindle = usize::from(regs::spindle_control::ADDR);
+            self.rw[spindle] = regs::spindle_control::ENABLE.set(self.rw[spindle], 0);
+            self.rw[usize::from(regs::outputs::ADDR)] = safe_before;
         }
 
         if position_latch(hw.core_run, inp.rec_ready, inp.latch_hold) {

@@ -33,16 +33,18 @@ use crate::core::Core;
 use crate::encoder_bank::{EncoderBank, EncoderBankInputs, EncoderBankStatus};
 use crate::hand_wheel::{HandWheel, HandWheelInputs};
 use crate::jog_generator::JogGenerator;
+use crate::logic_outputs::Interlock;
 use crate::motion_control::{MotionControl, MotionInputs};
 use crate::parallel_bus_slave::{ParallelBusSlave, ParallelPins};
 use crate::position_fifo::PositionFifo;
 use crate::register_file::{
-    arbitrate, position_latch, BusRequest, FeedbackStatus, Grant, HardwareStatus, RegisterFile, RegisterFileInputs,
-    ADDRESSES,
+    arbitrate, position_latch, BusRequest, FeedbackStatus, Grant, HardwareStatus, IoStatus, RegisterFile,
+    RegisterFileInputs, ADDRESSES,
 };
 use crate::safety_monitor::{SafetyInputs, SafetyMonitor};
 use crate::spi_frame::{SpiFrame, SpiFrameInputs};
 use crate::spi_slave_phy::{SpiPins, SpiSlavePhy};
+use crate::spindle::{Spindle, SpindlePins};
 use crate::{CoreInputs, ParamError, MAX_AXES};
 pub use finestep_interface::TopParams;
 
@@ -71,6 +73,8 @@ pub mod top_pins {
         pub const BUS_WR_N: u32 = 7;
         /// `estop_pin`.
         pub const ESTOP_PIN: u32 = 8;
+        /// `interlock_pin`.
+        pub const INTERLOCK_PIN: u32 = 9;
         /// Lowest bit of `bus_ad_in[15:0]` (bits 16..=31).
         pub const BUS_AD_IN: u32 = 16;
         /// Lowest bit of `enc_a[c]` (bits 32..=39, bit `32 + c` for channel `c`).
@@ -109,8 +113,28 @@ pub mod top_pins {
         pub const IRQ: u32 = 26;
         /// `bus_ad_oe`.
         pub const BUS_AD_OE: u32 = 27;
+        /// `coolant_mist`.
+        pub const COOLANT_MIST: u32 = 28;
+        /// `coolant_flood`.
+        pub const COOLANT_FLOOD: u32 = 29;
+        /// `light`.
+        pub const LIGHT: u32 = 30;
         /// Lowest bit of `bus_ad_out[15:0]` (bits 32..=47).
         pub const BUS_AD_OUT: u32 = 32;
+        /// `spindle_pwm`.
+        pub const SPINDLE_PWM: u32 = 48;
+        /// `spindle_dir`.
+        pub const SPINDLE_DIR: u32 = 49;
+        /// `spindle_en`.
+        pub const SPINDLE_EN: u32 = 50;
+        /// `dac_cs_n`.
+        pub const DAC_CS_N: u32 = 51;
+        /// `dac_sck`.
+        pub const DAC_SCK: u32 = 52;
+        /// `dac_sdi`.
+        pub const DAC_SDI: u32 = 53;
+        /// Lowest bit of `gpio[i]` (bits 56..=63, bit `56 + i` for output `i`).
+        pub const GPIO: u32 = 56;
     }
 }
 
@@ -149,6 +173,8 @@ pub struct TopInputs {
     pub mpg_a: bool,
     /// Hand wheel B.
     pub mpg_b: bool,
+    /// The interlock input; its active level is `INTERLOCK.ACTIVE_HIGH`.
+    pub interlock_pin: bool,
 }
 
 impl Default for TopInputs {
@@ -174,6 +200,7 @@ impl Default for TopInputs {
             probe_pin: false,
             mpg_a: false,
             mpg_b: false,
+            interlock_pin: false,
         }
     }
 }
@@ -198,6 +225,7 @@ impl TopInputs {
             | u64::from(self.probe_pin) << i::PROBE_PIN
             | u64::from(self.mpg_a) << i::MPG_A
             | u64::from(self.mpg_b) << i::MPG_B
+            | u64::from(self.interlock_pin) << i::INTERLOCK_PIN
     }
 
     /// The pins from one word (bits not in [`top_pins::input`] are ignored).
@@ -221,12 +249,13 @@ impl TopInputs {
             probe_pin: bit(i::PROBE_PIN),
             mpg_a: bit(i::MPG_A),
             mpg_b: bit(i::MPG_B),
+            interlock_pin: bit(i::INTERLOCK_PIN),
         }
     }
 }
 
 /// Every output pin of the top in one cycle (all flip-flops).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TopOutputs {
     /// `pin_a`, bit `i` for axis `i` (0 at and above `N_AXES`).
     pub pin_a: u8,
@@ -244,6 +273,37 @@ pub struct TopOutputs {
     pub bus_ad_oe: bool,
     /// `bus_ad_out`.
     pub bus_ad_out: u16,
+    /// The spindle's pins (PWM, direction, enable, the DAC's CS_n, SCK, SDI).
+    pub spindle: SpindlePins,
+    /// `coolant_mist`.
+    pub coolant_mist: bool,
+    /// `coolant_flood`.
+    pub coolant_flood: bool,
+    /// `light`.
+    pub light: bool,
+    /// `gpio`, bit `i` for output `i` (0 at and above `N_GPIO`).
+    pub gpio: u8,
+}
+
+impl Default for TopOutputs {
+    /// Every pin low but the DAC's chip select (inactive high): the pins after reset.
+    fn default() -> Self {
+        TopOutputs {
+            pin_a: 0,
+            pin_b: 0,
+            pin_en: 0,
+            spi_miso: false,
+            spi_miso_oe: false,
+            irq: false,
+            bus_ad_oe: false,
+            bus_ad_out: 0,
+            spindle: SpindlePins { cs_n: true, ..SpindlePins::default() },
+            coolant_mist: false,
+            coolant_flood: false,
+            light: false,
+            gpio: 0,
+        }
+    }
 }
 
 impl TopOutputs {
@@ -258,6 +318,16 @@ impl TopOutputs {
             | u64::from(self.irq) << o::IRQ
             | u64::from(self.bus_ad_oe) << o::BUS_AD_OE
             | u64::from(self.bus_ad_out) << o::BUS_AD_OUT
+            | u64::from(self.spindle.pwm) << o::SPINDLE_PWM
+            | u64::from(self.spindle.dir) << o::SPINDLE_DIR
+            | u64::from(self.spindle.en) << o::SPINDLE_EN
+            | u64::from(self.spindle.cs_n) << o::DAC_CS_N
+            | u64::from(self.spindle.sck) << o::DAC_SCK
+            | u64::from(self.spindle.sdi) << o::DAC_SDI
+            | u64::from(self.coolant_mist) << o::COOLANT_MIST
+            | u64::from(self.coolant_flood) << o::COOLANT_FLOOD
+            | u64::from(self.light) << o::LIGHT
+            | u64::from(self.gpio) << o::GPIO
     }
 
     /// The pins from one word (bits not in [`top_pins::output`] are ignored).
@@ -273,6 +343,18 @@ impl TopOutputs {
             irq: bit(o::IRQ),
             bus_ad_oe: bit(o::BUS_AD_OE),
             bus_ad_out: (word >> o::BUS_AD_OUT) as u16,
+            spindle: SpindlePins {
+                pwm: bit(o::SPINDLE_PWM),
+                dir: bit(o::SPINDLE_DIR),
+                en: bit(o::SPINDLE_EN),
+                cs_n: bit(o::DAC_CS_N),
+                sck: bit(o::DAC_SCK),
+                sdi: bit(o::DAC_SDI),
+            },
+            coolant_mist: bit(o::COOLANT_MIST),
+            coolant_flood: bit(o::COOLANT_FLOOD),
+            light: bit(o::LIGHT),
+            gpio: (word >> o::GPIO) as u8,
         }
     }
 
@@ -307,6 +389,8 @@ pub struct Top {
     encoders: EncoderBank,
     hand_wheel: HandWheel,
     jog: JogGenerator,
+    spindle: Spindle,
+    interlock: Interlock,
     cycle: u64,
     /// The SPI frame layer committed a FIFO frame last cycle: the kick's flip-flop
     /// (`kick <- served write || wr_commit`) for the commit half.
@@ -347,6 +431,8 @@ impl Top {
             encoders: EncoderBank::new(params.n_enc),
             hand_wheel: HandWheel::default(),
             jog: JogGenerator::default(),
+            spindle: Spindle::default(),
+            interlock: Interlock::default(),
             cycle: 0,
             committed_last_cycle: false,
             bus_stage: None,
@@ -424,6 +510,16 @@ impl Top {
         &self.jog
     }
 
+    /// The spindle block (its state; meaningful with `HAS_SPINDLE`).
+    pub fn spindle(&self) -> &Spindle {
+        &self.spindle
+    }
+
+    /// The interlock (meaningful with `HAS_OUTPUTS`).
+    pub fn interlock(&self) -> &Interlock {
+        &self.interlock
+    }
+
     /// `halt`: the safety monitor stops the machine.
     pub fn halt(&self) -> bool {
         self.safety.halt()
@@ -462,6 +558,17 @@ impl Top {
             out.bus_ad_oe = self.parallel.ad_oe();
             out.bus_ad_out = self.parallel.ad_out();
         }
+        if self.params.has_spindle {
+            out.spindle = self.spindle.pins(&self.registers.spindle_config());
+        }
+        if self.params.has_outputs {
+            use regs::outputs as o;
+            let word = self.registers.outputs();
+            out.coolant_mist = o::MIST.get(word) != 0;
+            out.coolant_flood = o::FLOOD.get(word) != 0;
+            out.light = o::LIGHT.get(word) != 0;
+            out.gpio = o::GPIO.get(word) as u8;
+        }
         out
     }
 
@@ -491,7 +598,23 @@ impl Top {
             fifo_level: self.fifo.level(),
             fifo_free: self.fifo.depth() - self.fifo.level() - self.fifo.staged(),
             feedback: self.feedback_status(read_served),
+            io: self.io_status(),
         }
+    }
+
+    fn io_status(&self) -> IoStatus {
+        let mut io = IoStatus::default();
+        if self.params.has_spindle {
+            let config = self.registers.spindle_config();
+            io.spindle_level = self.spindle.level();
+            io.spindle_at_speed = self.spindle.level() == config.target();
+            io.spindle_enabled = self.spindle.pins(&config).en;
+        }
+        if self.params.has_outputs {
+            io.interlock_active = self.interlock.active(&self.registers.interlock_config());
+            io.interlock_blocked = self.interlock.blocked();
+        }
+        io
     }
 
     /// The feedback blocks' register view in this cycle.
@@ -557,7 +680,9 @@ impl Top {
             level: self.fifo.level(),
             start_level: self.registers.start_level(),
             clear_errors: self.registers.clear_errors(),
+            inhibit: p.has_outputs && self.interlock.inhibit(&self.registers.interlock_config()),
         };
+        let start_blocked = self.motion.start_blocked(&motion_inputs);
         // While the jog drives the core the FIFO waits.
         let pop = !engaged && self.motion.pop(&motion_inputs);
         let (fifo_inputs, push_refused, push_in_flight) =
@@ -664,6 +789,13 @@ impl Top {
             self.jog.step(&jog_inputs);
         }
 
+        if p.has_spindle {
+            self.spindle.step(&self.registers.spindle_config(), halt);
+        }
+        if p.has_outputs {
+            let config = self.registers.interlock_config();
+            self.interlock.step(inputs.interlock_pin, &config, start_blocked, clear_errors);
+        }
         let underrun = self.motion.step(&motion_inputs);
         self.registers.step(&RegisterFileInputs {
             served,
@@ -713,7 +845,18 @@ mod tests {
         assert_eq!(word, 0x81 << 32 | 0x02 << 40 | 0x40 << 48 | 1 << 56 | 1 << 58);
         assert_eq!(TopInputs::unpack(feedback.pack()), feedback);
         let outputs = TopOutputs { pin_a: 0x81, pin_en: 0x0F, irq: true, bus_ad_out: 0x1234, ..TopOutputs::default() };
-        assert_eq!(outputs.pack(), 0x81 | 0x0F << 16 | 1 << 26 | 0x1234 << 32);
+        assert_eq!(outputs.pack(), 0x81 | 0x0F << 16 | 1 << 26 | 0x1234 << 32 | 1 << 51);
+        assert_eq!(TopOutputs::unpack(outputs.pack()), outputs);
+        let io = TopOutputs {
+            spindle: SpindlePins { pwm: true, sdi: true, ..SpindlePins::default() },
+            light: true,
+            gpio: 0x81,
+            ..TopOutputs::default()
+        };
+        assert_eq!(io.pack(), 1 << 48 | 1 << 53 | 1 << 30 | 0x81 << 56);
+        assert_eq!(TopOutputs::unpack(io.pack()), io);
+        let interlock = TopInputs { interlock_pin: true, ..TopInputs::default() };
+        assert_eq!(interlock.pack() & !TopInputs::default().pack(), 1 << 9);
         assert_eq!(TopOutputs::unpack(outputs.pack()), outputs);
     }
 

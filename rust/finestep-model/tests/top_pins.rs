@@ -10,8 +10,17 @@ use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
     let links = (any::<bool>(), any::<bool>(), 1..=MAX_CHANNELS, any::<bool>(), any::<bool>());
-    (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links).prop_map(
-        |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (has_spi, has_parallel, n_enc, has_mpg, step_shared))| {
+    let io = (any::<bool>(), any::<bool>(), 0..=8usize);
+    (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links, io).prop_map(
+        |(
+            n_axes,
+            p_width,
+            timing_w,
+            fifo_depth_log2,
+            wd_w,
+            (has_spi, has_parallel, n_enc, has_mpg, step_shared),
+            (has_spindle, has_outputs, n_gpio),
+        )| {
             let p = TopParams {
                 n_axes,
                 p_width,
@@ -24,6 +33,9 @@ fn params() -> impl Strategy<Value = TopParams> {
                 n_enc,
                 has_mpg,
                 step_shared,
+                has_spindle,
+                has_outputs,
+                n_gpio,
             };
             host::engine_if_valid(p)
         },
