@@ -48,10 +48,17 @@ fn fail(e: BusError) -> TestCaseError {
 /// The bits of each `rw` register that store (docs/registers.md, with the widths of
 /// this build: N_AXES = 4, TIMING_W = 12, P_WIDTH = 20, WD_W = 24), and its reset value.
 /// CONTROL is rw too but never written by the fuzzer (it would run or halt the machine),
-/// nor are PROBE_CONTROL (its ARM) and JOG_CONTROL (its ENABLE, cleared by the halt).
+/// nor are PROBE_CONTROL (its ARM), JOG_CONTROL (its ENABLE, cleared by the halt) and
+/// INTERLOCK (a polarity write makes ACTIVE follow the pin after its filter). The machine
+/// stays halted (the power-on E-stop fault), so SPINDLE_CONTROL.ENABLE never holds a 1
+/// and OUTPUTS reads OUTPUTS_SAFE (docs/spec/spindle.md, docs/spec/logic_outputs.md).
 fn rw_register(addr: u8) -> Option<(u32, u32)> {
     let timing = 0x0FFF_0FFF;
     match addr {
+        0x1A => Some((0xF6, 0x10)),               // SPINDLE_CONTROL: DIR, DAC, DAC_DIV (reset 1)
+        0x1B => Some((0xFFFF, 4096)),             // SPINDLE_PERIOD
+        0x1C | 0x1D => Some((0xFFFF, 0)),         // SPINDLE_LEVEL, SPINDLE_RAMP
+        0x23 => Some((0xF07, 0)),                 // OUTPUTS_SAFE: MIST, FLOOD, LIGHT, GPIO[0..4]
         0x08 => Some((0xFFFF, 0)),                // FIFO_WATERMARK
         0x09 => Some((0xFFFF, 1)),                // START_LEVEL
         0x0A => Some(((1 << 20) - 1, 50_000)),    // PERIOD_CLOCKS
@@ -81,7 +88,7 @@ fn rw_register(addr: u8) -> Option<(u32, u32)> {
 /// arrays' elements of absent axes, must change nothing.
 fn safe_addr() -> impl Strategy<Value = u8> {
     let rw: Vec<u8> = (0u8..0x80).filter(|&a| rw_register(a).is_some()).collect();
-    let all: Vec<u8> = (0u8..0x80).filter(|&a| !matches!(a, 0x04 | 0x05 | 0x50 | 0x52 | 0x58)).collect();
+    let all: Vec<u8> = (0u8..0x80).filter(|&a| !matches!(a, 0x04 | 0x05 | 0x27 | 0x50 | 0x52 | 0x58)).collect();
     prop_oneof![3 => prop::sample::select(rw), 1 => prop::sample::select(all)]
 }
 
@@ -436,6 +443,12 @@ impl Expect {
             0x14 => self.frame_errors & 0xFFFF,
             0x15 => self.parallel_errors & 0xFFFF,
             0x16 => self.refused & 0xFFFF,
+            // SPINDLE_STATUS while halted: level 0, at its target (0), not enabled.
+            0x1E => 1 << 16,
+            // OUTPUTS while halted: the safe levels, and N_GPIO = 4.
+            0x1F => self.rw[0x23] | 4 << 24,
+            // INTERLOCK at reset: active high, filter 50; the pin low: not active.
+            0x27 => 0x3202,
             // PROBE_CONTROL at reset: active high, filter 1; ENC_STATUS: the arms.
             0x52 => 0x11,
             0x74..=0x77 => {
