@@ -22,7 +22,7 @@
 //!   the delay stays at most `j` (by induction: `previous + 1 - t <= previous delay`).
 //! - **Glitches** on chosen pins: pulses of the opposite level, `1..shorter_than`
 //!   cycles long, with gaps of `1..2 * mean_interval` cycles between them (from one's
-//!   end to the next's start). A glitch is an XOR on the pin, so the pin differs from
+//!   end to the next's start; the first gap from cycle `from`, or the creation). A glitch is an XOR on the pin, so the pin differs from
 //!   its (possibly jittered) ideal level exactly during glitches; an edge falling inside
 //!   one appears at the glitch's end.
 //! - **Missing edges** (`one in n` count changes, drawn per change): the change's A/B
@@ -99,6 +99,10 @@ pub struct Glitches {
     pub shorter_than: u64,
     /// Mean gap between glitches of one pin, in cycles (at least 1).
     pub mean_interval: u64,
+    /// No glitch starts before this cycle: the first gap counts from it (or from the
+    /// encoder's creation, if later). A test that sets the chip's filter first lets the
+    /// glitches start once the setting is in force (0: from creation).
+    pub from: u64,
 }
 
 /// Injected faults (the default: none).
@@ -255,7 +259,7 @@ impl Encoder {
                 return None;
             }
             let mut rng = crate::stream(seed, 0, 2 + pin as u64);
-            let next = cycle.saturating_add(gap(&mut rng, g.mean_interval));
+            let next = cycle.max(g.from).saturating_add(gap(&mut rng, g.mean_interval));
             Some(GlitchPin { rng, active: false, next })
         });
         let mut encoder = Encoder {
@@ -603,7 +607,7 @@ mod tests {
         runner
             .run(&strategy, |(case, shorter_than, mean_interval, [a, b, z], jitter, seed)| {
                 let base = Faults { jitter, ..Faults::default() };
-                let glitches = Glitches { a, b, z, shorter_than, mean_interval };
+                let glitches = Glitches { a, b, z, shorter_than, mean_interval, from: 0 };
                 let faults = Faults { glitches: Some(glitches), ..base };
                 let (clean, _, _) = case.levels(base, seed);
                 let (glitched, _, encoder) = case.levels(faults, seed);
@@ -628,6 +632,30 @@ mod tests {
                 Ok(())
             })
             .unwrap();
+    }
+
+    /// No glitch starts before `from`: on an encoder at rest, the pins with the glitches
+    /// from cycle `from` are those from the creation, `from` cycles later.
+    #[test]
+    fn glitches_start_from() {
+        let drive = Drive::new(DriveConfig::default()).unwrap();
+        let levels = |from: u64, end: u64| {
+            let glitches = Glitches { a: true, b: true, z: true, shorter_than: 9, mean_interval: 40, from };
+            let mut config = EncoderConfig::rotary(CountsPerStep::integer(1).unwrap(), 4, 1);
+            config.faults.glitches = Some(glitches);
+            let mut encoder = Encoder::new(config, 7, &drive, 0).unwrap();
+            (0..end)
+                .map(|n| {
+                    encoder.advance_to(n, &drive);
+                    encoder.levels()
+                })
+                .collect::<Vec<_>>()
+        };
+        let (from, end) = (1000u64, 3000u64);
+        let (early, late) = (levels(0, end - from), levels(from, end));
+        assert!(late[..=from as usize].iter().all(|&l| l == late[0]), "a glitch before cycle {from}");
+        assert_eq!(&late[from as usize..], &early[..]);
+        assert!(early.iter().any(|&l| l != early[0]), "no glitch at all");
     }
 
     /// A missing edge shows: the decoder first differs from the ideal count exactly
@@ -709,6 +737,7 @@ mod tests {
                     z,
                     shorter_than,
                     mean_interval,
+                    from: 0,
                 }),
                 missing_one_in,
                 swap_ab,

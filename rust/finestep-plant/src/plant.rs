@@ -333,6 +333,7 @@ mod tests {
                     z: true,
                     shorter_than: 3,
                     mean_interval: 400,
+                    from: 0,
                 }),
                 missing_one_in: missing,
                 swap_ab: false,
