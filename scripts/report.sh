@@ -34,7 +34,7 @@ yosys_stat() {
     fi
     echo "report: $name ($((SECONDS - start)) s)"
 }
-CPLD="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 2 -set FIFO_HEAD_REG 0 finestep_top"
+CPLD="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 2 -set FIFO_HEAD_REG 0 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 finestep_top"
 yosys_stat ice40_blocks "synth_ice40 -noflatten" "chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG 0 finestep_top"
 yosys_stat ecp5_blocks "synth_ecp5 -noflatten"
 yosys_stat ice40_core "synth_ice40" "chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG 0 finestep_top"
@@ -42,7 +42,7 @@ yosys_stat ecp5_core "synth_ecp5"
 yosys_stat ice40_cpld "synth_ice40" "$CPLD"
 yosys_stat xo2_cpld "synth_lattice -family xo2" "$CPLD"
 # The MAX II configuration (no RAM: the FIFO of 2 records in flip-flops) as generic LUT4s.
-MAX2="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 1 -set READ_STORE 0 -set FIFO_HEAD_REG 0 finestep_top"
+MAX2="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 1 -set READ_STORE 0 -set FIFO_HEAD_REG 0 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 finestep_top"
 yosys_stat lut4_max2 "synth -lut 4" "$MAX2"
 
 # One step channel and one encoder channel out of context, against the peers the silicon
@@ -198,6 +198,8 @@ BLOCKS = [
     ("feedback_registers", "feedback registers"),
     ("motion_control", "motion control"),
     ("safety_monitor", "safety monitor"),
+    ("spindle", "spindle (PWM or SPI DAC, ramp, its registers)"),
+    ("logic_outputs", "logic outputs and interlock (its registers)"),
 ]
 
 p = print
@@ -209,7 +211,7 @@ p()
 p("## Per block, default 4-axis core")
 p()
 p("`finestep_top` with its defaults: 4 axes, 4 encoder channels, hand wheel and jog, SPI")
-p("and 8080, a 256-record FIFO. Each block synthesised on its own (`-noflatten`), counts")
+p("and 8080, a 256-record FIFO, the spindle and the logic outputs (4 general). Each block synthesised on its own (`-noflatten`), counts")
 p("including its submodules; n is the number of instances in the core, the figures are")
 p("per instance. iCE40: SB_LUT4, SB_CARRY, flip-flops, 4 kbit RAMs; ECP5: LUT4, CCU2C")
 p("(each 2 LUT4 with carry), flip-flops, 18 kbit RAMs.")
@@ -236,7 +238,7 @@ p()
 p("| configuration | iCE40 LUT4 | carry | FF | RAM4K | ECP5/MachXO2 LUT4 | CCU2 | FF | EBR | LUT4 equivalents |")
 p("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
 for label, ice_name, ecp_name in [
-        ("default: 4 axes, 4 encoders, hand wheel, SPI + 8080, FIFO 256 (ECP5)", "ice40_core", "ecp5_core"),
+        ("default: 4 axes, 4 encoders, hand wheel, SPI + 8080, FIFO 256, spindle, outputs (ECP5)", "ice40_core", "ecp5_core"),
         ("CPLD: 4 axes, 2 encoders, hand wheel, 8080, FIFO 4 (MachXO2)", "ice40_cpld", "xo2_cpld")]:
     im, em = load(ice_name), load(ecp_name)
     i = ice40(inclusive(im)["finestep_top"])
