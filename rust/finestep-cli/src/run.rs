@@ -6,11 +6,15 @@
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Context};
-use finestep_gcode::Program;
-use finestep_host::stream::{self, StreamEvent};
+use finestep_gcode::{Program, SpindleRotation};
+use finestep_host::stream::{self, RunReport, StreamEvent};
+use finestep_host::{Bus, Machine, Outputs, SpindleSetup};
 use finestep_model::{Core, CoreInputs};
+use finestep_planner::config::Resolved;
 use finestep_planner::config::AXIS_NAMES;
-use finestep_planner::{check_program, plan_program, CheckReport, MachineConfig, ProfileKind};
+use finestep_planner::{
+    check_program, plan_program, CheckReport, IoAction, MachineConfig, PlannedProgram, ProfileKind, SpindleConfig,
+};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::bus::BusTarget;
@@ -48,6 +52,79 @@ fn print_check(report: &CheckReport) {
             println!("    {v}");
         }
     }
+}
+
+/// Configures `chip` for `resolved` and streams `planned` into it, applying its spindle
+/// and coolant changes ([`PlannedProgram::events`]) at their exact stops: each once the
+/// records before it have run and the axes are at rest ([`stream::run_with_events`]).
+/// The spindle is set up from `spindle` when the program uses it; a chip built without
+/// the spindle or the logic outputs the program needs is refused before anything moves
+/// (`name`:line). `progress` gets the count of records queued.
+pub fn stream_planned<B: Bus>(
+    chip: &mut Machine<B>,
+    planned: &PlannedProgram,
+    resolved: &Resolved,
+    spindle: &SpindleConfig,
+    name: &str,
+    mut progress: impl FnMut(u64),
+) -> anyhow::Result<RunReport> {
+    machine_setup::configure(chip, resolved)?;
+    let config = machine_setup::stream_config(resolved);
+    let observe = |_: &mut Machine<B>, event: StreamEvent| {
+        if let StreamEvent::Queued { queued } = event {
+            progress(queued);
+        }
+        Ok(())
+    };
+    let streamed = if planned.events.is_empty() {
+        stream::run(chip, planned.records.iter().copied(), &config, observe)?
+    } else {
+        let caps = chip.caps();
+        let setup = SpindleSetup {
+            period_clocks: spindle.period_clocks,
+            ramp_step: spindle.ramp_step,
+            dac: spindle.dac,
+            dac_div: spindle.dac_div,
+        };
+        let mut outputs = Outputs::default();
+        let mut spindle_set_up = false;
+        for timed in &planned.events {
+            let line = timed.event.line;
+            match timed.event.action {
+                IoAction::Spindle { .. } if !caps.has_spindle => {
+                    bail!("{name}:{line}: the program sets the spindle, but the chip has no spindle (CAPS)")
+                }
+                IoAction::Spindle { .. } if !spindle_set_up => {
+                    chip.configure_spindle(&setup)?;
+                    spindle_set_up = true;
+                }
+                IoAction::Coolant { .. } if !caps.has_outputs => {
+                    bail!("{name}:{line}: the program sets the coolant, but the chip has no logic outputs (CAPS)")
+                }
+                IoAction::Coolant { .. } if outputs == Outputs::default() => outputs = chip.outputs()?,
+                _ => {}
+            }
+        }
+        let events = planned.events.iter().map(|timed| (timed.period, timed.event.action));
+        stream::run_with_events(chip, planned.records.iter().copied(), events, &config, observe, |chip, action| {
+            match action {
+                IoAction::Spindle { rotation, fraction, .. } => chip.set_spindle(
+                    rotation != SpindleRotation::Off,
+                    rotation == SpindleRotation::CounterClockwise,
+                    setup.level_for(fraction),
+                ),
+                IoAction::Coolant { mist, flood } => {
+                    outputs.mist = mist;
+                    outputs.flood = flood;
+                    chip.set_outputs(&outputs)
+                }
+            }
+        })?
+    };
+    if streamed.stream.underruns != 0 {
+        bail!("{} FIFO underruns", streamed.stream.underruns);
+    }
+    Ok(streamed)
 }
 
 pub fn run(
@@ -138,6 +215,12 @@ pub fn run_program_on(
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} periods {per_sec} {msg}")?);
     let drain = 2 * u64::from(period_clocks);
+    if fast && !planned.events.is_empty() {
+        println!(
+            "  note: the fast path runs the motion core alone: {} spindle/coolant changes not carried out",
+            planned.events.len()
+        );
+    }
     let (positions, cycles) = match &mut chip {
         None => {
             let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
@@ -160,20 +243,12 @@ pub fn run_program_on(
             (core.outputs().positions.map(|p| p as i32).to_vec(), core.cycle())
         }
         Some(chip) => {
-            machine_setup::configure(chip, &resolved)?;
-            let config = machine_setup::stream_config(&resolved);
-            let streamed = stream::run(chip, records.iter().copied(), &config, |_, event| {
-                if let StreamEvent::Queued { queued } = event {
-                    progress.set_position(queued);
-                    if let Some(line) = planned.lines.get((queued as usize).saturating_sub(1)) {
-                        progress.set_message(format!("line {line}"));
-                    }
+            let streamed = stream_planned(chip, &planned, &resolved, &config.spindle, name, |queued| {
+                progress.set_position(queued);
+                if let Some(line) = planned.lines.get((queued as usize).saturating_sub(1)) {
+                    progress.set_message(format!("line {line}"));
                 }
-                Ok(())
             })?;
-            if streamed.stream.underruns != 0 {
-                bail!("{} FIFO underruns", streamed.stream.underruns);
-            }
             (streamed.end.steps, streamed.cycles)
         }
     };
@@ -208,4 +283,105 @@ pub fn run_program_on(
         bail!("the checker found {} violations", report.violation_count);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use finestep_cosim::{rtl_top_params, ModelPins};
+    use finestep_host::pins::layout::{
+        OUT_COOLANT_FLOOD, OUT_COOLANT_MIST, OUT_PIN_A0, OUT_PIN_B0, OUT_SPINDLE_EN, OUT_SPINDLE_PWM,
+    };
+    use finestep_host::{BusError, PinHost, PinTarget, PinTiming, SpiBus};
+    use finestep_model::top::Top;
+
+    /// The model at its pins, one clock at a time: X's position counted from its step
+    /// and direction pins (step/dir mode: A steps on its rising edge, B high forward), and
+    /// every change of the spindle enable, mist and flood pins with X's position then.
+    struct Recorder {
+        inner: ModelPins,
+        cycle: u64,
+        x: i64,
+        pwm_rises: u64,
+        changes: Vec<(u64, u64, i64)>,
+        steps: Vec<u64>,
+    }
+
+    const WATCHED: u64 = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_MIST | 1 << OUT_COOLANT_FLOOD;
+
+    impl PinTarget for Recorder {
+        fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+            for _ in 0..cycles {
+                let before = self.inner.outputs();
+                self.inner.drive(inputs, 1)?;
+                let now = self.inner.outputs();
+                self.cycle += 1;
+                if now >> OUT_PIN_A0 & 1 != 0 && before >> OUT_PIN_A0 & 1 == 0 {
+                    self.x += if now >> OUT_PIN_B0 & 1 != 0 { 1 } else { -1 };
+                    self.steps.push(self.cycle);
+                }
+                if now >> OUT_SPINDLE_PWM & 1 != 0 && before >> OUT_SPINDLE_PWM & 1 == 0 {
+                    self.pwm_rises += 1;
+                }
+                if (now ^ before) & WATCHED != 0 {
+                    self.changes.push((self.cycle, now & WATCHED, self.x));
+                }
+            }
+            Ok(())
+        }
+
+        fn outputs(&self) -> u64 {
+            self.inner.outputs()
+        }
+    }
+
+    /// `finestep run`'s machinery (resolution against the chip, planner, streamer with
+    /// events) on the model's pins: the spindle turns on with X at rest at 1 mm, flood at
+    /// 2 mm, both off at 3 mm, and X moves only between them.
+    #[test]
+    fn spindle_and_coolant_switch_on_the_pins_between_the_moves() {
+        let recorder = Recorder {
+            inner: ModelPins(Top::new(rtl_top_params())),
+            cycle: 0,
+            x: 0,
+            pwm_rises: 0,
+            changes: Vec::new(),
+            steps: Vec::new(),
+        };
+        let mut host = PinHost::new(recorder, PinTiming::default());
+        host.reset(4).unwrap();
+        host.idle(8).unwrap();
+        let mut chip = Machine::connect(SpiBus::new(host, 1)).unwrap();
+        let n_axes = chip.caps().n_axes;
+        chip.bus().set_n_axes(n_axes);
+        let limits = machine_setup::chip_limits(&chip.caps());
+        let (config, resolved) = machine_setup::resolve(MachineConfig::default(), limits, "<built-in>").unwrap();
+        let text = "G1 X1 F600\nM3 S1000\nG1 X2\nM8\nG1 X3\nM5 M9\nM2\n";
+        let program = finestep_gcode::parse_str(text, "io.ngc").unwrap();
+        let planned = plan_program(&config, &program).unwrap();
+        assert_eq!(planned.events.len(), 4);
+        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "io.ngc", |_| {}).unwrap();
+        assert_eq!(report.stream.underruns, 0);
+        assert_eq!(report.end.steps[0], 3 * 800);
+        let recorder = chip.bus().link_mut().target();
+        assert_eq!(recorder.x, 3 * 800);
+        // Each pin change with X's position then: exactly the block's point.
+        let (en, flood) = (1 << OUT_SPINDLE_EN, 1 << OUT_COOLANT_FLOOD);
+        let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, x)| (pins, x)).collect();
+        assert_eq!(states, vec![(en, 800), (en | flood, 1600), (flood, 2400), (0, 2400)], "{:?}", recorder.changes);
+        // X at rest around each change: no step within four full-feed step intervals
+        // (10 mm/s at 800 steps/mm: one step per 6250 clocks) either side, where blended
+        // moves would pass X1 and X2 at full feed.
+        let quiet = 4 * 6250;
+        for &(cycle, _, _) in &recorder.changes {
+            let before = recorder.steps.iter().rev().find(|&&s| s <= cycle).copied().unwrap_or(0);
+            let after = recorder.steps.iter().find(|&&s| s > cycle).copied().unwrap_or(u64::MAX);
+            assert!(
+                cycle - before > quiet && after - cycle > quiet,
+                "steps at {before} and {after}, change at {cycle}"
+            );
+        }
+        // The spindle ran (PWM at 1000/24000 of full level) while enabled.
+        assert!(recorder.pwm_rises > 10, "{}", recorder.pwm_rises);
+    }
 }

@@ -21,7 +21,7 @@
 use finestep_interface::PeriodRecord;
 
 use crate::frame::MAX_COUNT;
-use crate::regs::{fifo_level, latch_time, status, underrun_count};
+use crate::regs::{fifo_level, latch_time, start_level, status, underrun_count};
 use crate::{Bus, BusError, Machine, Positions};
 
 /// How the streamer polls and fills.
@@ -263,4 +263,72 @@ pub fn run<B: Bus>(
         cycles: u64::from(end.latch_time.wrapping_sub(before_run)),
         end,
     })
+}
+
+/// [`run`] with actions between records: `events` gives `(period, action)` in order of
+/// `period`, and each action is applied (by `apply`) once the first `period` records have
+/// run and the core is at rest: the streamer queues the records up to that point, waits
+/// until the FIFO is empty and the gate has closed, applies the action, and goes on. The
+/// record before each event must end at rest (`BLOCK_END`), or the drain counts as an
+/// underrun. Each stretch of records starts once all of it, or `config.prefill`
+/// records, are queued (START_LEVEL is set for it; the value read before the run is
+/// written back at the end). An action at period 0 is applied after the run request,
+/// before the first record is queued. `first_boundary` is `LATCH_TIME` read just after
+/// the run request, the FIFO empty (not the boundary that took the first record).
+pub fn run_with_events<B: Bus, E>(
+    machine: &mut Machine<B>,
+    records: impl IntoIterator<Item = PeriodRecord>,
+    events: impl IntoIterator<Item = (u64, E)>,
+    config: &StreamConfig,
+    mut observe: impl FnMut(&mut Machine<B>, StreamEvent) -> Result<(), BusError>,
+    mut apply: impl FnMut(&mut Machine<B>, E) -> Result<(), BusError>,
+) -> Result<RunReport, BusError> {
+    let period = u64::from(machine.period_clocks());
+    let fifo_depth = machine.caps().fifo_depth;
+    let start_level_before = machine.bus().read_one(start_level::ADDR)?;
+    let underruns_before = underruns(machine.bus())?;
+    let mut records = records.into_iter().peekable();
+    let mut events = events.into_iter().peekable();
+    let before_run = machine.positions()?.latch_time;
+    machine.set_control(true, config.watchdog, config.estop_active_high)?;
+    let first_boundary = machine.bus().read_one(latch_time::ADDR)?;
+    let mut report = StreamReport::default();
+    let max_clocks = 2 * (fifo_depth as u64 + 2) * period;
+    loop {
+        while let Some((_, action)) = events.next_if(|(at, _)| *at <= report.records) {
+            apply(machine, action)?;
+        }
+        let until = events.peek().map(|(at, _)| *at);
+        let stretch: Vec<PeriodRecord> = match until {
+            Some(at) => records.by_ref().take((at - report.records) as usize).collect(),
+            None => records.by_ref().collect(),
+        };
+        if !stretch.is_empty() {
+            let start = stretch.len().min(config.prefill).min(fifo_depth).max(1);
+            machine.set_start_level(start as u16)?;
+            let queued_before = report.records;
+            let streamed = queue(machine, stretch, config, |machine, event| match event {
+                StreamEvent::Queued { queued } => {
+                    observe(machine, StreamEvent::Queued { queued: queued_before + queued })
+                }
+                StreamEvent::Waited => observe(machine, event),
+            })?;
+            report.records += streamed.records;
+            report.bursts += streamed.bursts;
+            report.polls += streamed.polls;
+            idle(machine, config.poll_clocks, max_clocks, &mut observe)?;
+        }
+        if until.is_none() || (records.peek().is_none() && until.is_some_and(|at| at > report.records)) {
+            // The records ran out; events after their end are applied at the end.
+            for (_, action) in events {
+                apply(machine, action)?;
+            }
+            break;
+        }
+    }
+    machine.bus().wait(2 * period)?;
+    machine.bus().write(start_level::ADDR, start_level_before)?;
+    report.underruns = underruns(machine.bus())?.wrapping_sub(underruns_before);
+    let end = machine.positions()?;
+    Ok(RunReport { stream: report, first_boundary, cycles: u64::from(end.latch_time.wrapping_sub(before_run)), end })
 }

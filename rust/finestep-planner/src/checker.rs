@@ -444,7 +444,12 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
                 let sweep = arc_sweep(theta0, theta1, clockwise, extra_turns);
                 (to, feed_mm_per_min / 60.0, Some(((u, v), (c[u], c[v]), r0, theta0, sweep)))
             }
-            BlockKind::Dwell { .. } | BlockKind::Pause | BlockKind::ToolChange { .. } => {
+            // Spindle and coolant changes take effect at rest where they are written.
+            BlockKind::Dwell { .. }
+            | BlockKind::Pause
+            | BlockKind::ToolChange { .. }
+            | BlockKind::Spindle { .. }
+            | BlockKind::Coolant { .. } => {
                 mark_stop(&mut out);
                 continue;
             }

@@ -16,6 +16,12 @@
 //! dir_setup_ns = 5000
 //! dir_hold_ns = 5000
 //!
+//! [spindle]                     # S, M3/M4/M5 (docs/spec/spindle.md)
+//! max_rpm = 24000.0             # S at full level; a larger S is refused (file:line)
+//! period_clocks = 1000          # PWM period / DAC frame interval, clocks
+//! ramp_step = 0                 # most the level moves per period (0: no ramp)
+//! dac = false                   # the SPI DAC instead of the PWM pin
+//!
 //! [axes.X]                      # X, Y, Z (mm) and A (degrees); a listed [axes] table
 //! steps_per_unit = 800.0        # replaces the default axes, missing keys take defaults
 //! max_velocity = 100.0          # units/s
@@ -128,6 +134,8 @@ pub struct MachineConfig {
     /// The tool table: radii for cutter compensation (G41/G42 D, or the tool in the
     /// spindle).
     pub tools: Vec<ToolConfig>,
+    /// The spindle: what S means and how the level reaches the drive.
+    pub spindle: SpindleConfig,
     /// The host link the `finestep` tools talk over (`lockstep`, `model`,
     /// `spidev:/dev/spidevB.C[@SCK_HZ]`, `sim:SOCKET`); `--bus` overrides it. The planner
     /// does not read it.
@@ -187,6 +195,30 @@ impl CoreLimits {
     }
 }
 
+/// The spindle's scale and output (`[spindle]`).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SpindleConfig {
+    /// The speed at full level, rev/min: S maps linearly to the level, `S / max_rpm` of
+    /// full scale; an S above it (or negative) is refused at its line.
+    pub max_rpm: f64,
+    /// The PWM period (the DAC frame and ramp interval), clocks.
+    pub period_clocks: u16,
+    /// The most the level moves per period (0: no limit).
+    pub ramp_step: u16,
+    /// The 12-bit SPI DAC instead of the PWM pin.
+    pub dac: bool,
+    /// The DAC's SCK half-period minus one, clocks (0..=15).
+    pub dac_div: u8,
+}
+
+impl Default for SpindleConfig {
+    /// 24000 rev/min at full level, PWM of 1000 clocks (50 kHz at 50 MHz), no ramp.
+    fn default() -> Self {
+        SpindleConfig { max_rpm: 24_000.0, period_clocks: 1000, ramp_step: 0, dac: false, dac_div: 0 }
+    }
+}
+
 /// One tool of the tool table.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -220,6 +252,7 @@ impl Default for MachineConfig {
             chord_tolerance_mm: 0.001,
             lookahead_moves: 2000,
             bus: None,
+            spindle: SpindleConfig::default(),
             drive: DriveTimingNs::default(),
             axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
             tools: vec![
@@ -282,6 +315,8 @@ pub struct Resolved {
     pub chord_tolerance_mm: f64,
     /// Look-ahead in moves.
     pub lookahead_moves: usize,
+    /// S at full spindle level, rev/min.
+    pub spindle_max_rpm: f64,
     /// What was adjusted (velocity caps), for the report.
     pub notes: Vec<String>,
 }
@@ -393,6 +428,7 @@ impl MachineConfig {
         }
         positive("path_tolerance_mm", self.path_tolerance_mm)?;
         positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
+        positive("spindle.max_rpm", self.spindle.max_rpm)?;
         if !(2..=1_000_000).contains(&self.lookahead_moves) {
             return Err(fail(
                 "lookahead_moves".into(),
@@ -475,6 +511,7 @@ impl MachineConfig {
             path_tolerance_mm: self.path_tolerance_mm,
             chord_tolerance_mm: self.chord_tolerance_mm,
             lookahead_moves: self.lookahead_moves,
+            spindle_max_rpm: self.spindle.max_rpm,
             notes,
         })
     }

@@ -72,6 +72,50 @@ pub struct Element {
     pub dwell_line: usize,
     /// The last element of a programmed block (its period gets the block-end flag).
     pub block_end: bool,
+    /// Machine-I/O changes at the exact stop after this element, each after that many of
+    /// its dwell periods (`stop_after` is set whenever this is not empty).
+    pub events: Vec<(u64, IoEvent)>,
+}
+
+/// A spindle or coolant change the program makes at a point of the path (S, M3/M4/M5,
+/// M7/M8/M9), applied at an exact stop.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IoAction {
+    /// The spindle after the block.
+    Spindle {
+        /// M3, M4 or M5.
+        rotation: finestep_gcode::SpindleRotation,
+        /// The programmed speed (the last S), rev/min.
+        rpm: f64,
+        /// `rpm` over the configuration's `spindle.max_rpm` (0..=1).
+        fraction: f64,
+    },
+    /// The coolant after the block.
+    Coolant {
+        /// M7.
+        mist: bool,
+        /// M8.
+        flood: bool,
+    },
+}
+
+/// An [`IoAction`] and the source line that wrote it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IoEvent {
+    /// 1-based source line.
+    pub line: usize,
+    /// What changes.
+    pub action: IoAction,
+}
+
+/// An [`IoEvent`] placed in the record stream: it takes effect once the first `period`
+/// records have run (the one before it ends at rest, with the block-end flag).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimedEvent {
+    /// Records before the event.
+    pub period: u64,
+    /// The event.
+    pub event: IoEvent,
 }
 
 impl Element {

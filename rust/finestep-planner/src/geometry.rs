@@ -28,6 +28,7 @@ pub use crate::element::{
     Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE,
     TANGENTIAL_JERK_SHARE,
 };
+use crate::element::{IoAction, IoEvent};
 use crate::error::ProgramError;
 use crate::nurbs::NurbsCurve;
 use crate::nurbs_pieces;
@@ -53,6 +54,33 @@ struct Move {
     stop_after: bool,
     dwell_periods: u64,
     dwell_line: usize,
+    /// I/O events at the stop after the move, each after that many dwell periods.
+    events: Vec<(u64, IoEvent)>,
+}
+
+/// What the program's moves give: the moves, the end, the idle periods and the I/O
+/// events (each after that many idle periods) before the first move.
+struct Moves {
+    moves: Vec<Move>,
+    end: Vec4,
+    leading_dwell: u64,
+    leading_events: Vec<(u64, IoEvent)>,
+}
+
+/// The element `e` made from `m` takes the stop, dwell and events after `m`.
+fn take_after(e: &mut Element, m: &Move) {
+    e.stop_after = m.stop_after;
+    e.dwell_periods = m.dwell_periods;
+    e.dwell_line = m.dwell_line;
+    e.events = m.events.clone();
+}
+
+/// `m` made no element: the stop, dwell and events after it go after `last`.
+fn merge_after(last: &mut Element, m: &Move) {
+    last.stop_after |= m.stop_after;
+    last.events.extend(m.events.iter().map(|&(d, event)| (last.dwell_periods + d, event)));
+    last.dwell_periods += m.dwell_periods;
+    last.dwell_line = last.dwell_line.max(m.dwell_line);
 }
 
 fn coords(p: &Point) -> Vec4 {
@@ -88,7 +116,7 @@ fn sweep_angle(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
 }
 
 /// Reads the program's moves: positions rounded to steps, modes resolved.
-fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64), ProgramError> {
+fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
     let mut out: Vec<Move> = Vec::new();
     let mut at = [0.0; 4];
     let mut at_programmed = [0.0; 4];
@@ -107,8 +135,33 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
         }
     };
     let mut leading_dwell = 0u64;
+    let mut leading_events = Vec::new();
     for block in &program.blocks {
         let fail = |reason: String| ProgramError { line: block.line, reason };
+        let action = match block.kind {
+            BlockKind::Spindle { rotation, rpm } => {
+                let max = config.spindle_max_rpm;
+                if !(0.0..=max).contains(&rpm) {
+                    return Err(fail(format!("S{rpm} is outside 0..={max} rev/min (spindle.max_rpm)")));
+                }
+                Some(IoAction::Spindle { rotation, rpm, fraction: rpm / max })
+            }
+            BlockKind::Coolant { mist, flood } => Some(IoAction::Coolant { mist, flood }),
+            _ => None,
+        };
+        if let Some(action) = action {
+            // An exact stop where the block is: the change takes effect at rest there.
+            let event = IoEvent { line: block.line, action };
+            match out.last_mut() {
+                Some(last) => {
+                    last.stop_after = true;
+                    last.blend = None;
+                    last.events.push((last.dwell_periods, event));
+                }
+                None => leading_events.push((leading_dwell, event)),
+            }
+            continue;
+        }
         let mut nurbs: Option<Vec<(f64, f64, f64)>> = None;
         let mut nurbs_shape: (usize, &[f64]) = (0, &[]);
         let (to, feed, arc) = match block.kind {
@@ -236,6 +289,7 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
             stop_after: blend.is_none(),
             dwell_periods: 0,
             dwell_line: 0,
+            events: Vec::new(),
         });
         at = to;
     }
@@ -243,7 +297,7 @@ fn moves(config: &Resolved, program: &Program) -> Result<(Vec<Move>, Vec4, u64),
         last.stop_after = true;
         last.blend = None;
     }
-    Ok((out, at, leading_dwell))
+    Ok(Moves { moves: out, end: at, leading_dwell, leading_events })
 }
 
 /// Per-axis shares of the path speed for a unit path speed (an upper bound on arcs).
@@ -274,6 +328,7 @@ fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64,
         dwell_periods: 0,
         dwell_line: 0,
         block_end: false,
+        events: Vec::new(),
     };
     limit(config, element, feed)
 }
@@ -432,6 +487,8 @@ pub struct PathElements {
     pub elements: Vec<Element>,
     /// Idle periods before the first move (G4 first).
     pub leading_dwell: u64,
+    /// I/O events before the first move, each after that many of the leading idle periods.
+    pub leading_events: Vec<(u64, IoEvent)>,
     /// Where the program ends, on whole steps.
     pub end: Vec4,
     /// Remarks for the report.
@@ -440,7 +497,7 @@ pub struct PathElements {
 
 /// The program as elements, and where it ends.
 pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, ProgramError> {
-    let (moves, end, leading_dwell) = moves(config, program)?;
+    let Moves { moves, end, leading_dwell, leading_events } = moves(config, program)?;
     let mut out: Vec<Element> = Vec::with_capacity(moves.len() * 2);
     // Where the current move's element starts (after the previous blend).
     let mut start = moves.first().map(|m| m.start).unwrap_or([0.0; 4]);
@@ -454,9 +511,7 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
                 .map_err(|e| ProgramError { line: m.line, reason: e.to_string() })?;
             let last = pieces.last_mut().expect("a NURBS has a piece");
             last.block_end = true;
-            last.stop_after = m.stop_after;
-            last.dwell_periods = m.dwell_periods;
-            last.dwell_line = m.dwell_line;
+            take_after(last, m);
             out.extend(pieces);
             start = m.end;
             continue;
@@ -464,14 +519,10 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
         if m.arc.is_some() {
             if let Some(mut e) = arc_element(config, m)? {
                 e.block_end = true;
-                e.stop_after = m.stop_after;
-                e.dwell_periods = m.dwell_periods;
-                e.dwell_line = m.dwell_line;
+                take_after(&mut e, m);
                 out.push(e);
             } else if let Some(last) = out.last_mut() {
-                last.stop_after |= m.stop_after;
-                last.dwell_periods += m.dwell_periods;
-                last.dwell_line = last.dwell_line.max(m.dwell_line);
+                merge_after(last, m);
             }
             start = m.end;
             continue;
@@ -500,6 +551,7 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
                     dwell_periods: 0,
                     dwell_line: 0,
                     block_end: false,
+                    events: Vec::new(),
                 };
                 pending_blend = Some(limit(config, blend, m.feed.min(n.feed)));
                 end_here = a;
@@ -507,19 +559,15 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
         }
         if let Some(mut e) = line_element(config, m, start, end_here, m.feed) {
             e.block_end = true;
-            e.stop_after = m.stop_after;
-            e.dwell_periods = m.dwell_periods;
-            e.dwell_line = m.dwell_line;
+            take_after(&mut e, m);
             out.push(e);
         } else if let Some(last) = out.last_mut() {
-            last.stop_after |= m.stop_after;
-            last.dwell_periods += m.dwell_periods;
-            last.dwell_line = last.dwell_line.max(m.dwell_line);
+            merge_after(last, m);
         }
         start = pending_blend.as_ref().map(|b| b.end).unwrap_or(m.end);
     }
     if let Some(b) = pending_blend {
         out.push(b);
     }
-    Ok(PathElements { elements: out, leading_dwell, end, notes: Vec::new() })
+    Ok(PathElements { elements: out, leading_dwell, leading_events, end, notes: Vec::new() })
 }

@@ -20,7 +20,7 @@ use finestep_interface::rate::RateChecker;
 use finestep_interface::{Increment, PeriodRecord};
 
 use crate::config::{Resolved, AXIS_NAMES};
-use crate::element::{Element, Shape};
+use crate::element::{Element, IoEvent, Shape, TimedEvent};
 use crate::error::ProgramError;
 use crate::lookahead::{element_limits, WindowedSpeeds};
 use crate::nurbs::NurbsCursor;
@@ -48,6 +48,10 @@ pub struct Periods {
     cursor: NurbsCursor,
     started: bool,
     done: bool,
+    /// Records emitted so far.
+    emitted: u64,
+    /// I/O events placed but not yet taken ([`Periods::take_events`]).
+    events: Vec<TimedEvent>,
 }
 
 impl Periods {
@@ -70,7 +74,24 @@ impl Periods {
             cursor: NurbsCursor::new(usize::MAX, 0.0),
             started: false,
             done: false,
+            emitted: 0,
+            events: Vec::new(),
         }
+    }
+
+    /// With the I/O events before the first move, each after that many of the leading
+    /// idle periods ([`crate::geometry::PathElements::leading_events`]).
+    pub fn with_leading_events(mut self, events: &[(u64, IoEvent)]) -> Periods {
+        self.events.extend(events.iter().map(|&(period, event)| TimedEvent { period, event }));
+        self
+    }
+
+    /// The I/O events placed so far and not yet taken, in order. An event is placed when
+    /// the record that stops before it is produced (its `period` is at most the count of
+    /// records produced plus the dwell that precedes it), so a consumer that reads all
+    /// records and then takes the events has them all.
+    pub fn take_events(&mut self) -> Vec<TimedEvent> {
+        std::mem::take(&mut self.events)
     }
 
     /// The elements being interpolated.
@@ -103,6 +124,7 @@ impl Periods {
             reason: format!("axis {}: {why} (planner bug: refusing to emit)", AXIS_NAMES.get(axis).unwrap_or(&"?")),
         })?;
         self.last = grid;
+        self.emitted += 1;
         Ok((record, line))
     }
 
@@ -144,11 +166,15 @@ impl Periods {
             }
             let last_element = self.index + 1 == self.elements.len();
             if stop_after || last_element {
-                // An exact stop (the last element always stops): the period ends on it.
+                // An exact stop (the last element always stops): the period ends on it,
+                // at rest (block end), and its I/O events follow it and the dwell before
+                // each.
                 let grid = self.grid_exact(end);
-                let out = self.emit(grid, flags, line);
+                let out = self.emit(grid, flags | BLOCK_END, line);
                 let e = &self.elements[self.index];
                 (self.idle, self.idle_line) = (e.dwell_periods, e.dwell_line);
+                let emitted = self.emitted;
+                self.events.extend(e.events.iter().map(|&(d, event)| TimedEvent { period: emitted + d, event }));
                 self.index += 1;
                 if self.index == self.elements.len() {
                     self.done = true;
@@ -189,7 +215,8 @@ impl Iterator for Periods {
     fn next(&mut self) -> Option<Self::Item> {
         if self.idle > 0 {
             self.idle -= 1;
-            return Some(self.emit(self.last, 0, self.idle_line));
+            // At rest: block end, so the FIFO may run dry after it (an I/O event).
+            return Some(self.emit(self.last, BLOCK_END, self.idle_line));
         }
         if self.done {
             return None;

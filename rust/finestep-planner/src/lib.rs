@@ -27,6 +27,14 @@
 //! the number of programmed moves (about 1.1 kB a move with the parsed program), not
 //! with their duration. [`plan_program`] collects the stream.
 //!
+//! Spindle and coolant changes (S, M3/M4/M5, M7/M8/M9) take effect where they are
+//! written, as in LinuxCNC: the path stops exactly there (no blending across them) and
+//! the change is placed at that record index ([`PlannedProgram::events`],
+//! [`TimedEvent`]), after the block-end record of the stop; the host applies it once the
+//! chip has run the records before it. S maps linearly to the spindle level,
+//! `S / spindle.max_rpm` of full scale; an S above `spindle.max_rpm` is refused at its
+//! line. M62-M65 are refused by the parser (not implemented).
+//!
 //! [`checker`] checks the result independently, from the records and the program alone.
 //!
 //! ```
@@ -78,5 +86,6 @@ pub mod vec4;
 pub mod velocity;
 
 pub use checker::{check_program, CheckReport};
-pub use config::{ConfigError, MachineConfig, ProfileKind};
+pub use config::{ConfigError, MachineConfig, ProfileKind, SpindleConfig};
+pub use element::{IoAction, IoEvent, TimedEvent};
 pub use program::{plan_program, plan_stream, PlanStream, PlannedProgram, ProgramError};

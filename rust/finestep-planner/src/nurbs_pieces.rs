@@ -289,6 +289,7 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 dwell_periods: 0,
                 dwell_line: 0,
                 block_end: false,
+                events: Vec::new(),
             });
             j = end;
         }

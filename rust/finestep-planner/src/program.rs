@@ -11,6 +11,7 @@ use finestep_interface::PeriodRecord;
 
 use crate::config::MachineConfig;
 use crate::cutter_comp::compensate;
+use crate::element::TimedEvent;
 pub use crate::error::ProgramError;
 use crate::geometry::elements;
 use crate::interpolate::Periods;
@@ -28,6 +29,10 @@ pub struct PlannedProgram {
     pub elements: usize,
     /// What was adjusted or not carried out as programmed, for the report.
     pub notes: Vec<String>,
+    /// The spindle and coolant changes (S, M3/M4/M5, M7/M8/M9) in program order, each at
+    /// the record index where it takes effect: the record before it ends an exact stop
+    /// at the point where the block is written (flagged block end).
+    pub events: Vec<TimedEvent>,
 }
 
 /// A program's periods as a stream ([`Periods`]): records are produced as they are
@@ -60,7 +65,7 @@ pub fn plan_stream(config: &MachineConfig, program: &Program) -> Result<PlanStre
     notes.extend(path.notes);
     let count = path.elements.len();
     Ok(PlanStream {
-        periods: Periods::new(resolved, path.elements, path.leading_dwell),
+        periods: Periods::new(resolved, path.elements, path.leading_dwell).with_leading_events(&path.leading_events),
         end: path.end,
         elements: count,
         notes,
@@ -70,15 +75,16 @@ pub fn plan_stream(config: &MachineConfig, program: &Program) -> Result<PlanStre
 /// Plan and interpolate `program` on the machine `config`, starting at rest at the
 /// origin, every record collected ([`plan_stream`] streams them instead).
 pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<PlannedProgram, ProgramError> {
-    let stream = plan_stream(config, program)?;
+    let mut stream = plan_stream(config, program)?;
     let mut records = Vec::new();
     let mut lines = Vec::new();
-    for period in stream.periods {
+    for period in stream.periods.by_ref() {
         let (record, line) = period?;
         records.push(record);
         lines.push(line);
     }
-    Ok(PlannedProgram { records, lines, end: stream.end, elements: stream.elements, notes: stream.notes })
+    let events = stream.periods.take_events();
+    Ok(PlannedProgram { records, lines, end: stream.end, elements: stream.elements, notes: stream.notes, events })
 }
 
 #[cfg(test)]
@@ -145,6 +151,69 @@ mod tests {
         assert_eq!(config.tool_table().radius_mm(1), None);
         let error = MachineConfig::from_toml_str("[[tools]]\nnumber = 7\nradius_mm = -1\n", "t.toml").unwrap_err();
         assert_eq!(error.key, "tools[0].radius_mm");
+    }
+
+    #[test]
+    fn spindle_and_coolant_changes_stop_the_path_where_they_are_written() {
+        use crate::element::IoAction;
+        use finestep_gcode::SpindleRotation;
+        let config = MachineConfig::default(); // X at 800 steps/mm, T = 1 ms
+        let text = "G64\nG1 X1 F600\nM3 S1000\nG1 X2\nM8\nG1 X3\nM5 M9\nM2\n";
+        let planned = plan_program(&config, &finestep_gcode::parse_str(text, "io.ngc").unwrap()).unwrap();
+        let x_after =
+            |n: u64| -> i64 { planned.records[..n as usize].iter().map(|r| i64::from(r.inc[0].to_bits())).sum() };
+        let x_inc = |i: u64| i64::from(planned.records[i as usize].inc[0].to_bits());
+        let events: Vec<(u64, usize, IoAction)> =
+            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+        assert_eq!(events.len(), 4, "{events:?}");
+        let on = IoAction::Spindle { rotation: SpindleRotation::Clockwise, rpm: 1000.0, fraction: 1000.0 / 24000.0 };
+        let off = IoAction::Spindle { rotation: SpindleRotation::Off, rpm: 1000.0, fraction: 1000.0 / 24000.0 };
+        assert_eq!((events[0].1, events[0].2), (3, on));
+        assert_eq!((events[1].1, events[1].2), (5, IoAction::Coolant { mist: false, flood: true }));
+        assert_eq!((events[2].1, events[2].2), (7, off));
+        assert_eq!((events[3].1, events[3].2), (7, IoAction::Coolant { mist: false, flood: false }));
+        let steps = |mm: i64| (mm * 800) << 16;
+        for (event, mm) in [(events[0], 1), (events[1], 2), (events[2], 3)] {
+            let p = event.0;
+            // The program position at the event is the block's point, exactly on the step.
+            assert_eq!(x_after(p), steps(mm), "{event:?}");
+            // The record before it ends at rest (block end) and the path stops there: the
+            // last increment before it and the first after it are below a speed of one
+            // step per period (full feed is 8 steps per period).
+            assert!(planned.records[p as usize - 1].flags & 1 != 0);
+            assert!(x_inc(p - 1).abs() < 1 << 16, "{}", x_inc(p - 1));
+            if p < planned.records.len() as u64 {
+                assert!(x_inc(p).abs() < 1 << 16, "{}", x_inc(p));
+            }
+        }
+        assert_eq!(events[3].0, planned.records.len() as u64);
+        // The independent checker reads the M codes as exact stops too and finds all
+        // three on their steps (X1, X2, X3 and the end).
+        let report =
+            crate::check_program(&config, &finestep_gcode::parse_str(text, "io.ngc").unwrap(), &planned.records)
+                .unwrap();
+        assert!(report.passed());
+        assert_eq!(report.exact_stops, 3);
+        // Without the M codes the collinear moves blend at full feed through X1 and X2.
+        let plain = "G64\nG1 X1 F600\nG1 X2\nG1 X3\nM2\n";
+        let blended = plan_program(&config, &finestep_gcode::parse_str(plain, "plain.ngc").unwrap()).unwrap();
+        assert!(blended.events.is_empty());
+        let mut x = 0i64;
+        for r in &blended.records {
+            let before = x;
+            x += i64::from(r.inc[0].to_bits());
+            if before < steps(1) && x >= steps(1) {
+                assert!(i64::from(r.inc[0].to_bits()) > 7 << 16);
+            }
+        }
+        assert!(blended.records.len() < planned.records.len());
+        // Before any move the event is at record 0; an S over spindle.max_rpm is refused at its line.
+        let first = plan_program(&config, &finestep_gcode::parse_str("M8\nG1 X1 F600\n", "m8.ngc").unwrap()).unwrap();
+        assert_eq!(first.events[0].period, 0);
+        let error =
+            plan_program(&config, &finestep_gcode::parse_str("G1 X1 F600\nM3 S30000\n", "s.ngc").unwrap()).unwrap_err();
+        assert_eq!(error.line, 2, "{error}");
+        assert!(error.reason.contains("spindle.max_rpm"), "{error}");
     }
 
     #[test]
