@@ -136,8 +136,15 @@ fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
     };
     let mut leading_dwell = 0u64;
     let mut leading_events = Vec::new();
+    // The spindle and coolant as the program leaves them: M2 or M30 (or the program's
+    // last line) turns on ones off, as LinuxCNC's M2 does (M5, M9).
+    let mut left_on: (Option<IoAction>, bool) = (None, false);
+    let mut last_line = program.blocks.last().map_or(0, |b| b.line);
     for block in &program.blocks {
         let fail = |reason: String| ProgramError { line: block.line, reason };
+        if matches!(block.kind, BlockKind::End) {
+            last_line = block.line;
+        }
         let action = match block.kind {
             BlockKind::Spindle { rotation, rpm } => {
                 let max = config.spindle_max_rpm;
@@ -150,6 +157,12 @@ fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
             _ => None,
         };
         if let Some(action) = action {
+            match action {
+                IoAction::Spindle { rotation, .. } => {
+                    left_on.0 = (rotation != finestep_gcode::SpindleRotation::Off).then_some(action)
+                }
+                IoAction::Coolant { mist, flood } => left_on.1 = mist || flood,
+            }
             // An exact stop where the block is: the change takes effect at rest there.
             let event = IoEvent { line: block.line, action };
             match out.last_mut() {
@@ -293,9 +306,22 @@ fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
         });
         at = to;
     }
-    if let Some(last) = out.last_mut() {
-        last.stop_after = true;
-        last.blend = None;
+    let mut off = Vec::new();
+    if let Some(IoAction::Spindle { rpm, fraction, .. }) = left_on.0 {
+        let rotation = finestep_gcode::SpindleRotation::Off;
+        off.push(IoEvent { line: last_line, action: IoAction::Spindle { rotation, rpm, fraction } });
+    }
+    if left_on.1 {
+        off.push(IoEvent { line: last_line, action: IoAction::Coolant { mist: false, flood: false } });
+    }
+    match out.last_mut() {
+        Some(last) => {
+            last.stop_after = true;
+            last.blend = None;
+            let dwell = last.dwell_periods;
+            last.events.extend(off.into_iter().map(|event| (dwell, event)));
+        }
+        None => leading_events.extend(off.into_iter().map(|event| (leading_dwell, event))),
     }
     Ok(Moves { moves: out, end: at, leading_dwell, leading_events })
 }

@@ -210,6 +210,22 @@ mod tests {
         // Before any move the event is at record 0; an S over spindle.max_rpm is refused at its line.
         let first = plan_program(&config, &finestep_gcode::parse_str("M8\nG1 X1 F600\n", "m8.ngc").unwrap()).unwrap();
         assert_eq!(first.events[0].period, 0);
+        // M2 turns off what the program left on, after the last move (LinuxCNC's M5 M9).
+        let left = "M3 S1000\nM7\nG1 X1 F600\nM2\n";
+        let left = plan_program(&config, &finestep_gcode::parse_str(left, "left.ngc").unwrap()).unwrap();
+        let ends: Vec<(u64, usize, IoAction)> =
+            left.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+        let n = left.records.len() as u64;
+        let on = IoAction::Spindle { rotation: SpindleRotation::Clockwise, rpm: 1000.0, fraction: 1000.0 / 24000.0 };
+        assert_eq!(
+            ends,
+            vec![
+                (0, 1, on),
+                (0, 2, IoAction::Coolant { mist: true, flood: false }),
+                (n, 4, off),
+                (n, 4, IoAction::Coolant { mist: false, flood: false })
+            ]
+        );
         let error =
             plan_program(&config, &finestep_gcode::parse_str("G1 X1 F600\nM3 S30000\n", "s.ngc").unwrap()).unwrap_err();
         assert_eq!(error.line, 2, "{error}");
