@@ -105,7 +105,8 @@ pub struct HardwareStatus {
     pub fifo_free: usize,
     /// The encoders, probe, hand wheel and jog.
     pub feedback: FeedbackStatus,
-    /// The spindle and the interlock.
+    /// The spindle and the interlock: what a read of their registers shows, so `top`
+    /// fills it only in a cycle that serves a read (all 0 otherwise).
     pub io: IoStatus,
 }
 

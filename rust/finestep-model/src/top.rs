@@ -573,8 +573,8 @@ impl Top {
     }
 
     /// The hardware values register reads show in this cycle.
-    /// `read_served`: a read is served in this cycle (the encoders' register view is
-    /// built only then; nothing else reads it).
+    /// `read_served`: a read is served in this cycle (the encoders' and the spindle's
+    /// and interlock's register views are built only then; nothing else reads them).
     fn hardware_status(&self, read_served: bool) -> HardwareStatus {
         let core_out = self.core.outputs();
         let mut rate_error = 0;
@@ -598,7 +598,7 @@ impl Top {
             fifo_level: self.fifo.level(),
             fifo_free: self.fifo.depth() - self.fifo.level() - self.fifo.staged(),
             feedback: self.feedback_status(read_served),
-            io: self.io_status(),
+            io: if read_served { self.io_status() } else { IoStatus::default() },
         }
     }
 

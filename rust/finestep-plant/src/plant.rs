@@ -257,7 +257,7 @@ mod tests {
     type TimedInput = (u64, Option<u64>, Option<(i64, u64)>);
 
     use super::*;
-    use crate::testutil::{step_pins, StepPlan, X4};
+    use crate::testutil::{jump_through, step_pins, StepPlan, X4};
     use crate::{CountsPerStep, Faults, Glitches, Mechanics};
     use proptest::prelude::*;
 
@@ -376,25 +376,7 @@ mod tests {
                 }
 
                 let mut jumped = Plant::new(config(tau, faults, phase), seed).unwrap();
-                let mut found = Vec::new();
-                let mut next = inputs.iter().peekable();
-                loop {
-                    let stop = next.peek().map_or(end, |i| i.0);
-                    while let Some(t) = jumped.next_change().filter(|&t| t <= stop) {
-                        let before = jumped.pins();
-                        jumped.advance_to(t);
-                        prop_assert!(jumped.pins() != before, "jump to {} changed nothing", t);
-                        found.push((t, jumped.pins()));
-                    }
-                    jumped.advance_to(stop);
-                    if next.peek().is_none() {
-                        break;
-                    }
-                    while let Some(input) = next.peek().filter(|i| i.0 == stop) {
-                        apply(&mut jumped, input);
-                        next.next();
-                    }
-                }
+                let found = jump_through(&mut jumped, &inputs, end, |i| i.0, apply)?;
                 prop_assert_eq!(&found, &expected);
                 for c in 0..jumped.channels() {
                     prop_assert_eq!(jumped.encoder(c).decoded(), stepped.encoder(c).decoded());

@@ -257,7 +257,7 @@ impl Roller {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testutil::{step_pins, StepPlan};
+    use crate::testutil::{jump_through, step_pins, StepPlan};
     use crate::{ChannelConfig, DriveConfig, Mechanics, Plant, PlantConfig, PlantPins};
     use proptest::prelude::*;
 
@@ -324,25 +324,13 @@ mod tests {
                     }
                 }
                 let mut jumped = plant(tau, measure, surface.clone());
-                let mut found = Vec::new();
-                let mut next = events.iter().peekable();
-                loop {
-                    let stop = next.peek().map_or(end, |e| e.0);
-                    while let Some(t) = jumped.next_change().filter(|&t| t <= stop) {
-                        let before = jumped.pins();
-                        jumped.advance_to(t);
-                        prop_assert!(jumped.pins() != before, "jump to {} changed nothing", t);
-                        found.push((t, jumped.pins()));
-                    }
-                    jumped.advance_to(stop);
-                    if next.peek().is_none() {
-                        break;
-                    }
-                    while let Some(&&(_, axis, s, d)) = next.peek().filter(|e| e.0 == stop) {
-                        jumped.set_step_pins(stop, axis, s, d);
-                        next.next();
-                    }
-                }
+                let found = jump_through(
+                    &mut jumped,
+                    &events,
+                    end,
+                    |e| e.0,
+                    |p, &(t, axis, s, d)| p.set_step_pins(t, axis, s, d),
+                )?;
                 prop_assert_eq!(&found, &expected);
                 let gauge = jumped.roller().unwrap().gauge().unwrap();
                 prop_assert_eq!(gauge.decoded().count, gauge.ideal_count());

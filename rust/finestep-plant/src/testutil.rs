@@ -2,8 +2,9 @@
 //! chip's decoding rule (independent of the encoder's own tables).
 
 use proptest::prelude::*;
+use proptest::test_runner::TestCaseError;
 
-use crate::Drive;
+use crate::{Drive, Plant, PlantPins};
 
 /// Steps of one axis: (cycles since the previous step's rising edge, direction).
 #[derive(Clone, Debug)]
@@ -134,5 +135,35 @@ impl X4 {
         }
         self.a = a;
         self.b = b;
+    }
+}
+
+/// Runs `plant` to `end` the way a closed loop does, jumping from pin change to pin
+/// change (`next_change`) and applying each of `events` (sorted by `at`) at its cycle;
+/// returns every (cycle, pins) change, and fails if a jump changes nothing.
+pub fn jump_through<E>(
+    plant: &mut Plant,
+    events: &[E],
+    end: u64,
+    at: impl Fn(&E) -> u64,
+    mut apply: impl FnMut(&mut Plant, &E),
+) -> Result<Vec<(u64, PlantPins)>, TestCaseError> {
+    let mut found = Vec::new();
+    let mut next = events.iter().peekable();
+    loop {
+        let stop = next.peek().map_or(end, |e| at(e));
+        while let Some(t) = plant.next_change().filter(|&t| t <= stop) {
+            let before = plant.pins();
+            plant.advance_to(t);
+            prop_assert!(plant.pins() != before, "jump to {} changed nothing", t);
+            found.push((t, plant.pins()));
+        }
+        plant.advance_to(stop);
+        if next.peek().is_none() {
+            return Ok(found);
+        }
+        while let Some(event) = next.next_if(|e| at(e) == stop) {
+            apply(plant, event);
+        }
     }
 }
