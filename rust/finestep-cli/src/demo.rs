@@ -9,14 +9,16 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use finestep_cosim::{TopLockstep, TraceDepth};
 use finestep_host::stream::{self, StreamEvent};
+use finestep_host::{Bus, Machine};
 use finestep_model::limits::RateChecker;
 use finestep_model::PeriodRecord;
 use finestep_planner::MachineConfig;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::bus::BusTarget;
 use crate::machine_setup::{self, BURST};
 use crate::plot::{plot_axes, AxisTrace};
-use crate::run::run_program;
+use crate::run::run_program_on;
 
 const AXIS_NAMES: [&str; 3] = ["X", "Z", "C"];
 const AXIS_UNITS: [&str; 3] = ["mm", "mm", "deg"];
@@ -25,9 +27,49 @@ const STEPS_PER_UNIT: [f64; 3] = [1000.0, 400.0, 100.0];
 /// Periods traced into the waveform (the start of the move: direction set-up, first steps).
 const TRACED_PERIODS: u64 = 4;
 
-pub fn run(out: &Path) -> anyhow::Result<()> {
+/// The demo on the Verilated chip in lockstep with the model, or with `bus`, parts 1
+/// and 2 on that chip (a board, a served chip, the model alone); parts 3 and 4 need the
+/// simulated machine on the chip's pins and run only in lockstep.
+pub fn run(out: &Path, bus: Option<BusTarget>) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let mut chip = machine_setup::open(TopLockstep::new("demo"))?;
+    let bus = bus.unwrap_or(BusTarget::Lockstep);
+    if bus.is_lockstep() {
+        let mut chip = machine_setup::open(TopLockstep::new("demo"))?;
+        let line = part_1(&mut chip, out, &bus)?;
+        let lockstep = chip.into_bus().into_link().into_target();
+        let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });
+        let traced = lockstep.cycle() - line.cycles + TRACED_PERIODS * u64::from(line.period_clocks);
+        lockstep.write_waveform(&waveform, TraceDepth::Ports, traced)?;
+        println!("  waveform of the ports, first {TRACED_PERIODS} periods: {}", waveform.display());
+    } else {
+        let mut chip = crate::bus::open(&bus, "demo", machine_setup::model_params().clock_hz)?;
+        part_1(&mut chip, out, &bus)?;
+    }
+
+    println!();
+    println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
+    let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
+    run_program_on(&program, "demo-part.ngc", false, &bus, MachineConfig::default(), "<built-in>", out)?;
+    if !bus.is_lockstep() {
+        println!();
+        println!(
+            "finestep demo, parts 3 and 4 (feedback, hand wheel, roller compensation): skipped on {bus}; they need \
+             the simulated machine on the chip's pins (run `finestep demo` without --bus)"
+        );
+        return Ok(());
+    }
+    crate::demo_feedback::run()?;
+    crate::roller::demo(out)
+}
+
+/// What part 1's stream took, for the waveform of its first periods.
+struct LineRun {
+    cycles: u64,
+    period_clocks: u32,
+}
+
+/// Part 1: the seed-000 line streamed on `chip`; checks the end positions, plots them.
+fn part_1<B: Bus>(chip: &mut Machine<B>, out: &Path, bus: &BusTarget) -> anyhow::Result<LineRun> {
     let core = machine_setup::chip_limits(&chip.caps());
     let (config, resolved) =
         machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_UNIT), core, "<demo part 1>")?;
@@ -54,17 +96,23 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         resolved.clock_hz / 1e6
     );
     println!(
-        "  {} period records streamed over SPI (SCK = clk/8, bursts of {BURST}, CRC-checked frames) into the FIFO;",
+        "  {} period records streamed over SPI on {bus} (bursts of {BURST}, CRC-checked frames) into the FIFO;",
         records.len()
     );
-    println!("  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock");
-    machine_setup::configure(&mut chip, &resolved)?;
+    if bus.is_lockstep() {
+        println!(
+            "  RTL (Verilator) in lockstep with the reference model at the pins, every pin every clock (SCK = clk/8)"
+        );
+    }
+    machine_setup::configure(chip, &resolved)?;
+    // Counted from where the axes stand (a served chip or a board keeps its positions).
+    let start = chip.positions()?.steps;
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} records queued {per_sec}")?);
     // The latched positions the host reads while it waits: (LATCH_TIME, steps).
     let mut samples = Vec::new();
     let report =
-        stream::run(&mut chip, records.iter().copied(), &machine_setup::stream_config(&resolved), |chip, event| {
+        stream::run(chip, records.iter().copied(), &machine_setup::stream_config(&resolved), |chip, event| {
             match event {
                 StreamEvent::Queued { queued } => progress.set_position(queued),
                 StreamEvent::Waited => {
@@ -76,7 +124,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         })?;
     progress.finish_and_clear();
 
-    println!("  axis   final steps   final position   commanded");
+    println!("  axis   steps moved   end position   commanded");
     let mut commanded = [0i64; 3];
     for record in &records {
         for (axis, total) in commanded.iter_mut().enumerate() {
@@ -84,7 +132,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         }
     }
     for axis in 0..AXIS_NAMES.len() {
-        let steps = report.end.steps[axis];
+        let steps = report.end.steps[axis].wrapping_sub(start[axis]);
         let target = commanded[axis] as f64 / 65536.0;
         println!(
             "  {:<4} {:>13} {:>12.4} {:<3} {:>10.4} {}",
@@ -103,16 +151,12 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         bail!("{} FIFO underruns", report.stream.underruns);
     }
     println!(
-        "  {} bursts, 0 underruns; bit-exact over {} cycles ({:.3} s of machine time)",
+        "  {} bursts, 0 underruns;{} {} cycles ({:.3} s of machine time)",
         report.stream.bursts,
+        if bus.is_lockstep() { " bit-exact over" } else { "" },
         report.cycles,
         report.cycles as f64 / resolved.clock_hz
     );
-
-    let lockstep = chip.into_bus().into_link().into_target();
-    let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });
-    let traced = lockstep.cycle() - report.cycles + TRACED_PERIODS * u64::from(period_clocks);
-    lockstep.write_waveform(&waveform, TraceDepth::Ports, traced)?;
 
     // Commanded positions at the period boundaries; emitted ones where the host sampled
     // the latched POSITION registers, timed from the first boundary.
@@ -127,20 +171,13 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     for (latch_time, steps) in &samples {
         let t = f64::from(latch_time.wrapping_sub(report.first_boundary)) / resolved.clock_hz;
         for (axis, trace) in traces.iter_mut().enumerate() {
-            trace.emitted.push((t, f64::from(steps[axis])));
+            trace.emitted.push((t, f64::from(steps[axis].wrapping_sub(start[axis]))));
         }
     }
     let png = out.join("demo.png");
     plot_axes(&png, &traces, &AXIS_NAMES, resolved.period_s)?;
-    println!("  waveform of the ports, first {TRACED_PERIODS} periods: {}", waveform.display());
     println!("  plot: {}", png.display());
-
-    println!();
-    println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
-    let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
-    run_program(&program, "demo-part.ngc", false, MachineConfig::default(), "<built-in>", out)?;
-    crate::demo_feedback::run()?;
-    crate::roller::demo(out)
+    Ok(LineRun { cycles: report.cycles, period_clocks })
 }
 
 /// The demo's part program: an outside contour cut with cutter compensation (tool 3,

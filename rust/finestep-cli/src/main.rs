@@ -35,6 +35,10 @@ enum Command {
         /// Where the waveform and the plot go.
         #[arg(long, default_value = "target/demo")]
         out: PathBuf,
+        /// Parts 1 and 2 on this chip: lockstep (default, every part), model,
+        /// spidev:/dev/spidevB.C[@SCK_HZ] or sim:SOCKET.
+        #[arg(long)]
+        bus: Option<bus::BusTarget>,
     },
     /// Run a G-code part program: plan it (look-ahead, G64 blending, trapezoid or S-curve
     /// feed), check the periods independently, plot them, and stream them into the
@@ -193,7 +197,7 @@ enum ConfigAction {
 
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
-        Command::Demo { out } => demo::run(&out),
+        Command::Demo { out, bus } => demo::run(&out, bus),
         Command::Run { file, fast, bus, config, profile, out } => {
             run::run(&file, fast, bus, config.as_deref(), profile.as_deref(), &out)
         }

@@ -150,20 +150,9 @@ pub fn run(
 }
 
 /// Plans, checks, plots and runs `program` (named `name` in messages and plot files) on
-/// the machine `config` (named `config_name` in errors): on the chip, whose CAPS and
-/// clock the configuration is resolved against, or with `fast` on the model's build.
-pub fn run_program(
-    program: &Program,
-    name: &str,
-    fast: bool,
-    config: MachineConfig,
-    config_name: &str,
-    out: &Path,
-) -> anyhow::Result<()> {
-    run_program_on(program, name, fast, &BusTarget::Lockstep, config, config_name, out)
-}
-
-/// [`run_program`] with the chip on `bus` (unused with `fast`).
+/// the machine `config` (named `config_name` in errors): on the chip on `bus`, whose
+/// CAPS and clock the configuration is resolved against, or with `fast` on the model's
+/// build (no chip).
 pub fn run_program_on(
     program: &Program,
     name: &str,
@@ -243,18 +232,22 @@ pub fn run_program_on(
             (core.outputs().positions.map(|p| p as i32).to_vec(), core.cycle())
         }
         Some(chip) => {
+            // The program's origin is where the axes stand when it starts (a served chip
+            // or a board keeps its positions from the run before).
+            let start = chip.positions()?.steps;
             let streamed = stream_planned(chip, &planned, &resolved, &config.spindle, name, |queued| {
                 progress.set_position(queued);
                 if let Some(line) = planned.lines.get((queued as usize).saturating_sub(1)) {
                     progress.set_message(format!("line {line}"));
                 }
             })?;
-            (streamed.end.steps, streamed.cycles)
+            let moved = streamed.end.steps.iter().zip(start).map(|(end, start)| end.wrapping_sub(start));
+            (moved.collect(), streamed.cycles)
         }
     };
     progress.finish_and_clear();
 
-    println!("  axis   final steps   final position   programmed end   error");
+    println!("  axis   steps moved   end position   programmed end   error");
     let mut worst = 0i64;
     for axis in (0..4).filter(|&a| resolved.axes[a].present) {
         let scale = resolved.axes[axis].steps_per_unit;

@@ -20,9 +20,47 @@ fn a_part_program_runs_on_a_served_chip_to_its_exact_end() {
     let (ok, text) = finestep(&["run", "--bus", &bus, "--out", &out, &program()]);
     assert!(ok, "{text}");
     assert!(text.contains(&format!("streamed over SPI on {bus}")), "{text}");
-    let finals: Vec<&str> = text.lines().skip_while(|l| !l.contains("final steps")).skip(1).take(2).collect();
+    let finals: Vec<&str> = text.lines().skip_while(|l| !l.contains("steps moved")).skip(1).take(2).collect();
     assert_eq!(finals.len(), 2, "{text}");
     assert!(finals.iter().all(|l| l.ends_with(" 0 steps")), "{text}");
+}
+
+#[test]
+fn a_second_run_on_the_same_chip_starts_where_the_first_ended() {
+    // A served chip (or a board) keeps its positions: each run is counted from where
+    // the axes stand when it starts.
+    let server = serve("run-twice", &["--target", "model"]);
+    let bus = format!("sim:{}", server.socket.display());
+    let out = scratch("out-twice").display().to_string();
+    let program = scratch("out.ngc");
+    std::fs::write(&program, "G21 G90 G64 P0.01 F3000\nG1 X2 Y-1\nM2\n").unwrap();
+    let program = program.display().to_string();
+    for _ in 0..2 {
+        let (ok, text) = finestep(&["run", "--bus", &bus, "--out", &out, &program]);
+        assert!(ok, "{text}");
+        let moved: Vec<&str> = text.lines().skip_while(|l| !l.contains("steps moved")).skip(1).take(2).collect();
+        assert_eq!(moved.len(), 2, "{text}");
+        assert!(
+            moved[0].starts_with("  X") && moved[0].contains(" 2.0000 mm") && moved[0].ends_with(" 0 steps"),
+            "{text}"
+        );
+        assert!(
+            moved[1].starts_with("  Y") && moved[1].contains(" -1.0000 mm") && moved[1].ends_with(" 0 steps"),
+            "{text}"
+        );
+    }
+}
+
+#[test]
+fn the_demo_takes_the_bus_and_names_what_it_cannot_reach() {
+    let socket = scratch("nobody-demo.sock").display().to_string();
+    let out = scratch("out-demo").display().to_string();
+    let (ok, text) = finestep(&["demo", "--bus", &format!("sim:{socket}"), "--out", &out]);
+    assert!(!ok);
+    assert!(text.contains(&format!("sim:{socket}: cannot connect")), "{text}");
+    let (ok, text) = finestep(&["demo", "--bus", "spidev:/dev/spidev9.9", "--out", &out]);
+    assert!(!ok);
+    assert!(text.contains("spidev:/dev/spidev9.9: no such device"), "{text}");
 }
 
 #[test]

@@ -53,7 +53,7 @@ fn a_short_program_streams_over_spi_into_the_chip_in_lockstep() {
     assert!(ok, "{text}");
     assert!(text.contains("streamed over SPI; RTL in lockstep"), "{text}");
     assert!(text.contains("bit-exact RTL against the model"), "{text}");
-    let finals: Vec<&str> = text.lines().skip_while(|l| !l.contains("final steps")).skip(1).take(4).collect();
+    let finals: Vec<&str> = text.lines().skip_while(|l| !l.contains("steps moved")).skip(1).take(4).collect();
     assert_eq!(finals.len(), 4, "{text}");
     assert!(finals.iter().all(|l| l.ends_with(" 0 steps")), "{text}");
 }
