@@ -1,19 +1,24 @@
 // C ABI shim around the Verilated finestep_top (see finestep_top_sim.h). As for the
-// core, two Verilations are linked: Vfinestep_top (fast) and Vfinestep_top_traced. A
+// core, each variant is linked twice: Vfinestep_top (fast) and Vfinestep_top_traced with
+// finestep_top's defaults; Vfinestep_top_motion, untraced only, without the spindle and
+// the logic outputs (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0, as every board top):
+// ft_new_traced makes it untraced, and ft_trace_open fails on it. A
 // synthesised netlist (FT_NETLIST, rust/finestep-rtl-sys's netlist features) is Verilated
-// once, without tracing: ft_new_traced makes the same top, and ft_trace_open fails on it.
+// once, without tracing: ft_new and ft_new_traced make that top for either variant, and
+// ft_trace_open fails on it.
 #include "finestep_top_sim.h"
 
 #include <memory>
 
 #include "Vfinestep_top.h"
 #ifndef FT_NETLIST
+#include "Vfinestep_top_motion.h"
 #include "Vfinestep_top_traced.h"
 #endif
 #include "verilated_trace.h"
 
 #ifndef FT_N_AXES
-#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W, FT_FIFO_DEPTH_LOG2, FT_N_ENC, FT_HAS_MPG and FT_STEP_SHARED must match the Verilated parameters"
+#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W, FT_FIFO_DEPTH_LOG2, FT_N_ENC, FT_HAS_MPG, FT_STEP_SHARED, FT_HAS_SPINDLE, FT_HAS_OUTPUTS and FT_N_GPIO must match the Verilated parameters"
 #endif
 
 struct ft_sim {
@@ -139,11 +144,18 @@ struct TopSim final : ft_sim {
     void trace_close() override { finestep::close_trace(trace); }
 };
 
-// Only the traced model has trace(); give the untraced one a stub so one template fits.
-struct FastTop : Vfinestep_top {
-    using Vfinestep_top::Vfinestep_top;
+// Only a traced model has trace(); give the untraced ones a stub so one template fits.
+template <typename Base>
+struct Untraced : Base {
+    using Base::Base;
     void trace(TraceFile *, int) {}
 };
+
+#ifndef FT_NETLIST
+bool is_motion(uint32_t variant) { return variant == FT_VARIANT_MOTION; }
+#else
+bool is_motion(uint32_t) { return false; }
+#endif
 
 }  // namespace
 
@@ -156,12 +168,22 @@ uint32_t ft_fifo_depth_log2(void) { return FT_FIFO_DEPTH_LOG2; }
 uint32_t ft_n_enc(void) { return FT_N_ENC; }
 uint32_t ft_has_mpg(void) { return FT_HAS_MPG; }
 uint32_t ft_step_shared(void) { return FT_STEP_SHARED; }
+uint32_t ft_has_spindle(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_SPINDLE; }
+uint32_t ft_has_outputs(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_OUTPUTS; }
+uint32_t ft_n_gpio(uint32_t variant) { return is_motion(variant) ? 0 : FT_N_GPIO; }
 
-ft_sim *ft_new(void) { return new TopSim<FastTop, false>; }
 #ifndef FT_NETLIST
-ft_sim *ft_new_traced(void) { return new TopSim<Vfinestep_top_traced, true>; }
+ft_sim *ft_new(uint32_t variant) {
+    if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
+    return new TopSim<Untraced<Vfinestep_top>, false>;
+}
+ft_sim *ft_new_traced(uint32_t variant) {
+    if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
+    return new TopSim<Vfinestep_top_traced, true>;
+}
 #else
-ft_sim *ft_new_traced(void) { return new TopSim<FastTop, false>; }
+ft_sim *ft_new(uint32_t) { return new TopSim<Untraced<Vfinestep_top>, false>; }
+ft_sim *ft_new_traced(uint32_t) { return new TopSim<Untraced<Vfinestep_top>, false>; }
 #endif
 void ft_free(ft_sim *sim) { delete sim; }
 uint64_t ft_cycle(const ft_sim *sim) { return sim->cycle; }

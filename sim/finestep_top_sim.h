@@ -63,7 +63,13 @@ typedef struct ft_event {
 
 typedef struct ft_sim ft_sim;
 
-/* Build-time parameters of the Verilated top. */
+/* Which Verilation of the top: finestep_top's defaults (the spindle and the logic
+ * outputs built), or the motion chip every board top builds (without them). A netlist
+ * build (FT_NETLIST) has one top, the default's netlist, for both. */
+#define FT_VARIANT_FULL 0
+#define FT_VARIANT_MOTION 1
+
+/* Build-time parameters of the Verilated top (the same in both variants). */
 uint32_t ft_n_axes(void);
 uint32_t ft_p_width(void);
 uint32_t ft_timing_width(void);
@@ -71,11 +77,16 @@ uint32_t ft_fifo_depth_log2(void);
 uint32_t ft_n_enc(void);
 uint32_t ft_has_mpg(void);
 uint32_t ft_step_shared(void);
+/* ... and those of the variant. */
+uint32_t ft_has_spindle(uint32_t variant);
+uint32_t ft_has_outputs(uint32_t variant);
+uint32_t ft_n_gpio(uint32_t variant);
 
-/* A top built without waveform support (the fast one). */
-ft_sim *ft_new(void);
-/* A top that can write waveforms (ft_trace_open); slower. */
-ft_sim *ft_new_traced(void);
+/* A top of `variant` built without waveform support (the fast one). */
+ft_sim *ft_new(uint32_t variant);
+/* A top of `variant` that can write waveforms (ft_trace_open); slower. The motion
+ * variant and a netlist build have no traced Verilation: this is their fast top. */
+ft_sim *ft_new_traced(uint32_t variant);
 void ft_free(ft_sim *sim);
 
 /* Cycles run so far (edges since construction). */

@@ -28,6 +28,9 @@ struct Params {
     n_enc: i64,
     has_mpg: i64,
     step_shared: i64,
+    has_spindle: i64,
+    has_outputs: i64,
+    n_gpio: i64,
 }
 
 impl Params {
@@ -42,6 +45,9 @@ impl Params {
             n_enc: default("N_ENC"),
             has_mpg: default("HAS_MPG"),
             step_shared: default("STEP_SHARED"),
+            has_spindle: default("HAS_SPINDLE"),
+            has_outputs: default("HAS_OUTPUTS"),
+            n_gpio: default("N_GPIO"),
         }
     }
 }
@@ -190,7 +196,10 @@ fn main() {
         .define("FT_FIFO_DEPTH_LOG2", params.fifo_depth_log2.to_string().as_str())
         .define("FT_N_ENC", params.n_enc.to_string().as_str())
         .define("FT_HAS_MPG", params.has_mpg.to_string().as_str())
-        .define("FT_STEP_SHARED", params.step_shared.to_string().as_str());
+        .define("FT_STEP_SHARED", params.step_shared.to_string().as_str())
+        .define("FT_HAS_SPINDLE", params.has_spindle.to_string().as_str())
+        .define("FT_HAS_OUTPUTS", params.has_outputs.to_string().as_str())
+        .define("FT_N_GPIO", params.n_gpio.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -206,22 +215,29 @@ fn main() {
     // The core alone (its own co-simulation), behind the input registers of
     // sim/finestep_core_sim.v: without the gantry block and with the shared step engine
     // (every test but the gantry's), and with the gantry block and a DDA and a shaper per
-    // axis; and the top behind the host interface (a DDA and a shaper per axis).
+    // axis; and the top behind the host interface: with its defaults (the spindle and
+    // the logic outputs), and as the motion chip every board top builds (without them:
+    // what the motion tests and the bench run; every block it has is in the first).
     let core_sim = sim.join("finestep_core_sim.v");
     let mut models = vec![
         (Build::Core { gantry: false }, "Vfinestep_core", None),
         (Build::Core { gantry: false }, "Vfinestep_core_traced", Some(trace_flag)),
         (Build::Core { gantry: true }, "Vfinestep_core_gantry", None),
         (Build::Core { gantry: true }, "Vfinestep_core_gantry_traced", Some(trace_flag)),
-        (Build::Top, "Vfinestep_top", None),
-        (Build::Top, "Vfinestep_top_traced", Some(trace_flag)),
+        (Build::Top { motion: false }, "Vfinestep_top", None),
+        (Build::Top { motion: false }, "Vfinestep_top_traced", Some(trace_flag)),
+        // The motion chip once, without tracing (a second traced top would add a third
+        // to the build): its lockstep mismatches name the pin and the clock, no waveform.
+        (Build::Top { motion: true }, "Vfinestep_top_motion", None),
     ];
     if netlist.is_some() {
         // A netlist is Verilated once, without tracing (with it, the trace code of its
         // 18 000 named net bits makes 53 MB of C++ instead of 21): the shim (FT_NETLIST)
         // makes ft_new_traced a top that cannot open a waveform, so a mismatch reports its
-        // pin and clock without one.
-        models.retain(|(_, prefix, _)| *prefix != "Vfinestep_top_traced");
+        // pin and clock without one. The netlist is of the default top: the motion
+        // variant is that netlist too (the shim and top_build give it for either).
+        models
+            .retain(|(_, prefix, _)| *prefix != "Vfinestep_top_traced" && !prefix.starts_with("Vfinestep_top_motion"));
     }
     let mut files = Vec::new();
     for (build_of, prefix, trace) in models {
@@ -230,7 +246,7 @@ fn main() {
         if let Build::Core { .. } = build_of {
             model_sources.push(core_sim.clone());
         }
-        let top_netlist = if let Build::Top = build_of { netlist.as_ref() } else { None };
+        let top_netlist = if let Build::Top { .. } = build_of { netlist.as_ref() } else { None };
         let classes = verilate(&verilator, &model_sources, &gen, &params, build_of, prefix, trace, top_netlist, &dir);
         let list = |name: &str| -> Vec<String> {
             classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
@@ -315,8 +331,9 @@ enum Build {
     /// gantry block and a DDA and a shaper per axis, or without it and with the shared
     /// step engine.
     Core { gantry: bool },
-    /// `finestep_top`.
-    Top,
+    /// `finestep_top`: with its defaults, or without the spindle and the logic outputs
+    /// (`motion`, as every board top).
+    Top { motion: bool },
 }
 
 /// Runs Verilator on `build` into `dir` and returns the variables of its `*_classes.mk`.
@@ -332,9 +349,9 @@ fn verilate(
     netlist: Option<&Netlist>,
     dir: &Path,
 ) -> BTreeMap<String, String> {
-    let (top, gantry) = match build {
-        Build::Core { gantry } => ("finestep_core_sim", Some(gantry)),
-        Build::Top => ("finestep_top", None),
+    let (top, gantry, motion) = match build {
+        Build::Core { gantry } => ("finestep_core_sim", Some(gantry), None),
+        Build::Top { motion } => ("finestep_top", None, Some(motion)),
     };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
@@ -379,6 +396,9 @@ fn verilate(
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
         .args((top == "finestep_top").then(|| format!("-GHAS_MPG={}", params.has_mpg)))
         .args((top == "finestep_top").then(|| format!("-GSTEP_SHARED={}", params.step_shared)))
+        .args(motion.map(|m| format!("-GHAS_SPINDLE={}", if m { 0 } else { params.has_spindle })))
+        .args(motion.map(|m| format!("-GHAS_OUTPUTS={}", if m { 0 } else { params.has_outputs })))
+        .args(motion.map(|m| format!("-GN_GPIO={}", if m { 0 } else { params.n_gpio })))
         .args(sources)
         .status()
         .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));

@@ -55,6 +55,22 @@ fn drive(machine: &Resolved, periods: u64, mut run_chunk: impl FnMut(&CoreInputs
     cycles
 }
 
+/// The CPU time of the calling thread: the simulation figures are per CPU second of the
+/// thread that simulates (Verilator and the model run on it alone), so they do not move
+/// with what else the machine runs, as wall-clock figures do on a shared machine.
+pub(crate) struct CpuClock(cpu_time::ThreadTime);
+
+impl CpuClock {
+    pub(crate) fn start() -> CpuClock {
+        CpuClock(cpu_time::ThreadTime::now())
+    }
+
+    /// CPU seconds of this thread since [`CpuClock::start`].
+    pub(crate) fn seconds(&self) -> f64 {
+        self.0.elapsed().as_secs_f64()
+    }
+}
+
 /// One throughput figure of `cycles` simulated in `seconds` on `machine`'s period and clock.
 pub(crate) fn report(machine: &Resolved, what: &str, cycles: u64, seconds: f64) {
     println!(
@@ -296,32 +312,32 @@ pub fn run(cycles: u64) -> anyhow::Result<()> {
     let period_clocks = machine.period_clocks;
     let periods = (cycles / u64::from(period_clocks)).max(1);
     let limit = u64::from(period_clocks) + 8;
-    println!("finestep bench: {AXES} axes, P = {period_clocks} clocks, {periods} periods per figure, one core");
+    println!("finestep bench: {AXES} axes, P = {period_clocks} clocks, {periods} periods per figure, M cycles per CPU second of the simulating thread");
 
     let mut rtl = Rtl::new();
-    let start = Instant::now();
+    let start = CpuClock::start();
     let n = drive(&machine, periods, |inputs, events| rtl.run_chunk(inputs, limit, events).cycles);
-    report(&machine, "RTL alone (Verilator, event capture)", n, start.elapsed().as_secs_f64());
+    report(&machine, "RTL alone (Verilator, event capture)", n, start.seconds());
 
     let mut model = Core::new(finestep_rtl_sys::params());
-    let start = Instant::now();
+    let start = CpuClock::start();
     let n = drive(&machine, periods, |inputs, events| model.run_chunk(inputs, limit, events).cycles);
-    report(&machine, "model per-clock step()", n, start.elapsed().as_secs_f64());
+    report(&machine, "model per-clock step()", n, start.seconds());
 
     let mut model = Core::new(finestep_rtl_sys::params());
-    let start = Instant::now();
+    let start = CpuClock::start();
     let n = drive(&machine, periods * 20, |inputs, events| model.run_chunk_fast(inputs, limit, events).cycles);
-    report(&machine, "model fast path", n, start.elapsed().as_secs_f64());
+    report(&machine, "model fast path", n, start.seconds());
 
     for (what, path) in [
         ("lockstep RTL + model per-clock, compared", ModelPath::PerClock),
         ("lockstep RTL + model fast path, compared", ModelPath::Fast),
     ] {
         let mut harness = Harness::new("bench", path);
-        let start = Instant::now();
+        let start = CpuClock::start();
         let mut inputs = inputs(&machine);
         harness.feed(&mut inputs, stream(periods))?;
-        report(&machine, what, harness.cycle(), start.elapsed().as_secs_f64());
+        report(&machine, what, harness.cycle(), start.seconds());
     }
     front_end()
 }

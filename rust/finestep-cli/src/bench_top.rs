@@ -1,18 +1,19 @@
 //! Throughput of the chip-level simulation (not timed tests): a 4-axis move streamed
 //! over SPI by the host driver into the bus-level top, on the Verilated RTL alone, the
-//! model alone and both in lockstep.
+//! model alone and both in lockstep: the motion chip the boards build, then the RTL and
+//! the lockstep of `finestep_top`'s defaults (with the spindle and the logic outputs).
 
 use std::time::Instant;
 
 use anyhow::bail;
-use finestep_cosim::{rtl_top_params, ModelPins, RtlPins, TopLockstep};
+use finestep_cosim::{rtl_top_params, rtl_top_params_of, ModelPins, RtlPins, TopLockstep, TopVariant};
 use finestep_host::stream;
 use finestep_host::PinTarget;
 use finestep_model::top::Top;
 use finestep_model::{Increment, PeriodRecord};
 use finestep_planner::MachineConfig;
 
-use crate::bench::report;
+use crate::bench::{report, CpuClock};
 use crate::bus::BusTarget;
 use crate::machine_setup;
 
@@ -40,14 +41,14 @@ fn streamed<T: PinTarget>(what: &str, target: T, periods: usize, cycles: impl Fn
     let core = machine_setup::chip_limits(&machine.caps());
     let (_, resolved) = machine_setup::resolve(MachineConfig::default(), core, "<built-in>")?;
     machine_setup::configure(&mut machine, &resolved)?;
-    let started = Instant::now();
+    let started = CpuClock::start();
     let begin = cycles(machine.bus().link().target());
     let config = machine_setup::stream_config(&resolved);
     let streamed = stream::run(&mut machine, records(periods), &config, |_, _| Ok(()))?;
     if streamed.stream.underruns != 0 {
         bail!("{} underruns while benchmarking", streamed.stream.underruns);
     }
-    let seconds = started.elapsed().as_secs_f64();
+    let seconds = started.seconds();
     report(&resolved, what, cycles(machine.bus().link().target()) - begin, seconds);
     Ok(())
 }
@@ -74,12 +75,20 @@ pub fn on_bus(target: &BusTarget, periods: usize) -> anyhow::Result<()> {
 pub fn run(periods: usize) -> anyhow::Result<()> {
     let machine = crate::bench::bench_machine()?;
     println!(
-        "finestep bench, chip level: {AXES} axes, P = {} clocks, {periods} periods streamed over SPI at clk/8",
+        "finestep bench, chip level: {AXES} axes, P = {} clocks, {periods} periods streamed over SPI at clk/8, per CPU second",
         machine.period_clocks
     );
-    streamed("RTL top alone (Verilator), SPI-driven", RtlPins::new(), periods, RtlPins::cycle)?;
-    let model = ModelPins(Top::new(rtl_top_params()));
+    // The motion chip, as every board top builds it (no spindle, no logic outputs).
+    let motion = TopVariant::Motion;
+    streamed("RTL top alone (Verilator), SPI-driven", RtlPins::of(motion), periods, RtlPins::cycle)?;
+    let model = ModelPins(Top::new(rtl_top_params_of(motion)));
     streamed("model top alone, per clock, SPI-driven", model, periods, ModelPins::cycle)?;
-    streamed("lockstep RTL + model top, every pin compared", TopLockstep::new("bench"), periods, TopLockstep::cycle)?;
+    let lockstep = TopLockstep::motion("bench");
+    streamed("lockstep RTL + model top, every pin compared", lockstep, periods, TopLockstep::cycle)?;
+    // finestep_top's defaults: the same move with the spindle and the logic outputs built.
+    let full = TopVariant::Full;
+    streamed("RTL top with spindle + outputs (finestep_top's defaults)", RtlPins::of(full), periods, RtlPins::cycle)?;
+    let full_lockstep = TopLockstep::of(full, "bench-full");
+    streamed("lockstep, top with spindle + outputs", full_lockstep, periods, TopLockstep::cycle)?;
     Ok(())
 }

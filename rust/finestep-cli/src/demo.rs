@@ -34,7 +34,7 @@ pub fn run(out: &Path, bus: Option<BusTarget>) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let bus = bus.unwrap_or(BusTarget::Lockstep);
     if bus.is_lockstep() {
-        let mut chip = machine_setup::open(TopLockstep::new("demo"))?;
+        let mut chip = machine_setup::open(TopLockstep::motion("demo"))?;
         let line = part_1(&mut chip, out, &bus)?;
         let lockstep = chip.into_bus().into_link().into_target();
         let waveform = out.join(if finestep_rtl_sys::trace_is_fst() { "demo.fst" } else { "demo.vcd" });

@@ -78,7 +78,7 @@ pub fn run() -> anyhow::Result<()> {
     println!();
     println!("finestep demo, part 3: feedback with a simulated machine on the pins (drives lagging 1 ms,");
     println!("  gratings X 1 um and Z 0.5 um, a probe, a hand wheel with contact bounce); RTL and model in lockstep");
-    let (mut machine, config, resolved) = connect(TopLockstep::new("demo-feedback"))?;
+    let (mut machine, config, resolved) = connect(TopLockstep::motion("demo-feedback"))?;
     grating_pass(&mut machine, &config, &resolved)?;
     jog(&mut machine, &resolved)?;
     Ok(())

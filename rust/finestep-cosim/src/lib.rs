@@ -26,11 +26,11 @@ use std::path::PathBuf;
 
 use finestep_model::{pins, ChunkEnd, Core, CoreInputs, CoreOutputs, Event, PeriodRecord, MAX_AXES};
 use finestep_rtl_sys::Rtl;
-pub use finestep_rtl_sys::TraceDepth;
+pub use finestep_rtl_sys::{TopVariant, TraceDepth};
 
 pub use mismatch::{describe_difference, Mismatch, WaveformError};
 pub use plant_loop::PlantLoop;
-pub use top_lockstep::{rtl_top_params, ModelPins, RtlPins, TopLockstep, TopMismatch};
+pub use top_lockstep::{rtl_top_params, rtl_top_params_of, ModelPins, RtlPins, TopLockstep, TopMismatch};
 
 /// Which model path runs against the RTL.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use finestep_host::{BusError, PinTarget};
 use finestep_model::top::{top_pins, Top, TopInputs, TopParams};
-use finestep_rtl_sys::{top_build, PinEvent, RtlTop, TraceDepth};
+use finestep_rtl_sys::{top_build_of, PinEvent, RtlTop, TopVariant, TraceDepth};
 
 use crate::mismatch::WaveformError;
 
@@ -90,6 +90,7 @@ impl std::error::Error for TopMismatch {}
 /// The Verilated top and the model side by side, compared every clock.
 pub struct TopLockstep {
     name: String,
+    variant: TopVariant,
     rtl: RtlTop,
     model: Top,
     /// Every drive since construction, run-length merged (for waveform replay).
@@ -99,9 +100,14 @@ pub struct TopLockstep {
     outputs: u64,
 }
 
-/// The model parameters of the Verilated top.
+/// The model parameters of the Verilated top with `finestep_top`'s defaults.
 pub fn rtl_top_params() -> TopParams {
-    let build = top_build();
+    rtl_top_params_of(TopVariant::Full)
+}
+
+/// The model parameters of the Verilated top `variant`.
+pub fn rtl_top_params_of(variant: TopVariant) -> TopParams {
+    let build = top_build_of(variant);
     TopParams {
         n_axes: build.n_axes,
         p_width: build.p_width,
@@ -110,19 +116,35 @@ pub fn rtl_top_params() -> TopParams {
         n_enc: build.n_enc,
         has_mpg: build.has_mpg,
         step_shared: build.step_shared,
+        has_spindle: build.has_spindle,
+        has_outputs: build.has_outputs,
+        n_gpio: build.n_gpio,
         ..TopParams::default()
     }
 }
 
 impl TopLockstep {
-    /// Both sides at power-on; drive `rst` first. `name` names the failure waveform.
+    /// Both sides at power-on, with `finestep_top`'s defaults; drive `rst` first.
+    /// `name` names the failure waveform.
     pub fn new(name: &str) -> TopLockstep {
-        let rtl = RtlTop::new();
+        Self::of(TopVariant::Full, name)
+    }
+
+    /// The motion chip every board top builds (no spindle, no logic outputs): what the
+    /// motion tests and the bench run.
+    pub fn motion(name: &str) -> TopLockstep {
+        Self::of(TopVariant::Motion, name)
+    }
+
+    /// Both sides of `variant` at power-on; drive `rst` first.
+    pub fn of(variant: TopVariant, name: &str) -> TopLockstep {
+        let rtl = RtlTop::of(variant);
         let outputs = rtl.outputs();
         TopLockstep {
             name: name.to_string(),
+            variant,
             rtl,
-            model: Top::new(rtl_top_params()),
+            model: Top::new(rtl_top_params_of(variant)),
             log: Vec::new(),
             events: Vec::new(),
             cycle: 0,
@@ -163,7 +185,7 @@ impl TopLockstep {
     /// Replays the run so far on a traced RTL from power-on up to cycle `until` and
     /// writes its waveform to `path`.
     pub fn write_waveform(&self, path: &std::path::Path, depth: TraceDepth, until: u64) -> Result<(), WaveformError> {
-        let mut rtl = RtlTop::new_traced();
+        let mut rtl = RtlTop::traced_of(self.variant);
         rtl.trace_open(path, depth).map_err(WaveformError::at(path))?;
         let mut scratch = Vec::new();
         let mut ran = 0;
@@ -270,9 +292,14 @@ pub struct RtlPins {
 }
 
 impl RtlPins {
-    /// A Verilated top at power-on.
+    /// A Verilated top with `finestep_top`'s defaults at power-on.
     pub fn new() -> RtlPins {
-        RtlPins { rtl: RtlTop::new(), scratch: Vec::new() }
+        Self::of(TopVariant::Full)
+    }
+
+    /// A Verilated top of `variant` at power-on.
+    pub fn of(variant: TopVariant) -> RtlPins {
+        RtlPins { rtl: RtlTop::of(variant), scratch: Vec::new() }
     }
 
     /// Clock edges run since construction.

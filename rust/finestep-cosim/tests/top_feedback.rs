@@ -236,7 +236,7 @@ fn faults_beyond_the_filter_are_flagged() {
 
 /// The encoder bank's slots: S = max(N_ENC, 2) of the chip these tests build.
 fn slots() -> u64 {
-    (finestep_cosim::rtl_top_params().n_enc as u64).max(2)
+    (finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::Motion).n_enc as u64).max(2)
 }
 
 /// Quadrature driven straight at the pins at the rated rates of the filter table: every

@@ -26,7 +26,7 @@ use finestep_interface::{CoreParams, DriveTiming, MAX_AXES};
 use finestep_model::{ChunkEnd, CoreInputs, CoreOutputs, Event};
 
 pub mod top;
-pub use top::{top_build, PinEvent, RtlTop, TopBuild};
+pub use top::{top_build, top_build_of, PinEvent, RtlTop, TopBuild, TopVariant};
 
 /// What [`RtlTop`] was built from: `"RTL (hdl/)"`, or with the feature `netlist-ecp5` or
 /// `netlist-ice40` the Yosys netlist (`"ecp5 netlist (<path>)"`), Verilated with Yosys's

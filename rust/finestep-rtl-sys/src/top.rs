@@ -8,6 +8,29 @@ use std::ptr::NonNull;
 
 use crate::{ffi, TraceDepth};
 
+/// Which Verilation of `finestep_top`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TopVariant {
+    /// `finestep_top`'s defaults (`hdl/interface.toml`): the spindle and the logic
+    /// outputs built.
+    #[default]
+    Full,
+    /// The motion chip every board top builds: without the spindle and the logic outputs
+    /// (`HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0`); what the motion tests and the bench run.
+    /// Verilated without tracing (no waveform of a mismatch). A netlist build has one top,
+    /// the default's: this is that top too.
+    Motion,
+}
+
+impl TopVariant {
+    fn raw(self) -> u32 {
+        match self {
+            TopVariant::Full => ffi::FT_VARIANT_FULL,
+            TopVariant::Motion => ffi::FT_VARIANT_MOTION,
+        }
+    }
+}
+
 /// The parameters the Verilated top was built with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TopBuild {
@@ -25,10 +48,22 @@ pub struct TopBuild {
     pub has_mpg: bool,
     /// The core's step engine is built (`STEP_SHARED`).
     pub step_shared: bool,
+    /// The spindle block is built (`HAS_SPINDLE`).
+    pub has_spindle: bool,
+    /// The logic outputs and the interlock input are built (`HAS_OUTPUTS`).
+    pub has_outputs: bool,
+    /// General outputs (`N_GPIO`).
+    pub n_gpio: usize,
 }
 
-/// The build parameters of the Verilated top.
+/// The build parameters of the Verilated top with `finestep_top`'s defaults.
 pub fn top_build() -> TopBuild {
+    top_build_of(TopVariant::Full)
+}
+
+/// The build parameters of the Verilated top `variant`.
+pub fn top_build_of(variant: TopVariant) -> TopBuild {
+    let v = variant.raw();
     // SAFETY: pure functions returning build-time constants.
     unsafe {
         TopBuild {
@@ -39,6 +74,9 @@ pub fn top_build() -> TopBuild {
             n_enc: ffi::ft_n_enc() as usize,
             has_mpg: ffi::ft_has_mpg() != 0,
             step_shared: ffi::ft_step_shared() != 0,
+            has_spindle: ffi::ft_has_spindle(v) != 0,
+            has_outputs: ffi::ft_has_outputs(v) != 0,
+            n_gpio: ffi::ft_n_gpio(v) as usize,
         }
     }
 }
@@ -56,6 +94,7 @@ pub struct PinEvent {
 /// (drive `rst` for at least 2 cycles first). Not `Send`.
 pub struct RtlTop {
     sim: NonNull<ffi::ft_sim>,
+    variant: TopVariant,
     events: Vec<ffi::ft_event>,
     _not_send: PhantomData<*const ()>,
 }
@@ -67,20 +106,33 @@ impl Default for RtlTop {
 }
 
 impl RtlTop {
-    /// A top without waveform support (fast).
+    /// A top with `finestep_top`'s defaults, without waveform support (fast).
     pub fn new() -> RtlTop {
+        Self::of(TopVariant::Full)
+    }
+
+    /// A top of `variant` without waveform support (fast).
+    pub fn of(variant: TopVariant) -> RtlTop {
         // SAFETY: ft_new returns a valid owned pointer, freed in Drop.
-        Self::from_raw(unsafe { ffi::ft_new() })
+        Self::from_raw(unsafe { ffi::ft_new(variant.raw()) }, variant)
     }
 
-    /// A top that can write waveforms ([`RtlTop::trace_open`]).
+    /// A top with `finestep_top`'s defaults that can write waveforms
+    /// ([`RtlTop::trace_open`]).
     pub fn new_traced() -> RtlTop {
-        // SAFETY: ft_new_traced returns a valid owned pointer, freed in Drop.
-        Self::from_raw(unsafe { ffi::ft_new_traced() })
+        Self::traced_of(TopVariant::Full)
     }
 
-    fn from_raw(sim: *mut ffi::ft_sim) -> RtlTop {
-        RtlTop { sim: NonNull::new(sim).expect("ft_new returned null"), events: Vec::new(), _not_send: PhantomData }
+    /// A top of `variant` that can write waveforms ([`RtlTop::trace_open`]);
+    /// [`TopVariant::Motion`] is Verilated without tracing: its `trace_open` fails.
+    pub fn traced_of(variant: TopVariant) -> RtlTop {
+        // SAFETY: ft_new_traced returns a valid owned pointer, freed in Drop.
+        Self::from_raw(unsafe { ffi::ft_new_traced(variant.raw()) }, variant)
+    }
+
+    fn from_raw(sim: *mut ffi::ft_sim, variant: TopVariant) -> RtlTop {
+        let sim = NonNull::new(sim).expect("ft_new returned null");
+        RtlTop { sim, variant, events: Vec::new(), _not_send: PhantomData }
     }
 
     /// Edges run since construction.
@@ -121,11 +173,13 @@ impl RtlTop {
     }
 
     /// Start writing a waveform of every following cycle (a top from
-    /// [`RtlTop::new_traced`] only).
+    /// [`RtlTop::new_traced`] or [`RtlTop::traced_of`] `(TopVariant::Full)` only).
     /// A netlist build (`crate::TOP_IS_NETLIST`) is Verilated without tracing: this fails.
     pub fn trace_open(&mut self, path: &Path, depth: TraceDepth) -> std::io::Result<()> {
         let maker = if crate::TOP_IS_NETLIST {
             "RtlTop::new_traced on an RTL build; the netlist build has no tracing"
+        } else if self.variant == TopVariant::Motion {
+            "RtlTop::traced_of(TopVariant::Full); the motion variant has no traced build: rerun the case on it"
         } else {
             "RtlTop::new_traced"
         };

@@ -14,7 +14,7 @@ pub const PERIOD: u32 = 2000;
 
 /// A connected machine named `name` (its waveform and logs) with `plant` on the pins.
 pub fn connect(name: &str, plant: Plant) -> Chip {
-    let mut host = PinHost::new(PlantLoop::new(TopLockstep::new(name), plant), PinTiming::default());
+    let mut host = PinHost::new(PlantLoop::new(TopLockstep::motion(name), plant), PinTiming::default());
     host.reset(4).unwrap();
     host.idle(8).unwrap();
     let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
