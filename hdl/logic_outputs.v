@@ -45,6 +45,7 @@ module logic_outputs #(
     localparam GPIO_W   = (N_GPIO > 0) ? N_GPIO : 1;
     localparam OUT_W    = 3 + GPIO_W;                    // mist, flood, light, gpio
     localparam FILTER_W = FS_INTERLOCK_FILTER_WIDTH;
+    localparam PRESC_W  = FS_INTERLOCK_PRESCALE_WIDTH;
     localparam [OUT_W-1:0] GPIO_MASK = {((N_GPIO > 0) ? 1'b1 : 1'b0), {(OUT_W-1){1'b1}}};   // GPIO_W is 1 then
 
     localparam [31:0] OUTPUTS_RESET = ({24'd0, FS_OUTPUTS_GPIO_RESET} << FS_OUTPUTS_GPIO_LSB)
@@ -59,11 +60,22 @@ module logic_outputs #(
     reg [OUT_W-1:0]    outputs_reg, safe_reg;
     reg                enable_reg, active_high_reg, blocked_reg;
     reg [FILTER_W-1:0] filter_reg;
+    reg [PRESC_W-1:0]  prescale_reg;
     reg [OUT_W-1:0]    outputs_next, safe_next;
+
+    // The filter's sampling prescaler (the hand wheel's): a sample every PRESCALE + 1
+    // clocks, the first in the third cycle after reset (both synchroniser flops hold the
+    // pin by then).
+    reg  [PRESC_W-1:0] presc_reg;
+    wire               sample = (presc_reg == {PRESC_W{1'b0}});
+    always @(posedge clk) begin
+        presc_reg <= sample ? prescale_reg : presc_reg - {{(PRESC_W-1){1'b0}}, 1'b1};
+        if (rst) presc_reg <= {{(PRESC_W-2){1'b0}}, 2'd2};
+    end
 
     wire level, primed;
     input_filter #(.FILTER_W(FILTER_W)) interlock_filter (
-        .clk(clk), .rst(rst), .filter_len(filter_reg), .sample(1'b1), .pin(interlock_pin),
+        .clk(clk), .rst(rst), .filter_len(filter_reg), .sample(sample), .pin(interlock_pin),
         .level(level), .primed(primed)
     );
     wire active = primed && (level == active_high_reg);
@@ -101,6 +113,7 @@ module logic_outputs #(
             enable_reg      <= wdata[FS_INTERLOCK_ENABLE_LSB];
             active_high_reg <= wdata[FS_INTERLOCK_ACTIVE_HIGH_LSB];
             filter_reg      <= wdata[FS_INTERLOCK_FILTER_LSB +: FILTER_W];
+            prescale_reg    <= wdata[FS_INTERLOCK_PRESCALE_LSB +: PRESC_W];
         end
         if (start_blocked) blocked_reg <= 1'b1;
         else if (clear_errors) blocked_reg <= 1'b0;
@@ -110,6 +123,7 @@ module logic_outputs #(
             enable_reg      <= FS_INTERLOCK_ENABLE_RESET;
             active_high_reg <= FS_INTERLOCK_ACTIVE_HIGH_RESET;
             filter_reg      <= FS_INTERLOCK_FILTER_RESET;
+            prescale_reg    <= FS_INTERLOCK_PRESCALE_RESET;
             blocked_reg     <= 1'b0;
         end
     end
@@ -127,6 +141,7 @@ module logic_outputs #(
                 rdata[FS_INTERLOCK_ENABLE_LSB]                = enable_reg;
                 rdata[FS_INTERLOCK_ACTIVE_HIGH_LSB]           = active_high_reg;
                 rdata[FS_INTERLOCK_FILTER_LSB +: FILTER_W]    = filter_reg;
+                rdata[FS_INTERLOCK_PRESCALE_LSB +: PRESC_W]   = prescale_reg;
                 rdata[FS_INTERLOCK_ACTIVE_LSB]                = active;
                 rdata[FS_INTERLOCK_BLOCKED_LSB]               = blocked_reg;
             end
@@ -155,6 +170,11 @@ module logic_outputs #(
         if ($past(start_blocked)) assert (blocked_reg);
         if ($past(blocked_reg) && !$past(clear_errors)) assert (blocked_reg);
         if (!$past(start_blocked) && !$past(blocked_reg)) assert (!blocked_reg);
+        // Samples every PRESCALE + 1 clocks: a sample reloads PRESCALE, others count down;
+        // between samples the filtered input holds.
+        if ($past(sample)) assert (presc_reg == $past(prescale_reg));
+        else assert (presc_reg == $past(presc_reg) - 1);
+        if (!$past(sample)) assert (level == $past(level) && primed == $past(primed));
         cover ($past(halt) && $past(outputs_reg) != $past(safe_reg));
         cover (inhibit);
     end

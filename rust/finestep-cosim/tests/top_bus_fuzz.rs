@@ -447,8 +447,9 @@ impl Expect {
             0x1E => 1 << 16,
             // OUTPUTS while halted: the safe levels, and N_GPIO = 4.
             0x1F => self.rw[0x23] | 4 << 24,
-            // INTERLOCK at reset: active high, filter 50; the pin low: not active.
-            0x27 => 0x3202,
+            // INTERLOCK at reset: active high, filter 50, prescale 4999; the pin low: not
+            // active.
+            0x27 => 4999 << 18 | 0x3202,
             // PROBE_CONTROL at reset: active high, filter 1; ENC_STATUS: the arms.
             0x52 => 0x11,
             0x74..=0x77 => {

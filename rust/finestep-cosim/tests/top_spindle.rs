@@ -202,9 +202,16 @@ fn interlock_holds_the_start() {
     let mut m = machine("interlock_holds_the_start");
     ok(m.set_period(200));
     ok(m.set_start_level(2));
-    ok(m.configure_interlock(&InterlockSetup { enable: true, active_high: true, filter_clocks: 8 }));
+    // A prescale the 14-bit field cannot hold is refused before anything is written.
+    let wide = InterlockSetup { enable: true, active_high: true, filter_samples: 3, prescale: 1 << 14 };
+    assert!(matches!(m.configure_interlock(&wide), Err(BusError::SettingRange { max: 0x3FFF, .. })));
+    // 3 samples of 7 clocks: active 21-27 clocks after the pin (plus the synchroniser),
+    // once the prescaler has counted down the reset setting's 5 000 clocks (a new
+    // PRESCALE takes effect at the next sample).
+    ok(m.configure_interlock(&InterlockSetup { enable: true, active_high: true, filter_samples: 3, prescale: 6 }));
+    ok(m.bus().wait(5_000));
     m.bus().link_mut().set_interlock_pin(true);
-    ok(m.bus().wait(20));
+    ok(m.bus().wait(30));
     assert_eq!(ok(m.interlock()), (true, false));
     let records: Vec<PeriodRecord> = (0..4).map(|_| PeriodRecord::from_raw(&[1 << 16, 0, 0, 0], 0)).collect();
     ok(m.bus().push_records(&records));

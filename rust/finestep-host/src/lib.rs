@@ -146,6 +146,16 @@ pub enum BusError {
         /// The step engine's slots.
         slots: u32,
     },
+    /// A setting too large for its register field.
+    #[error("{what} = {value} does not fit its register field (at most {max})")]
+    SettingRange {
+        /// The setting.
+        what: &'static str,
+        /// What was asked for.
+        value: u32,
+        /// The field's largest value.
+        max: u32,
+    },
     /// More records than one FIFO frame carries.
     #[error("{records} records in one burst (at most {max})")]
     BurstTooLong {

@@ -98,8 +98,13 @@ pub struct InterlockSetup {
     pub enable: bool,
     /// The pin is active high.
     pub active_high: bool,
-    /// Clocks of the other level before the filtered input changes (0 acts as 1).
-    pub filter_clocks: u8,
+    /// Samples of the other level in a row before the filtered input changes (0 acts as
+    /// 1).
+    pub filter_samples: u8,
+    /// The filter samples every `prescale + 1` clocks (14 bits): a change shorter than
+    /// `(filter_samples - 1) * (prescale + 1)` clocks never shows, one of
+    /// `filter_samples * (prescale + 1)` always does.
+    pub prescale: u16,
 }
 
 impl<B: Bus> Machine<B> {
@@ -167,9 +172,18 @@ impl<B: Bus> Machine<B> {
     /// Configures the interlock input.
     pub fn configure_interlock(&mut self, setup: &InterlockSetup) -> Result<(), BusError> {
         self.need(self.caps.has_outputs, "interlock")?;
+        let prescale = u32::from(setup.prescale);
+        if prescale > interlock::PRESCALE.max() {
+            return Err(BusError::SettingRange {
+                what: "interlock prescale",
+                value: prescale,
+                max: interlock::PRESCALE.max(),
+            });
+        }
         let word = interlock::ENABLE.set(0, u32::from(setup.enable));
         let word = interlock::ACTIVE_HIGH.set(word, u32::from(setup.active_high));
-        self.bus.write(interlock::ADDR, interlock::FILTER.set(word, u32::from(setup.filter_clocks)))
+        let word = interlock::FILTER.set(word, u32::from(setup.filter_samples));
+        self.bus.write(interlock::ADDR, interlock::PRESCALE.set(word, prescale))
     }
 
     /// The interlock: (active now, BLOCKED: a start was held since the last CLEAR_ERRORS).

@@ -415,6 +415,7 @@ impl RegisterFile {
             enable: i::ENABLE.get(word) != 0,
             active_high: i::ACTIVE_HIGH.get(word) != 0,
             filter: i::FILTER.get(word),
+            prescale: i::PRESCALE.get(word) as u16,
         }
     }
 
