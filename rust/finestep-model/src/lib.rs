@@ -76,6 +76,7 @@ pub mod limits;
 pub mod logic_outputs;
 pub mod motion_control;
 pub mod parallel_bus_slave;
+pub mod pbp_interp;
 pub mod period_timer;
 pub mod position_fifo;
 pub mod quadrature_channel;
