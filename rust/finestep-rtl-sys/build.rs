@@ -141,6 +141,8 @@ fn main() {
         "finestep_top_sim.h",
         "verilated_trace.h",
         "finestep_core_sim.v",
+        "pbp_interp_sim.cpp",
+        "pbp_interp_sim.h",
     ] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
@@ -199,7 +201,9 @@ fn main() {
         .define("FT_STEP_SHARED", params.step_shared.to_string().as_str())
         .define("FT_HAS_SPINDLE", params.has_spindle.to_string().as_str())
         .define("FT_HAS_OUTPUTS", params.has_outputs.to_string().as_str())
-        .define("FT_N_GPIO", params.n_gpio.to_string().as_str());
+        .define("FT_N_GPIO", params.n_gpio.to_string().as_str())
+        .define("PI_COORD_W", PBP_COORD_W.to_string().as_str())
+        .define("PI_DIV_W", PBP_DIV_W.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -229,6 +233,8 @@ fn main() {
         // The motion chip once, without tracing (a second traced top would add a third
         // to the build): its lockstep mismatches name the pin and the clock, no waveform.
         (Build::Top { motion: true }, "Vfinestep_top_motion", None),
+        // The point-by-point comparison interpolator alone (its own lockstep test).
+        (Build::PbpInterp, "Vpbp_interp", Some(trace_flag)),
     ];
     if netlist.is_some() {
         // A netlist is Verilated once, without tracing (with it, the trace code of its
@@ -273,6 +279,7 @@ fn main() {
     files.extend(globals.into_iter().map(|stem| root.join("include").join(format!("{stem}.cpp"))));
     files.push(sim.join("finestep_sim.cpp"));
     files.push(sim.join("finestep_top_sim.cpp"));
+    files.push(sim.join("pbp_interp_sim.cpp"));
     compile_parallel(&mut build, files);
     build.compile("finestep_core");
     if fst {
@@ -286,8 +293,9 @@ fn main() {
     bindgen::Builder::default()
         .header(sim.join("finestep_sim.h").to_string_lossy())
         .header(sim.join("finestep_top_sim.h").to_string_lossy())
-        .allowlist_function("fs_.*|ft_.*")
-        .allowlist_type("fs_.*|ft_.*")
+        .header(sim.join("pbp_interp_sim.h").to_string_lossy())
+        .allowlist_function("fs_.*|ft_.*|pi_.*")
+        .allowlist_type("fs_.*|ft_.*|pi_.*")
         .allowlist_var("FS_.*|FT_.*")
         .clang_arg(format!("-I{}", gen.display()))
         .derive_default(true)
@@ -334,7 +342,14 @@ enum Build {
     /// `finestep_top`: with its defaults, or without the spindle and the logic outputs
     /// (`motion`, as every board top).
     Top { motion: bool },
+    /// `pbp_interp` alone, with [`PBP_COORD_W`] and [`PBP_DIV_W`].
+    PbpInterp,
 }
+
+/// The parameters the Verilated `pbp_interp` is built with (its defaults); the shim
+/// reports them.
+const PBP_COORD_W: u32 = 24;
+const PBP_DIV_W: u32 = 16;
 
 /// Runs Verilator on `build` into `dir` and returns the variables of its `*_classes.mk`.
 #[allow(clippy::too_many_arguments)]
@@ -352,6 +367,7 @@ fn verilate(
     let (top, gantry, motion) = match build {
         Build::Core { gantry } => ("finestep_core_sim", Some(gantry), None),
         Build::Top { motion } => ("finestep_top", None, Some(motion)),
+        Build::PbpInterp => ("pbp_interp", None, None),
     };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
@@ -375,6 +391,23 @@ fn verilate(
             .status()
             .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
         assert!(status.success(), "verilator failed on the {} netlist {}", netlist.family, netlist.path.display());
+        return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
+    }
+    if let Build::PbpInterp = build {
+        let status = command
+            .arg("--cc")
+            .args(["--top-module", top, "--prefix", prefix])
+            .arg(format!("-I{}", include.display()))
+            .arg("--Mdir")
+            .arg(dir)
+            .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal"])
+            .args(trace)
+            .arg(format!("-GCOORD_W={PBP_COORD_W}"))
+            .arg(format!("-GDIV_W={PBP_DIV_W}"))
+            .args(sources)
+            .status()
+            .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+        assert!(status.success(), "verilator failed on hdl/ (pbp_interp)");
         return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
     }
     let status = command

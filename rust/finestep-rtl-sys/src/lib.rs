@@ -25,7 +25,9 @@ use std::ptr::NonNull;
 use finestep_interface::{CoreParams, DriveTiming, MAX_AXES};
 use finestep_model::{ChunkEnd, CoreInputs, CoreOutputs, Event};
 
+pub mod pbp_interp;
 pub mod top;
+pub use pbp_interp::{pbp_params, RtlPbpInterp};
 pub use top::{top_build, top_build_of, PinEvent, RtlTop, TopBuild, TopVariant};
 
 /// What [`RtlTop`] was built from: `"RTL (hdl/)"`, or with the feature `netlist-ecp5` or
