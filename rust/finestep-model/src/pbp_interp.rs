@@ -493,6 +493,48 @@ mod tests {
         assert_eq!(arc_steps((5, 0), (5, 5), false), Err(ArcError::NotOnPath(5, 5)));
     }
 
+    /// The block's requests through two step shapers (the DDA's hand-off): every step
+    /// reaches the pins and the shapers end at the end point; with decisions at least
+    /// `L + max(S, H + U)` clocks apart the shapers never fall behind, faster they do.
+    #[test]
+    fn requests_drive_two_step_shapers_to_the_end_point() {
+        use crate::config::{AxisConfig, AxisSettings};
+        use crate::step_shaper::StepShaper;
+        use crate::DriveTiming;
+        let counter_max = 4095;
+        let cfg = AxisConfig { timing: DriveTiming::new(10, 10, 5, 5), enable: true, ..AxisConfig::default() };
+        let set = AxisSettings::masked(&cfg, counter_max, false);
+        let run = |rec: PbpRecord, tick_div: u32| {
+            let mut block = PbpInterp::new(PbpParams::default());
+            let mut shapers = [StepShaper::new(counter_max); 2];
+            block.step(&PbpInputs { tick_div, rec_valid: true, rec, ..PbpInputs::default() });
+            let idle = PbpInputs { tick_div, ..PbpInputs::default() };
+            for _ in 0..200_000 {
+                let o = block.outputs();
+                for (axis, shaper) in shapers.iter_mut().enumerate() {
+                    let r = if !o.req_valid[axis] {
+                        0
+                    } else if o.req_negative[axis] {
+                        -1
+                    } else {
+                        1
+                    };
+                    shaper.step(r, &set, counter_max, false);
+                }
+                block.step(&idle);
+            }
+            assert!(!block.outputs().busy);
+            let position = |s: &StepShaper| s.position() as i32 as i64;
+            ((position(&shapers[0]), position(&shapers[1])), shapers[0].rate_error() || shapers[1].rate_error())
+        };
+        let (start, end) = ((30, -41), (-50, 7));
+        let arc = PbpRecord::arc(start, end, true).unwrap();
+        assert_eq!(run(arc, 19), ((end.0 - start.0, end.1 - start.1), false));
+        assert_eq!(run(PbpRecord::line(-300, 171), 19), ((-300, 171), false));
+        // Decisions every 10 clocks: the shapers fall behind (rate_error) yet lose no step.
+        assert_eq!(run(arc, 9), ((end.0 - start.0, end.1 - start.1), true));
+    }
+
     #[test]
     fn a_line_record_runs_at_the_tick_rate() {
         let mut block = PbpInterp::new(PbpParams::default());
