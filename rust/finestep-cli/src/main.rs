@@ -123,6 +123,13 @@ enum Command {
         /// The profile file.
         #[arg(long, default_value = "target/roller/profile.csv")]
         out: PathBuf,
+        /// The chip (lockstep, model, spidev:/dev/spidevB.C[@SCK_HZ], sim:SOCKET), with the
+        /// configuration's [measure] traverse; without a bus, the simulated roller.
+        #[arg(long)]
+        bus: Option<bus::BusTarget>,
+        /// The machine configuration (TOML): axes, drive timing, [measure], bus.
+        #[arg(long)]
+        config: Option<PathBuf>,
     },
     /// The demo's part 4 alone: measure the roller, compensate, grind, measure again.
     #[command(hide = true)]
@@ -216,11 +223,11 @@ fn main() -> anyhow::Result<()> {
         Command::Conformance { manifest, out, tool_table } => conformance::run(&manifest, &out, tool_table.as_deref()),
         Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
         Command::Selftest { bus, loopback } => selftest::run(bus, loopback),
-        Command::Measure { out } => {
+        Command::Measure { out, bus, config } => {
             if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir)?;
             }
-            roller::measure(&out)
+            roller::measure(&out, bus, config.as_deref())
         }
         Command::RollerDemo { out } => {
             std::fs::create_dir_all(&out)?;

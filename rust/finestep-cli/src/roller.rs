@@ -20,10 +20,10 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use finestep_cosim::{rtl_top_params, ModelPins, PlantLoop};
 use finestep_host::stream::{self, StreamEvent};
-use finestep_host::{EncoderSetup, PinTarget};
+use finestep_host::{Bus, EncoderSetup, Machine};
 use finestep_model::top::Top;
 use finestep_planner::config::Resolved;
-use finestep_planner::MachineConfig;
+use finestep_planner::{MachineConfig, MeasureConfig};
 use finestep_plant::roller::roughness_nm;
 use finestep_plant::{
     ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Mechanics, Plant, PlantConfig, RollerConfig, RollerMode,
@@ -31,6 +31,7 @@ use finestep_plant::{
 };
 use finestep_profile::{compensate, form_error, CompensateOptions, Profile, Sample, Target};
 
+use crate::bus::BusTarget;
 use crate::machine_setup::{self, Chip};
 
 /// X, Y (unused), Z steps per mm: the planner's slots 0, 1, 2.
@@ -103,7 +104,17 @@ fn plant(mode: RollerMode, surface: Surface) -> anyhow::Result<Plant> {
 fn connect(plant: Plant) -> anyhow::Result<(Chip<PlantLoop<ModelPins>>, MachineConfig, Resolved)> {
     let mut machine = machine_setup::open(PlantLoop::new(ModelPins(Top::new(rtl_top_params())), plant))?;
     let core = machine_setup::chip_limits(&machine.caps());
-    let (config, resolved) = machine_setup::resolve(machine_setup::demo_config(&STEPS_PER_MM), core, "<roller>")?;
+    let mut config = machine_setup::demo_config(&STEPS_PER_MM);
+    config.measure = MeasureConfig {
+        axis: "Z".into(),
+        length_mm: ROLLER_MM,
+        feed_mm_s: MEASURE_FEED_MM_S,
+        axis_channel: 0,
+        axis_counts_per_mm: STEPS_PER_MM[2] * f64::from(Z_COUNTS_PER_STEP),
+        gauge_channel: 1,
+        gauge_um_per_count: f64::from(GAUGE_NM) * 1e-3,
+    };
+    let (config, resolved) = machine_setup::resolve(config, core, "<roller>")?;
     machine_setup::configure(&mut machine, &resolved)?;
     for channel in 0..2 {
         machine.configure_encoder(channel, &EncoderSetup { filter: 3, ..EncoderSetup::default() })?;
@@ -111,14 +122,30 @@ fn connect(plant: Plant) -> anyhow::Result<(Chip<PlantLoop<ModelPins>>, MachineC
     Ok((machine, config, resolved))
 }
 
-/// A measuring traverse of Z over the roller: both gratings latched at every period
-/// boundary, read back while the host streams.
-fn traverse<T: PinTarget>(
-    machine: &mut Chip<T>,
-    config: &MachineConfig,
-    resolved: &Resolved,
-) -> anyhow::Result<Profile> {
-    let records = machine_setup::plan_line(config, [0.0, 0.0, ROLLER_MM, 0.0], MEASURE_FEED_MM_S)?;
+/// A measuring traverse of `config.measure`'s axis (Z over the roller): its grating and
+/// the gauge latched at every period boundary, read back while the host streams. The
+/// grating, the gauge and the steps read from 0 where the traverse starts (the counts
+/// the chip shows at rest before it); samples where the axis stands still repeat a point
+/// and are dropped, as are those outside the traverse's length.
+fn traverse<B: Bus>(machine: &mut Machine<B>, config: &MachineConfig, resolved: &Resolved) -> anyhow::Result<Profile> {
+    let m = &config.measure;
+    let slot = finestep_planner::config::AXIS_NAMES
+        .iter()
+        .position(|name| *name == m.axis && config.axes.contains_key(*name))
+        .with_context(|| format!("measure.axis: `{}` is not an axis of this machine", m.axis))?;
+    let channels = machine.caps().n_enc;
+    for (key, channel) in [("measure.axis_channel", m.axis_channel), ("measure.gauge_channel", m.gauge_channel)] {
+        if usize::from(channel) >= channels {
+            bail!("{key}: channel {channel}, but the chip has {channels} encoder channels (CAPS.N_ENC)");
+        }
+    }
+    let (axis_ch, gauge_ch) = (usize::from(m.axis_channel), usize::from(m.gauge_channel));
+    let steps_per_mm = resolved.axes[slot].steps_per_unit;
+    let mut target = [0.0; 4];
+    target[slot] = m.length_mm;
+    let records = machine_setup::plan_line(config, target, m.feed_mm_s)?;
+    let start = machine.feedback()?;
+    let (z0, x0, s0) = (start.counts[axis_ch], start.counts[gauge_ch], start.steps[slot]);
     let stream_config = machine_setup::stream_config(resolved);
     let stream_config = stream::StreamConfig { poll_clocks: u64::from(resolved.period_clocks / 4), ..stream_config };
     let mut samples: Vec<Sample> = Vec::new();
@@ -135,9 +162,9 @@ fn traverse<T: PinTarget>(
         last_latch = Some(snapshot.latch_time);
         let t0 = *first.get_or_insert(snapshot.latch_time);
         samples.push(Sample {
-            z_mm: f64::from(snapshot.counts[0]) / (STEPS_PER_MM[2] * f64::from(Z_COUNTS_PER_STEP)),
-            x_mm: f64::from(snapshot.counts[1]) * f64::from(GAUGE_NM) * 1e-6,
-            z_commanded_mm: f64::from(snapshot.steps[2]) / STEPS_PER_MM[2],
+            z_mm: f64::from(snapshot.counts[axis_ch].wrapping_sub(z0)) / m.axis_counts_per_mm,
+            x_mm: f64::from(snapshot.counts[gauge_ch].wrapping_sub(x0)) * m.gauge_um_per_count * 1e-3,
+            z_commanded_mm: f64::from(snapshot.steps[slot].wrapping_sub(s0)) / steps_per_mm,
             time_s: f64::from(snapshot.latch_time.wrapping_sub(t0)) / resolved.clock_hz,
         });
         Ok(())
@@ -147,12 +174,16 @@ fn traverse<T: PinTarget>(
     }
     // Samples on the roller, the table moving (at rest the same point repeats).
     samples.dedup_by(|a, b| a.z_mm == b.z_mm);
-    samples.retain(|s| s.z_mm > 0.0 && s.z_mm < ROLLER_MM);
-    Ok(Profile {
-        samples,
-        z_resolution_mm: 1.0 / (STEPS_PER_MM[2] * f64::from(Z_COUNTS_PER_STEP)),
-        x_resolution_mm: f64::from(GAUGE_NM) * 1e-6,
-    })
+    let (low, high) = if m.length_mm > 0.0 { (0.0, m.length_mm) } else { (m.length_mm, 0.0) };
+    samples.retain(|s| s.z_mm > low && s.z_mm < high);
+    if samples.is_empty() {
+        bail!(
+            "measure: the {} grating (channel {axis_ch}) did not move over the traverse: nothing on the chip's \
+             encoder pins, or another channel",
+            m.axis
+        );
+    }
+    Ok(Profile { samples, z_resolution_mm: 1.0 / m.axis_counts_per_mm, x_resolution_mm: m.gauge_um_per_count * 1e-3 })
 }
 
 /// Measures `surface` on the simulated machine.
@@ -188,9 +219,32 @@ const PROFILE_COMMENT: &str = "finestep measure: the roller's radius deviation X
     z_mm: Z by its grating; x_mm: the gauge (zeroed at the start); z_commanded_mm: the step generator's Z;\n\
     lag_um: how far the commanded Z leads the grating (the drive's lag, removed by taking Z from the grating)";
 
-/// `finestep measure`: a measuring traverse over the simulated roller; writes `out`.
-pub fn measure(out: &Path) -> anyhow::Result<()> {
-    let profile = measure_surface(initial_surface()?)?;
+/// `finestep measure`: a measuring traverse over the simulated roller, or with a bus (the
+/// command line's or the configuration's) on that chip with the configuration's
+/// `[measure]` traverse and channels; writes `out`.
+pub fn measure(out: &Path, bus: Option<BusTarget>, config_path: Option<&Path>) -> anyhow::Result<()> {
+    let (config, config_name) = match config_path {
+        Some(path) => (Some(crate::config_file::load(path)?), path.display().to_string()),
+        None => (None, "<built-in>".to_string()),
+    };
+    let on_bus = bus.is_some() || config.as_ref().is_some_and(|c| c.bus.is_some());
+    let profile = if on_bus {
+        let config = config.unwrap_or_default();
+        let target = BusTarget::choose(bus, config.bus.as_deref(), &config_name)?;
+        let clock_hz = config.clock_hz.map_or(machine_setup::model_params().clock_hz, |hz| hz as u32);
+        let mut machine = crate::bus::open(&target, "measure", clock_hz)?;
+        let core = machine_setup::chip_limits(&machine.caps());
+        let (config, resolved) = machine_setup::resolve(config, core, &config_name)?;
+        machine_setup::configure(&mut machine, &resolved)?;
+        let m = &config.measure;
+        println!(
+            "finestep measure on {target}: {} over {} mm at {} mm/s, grating on channel {}, gauge on channel {}",
+            m.axis, m.length_mm, m.feed_mm_s, m.axis_channel, m.gauge_channel
+        );
+        traverse(&mut machine, &config, &resolved)?
+    } else {
+        measure_surface(initial_surface()?)?
+    };
     let text = profile.to_text(PROFILE_COMMENT);
     std::fs::write(out, text).with_context(|| format!("writing {}", out.display()))?;
     let form = form_error(&profile, &Target::Constant(0.0), WINDOW_MM)?;

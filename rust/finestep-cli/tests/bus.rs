@@ -63,6 +63,53 @@ fn the_demo_takes_the_bus_and_names_what_it_cannot_reach() {
     assert!(text.contains("spidev:/dev/spidev9.9: no such device"), "{text}");
 }
 
+/// `finestep measure` on a served chip with the self-test's loopback machine on its pins
+/// (encoder 0 follows axis 0, one count per step): the configuration's traverse of X,
+/// its grating on channel 0; the gauge (channel 1) is unplugged and reads 0. A second
+/// traverse on the same chip starts from where the first ended.
+#[test]
+fn measure_traverses_a_served_chip_with_the_configured_channels() {
+    let server = serve("measure", &["--target", "model", "--plant"]);
+    let config = scratch("measure.toml");
+    let measure = "[measure]\naxis = \"X\"\nlength_mm = 2.0\nfeed_mm_s = 20.0\naxis_channel = 0\n\
+        axis_counts_per_mm = 800.0\ngauge_channel = 1\ngauge_um_per_count = 0.5\n";
+    std::fs::write(&config, format!("bus = \"sim:{}\"\n{measure}", server.socket.display())).unwrap();
+    let config = config.display().to_string();
+    for pass in 0..2 {
+        let out = scratch(&format!("profile-{pass}.csv"));
+        let (ok, text) = finestep(&["measure", "--config", &config, "--out", &out.display().to_string()]);
+        assert!(ok, "{text}");
+        let profile = std::fs::read_to_string(&out).unwrap();
+        let rows: Vec<Vec<f64>> = profile
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.starts_with("z_mm"))
+            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+            .collect();
+        assert!(rows.len() > 80, "{text}");
+        // The grating is the axis's steps: Z (the traverse axis) equals the command, in
+        // whole counts of 1.25 um, rising over (0, 2) mm; the gauge reads 0.
+        assert!(rows.windows(2).all(|w| w[1][0] > w[0][0]), "{profile}");
+        assert!(rows.iter().all(|r| r[0] > 0.0 && r[0] < 2.0 && r[1] == 0.0 && r[0] == r[2]), "{profile}");
+        assert!(rows.iter().all(|r| (r[0] / 0.00125 - (r[0] / 0.00125).round()).abs() < 1e-6), "{profile}");
+        assert!(rows.last().unwrap()[0] > 1.99, "{profile}");
+    }
+    // A channel the chip does not have, and a chip with nothing on its encoder pins.
+    let bad = scratch("measure-bad.toml");
+    std::fs::write(&bad, measure.replace("axis_channel = 0", "axis_channel = 7")).unwrap();
+    let bad = bad.display().to_string();
+    let bus = format!("sim:{}", server.socket.display());
+    let (ok, text) = finestep(&["measure", "--config", &bad, "--bus", &bus]);
+    assert!(!ok);
+    assert!(
+        text.contains("measure.axis_channel: channel 7, but the chip has 4 encoder channels (CAPS.N_ENC)"),
+        "{text}"
+    );
+    let (ok, text) =
+        finestep(&["measure", "--config", &config, "--bus", "model", "--out", &scratch("p.csv").display().to_string()]);
+    assert!(!ok);
+    assert!(text.contains("the X grating (channel 0) did not move over the traverse"), "{text}");
+}
+
 #[test]
 fn the_configuration_names_the_bus_and_the_command_line_overrides_it() {
     let config = scratch("machine.toml");

@@ -136,6 +136,8 @@ pub struct MachineConfig {
     pub tools: Vec<ToolConfig>,
     /// The spindle: what S means and how the level reaches the drive.
     pub spindle: SpindleConfig,
+    /// `finestep measure`'s traverse and gratings (seed 000's roller gauge).
+    pub measure: MeasureConfig,
     /// The host link the `finestep` tools talk over (`lockstep`, `model`,
     /// `spidev:/dev/spidevB.C[@SCK_HZ]`, `sim:SOCKET`); `--bus` overrides it. The planner
     /// does not read it.
@@ -219,6 +221,44 @@ impl Default for SpindleConfig {
     }
 }
 
+/// `finestep measure` (`[measure]`): a traverse of one axis at a steady feed while the chip
+/// latches two encoder channels on one clock at every period boundary: the traverse
+/// axis's own grating and a gauge. The planner does not read it.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MeasureConfig {
+    /// The traverse axis (X, Y, Z or A).
+    pub axis: String,
+    /// The traverse's length from where the axis stands, mm (its sign is the direction).
+    pub length_mm: f64,
+    /// The traverse's feed, mm/s.
+    pub feed_mm_s: f64,
+    /// The encoder channel of the traverse axis's grating.
+    pub axis_channel: u8,
+    /// That grating's counts per mm.
+    pub axis_counts_per_mm: f64,
+    /// The encoder channel of the gauge.
+    pub gauge_channel: u8,
+    /// The gauge's resolution, um per count.
+    pub gauge_um_per_count: f64,
+}
+
+impl Default for MeasureConfig {
+    /// The demo's roller: Z over 6 mm at 20 mm/s, a 0.5 um grating on channel 0, a 0.5 um
+    /// gauge on channel 1.
+    fn default() -> Self {
+        MeasureConfig {
+            axis: "Z".into(),
+            length_mm: 6.0,
+            feed_mm_s: 20.0,
+            axis_channel: 0,
+            axis_counts_per_mm: 2000.0,
+            gauge_channel: 1,
+            gauge_um_per_count: 0.5,
+        }
+    }
+}
+
 /// One tool of the tool table.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -252,6 +292,7 @@ impl Default for MachineConfig {
             chord_tolerance_mm: 0.001,
             lookahead_moves: 2000,
             bus: None,
+            measure: MeasureConfig::default(),
             spindle: SpindleConfig::default(),
             drive: DriveTimingNs::default(),
             axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
@@ -429,6 +470,21 @@ impl MachineConfig {
         positive("path_tolerance_mm", self.path_tolerance_mm)?;
         positive("chord_tolerance_mm", self.chord_tolerance_mm)?;
         positive("spindle.max_rpm", self.spindle.max_rpm)?;
+        positive("measure.feed_mm_s", self.measure.feed_mm_s)?;
+        positive("measure.axis_counts_per_mm", self.measure.axis_counts_per_mm)?;
+        positive("measure.gauge_um_per_count", self.measure.gauge_um_per_count)?;
+        if !self.measure.length_mm.is_finite() || self.measure.length_mm == 0.0 {
+            return Err(fail(
+                "measure.length_mm".into(),
+                format!("must be a finite non-zero length, got {}", self.measure.length_mm),
+            ));
+        }
+        if self.measure.axis_channel == self.measure.gauge_channel {
+            return Err(fail(
+                "measure.gauge_channel".into(),
+                format!("channel {} is the axis's grating too", self.measure.gauge_channel),
+            ));
+        }
         if !(2..=1_000_000).contains(&self.lookahead_moves) {
             return Err(fail(
                 "lookahead_moves".into(),
@@ -558,6 +614,12 @@ mod tests {
         assert_eq!(err.key, "axes.X.max_acceleration");
         let err = MachineConfig::from_toml_str("profile = \"cubic\"\n", "m.toml").unwrap_err();
         assert!(err.reason.contains("cubic"), "{err}");
+        let err = MachineConfig::from_toml_str("[measure]\nfeed_mm_s = 0\n", "m.toml").unwrap_err();
+        assert_eq!(err.key, "measure.feed_mm_s");
+        let err = MachineConfig::from_toml_str("[measure]\nlength_mm = 0\n", "m.toml").unwrap_err();
+        assert_eq!(err.key, "measure.length_mm");
+        let err = MachineConfig::from_toml_str("[measure]\ngauge_channel = 0\n", "m.toml").unwrap_err();
+        assert_eq!(err.to_string(), "m.toml: measure.gauge_channel: channel 0 is the axis's grating too");
     }
 
     #[test]

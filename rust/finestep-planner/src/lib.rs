@@ -86,6 +86,6 @@ pub mod vec4;
 pub mod velocity;
 
 pub use checker::{check_program, CheckReport};
-pub use config::{ConfigError, MachineConfig, ProfileKind, SpindleConfig};
+pub use config::{ConfigError, MachineConfig, MeasureConfig, ProfileKind, SpindleConfig};
 pub use element::{IoAction, IoEvent, TimedEvent};
 pub use program::{plan_program, plan_stream, PlanStream, PlannedProgram, ProgramError};
