@@ -23,6 +23,9 @@ pub enum GcodeError {
         /// What is wrong, e.g. `word X appears twice`.
         message: String,
     },
+    /// The parameters given before the program (a parameter file) are refused.
+    #[error("parameter file: {0}")]
+    Parameters(#[from] crate::persistent::ParameterFileError),
     /// The file could not be read.
     #[error("{file}: {source}")]
     Io {
@@ -39,7 +42,7 @@ impl GcodeError {
     pub fn line(&self) -> Option<usize> {
         match self {
             GcodeError::Parse { line, .. } => Some(*line),
-            GcodeError::Io { .. } => None,
+            GcodeError::Io { .. } | GcodeError::Parameters(_) => None,
         }
     }
 
@@ -47,7 +50,7 @@ impl GcodeError {
     pub fn column(&self) -> Option<usize> {
         match self {
             GcodeError::Parse { column, .. } => Some(*column),
-            GcodeError::Io { .. } => None,
+            GcodeError::Io { .. } | GcodeError::Parameters(_) => None,
         }
     }
 }

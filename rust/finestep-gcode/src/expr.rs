@@ -304,7 +304,7 @@ pub(crate) fn read_value(s: &mut Chars, word: What, depth: usize) -> Result<Expr
         Some('#') => {
             s.i += 1;
             if s.peek() == Some('<') {
-                let name = read_name(s)?;
+                let name = read_parameter_name(s, column)?;
                 Ok(Expr::Named(name.into(), column))
             } else {
                 let index = read_value(s, What::Named("parameter number"), depth + 1)?;
@@ -318,6 +318,22 @@ pub(crate) fn read_value(s: &mut Chars, word: What, depth: usize) -> Result<Expr
         Some(c) if c.is_ascii_alphabetic() => read_function(s, depth),
         Some(c) => Err(LineError::new(column, format!("unexpected character {c:?} in the value of {word}"))),
     }
+}
+
+/// `<name>` of a named parameter, after its `#` (which stands at `column`): as
+/// [`read_name`], with LinuxCNC's `#<_ini[section]name>` and `#<_hal[pin]>` refused
+/// (they read the machine's INI file and HAL pins, which a part program alone lacks).
+pub(crate) fn read_parameter_name(s: &mut Chars, column: usize) -> Result<String, LineError> {
+    let name = read_name(s)?;
+    for (prefix, why) in [
+        ("_ini[", "finestep reads no LinuxCNC INI file; give the value in the program"),
+        ("_hal[", "finestep reads no HAL pins"),
+    ] {
+        if name.starts_with(prefix) {
+            return Err(LineError::new(column, format!("unsupported: #<{prefix}...]> ({why})")));
+        }
+    }
+    Ok(name)
 }
 
 /// `<name>` after `#` or in `EXISTS[#<name>]`: lower case, blanks already removed.
@@ -401,8 +417,9 @@ fn read_function(s: &mut Chars, depth: usize) -> Result<Expr, LineError> {
     if s.starts_with("exists") {
         s.i += 6;
         s.expect('[', "after EXISTS")?;
+        let hash = s.column();
         s.expect('#', "in EXISTS[#<name>]")?;
-        let name = read_name(s)?;
+        let name = read_parameter_name(s, hash)?;
         s.expect(']', "to close EXISTS[...]")?;
         return Ok(Expr::Exists(name.into()));
     }

@@ -522,6 +522,25 @@ impl State {
         self.machine_unit_mm = mm;
     }
 
+    /// Sets the numbered parameters a parameter file held (machine units) before the
+    /// program runs, and puts their offsets in force as LinuxCNC's interpreter does at
+    /// start-up: the coordinate system #5220 with its offsets and rotation, and the G92
+    /// offsets #5211-#5214 if #5210 is set. #5220 must be 1 to 9 (checked by the caller).
+    pub(crate) fn load_parameters(&mut self, values: &std::collections::BTreeMap<usize, f64>) {
+        let mut system = self.system;
+        for (&n, &value) in values {
+            if n == PARAM_COORD_SYSTEM {
+                system = (value.round() as usize).clamp(1, 9) - 1;
+            } else if !matches!(n, PARAM_TOOL | PARAM_POSITION..=5428 | 5401..=5413) {
+                self.set_parameter(n, value);
+            }
+        }
+        self.select_system(system);
+        if self.g92_on {
+            self.active_g92 = self.g92;
+        }
+    }
+
     /// Loads the coordinate system `system` as the one in force.
     fn select_system(&mut self, system: usize) {
         self.system = system;
@@ -705,9 +724,15 @@ impl State {
                 _ => return Err(LineError::new(column, "P word is used by more than one code")),
             }
         }
-        if let Some((_, column)) = w.param('Q') {
-            if !(w.has(Group::ToolChange, 610) || cycle_move && matches!(motion, Some(730 | 830))) {
-                return Err(LineError::new(column, "Q word with no G73 or G83 to use it"));
+        if let Some((q, column)) = w.param('Q') {
+            // G64's Q is LinuxCNC's naive-CAM tolerance (it merges nearly collinear
+            // segments within Q): accepted and not used, every segment is followed.
+            let g64 = w.has(Group::Path, 640);
+            if g64 && q < 0.0 {
+                return Err(LineError::new(column, "negative naive-CAM tolerance Q"));
+            }
+            if !(g64 || w.has(Group::ToolChange, 610) || cycle_move && matches!(motion, Some(730 | 830))) {
+                return Err(LineError::new(column, "Q word with no G64, G73, G83 or M61 to use it"));
             }
         }
         if let Some((_, column)) = w.param('H') {

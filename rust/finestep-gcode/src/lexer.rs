@@ -8,7 +8,7 @@
 //! block runs, as with LinuxCNC's block-delete switch off.
 
 use crate::error::LineError;
-use crate::expr::{read_expression, read_name, read_value, Chars, Expr, What};
+use crate::expr::{read_expression, read_name, read_parameter_name, read_value, Chars, Expr, What};
 
 /// One word with its value computed: an upper-case letter, its value, and the 1-based
 /// column of the letter.
@@ -192,7 +192,7 @@ pub(crate) fn lex_into(
                 }
                 s.i += 1;
                 let target = if s.peek() == Some('<') {
-                    Target::Named(read_name(&mut s)?.into())
+                    Target::Named(read_parameter_name(&mut s, column)?.into())
                 } else {
                     Target::Numbered(read_value(&mut s, What::Named("the parameter number"), 0)?)
                 };
@@ -281,11 +281,19 @@ fn read_oword(s: &mut Chars, column: usize) -> Result<OWord, LineError> {
         }
         _ => return Err(LineError::new(column, "O-word needs a number or a <name> (o100 sub, o<name> call)")),
     };
-    let Some(&(keyword, kind)) = O_KEYWORDS.iter().find(|(k, _)| s.starts_with(k)) else {
+    let word: String = s.chars[s.i..].iter().take_while(|c| c.is_ascii_alphabetic()).collect();
+    let Some(&(keyword, kind)) = O_KEYWORDS.iter().find(|(k, _)| *k == word) else {
+        let what = if word.is_empty() {
+            "O-word needs a keyword".to_string()
+        } else {
+            format!("unknown O-word keyword {:?}", word.to_uppercase())
+        };
         return Err(LineError::new(
             s.column(),
-            "O-word needs a keyword: sub, endsub, call, return, if, elseif, else, endif, while, endwhile, do, \
-             repeat, endrepeat, break or continue",
+            format!(
+                "{what}: sub, endsub, call, return, if, elseif, else, endif, while, endwhile, do, repeat, \
+                 endrepeat, break or continue"
+            ),
         ));
     };
     s.i += keyword.len();
@@ -381,6 +389,8 @@ mod tests {
         assert_eq!(err("G1 X1000000001"), LineError::new(5, "number out of range for word X"));
         assert_eq!(err("G1 X[1"), LineError::new(7, "expression not closed with ']'"));
         assert_eq!(err("o100"), LineError::new(5, "O-word needs a keyword: sub, endsub, call, return, if, elseif, else, endif, while, endwhile, do, repeat, endrepeat, break or continue"));
+        // nestedcall.ngc, which rs274 refuses too ("Unexpected character after O-word").
+        assert_eq!(err("O<g20sub> callsub"), LineError::new(11, "unknown O-word keyword \"CALLSUB\": sub, endsub, call, return, if, elseif, else, endif, while, endwhile, do, repeat, endrepeat, break or continue"));
         assert!(err("X1e308").message.starts_with("unsupported: exponent"));
         let huge = format!("X1{}", "0".repeat(400));
         assert_eq!(err(&huge), LineError::new(2, "number out of range for word X"));

@@ -36,7 +36,10 @@
 //! - Parameters: `#1`-`#5601` (`#5220` coordinate system 1, `#5400` tool, `#5420`-`#5423`
 //!   position), local `#<name>` (per subroutine call) and global `#<_name>` (a global
 //!   never set reads 0, as in rs274), LinuxCNC's predefined `#<_x>`, `#<_metric>`, ...
-//!   (read-only). `#n = value` on a line takes effect after the whole line is read.
+//!   (read-only; `#<_ini[...]>` and `#<_hal[...]>` are refused). `#n = value` on a line
+//!   takes effect after the whole line is read. A parameter file ([`Parameters`], given
+//!   in [`Options::parameters`]) sets parameters and the offsets in force before the
+//!   first line; [`parse_file_with_parameters`] gives the persistent ones back.
 //! - O-words: `sub`/`endsub`/`call [args]`/`return [value]` (`#1`-`#30` local to the
 //!   call, the value in `#<_value>`), `if`/`elseif`/`else`/`endif`, `while`/`endwhile`,
 //!   `do`/`while`, `repeat`/`endrepeat`, `break`/`continue`; `o<name> call` of a
@@ -72,11 +75,13 @@ mod error;
 mod expr;
 mod interp;
 mod lexer;
+mod persistent;
 mod program;
 
 use std::path::Path;
 
 pub use error::GcodeError;
+pub use persistent::{required_parameters, ParameterFileError, Parameters};
 pub use program::{MAX_CALL_DEPTH, MAX_ITERATIONS, MAX_REPEATED_LINES};
 
 /// A position: named axis fields whose names carry their units. Linear axes are in
@@ -316,11 +321,22 @@ pub struct Options {
     pub subroutine_path: Vec<std::path::PathBuf>,
     /// Tool length offsets by tool number (X Y Z in mm, A in degrees), for G43.
     pub tools: std::collections::HashMap<u32, [f64; 4]>,
+    /// Numbered parameters set before the program runs, as LinuxCNC's parameter file
+    /// gives them ([`Parameters::read`]; lengths in the machine unit). The coordinate
+    /// system #5220, its offsets and the G92 offsets (when #5210 is set) are in force from
+    /// the first line, as in LinuxCNC. [`parse_file_with_parameters`] gives them back as
+    /// the program leaves them, to be written to the file.
+    pub parameters: Parameters,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { machine_unit_mm: 1.0, subroutine_path: Vec::new(), tools: std::collections::HashMap::new() }
+        Options {
+            machine_unit_mm: 1.0,
+            subroutine_path: Vec::new(),
+            tools: std::collections::HashMap::new(),
+            parameters: Parameters::default(),
+        }
     }
 }
 
@@ -357,11 +373,23 @@ impl Options {
 /// Parses a part program held in memory. `file_name` is only used in errors;
 /// subroutine files are searched in the [`Options::subroutine_path`] only.
 pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
-    program::run(source, file_name, None, &Options::default())
+    parse_str_with(source, file_name, &Options::default())
 }
 
 /// [`parse_str`] with the machine configuration's [`Options`].
 pub fn parse_str_with(source: &str, file_name: &str, options: &Options) -> Result<Program, GcodeError> {
+    program::run(source, file_name, None, options).map(|(program, _)| program)
+}
+
+/// [`parse_str_with`] that also gives the persistent parameters as the program leaves
+/// them: LinuxCNC's [`required_parameters`] and every parameter
+/// [`Options::parameters`] held, to be written back to the parameter file
+/// ([`Parameters::to_text`]) as LinuxCNC does when it shuts down.
+pub fn parse_str_with_parameters(
+    source: &str,
+    file_name: &str,
+    options: &Options,
+) -> Result<(Program, Parameters), GcodeError> {
     program::run(source, file_name, None, options)
 }
 
@@ -379,6 +407,18 @@ pub fn parse_file(path: impl AsRef<Path>) -> Result<Program, GcodeError> {
 
 /// [`parse_file`] with the machine configuration's [`Options`].
 pub fn parse_file_with(path: impl AsRef<Path>, options: &Options) -> Result<Program, GcodeError> {
+    let path = path.as_ref();
+    let file = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| GcodeError::Io { file: file.clone(), source })?;
+    program::run(&String::from_utf8_lossy(&bytes), &file, path.parent(), options).map(|(program, _)| program)
+}
+
+/// [`parse_file_with`] that also gives the persistent parameters as the program leaves
+/// them (see [`parse_str_with_parameters`]).
+pub fn parse_file_with_parameters(
+    path: impl AsRef<Path>,
+    options: &Options,
+) -> Result<(Program, Parameters), GcodeError> {
     let path = path.as_ref();
     let file = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|source| GcodeError::Io { file: file.clone(), source })?;

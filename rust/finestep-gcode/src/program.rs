@@ -9,6 +9,7 @@ use crate::error::LineError;
 use crate::expr::{parameter_index, Params};
 use crate::interp::{Modal, ModalOp, State};
 use crate::lexer::{lex_into, lex_line_into, Line, OKind, OWord, Target, Word};
+use crate::persistent::{required_parameters, Parameters};
 use crate::{Block, GcodeError, Options, Program};
 
 /// Loop iterations (backward jumps) and subroutine calls a program may make in all
@@ -279,7 +280,8 @@ pub(crate) fn run(
     file_name: &str,
     folder: Option<&Path>,
     options: &Options,
-) -> Result<Program, GcodeError> {
+) -> Result<(Program, Parameters), GcodeError> {
+    crate::persistent::check(&options.parameters.values)?;
     let main = Source::new(std::borrow::Cow::Borrowed(text), file_name);
     let mut runner = Runner {
         sources: vec![main],
@@ -307,6 +309,7 @@ pub(crate) fn run(
     runner.lines_held = runner.sources[0].entries.len() as u64;
     runner.state.set_tools(&options.tools);
     runner.state.set_machine_unit(options.machine_unit_mm);
+    runner.state.load_parameters(&options.parameters.values);
     if runner.sources[0].entries.is_empty() {
         return Err(GcodeError::Parse {
             file: file_name.to_string(),
@@ -324,7 +327,13 @@ pub(crate) fn run(
             message: "the program ends inside the NURBS block opened here (G5.3 missing)".into(),
         });
     }
-    Ok(Program { blocks: runner.blocks })
+    // The persistent parameters as the program leaves them: LinuxCNC's required ones
+    // and every one the parameter file held.
+    let values = required_parameters()
+        .chain(options.parameters.values.keys().copied())
+        .map(|n| (n, runner.state.parameter(n)))
+        .collect();
+    Ok((Program { blocks: runner.blocks }, Parameters { values }))
 }
 
 impl Runner<'_, '_> {

@@ -263,8 +263,15 @@ fn every_error_message_with_its_place() {
         ("N99999999999999 G0", "1:2: number out of range for word N"),
         ("G0 X1 @", "1:8: missing value for word @"),
         ("G0 X1 @1", "1:7: X or Y with polar coordinates @ ^ in one block"),
+        (
+            "G0 X#<_ini[axis_x]max_velocity>",
+            "1:5: unsupported: #<_ini[...]> (finestep reads no LinuxCNC INI file; give the value in the program)",
+        ),
+        ("#<_hal[motion.spindle-speed-out]> = 1", "1:1: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
+        ("G0 X[EXISTS[#<_hal[x]>]]", "1:13: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
         // Words.
-        ("G0 X1 Q2", "1:7: Q word with no G73 or G83 to use it"),
+        ("G0 X1 Q2", "1:7: Q word with no G64, G73, G83 or M61 to use it"),
+        ("G64 P0.1 Q-1", "1:10: negative naive-CAM tolerance Q"),
         ("G0 X1 B2", "1:7: unsupported: axis B (finestep drives the axes X Y Z A)"),
         (
             "G0 X1e5",
@@ -493,4 +500,106 @@ fn nurbs_errors_with_their_place() {
     for (source, expected) in cases {
         assert_eq!(err(source), format!("{FILE}:{expected}"), "{source:?}");
     }
+}
+
+/// The parameter file of `rs274 -g -v in.var t.ngc` (LinuxCNC 2.9, no INI file, so the
+/// machine unit is the inch): G55 in use with X 1 Y -2 and a 90-degree rotation, G92 X
+/// 0.5 in force, and #31 kept because the file lists it.
+const VAR_IN: &str = "31\t4.000000\n5161\t0.000000\n5210\t1.000000\n5211\t0.500000\n5220\t2.000000\n\
+                      5241\t1.000000\n5242\t-2.000000\n5250\t90.000000\n";
+
+#[test]
+fn parameter_file_sets_the_offsets_in_force_and_comes_back_as_rs274_writes_it() {
+    let options =
+        Options { machine_unit_mm: 25.4, parameters: Parameters::read(VAR_IN).unwrap(), ..Options::default() };
+    let source = "G0 X1 Y0\n#1=[#5220] #2=[#5211] #3=[#5241]\nG1 F100 X[#1] Y[#2+#3]\nG54\nG0 X0\n\
+                  #5221=3 #31=[#31+1] #32=5\nM2\n";
+    let (program, parameters) = parse_str_with_parameters(source, FILE, &options).unwrap();
+    // What rs274 printed for it, in program coordinates with its offsets (G54 loads
+    // G92 X 12.7 mm again; M2 then loads #5221 = 3 in).
+    let rs274 = "\
+                     1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+                     2 N..... SET_G5X_OFFSET(2, 25.4000, -50.8000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                     3 N..... SET_G92_OFFSET(12.7000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                     4 N..... SET_XY_ROTATION(90.0000)\n\
+                     5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+                     6 N..... ON_RESET()\n\
+                     7 N..... STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                     8 N..... SET_FEED_RATE(100.0000)\n\
+                     9 N..... STRAIGHT_FEED(2.0000, 1.5000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                    10 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                    11 N..... SET_G92_OFFSET(12.7000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                    12 N..... SET_XY_ROTATION(0.0000)\n\
+                    13 N..... STRAIGHT_TRAVERSE(0.0000, -36.1000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                    14 N..... SET_G5X_OFFSET(1, 76.2000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+                    15 N..... SET_XY_ROTATION(0.0000)\n\
+                    16 N..... SET_FEED_MODE(0, 0)\n\
+                    17 N..... SET_FEED_RATE(0.0000)\n\
+                    18 N..... STOP_SPINDLE_TURNING(0)\n\
+                    19 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+                    20 N..... PROGRAM_END()\n\
+                    21 N..... ON_RESET()\n\
+                    22 N..... ON_RESET()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    // Hand-derived: program (1, 0) + G92 (12.7, 0), turned 90 degrees: (0, 13.7), plus
+    // G55 (25.4, -50.8).
+    let BlockKind::Rapid { to } = program.blocks[0].kind else { panic!("{:?}", program.blocks[0]) };
+    assert!(close(to, p(25.4, -37.1, 0.0, 0.0)), "{to:?}");
+    // rs274 wrote its 119 required parameters and #31 (listed in the file), not #32.
+    assert_eq!(parameters.values.len(), 120);
+    assert_eq!(required_parameters().count(), 119);
+    let value = |n: usize| parameters.values[&n];
+    assert_eq!(value(5220), 1.0);
+    assert!((value(5221) - 3.0).abs() < 1e-9);
+    assert_eq!((value(31), value(5210), value(5250)), (5.0, 1.0, 90.0));
+    assert!((value(5211) - 0.5).abs() < 1e-9 && (value(5242) + 2.0).abs() < 1e-9);
+    assert!(!parameters.values.contains_key(&32));
+    let text = parameters.to_text();
+    assert!(text.starts_with("31\t5.000000\n5161\t0.000000\n"), "{text}");
+    assert!(text.contains("\n5220\t1.000000\n5221\t3.000000\n"), "{text}");
+    assert_eq!(Parameters::read(&text).unwrap().values.len(), 120);
+    // Without a parameter file nothing is in force and the required ones are zero but
+    // #5220 (G54).
+    let (_, parameters) = parse_str_with_parameters("G0 X1\n", FILE, &Options::default()).unwrap();
+    assert_eq!(parameters.values.len(), 119);
+    assert!(parameters.values.iter().all(|(&n, &v)| v == if n == 5220 { 1.0 } else { 0.0 }));
+}
+
+#[test]
+fn parameter_file_errors() {
+    assert_eq!(
+        Parameters::read("5161 0\n5161 1\n").unwrap_err().to_string(),
+        "parameter file line 2: parameter 5161 out of order (after 5161)"
+    );
+    assert_eq!(
+        Parameters::read("0 1\n").unwrap_err().to_string(),
+        "parameter file line 1: parameter number 0 out of range (1 to 5601)"
+    );
+    assert_eq!(
+        Parameters::read("5602 1\n").unwrap_err().to_string(),
+        "parameter file line 1: parameter number 5602 out of range (1 to 5601)"
+    );
+    assert_eq!(
+        Parameters::read("10 inf\n").unwrap_err().to_string(),
+        "parameter file line 1: the value of parameter 10 is not a finite number"
+    );
+    // Lines that do not start with an index and a value are skipped, as LinuxCNC does.
+    let read = Parameters::read("# comment\n\n5161 1.5 trailing\nabc 1\n").unwrap();
+    assert_eq!(read.values.into_iter().collect::<Vec<_>>(), vec![(5161, 1.5)]);
+    let options = Options { parameters: Parameters::read("5220 10\n").unwrap(), ..Options::default() };
+    assert_eq!(
+        parse_str_with("G0 X1\n", FILE, &options).unwrap_err().to_string(),
+        "parameter file: parameter 5220 (the coordinate system in use) is 10: it must be 1 (G54) to 9 (G59.3)"
+    );
+}
+
+#[test]
+fn g64_q_is_accepted_and_not_used() {
+    // melfa-sim/example.ngc, which rs274 accepts: G64 P0.1 Q1 (Q, the naive-CAM
+    // tolerance, merges nothing here: every segment is kept).
+    assert_eq!(
+        parse("G90 G64 P0.1 Q1\n"),
+        vec![BlockKind::PathControl(PathControl::Blend { tolerance_mm: Some(0.1) })]
+    );
 }
