@@ -351,6 +351,13 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                     format!("unsupported: axis {letter} (finestep drives the axes X Y Z A)"),
                 ))
             }
+            'E' => {
+                return Err(LineError::new(
+                    column,
+                    "unsupported: word E (LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not \
+                     implement)",
+                ))
+            }
             l => return Err(LineError::new(column, format!("unknown word {l}"))),
         };
         let (code, group) = coded;

@@ -215,6 +215,12 @@ pub(crate) fn lex_into(
                 let value = read_value(&mut s, What::Word(c), 0)?;
                 out.words.push(RawWord { letter: c, value, column });
             }
+            '$' => {
+                return Err(LineError::new(
+                    column,
+                    "unsupported: $ spindle selection (finestep drives one spindle: leave $ out)",
+                ))
+            }
             c => return Err(LineError::new(column, format!("unexpected character {c:?}"))),
         }
     }

@@ -435,7 +435,14 @@ impl Runner<'_, '_> {
         for a in &line.assigns {
             let value = a.value.eval(&scope)?;
             match &a.target {
-                Target::Numbered(index) => numbered.push((parameter_index(index.eval(&scope)?, a.column)?, value)),
+                Target::Numbered(index) => {
+                    let n = parameter_index(index.eval(&scope)?, a.column)?;
+                    // LinuxCNC's read-only ones: the tool's (#5400-#5413) and the position's.
+                    if matches!(n, 5400..=5413 | 5420..=5428) {
+                        return Err(LineError::new(a.column, format!("#{n} is read-only")));
+                    }
+                    numbered.push((n, value))
+                }
                 Target::Named(name) => {
                     if self.state.predefined(name).is_some() {
                         return Err(LineError::new(a.column, format!("#<{name}> is read-only")));

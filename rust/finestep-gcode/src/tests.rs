@@ -277,6 +277,20 @@ fn every_error_message_with_its_place() {
             "G0 X1e5",
             "1:6: unsupported: exponent in the number of word X (G-code numbers have no exponent: write the digits)",
         ),
+        // rs274: 'E word with no G70, G76, M66, M67 or M68 to use it'.
+        (
+            "G0 X1 E5",
+            "1:7: unsupported: word E (LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not implement)",
+        ),
+        (
+            "E5",
+            "1:1: unsupported: word E (LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not implement)",
+        ),
+        ("M3 S100 $0", "1:9: unsupported: $ spindle selection (finestep drives one spindle: leave $ out)"),
+        // rs274: 'Parameter is readonly' for #5400-#5413 and #5420-#5428, not #5414-#5419.
+        ("#5420 = 7", "1:1: #5420 is read-only"),
+        ("#1 = 1 #[5400 + #1] = 7", "1:8: #5400 is read-only"),
+        ("#5413 = 7", "1:1: #5413 is read-only"),
         ("G0 X1 x2", "1:7: word X appears twice"),
         ("F1 G1 X1 F2", "1:10: word F appears twice"),
         ("N1 N2", "1:4: word N appears twice"),
