@@ -90,10 +90,14 @@ pub(crate) enum Expr {
     Neg(Box<Expr>),
     Func(Func, Box<Expr>, usize),
     /// `ATAN[y]/[x]`, in degrees.
-    Atan(Box<Expr>, Box<Expr>),
+    Atan(Box<Expr>, Box<Expr>, usize),
     /// `EXISTS[#<name>]`.
     Exists(Box<str>),
     Binary(Op, Box<Expr>, Box<Expr>, usize),
+    /// `[a op b ...]` standing as a value (an operand, a word's value): its result must
+    /// be a finite number, as rs274 checks every value it reads (an operation inside
+    /// one expression may give NaN, e.g. `[1 GT 2 MOD 0]` is 0, without an error).
+    Group(Box<Expr>, usize),
 }
 
 /// Where an expression reads its parameters.
@@ -102,6 +106,8 @@ pub(crate) trait Params {
     fn numbered(&self, n: usize) -> f64;
     /// `#<name>`, or None when it is not defined.
     fn named(&self, name: &str) -> Option<f64>;
+    /// Whether `#<name>` is defined, for `EXISTS`.
+    fn exists(&self, name: &str) -> bool;
 }
 
 /// Parameters for lexer tests: none defined, all zero.
@@ -115,6 +121,9 @@ impl Params for NoParams {
     }
     fn named(&self, _: &str) -> Option<f64> {
         None
+    }
+    fn exists(&self, _: &str) -> bool {
+        false
     }
 }
 
@@ -131,11 +140,23 @@ impl Expr {
                 .named(name)
                 .ok_or_else(|| LineError::new(*column, format!("named parameter #<{name}> is not defined")))?,
             Expr::Neg(e) => -e.eval(params)?,
-            Expr::Func(f, e, column) => apply(*f, e.eval(params)?, *column)?,
-            Expr::Atan(y, x) => y.eval(params)?.atan2(x.eval(params)?).to_degrees(),
-            Expr::Exists(name) => f64::from(u8::from(params.named(name).is_some())),
+            Expr::Func(f, e, column) => finite(apply(*f, e.eval(params)?, *column)?, *column)?,
+            Expr::Atan(y, x, column) => finite(y.eval(params)?.atan2(x.eval(params)?).to_degrees(), *column)?,
+            Expr::Exists(name) => f64::from(u8::from(params.exists(name))),
             Expr::Binary(op, a, b, column) => binary(*op, a.eval(params)?, b.eval(params)?, *column)?,
+            Expr::Group(e, column) => finite(e.eval(params)?, *column)?,
         })
+    }
+}
+
+/// rs274's check of every value it reads: NaN or an infinity is an error.
+fn finite(v: f64, column: usize) -> Result<f64, LineError> {
+    if v.is_nan() {
+        Err(LineError::new(column, "calculation resulted in 'not a number'"))
+    } else if v.is_infinite() {
+        Err(LineError::new(column, "calculation resulted in an infinite value"))
+    } else {
+        Ok(v)
     }
 }
 
@@ -199,7 +220,9 @@ fn binary(op: Op, a: f64, b: f64, column: usize) -> Result<f64, LineError> {
             a.powf(b)
         }
         Op::Times => a * b,
-        Op::Divide | Op::Mod if b == 0.0 => return Err(LineError::new(column, "attempt to divide by zero")),
+        Op::Divide if b == 0.0 => return Err(LineError::new(column, "attempt to divide by zero")),
+        // rs274: fmod by zero is NaN, an error only if it reaches a value (see Group).
+        Op::Mod if b == 0.0 => f64::NAN,
         Op::Divide => a / b,
         Op::Mod => {
             let m = a % b;
@@ -298,8 +321,10 @@ pub(crate) fn read_value(s: &mut Chars, word: What, depth: usize) -> Result<Expr
         }
         Some('[') => {
             s.i += 1;
-            let e = read_expression(s, depth + 1)?;
-            Ok(e)
+            match read_expression(s, depth + 1)? {
+                e @ Expr::Binary(..) => Ok(Expr::Group(Box::new(e), column)),
+                e => Ok(e),
+            }
         }
         Some('#') => {
             s.i += 1;
@@ -415,7 +440,7 @@ fn read_function(s: &mut Chars, depth: usize) -> Result<Expr, LineError> {
         s.expect('/', "between ATAN's [y] and [x]")?;
         s.expect('[', "for ATAN's [x]")?;
         let x = read_expression(s, depth + 1)?;
-        return Ok(Expr::Atan(Box::new(y), Box::new(x)));
+        return Ok(Expr::Atan(Box::new(y), Box::new(x), column));
     }
     if s.starts_with("exists") {
         s.i += 6;

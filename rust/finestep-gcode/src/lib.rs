@@ -34,8 +34,8 @@
 //!   `LE`; `AND` `OR` `XOR` (that precedence, left to right), ABS ACOS ASIN COS EXP FIX
 //!   FUP ROUND LN SIN SQRT TAN (degrees), `ATAN[y]/[x]`, `EXISTS[#<name>]`.
 //! - Parameters: `#1`-`#5601` (`#5220` coordinate system 1, `#5400` tool, `#5420`-`#5423`
-//!   position), local `#<name>` (per subroutine call) and global `#<_name>` (a global
-//!   never set reads 0, as in rs274), LinuxCNC's predefined `#<_x>`, `#<_metric>`, ...
+//!   position), local `#<name>` (per subroutine call) and global `#<_name>` (reading one
+//!   never set is an error, as in rs274; `#<_value>`, `#<_call_level>` ... are defined), LinuxCNC's predefined `#<_x>`, `#<_metric>`, ...
 //!   (read-only; `#<_ini[...]>` and `#<_hal[...]>` are refused). `#n = value` on a line
 //!   takes effect after the whole line is read. A parameter file ([`Parameters`], given
 //!   in [`Options::parameters`]) sets parameters and the offsets in force before the

@@ -224,6 +224,22 @@ struct Scope<'a> {
     state: &'a State,
     locals: &'a HashMap<Box<str>, f64>,
     globals: &'a HashMap<Box<str>, f64>,
+    /// Subroutine calls in progress (0 in the main program), for `#<_call_level>`.
+    call_level: usize,
+}
+
+impl Scope<'_> {
+    /// A global (`_`) parameter: set by the program, predefined, or one rs274 defines
+    /// from the start (`#<_value>`, `#<_value_returned>`, `#<_call_level>`,
+    /// `#<_remap_level>`). A global never set is not defined: reading it is an error, as
+    /// in rs274 ("Named parameter #<_name> not defined").
+    fn global(&self, name: &str) -> Option<f64> {
+        self.globals.get(name).copied().or_else(|| self.state.predefined(name)).or(match name {
+            "_value" | "_value_returned" | "_remap_level" => Some(0.0),
+            "_call_level" => Some(self.call_level as f64),
+            _ => None,
+        })
+    }
 }
 
 impl Params for Scope<'_> {
@@ -232,14 +248,16 @@ impl Params for Scope<'_> {
     }
     fn named(&self, name: &str) -> Option<f64> {
         if name.starts_with('_') {
-            self.globals
-                .get(name)
-                .copied()
-                .or_else(|| self.state.predefined(name))
-                // rs274 reads a global never set as 0.
-                .or(Some(0.0))
+            self.global(name)
         } else {
             self.locals.get(name).copied()
+        }
+    }
+    fn exists(&self, name: &str) -> bool {
+        if name.starts_with('_') {
+            self.global(name).is_some()
+        } else {
+            self.locals.contains_key(name)
         }
     }
 }
@@ -391,7 +409,12 @@ impl Runner<'_, '_> {
     }
 
     fn scope(&self) -> Scope<'_> {
-        Scope { state: &self.state, locals: &self.frames.last().expect("frame").locals, globals: &self.globals }
+        Scope {
+            state: &self.state,
+            locals: &self.frames.last().expect("frame").locals,
+            globals: &self.globals,
+            call_level: self.frames.len() - 1,
+        }
     }
 
     fn count_iteration(&mut self, column: usize) -> Result<(), LineError> {
@@ -425,8 +448,12 @@ impl Runner<'_, '_> {
                 &buffer
             }
         };
-        let scope =
-            Scope { state: &self.state, locals: &self.frames.last().expect("frame").locals, globals: &self.globals };
+        let scope = Scope {
+            state: &self.state,
+            locals: &self.frames.last().expect("frame").locals,
+            globals: &self.globals,
+            call_level: self.frames.len() - 1,
+        };
         for w in &line.words {
             words.push(Word { letter: w.letter, value: w.value.eval(&scope)?, column: w.column });
         }

@@ -291,6 +291,13 @@ fn every_error_message_with_its_place() {
         ("#5420 = 7", "1:1: #5420 is read-only"),
         ("#1 = 1 #[5400 + #1] = 7", "1:8: #5400 is read-only"),
         ("#5413 = 7", "1:1: #5413 is read-only"),
+        // rs274 2.9, line by line: a global never set is not defined; NaN or an
+        // infinity reaching a value is an error, MOD by zero is NaN (not an error).
+        ("G0 X1 Y#<_never>", "1:8: named parameter #<_never> is not defined"),
+        ("G0 X[3 MOD 0]", "1:5: calculation resulted in 'not a number'"),
+        ("G0 X[1 GT [2 MOD 0]]", "1:11: calculation resulted in 'not a number'"),
+        ("G0 X[1 + EXP[1000]]", "1:10: calculation resulted in an infinite value"),
+        ("G0 X[ATAN[1 MOD 0]/[1]]", "1:6: calculation resulted in 'not a number'"),
         ("G0 X1 x2", "1:7: word X appears twice"),
         ("F1 G1 X1 F2", "1:10: word F appears twice"),
         ("N1 N2", "1:4: word N appears twice"),
@@ -616,4 +623,22 @@ fn g64_q_is_accepted_and_not_used() {
         parse("G90 G64 P0.1 Q1\n"),
         vec![BlockKind::PathControl(PathControl::Blend { tolerance_mm: Some(0.1) })]
     );
+}
+
+#[test]
+fn exists_nan_and_globals_as_rs274() {
+    // rs274 -g printed STRAIGHT_TRAVERSE(1, 0, 2, ...) for line 1 and X 3 for line 3:
+    // EXISTS of a global never set is 0 (and no error), of a predefined one 1; 2 MOD 0 is
+    // NaN, 1 GT NaN is 0 inside one expression; a global set to 0 exists.
+    let blocks = parse(
+        "G0 X[EXISTS[#<_never>]+1] Y[1 GT 2 MOD 0 + 5] Z[EXISTS[#<_x>] + 1]\n#<_set> = 0\n\
+         G0 X[EXISTS[#<_set>] + 2 + #<_value> + #<_value_returned> + #<_call_level>]\n",
+    );
+    assert_eq!(
+        blocks,
+        vec![BlockKind::Rapid { to: p(1.0, 0.0, 2.0, 0.0) }, BlockKind::Rapid { to: p(3.0, 0.0, 2.0, 0.0) }]
+    );
+    // #<_call_level> is 1 inside a call.
+    let blocks = parse("o<s> sub\nG0 X#<_call_level>\no<s> endsub\no<s> call\n");
+    assert_eq!(blocks, vec![BlockKind::Rapid { to: p(1.0, 0.0, 0.0, 0.0) }]);
 }
