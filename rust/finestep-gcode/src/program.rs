@@ -188,6 +188,16 @@ impl<'t> Source<'t> {
                         .take_while(|(k, _, _, _)| *k != OKind::Sub)
                         .find(|(k, l, _, _)| matches!(k, OKind::While | OKind::Do | OKind::Repeat) && *l == label);
                     match found {
+                        // rs274: "no matching while/do label ... (found 'repeat' ...)".
+                        Some(&(OKind::Repeat, _, _, _)) => fail(
+                            self,
+                            format!(
+                                "o{label} {kind:?} inside o{label} repeat: LinuxCNC's break and continue serve while \
+                                 and do loops only"
+                            )
+                            .replace("Break", "break")
+                            .replace("Continue", "continue"),
+                        ),
                         Some(&(_, _, start, _)) => self.links[i].start = Some(start),
                         None => {
                             fail(self, format!("o{label} {kind:?} outside a loop labelled o{label}").to_lowercase())
@@ -564,6 +574,8 @@ impl Runner<'_, '_> {
                         self.globals.insert("_value_returned".into(), 1.0);
                     }
                     None => {
+                        // LinuxCNC: #<_value> is 0 after a return or endsub without one.
+                        self.globals.insert("_value".into(), 0.0);
                         self.globals.insert("_value_returned".into(), 0.0);
                     }
                 }

@@ -298,6 +298,11 @@ fn every_error_message_with_its_place() {
         ("G0 X[1 GT [2 MOD 0]]", "1:11: calculation resulted in 'not a number'"),
         ("G0 X[1 + EXP[1000]]", "1:10: calculation resulted in an infinite value"),
         ("G0 X[ATAN[1 MOD 0]/[1]]", "1:6: calculation resulted in 'not a number'"),
+        // rs274: "no matching while/do label: 'o1 break' (found 'repeat' in line 1)".
+        (
+            "o1 repeat [2]\no1 break\no1 endrepeat",
+            "2:1: o1 break inside o1 repeat: LinuxCNC's break and continue serve while and do loops only",
+        ),
         ("G0 X1 x2", "1:7: word X appears twice"),
         ("F1 G1 X1 F2", "1:10: word F appears twice"),
         ("N1 N2", "1:4: word N appears twice"),
@@ -641,4 +646,21 @@ fn exists_nan_and_globals_as_rs274() {
     // #<_call_level> is 1 inside a call.
     let blocks = parse("o<s> sub\nG0 X#<_call_level>\no<s> endsub\no<s> call\n");
     assert_eq!(blocks, vec![BlockKind::Rapid { to: p(1.0, 0.0, 0.0, 0.0) }]);
+}
+
+#[test]
+fn value_after_a_return_without_one_is_zero() {
+    // rs274 -g: STRAIGHT_TRAVERSE(7, 1, ...) then (0, 0, ...).
+    let blocks = parse(
+        "o<s> sub\no<s> return [7]\no<s> endsub\no<t> sub\no<t> endsub\no<s> call\n\
+         G0 X#<_value> Y#<_value_returned>\no<t> call\nG0 X#<_value> Y#<_value_returned>\nM2\n",
+    );
+    assert_eq!(
+        blocks,
+        vec![
+            BlockKind::Rapid { to: p(7.0, 1.0, 0.0, 0.0) },
+            BlockKind::Rapid { to: p(0.0, 0.0, 0.0, 0.0) },
+            BlockKind::End
+        ]
+    );
 }
