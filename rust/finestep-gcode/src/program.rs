@@ -18,8 +18,9 @@ pub const MAX_ITERATIONS: u64 = 1_000_000;
 /// Lines a program may execute beyond one pass over its files (lines that loops and
 /// calls run again), so that no program interprets for long (about a second).
 pub const MAX_REPEATED_LINES: u64 = 1_000_000;
-/// Subroutine calls nest at most this deep (LinuxCNC's limit).
-pub const MAX_CALL_DEPTH: usize = 10;
+/// Subroutine calls nest at most this deep: rs274 runs a call at `#<_call_level>` 9 and
+/// refuses the next one ("Too many subroutine levels").
+pub const MAX_CALL_DEPTH: usize = 9;
 /// Subroutine parameters #1-#30 are saved around a call.
 const SUB_PARAMS: usize = 30;
 
@@ -223,6 +224,10 @@ struct Frame {
     locals: HashMap<Box<str>, f64>,
     /// Remaining passes of the `repeat` loops open in this frame, by entry.
     repeats: HashMap<usize, u64>,
+    /// The labels of the if, while, do and repeat statements run in this frame, with
+    /// the entry that opened each: rs274 refuses a label used again by another
+    /// statement in the same call ("duplicate O-word label").
+    labels: HashMap<Box<str>, usize>,
     /// The modal state M70 saved at this level, and whether M73 saved it (restored on
     /// return).
     saved: Option<(Modal, bool)>,
@@ -319,6 +324,7 @@ pub(crate) fn run(
             params_saved: None,
             locals: HashMap::new(),
             repeats: HashMap::new(),
+            labels: HashMap::new(),
             saved: None,
         }],
         globals: HashMap::new(),
@@ -543,6 +549,21 @@ impl Runner<'_, '_> {
             }
         }
         let condition = values.first().is_some_and(|&v| v != 0.0);
+        if matches!(o.kind, OKind::If | OKind::While | OKind::Do | OKind::Repeat) && !links.closes_do {
+            let frame = self.frames.last_mut().expect("frame");
+            let first = *frame.labels.entry(o.label.clone()).or_insert(pc);
+            if first != pc {
+                let line = self.sources[s].entries[first].line;
+                return Err(LineError::new(
+                    column,
+                    format!(
+                        "label o{} is already used on line {line}: LinuxCNC gives each if, while, do and repeat \
+                         its own label within a subroutine (or the main program)",
+                        o.label
+                    ),
+                ));
+            }
+        }
         match o.kind {
             OKind::Sub => self.jump(links.end.ok_or_else(|| missing("sub"))? + 1),
             OKind::Call => {
@@ -683,7 +704,7 @@ impl Runner<'_, '_> {
         if self.frames.len() > MAX_CALL_DEPTH {
             return Err(LineError::new(
                 o.column,
-                format!("subroutine calls nest more than {MAX_CALL_DEPTH} deep (LinuxCNC's limit)"),
+                format!("subroutine calls nest more than {MAX_CALL_DEPTH} deep (LinuxCNC's limit: too many subroutine levels)"),
             ));
         }
         let current = self.frames.last().expect("frame").source;
@@ -708,6 +729,7 @@ impl Runner<'_, '_> {
             params_saved: Some(saved),
             locals: HashMap::new(),
             repeats: HashMap::new(),
+            labels: HashMap::new(),
             saved: None,
         });
         Ok(())

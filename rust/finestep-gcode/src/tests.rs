@@ -303,6 +303,12 @@ fn every_error_message_with_its_place() {
             "o1 repeat [2]\no1 break\no1 endrepeat",
             "2:1: o1 break inside o1 repeat: LinuxCNC's break and continue serve while and do loops only",
         ),
+        // rs274: "duplicate O-word label - already defined in line 1".
+        (
+            "o1 while [0]\no1 endwhile\no1 if [1]\no1 endif",
+            "3:1: label o1 is already used on line 1: LinuxCNC gives each if, while, do and repeat its own label within \
+             a subroutine (or the main program)",
+        ),
         ("G0 X1 x2", "1:7: word X appears twice"),
         ("F1 G1 X1 F2", "1:10: word F appears twice"),
         ("N1 N2", "1:4: word N appears twice"),
@@ -662,5 +668,24 @@ fn value_after_a_return_without_one_is_zero() {
             BlockKind::Rapid { to: p(0.0, 0.0, 0.0, 0.0) },
             BlockKind::End
         ]
+    );
+}
+
+#[test]
+fn calls_nest_nine_deep_as_rs274() {
+    // rs274 -g: a recursion of 9 runs (traverses to X 1 ... 9); of 10 it stops with
+    // "Too many subroutine levels" after X 9.
+    let program = |n: u32| {
+        format!(
+            "o<r> sub\nG0 X#<_call_level>\no1 if [#1 GT 1]\no<r> call [#1 - 1]\no1 endif\no<r> endsub\n\
+             o<r> call [{n}]\nM2\n"
+        )
+    };
+    let blocks = parse(&program(9));
+    assert_eq!(blocks.len(), 10);
+    assert_eq!(blocks[8], BlockKind::Rapid { to: p(9.0, 0.0, 0.0, 0.0) });
+    assert_eq!(
+        err(&program(10)),
+        "t.ngc:4:1: subroutine calls nest more than 9 deep (LinuxCNC's limit: too many subroutine levels)"
     );
 }
