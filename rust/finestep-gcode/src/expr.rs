@@ -93,11 +93,12 @@ pub(crate) enum Expr {
     Atan(Box<Expr>, Box<Expr>, usize),
     /// `EXISTS[#<name>]`.
     Exists(Box<str>),
-    Binary(Op, Box<Expr>, Box<Expr>, usize),
-    /// `[a op b ...]` standing as a value (an operand, a word's value): its result must
-    /// be a finite number, as rs274 checks every value it reads (an operation inside
-    /// one expression may give NaN, e.g. `[1 GT 2 MOD 0]` is 0, without an error).
-    Group(Box<Expr>, usize),
+    /// `a op b`: the operator's column, and the column of the `[` when the operation is
+    /// the whole of a `[bracket]` standing as a value (an operand, a word's value), else
+    /// 0. Such a value must be a finite number, as rs274 checks every value it reads (an
+    /// operation inside one expression may give NaN: `[1 GT 2 MOD 0]` is 0, no error).
+    /// Columns are u32 to keep the node small; a column beyond that saturates.
+    Binary(Op, Box<Expr>, Box<Expr>, u32, u32),
 }
 
 /// Where an expression reads its parameters.
@@ -143,10 +144,21 @@ impl Expr {
             Expr::Func(f, e, column) => finite(apply(*f, e.eval(params)?, *column)?, *column)?,
             Expr::Atan(y, x, column) => finite(y.eval(params)?.atan2(x.eval(params)?).to_degrees(), *column)?,
             Expr::Exists(name) => f64::from(u8::from(params.exists(name))),
-            Expr::Binary(op, a, b, column) => binary(*op, a.eval(params)?, b.eval(params)?, *column)?,
-            Expr::Group(e, column) => finite(e.eval(params)?, *column)?,
+            Expr::Binary(op, a, b, column, group) => {
+                let v = binary(*op, a.eval(params)?, b.eval(params)?, *column as usize)?;
+                if *group != 0 {
+                    finite(v, *group as usize)?
+                } else {
+                    v
+                }
+            }
         })
     }
+}
+
+/// A column as stored in [`Expr::Binary`] (saturating; columns start at 1, so 0 is free).
+fn small(column: usize) -> u32 {
+    u32::try_from(column).unwrap_or(u32::MAX)
 }
 
 /// rs274's check of every value it reads: NaN or an infinity is an error.
@@ -221,7 +233,7 @@ fn binary(op: Op, a: f64, b: f64, column: usize) -> Result<f64, LineError> {
         }
         Op::Times => a * b,
         Op::Divide if b == 0.0 => return Err(LineError::new(column, "attempt to divide by zero")),
-        // rs274: fmod by zero is NaN, an error only if it reaches a value (see Group).
+        // rs274: fmod by zero is NaN, an error only if it reaches a value (see Binary).
         Op::Mod if b == 0.0 => f64::NAN,
         Op::Divide => a / b,
         Op::Mod => {
@@ -322,7 +334,7 @@ pub(crate) fn read_value(s: &mut Chars, word: What, depth: usize) -> Result<Expr
         Some('[') => {
             s.i += 1;
             match read_expression(s, depth + 1)? {
-                e @ Expr::Binary(..) => Ok(Expr::Group(Box::new(e), column)),
+                Expr::Binary(op, a, b, op_column, _) => Ok(Expr::Binary(op, a, b, op_column, small(column))),
                 e => Ok(e),
             }
         }
@@ -508,7 +520,7 @@ pub(crate) fn read_expression(s: &mut Chars, depth: usize) -> Result<Expr, LineE
         let (op, column) = ops.pop().expect("operator");
         let b = values.pop().expect("operand");
         let a = values.pop().expect("operand");
-        values.push(Expr::Binary(op, Box::new(a), Box::new(b), column));
+        values.push(Expr::Binary(op, Box::new(a), Box::new(b), small(column), 0));
     };
     loop {
         let column = s.column();

@@ -61,6 +61,9 @@ struct Links {
     start: Option<usize>,
     /// A `while` that closes a `do`.
     closes_do: bool,
+    /// An if, while, do or repeat whose label another such statement of the same
+    /// subroutine (or of the main program) also uses: checked when it runs.
+    shared_label: bool,
 }
 
 /// A lexed file with its O-word structure.
@@ -121,6 +124,8 @@ impl<'t> Source<'t> {
     fn link(&mut self) {
         // Open structures: (kind, label, entry, last branch entry).
         let mut open: Vec<(OKind, Box<str>, usize, usize)> = Vec::new();
+        // The statements opening if, while, do and repeat, by (enclosing sub, label).
+        let mut openers: HashMap<(Option<usize>, Box<str>), Vec<usize>> = HashMap::new();
         for i in 0..self.entries.len() {
             let Some(o) = oword(&self.entries[i]) else { continue };
             let (kind, label) = (o.kind, o.label.clone());
@@ -145,6 +150,8 @@ impl<'t> Source<'t> {
                         self.links[i].closes_do = true;
                         continue;
                     }
+                    let sub = open.iter().find(|(k, _, _, _)| *k == OKind::Sub).map(|&(_, _, entry, _)| entry);
+                    openers.entry((sub, label.clone())).or_default().push(i);
                     open.push((kind, label, i, i));
                 }
                 OKind::Elseif | OKind::Else => {
@@ -210,6 +217,11 @@ impl<'t> Source<'t> {
         }
         for (kind, label, start, _) in open {
             self.broken[start] = Some(format!("o{label} {kind:?} is never closed").to_lowercase());
+        }
+        for entries in openers.values().filter(|e| e.len() > 1) {
+            for &e in entries {
+                self.links[e].shared_label = true;
+            }
         }
     }
 }
@@ -549,9 +561,12 @@ impl Runner<'_, '_> {
             }
         }
         let condition = values.first().is_some_and(|&v| v != 0.0);
-        if matches!(o.kind, OKind::If | OKind::While | OKind::Do | OKind::Repeat) && !links.closes_do {
+        if links.shared_label {
             let frame = self.frames.last_mut().expect("frame");
-            let first = *frame.labels.entry(o.label.clone()).or_insert(pc);
+            let first = match frame.labels.get(&o.label) {
+                Some(&first) => first,
+                None => *frame.labels.entry(o.label.clone()).or_insert(pc),
+            };
             if first != pc {
                 let line = self.sources[s].entries[first].line;
                 return Err(LineError::new(
