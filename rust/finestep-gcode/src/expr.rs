@@ -7,8 +7,7 @@ use crate::error::LineError;
 
 /// The largest magnitude a literal number in the program may have.
 pub(crate) const MAX_NUMBER: f64 = 1e9;
-/// Numbered parameters are #1 up to this one (LinuxCNC's RS274NGC_MAX_PARAMETERS - 1).
-pub(crate) const MAX_PARAMETER: usize = 5601;
+pub(crate) use crate::persistent::MAX_PARAMETER;
 /// Two values are EQ when closer than this (LinuxCNC's TOLERANCE_EQUAL).
 const TOLERANCE_EQUAL: f64 = 0.0001;
 /// Expressions nest at most this deep (a stack guard for hostile input).

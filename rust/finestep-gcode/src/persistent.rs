@@ -11,7 +11,9 @@
 
 use std::collections::BTreeMap;
 
-use crate::expr::MAX_PARAMETER;
+/// Numbered parameters are #1 up to this one (LinuxCNC's RS274NGC_MAX_PARAMETERS - 1).
+/// Defined here, the lowest module that needs it (the expressions read it too).
+pub(crate) const MAX_PARAMETER: usize = 5601;
 
 /// Why a parameter file was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
