@@ -393,15 +393,18 @@ fn verilate(
         assert!(status.success(), "verilator failed on the {} netlist {}", netlist.family, netlist.path.display());
         return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
     }
+    command
+        .arg("--cc")
+        .args(["--top-module", top, "--prefix", prefix])
+        .arg(format!("-I{}", include.display()))
+        .arg("--Mdir")
+        .arg(dir)
+        .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
+        // Lint is `make lint`'s job; a newer Verilator's new warnings must not stop a build.
+        .arg("-Wno-fatal")
+        .args(trace);
     if let Build::PbpInterp = build {
         let status = command
-            .arg("--cc")
-            .args(["--top-module", top, "--prefix", prefix])
-            .arg(format!("-I{}", include.display()))
-            .arg("--Mdir")
-            .arg(dir)
-            .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert", "-Wno-fatal"])
-            .args(trace)
             .arg(format!("-GCOORD_W={PBP_COORD_W}"))
             .arg(format!("-GDIV_W={PBP_DIV_W}"))
             .args(sources)
@@ -411,15 +414,6 @@ fn verilate(
         return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
     }
     let status = command
-        .arg("--cc")
-        .args(["--top-module", top, "--prefix", prefix])
-        .arg(format!("-I{}", include.display()))
-        .arg("--Mdir")
-        .arg(dir)
-        .args(["-O3", "--x-assign", "fast", "--x-initial", "fast", "--noassert"])
-        // Lint is `make lint`'s job; a newer Verilator's new warnings must not stop a build.
-        .arg("-Wno-fatal")
-        .args(trace)
         .arg(format!("-GN_AXES={}", params.n_axes))
         .arg(format!("-GP_WIDTH={}", params.p_width))
         .arg(format!("-GTIMING_W={}", params.timing_w))
