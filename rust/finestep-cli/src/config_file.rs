@@ -8,6 +8,15 @@ use anyhow::Context;
 use finestep_planner::MachineConfig;
 use finestep_store::{LoadOptions, Loaded, OsFs, Source};
 
+/// The configuration at `path` ([`load`]) or, without one, the built-in machine; with the
+/// name errors give it (the path, or `<built-in>`).
+pub fn load_or_builtin(path: Option<&Path>) -> anyhow::Result<(MachineConfig, String)> {
+    Ok(match path {
+        Some(path) => (load(path)?, path.display().to_string()),
+        None => (MachineConfig::default(), "<built-in>".to_string()),
+    })
+}
+
 /// Loads the configuration at `path`: sealed (checked) or hand-written; a fallback to the
 /// last good copy is printed with what was wrong with the file.
 pub fn load(path: &Path) -> anyhow::Result<MachineConfig> {

@@ -33,6 +33,12 @@ pub fn open<T: PinTarget>(target: T) -> anyhow::Result<Chip<T>> {
     Ok(machine)
 }
 
+/// The core clock a configuration expects before the chip is asked (its `clock_hz`, else
+/// the default build's): what a spidev SCK is checked against before anything is sent.
+pub fn expected_clock_hz(config: &MachineConfig) -> u32 {
+    config.clock_hz.map_or(model_params().clock_hz, |hz| hz as u32)
+}
+
 /// What a configuration must fit, as the chip reports it.
 pub fn chip_limits(caps: &Caps) -> CoreLimits {
     CoreLimits {

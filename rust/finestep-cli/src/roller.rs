@@ -223,15 +223,10 @@ const PROFILE_COMMENT: &str = "finestep measure: the roller's radius deviation X
 /// command line's or the configuration's) on that chip with the configuration's
 /// `[measure]` traverse and channels; writes `out`.
 pub fn measure(out: &Path, bus: Option<BusTarget>, config_path: Option<&Path>) -> anyhow::Result<()> {
-    let (config, config_name) = match config_path {
-        Some(path) => (Some(crate::config_file::load(path)?), path.display().to_string()),
-        None => (None, "<built-in>".to_string()),
-    };
-    let on_bus = bus.is_some() || config.as_ref().is_some_and(|c| c.bus.is_some());
-    let profile = if on_bus {
-        let config = config.unwrap_or_default();
+    let (config, config_name) = crate::config_file::load_or_builtin(config_path)?;
+    let profile = if bus.is_some() || config.bus.is_some() {
         let target = BusTarget::choose(bus, config.bus.as_deref(), &config_name)?;
-        let clock_hz = config.clock_hz.map_or(machine_setup::model_params().clock_hz, |hz| hz as u32);
+        let clock_hz = machine_setup::expected_clock_hz(&config);
         let mut machine = crate::bus::open(&target, "measure", clock_hz)?;
         let core = machine_setup::chip_limits(&machine.caps());
         let (config, resolved) = machine_setup::resolve(config, core, &config_name)?;

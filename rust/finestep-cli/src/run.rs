@@ -135,10 +135,7 @@ pub fn run(
     profile: Option<&str>,
     out: &Path,
 ) -> anyhow::Result<()> {
-    let (mut config, config_name) = match config_path {
-        Some(path) => (crate::config_file::load(path)?, path.display().to_string()),
-        None => (MachineConfig::default(), "<built-in>".to_string()),
-    };
+    let (mut config, config_name) = crate::config_file::load_or_builtin(config_path)?;
     match profile {
         Some("trapezoid") => config.profile = ProfileKind::Trapezoid,
         Some("s-curve") => config.profile = ProfileKind::SCurve,
@@ -163,7 +160,7 @@ pub fn run_program_on(
     out: &Path,
 ) -> anyhow::Result<()> {
     let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
-    let clock_hz = config.clock_hz.map_or(machine_setup::model_params().clock_hz, |hz| hz as u32);
+    let clock_hz = machine_setup::expected_clock_hz(&config);
     let mut chip = if fast { None } else { Some(crate::bus::open(bus, &stem, clock_hz)?) };
     let core = match &chip {
         Some(chip) => machine_setup::chip_limits(&chip.caps()),
