@@ -197,15 +197,16 @@ impl<'t> Source<'t> {
                         .find(|(k, l, _, _)| matches!(k, OKind::While | OKind::Do | OKind::Repeat) && *l == label);
                     match found {
                         // rs274: "no matching while/do label ... (found 'repeat' ...)".
-                        Some(&(OKind::Repeat, _, _, _)) => fail(
-                            self,
-                            format!(
-                                "o{label} {kind:?} inside o{label} repeat: LinuxCNC's break and continue serve while \
-                                 and do loops only"
+                        Some(&(OKind::Repeat, _, _, _)) => {
+                            let word = if kind == OKind::Break { "break" } else { "continue" };
+                            fail(
+                                self,
+                                format!(
+                                    "o{label} {word} inside o{label} repeat: LinuxCNC's break and continue serve \
+                                     while and do loops only"
+                                ),
                             )
-                            .replace("Break", "break")
-                            .replace("Continue", "continue"),
-                        ),
+                        }
                         Some(&(_, _, start, _)) => self.links[i].start = Some(start),
                         None => {
                             fail(self, format!("o{label} {kind:?} outside a loop labelled o{label}").to_lowercase())
