@@ -201,8 +201,9 @@ module step_engine #(
     reg [N_AXES-1:0]    pin_a_reg;
     reg [N_AXES-1:0]    pin_b_reg;
     reg [N_AXES-1:0]    pin_en_reg;
-    wire [31:0] position_cur  = position_reg[32*sh_ix +: 32];
-    wire [31:0] position_next = position_cur + {{31{!dir}}, 1'b1};
+    // Each axis's position is its own up/down counter enabled at its shaper visit (no
+    // shared adder behind a select: fewer cells, and the slot does not steer a 32-bit
+    // multiplexer into the carry chain).
 
     integer a;
     always @(posedge clk) begin
@@ -216,7 +217,7 @@ module step_engine #(
                 pin_a_reg[a] <= a_next ^ inv_cur[FS_INVERT_PIN_A_BIT];
                 pin_b_reg[a] <= b_next ^ inv_cur[FS_INVERT_PIN_B_BIT];
                 sh_init_reg[a] <= 1'b1;
-                if (rise) position_reg[32*a +: 32] <= position_next;
+                if (rise) position_reg[32*a +: 32] <= position_reg[32*a +: 32] + {{31{!dir}}, 1'b1};
             end
             if (!run) dda_live_reg[a] <= 1'b0;
             else if (dda_hot[a]) dda_live_reg[a] <= 1'b1;
@@ -253,6 +254,7 @@ module step_engine #(
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
+    wire [31:0] position_cur = position_reg[32*sh_ix +: 32];
     // Configuration is constant during the proof; the period timer's environment: p_active
     // is a whole number of visits while running and every increment is below one step per
     // visit (the record check).
