@@ -230,6 +230,9 @@ pub struct RegisterFile {
     parallel_error_count: u16,
     refused_record_count: u16,
     halt_prev: bool,
+    /// [`RegisterFile::axis_config`] of every axis, a function of `rw` kept beside it
+    /// (refreshed whenever a write is served: the core reads it every clock).
+    axis_configs: [crate::AxisConfig; MAX_AXES],
 }
 
 /// Element `i` of the register array at `base` with `stride`, if `addr` is one of its
@@ -340,7 +343,7 @@ impl RegisterFile {
     /// The reset state for a build with `params`.
     pub fn new(params: &TopParams) -> Self {
         let (write_mask, rw) = implemented_rw(params);
-        RegisterFile {
+        let mut file = RegisterFile {
             params: *params,
             rw,
             write_mask,
@@ -375,7 +378,14 @@ impl RegisterFile {
             refused_record_count: 0,
             // The power-on halt must not flush an empty FIFO a second time.
             halt_prev: true,
-        }
+            axis_configs: [crate::AxisConfig::default(); MAX_AXES],
+        };
+        file.refresh_axis_configs();
+        file
+    }
+
+    fn refresh_axis_configs(&mut self) {
+        self.axis_configs = std::array::from_fn(|axis| self.axis_config_of_rw(axis));
     }
 
     fn rw_field(&self, addr: u8, field: Field) -> u32 {
@@ -463,6 +473,10 @@ impl RegisterFile {
     /// The step-shaper settings of `axis` from `AXIS_TIMING_A`/`_B`, `AXIS_MODE` and
     /// `AXIS_ENABLE` (all zero for an axis this build does not have).
     pub fn axis_config(&self, axis: usize) -> crate::AxisConfig {
+        self.axis_configs.get(axis).copied().unwrap_or_default()
+    }
+
+    fn axis_config_of_rw(&self, axis: usize) -> crate::AxisConfig {
         if axis >= self.params.n_axes {
             return crate::AxisConfig::default();
         }
@@ -900,6 +914,7 @@ impl RegisterFile {
                 let addr = addr & (ADDRESSES - 1) as u8;
                 let slot = usize::from(addr);
                 self.rw[slot] = (self.rw[slot] & !self.write_mask[slot]) | (wdata & self.write_mask[slot]);
+                self.refresh_axis_configs();
                 self.kick = true;
                 match addr {
                     regs::command::ADDR => {
