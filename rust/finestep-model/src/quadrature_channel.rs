@@ -165,6 +165,11 @@ impl QuadratureChannel {
 
     /// One rising clock edge: a sampling visit if `inp.sample`, the host pulses always.
     pub fn step(&mut self, inp: &ChannelInputs) {
+        // Without a sample, an arm or a clear every update below keeps its state (the
+        // channels not visited in a cycle, nearly all of them): skip them.
+        if !(inp.sample || inp.arm_index_latch || inp.arm_index_clear || inp.clear_errors || inp.clear_counters) {
+            return;
+        }
         let mut delta = 0;
         let mut illegal_now = false;
         let mut index_event = false;
