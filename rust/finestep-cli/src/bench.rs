@@ -249,6 +249,87 @@ fn nurbs_figures() -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The committed test programs (`tests/programs/`).
+fn test_programs() -> anyhow::Result<Vec<(String, finestep_gcode::Program)>> {
+    let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"));
+    let mut names: Vec<String> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
+        .filter(|n| n.ends_with(".ngc"))
+        .collect();
+    names.sort();
+    names
+        .into_iter()
+        .map(|name| {
+            let program = finestep_gcode::parse_file(dir.join(&name))?;
+            Ok((name, program))
+        })
+        .collect()
+}
+
+/// Seed 002's machine: 200 mm/s, 300 mm/s^2, 3 000 mm/s^3 on X and Y, 1 um chord
+/// tolerance (as the planner's star test, `finestep-planner/tests/star.rs`).
+fn seed_002(profile: finestep_planner::ProfileKind) -> MachineConfig {
+    let mut config = MachineConfig { profile, chord_tolerance_mm: 0.001, ..MachineConfig::default() };
+    for (name, axis) in config.axes.iter_mut() {
+        if name == "X" || name == "Y" {
+            (axis.max_velocity, axis.max_acceleration, axis.max_jerk) = (200.0, 300.0, 3000.0);
+        }
+    }
+    config
+}
+
+/// How much of the limits the plans use: peak acceleration and jerk on seed 002's star
+/// as fractions of the limits, and machining time over the independent lower bound
+/// ([`finestep_planner::bound`]) on every program of `tests/programs/`, per profile.
+fn limit_figures() -> anyhow::Result<()> {
+    use finestep_planner::{check_program, plan_program, time_lower_bound, ProfileKind};
+    let programs = test_programs()?;
+    let fail = |name: &str, e: finestep_planner::ProgramError| anyhow::anyhow!("{name}:{}: {}", e.line, e.reason);
+    for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
+        if let Some((name, star)) = programs.iter().find(|(n, _)| n == "star.ngc") {
+            let config = seed_002(profile);
+            let planned = plan_program(&config, star).map_err(|e| fail(name, e))?;
+            let report = check_program(&config, star, &planned.records)?;
+            anyhow::ensure!(report.passed(), "star.ngc ({profile:?}): {:?}", report.violations);
+            let [x, y] = [0, 1].map(|a| report.axis_max[a]);
+            println!(
+                "  {:<44} a X {:.3} Y {:.3} path {:.3}   j X {:.3} Y {:.3} path {:.3}   ({:.3} s)",
+                format!("star, seed 002, peak / limit ({profile:?})"),
+                x[1] / 300.0,
+                y[1] / 300.0,
+                report.path_max[1] / 300.0,
+                x[2] / 3000.0,
+                y[2] / 3000.0,
+                report.path_max[2] / 3000.0,
+                planned.records.len() as f64 * report.period_s
+            );
+        }
+        let (mut time, mut bound, mut worst) = (0.0, 0.0, (0.0f64, String::new()));
+        for (name, program) in &programs {
+            let config = MachineConfig { profile, ..MachineConfig::default() };
+            let planned = plan_program(&config, program).map_err(|e| fail(name, e))?;
+            let moving = planned.records.iter().filter(|r| r.inc.iter().any(|i| i.to_bits() != 0)).count();
+            let t = moving as f64 * config.period_ms * 1e-3;
+            let b = time_lower_bound(&config, program).map_err(|e| fail(name, e))?;
+            if t / b > worst.0 {
+                worst = (t / b, name.clone());
+            }
+            time += t;
+            bound += b;
+        }
+        println!(
+            "  {:<44} {:>7.3}   (worst {:.3} on {}; {:.2} s of motion against {:.2} s)",
+            format!("time / lower bound, tests/programs ({profile:?})"),
+            time / bound,
+            worst.0,
+            worst.1,
+            time,
+            bound
+        );
+    }
+    Ok(())
+}
+
 /// Parse, plan and interpolate throughput on a 100 000-segment program, per profile.
 pub fn front_end() -> anyhow::Result<()> {
     use finestep_planner::ProfileKind;
@@ -304,6 +385,7 @@ pub fn front_end() -> anyhow::Result<()> {
         );
     }
     nurbs_figures()?;
+    limit_figures()?;
     memory_figures()
 }
 

@@ -85,7 +85,9 @@ fn measure_traverses_a_served_chip_with_the_configured_channels() {
             .filter(|l| !l.starts_with('#') && !l.starts_with("z_mm"))
             .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
             .collect();
-        assert!(rows.len() > 80, "{text}");
+        // The traverse takes about 120 periods (0.1 s at 20 mm/s, the ramps at 98 % of
+        // X's 1000 mm/s^2; 140 while a line took half of it): most of them latched.
+        assert!(rows.len() > 70, "{text}");
         // The grating is the axis's steps: Z (the traverse axis) equals the command, in
         // whole counts of 1.25 um, rising over (0, 2) mm; the gauge reads 0.
         assert!(rows.windows(2).all(|w| w[1][0] > w[0][0]), "{profile}");

@@ -1,6 +1,33 @@
 //! One element of the planned path (a line, an arc or a NURBS sub-piece) with its
-//! speed, acceleration and jerk caps, and the shares of each axis's limits the planner
-//! gives to the motion along the path and to turning.
+//! speed, acceleration and jerk caps, and how each axis's limits are shared between the
+//! motion along the path and turning.
+//!
+//! # Sharing the limits by what the path needs
+//!
+//! At a point of curvature k on a path moving at speed v with tangential acceleration
+//! a_t and jerk j_t, axis a (tangent component T_a, normal component N_a) sees
+//!
+//! - acceleration `a_t T_a + k v^2 N_a`,
+//! - jerk `(j_t - k^2 v^3) T_a + (3 k v a_t + k' v^3) N_a` (k' = dk/ds).
+//!
+//! Each element gets its caps from these ([`full_caps`]), with the largest |T_a| (`w`)
+//! and |N_a| (`n`) over it: the speed cap first, where the normal acceleration takes
+//! the share `f` of the axis's limit that the path needs (the most, [`NORMAL_SHARE_MAX`],
+//! where the curvature is constant or at its extremum; less where it changes fast, so
+//! that the tangential acceleration needed to follow the curvature's speed limit,
+//! `f A k' / (2 k^2)`, is left), then the tangential acceleration takes all that the
+//! normal acceleration at the cap leaves, and the tangential jerk all that the turning
+//! terms leave, each within [`FULL_SHARE`] of the limit. A line takes [`FULL_SHARE`]
+//! of every limit along it.
+//!
+//! Where a junction jumps (a corner the path takes with a tangent jump, or in S-curve
+//! mode a curvature jump, that reads as more than [`JUMP_READING`] of a limit within a
+//! period), the jump takes its own share of the limits ([`GEOMETRIC_ACCEL_SHARE`],
+//! [`JUNCTION_JERK_SHARE`]) and the elements beside it take the fixed shares
+//! ([`Element::shared`]: [`TANGENTIAL_ACCEL_SHARE`], [`TANGENTIAL_JERK_SHARE`],
+//! [`ARC_JERK_SHARE`]), as [`crate::lookahead`] describes. Where the path is smooth,
+//! the acceleration read over the periods around a junction is an average of the
+//! accelerations on either side, each within the limit, so no share is kept for it.
 
 use std::sync::Arc;
 
@@ -64,6 +91,12 @@ pub struct Element {
     pub accel: f64,
     /// Tangential jerk limit, units/s^3.
     pub jerk: f64,
+    /// The caps under the fixed shares of the limits, which the element takes when a
+    /// junction beside it jumps (module docs).
+    pub shared: Caps,
+    /// The junction after this element jumps ([`crate::lookahead::junction_jumps`],
+    /// decided on the path's caps before the fixed shares are taken).
+    pub jump_after: bool,
     /// The junction after this element is an exact stop; `dwell_periods` idle periods follow.
     pub stop_after: bool,
     /// Idle periods after the stop (G4).
@@ -199,10 +232,95 @@ impl Element {
     }
 }
 
+/// The speed, tangential acceleration and tangential jerk caps of an element.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct Caps {
+    /// Speed cap, units/s.
+    pub v_cap: f64,
+    /// Tangential acceleration, units/s^2.
+    pub accel: f64,
+    /// Tangential jerk, units/s^3.
+    pub jerk: f64,
+}
+
+/// The share of every limit an element uses where the path is smooth; the rest covers
+/// the jumps below [`JUMP_READING`] at its junctions.
+pub const FULL_SHARE: f64 = 0.98;
+/// The largest share of an axis's acceleration the normal acceleration takes.
+pub const NORMAL_SHARE_MAX: f64 = 0.9;
+/// The smallest share of an axis's acceleration the normal acceleration takes where the
+/// curvature changes fast.
+pub const NORMAL_SHARE_MIN: f64 = 0.5;
+/// S-curve: the largest share of an axis's jerk spent on turning, `(k^2 + |k'|) v^3`.
+pub const TURNING_JERK_SHARE: f64 = 0.25;
+/// S-curve: the largest share of an axis's jerk spent on the tangential acceleration
+/// turning with the path, `3 k v a_t`.
+pub const TURNING_ACCEL_JERK_SHARE: f64 = 0.5;
+/// A junction jumps when its tangent or curvature jump reads as more than this share of
+/// an axis's acceleration (or jerk) within a period.
+pub const JUMP_READING: f64 = 0.01;
+
+/// One axis as an element sees it: its largest tangent component `w`, normal component
+/// `n` (both 0 for an axis the machine does not have), and its velocity, acceleration
+/// and jerk limits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisShare {
+    /// Largest |T_a| over the element.
+    pub w: f64,
+    /// Largest |N_a| over the element.
+    pub n: f64,
+    /// Velocity limit, units/s.
+    pub velocity: f64,
+    /// Acceleration limit, units/s^2.
+    pub accel: f64,
+    /// Jerk limit, units/s^3.
+    pub jerk: f64,
+}
+
+/// The caps of an element of largest curvature `k` and curvature change `dk` (|dk/ds|)
+/// under the speed limit `v_limit` (feed, chord tolerance), the limits shared by what
+/// the path needs (module docs).
+pub fn full_caps(axes: &[AxisShare], v_limit: f64, k: f64, dk: f64, scurve: bool) -> Caps {
+    let curved = k > 1e-12;
+    // The normal share: what following the curvature's speed limit leaves.
+    let f = if curved { (1.0 / (1.0 + dk / (2.0 * k * k))).clamp(NORMAL_SHARE_MIN, NORMAL_SHARE_MAX) } else { 0.0 };
+    let turning = k * k + dk;
+    let mut v_cap = v_limit;
+    for axis in axes.iter().filter(|a| a.w.max(a.n) > 1e-12) {
+        if axis.w > 1e-12 {
+            v_cap = v_cap.min(axis.velocity / axis.w);
+        }
+        if curved && axis.n > 1e-12 {
+            v_cap = v_cap.min((f * axis.accel / (k * axis.n)).sqrt());
+        }
+        if scurve && turning > 1e-12 {
+            v_cap = v_cap.min((TURNING_JERK_SHARE * axis.jerk / (turning * axis.w.max(axis.n))).cbrt());
+        }
+    }
+    let mut accel = f64::INFINITY;
+    for axis in axes {
+        if axis.w > 1e-12 {
+            accel = accel.min((FULL_SHARE * axis.accel - k * v_cap * v_cap * axis.n) / axis.w);
+        }
+        if scurve && curved && axis.n > 1e-12 {
+            accel = accel.min(TURNING_ACCEL_JERK_SHARE * axis.jerk / (3.0 * k * v_cap * axis.n));
+        }
+    }
+    let mut jerk = f64::INFINITY;
+    for axis in axes.iter().filter(|a| a.w > 1e-12) {
+        // A trapezoid's jerk is unbounded by design: the jerk cap is not used there.
+        let turning_jerk =
+            if scurve { turning * v_cap.powi(3) * axis.w.max(axis.n) + 3.0 * k * v_cap * accel * axis.n } else { 0.0 };
+        jerk = jerk.min((FULL_SHARE * axis.jerk - turning_jerk) / axis.w);
+    }
+    Caps { v_cap, accel, jerk }
+}
+
 /// Share of each axis's acceleration the planner spends on speeding up and slowing
 /// down along the path; [`GEOMETRIC_ACCEL_SHARE`] goes to turning (arcs, junctions).
 pub const TANGENTIAL_ACCEL_SHARE: f64 = 0.5;
-/// Share of each axis's acceleration spent on turning.
+/// Share of each axis's acceleration spent on turning at a jump (and inside the
+/// elements beside it).
 pub const GEOMETRIC_ACCEL_SHARE: f64 = 0.45;
 /// Share of each axis's jerk spent on changing the acceleration along the path.
 pub const TANGENTIAL_JERK_SHARE: f64 = 0.4;
@@ -211,3 +329,55 @@ pub const TANGENTIAL_JERK_SHARE: f64 = 0.4;
 pub const ARC_JERK_SHARE: f64 = 0.15;
 /// Share of each axis's jerk spent at a junction (tangent or curvature jump within a period).
 pub const JUNCTION_JERK_SHARE: f64 = 0.25;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Over a grid of curvatures, curvature changes and directions, the caps keep every
+    /// axis's acceleration and (S-curve) jerk within FULL_SHARE of its limit at the cap,
+    /// with the tangential acceleration at its cap, and leave the tangential parts room.
+    #[test]
+    fn full_caps_keep_every_axis_within_its_limits() {
+        for scurve in [false, true] {
+            for &k in &[0.0, 1e-3, 0.05, 1.0, 40.0] {
+                for &dk in &[0.0, 1e-3, 0.3, 50.0] {
+                    for &angle in &[0.0f64, 0.3, 0.785, 1.2] {
+                        let (w, n) = (angle.cos().abs(), angle.sin().abs());
+                        let axes = [
+                            AxisShare { w, n, velocity: 200.0, accel: 300.0, jerk: 3000.0 },
+                            AxisShare { w: n, n: w, velocity: 100.0, accel: 1000.0, jerk: 1e5 },
+                        ];
+                        let c = full_caps(&axes, 150.0, k, dk, scurve);
+                        assert!(c.v_cap > 0.0 && c.accel > 0.0 && c.jerk > 0.0, "{c:?}");
+                        for axis in &axes {
+                            let v = c.v_cap;
+                            assert!(v * axis.w <= axis.velocity * (1.0 + 1e-12));
+                            let accel = c.accel * axis.w + k * v * v * axis.n;
+                            assert!(accel <= FULL_SHARE * axis.accel * (1.0 + 1e-9), "{k} {dk} {angle}: {accel}");
+                            if scurve {
+                                let jerk = c.jerk * axis.w
+                                    + (k * k + dk) * v.powi(3) * axis.w.max(axis.n)
+                                    + 3.0 * k * v * c.accel * axis.n;
+                                assert!(jerk <= FULL_SHARE * axis.jerk * (1.0 + 1e-9), "{k} {dk} {angle}: {jerk}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// A line takes FULL_SHARE of the limits along it, a constant curvature
+    /// NORMAL_SHARE_MAX of the acceleration for turning.
+    #[test]
+    fn a_line_takes_the_full_limits_and_an_arc_the_normal_share() {
+        let axes = [AxisShare { w: 1.0, n: 0.0, velocity: 200.0, accel: 300.0, jerk: 3000.0 }];
+        let line = full_caps(&axes, 1e9, 0.0, 0.0, true);
+        assert_eq!((line.v_cap, line.accel, line.jerk), (200.0, FULL_SHARE * 300.0, FULL_SHARE * 3000.0));
+        let axes = [AxisShare { w: 1.0, n: 1.0, velocity: 200.0, accel: 300.0, jerk: 3000.0 }];
+        let arc = full_caps(&axes, 1e9, 0.1, 0.0, false);
+        assert!((arc.v_cap - (NORMAL_SHARE_MAX * 300.0 / 0.1f64).sqrt()).abs() < 1e-9, "{arc:?}");
+        assert!((arc.accel - (FULL_SHARE - NORMAL_SHARE_MAX) * 300.0).abs() < 1e-9, "{arc:?}");
+    }
+}

@@ -25,8 +25,8 @@ use finestep_gcode::{BlockKind, CompSide, PathControl, Plane, Point, Program};
 
 use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
 pub use crate::element::{
-    Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE,
-    TANGENTIAL_JERK_SHARE,
+    full_caps, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE,
+    TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
 };
 use crate::element::{IoAction, IoEvent};
 use crate::error::ProgramError;
@@ -350,6 +350,8 @@ fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64,
         v_cap: 0.0,
         accel: 0.0,
         jerk: 0.0,
+        shared: Caps::default(),
+        jump_after: false,
         stop_after: false,
         dwell_periods: 0,
         dwell_line: 0,
@@ -404,10 +406,51 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
             }
         }
     }
-    element.v_cap = v_cap;
-    element.accel = accel;
-    element.jerk = jerk;
+    element.shared = Caps { v_cap, accel, jerk };
+    // The limits shared by what the element needs (`crate::element`).
+    let mut v_limit = feed;
+    let (mut k, mut normal) = (0.0, [0.0; 4]);
+    if let Shape::Arc { e1, e2, .. } = element.shape {
+        let (planar, r) = element.planar_fraction_and_radius();
+        k = planar * planar / r;
+        let delta = config.chord_tolerance_mm.min(r);
+        let chord = 2.0 * (r * r - (r - delta).powi(2)).sqrt();
+        v_limit = v_limit.min(chord / config.period_s / planar.max(1e-12));
+        normal = [0, 1, 2, 3].map(|a| e1[a].hypot(e2[a]));
+    }
+    // An absent axis has no share (w = n = 0).
+    let axes: [AxisShare; 4] = std::array::from_fn(|a| {
+        let axis = &config.axes[a];
+        let present = if axis.present { 1.0 } else { 0.0 };
+        AxisShare {
+            w: present * weights[a],
+            n: present * normal[a],
+            velocity: axis.max_velocity,
+            accel: axis.max_acceleration,
+            jerk: axis.max_jerk,
+        }
+    });
+    let full = full_caps(&axes, v_limit, k, 0.0, config.profile == ProfileKind::SCurve);
+    element.v_cap = full.v_cap;
+    element.accel = full.accel;
+    element.jerk = full.jerk;
     element
+}
+
+/// Where a junction jumps (`lookahead::junction_jumps`), the elements beside it take
+/// the fixed shares of the limits (`crate::element`).
+fn share_at_jumps(config: &Resolved, elements: &mut [Element]) {
+    let jumps: Vec<bool> =
+        elements.windows(2).map(|pair| crate::lookahead::junction_jumps(config, &pair[0], &pair[1])).collect();
+    for (i, &jump) in jumps.iter().enumerate() {
+        elements[i].jump_after = jump;
+        if jump {
+            for e in &mut elements[i..=i + 1] {
+                let Caps { v_cap, accel, jerk } = e.shared;
+                (e.v_cap, e.accel, e.jerk) = (v_cap, accel, jerk);
+            }
+        }
+    }
 }
 
 fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) -> Option<Element> {
@@ -573,6 +616,8 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
                     v_cap: 0.0,
                     accel: 0.0,
                     jerk: 0.0,
+                    shared: Caps::default(),
+                    jump_after: false,
                     stop_after: false,
                     dwell_periods: 0,
                     dwell_line: 0,
@@ -595,5 +640,6 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
     if let Some(b) = pending_blend {
         out.push(b);
     }
+    share_at_jumps(config, &mut out);
     Ok(PathElements { elements: out, leading_dwell, leading_events, end, notes: Vec::new() })
 }

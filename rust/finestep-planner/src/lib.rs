@@ -50,9 +50,16 @@
 //!
 //! # Limits of this planner
 //!
-//! - Each axis's acceleration (and jerk) is split between speeding up along the path
-//!   (50 %, 40 % of the jerk) and turning (45 %; jerk shares in [`geometry`]), so a line
-//!   never uses more than half of an axis's acceleration.
+//! - Each axis's acceleration and jerk are shared between speeding up along the path and
+//!   turning by what each element needs ([`element`]): a line takes 98 % of them, a
+//!   curve up to 90 % of the acceleration for turning and the rest along the path. The
+//!   shares are fixed (50 % of the acceleration along the path, 45 % turning, the jerk
+//!   in [`element`]) only beside a junction that jumps (a corner taken with a tangent
+//!   jump, in S-curve mode also a curvature jump such as a line entering an arc or a
+//!   blend). Each element keeps one tangential acceleration and jerk over its length (set
+//!   at its speed cap), and an S-curve brings the acceleration to zero at every element's
+//!   end, so the limits are reached where the path allows, not followed everywhere.
+//! - [`bound`] gives an independent lower bound on the machining time, for figures.
 //! - Only line-line corners are blended; where a line meets an arc, or two arcs meet,
 //!   the junction speed comes from the tangent jump read over one period: full speed
 //!   where they are tangent, nearly a stop where they are not.
@@ -71,6 +78,7 @@
 //!
 //! [`PeriodRecord`]: finestep_interface::PeriodRecord
 
+pub mod bound;
 pub mod checker;
 pub mod config;
 pub mod cutter_comp;
@@ -85,6 +93,7 @@ pub mod program;
 pub mod vec4;
 pub mod velocity;
 
+pub use bound::time_lower_bound;
 pub use checker::{check_program, CheckReport};
 pub use config::{ConfigError, MachineConfig, MeasureConfig, ProfileKind, SpindleConfig};
 pub use element::{IoAction, IoEvent, TimedEvent};

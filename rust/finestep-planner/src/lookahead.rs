@@ -7,12 +7,17 @@
 //!
 //! - Exact stop (G61, dwell, pause, program end): 0.
 //! - Both elements' speed caps.
-//! - Turning at the junction. Sampled once per period, a tangent jump `dt` (unit tangent
+//! - Where the junction jumps ([`junction_jumps`]: its jumps read as more than
+//!   [`JUMP_READING`] of a limit), turning at the junction, below; where it does not,
+//!   nothing more: the elements' caps keep each side within the limits, and the
+//!   acceleration read over the periods around the junction averages the two sides
+//!   ([`crate::element`]). Turning at a junction that jumps: Sampled once per period, a tangent jump `dt` (unit tangent
 //!   after minus before) at speed v changes axis a's per-period velocity by `v |dt_a|`
 //!   within one period, which reads as an acceleration `v |dt_a| / T`; the normal
 //!   acceleration `k_a v^2` of an arc on either side adds to it. Together they stay
 //!   within [`GEOMETRIC_ACCEL_SHARE`] of the axis's limit:
 //!   `k_a v^2 + v |dt_a| / T <= 0.45 A_a`.
+//!   The elements beside it take the fixed shares ([`crate::element::Element::shared`]).
 //! - S-curve only: the same jumps read as jerk, `v |dt_a| / T^2` from the tangent jump
 //!   and `|dk_a| v^2 / T` from a curvature jump (a line meeting an arc), within
 //!   [`JUNCTION_JERK_SHARE`] of the axis's jerk limit.
@@ -31,7 +36,7 @@
 //! moves on, because a later window end only allows higher speeds.
 
 use crate::config::{ProfileKind, Resolved};
-use crate::element::{Element, GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE};
+use crate::element::{Element, GEOMETRIC_ACCEL_SHARE, JUMP_READING, JUNCTION_JERK_SHARE};
 use crate::vec4::sub;
 use crate::velocity::Limits;
 
@@ -51,12 +56,38 @@ fn quadratic_cap(alpha: f64, beta: f64, gamma: f64) -> f64 {
     }
 }
 
+/// Whether the junction between `before` and `after` jumps: its tangent jump (or in
+/// S-curve mode its tangent or curvature jump) read within a period at the speed both
+/// elements allow is more than [`JUMP_READING`] of an axis's acceleration (jerk). An
+/// exact stop does not jump. Where a junction jumps, the junction cap below and the
+/// fixed shares of the elements beside it keep the limits; elsewhere the elements'
+/// own caps do ([`crate::element`]).
+pub fn junction_jumps(config: &Resolved, before: &Element, after: &Element) -> bool {
+    if before.stop_after {
+        return false;
+    }
+    let v = before.v_cap.min(after.v_cap);
+    let period = config.period_s;
+    let tangent_jump = sub(after.tangent(false), before.tangent(true));
+    let curvature_jump = sub(after.curvature(false), before.curvature(true));
+    config.axes.iter().enumerate().filter(|(_, axis)| axis.present).any(|(a, axis)| {
+        let accel = v * tangent_jump[a].abs() / period;
+        let jerk = accel / period + curvature_jump[a].abs() * v * v / period;
+        // A reading that is not a number counts as a jump.
+        let over = |reading: f64, limit: f64| reading.is_nan() || reading > JUMP_READING * limit;
+        over(accel, axis.max_acceleration) || config.profile == ProfileKind::SCurve && over(jerk, axis.max_jerk)
+    })
+}
+
 /// The speed cap of the junction between `before` and `after` (module docs).
 pub fn junction_cap(config: &Resolved, before: &Element, after: &Element) -> f64 {
     if before.stop_after {
         return 0.0;
     }
     let mut cap = before.v_cap.min(after.v_cap);
+    if !before.jump_after {
+        return cap.max(0.0);
+    }
     let period = config.period_s;
     let tangent_jump = sub(after.tangent(false), before.tangent(true));
     let k_before = before.curvature(true);

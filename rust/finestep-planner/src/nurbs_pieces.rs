@@ -30,7 +30,8 @@ use std::sync::Arc;
 
 use crate::config::{ProfileKind, Resolved};
 use crate::element::{
-    Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
+    full_caps, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, TANGENTIAL_ACCEL_SHARE,
+    TANGENTIAL_JERK_SHARE,
 };
 use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
 
@@ -182,15 +183,15 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
         }
         // The curvature inside each interval too, at the three points the tangent bound
         // below evaluates: a peak between samples lowers the interval's cap.
-        let inner_cap: Vec<f64> = (0..m)
+        let inner_k: Vec<f64> = (0..m)
             .map(|j| {
                 let (a, b) = (samples[j].u, samples[j + 1].u);
-                let k = (1..4)
+                (1..4)
                     .map(|i| curve.derivatives_on(a + (b - a) * i as f64 / 4.0, ua).curvature().abs())
-                    .fold(0.0, f64::max);
-                cap_of(k, dk[j].max(dk[j + 1]))
+                    .fold(0.0, f64::max)
             })
             .collect();
+        let inner_cap: Vec<f64> = (0..m).map(|j| cap_of(inner_k[j], dk[j].max(dk[j + 1]))).collect();
         // Per interval and axis, the largest tangent component: parabolas through the
         // values at five points of the interval, at their vertices where those are inside
         // (an inflection between samples lets the tangent swing past both ends), kept a
@@ -273,6 +274,30 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                     }
                 }
             }
+            let shared = Caps { v_cap, accel, jerk };
+            // The limits shared by what the sub-piece needs (`crate::element`): the
+            // largest curvature and curvature change over it and the samples around it;
+            // the normal's components are the tangent's, swapped.
+            let k_top = inner_k[j..end].iter().fold(k_max, |a, &b| a.max(b));
+            let dk_top = dk[j.saturating_sub(1)..=(end + 1).min(m)].iter().fold(0.0, |a: f64, &b| a.max(b));
+            let mut v_limit = feed;
+            if k_top > 1e-12 {
+                let rho = 1.0 / k_top;
+                let delta = config.chord_tolerance_mm.min(rho);
+                v_limit = v_limit.min(2.0 / config.period_s * (2.0 * rho * delta - delta * delta).max(0.0).sqrt());
+            }
+            let axes: [AxisShare; 2] = std::array::from_fn(|c| {
+                let axis = &config.axes[plane_axes[c]];
+                let present = if axis.present { 1.0 } else { 0.0 };
+                AxisShare {
+                    w: present * weights[c],
+                    n: present * weights[1 - c],
+                    velocity: axis.max_velocity,
+                    accel: axis.max_acceleration,
+                    jerk: axis.max_jerk,
+                }
+            });
+            let Caps { v_cap, accel, jerk } = full_caps(&axes, v_limit, k_top, dk_top, scurve);
             let length: f64 = ds[j..end].iter().sum();
             let start = curve.point(u0);
             let end_point = curve.point(u1);
@@ -285,6 +310,8 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 v_cap,
                 accel,
                 jerk,
+                shared,
+                jump_after: false,
                 stop_after: false,
                 dwell_periods: 0,
                 dwell_line: 0,

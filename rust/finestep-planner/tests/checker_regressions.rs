@@ -40,7 +40,13 @@ fn a_switch_from_g61_to_g64_is_no_violation() {
     // final stop (1 241 violations and a 35.9 mm "deviation").
     let program = parse("g61g64.ngc", "G61\nG1 X-25 F6000\nG64\nG1 X25\nG1 Y25\nX0\nY0\nM2\n");
     for profile in PROFILES {
-        let (planned, report) = plan_and_check("g61g64.ngc", &program, &config(profile));
+        // X's acceleration such that the line takes exactly 1000 mm/s^2 of it
+        // (`element::FULL_SHARE`): 100 periods to reach 100 mm/s over 5 mm, then
+        // 0.1 mm a period, landing on the origin.
+        let mut config = config(profile);
+        config.axes.iter_mut().find(|(name, _)| *name == "X").expect("X").1.max_acceleration =
+            1000.0 / finestep_planner::element::FULL_SHARE;
+        let (planned, report) = plan_and_check("g61g64.ngc", &program, &config);
         assert_eq!(report.exact_stops, 2, "{profile:?}");
         assert!(report.max_deviation <= deviation_bound(0.01), "{profile:?}: {}", report.max_deviation);
         if profile == ProfileKind::Trapezoid {

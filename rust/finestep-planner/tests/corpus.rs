@@ -140,7 +140,10 @@ fn tiny_segments() -> Program {
 #[test]
 fn look_ahead_sees_two_thousand_moves_and_brakes_in_time_for_the_corner() {
     let program = tiny_segments();
-    let config = MachineConfig { lookahead_moves: 2000, ..MachineConfig::default() };
+    // X at 500 mm/s^2: the lines take all but 2 % of it (`element::FULL_SHARE`), so
+    // braking from 100 mm/s takes 10.2 mm, more than 1000 of the segments.
+    let mut config = MachineConfig { lookahead_moves: 2000, ..MachineConfig::default() };
+    config.axes.iter_mut().find(|(name, _)| *name == "X").expect("X").1.max_acceleration = 500.0;
     let (planned, _) = plan_and_check("tiny.ngc", &program, &config);
     let v = speeds(&planned, &config);
     // The peak on the 3000 tiny segments (lines 3 to 3002), not on the last 10 mm line.
@@ -173,7 +176,7 @@ fn look_ahead_sees_two_thousand_moves_and_brakes_in_time_for_the_corner() {
     );
 
     // A short look-ahead cannot reach the feed on the same segments.
-    let short = MachineConfig { lookahead_moves: 20, ..MachineConfig::default() };
+    let short = MachineConfig { lookahead_moves: 20, ..config.clone() };
     let (planned, _) = plan_and_check("tiny.ngc", &program, &short);
     let peak_short = peak_on_x(&planned, &speeds(&planned, &short));
     // 20 moves of look-ahead: a window of 80 elements, at least 0.2 mm to stop in.

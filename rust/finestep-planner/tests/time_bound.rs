@@ -1,0 +1,42 @@
+//! Machining time against the independent lower bound ([`finestep_planner::bound`]) on
+//! every program of `tests/programs/`, both profiles: the plan may never beat the bound
+//! (that would make it no bound, or the plan break a limit), and the ratios are printed
+//! (the figures of `finestep bench --host-only`).
+
+mod common;
+
+use finestep_planner::{plan_program, time_lower_bound, ProfileKind};
+
+use common::{config, programs_dir, read, PROFILES};
+
+/// Machining time over the bound for one program and profile: (time, bound) in s.
+fn timed(name: &str, profile: ProfileKind) -> (f64, f64) {
+    let program = read(name);
+    let config = config(profile);
+    let planned = plan_program(&config, &program).unwrap();
+    // Dwells are not motion: the bound leaves them out, so does the time here.
+    let moving = planned.records.iter().filter(|r| r.inc.iter().any(|i| i.to_bits() != 0)).count();
+    let resolved = config.resolve().unwrap();
+    (moving as f64 * resolved.period_s, time_lower_bound(&config, &program).unwrap())
+}
+
+#[test]
+fn no_plan_beats_the_time_lower_bound() {
+    let mut names: Vec<String> = std::fs::read_dir(programs_dir())
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
+        .filter(|n| n.ends_with(".ngc"))
+        .collect();
+    names.sort();
+    for profile in PROFILES {
+        let (mut time, mut bound) = (0.0, 0.0);
+        for name in &names {
+            let (t, b) = timed(name, profile);
+            eprintln!("{name} {profile:?}: {t:.3} s, bound {b:.3} s, ratio {:.3}", t / b);
+            assert!(t >= b, "{name} {profile:?}: {t} s is below the lower bound {b} s");
+            time += t;
+            bound += b;
+        }
+        eprintln!("corpus {profile:?}: {time:.3} s, bound {bound:.3} s, ratio {:.3}", time / bound);
+    }
+}
