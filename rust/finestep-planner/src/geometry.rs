@@ -437,18 +437,53 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
     element
 }
 
+/// Periods either side of a junction whose readings can include its jump: the jerk
+/// reads four positions, three periods.
+pub const JUMP_REACH_PERIODS: f64 = 3.0;
+
 /// Where a junction jumps (`lookahead::junction_jumps`), the elements beside it take
-/// the fixed shares of the limits (`crate::element`).
+/// the fixed shares of the limits (`crate::element`): every element within
+/// [`JUMP_REACH_PERIODS`] periods' travel of it (at the elements' caps), so that
+/// sub-pieces shorter than a period's travel (a NURBS near a heavy weight) do not put
+/// their full tangential acceleration into the periods that read the jump. An exact
+/// stop ends the reach.
 fn share_at_jumps(config: &Resolved, elements: &mut [Element]) {
     let jumps: Vec<bool> =
         elements.windows(2).map(|pair| crate::lookahead::junction_jumps(config, &pair[0], &pair[1])).collect();
+    let mut shared = vec![false; elements.len()];
+    let reach = JUMP_REACH_PERIODS * config.period_s;
     for (i, &jump) in jumps.iter().enumerate() {
         elements[i].jump_after = jump;
-        if jump {
-            for e in &mut elements[i..=i + 1] {
-                let Caps { v_cap, accel, jerk } = e.shared;
-                (e.v_cap, e.accel, e.jerk) = (v_cap, accel, jerk);
+        if !jump {
+            continue;
+        }
+        // Backward from the junction, then forward, at the fastest cap met so far.
+        let (mut covered, mut fastest) = (0.0, 0.0f64);
+        for j in (0..=i).rev() {
+            if j < i && elements[j].stop_after {
+                break;
             }
+            shared[j] = true;
+            covered += elements[j].length;
+            fastest = fastest.max(elements[j].v_cap);
+            if covered >= reach * fastest {
+                break;
+            }
+        }
+        let (mut covered, mut fastest) = (0.0, 0.0f64);
+        for j in i + 1..elements.len() {
+            shared[j] = true;
+            covered += elements[j].length;
+            fastest = fastest.max(elements[j].v_cap);
+            if covered >= reach * fastest || elements[j].stop_after {
+                break;
+            }
+        }
+    }
+    for (e, &take) in elements.iter_mut().zip(&shared) {
+        if take {
+            let Caps { v_cap, accel, jerk } = e.shared;
+            (e.v_cap, e.accel, e.jerk) = (v_cap, accel, jerk);
         }
     }
 }

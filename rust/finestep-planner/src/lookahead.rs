@@ -45,12 +45,16 @@ pub fn element_limits(config: &Resolved, element: &Element) -> Limits {
     Limits { kind: config.profile, accel: element.accel, jerk: element.jerk }
 }
 
-/// Largest `v >= 0` with `alpha v^2 + beta v <= gamma`.
+/// Largest `v >= 0` with `alpha v^2 + beta v <= gamma`, in the form
+/// `2 gamma / (beta + sqrt(beta^2 + 4 alpha gamma))`, which does not cancel: the
+/// textbook `(-beta + sqrt(...)) / (2 alpha)` lost every digit where alpha is tiny
+/// (a straight NURBS span reads a curvature of 1e-13 from rounding) and read a sharp
+/// NURBS corner's cap 2.5 times too high (issue 18's acceleration excursions, seed
+/// 0x5780d0fb1e2da647).
 fn quadratic_cap(alpha: f64, beta: f64, gamma: f64) -> f64 {
-    if alpha > 1e-300 {
-        (-beta + (beta * beta + 4.0 * alpha * gamma).sqrt()) / (2.0 * alpha)
-    } else if beta > 1e-300 {
-        gamma / beta
+    let root = beta + (beta * beta + 4.0 * alpha * gamma).sqrt();
+    if root > 1e-300 {
+        2.0 * gamma / root
     } else {
         f64::INFINITY
     }
@@ -193,5 +197,23 @@ impl WindowedSpeeds {
             self.caps.pop_front();
         }
         self.fixed = commit;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::quadratic_cap;
+
+    #[test]
+    fn the_quadratic_cap_holds_at_tiny_curvatures() {
+        // alpha v^2 + beta v = gamma at the cap, to the last digits, however small alpha.
+        for &(alpha, beta, gamma) in
+            &[(2e-13, 1952.6, 450.0), (1e-300, 3.0, 2.0), (0.0, 5.0, 10.0), (4.0, 0.0, 16.0), (1.0, 1.0, 0.0)]
+        {
+            let v = quadratic_cap(alpha, beta, gamma);
+            let lhs = alpha * v * v + beta * v;
+            assert!((lhs - gamma).abs() <= 1e-12 * gamma.max(1.0), "{alpha} {beta} {gamma}: {v} gives {lhs}");
+        }
+        assert_eq!(quadratic_cap(0.0, 0.0, 1.0), f64::INFINITY);
     }
 }
