@@ -326,6 +326,24 @@ fn limit_figures() -> anyhow::Result<()> {
             time,
             bound
         );
+        // Short segments: the first 20 000 moves of the CAM program above.
+        let cam = finestep_gcode::parse_str(&(cam_program(20_000) + "M2\n"), "cam.ngc")?;
+        let config = MachineConfig { profile, ..MachineConfig::default() };
+        let stream = finestep_planner::plan_stream(&config, &cam).map_err(|e| fail("cam.ngc", e))?;
+        let mut moving = 0u64;
+        for period in stream.periods {
+            let (record, _) = period.map_err(|e| fail("cam.ngc", e))?;
+            moving += u64::from(record.inc.iter().any(|i| i.to_bits() != 0));
+        }
+        let t = moving as f64 * config.period_ms * 1e-3;
+        let b = time_lower_bound(&config, &cam).map_err(|e| fail("cam.ngc", e))?;
+        println!(
+            "  {:<44} {:>7.3}   ({:.2} s of motion against {:.2} s)",
+            format!("time / lower bound, 20 000 short G1 ({profile:?})"),
+            t / b,
+            t,
+            b
+        );
     }
     Ok(())
 }

@@ -71,9 +71,12 @@ struct Point {
     a: f64,
 }
 
-/// Tangent and curvature vector of `e` at `s`, from positions (central differences).
-fn tangent_and_curvature(e: &Element, s: f64) -> (Vec4, Vec4) {
-    let h = (1e-4 * e.length).clamp(1e-9, 1e-3).min(0.25 * e.length);
+/// Tangent and curvature vector of `e` at `s`, from positions (central differences a
+/// quarter of the sample spacing `spacing` apart: on a circle the second difference is
+/// exact to `(h k)^2`, while a step much shorter than that reads the positions' rounding
+/// as curvature, 1e-14 mm over h^2).
+fn tangent_and_curvature(e: &Element, s: f64, spacing: f64) -> (Vec4, Vec4) {
+    let h = (0.25 * spacing).min(0.25 * e.length);
     let (s0, s2) = ((s - h).max(0.0), (s + h).min(e.length));
     let s1 = 0.5 * (s0 + s2);
     let (p0, p1, p2) = (e.position(s0), e.position(s1), e.position(s2));
@@ -135,7 +138,7 @@ fn bound_of_path(config: &Resolved, path: &[Element], feed_of: &dyn Fn(usize) ->
         let n = ((e.length * SAMPLES_PER_UNIT).ceil() as usize).clamp(MIN_SAMPLES, MAX_SAMPLES);
         for i in 1..=n {
             let s = e.length * i as f64 / n as f64;
-            let (t, kappa) = tangent_and_curvature(e, s.min(e.length * (1.0 - 0.5 / n as f64)));
+            let (t, kappa) = tangent_and_curvature(e, s.min(e.length * (1.0 - 0.5 / n as f64)), e.length / n as f64);
             let (v, a) = limits_at(config, feed, t, kappa);
             points.push(Point { s: at + s, v, a });
         }
@@ -146,8 +149,8 @@ fn bound_of_path(config: &Resolved, path: &[Element], feed_of: &dyn Fn(usize) ->
             last.v = 0.0;
         } else {
             let next = &path[index + 1];
-            let (before, _) = tangent_and_curvature(e, e.length);
-            let (after, _) = tangent_and_curvature(next, 0.0);
+            let (before, _) = tangent_and_curvature(e, e.length, 1e-3 * e.length);
+            let (after, _) = tangent_and_curvature(next, 0.0, 1e-3 * next.length);
             let jump = sub(after, before);
             for (i, axis) in config.axes.iter().enumerate() {
                 if axis.present && jump[i].abs() > 1e-9 {
