@@ -23,9 +23,11 @@
 //! Where a junction jumps (a corner the path takes with a tangent jump, or in S-curve
 //! mode a curvature jump, that reads as more than [`JUMP_READING`] of a limit within a
 //! period), the jump takes its own share of the limits ([`GEOMETRIC_ACCEL_SHARE`],
-//! [`JUNCTION_JERK_SHARE`]) and the elements beside it take the fixed shares
-//! ([`Element::shared`]: [`TANGENTIAL_ACCEL_SHARE`], [`TANGENTIAL_JERK_SHARE`],
-//! [`ARC_JERK_SHARE`]), as [`crate::lookahead`] describes. Where the path is smooth,
+//! [`JUNCTION_JERK_SHARE`]) and the elements within three periods' travel of it (the
+//! periods whose readings include the jump; several elements where NURBS sub-pieces are
+//! shorter than a period's travel) take the fixed shares ([`Element::shared`]:
+//! [`TANGENTIAL_ACCEL_SHARE`], [`TANGENTIAL_JERK_SHARE`], [`ARC_JERK_SHARE`]), as
+//! [`crate::lookahead`] describes. Where the path is smooth,
 //! the acceleration read over the periods around a junction is an average of the
 //! accelerations on either side, each within the limit, so no share is kept for it.
 

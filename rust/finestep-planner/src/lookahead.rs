@@ -17,7 +17,8 @@
 //!   acceleration `k_a v^2` of an arc on either side adds to it. Together they stay
 //!   within [`GEOMETRIC_ACCEL_SHARE`] of the axis's limit:
 //!   `k_a v^2 + v |dt_a| / T <= 0.45 A_a`.
-//!   The elements beside it take the fixed shares ([`crate::element::Element::shared`]).
+//!   The elements within three periods' travel of it take the fixed shares
+//!   ([`crate::element::Element::shared`], [`crate::geometry::JUMP_REACH_PERIODS`]).
 //! - S-curve only: the same jumps read as jerk, `v |dt_a| / T^2` from the tangent jump
 //!   and `|dk_a| v^2 / T` from a curvature jump (a line meeting an arc), within
 //!   [`JUNCTION_JERK_SHARE`] of the axis's jerk limit.
