@@ -4,7 +4,7 @@ export VERILATOR ?= verilator
 
 .PHONY: conformance flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
         bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick \
-        linuxcnc linuxcnc-quick netlist netlist-quick
+        linuxcnc linuxcnc-quick netlist netlist-quick mutants-rtl mutants-rtl-quick icarus icarus-quick
 
 all: test
 
@@ -14,7 +14,7 @@ setup:
 demo: setup
 	$(CARGO) run --release -q -p finestep-cli -- demo
 
-test: setup lint cargo-test wheel-check formal mutants-quick netlist-quick linuxcnc-quick flows
+test: setup lint cargo-test wheel-check formal mutants-quick mutants-rtl-quick netlist-quick icarus-quick linuxcnc-quick flows
 	@echo "make test: all passed"
 
 # Before a commit: fmt, clippy, Verilator lint and the unit tests (a few minutes warm).
@@ -45,11 +45,36 @@ mutants: setup
 mutants-quick: setup
 	@./scripts/mutants.sh --quick
 
+# RTL mutation coverage as YosysHQ's MCY measures it (docs/verification.md): Yosys's
+# `mutate` lists mutants of the blocks of finestep_top, all of them built into one
+# Verilation behind a run-time `mutsel` (feature netlist-mutants); each run against the
+# pin-level lockstep tests alone and against the block's formal proofs alone, survivors
+# of both checked for equivalence; prints the table per block (build/mutants-rtl/).
+mutants-rtl: setup
+	@.venv/bin/python scripts/mutants_rtl.py gen
+	@.venv/bin/python scripts/mutants_rtl.py run
+
+# The quick slice of it in make test: six mutants spread over the list, the cheapest
+# lockstep tests and the formal proofs; fails unless each check kills one.
+mutants-rtl-quick: setup
+	@.venv/bin/python scripts/mutants_rtl.py gen
+	@.venv/bin/python scripts/mutants_rtl.py run --quick
+
+# A second simulator: the pin records of Verilator lockstep runs replayed into the RTL
+# under Icarus Verilog by a cocotb testbench, every output pin compared every clock
+# (scripts/icarus_replay.py; records under build/icarus/).
+icarus: setup
+	@.venv/bin/python scripts/icarus_replay.py
+
+# The quick slice of it in make test: a stream over SPI, an E-stop, the encoders and probe.
+icarus-quick: setup
+	@.venv/bin/python scripts/icarus_replay.py --quick
+
 # The ECP5 and iCE40 bitstreams and the MachXO2 fit, held to constraints/flow_limits.txt.
 flows: setup
 	@./scripts/bitstream_check.sh
 
-test-long: setup netlist
+test-long: setup netlist icarus
 	FINESTEP_CASES=2000 $(CARGO) test --release --workspace
 
 # The synthesised netlist in lockstep (docs/verification.md): finestep_top after Yosys's

@@ -79,10 +79,19 @@ module input_filter #(
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($changed(level_reg)) assert ($past(sample) && $past(f_differs) &&
                                          (!$past(primed_reg) || $past(count_reg) + F_ONE == $past(f_needed)));
+        // ... and it does change then (found by make mutants-rtl: a level stuck at its
+        // reset value kept every property above), and the first sample adopts the pin.
+        if ($past(sample) && $past(primed_reg) && $past(f_differs) && $past(count_reg) + F_ONE == $past(f_needed))
+            assert ($changed(level_reg));
+        if ($past(sample) && !$past(primed_reg)) assert (level_reg == $past(raw) && primed_reg);
         if ($past(primed_reg)) assert (primed_reg);
         if (!$past(sample)) assert ($stable(level_reg) && $stable(count_reg));
         cover ($changed(level_reg) && f_needed == 3);
     end
+    // Reset leaves the filter unprimed, so the first sample after it adopts the pin; the
+    // filter sees the pin through exactly two flip-flops.
+    always @(posedge clk) if (f_past_valid && $past(rst)) assert (!primed_reg && !level_reg && count_reg == 0);
+    always @(posedge clk) if (f_past_valid && !$past(rst)) assert (sync_reg == {$past(sync_reg[0]), $past(pin)});
 `endif
 
 endmodule

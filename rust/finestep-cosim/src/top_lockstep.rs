@@ -98,6 +98,15 @@ pub struct TopLockstep {
     events: Vec<PinEvent>,
     cycle: u64,
     outputs: u64,
+    /// With `FINESTEP_PIN_RECORD_DIR` set: written with `log` to `<dir>/<name>.pins` on drop.
+    record: Option<PinRecord>,
+}
+
+/// The outputs of a recorded run: at power-on and every change since (cycle, outputs).
+struct PinRecord {
+    path: PathBuf,
+    outputs0: u64,
+    changes: Vec<(u64, u64)>,
 }
 
 /// The model parameters of the Verilated top with `finestep_top`'s defaults.
@@ -140,6 +149,11 @@ impl TopLockstep {
     pub fn of(variant: TopVariant, name: &str) -> TopLockstep {
         let rtl = RtlTop::of(variant);
         let outputs = rtl.outputs();
+        let record = std::env::var_os(RECORD_DIR_VAR).map(|dir| PinRecord {
+            path: PathBuf::from(dir).join(format!("{name}.pins")),
+            outputs0: outputs,
+            changes: Vec::new(),
+        });
         TopLockstep {
             name: name.to_string(),
             variant,
@@ -149,7 +163,34 @@ impl TopLockstep {
             events: Vec::new(),
             cycle: 0,
             outputs,
+            record,
         }
+    }
+
+    /// The pin record (`FINESTEP_PIN_RECORD_DIR`): a header, the inputs as run-length
+    /// `I <cycles> <inputs hex>` lines in order, and the outputs as `O <cycle> <outputs hex>`
+    /// at power-on (cycle 0) and at every change, both packed as `top_pins` packs them. The
+    /// second simulator (`scripts/icarus_replay.py`) replays it clock by clock.
+    fn write_record(&self, path: &std::path::Path, outputs0: u64, changes: &[(u64, u64)]) -> std::io::Result<()> {
+        use std::io::Write;
+        if let Some(dir) = path.parent() {
+            std::fs::create_dir_all(dir)?;
+        }
+        let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+        let variant = match self.variant {
+            TopVariant::Full => "full",
+            TopVariant::Motion => "motion",
+        };
+        writeln!(out, "# finestep_top pins of {}, {} clocks; {}", self.name, self.cycle, finestep_rtl_sys::TOP_SOURCE)?;
+        writeln!(out, "variant {variant}")?;
+        for &(inputs, cycles) in &self.log {
+            writeln!(out, "I {cycles} {inputs:016x}")?;
+        }
+        writeln!(out, "O 0 {outputs0:016x}")?;
+        for &(cycle, outputs) in changes {
+            writeln!(out, "O {cycle} {outputs:016x}")?;
+        }
+        out.flush()
     }
 
     /// The model (for assertions on internal state in tests).
@@ -223,6 +264,9 @@ impl TopLockstep {
             while next_event < self.events.len() && self.events[next_event].cycle == cycle {
                 rtl_outputs = self.events[next_event].outputs;
                 next_event += 1;
+                if let Some(record) = &mut self.record {
+                    record.changes.push((cycle, rtl_outputs));
+                }
             }
             let expected = self.model.outputs().pack();
             if expected != rtl_outputs {
@@ -232,6 +276,19 @@ impl TopLockstep {
         self.cycle += cycles;
         self.outputs = rtl_outputs;
         Ok(())
+    }
+}
+
+/// The directory [`TopLockstep`] writes each run's pin record to, when set.
+pub const RECORD_DIR_VAR: &str = "FINESTEP_PIN_RECORD_DIR";
+
+impl Drop for TopLockstep {
+    fn drop(&mut self) {
+        if let Some(record) = self.record.take() {
+            if let Err(e) = self.write_record(&record.path, record.outputs0, &record.changes) {
+                eprintln!("{}: cannot write the pin record {}: {e}", self.name, record.path.display());
+            }
+        }
     }
 }
 

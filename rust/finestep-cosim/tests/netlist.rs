@@ -23,6 +23,11 @@ mod top_faults;
 mod top_feedback;
 #[path = "top_smoke.rs"]
 mod top_smoke;
+// The spindle, the logic outputs and the interlock: only for the RTL mutation build
+// (scripts/mutants_rtl.py), whose mutants of those blocks nothing else here drives.
+#[cfg(feature = "netlist-mutants")]
+#[path = "top_spindle.rs"]
+mod top_spindle;
 #[path = "top_stream.rs"]
 mod top_stream;
 
