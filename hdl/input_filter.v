@@ -90,7 +90,7 @@ module input_filter #(
     end
     // Reset leaves the filter unprimed, so the first sample after it adopts the pin; the
     // filter sees the pin through exactly two flip-flops.
-    always @(posedge clk) if (f_past_valid && $past(rst)) assert (!primed_reg && !level_reg && count_reg == 0);
+    always @(posedge clk) if (f_past_valid && $past(rst)) assert (!primed_reg && !level_reg && count_reg == 0 && sync_reg == 2'b00);
     always @(posedge clk) if (f_past_valid && !$past(rst)) assert (sync_reg == {$past(sync_reg[0]), $past(pin)});
 `endif
 
