@@ -484,6 +484,9 @@ def run_all(args):
         step = max(1, len(mutants) // QUICK)
         mutants = mutants[::step][:QUICK]
     prefix = "quick" if args.quick else "results"
+    if args.quick:
+        for old in OUT.glob("quick-*.json"):
+            old.unlink()
     checks = [c for c in ("lockstep", "formal") if args.only in (None, c)]
     files = {c: OUT / f"{prefix}-{c}.json" for c in ("lockstep", "formal", "equiv")}
     done = {c: ({} if args.quick or not f.exists() else json.loads(f.read_text())) for c, f in files.items()}
