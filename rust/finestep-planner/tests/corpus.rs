@@ -8,7 +8,7 @@ mod common;
 use finestep_planner::{check_program, plan_program, MachineConfig, PlannedProgram, ProfileKind};
 use proptest::prelude::*;
 
-use common::{config, parse, period_in_slots, plan_and_check, programs_dir, read, PROFILES};
+use common::{config, parse, period_in_slots, plan_and_check, program_names, read, PROFILES};
 
 /// Path speed in each period, from the increments, units/s.
 fn speeds(planned: &PlannedProgram, config: &MachineConfig) -> Vec<f64> {
@@ -25,12 +25,7 @@ fn speeds(planned: &PlannedProgram, config: &MachineConfig) -> Vec<f64> {
 
 #[test]
 fn every_committed_program_passes_the_checker() {
-    let mut names: Vec<String> = std::fs::read_dir(programs_dir())
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
-        .filter(|n| n.ends_with(".ngc"))
-        .collect();
-    names.sort();
+    let names = program_names();
     assert!(names.len() >= 4, "{names:?}");
     for name in &names {
         for profile in PROFILES {

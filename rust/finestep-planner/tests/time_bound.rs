@@ -7,7 +7,7 @@ mod common;
 
 use finestep_planner::{plan_program, time_lower_bound, ProfileKind};
 
-use common::{config, parse, programs_dir, read, PROFILES};
+use common::{config, parse, program_names, read, PROFILES};
 
 /// Machining time over the bound for one program and profile: (time, bound) in s.
 fn timed(name: &str, profile: ProfileKind) -> (f64, f64) {
@@ -26,12 +26,7 @@ fn timed_program(program: &finestep_gcode::Program, profile: ProfileKind) -> (f6
 
 #[test]
 fn no_plan_beats_the_time_lower_bound() {
-    let mut names: Vec<String> = std::fs::read_dir(programs_dir())
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
-        .filter(|n| n.ends_with(".ngc"))
-        .collect();
-    names.sort();
+    let names = program_names();
     for profile in PROFILES {
         let (mut time, mut bound) = (0.0, 0.0);
         for name in &names {

@@ -14,6 +14,17 @@ pub fn programs_dir() -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"))
 }
 
+/// The `.ngc` files of [`programs_dir`], sorted.
+pub fn program_names() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(programs_dir())
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
+        .filter(|n| n.ends_with(".ngc"))
+        .collect();
+    names.sort();
+    names
+}
+
 /// `ms` rounded to a whole number of the default core's step slots: the periods a
 /// machine can be configured with (the core runs periods in multiples of its `S`
 /// clocks, and the configuration refuses any other).
