@@ -99,9 +99,17 @@ def run(cmd, cwd=None, timeout=None, env=None):
     return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 
+def wasm_paths(script, cwd):
+    """The script with the project's absolute paths made relative to `cwd`: YoWASP's
+    Yosys resolves relative paths from its working directory anywhere, absolute ones only
+    under the root directories its runtime could preopen (not /tmp on this machine, where
+    a fresh clone may live)."""
+    return script.replace(str(ROOT), os.path.relpath(ROOT, cwd))
+
+
 def yosys(script, cwd):
     path = Path(cwd) / "script.ys"
-    path.write_text(script)
+    path.write_text(wasm_paths(script, cwd))
     r = run([YOSYS, "-q", "-s", "script.ys"], cwd=cwd)
     if r.returncode != 0:
         sys.exit(f"mutants-rtl: yosys failed in {cwd}:\n{r.stdout[-3000:]}{r.stderr[-3000:]}")
@@ -450,7 +458,7 @@ equiv_simple -seq 5
 equiv_induct -seq 5
 equiv_status -assert
 """
-    (work / "check.ys").write_text(script)
+    (work / "check.ys").write_text(wasm_paths(script, work))
     try:
         r = run([YOSYS, "-q", "-l", "check.log", "-s", "check.ys"], cwd=work, timeout=60)
     except subprocess.TimeoutExpired:
