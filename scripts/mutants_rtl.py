@@ -428,7 +428,9 @@ def equivalent(mut):
     the block (flattened) before and after the mutation, equiv_make / equiv_simple /
     equiv_induct; `equivalent` only when every matched signal is proven equal."""
     m = parse_mutation(mut["sim"])
-    work = OUT / "equiv" / f"m{mut['id']}"
+    # As deep below the project as the netlist's directory (OUT / "sim"): the cells carry
+    # the source path as read (wasm_paths), and the listed mutation names them.
+    work = OUT / f"equiv-m{mut['id']}"
     work.mkdir(parents=True, exist_ok=True)
     sources = sorted((ROOT / "hdl").glob("*.v"))
     read = f"read_verilog -I{ROOT}/build/gen " + " ".join(str(s) for s in sources)
