@@ -4,7 +4,7 @@ export VERILATOR ?= verilator
 
 .PHONY: conformance flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
         bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick \
-        linuxcnc linuxcnc-quick netlist netlist-quick mutants-rtl mutants-rtl-quick icarus icarus-quick
+        linuxcnc linuxcnc-quick netlist netlist-quick mutants-rtl mutants-rtl-quick icarus icarus-quick view-check
 
 all: test
 
@@ -69,6 +69,13 @@ icarus: setup
 # The quick slice of it in make test: a stream over SPI, an E-stop, the encoders and probe.
 icarus-quick: setup
 	@.venv/bin/python scripts/icarus_replay.py --quick
+
+# The 3-D view in a real browser (tests/view_browser.rs, about 20 s): `finestep view` and
+# `finestep run --view` on tests/view/pocket.ngc loaded by headless Chromium, the drawn
+# segments, bounding box and live state held against the CLI's figures, a screenshot
+# (target/view/view.png) checked for the path's pixels. `make test` runs it within cargo-test.
+view-check: setup
+	$(CARGO) test --release -p finestep-cli --test view_browser -- --nocapture
 
 # The ECP5 and iCE40 bitstreams and the MachXO2 fit, held to constraints/flow_limits.txt.
 flows: setup

@@ -75,6 +75,15 @@ pub fn save(source: &Path, path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Sets the configuration's feed profile from `--profile` (trapezoid or s-curve).
+pub fn set_profile(config: &mut MachineConfig, profile: Option<&str>) {
+    match profile {
+        Some("trapezoid") => config.profile = finestep_planner::ProfileKind::Trapezoid,
+        Some("s-curve") => config.profile = finestep_planner::ProfileKind::SCurve,
+        _ => {}
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

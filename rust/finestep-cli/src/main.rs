@@ -14,6 +14,7 @@ mod roller;
 mod run;
 mod selftest;
 mod sim_chip;
+mod view;
 
 use std::path::PathBuf;
 
@@ -62,6 +63,35 @@ enum Command {
         /// Where the plots go.
         #[arg(long, default_value = "target/run")]
         out: PathBuf,
+        /// Serve the 3-D view (programmed and executed path, live position, progress,
+        /// FIFO) on 127.0.0.1 during the run and after it, until Ctrl-C.
+        #[arg(long)]
+        view: bool,
+        /// The view's port (0: a free one, printed).
+        #[arg(long, default_value_t = 8020, requires = "view")]
+        port: u16,
+        /// With --fast: run at this many times real time, so the view can follow.
+        #[arg(long, requires = "view")]
+        pace: Option<f64>,
+    },
+    /// The 3-D view of a part program in the browser: the programmed path and the path of
+    /// its period records, coloured by feed, with a time scrubber; served on 127.0.0.1
+    /// until Ctrl-C.
+    View {
+        /// The part program.
+        file: PathBuf,
+        /// Machine configuration (TOML); the built-in machine when absent.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Override the configuration's feed profile.
+        #[arg(long, value_parser = ["trapezoid", "s-curve"])]
+        profile: Option<String>,
+        /// The port (0: a free one, printed).
+        #[arg(long, default_value_t = 8020)]
+        port: u16,
+        /// The page's directory (default: FINESTEP_WEB, else the checkout's web/).
+        #[arg(long)]
+        web: Option<PathBuf>,
     },
     /// Print finestep's canonical events for a part program (positions in the machine
     /// frame in mm), the form `conformance` compares with LinuxCNC's rs274.
@@ -205,8 +235,12 @@ enum ConfigAction {
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Demo { out, bus } => demo::run(&out, bus),
-        Command::Run { file, fast, bus, config, profile, out } => {
-            run::run(&file, fast, bus, config.as_deref(), profile.as_deref(), &out)
+        Command::Run { file, fast, bus, config, profile, out, view, port, pace } => {
+            let view = view.then_some(run::ViewOptions { port, pace, web: None });
+            run::run(&file, fast, bus, config.as_deref(), profile.as_deref(), &out, view.as_ref())
+        }
+        Command::View { file, config, profile, port, web } => {
+            view::view(&file, config.as_deref(), profile.as_deref(), port, web.as_deref())
         }
         Command::Bench { cycles, host_only, bus } => {
             if let Some(target) = bus {

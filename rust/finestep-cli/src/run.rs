@@ -7,19 +7,36 @@ use std::path::Path;
 
 use anyhow::{anyhow, bail, Context};
 use finestep_gcode::{Program, SpindleRotation};
+use finestep_host::regs::underrun_count;
 use finestep_host::stream::{self, RunReport, StreamEvent};
-use finestep_host::{Bus, Machine, Outputs, SpindleSetup};
+use finestep_host::{Bus, BusError, Machine, Outputs, SpindleSetup};
 use finestep_model::{Core, CoreInputs};
 use finestep_planner::config::Resolved;
 use finestep_planner::config::AXIS_NAMES;
 use finestep_planner::{
-    check_program, plan_program, CheckReport, IoAction, MachineConfig, PlannedProgram, ProfileKind, SpindleConfig,
+    check_program, plan_program, CheckReport, IoAction, MachineConfig, PlannedProgram, SpindleConfig,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::bus::BusTarget;
 use crate::machine_setup;
 use crate::plot::{plot_motion, plot_toolpath};
+use crate::view::{self, Live, Scene};
+
+/// `finestep run --view`: the 3-D view served during the run.
+#[derive(Clone, Debug, Default)]
+pub struct ViewOptions {
+    /// The port on 127.0.0.1 (0: a free one).
+    pub port: u16,
+    /// Run the fast path at this many times real time (the view follows it); as fast as
+    /// it goes without.
+    pub pace: Option<f64>,
+    /// The page's directory ([`view::web_dir`] without).
+    pub web: Option<std::path::PathBuf>,
+}
+
+/// How often a run under the view reads the chip back, s (wall clock).
+const VIEW_UPDATE_S: f64 = 0.05;
 
 const AXIS_UNITS: [&str; 4] = ["mm", "mm", "mm", "deg"];
 
@@ -59,22 +76,24 @@ fn print_check(report: &CheckReport) {
 /// records before it have run and the axes are at rest ([`stream::run_with_events`]).
 /// The spindle is set up from `spindle` when the program uses it; a chip built without
 /// the spindle or the logic outputs the program needs is refused before anything moves
-/// (`name`:line). `progress` gets the count of records queued.
+/// (`name`:line). `watch` is called with the chip and the count of records queued so far
+/// after every burst and every wait for room (`finestep run --view` reads the chip there).
 pub fn stream_planned<B: Bus>(
     chip: &mut Machine<B>,
     planned: &PlannedProgram,
     resolved: &Resolved,
     spindle: &SpindleConfig,
     name: &str,
-    mut progress: impl FnMut(u64),
+    mut watch: impl FnMut(&mut Machine<B>, u64) -> Result<(), BusError>,
 ) -> anyhow::Result<RunReport> {
     machine_setup::configure(chip, resolved)?;
     let config = machine_setup::stream_config(resolved);
-    let observe = |_: &mut Machine<B>, event: StreamEvent| {
+    let mut queued_so_far = 0;
+    let observe = |chip: &mut Machine<B>, event: StreamEvent| {
         if let StreamEvent::Queued { queued } = event {
-            progress(queued);
+            queued_so_far = queued;
         }
-        Ok(())
+        watch(chip, queued_so_far)
     };
     let streamed = if planned.events.is_empty() {
         stream::run(chip, planned.records.iter().copied(), &config, observe)?
@@ -134,22 +153,21 @@ pub fn run(
     config_path: Option<&Path>,
     profile: Option<&str>,
     out: &Path,
+    view: Option<&ViewOptions>,
 ) -> anyhow::Result<()> {
     let (mut config, config_name) = crate::config_file::load_or_builtin(config_path)?;
-    match profile {
-        Some("trapezoid") => config.profile = ProfileKind::Trapezoid,
-        Some("s-curve") => config.profile = ProfileKind::SCurve,
-        _ => {}
-    }
+    crate::config_file::set_profile(&mut config, profile);
     let bus = BusTarget::choose(bus, config.bus.as_deref(), &config_name)?;
     let program = finestep_gcode::parse_file(file)?;
-    run_program_on(&program, &file.display().to_string(), fast, &bus, config, &config_name, out)
+    run_program_on(&program, &file.display().to_string(), fast, &bus, config, &config_name, out, view)
 }
 
 /// Plans, checks, plots and runs `program` (named `name` in messages and plot files) on
 /// the machine `config` (named `config_name` in errors): on the chip on `bus`, whose
 /// CAPS and clock the configuration is resolved against, or with `fast` on the model's
-/// build (no chip).
+/// build (no chip). With `view`, the 3-D view is served during the run and after it, until
+/// the process ends.
+#[allow(clippy::too_many_arguments)]
 pub fn run_program_on(
     program: &Program,
     name: &str,
@@ -158,6 +176,7 @@ pub fn run_program_on(
     config: MachineConfig,
     config_name: &str,
     out: &Path,
+    view: Option<&ViewOptions>,
 ) -> anyhow::Result<()> {
     let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
     let clock_hz = machine_setup::expected_clock_hz(&config);
@@ -197,7 +216,90 @@ pub fn run_program_on(
     plot_motion(&motion, &report.samples, report.period_s)?;
     println!("  plots: {} {}", toolpath.display(), motion.display());
 
+    let source = if fast {
+        "the model's fast path".to_string()
+    } else if bus.is_lockstep() {
+        "the co-simulated chip (RTL in lockstep with the model), read back over SPI".to_string()
+    } else {
+        format!("the chip on {bus}, read back")
+    };
+    let viewer = match view {
+        None => None,
+        Some(options) => {
+            let scene = Scene::new(name, program, &config, &resolved, &planned, &report.samples)?;
+            let live = Live::default();
+            {
+                let mut state = live.lock();
+                state.source = source;
+                state.running = true;
+                state.periods = scene.periods;
+            }
+            let web = options.web.clone().unwrap_or_else(view::web_dir);
+            let server = view::serve(options.port, &web, &scene, live.clone())?;
+            println!("view-figures {}", scene.figures());
+            println!("  view: {} (follows the run)", server.url());
+            Some((server, live, options.pace.filter(|p| *p > 0.0)))
+        }
+    };
+    let result = run_records(&mut chip, &planned, &resolved, &config, name, fast, viewer.as_ref().map(|v| (&v.1, v.2)));
+    let result = result.and_then(|(positions, cycles)| {
+        report_end(&planned, &resolved, &positions, cycles, fast, bus)?;
+        if !report.passed() {
+            bail!("the checker found {} violations", report.violation_count);
+        }
+        Ok(())
+    });
+    if let Some((server, live, _)) = viewer {
+        {
+            let mut state = live.lock();
+            state.running = false;
+            state.done = true;
+            if let Err(error) = &result {
+                state.errors.push(format!("{error:#}"));
+            }
+            println!(
+                "view-final {}",
+                serde_json::json!({"period": state.period, "position": state.position, "errors": state.errors.len()})
+            );
+        }
+        if let Err(error) = &result {
+            eprintln!("Error: {error:#}");
+        }
+        println!("  view: the run has ended; still serving {} (Ctrl-C ends)", server.url());
+        server.wait();
+    }
+    result
+}
+
+/// The position of `steps` in units of `resolved`'s axes, x, y, z.
+fn units(resolved: &Resolved, steps: &[i32]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    for (axis, slot) in out.iter_mut().enumerate() {
+        if resolved.axes[axis].present {
+            *slot = f64::from(steps.get(axis).copied().unwrap_or(0)) / resolved.axes[axis].steps_per_unit;
+        }
+    }
+    out
+}
+
+/// Runs `planned`'s records on `chip` (or the model's fast path when `fast`), updating
+/// `live` (and pacing the fast path at its factor) when given: the steps moved per axis
+/// and the clock cycles.
+#[allow(clippy::too_many_arguments)]
+fn run_records<B: Bus>(
+    chip: &mut Option<Machine<B>>,
+    planned: &PlannedProgram,
+    resolved: &Resolved,
+    config: &MachineConfig,
+    name: &str,
+    fast: bool,
+    live: Option<(&Live, Option<f64>)>,
+) -> anyhow::Result<(Vec<i32>, u64)> {
+    let records = &planned.records;
+
     let period_clocks = resolved.period_clocks;
+    let started = std::time::Instant::now();
+    let mut last_update = f64::NEG_INFINITY;
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} periods {per_sec} {msg}")?);
     let drain = 2 * u64::from(period_clocks);
@@ -207,11 +309,11 @@ pub fn run_program_on(
             planned.events.len()
         );
     }
-    let (positions, cycles) = match &mut chip {
+    let (positions, cycles) = match chip {
         None => {
             let mut inputs = CoreInputs { run: true, period_clocks, rec_valid: true, ..Default::default() };
             for (axis, slot) in inputs.axes.iter_mut().enumerate().take(resolved.timing.len()) {
-                *slot = machine_setup::axis_config(&resolved, axis);
+                *slot = machine_setup::axis_config(resolved, axis);
             }
             let mut core = Core::new(machine_setup::model_core_params());
             let mut events = Vec::new();
@@ -223,27 +325,107 @@ pub fn run_program_on(
                     progress.set_position(index as u64);
                     progress.set_message(format!("line {}", planned.lines[index]));
                 }
+                if let Some((live, pace)) = live {
+                    if let Some(pace) = pace {
+                        let due = index as f64 * resolved.period_s / pace;
+                        let now = started.elapsed().as_secs_f64();
+                        if due > now {
+                            std::thread::sleep(std::time::Duration::from_secs_f64(due - now));
+                        }
+                    }
+                    let now = started.elapsed().as_secs_f64();
+                    if now - last_update >= VIEW_UPDATE_S {
+                        last_update = now;
+                        let steps = core.outputs().positions.map(|p| p as i32);
+                        let position = units(resolved, &steps);
+                        let mut state = live.lock();
+                        state.period = index as u64;
+                        state.queued = index as u64 + 1;
+                        state.position = position;
+                        state.trail.push([position[0], position[1], position[2], index as f64]);
+                    }
+                }
             }
             inputs.rec_valid = false;
             core.run_chunk_fast(&inputs, drain, &mut events);
-            (core.outputs().positions.map(|p| p as i32).to_vec(), core.cycle())
+            let steps = core.outputs().positions.map(|p| p as i32);
+            if let Some((live, _)) = live {
+                let position = units(resolved, &steps);
+                let mut state = live.lock();
+                state.period = records.len() as u64;
+                state.queued = records.len() as u64;
+                state.position = position;
+                state.trail.push([position[0], position[1], position[2], records.len() as f64]);
+            }
+            (steps.to_vec(), core.cycle())
         }
         Some(chip) => {
             // The program's origin is where the axes stand when it starts (a served chip
             // or a board keeps its positions from the run before).
             let start = chip.positions()?.steps;
-            let streamed = stream_planned(chip, &planned, &resolved, &config.spindle, name, |queued| {
+            let underruns_before = underrun_count::COUNT.get(chip.bus().read_one(underrun_count::ADDR)?);
+            let streamed = stream_planned(chip, planned, resolved, &config.spindle, name, |chip, queued| {
                 progress.set_position(queued);
                 if let Some(line) = planned.lines.get((queued as usize).saturating_sub(1)) {
                     progress.set_message(format!("line {line}"));
                 }
-            })?;
-            let moved = streamed.end.steps.iter().zip(start).map(|(end, start)| end.wrapping_sub(start));
-            (moved.collect(), streamed.cycles)
+                let Some((live, _)) = live else { return Ok(()) };
+                let now = started.elapsed().as_secs_f64();
+                if now - last_update < VIEW_UPDATE_S {
+                    return Ok(());
+                }
+                last_update = now;
+                let steps: Vec<i32> =
+                    chip.positions()?.steps.iter().zip(&start).map(|(p, s)| p.wrapping_sub(*s)).collect();
+                let (level, free) = chip.fifo()?;
+                let underruns = underrun_count::COUNT.get(chip.bus().read_one(underrun_count::ADDR)?);
+                let position = units(resolved, &steps);
+                let period = queued.saturating_sub(u64::from(level));
+                let mut state = live.lock();
+                state.queued = queued;
+                state.period = period;
+                state.fifo = Some([level, free]);
+                state.underruns = u64::from(underruns.wrapping_sub(underruns_before));
+                state.position = position;
+                state.trail.push([position[0], position[1], position[2], period as f64]);
+                Ok(())
+            });
+            let streamed = match streamed {
+                Ok(streamed) => streamed,
+                Err(error) => {
+                    progress.finish_and_clear();
+                    return Err(error);
+                }
+            };
+            let moved: Vec<i32> =
+                streamed.end.steps.iter().zip(start).map(|(end, start)| end.wrapping_sub(start)).collect();
+            if let Some((live, _)) = live {
+                let position = units(resolved, &moved);
+                let mut state = live.lock();
+                state.queued = records.len() as u64;
+                state.period = records.len() as u64;
+                state.fifo = Some([0, chip.caps().fifo_depth as u32]);
+                state.underruns = u64::from(streamed.stream.underruns);
+                state.position = position;
+                state.trail.push([position[0], position[1], position[2], records.len() as f64]);
+            }
+            (moved, streamed.cycles)
         }
     };
     progress.finish_and_clear();
+    Ok((positions, cycles))
+}
 
+/// Prints the end of a run: steps moved per axis against the programmed end; fails when
+/// an axis ended off it.
+fn report_end(
+    planned: &PlannedProgram,
+    resolved: &Resolved,
+    positions: &[i32],
+    cycles: u64,
+    fast: bool,
+    bus: &BusTarget,
+) -> anyhow::Result<()> {
     println!("  axis   steps moved   end position   programmed end   error");
     let mut worst = 0i64;
     for axis in (0..4).filter(|&a| resolved.axes[a].present) {
@@ -268,9 +450,6 @@ pub fn run_program_on(
     );
     if worst != 0 {
         bail!("the pulse train ended {worst} steps from the programmed end");
-    }
-    if !report.passed() {
-        bail!("the checker found {} violations", report.violation_count);
     }
     Ok(())
 }
@@ -350,7 +529,7 @@ mod tests {
         let program = finestep_gcode::parse_str(text, "io.ngc").unwrap();
         let planned = plan_program(&config, &program).unwrap();
         assert_eq!(planned.events.len(), 4);
-        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "io.ngc", |_| {}).unwrap();
+        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "io.ngc", |_, _| Ok(())).unwrap();
         assert_eq!(report.stream.underruns, 0);
         assert_eq!(report.end.steps[0], 3 * 800);
         let recorder = chip.bus().link_mut().target();
