@@ -86,15 +86,15 @@ impl Served {
     fn addr(&self) -> String {
         self.url.trim_start_matches("http://").trim_end_matches('/').to_string()
     }
+}
 
-    /// GET `path` from the server: the body.
-    fn get(&self, path: &str) -> String {
-        let mut stream = std::net::TcpStream::connect(self.addr()).unwrap();
-        write!(stream, "GET {path} HTTP/1.0\r\nHost: test\r\n\r\n").unwrap();
-        let mut text = String::new();
-        stream.read_to_string(&mut text).unwrap();
-        text.split_once("\r\n\r\n").map(|(_, body)| body.to_string()).unwrap_or_default()
-    }
+/// GET `path` from the server at `addr`: the body.
+fn get(addr: &str, path: &str) -> String {
+    let mut stream = std::net::TcpStream::connect(addr).unwrap();
+    write!(stream, "GET {path} HTTP/1.0\r\nHost: test\r\n\r\n").unwrap();
+    let mut text = String::new();
+    stream.read_to_string(&mut text).unwrap();
+    text.split_once("\r\n\r\n").map(|(_, body)| body.to_string()).unwrap_or_default()
 }
 
 impl Drop for Served {
@@ -107,7 +107,10 @@ impl Drop for Served {
 /// Runs headless Chromium on `url` with `extra` arguments (up to 90 s): its stdout.
 fn chromium(url: &str, extra: &[&str]) -> String {
     let binary = std::env::var("FINESTEP_CHROMIUM").unwrap_or_else(|_| "chromium".into());
-    let profile = std::env::temp_dir().join(format!("finestep-view-chromium-{}-{}", std::process::id(), extra.len()));
+    // A profile of its own for each browser (the two tests run side by side).
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let profile = std::env::temp_dir().join(format!("finestep-view-chromium-{}-{run}", std::process::id()));
     let window = format!("--window-size={},{}", WINDOW.0, WINDOW.1);
     let user_dir = format!("--user-data-dir={}", profile.display());
     let mut child = Command::new(&binary)
@@ -242,7 +245,7 @@ fn view_draws_the_programmed_and_executed_path() {
     check_screenshot(&shot, &figures);
 }
 
-/// `finestep run --fast --view --pace 1`: the server's state advances during the run, the
+/// `finestep run --fast --view --pace 0.5` (15 s): the server's state advances during the run, the
 /// page loaded mid-run shows it running, and the page loaded after it shows the end the
 /// CLI printed, with the positions read back on the way.
 #[test]
@@ -257,26 +260,33 @@ fn run_view_follows_the_run_live() {
         "--port",
         "0",
         "--pace",
-        "1",
+        "0.5",
         "--out",
         &out.display().to_string(),
     ]);
     let periods = served.figures["periods"].as_u64().unwrap();
+    // The server's state, polled every 100 ms from now to the end of the run.
+    let addr = served.addr();
+    let poller = std::thread::spawn(move || {
+        let mut seen = Vec::new();
+        let until = Instant::now() + Duration::from_secs(120);
+        while Instant::now() < until {
+            let state: serde_json::Value = serde_json::from_str(&get(&addr, "/state.json?since=0")).unwrap();
+            if state["done"].as_bool().unwrap() {
+                break;
+            }
+            seen.push(state["period"].as_u64().unwrap());
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        seen
+    });
     // The page while the run goes on.
     let during = dom_figures(&chromium(&served.url, &["--dump-dom"]));
     check_drawn(&during, &served.figures);
     let first = number(&during, "first-live-period");
     assert!(first < periods as f64, "the page first saw period {first} of {periods}: not during the run");
-    // The server's state advances.
-    let mut seen = Vec::new();
-    while seen.len() < 200 {
-        let state: serde_json::Value = serde_json::from_str(&served.get("/state.json?since=0")).unwrap();
-        if state["done"].as_bool().unwrap() {
-            break;
-        }
-        seen.push(state["period"].as_u64().unwrap());
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    // The server's state advanced.
+    let seen = poller.join().unwrap();
     assert!(seen.windows(2).all(|w| w[0] <= w[1]), "{seen:?}");
     assert!(seen.iter().collect::<std::collections::BTreeSet<_>>().len() >= 3, "the state did not advance: {seen:?}");
     // The end as the CLI printed it, on the page.
@@ -294,5 +304,10 @@ fn run_view_follows_the_run_live() {
     }
     let trail = number(&after, "trail-points");
     assert!(trail >= 10.0, "only {trail} positions read back during the run");
-    println!("  mid-run page at period {first} of {periods}; server periods seen {seen:?}; {trail} read-back points");
+    println!(
+        "  mid-run page at period {first} of {periods}; {} server states polled, periods {:?} to {:?}; {trail} read-back points",
+        seen.len(),
+        seen.first(),
+        seen.last()
+    );
 }
