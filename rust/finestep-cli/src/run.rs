@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Context};
-use finestep_gcode::{Program, SpindleRotation};
+use finestep_gcode::{BlockKind, Program, SpindleRotation};
 use finestep_host::regs::underrun_count;
 use finestep_host::stream::{self, RunReport, StreamEvent};
 use finestep_host::{Bus, BusError, Machine, Outputs, SpindleSetup};
@@ -20,7 +20,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::bus::BusTarget;
 use crate::machine_setup;
-use crate::plot::{plot_motion, plot_toolpath};
+use crate::plot::{plot_motion, plot_toolpath, MotionLimits};
 use crate::view::{self, Live, Scene};
 
 /// `finestep run --view`: the 3-D view served during the run.
@@ -212,8 +212,11 @@ pub fn run_program_on(
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let toolpath = out.join(format!("{stem}-toolpath.png"));
     let motion = out.join(format!("{stem}-motion.png"));
-    plot_toolpath(&toolpath, &report.samples)?;
-    plot_motion(&motion, &report.samples, report.period_s)?;
+    let scene = Scene::new(name, program, &config, &resolved, &planned, &report.samples)?;
+    let programmed: Vec<[f64; 3]> =
+        scene.programmed.points.chunks(3).map(|p| [f64::from(p[0]), f64::from(p[1]), f64::from(p[2])]).collect();
+    plot_toolpath(&toolpath, &programmed, &report.samples)?;
+    plot_motion(&motion, &report.samples, report.period_s, &motion_limits(program, &planned, &report))?;
     println!("  plots: {} {}", toolpath.display(), motion.display());
 
     let source = if fast {
@@ -226,7 +229,6 @@ pub fn run_program_on(
     let viewer = match view {
         None => None,
         Some(options) => {
-            let scene = Scene::new(name, program, &config, &resolved, &planned, &report.samples)?;
             let live = Live::default();
             {
                 let mut state = live.lock();
@@ -269,6 +271,29 @@ pub fn run_program_on(
         server.wait();
     }
     result
+}
+
+/// The motion plot's limits: the programmed feed of the block each period runs on, and the
+/// norms of the present axes' acceleration and jerk limits (the checker's path bounds).
+fn motion_limits(program: &Program, planned: &PlannedProgram, report: &CheckReport) -> MotionLimits {
+    let feeds: std::collections::HashMap<usize, f64> = program
+        .blocks
+        .iter()
+        .filter_map(|b| match b.kind {
+            BlockKind::Linear { feed_mm_per_min, .. }
+            | BlockKind::Arc { feed_mm_per_min, .. }
+            | BlockKind::Nurbs { feed_mm_per_min, .. } => Some((b.line, feed_mm_per_min / 60.0)),
+            _ => None,
+        })
+        .collect();
+    let norm = |k: usize| -> f64 {
+        (0..4).filter(|&a| report.axis_present[a]).map(|a| report.axis_limit[a][k].powi(2)).sum::<f64>().sqrt()
+    };
+    MotionLimits {
+        feed: planned.lines.iter().map(|line| feeds.get(line).copied().unwrap_or(f64::NAN)).collect(),
+        acceleration: norm(1),
+        jerk: norm(2),
+    }
 }
 
 /// The position of `steps` in units of `resolved`'s axes, x, y, z.
