@@ -70,7 +70,7 @@ icarus: setup
 icarus-quick: setup
 	@.venv/bin/python scripts/icarus_replay.py --quick
 
-# The 3-D view in a real browser (tests/view_browser.rs, about 20 s): `finestep view` and
+# The 3-D view in a real browser (tests/view_browser.rs, about 35 s): `finestep view` and
 # `finestep run --view` on tests/view/pocket.ngc loaded by headless Chromium, the drawn
 # segments, bounding box and live state held against the CLI's figures, a screenshot
 # (target/view/view.png) checked for the path's pixels. `make test` runs it within cargo-test.

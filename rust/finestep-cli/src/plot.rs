@@ -191,7 +191,12 @@ pub fn plot_toolpath(
             .draw_series(far.map(|(p, _)| Circle::new(pick(p), 3, COLOURS[1].filled())))?
             .label("farthest from the programmed path")
             .legend(|(x, y)| Circle::new((x + 10, y), 3, COLOURS[1].filled()));
-        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
     }
     root.present().with_context(|| format!("writing {}", path.display()))?;
     Ok(())
