@@ -382,6 +382,9 @@ module encoder_bank #(
         // A copy asked for is taken at the channel's next visit: pending until then.
         if ($past(latch_now) && !($past(visit) && $past(ch_i) == 0)) assert (latch_pending_reg[0]);
         if ($past(probe_event)) assert (!probe_armed_reg || $past(probe_arm));
+        // The probe's time and positions are those of the event's cycle, held until the next.
+        if ($past(probe_event)) assert (probe_time == $past(timestamp) && probe_position == $past(position));
+        else assert (probe_time == $past(probe_time) && probe_position == $past(probe_position));
         cover ($past(copy_latch) && $past(v_count) != 32'd0);
         cover ($past(stall));
         cover ($past(copy_probe) && $past(v_count) != 32'd0);

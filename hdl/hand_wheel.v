@@ -142,7 +142,7 @@ module hand_wheel #(
         else if (!primed_reg) f_phase0 <= {b_next, a_next ^ b_next};
     end
     always @(*) if (f_past_valid && !rst) begin
-        if (!primed_reg) assert (count_reg == 32'd0 && !illegal_reg && f_clean);
+        if (!primed_reg) assert (count == 32'd0 && !illegal && illegal_count == 16'd0 && f_clean);
         if (f_clean && primed_reg) assert (count_reg[1:0] == f_phase - f_phase0);
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
@@ -150,6 +150,12 @@ module hand_wheel #(
         if ($past(sample)) assert (presc_reg == $past(prescale));
         else assert (presc_reg == $past(presc_reg) - 16'd1);
         assert (detents == $past(detents) || detents == $past(detents) + 32'd1 || detents == $past(detents) - 32'd1);
+        // The illegal-transition counter: one more per illegal transition up to 0xFFFF,
+        // then held; CLEAR_COUNTERS zeroes it (and wins).
+        if ($past(clear_counters)) assert (illegal_count == 16'd0);
+        else if ($past(illegal_event) && ($past(illegal_count) < 16'hFFFF))
+            assert ({16'd0, illegal_count} == {16'd0, $past(illegal_count)} + 32'd1);
+        else assert (illegal_count == $past(illegal_count));
         cover (detents == 32'd1);
         cover (detents == 32'hFFFF_FFFF);
     end

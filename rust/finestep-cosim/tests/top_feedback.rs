@@ -4,7 +4,7 @@
 //! through the jog within its limits; the jog and a FIFO run exclude each other; faults
 //! outside the filter's specification are flagged, never silent.
 
-use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0};
+use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0, IN_MPG_A, IN_MPG_B};
 use finestep_host::regs::{control, fifo_level, jog_control, jog_velocity, period_count, probe_status, status};
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
@@ -274,6 +274,68 @@ fn rated_count_rates() {
         assert_eq!(machine.feedback().unwrap().counts[2], 0);
         assert_eq!(machine.encoder_errors(2).unwrap(), (false, 0));
     }
+}
+
+/// The counters' far ends, driven straight at the pins: the hand wheel's count and
+/// detents through 300 detents forward and 700 back (past 64, 128 and 256 detents, zero and
+/// back, so every bit of the detent count moves), and both illegal-transition counters
+/// saturating at 0xFFFF after 65 540 illegal transitions (A and B changing on one sample),
+/// then cleared. The expectations are the plain arithmetic of the edges driven; RTL and
+/// model are in lockstep on every read (an RTL mutation of a high bit of these counters
+/// survived every other test).
+#[test]
+fn counters_reach_their_far_ends() {
+    const ILLEGAL: u64 = 65_540;
+    let plant = Plant::new(PlantConfig::default(), 0).unwrap();
+    let mut machine = connect("counters_reach_their_far_ends", plant);
+    let host_pins = machine.bus().link().inputs();
+    // (A, B) in the forward order 00 -> 10 -> 11 -> 01.
+    let states = [(0u64, 0u64), (1, 0), (1, 1), (0, 1)];
+    let drive = |machine: &mut Chip, pins: u64, clocks: u64| {
+        machine.bus().link_mut().target_mut().drive(host_pins | pins, clocks).unwrap();
+    };
+    // The hand wheel: sampled every clock, a level taken after one sample; each state held
+    // 4 clocks. From reset the pins rest at phase 0, which the first sample adopts as count 0;
+    // the reset's sampling interval (500 clocks) runs out before the new one starts.
+    machine.configure_hand_wheel(0, 1).unwrap();
+    machine.bus().wait(600).unwrap();
+    let wheel = |phase: i64| {
+        let (a, b) = states[phase.rem_euclid(4) as usize];
+        a << IN_MPG_A | b << IN_MPG_B
+    };
+    let mut phase = 0i64;
+    for target in [4 * 300, -4 * 400] {
+        while phase != target {
+            phase += (target - phase).signum();
+            drive(&mut machine, wheel(phase), 4);
+        }
+        drive(&mut machine, wheel(phase), 40);
+        let state = machine.hand_wheel().unwrap();
+        assert_eq!(i64::from(state.edges), phase, "{state:?}");
+        assert_eq!(i64::from(state.detents), (phase + 2).div_euclid(4), "{state:?}");
+        assert_eq!((state.illegal, state.illegal_count), (false, 0), "{state:?}");
+    }
+    // Illegal transitions on both, (A, B) between 00 and 11 (the wheel rests at phase 0):
+    // the wheel's and the encoder channel 2's, each state held a sample and a filter length.
+    machine.set_encoder_prescale(0).unwrap();
+    machine.configure_encoder(2, &EncoderSetup { filter: 1, ..EncoderSetup::default() }).unwrap();
+    machine.bus().wait(40).unwrap();
+    let hold = slots() + 1;
+    for k in 0..ILLEGAL {
+        let both = if k % 2 == 0 { 1u64 } else { 0 };
+        let pins = both << IN_MPG_A | both << IN_MPG_B | both << (IN_ENC_A0 + 2) | both << (IN_ENC_B0 + 2);
+        drive(&mut machine, pins, hold);
+    }
+    drive(&mut machine, 0, 40);
+    let state = machine.hand_wheel().unwrap();
+    assert_eq!((state.illegal, state.illegal_count), (true, 0xFFFF), "{state:?}");
+    assert_eq!(i64::from(state.edges), phase, "illegal transitions count nothing: {state:?}");
+    assert_eq!(machine.encoder_errors(2).unwrap(), (true, 0xFFFF));
+    assert_eq!(machine.feedback().unwrap().counts[2], 0);
+    machine.clear_counters().unwrap();
+    machine.bus().wait(20).unwrap();
+    assert_eq!(machine.hand_wheel().unwrap().illegal_count, 0);
+    assert_eq!(machine.encoder_errors(2).unwrap().1, 0);
 }
 
 /// The index of a rotary encoder latches and then clears the count, one-shot each.
