@@ -58,8 +58,16 @@ fn events(file: &Path, options: &Options, radii: &ToolTable) -> Result<Vec<Event
 }
 
 /// Prints finestep's canonical events for `file`, one a line.
-pub fn canon(file: &Path, tool_table: Option<&Path>) -> anyhow::Result<()> {
-    let program = finestep_gcode::parse_file_with(file, &options(tool_table)?)?;
+/// With `var`, the parameter file is read before and written back after, as `rs274 -v`.
+pub fn canon(file: &Path, tool_table: Option<&Path>, var: Option<&Path>) -> anyhow::Result<()> {
+    let mut options = options(tool_table)?;
+    if let Some(var) = var {
+        options.parameters = crate::parameter_file::load(var)?;
+    }
+    let (program, parameters) = finestep_gcode::parse_file_with_parameters(file, &options)?;
+    if let Some(var) = var {
+        crate::parameter_file::save(var, &parameters)?;
+    }
     let program = compensate(&program, &radii(tool_table)?)?;
     for event in events_of(&program) {
         println!("{event}");

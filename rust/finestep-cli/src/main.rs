@@ -9,6 +9,7 @@ mod conformance;
 mod demo;
 mod demo_feedback;
 mod machine_setup;
+mod parameter_file;
 mod plot;
 mod roller;
 mod run;
@@ -101,6 +102,10 @@ enum Command {
         /// A LinuxCNC tool table (lengths in inches, as rs274 reads it), for G43.
         #[arg(long)]
         tool_table: Option<PathBuf>,
+        /// A LinuxCNC parameter file (lengths in inches), read before the program and
+        /// written back after it, as `rs274 -v FILE` does.
+        #[arg(long)]
+        var: Option<PathBuf>,
     },
     /// Compare finestep's interpretation with rs274's outputs listed in MANIFEST (lines
     /// `exit-status<TAB>program.ngc<TAB>rs274-output`, as scripts/conformance.sh writes).
@@ -253,7 +258,9 @@ fn main() -> anyhow::Result<()> {
             }
         }
         Command::PlanMemory { case } => bench::plan_memory(&case),
-        Command::GcodeCanon { file, tool_table } => conformance::canon(&file, tool_table.as_deref()),
+        Command::GcodeCanon { file, tool_table, var } => {
+            conformance::canon(&file, tool_table.as_deref(), var.as_deref())
+        }
         Command::Conformance { manifest, out, tool_table } => conformance::run(&manifest, &out, tool_table.as_deref()),
         Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
         Command::Selftest { bus, loopback } => selftest::run(bus, loopback),

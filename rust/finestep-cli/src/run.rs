@@ -158,7 +158,20 @@ pub fn run(
     let (mut config, config_name) = crate::config_file::load_or_builtin(config_path)?;
     crate::config_file::set_profile(&mut config, profile);
     let bus = BusTarget::choose(bus, config.bus.as_deref(), &config_name)?;
-    let program = finestep_gcode::parse_file(file)?;
+    // LinuxCNC's parameter file: the program starts from what the last one left, and its
+    // persistent parameters are written back once the interpreter has reached the
+    // program's end (as LinuxCNC's interpreter does at M2/M30), before the motion runs: a
+    // `--view` run serves its page until the process ends.
+    let parameter_file = crate::parameter_file::path_of(config.parameter_file.as_deref(), config_path);
+    let mut options = finestep_gcode::Options::default();
+    if let Some(path) = &parameter_file {
+        options.parameters = crate::parameter_file::load(path)?;
+    }
+    let (program, parameters) = finestep_gcode::parse_file_with_parameters(file, &options)?;
+    if let Some(path) = &parameter_file {
+        let generation = crate::parameter_file::save(path, &parameters)?;
+        println!("  parameters: {} written (generation {generation})", path.display());
+    }
     run_program_on(&program, &file.display().to_string(), fast, &bus, config, &config_name, out, view)
 }
 

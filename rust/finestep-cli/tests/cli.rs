@@ -106,3 +106,44 @@ fn a_configuration_is_resolved_against_the_chips_caps_and_clock() {
     let (ok, text) = finestep(&["run", "--fast", "--config", &config, &program("contour.ngc")]);
     assert!(!ok && text.contains("clock_hz: 48000000 Hz"), "{text}");
 }
+
+#[test]
+fn the_parameter_file_carries_offsets_from_one_run_to_the_next() {
+    // The configuration names a parameter file beside it (relative to its folder), not
+    // yet there: the first run starts from G54 without offsets, sets G55's offsets by
+    // G10 L2 and writes them back at its end (M2 puts G54 back in force, as LinuxCNC's
+    // does: #5220 is 1); the second run finds them there.
+    let dir = std::env::temp_dir().join(format!("finestep-cli-var-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let var = dir.join("machine.var");
+    let _ = std::fs::remove_file(&var);
+    let config = dir.join("machine.toml");
+    std::fs::write(&config, "parameter_file = \"machine.var\"\n").unwrap();
+    let first = dir.join("first.ngc");
+    std::fs::write(&first, "G10 L2 P2 X10 Y-2\nG55\nG0 X1\nM2\n").unwrap();
+    let second = dir.join("second.ngc");
+    std::fs::write(&second, "G55 G0 X2 Y0\n#<g55x> = #5241\nG0 X[#<g55x> / 5]\nM30\n").unwrap();
+    let out = dir.join("out").display().to_string();
+    let config = config.display().to_string();
+    let (ok, text) = finestep(&["run", "--fast", "--config", &config, "--out", &out, &first.display().to_string()]);
+    assert!(ok, "{text}");
+    assert!(text.contains("does not exist yet") && text.contains("machine.var written (generation 1)"), "{text}");
+    let stored = std::fs::read_to_string(&var).unwrap();
+    for line in ["5220\t1.000000\n", "5241\t10.000000\n", "5242\t-2.000000\n", "5221\t0.000000\n"] {
+        assert!(stored.contains(line), "{line:?} in {stored}");
+    }
+    // LinuxCNC's format with the store's seal as a last comment line.
+    assert!(stored.lines().last().unwrap().starts_with("# finestep-store v1 "), "{stored}");
+    // The second run: G55 as the first left it (X 2 + 10, Y 0 - 2), then X 10 / 5 + 10.
+    let (ok, text) = finestep(&["run", "--fast", "--config", &config, "--out", &out, &second.display().to_string()]);
+    assert!(ok, "{text}");
+    assert!(text.contains("generation 2"), "{text}");
+    let end = |axis: &str| {
+        let mut rows = text.lines().skip_while(|l| !l.contains("steps moved"));
+        let row = rows.find(|l| l.trim_start().starts_with(&format!("{axis} "))).unwrap();
+        row.split_whitespace().nth(4).unwrap().parse::<f64>().unwrap()
+    };
+    assert_eq!((end("X"), end("Y")), (12.0, -2.0), "{text}");
+    assert!(std::fs::read_to_string(&var).unwrap().contains("5241\t10.000000\n"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

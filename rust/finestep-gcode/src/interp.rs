@@ -1028,6 +1028,9 @@ impl State {
             } else {
                 kinds.push(BlockKind::End);
                 end = true;
+                // M2/M30 put G54 back in force (LinuxCNC's reset: #5220 is 1 in the
+                // parameter file written after it).
+                self.select_system(0);
             }
         }
         let modal = w.group(Group::ModalState).map(|(code, _)| match code {

@@ -596,6 +596,12 @@ fn parameter_file_sets_the_offsets_in_force_and_comes_back_as_rs274_writes_it() 
     let (_, parameters) = parse_str_with_parameters("G0 X1\n", FILE, &Options::default()).unwrap();
     assert_eq!(parameters.values.len(), 119);
     assert!(parameters.values.iter().all(|(&n, &v)| v == if n == 5220 { 1.0 } else { 0.0 }));
+    // M2 and M30 put G54 back in force, as rs274's M2 does (`G55`, `M2`: #5220 is 1 in
+    // the file rs274 -v writes); a program stopped before its end leaves G55.
+    for (source, system) in [("G55\nM2\n", 1.0), ("G55\nM30\n", 1.0), ("G55\nG0 X1\n", 2.0)] {
+        let (_, parameters) = parse_str_with_parameters(source, FILE, &Options::default()).unwrap();
+        assert_eq!(parameters.values[&5220], system, "{source:?}");
+    }
 }
 
 #[test]

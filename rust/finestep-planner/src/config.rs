@@ -9,6 +9,8 @@
 //! path_tolerance_mm = 0.01      # G64 without P
 //! chord_tolerance_mm = 0.001    # arcs: largest chord-to-circle distance
 //! lookahead_moves = 2000        # every move is planned seeing at least this many ahead
+//! parameter_file = "sim.var"    # LinuxCNC's parameter file: read before a program, the
+//!                               # persistent parameters written back at its end (none)
 //!
 //! [drive]                       # step/dir timing of every axis, ns
 //! step_len_ns = 2000
@@ -142,6 +144,11 @@ pub struct MachineConfig {
     /// `spidev:/dev/spidevB.C[@SCK_HZ]`, `sim:SOCKET`); `--bus` overrides it. The planner
     /// does not read it.
     pub bus: Option<String>,
+    /// LinuxCNC's parameter file (its `[RS274NGC]PARAMETER_FILE`, e.g. `sim.var`):
+    /// `finestep run` reads it before the program and writes the persistent parameters
+    /// back, crash-safe, when the program has run to its end. A relative path is taken
+    /// from the configuration file's folder. The planner does not read it.
+    pub parameter_file: Option<std::path::PathBuf>,
     /// The core the configuration is resolved against (not read from the file; see
     /// [`MachineConfig::for_core`]): the default build's unless set.
     #[serde(skip)]
@@ -292,6 +299,7 @@ impl Default for MachineConfig {
             chord_tolerance_mm: 0.001,
             lookahead_moves: 2000,
             bus: None,
+            parameter_file: None,
             measure: MeasureConfig::default(),
             spindle: SpindleConfig::default(),
             drive: DriveTimingNs::default(),
