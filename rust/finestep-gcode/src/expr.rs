@@ -361,10 +361,7 @@ pub(crate) fn read_value(s: &mut Chars, word: What, depth: usize) -> Result<Expr
 /// (they read the machine's INI file and HAL pins, which a part program alone lacks).
 pub(crate) fn read_parameter_name(s: &mut Chars, column: usize) -> Result<String, LineError> {
     let name = read_name(s)?;
-    for (prefix, why) in [
-        ("_ini[", "finestep reads no LinuxCNC INI file; give the value in the program"),
-        ("_hal[", "finestep reads no HAL pins"),
-    ] {
+    for (prefix, why) in [("_ini[", crate::unsupported::INI), ("_hal[", crate::unsupported::HAL)] {
         if name.starts_with(prefix) {
             return Err(LineError::new(column, format!("unsupported: #<{prefix}...]> ({why})")));
         }
@@ -420,9 +417,7 @@ fn read_number(s: &mut Chars, word: What) -> Result<f64, LineError> {
     if adjacent && s.peek() == Some('e') && s.peek_at(1).is_some_and(|c| c.is_ascii_digit() || c == '-' || c == '+') {
         return Err(LineError::new(
             s.column(),
-            format!(
-                "unsupported: exponent in the number of {word} (G-code numbers have no exponent: write the digits)"
-            ),
+            format!("unsupported: exponent in the number of {word} ({})", crate::unsupported::EXPONENT),
         ));
     }
     // Digits and the point are ASCII: a short number parses from a stack buffer.

@@ -3,6 +3,7 @@
 
 use crate::error::LineError;
 use crate::lexer::Word;
+use crate::unsupported;
 use crate::{nurbs_knots, BlockKind, CompSide, NurbsPoint, PathControl, Plane, Point, SpindleRotation};
 
 /// Millimetres per inch.
@@ -227,42 +228,6 @@ fn m_group(code: u32) -> Option<Group> {
     })
 }
 
-/// Why a G-code LinuxCNC knows is refused.
-fn g_unsupported(value: f64) -> String {
-    let tenths = (value * 10.0).round() as i64;
-    let why = match tenths {
-        330 | 331 | 760 | 840 | 740 | 842 | 843 => {
-            "spindle-synchronised motion needs the spindle feedback finestep does not have yet"
-        }
-        382..=385 => "probing needs a probe input, which finestep does not read",
-        70 => "lathe diameter mode is not implemented yet",
-        50 => "G5 cubic splines are not implemented yet (G5.1, G5.2/G5.3 are)",
-        411 | 421 => "dynamic cutter compensation is not implemented yet",
-        432 => "G43.2 is not implemented yet",
-        700..=720 => "lathe roughing cycles are not implemented yet",
-        860 | 870 | 880 => "canned cycles that stop or reverse the spindle are not implemented yet",
-        610 if false => "",
-        611 => "G61.1 is not implemented yet",
-        930 | 950 => "inverse-time and per-revolution feed are not implemented yet",
-        960 => "constant surface speed is not implemented yet",
-        _ => "not a G-code finestep implements",
-    };
-    format!("unsupported: G{value} ({why})")
-}
-
-/// Why an M-code is refused.
-fn m_unsupported(value: f64) -> String {
-    let why = match value as i64 {
-        19 => "spindle orientation is not implemented yet",
-        48..=53 => "override switches are not implemented yet",
-        60 => "pallet shuttle is not implemented",
-        62..=68 => "digital and analog I/O is not implemented yet",
-        100..=199 => "user M-codes run external programs, which finestep does not",
-        _ => "not an M-code finestep implements",
-    };
-    format!("unsupported: M{value} ({why})")
-}
-
 /// `G2`, `G90.1`: a code in tenths as written.
 fn g_name(code: Code) -> String {
     match (code / 10, code % 10) {
@@ -331,11 +296,11 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 let tenths = value * 10.0;
                 let code = (tenths.round() == tenths).then(|| as_u32(tenths)).flatten();
                 let group = code.and_then(|c| g_group(c).map(|g| (c, g)));
-                group.ok_or_else(|| LineError::new(column, g_unsupported(value)))?
+                group.ok_or_else(|| LineError::new(column, unsupported::g_code(value)))?
             }
             'M' => {
                 let group = as_u32(value).and_then(|c| m_group(c).map(|g| (c * 10, g)));
-                group.ok_or_else(|| LineError::new(column, m_unsupported(value)))?
+                group.ok_or_else(|| LineError::new(column, unsupported::m_code(value)))?
             }
             l if PARAMS.contains(l) => {
                 let slot = &mut out.params[letter_index(l)];
@@ -346,18 +311,9 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 continue;
             }
             'B' | 'C' | 'U' | 'V' | 'W' => {
-                return Err(LineError::new(
-                    column,
-                    format!("unsupported: axis {letter} (finestep drives the axes X Y Z A)"),
-                ))
+                return Err(LineError::new(column, format!("unsupported: axis {letter} ({})", unsupported::AXIS)))
             }
-            'E' => {
-                return Err(LineError::new(
-                    column,
-                    "unsupported: word E (LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not \
-                     implement)",
-                ))
-            }
+            'E' => return Err(LineError::new(column, format!("unsupported: word E ({})", unsupported::WORD_E))),
             l => return Err(LineError::new(column, format!("unknown word {l}"))),
         };
         let (code, group) = coded;
@@ -842,7 +798,7 @@ impl State {
             if plane != Plane::Xy && self.comp != CompSide::Off {
                 return Err(LineError::new(
                     column,
-                    "unsupported: plane change while cutter compensation is on (finestep compensates in G17 only)",
+                    format!("unsupported: plane change while cutter compensation is on ({})", unsupported::COMP_PLANE),
                 ));
             }
             self.plane = plane;
@@ -867,7 +823,7 @@ impl State {
             if side != CompSide::Off && self.plane != Plane::Xy {
                 return Err(LineError::new(
                     column,
-                    "unsupported: cutter compensation in G18/G19 (finestep compensates in G17 only)",
+                    format!("unsupported: cutter compensation in G18/G19 ({})", unsupported::COMP_PLANE),
                 ));
             }
             let tool = match w.param('D') {
@@ -1456,7 +1412,7 @@ impl State {
                     if k == 20 {
                         return Err(LineError::new(
                             column,
-                            "unsupported: G10 L20 R (rotation with L20 is not implemented)",
+                            format!("unsupported: G10 L20 R ({})", unsupported::G10_L20_R),
                         ));
                     }
                     self.rotation_deg[system] = r;
@@ -1465,12 +1421,7 @@ impl State {
                     self.select_system(system);
                 }
             }
-            _ => {
-                return Err(LineError::new(
-                    l_column,
-                    format!("unsupported: G10 L{l} (only L1, L2 and L20 are implemented)"),
-                ))
-            }
+            _ => return Err(LineError::new(l_column, format!("unsupported: G10 L{l} ({})", unsupported::G10_L))),
         }
         Ok(())
     }
@@ -1487,7 +1438,7 @@ impl State {
         if self.plane != Plane::Xy {
             return Err(LineError::new(
                 column,
-                format!("unsupported: {name} in G18/G19 (canned cycles are implemented in G17 only)"),
+                format!("unsupported: {name} in G18/G19 ({})", unsupported::CYCLE_PLANE),
             ));
         }
         if self.comp != CompSide::Off {

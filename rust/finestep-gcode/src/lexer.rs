@@ -218,7 +218,7 @@ pub(crate) fn lex_into(
             '$' => {
                 return Err(LineError::new(
                     column,
-                    "unsupported: $ spindle selection (finestep drives one spindle: leave $ out)",
+                    format!("unsupported: $ spindle selection ({})", crate::unsupported::SPINDLE_SELECTION),
                 ))
             }
             c => return Err(LineError::new(column, format!("unexpected character {c:?}"))),

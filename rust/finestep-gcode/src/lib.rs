@@ -77,6 +77,7 @@ mod interp;
 mod lexer;
 mod persistent;
 mod program;
+pub mod unsupported;
 
 use std::path::Path;
 

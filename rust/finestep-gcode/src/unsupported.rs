@@ -1,0 +1,97 @@
+//! What finestep refuses of LinuxCNC's dialect, and why: every `unsupported: <what>
+//! (<why>)` message the interpreter gives takes its reason from here, and the list in
+//! docs/gcode.md ("What is refused") is held to this table by a test
+//! (`tests/unsupported.rs`): each row of the list is refused with its exact message at
+//! its `file:line:col`, and every reason here has a row.
+
+/// G-codes LinuxCNC knows and finestep refuses, in tenths (G38.2 is 382), with why.
+pub const G_CODES: &[(&[u32], &str)] = &[
+    (&[330, 331, 740, 760, 840], "spindle-synchronised motion needs the spindle feedback finestep does not have yet"),
+    (&[382, 383, 384, 385], "probing needs a probe input, which finestep does not read"),
+    (&[70], "lathe diameter mode is not implemented yet"),
+    (&[50], "G5 cubic splines are not implemented yet (G5.1, G5.2/G5.3 are)"),
+    (&[411, 421], "dynamic cutter compensation is not implemented yet"),
+    (&[432], "G43.2 is not implemented yet"),
+    (&[700, 710, 711, 712, 720, 721, 722], "lathe roughing cycles are not implemented yet"),
+    (&[860, 870, 880], "canned cycles that stop or reverse the spindle are not implemented yet"),
+    (&[611], "G61.1 is not implemented yet"),
+    (&[930, 950], "inverse-time and per-revolution feed are not implemented yet"),
+    (&[960], "constant surface speed is not implemented yet"),
+];
+
+/// Any other G number.
+pub const G_OTHER: &str = "not a G-code finestep implements";
+
+/// M-codes LinuxCNC knows and finestep refuses (first, last), with why.
+pub const M_CODES: &[(u32, u32, &str)] = &[
+    (19, 19, "spindle orientation is not implemented yet"),
+    (48, 53, "override switches are not implemented yet"),
+    (60, 60, "pallet shuttle is not implemented"),
+    (62, 68, "digital and analog I/O is not implemented yet"),
+    (100, 199, "user M-codes run external programs, which finestep does not"),
+];
+
+/// Any other M number.
+pub const M_OTHER: &str = "not an M-code finestep implements";
+
+/// `unsupported: axis B`, C, U, V, W.
+pub const AXIS: &str = "finestep drives the axes X Y Z A";
+/// `unsupported: word E`.
+pub const WORD_E: &str = "LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not implement";
+/// `unsupported: $ spindle selection`.
+pub const SPINDLE_SELECTION: &str = "finestep drives one spindle: leave $ out";
+/// `unsupported: #<_ini[...]>`.
+pub const INI: &str = "finestep reads no LinuxCNC INI file; give the value in the program";
+/// `unsupported: #<_hal[...]>`.
+pub const HAL: &str = "finestep reads no HAL pins";
+/// `unsupported: exponent in the number of ...`.
+pub const EXPONENT: &str = "G-code numbers have no exponent: write the digits";
+/// `unsupported: cutter compensation in G18/G19` and `plane change while cutter
+/// compensation is on`.
+pub const COMP_PLANE: &str = "finestep compensates in G17 only";
+/// `unsupported: G81 in G18/G19` (every canned cycle).
+pub const CYCLE_PLANE: &str = "canned cycles are implemented in G17 only";
+/// `unsupported: G10 L20 R`.
+pub const G10_L20_R: &str = "rotation with L20 is not implemented";
+/// `unsupported: G10 L10` and every other L but 1, 2 and 20.
+pub const G10_L: &str = "only L1, L2 and L20 are implemented";
+
+/// Every reason above, once.
+pub fn reasons() -> Vec<&'static str> {
+    let mut all: Vec<&'static str> = G_CODES.iter().map(|&(_, why)| why).collect();
+    all.extend(M_CODES.iter().map(|&(_, _, why)| why));
+    all.extend([
+        G_OTHER,
+        M_OTHER,
+        AXIS,
+        WORD_E,
+        SPINDLE_SELECTION,
+        INI,
+        HAL,
+        EXPONENT,
+        COMP_PLANE,
+        CYCLE_PLANE,
+        G10_L20_R,
+        G10_L,
+    ]);
+    all
+}
+
+/// The message for a G number LinuxCNC knows or not.
+pub(crate) fn g_code(value: f64) -> String {
+    let tenths = (value * 10.0).round();
+    let why = G_CODES
+        .iter()
+        .find(|(codes, _)| (value * 10.0 == tenths) && codes.iter().any(|&c| f64::from(c) == tenths))
+        .map_or(G_OTHER, |&(_, why)| why);
+    format!("unsupported: G{value} ({why})")
+}
+
+/// The message for an M number.
+pub(crate) fn m_code(value: f64) -> String {
+    let why = M_CODES
+        .iter()
+        .find(|&&(first, last, _)| value.fract() == 0.0 && (f64::from(first)..=f64::from(last)).contains(&value))
+        .map_or(M_OTHER, |&(_, _, why)| why);
+    format!("unsupported: M{value} ({why})")
+}
