@@ -50,6 +50,10 @@ pub(crate) struct State {
     arc_incremental: bool,
     comp: CompSide,
     feed_mm_per_min: Option<f64>,
+    /// G93: F is the inverse of a move's time in minutes, given on every feed move.
+    inverse_time: bool,
+    /// The F of the block being executed in G93 (1/min), none without one.
+    inverse_f: Option<f64>,
     rotation: SpindleRotation,
     rpm: f64,
     mist: bool,
@@ -104,6 +108,8 @@ impl Default for State {
             arc_incremental: true,
             comp: CompSide::Off,
             feed_mm_per_min: None,
+            inverse_time: false,
+            inverse_f: None,
             rotation: SpindleRotation::Off,
             rpm: 0.0,
             mist: false,
@@ -202,7 +208,7 @@ fn g_group(code: Code) -> Option<Group> {
         430 | 431 | 490 => Group::ToolLength,
         // G94 (units per minute) is the only feed mode and always in force; likewise G97
         // (spindle in rpm) and G8 (lathe radius mode).
-        940 => Group::FeedMode,
+        930 | 940 => Group::FeedMode,
         970 => Group::SpindleMode,
         80 => Group::LatheMode,
         980 | 990 => Group::ReturnMode,
@@ -212,7 +218,7 @@ fn g_group(code: Code) -> Option<Group> {
         901 | 911 => Group::ArcDistance,
         200 | 210 => Group::Units,
         400 | 410 | 420 => Group::Comp,
-        610 | 640 => Group::Path,
+        610 | 611 | 640 => Group::Path,
         _ => return None,
     })
 }
@@ -226,6 +232,43 @@ fn m_group(code: u32) -> Option<Group> {
         70..=73 => Group::ModalState,
         _ => return None,
     })
+}
+
+/// The slowest feed a G93 move gets, in program units (or degrees) a minute: rs274 feeds
+/// `max(0.1, length * F)` (F0 included).
+const INVERSE_TIME_MIN_RATE: f64 = 0.1;
+
+/// A straight move's length for G93, as LinuxCNC's `find_straight_length`: X Y Z in mm,
+/// or the turn of A (degrees) when X Y Z stand still; and whether it is X Y Z's.
+fn straight_length(from: [f64; 4], to: [f64; 4]) -> (f64, bool) {
+    let xyz = ((to[0] - from[0]).powi(2) + (to[1] - from[1]).powi(2) + (to[2] - from[2]).powi(2)).sqrt();
+    if xyz > 0.0 {
+        (xyz, true)
+    } else {
+        ((to[3] - from[3]).abs(), false)
+    }
+}
+
+/// An arc's (helix's) length for G93, as LinuxCNC's `find_arc_length`: the in-plane arc
+/// (radius at the start times the swept angle, full turns included) and the normal
+/// axis's travel, at right angles.
+fn arc_length(from: [f64; 4], to: [f64; 4], centre: [f64; 4], plane: Plane, clockwise: bool, extra_turns: u32) -> f64 {
+    let (a, b, n) = match plane {
+        Plane::Xy => (0, 1, 2),
+        Plane::Zx => (2, 0, 1),
+        Plane::Yz => (1, 2, 0),
+    };
+    let start = (from[b] - centre[b]).atan2(from[a] - centre[a]);
+    let end = (to[b] - centre[b]).atan2(to[a] - centre[a]);
+    let tau = std::f64::consts::TAU;
+    let mut swept = if clockwise { start - end } else { end - start };
+    swept = swept.rem_euclid(tau);
+    if swept <= 1e-12 {
+        swept += tau;
+    }
+    swept += tau * f64::from(extra_turns);
+    let radius = (from[a] - centre[a]).hypot(from[b] - centre[b]);
+    (radius * swept).hypot(to[n] - from[n])
 }
 
 /// `G2`, `G90.1`: a code in tenths as written.
@@ -373,6 +416,7 @@ pub(crate) struct Modal {
     incremental: bool,
     arc_incremental: bool,
     feed_mm_per_min: Option<f64>,
+    inverse_time: bool,
     rpm: f64,
     rotation: SpindleRotation,
     mist: bool,
@@ -390,6 +434,7 @@ impl State {
             incremental: self.incremental,
             arc_incremental: self.arc_incremental,
             feed_mm_per_min: self.feed_mm_per_min,
+            inverse_time: self.inverse_time,
             rpm: self.rpm,
             rotation: self.rotation,
             mist: self.mist,
@@ -417,6 +462,7 @@ impl State {
         self.incremental = saved.incremental;
         self.arc_incremental = saved.arc_incremental;
         self.feed_mm_per_min = saved.feed_mm_per_min;
+        self.inverse_time = saved.inverse_time;
         (self.rpm, self.rotation, self.mist, self.flood) = (saved.rpm, saved.rotation, saved.mist, saved.flood);
         self.path = saved.path;
         self.retract_to_r = saved.retract_to_r;
@@ -721,12 +767,25 @@ impl State {
             }
         }
 
+        // Feed mode (before F, as LinuxCNC orders them): a change unsets the feed rate.
+        if let Some((code, _)) = w.group(Group::FeedMode) {
+            if (code == 930) != self.inverse_time {
+                self.inverse_time = code == 930;
+                self.feed_mm_per_min = None;
+            }
+        }
         // Feed, speed, tool selection.
+        self.inverse_f = None;
         if let Some((f, column)) = w.param('F') {
             if f < 0.0 {
                 return Err(LineError::new(column, "negative feed rate"));
             }
-            self.feed_mm_per_min = Some(self.length_mm(f));
+            if self.inverse_time {
+                // 1/min, for this block's move only; `#<_feed>` and F after G94 see none.
+                self.inverse_f = Some(f);
+            } else {
+                self.feed_mm_per_min = Some(self.length_mm(f));
+            }
         }
         if let Some((s, column)) = w.param('S') {
             if s < 0.0 {
@@ -920,7 +979,9 @@ impl State {
 
         // Path control.
         if let Some((code, _)) = w.group(Group::Path) {
-            let mode = if code == 610 {
+            // G61.1 (exact stop) is G61 here: finestep's G61 already stops at the end of
+            // every move, collinear or not, which is what G61.1 asks.
+            let mode = if code == 610 || code == 611 {
                 PathControl::ExactPath
             } else {
                 let tolerance_mm = match w.param('P') {
@@ -940,6 +1001,12 @@ impl State {
             if self.motion != Some(code) {
                 self.cycle = CycleWords::default();
             }
+        }
+        if let (true, Some((code @ (51 | G5_2), column))) = (self.inverse_time, w.group(Group::Motion)) {
+            return Err(LineError::new(
+                column,
+                format!("unsupported: {} in G93 ({})", g_name(code), unsupported::INVERSE_TIME_SPLINE),
+            ));
         }
         match w.group(Group::Motion) {
             Some((G5_2, column)) => {
@@ -1281,15 +1348,29 @@ impl State {
             Some(f) if f > 0.0 => Ok(f),
             _ => Err(LineError::new(column_of(w, column), format!("{} with no feed rate", g_name(code)))),
         };
+        let from_machine = self.position;
         let kind = match code {
             0 => BlockKind::Rapid { to: Point::from_array(to) },
+            10 if self.inverse_time => {
+                let f = self.inverse_feed(w, code, column)?;
+                let (length, linear) = straight_length(from_machine, to);
+                let floor = if linear { self.length_mm(INVERSE_TIME_MIN_RATE) } else { INVERSE_TIME_MIN_RATE };
+                BlockKind::Linear { to: Point::from_array(to), feed_mm_per_min: (length * f).max(floor) }
+            }
             10 => BlockKind::Linear { to: Point::from_array(to), feed_mm_per_min: feed()? },
             _ => {
-                let feed_mm_per_min = feed()?;
+                let inverse = if self.inverse_time { Some(self.inverse_feed(w, code, column)?) } else { None };
+                let feed_mm_per_min = if inverse.is_some() { 0.0 } else { feed()? };
                 let (centre, extra_turns) = self.arc_centre(w, from, to_program, g_name(code), column_of(w, column))?;
+                let centre_machine = self.to_machine(centre);
+                let feed_mm_per_min = match inverse {
+                    Some(f) => (f * arc_length(from_machine, to, centre_machine, self.plane, code == 20, extra_turns))
+                        .max(self.length_mm(INVERSE_TIME_MIN_RATE)),
+                    None => feed_mm_per_min,
+                };
                 BlockKind::Arc {
                     to: Point::from_array(to),
-                    centre: Point::from_array(self.to_machine(centre)),
+                    centre: Point::from_array(centre_machine),
                     plane: self.plane,
                     clockwise: code == 20,
                     extra_turns,
@@ -1300,6 +1381,18 @@ impl State {
         kinds.push(kind);
         self.position = to;
         Ok(())
+    }
+
+    /// The F of a feed move's block in G93 (1/min): required on every such block, as in
+    /// LinuxCNC.
+    fn inverse_feed(&self, w: &Words, code: Code, column: usize) -> Result<f64, LineError> {
+        match self.inverse_f {
+            Some(f) => Ok(f),
+            None => Err(LineError::new(
+                column_of(w, column),
+                format!("{} in inverse-time feed (G93) without F on its block", g_name(code)),
+            )),
+        }
     }
 
     /// G5.1: a quadratic B-spline in G17 from the current point to X Y, its control point
@@ -1443,6 +1536,10 @@ impl State {
         }
         if self.comp != CompSide::Off {
             return Err(LineError::new(column, format!("{name} with cutter compensation on")));
+        }
+        if self.inverse_time {
+            // rs274 refuses it too (its feed rate is zero there).
+            return Err(LineError::new(column, format!("{name} in inverse-time feed (G93): G94 first")));
         }
         let feed = match self.feed_mm_per_min {
             Some(f) if f > 0.0 => f,

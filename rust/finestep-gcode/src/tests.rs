@@ -695,3 +695,68 @@ fn calls_nest_nine_deep_as_rs274() {
         "t.ngc:4:1: subroutine calls nest more than 9 deep (LinuxCNC's limit: too many subroutine levels)"
     );
 }
+
+/// G93 inverse-time feed and back to G94, and G61.1, against what LinuxCNC 2.9's `rs274
+/// -g` printed for the same program: each move's feed is its length (X Y Z, or A alone,
+/// or the helix) times F, at least 0.1 program units a minute (F0 too).
+#[test]
+fn inverse_time_feed_and_exact_stop_agree_with_rs274() {
+    let source = "G21 G93\nG1 X10 F2\nG2 X20 I5 F1\nG2 X21 Y1 Z2 I1 F2\nG1 A90 F3\nG3 X21 Y1 I0 J-1 P2 F1\n\
+                  G0 X0 Y0 Z0\nG94 F100\nG1 X1\nG61.1\nG1 X2\nG20 G93 G1 X0 F0.5\nM2\n";
+    let program = parse_str(source, FILE).unwrap();
+    let rs274 = "\
+         7 N..... COMMENT(\"interpreter: feed mode set to inverse time\")\n\
+         8 N..... SET_FEED_MODE(0, 0)\n\
+         9 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+        10 N..... SET_FEED_RATE(20.0000)\n\
+        11 N..... STRAIGHT_FEED(10.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+        12 N..... SET_FEED_RATE(15.7080)\n\
+        13 N..... ARC_FEED(20.0000, 0.0000, 15.0000, 0.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+        14 N..... SET_FEED_RATE(5.0862)\n\
+        15 N..... ARC_FEED(21.0000, 1.0000, 21.0000, 0.0000, -1, 2.0000, 0.0000, 0.0000, 0.0000)\n\
+        16 N..... SET_FEED_RATE(270.0000)\n\
+        17 N..... STRAIGHT_FEED(21.0000, 1.0000, 2.0000, 90.0000, 0.0000, 0.0000)\n\
+        18 N..... SET_FEED_RATE(12.5664)\n\
+        19 N..... ARC_FEED(21.0000, 1.0000, 21.0000, 0.0000, 2, 2.0000, 90.0000, 0.0000, 0.0000)\n\
+        20 N..... STRAIGHT_TRAVERSE(0.0000, 0.0000, 0.0000, 90.0000, 0.0000, 0.0000)\n\
+        21 N..... COMMENT(\"interpreter: feed mode set to units per minute\")\n\
+        22 N..... SET_FEED_MODE(0, 0)\n\
+        23 N..... SET_FEED_RATE(0.0000)\n\
+        24 N..... SET_FEED_RATE(100.0000)\n\
+        25 N..... STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 90.0000, 0.0000, 0.0000)\n\
+        26 N..... SET_MOTION_CONTROL_MODE(CANON_EXACT_STOP)\n\
+        27 N..... STRAIGHT_FEED(2.0000, 0.0000, 0.0000, 90.0000, 0.0000, 0.0000)\n\
+        28 N..... COMMENT(\"interpreter: feed mode set to inverse time\")\n\
+        29 N..... SET_FEED_MODE(0, 0)\n\
+        30 N..... USE_LENGTH_UNITS(CANON_UNITS_INCHES)\n\
+        31 N..... SET_FEED_RATE(0.1000)\n\
+        32 N..... STRAIGHT_FEED(0.0000, 0.0000, 0.0000, 90.0000, 0.0000, 0.0000)\n\
+        39 N..... PROGRAM_END()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    let feeds: Vec<f64> = program
+        .blocks
+        .iter()
+        .filter_map(|b| match b.kind {
+            BlockKind::Linear { feed_mm_per_min, .. } | BlockKind::Arc { feed_mm_per_min, .. } => Some(feed_mm_per_min),
+            _ => None,
+        })
+        .collect();
+    let expected = [20.0, 5.0 * std::f64::consts::PI, 2.0 * (std::f64::consts::FRAC_PI_2.hypot(2.0)), 270.0];
+    for (got, want) in feeds.iter().zip(expected) {
+        assert!((got - want).abs() < 1e-9, "{feeds:?}");
+    }
+    assert!((feeds[4] - 4.0 * std::f64::consts::PI).abs() < 1e-9 && feeds[5..8] == [100.0, 100.0, 2.54], "{feeds:?}");
+    assert!(program.blocks.iter().any(|b| b.kind == BlockKind::PathControl(PathControl::ExactPath)));
+    // rs274's refusals: no F on the move's own block (an F alone on a line before does not
+    // count); a canned cycle in G93 (rs274: "Cannot feed with zero feed rate").
+    for (source, expected) in [
+        ("G93 G1 X1\n", "1:5: G1 in inverse-time feed (G93) without F on its block"),
+        ("G93 G1 X1 F1\nF2\nG1 X3\n", "3:1: G1 in inverse-time feed (G93) without F on its block"),
+        ("G93\nG2 X2 I1\n", "2:1: G2 in inverse-time feed (G93) without F on its block"),
+        ("G93 G81 X1 Y1 Z-1 R1 F1\n", "1:9: G81 in inverse-time feed (G93): G94 first"),
+        ("G94 F10\nG93\nG94\nG1 X1\n", "4:1: G1 with no feed rate"),
+    ] {
+        assert_eq!(err(source), format!("{FILE}:{expected}"), "{source:?}");
+    }
+}

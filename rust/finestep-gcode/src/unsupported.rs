@@ -14,8 +14,7 @@ pub const G_CODES: &[(&[u32], &str)] = &[
     (&[432], "G43.2 is not implemented yet"),
     (&[700, 710, 711, 712, 720, 721, 722], "lathe roughing cycles are not implemented yet"),
     (&[860, 870, 880], "canned cycles that stop or reverse the spindle are not implemented yet"),
-    (&[611], "G61.1 is not implemented yet"),
-    (&[930, 950], "inverse-time and per-revolution feed are not implemented yet"),
+    (&[950], "per-revolution feed needs the spindle feedback finestep does not have yet"),
     (&[960], "constant surface speed is not implemented yet"),
 ];
 
@@ -53,6 +52,8 @@ pub const COMP_PLANE: &str = "finestep compensates in G17 only";
 pub const CYCLE_PLANE: &str = "canned cycles are implemented in G17 only";
 /// `unsupported: G10 L20 R`.
 pub const G10_L20_R: &str = "rotation with L20 is not implemented";
+/// `unsupported: G5.1 in G93`, G5.2.
+pub const INVERSE_TIME_SPLINE: &str = "inverse-time feed is implemented for G1, G2 and G3";
 /// `unsupported: G10 L10` and every other L but 1, 2 and 20.
 pub const G10_L: &str = "only L1, L2 and L20 are implemented";
 
@@ -73,6 +74,7 @@ pub fn reasons() -> Vec<&'static str> {
         CYCLE_PLANE,
         G10_L20_R,
         G10_L,
+        INVERSE_TIME_SPLINE,
     ]);
     all
 }
