@@ -163,7 +163,10 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             BlockKind::ToolChange { tool } => events.push(Event::ToolChange { tool: *tool }),
             BlockKind::Pause => events.push(Event::Pause),
             BlockKind::End => events.push(Event::End),
-            BlockKind::ToolSelect { .. } | BlockKind::CutterComp { .. } | BlockKind::PathControl(_) => {}
+            BlockKind::ToolSelect { .. }
+            | BlockKind::CutterComp { .. }
+            | BlockKind::PathControl(_)
+            | BlockKind::Overrides(_) => {}
         }
     }
     events

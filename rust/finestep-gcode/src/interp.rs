@@ -4,7 +4,7 @@
 use crate::error::LineError;
 use crate::lexer::Word;
 use crate::unsupported;
-use crate::{nurbs_knots, BlockKind, CompSide, NurbsPoint, PathControl, Plane, Point, SpindleRotation};
+use crate::{nurbs_knots, BlockKind, CompSide, NurbsPoint, Overrides, PathControl, Plane, Point, SpindleRotation};
 
 /// Millimetres per inch.
 const MM_PER_INCH: f64 = 25.4;
@@ -54,6 +54,8 @@ pub(crate) struct State {
     inverse_time: bool,
     /// The F of the block being executed in G93 (1/min), none without one.
     inverse_f: Option<f64>,
+    /// M48-M53: the override switches.
+    overrides: Overrides,
     rotation: SpindleRotation,
     rpm: f64,
     mist: bool,
@@ -110,6 +112,7 @@ impl Default for State {
             feed_mm_per_min: None,
             inverse_time: false,
             inverse_f: None,
+            overrides: Overrides { feed: true, speed: true, adaptive_feed: false, feed_hold: true },
             rotation: SpindleRotation::Off,
             rpm: 0.0,
             mist: false,
@@ -182,21 +185,22 @@ enum Group {
     ArcDistance, // G group 4: G90.1 G91.1
     Units,       // G group 6: G20 G21
     Comp,        // G group 7: G40 G41 G42
-    FeedMode,    // G group 5: G94
+    FeedMode,    // G group 5: G93 G94
     SpindleMode, // G group 14: G97
     LatheMode,   // G group 15: G8
     ToolLength,  // G group 8: G43 G43.1 G49
     ReturnMode,  // G group 10: G98 G99
     Coord,       // G group 12: G54-G59.3
-    Path,        // G group 13: G61 G64
+    Path,        // G group 13: G61 G61.1 G64
     Stop,        // M group 4: M0 M1 M2 M30
     ToolChange,  // M group 6: M6 M61
     Spindle,     // M group 7: M3 M4 M5
     Coolant,     // M group 8: M7 M8 M9
     ModalState,  // M group 10: M70 M71 M72 M73
+    Override,    // M group 9: M48 M49 M50 M51 M52 M53
 }
 
-const GROUPS: usize = 19;
+const GROUPS: usize = 20;
 
 /// The canned cycles implemented (in tenths).
 const CYCLES: [Code; 6] = [730, 810, 820, 830, 850, 890];
@@ -230,6 +234,7 @@ fn m_group(code: u32) -> Option<Group> {
         3..=5 => Group::Spindle,
         7..=9 => Group::Coolant,
         70..=73 => Group::ModalState,
+        48..=53 => Group::Override,
         _ => return None,
     })
 }
@@ -603,8 +608,8 @@ impl State {
             "_imperial" => flag(self.inches),
             "_absolute" => flag(!self.incremental),
             "_incremental" => flag(self.incremental),
-            "_inverse_time" => 0.0,
-            "_units_per_minute" => 1.0,
+            "_inverse_time" => flag(self.inverse_time),
+            "_units_per_minute" => flag(!self.inverse_time),
             "_units_per_rev" => 0.0,
             "_coord_system" => [540.0, 550.0, 560.0, 570.0, 580.0, 590.0, 591.0, 592.0, 593.0][self.system],
             "_ijk_absolute_mode" => flag(!self.arc_incremental),
@@ -614,8 +619,10 @@ impl State {
             "_spindle_cw" => flag(self.rotation == SpindleRotation::Clockwise),
             "_mist" => flag(self.mist),
             "_flood" => flag(self.flood),
-            "_speed_override" | "_feed_override" => 1.0,
-            "_adaptive_feed" | "_feed_hold" => 0.0,
+            "_feed_override" => flag(self.overrides.feed),
+            "_speed_override" => flag(self.overrides.speed),
+            "_adaptive_feed" => flag(self.overrides.adaptive_feed),
+            "_feed_hold" => flag(self.overrides.feed_hold),
             "_feed" => self.feed_mm_per_min.map_or(0.0, |f| if self.inches { f / MM_PER_INCH } else { f }),
             "_rpm" => self.rpm,
             "_x" | "_abs_x" => self.program_position(0),
@@ -721,12 +728,13 @@ impl State {
                 w.has(Group::Motion, G5_2),
                 g10,
                 cycle_move && matches!(motion, Some(820 | 890)),
+                w.group(Group::Override).is_some_and(|(code, _)| code >= 500),
             ];
             match users.iter().filter(|&&u| u).count() {
                 0 => {
                     return Err(LineError::new(
                         column,
-                        "P word with no G4, G64, G2, G3, G5.2, G10, G82 or G89 to use it",
+                        "P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it",
                     ))
                 }
                 1 => {}
@@ -830,6 +838,22 @@ impl State {
                 (self.mist, self.flood) = (true, true);
             }
             kinds.push(BlockKind::Coolant { mist: self.mist, flood: self.flood });
+        }
+
+        // Override switches (M48-M53), after the coolant as in LinuxCNC. M50-M53 without
+        // P, or with a P other than 0, enable; P0 disables.
+        if let Some((code, _)) = w.group(Group::Override) {
+            let on = w.param('P').is_none_or(|(p, _)| p != 0.0);
+            let o = &mut self.overrides;
+            match code {
+                480 => (o.feed, o.speed) = (true, true),
+                490 => (o.feed, o.speed) = (false, false),
+                500 => o.feed = on,
+                510 => o.speed = on,
+                520 => o.adaptive_feed = on,
+                _ => o.feed_hold = on,
+            }
+            kinds.push(BlockKind::Overrides(self.overrides));
         }
 
         // Dwell.

@@ -50,7 +50,7 @@
 //! - G0 G1 G2 G3 G4 G5.1 G5.2 G5.3 G10 L1/L2/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G40
 //!   G41 G42 G43 G43.1 G49 G53 G54-G59.3 G61 G64 G73 G80 G81 G82 G83 G85 G89 G90 G91
 //!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
-//!   M61 M70 M71 M72 M73; F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A. What LinuxCNC has
+//!   M48-M53 M61 M70 M71 M72 M73; F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A. What LinuxCNC has
 //!   beyond that is refused as `unsupported: <what> (<why>)` at its word (`unsupported:
 //!   G33 (spindle-synchronised motion ...)`, `unsupported: axis B (...)`); other letters
 //!   as `unknown word E`.
@@ -150,6 +150,21 @@ pub enum SpindleRotation {
     Clockwise,
     /// M4.
     CounterClockwise,
+}
+
+/// The override switches M48-M53 set (LinuxCNC's `#<_feed_override>`,
+/// `#<_speed_override>`, `#<_adaptive_feed>`, `#<_feed_hold>`). finestep has no override
+/// inputs, adaptive feed or feed-hold input yet: they are carried as state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Overrides {
+    /// The feed override may act (M48, M50; on at the start).
+    pub feed: bool,
+    /// The spindle speed override may act (M48, M51; on at the start).
+    pub speed: bool,
+    /// Adaptive feed (M52; off at the start).
+    pub adaptive_feed: bool,
+    /// The feed-hold input may act (M53; on at the start).
+    pub feed_hold: bool,
 }
 
 /// One control point of a NURBS: its position in the XY plane and its weight.
@@ -285,6 +300,8 @@ pub enum BlockKind {
     },
     /// G61/G64.
     PathControl(PathControl),
+    /// M48-M53: the override switches after the block.
+    Overrides(Overrides),
     /// M0: pause until resumed.
     Pause,
     /// M2/M30: end of program.

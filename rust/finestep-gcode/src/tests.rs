@@ -340,7 +340,7 @@ fn every_error_message_with_its_place() {
         ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
         ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
         ("R1", "1:1: R word with no G2, G3, canned cycle or G10 to use it"),
-        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5.2, G10, G82 or G89 to use it"),
+        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
         ("G40 D1", "1:5: D word with no G41 or G42 to use it"),
@@ -517,7 +517,7 @@ fn nurbs_errors_with_their_place() {
         ("F600\nG41 D1\nG5.2 X1 Y1\n", "3:1: G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"),
         ("G5.2 X1 Y1\n", "1:1: G5.2 with no feed rate"),
         ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10 or canned cycle to use it"),
-        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n", "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82 or G89 to use it"),
+        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n", "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it"),
         // The program ends inside the block: the error points at its G5.2.
         (
             "F600\nG0 X1\n G5.2 X1 Y1\nX2 Y2\nX3 Y1\n",
@@ -759,4 +759,35 @@ fn inverse_time_feed_and_exact_stop_agree_with_rs274() {
     ] {
         assert_eq!(err(source), format!("{FILE}:{expected}"), "{source:?}");
     }
+}
+
+/// M48-M53 as modal state: what `#<_feed_override>` + 2 `#<_speed_override>` + 4
+/// `#<_adaptive_feed>` + 8 `#<_feed_hold>` reads after each, as LinuxCNC 2.9's rs274
+/// printed it for the same program (a `G0 X` of that sum after each code); each emits
+/// the switches as an event.
+#[test]
+fn override_switches_read_back_as_rs274_reads_them() {
+    let sum = "[#<_feed_override> + 2 * #<_speed_override> + 4 * #<_adaptive_feed> + 8 * #<_feed_hold>]";
+    let codes = ["", "M49", "M50", "M51 P2", "M52 P1", "M53 P0", "M50 P0", "M48", "M52 P0"];
+    let source: String = codes.iter().map(|code| format!("{code}\nG0 X{sum}\n")).collect::<String>() + "M2\n";
+    let program = parse_str(&source, FILE).unwrap();
+    let xs: Vec<f64> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Rapid { to } = b.kind { Some(to.x_mm) } else { None })
+        .collect();
+    assert_eq!(xs, [11.0, 8.0, 9.0, 11.0, 15.0, 7.0, 6.0, 7.0, 3.0]);
+    let events: Vec<Overrides> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Overrides(o) = b.kind { Some(o) } else { None })
+        .collect();
+    assert_eq!(events.len(), 8);
+    assert_eq!(events[3], Overrides { feed: true, speed: true, adaptive_feed: true, feed_hold: true });
+    // rs274: "Two m codes used from same modal group"; P needs M50-M53.
+    assert_eq!(err("M48 M53\n"), format!("{FILE}:1:5: M48 and M53 are in the same modal group"));
+    assert_eq!(
+        err("M48 P1\n"),
+        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it")
+    );
 }
