@@ -188,7 +188,7 @@ enum Group {
     FeedMode,    // G group 5: G93 G94
     SpindleMode, // G group 14: G97
     LatheMode,   // G group 15: G8
-    ToolLength,  // G group 8: G43 G43.1 G49
+    ToolLength,  // G group 8: G43 G43.1 G43.2 G49
     ReturnMode,  // G group 10: G98 G99
     Coord,       // G group 12: G54-G59.3
     Path,        // G group 13: G61 G61.1 G64
@@ -209,7 +209,7 @@ fn g_group(code: Code) -> Option<Group> {
     Some(match code {
         40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
         0 | 10 | 20 | 30 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 890 => Group::Motion,
-        430 | 431 | 490 => Group::ToolLength,
+        430 | 431 | 432 | 490 => Group::ToolLength,
         // G94 (units per minute) is the only feed mode and always in force; likewise G97
         // (spindle in rpm) and G8 (lathe radius mode).
         930 | 940 => Group::FeedMode,
@@ -674,7 +674,9 @@ impl State {
             }
         }
         // G10, G28, G30, G92 and G43.1 take the axis words themselves.
-        let axes_taken = matches!(non_modal, Some(100 | 280 | 300 | 920)) || w.has(Group::ToolLength, 431);
+        let axes_taken = matches!(non_modal, Some(100 | 280 | 300 | 920))
+            || w.has(Group::ToolLength, 431)
+            || w.has(Group::ToolLength, 432);
         let moving = first_axis.is_some() && !axes_taken;
         let motion_column = w.group(Group::Motion).map(|(_, c)| c).or(first_axis);
         let arc_mode = matches!(motion, Some(20 | 30));
@@ -753,8 +755,8 @@ impl State {
             }
         }
         if let Some((_, column)) = w.param('H') {
-            if !w.has(Group::ToolLength, 430) {
-                return Err(LineError::new(column, "H word with no G43 to use it"));
+            if !(w.has(Group::ToolLength, 430) || w.has(Group::ToolLength, 432)) {
+                return Err(LineError::new(column, "H word with no G43 or G43.2 to use it"));
             }
         }
         if let Some((_, column)) = w.param('D') {
@@ -936,6 +938,36 @@ impl State {
                             LineError::new(column, format!("G43: tool {tool} is not in the tool table"))
                         })?
                     }
+                }
+                // G43.2: the offset in force plus tool H's, or plus the axis words (as
+                // LinuxCNC's documentation says; rs274 2.9 refuses that form).
+                432 => {
+                    let axes = AXES.iter().filter_map(|&l| w.param(l).map(|(_, c)| c)).min();
+                    let mut offset = self.tool_offset;
+                    match (w.param('H'), axes) {
+                        (Some(_), Some(c)) => {
+                            return Err(LineError::new(c, "G43.2 with both H and axis words"));
+                        }
+                        (None, None) => return Err(LineError::new(column, "G43.2 with no H word and no axis words")),
+                        (Some((h, c)), None) => {
+                            let tool =
+                                as_u32(h).ok_or_else(|| LineError::new(c, "H word must be a non-negative integer"))?;
+                            if tool != 0 {
+                                let add = self.tools.get(&tool).ok_or_else(|| {
+                                    LineError::new(column, format!("G43.2: tool {tool} is not in the tool table"))
+                                })?;
+                                offset.iter_mut().zip(add).for_each(|(o, a)| *o += a);
+                            }
+                        }
+                        (None, Some(_)) => {
+                            for (axis, &letter) in AXES.iter().enumerate() {
+                                if let Some((v, _)) = w.param(letter) {
+                                    offset[axis] += if letter == 'A' { v } else { self.length_mm(v) };
+                                }
+                            }
+                        }
+                    }
+                    offset
                 }
                 431 => {
                     let mut offset = [0.0; 4];

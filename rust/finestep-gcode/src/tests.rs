@@ -517,7 +517,10 @@ fn nurbs_errors_with_their_place() {
         ("F600\nG41 D1\nG5.2 X1 Y1\n", "3:1: G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"),
         ("G5.2 X1 Y1\n", "1:1: G5.2 with no feed rate"),
         ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10 or canned cycle to use it"),
-        ("F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n", "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it"),
+        (
+            "F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n",
+            "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it",
+        ),
         // The program ends inside the block: the error points at its G5.2.
         (
             "F600\nG0 X1\n G5.2 X1 Y1\nX2 Y2\nX3 Y1\n",
@@ -790,4 +793,47 @@ fn override_switches_read_back_as_rs274_reads_them() {
         err("M48 P1\n"),
         format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it")
     );
+}
+
+/// G43.2 H adds tool H's length to the offset in force (H0 adds nothing), against LinuxCNC
+/// 2.9's `rs274 -g -t tests/conformance/tool.tbl` for the same program (tool 1 Z 1.25 in,
+/// tool 2 Z 2.5 in); the axis-word form adds the words, as LinuxCNC's documentation says.
+#[test]
+fn additional_tool_length_offset_agrees_with_rs274() {
+    let tools = [(1, [0.0, 0.0, 31.75, 0.0]), (2, [0.0, 0.0, 63.5, 0.0])].into_iter().collect();
+    let options = Options { machine_unit_mm: 25.4, tools, ..Options::default() };
+    let source =
+        "G21\nG43 H1\nG0 X1 Z0\nG43.2 H2\nG0 X2 Z0\nG43.2 H0\nG0 X3 Z0\nG43.2 H1\nG0 X4 Z0\nG49\nG0 X5 Z0\nM2\n";
+    let program = parse_str_with(source, FILE, &options).unwrap();
+    let rs274 = "\
+            8 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 31.7500, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+            9 N..... STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+           10 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 95.2500, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+           11 N..... STRAIGHT_TRAVERSE(2.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+           12 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 95.2500, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+           13 N..... STRAIGHT_TRAVERSE(3.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+           14 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 127.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+           15 N..... STRAIGHT_TRAVERSE(4.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+           16 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+           17 N..... STRAIGHT_TRAVERSE(5.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+           24 N..... PROGRAM_END()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    let zs: Vec<f64> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Rapid { to } = b.kind { Some(to.z_mm) } else { None })
+        .collect();
+    assert_eq!(zs, [31.75, 95.25, 95.25, 127.0, 0.0]);
+    // The axis-word form (rs274 2.9 refuses it: "Requested tool -1 not found").
+    let program = parse_str_with("G43.2 Z1 X0.5\nG0 X0 Z0\nG20 G43.2 Z1\nG0 Z0\nM2\n", FILE, &options).unwrap();
+    let BlockKind::Rapid { to } = program.blocks[0].kind else { panic!() };
+    assert_eq!((to.x_mm, to.z_mm), (0.5, 1.0));
+    let BlockKind::Rapid { to } = program.blocks[1].kind else { panic!() };
+    assert_eq!(to.z_mm, 26.4);
+    // rs274's refusals, at their words.
+    let err_with = |source: &str| parse_str_with(source, FILE, &options).unwrap_err().to_string();
+    assert_eq!(err_with("G43.2\n"), format!("{FILE}:1:1: G43.2 with no H word and no axis words"));
+    assert_eq!(err_with("G43.2 H1 Z1\n"), format!("{FILE}:1:10: G43.2 with both H and axis words"));
+    assert_eq!(err_with("G43.2 H99\n"), format!("{FILE}:1:1: G43.2: tool 99 is not in the tool table"));
 }
