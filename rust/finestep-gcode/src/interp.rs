@@ -1541,6 +1541,30 @@ impl State {
                 }
                 self.tools.insert(tool, entry);
             }
+            // L10: tool P's length such that the current position, in the coordinate
+            // system and G92 offsets in force, reads the given values with it; L11: such
+            // that it would read them in G59.3 without G92 (LinuxCNC's definitions).
+            Some(k @ (10 | 11)) => {
+                let tool =
+                    as_u32(p).ok_or_else(|| LineError::new(p_column, format!("G10 L{k} P must be a tool number")))?;
+                if tool == 0 {
+                    return Err(LineError::new(p_column, format!("G10 L{k} P0: tool 0 is no tool")));
+                }
+                if self.active_rotation_deg != 0.0 && (w.param('X').is_some() || w.param('Y').is_some()) {
+                    return Err(LineError::new(
+                        column,
+                        format!("unsupported: G10 L{k} X/Y under an XY rotation ({})", unsupported::G10_TOOL_ROTATION),
+                    ));
+                }
+                let (origin, g92) = if k == 10 { (self.active_g5x, self.g92_now()) } else { (self.g5x[8], [0.0; 4]) };
+                let mut entry = self.tools.get(&tool).copied().unwrap_or_default();
+                for (axis, &letter) in AXES.iter().enumerate() {
+                    if let Some((v, _)) = w.param(letter) {
+                        entry[axis] = self.position[axis] - origin[axis] - g92[axis] - value(letter, v);
+                    }
+                }
+                self.tools.insert(tool, entry);
+            }
             Some(k @ (2 | 20)) => {
                 let system = match as_u32(p) {
                     Some(0) => self.system,

@@ -837,3 +837,44 @@ fn additional_tool_length_offset_agrees_with_rs274() {
     assert_eq!(err_with("G43.2 H1 Z1\n"), format!("{FILE}:1:10: G43.2 with both H and axis words"));
     assert_eq!(err_with("G43.2 H99\n"), format!("{FILE}:1:1: G43.2: tool 99 is not in the tool table"));
 }
+
+/// G10 L10 and L11 set a tool's length from where the machine stands, against LinuxCNC
+/// 2.9's `rs274 -g -t tests/conformance/tool.tbl` for the same program (G54 and G92 in
+/// force for L10, G59.3 without G92 for L11).
+#[test]
+fn tool_table_set_from_the_position_agrees_with_rs274() {
+    let options = Options { machine_unit_mm: 25.4, ..Options::default() };
+    let source = "G21\nG10 L2 P1 X1 Y2 Z3\nG10 L2 P9 Z-4\nG92 X0.5 Z0.25\nG0 X10 Y10 Z10\nG10 L10 P1 Z2 X1\nG43 H1\n\
+                  G0 X10 Y10 Z10\nG10 L11 P2 Z1\nG43 H2\nG0 X5 Z5\nG10 L10 P3 Z0\nG43 H3\nG0 Z1\nM2\n";
+    let program = parse_str_with(source, FILE, &options).unwrap();
+    let rs274 = "\
+               2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+               3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+               4 N..... SET_XY_ROTATION(0.0000)\n\
+               8 N..... SET_G5X_OFFSET(1, 1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)\n\
+               9 N..... SET_XY_ROTATION(0.0000)\n\
+              11 N..... SET_G92_OFFSET(-1.5000, 0.0000, -3.2500, 0.0000, 0.0000, 0.0000)\n\
+              12 N..... STRAIGHT_TRAVERSE(10.0000, 10.0000, 10.0000, 0.0000, 0.0000, 0.0000)\n\
+              15 N..... USE_TOOL_LENGTH_OFFSET(9.0000 0.0000 8.0000, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+              16 N..... STRAIGHT_TRAVERSE(10.0000, 10.0000, 10.0000, 0.0000, 0.0000, 0.0000)\n\
+              18 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 20.7500, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+              19 N..... STRAIGHT_TRAVERSE(5.0000, 10.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+              21 N..... USE_TOOL_LENGTH_OFFSET(0.0000 0.0000 25.7500, 0.0000 0.0000 0.0000, 0.0000 0.0000 0.0000)\n\
+              22 N..... STRAIGHT_TRAVERSE(5.0000, 10.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+              23 N..... SET_G5X_OFFSET(1, 1.0000, 2.0000, 3.0000, 0.0000, 0.0000, 0.0000)\n\
+              24 N..... SET_XY_ROTATION(0.0000)\n\
+              29 N..... PROGRAM_END()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    let ends: Vec<(f64, f64)> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Rapid { to } = b.kind { Some((to.x_mm, to.z_mm)) } else { None })
+        .collect();
+    assert_eq!(ends, [(9.5, 9.75), (18.5, 17.75), (4.5, 25.5), (4.5, 26.5)]);
+    assert_eq!(err("G10 L10 P0 Z1\n"), format!("{FILE}:1:9: G10 L10 P0: tool 0 is no tool"));
+    assert_eq!(
+        err("G10 L2 P1 R30\nG10 L10 P1 X1\n"),
+        format!("{FILE}:2:1: unsupported: G10 L10 X/Y under an XY rotation (the tool table is set in the unrotated frame only)")
+    );
+}

@@ -52,8 +52,10 @@ pub const CYCLE_PLANE: &str = "canned cycles are implemented in G17 only";
 pub const G10_L20_R: &str = "rotation with L20 is not implemented";
 /// `unsupported: G5.1 in G93`, G5.2.
 pub const INVERSE_TIME_SPLINE: &str = "inverse-time feed is implemented for G1, G2 and G3";
-/// `unsupported: G10 L10` and every other L but 1, 2 and 20.
-pub const G10_L: &str = "only L1, L2 and L20 are implemented";
+/// `unsupported: G10 L3` and every other L but 1, 2, 10, 11 and 20.
+pub const G10_L: &str = "only L1, L2, L10, L11 and L20 are implemented";
+/// `unsupported: G10 L10 X/Y under an XY rotation`.
+pub const G10_TOOL_ROTATION: &str = "the tool table is set in the unrotated frame only";
 
 /// Every reason above, once.
 pub fn reasons() -> Vec<&'static str> {
@@ -73,6 +75,7 @@ pub fn reasons() -> Vec<&'static str> {
         G10_L20_R,
         G10_L,
         INVERSE_TIME_SPLINE,
+        G10_TOOL_ROTATION,
     ]);
     all
 }
