@@ -203,12 +203,12 @@ enum Group {
 const GROUPS: usize = 20;
 
 /// The canned cycles implemented (in tenths).
-const CYCLES: [Code; 6] = [730, 810, 820, 830, 850, 890];
+const CYCLES: [Code; 7] = [730, 810, 820, 830, 850, 860, 890];
 
 fn g_group(code: Code) -> Option<Group> {
     Some(match code {
         40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
-        0 | 10 | 20 | 30 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 890 => Group::Motion,
+        0 | 10 | 20 | 30 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 860 | 890 => Group::Motion,
         430 | 431 | 432 | 490 => Group::ToolLength,
         // G94 (units per minute) is the only feed mode and always in force; likewise G97
         // (spindle in rpm) and G8 (lathe radius mode).
@@ -729,7 +729,7 @@ impl State {
                 arc_move,
                 w.has(Group::Motion, G5_2),
                 g10,
-                cycle_move && matches!(motion, Some(820 | 890)),
+                cycle_move && matches!(motion, Some(820 | 860 | 890)),
                 w.group(Group::Override).is_some_and(|(code, _)| code >= 500),
             ];
             match users.iter().filter(|&&u| u).count() {
@@ -1617,6 +1617,9 @@ impl State {
         if self.comp != CompSide::Off {
             return Err(LineError::new(column, format!("{name} with cutter compensation on")));
         }
+        if code == 860 && self.rotation == SpindleRotation::Off {
+            return Err(LineError::new(column, "G86 with the spindle not turning (M3 or M4 first)"));
+        }
         if self.inverse_time {
             // rs274 refuses it too (its feed rate is zero there).
             return Err(LineError::new(column, format!("{name} in inverse-time feed (G93): G94 first")));
@@ -1660,7 +1663,9 @@ impl State {
             return Err(LineError::new(column, format!("{name} with Z above R")));
         }
         let dwell = match code {
-            820 | 890 => Some(self.cycle.p.ok_or_else(|| LineError::new(column, format!("{name} with no P (dwell)")))?),
+            820 | 860 | 890 => {
+                Some(self.cycle.p.ok_or_else(|| LineError::new(column, format!("{name} with no P (dwell)")))?)
+            }
             _ => None,
         };
         let q = match code {
@@ -1718,7 +1723,16 @@ impl State {
             if matches!(code, 850 | 890) {
                 cut(self, &mut out, at(r));
             }
+            // G86: the spindle stops at the bottom, the tool leaves at traverse and the
+            // spindle starts again as it turned (rs274's order).
+            let spindle = (self.rotation, self.rpm);
+            if code == 860 {
+                out.push(BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: spindle.1 });
+            }
             rapid(self, &mut out, at(clear));
+            if code == 860 {
+                out.push(BlockKind::Spindle { rotation: spindle.0, rpm: spindle.1 });
+            }
             cur[2] = clear;
             if out.len() > 1_000_000 {
                 return Err(LineError::new(column, format!("{name} makes more than 10^6 moves")));

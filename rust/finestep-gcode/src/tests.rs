@@ -878,3 +878,67 @@ fn tool_table_set_from_the_position_agrees_with_rs274() {
         format!("{FILE}:2:1: unsupported: G10 L10 X/Y under an XY rotation (the tool table is set in the unrotated frame only)")
     );
 }
+
+/// G86 (bore, spindle stop at the bottom, traverse out, spindle on again) with G98 and
+/// G99, against LinuxCNC 2.9's `rs274 -g` for the same program (spindle M4 at S500).
+#[test]
+fn boring_cycle_g86_agrees_with_rs274() {
+    let source = "G21 G17 F100 S500 M4\nG0 X0 Y0 Z5\nG98 G86 X1 Y1 Z-2 R1 P0.5\nG99 X2\nG80\nM2\n";
+    let program = parse_str(source, FILE).unwrap();
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_FEED_RATE(100.0000)\n\
+            8 N..... SET_SPINDLE_SPEED(0, 500.0000)\n\
+            9 N..... START_SPINDLE_COUNTERCLOCKWISE(0)\n\
+           10 N..... SELECT_PLANE(CANON_PLANE_XY)\n\
+           11 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+           12 N..... STRAIGHT_TRAVERSE(0.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+           13 N..... COMMENT(\"interpreter: retract mode set to old_z\")\n\
+           14 N..... SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH)\n\
+           15 N..... STRAIGHT_TRAVERSE(1.0000, 1.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+           16 N..... STRAIGHT_TRAVERSE(1.0000, 1.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+           17 N..... STRAIGHT_FEED(1.0000, 1.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+           18 N..... DWELL(0.5000)\n\
+           19 N..... STOP_SPINDLE_TURNING(0)\n\
+           20 N..... STRAIGHT_TRAVERSE(1.0000, 1.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+           21 N..... START_SPINDLE_COUNTERCLOCKWISE(0)\n\
+           22 N..... SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.000000)\n\
+           23 N..... SET_NAIVECAM_TOLERANCE(0.0000)\n\
+           24 N..... COMMENT(\"interpreter: retract mode set to r_plane\")\n\
+           25 N..... SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH)\n\
+           26 N..... STRAIGHT_TRAVERSE(2.0000, 1.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+           27 N..... STRAIGHT_TRAVERSE(2.0000, 1.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+           28 N..... STRAIGHT_FEED(2.0000, 1.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+           29 N..... DWELL(0.5000)\n\
+           30 N..... STOP_SPINDLE_TURNING(0)\n\
+           31 N..... STRAIGHT_TRAVERSE(2.0000, 1.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+           32 N..... START_SPINDLE_COUNTERCLOCKWISE(0)\n\
+           33 N..... SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.000000)\n\
+           34 N..... SET_NAIVECAM_TOLERANCE(0.0000)\n\
+           35 N..... COMMENT(\"interpreter: motion mode set to none\")\n\
+           36 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+           37 N..... SET_XY_ROTATION(0.0000)\n\
+           38 N..... SET_FEED_MODE(0, 0)\n\
+           39 N..... SET_FEED_RATE(0.0000)\n\
+           40 N..... STOP_SPINDLE_TURNING(0)\n\
+           41 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+           42 N..... PROGRAM_END()\n\
+           43 N..... ON_RESET()\n\
+           44 N..... ON_RESET()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    let spindle: Vec<SpindleRotation> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Spindle { rotation, .. } = b.kind { Some(rotation) } else { None })
+        .collect();
+    use SpindleRotation::*;
+    assert_eq!(spindle, [CounterClockwise, Off, CounterClockwise, Off, CounterClockwise]);
+    assert_eq!(err("G86 X1 Z-1 R1 P1 F10\n"), format!("{FILE}:1:5: G86 with the spindle not turning (M3 or M4 first)"));
+    assert_eq!(err("M3 S100 G86 X1 Z-1 R1 F10\n"), format!("{FILE}:1:13: G86 with no P (dwell)"));
+}

@@ -12,7 +12,7 @@ pub const G_CODES: &[(&[u32], &str)] = &[
     (&[50], "G5 cubic splines are not implemented yet (G5.1, G5.2/G5.3 are)"),
     (&[411, 421], "dynamic cutter compensation is not implemented yet"),
     (&[700, 710, 711, 712, 720, 721, 722], "lathe roughing cycles are not implemented yet"),
-    (&[860, 870, 880], "canned cycles that stop or reverse the spindle are not implemented yet"),
+    (&[870, 880], "the back-boring and manual-retract cycles are not implemented yet"),
     (&[950], "per-revolution feed needs the spindle feedback finestep does not have yet"),
     (&[960], "constant surface speed is not implemented yet"),
 ];
