@@ -117,10 +117,12 @@ pub fn stream_planned<B: Bus>(
                     chip.configure_spindle(&setup)?;
                     spindle_set_up = true;
                 }
-                IoAction::Coolant { .. } if !caps.has_outputs => {
-                    bail!("{name}:{line}: the program sets the coolant, but the chip has no logic outputs (CAPS)")
+                IoAction::Coolant { .. } | IoAction::Output { .. } if !caps.has_outputs => {
+                    bail!("{name}:{line}: the program sets the coolant or an output, but the chip has no logic outputs (CAPS)")
                 }
-                IoAction::Coolant { .. } if outputs == Outputs::default() => outputs = chip.outputs()?,
+                IoAction::Coolant { .. } | IoAction::Output { .. } if outputs == Outputs::default() => {
+                    outputs = chip.outputs()?
+                }
                 _ => {}
             }
         }
@@ -132,6 +134,11 @@ pub fn stream_planned<B: Bus>(
                     rotation == SpindleRotation::CounterClockwise,
                     setup.level_for(fraction),
                 ),
+                IoAction::Output { index, on } => {
+                    let bit = 1u8 << index;
+                    outputs.gpio = if on { outputs.gpio | bit } else { outputs.gpio & !bit };
+                    chip.set_outputs(&outputs)
+                }
                 IoAction::Coolant { mist, flood } => {
                     outputs.mist = mist;
                     outputs.flood = flood;
@@ -497,7 +504,7 @@ mod tests {
     use super::*;
     use finestep_cosim::{rtl_top_params, ModelPins};
     use finestep_host::pins::layout::{
-        OUT_COOLANT_FLOOD, OUT_COOLANT_MIST, OUT_PIN_A0, OUT_PIN_B0, OUT_SPINDLE_EN, OUT_SPINDLE_PWM,
+        OUT_COOLANT_FLOOD, OUT_COOLANT_MIST, OUT_GPIO0, OUT_PIN_A0, OUT_PIN_B0, OUT_SPINDLE_EN, OUT_SPINDLE_PWM,
     };
     use finestep_host::{BusError, PinHost, PinTarget, PinTiming, SpiBus};
     use finestep_model::top::Top;
@@ -514,7 +521,7 @@ mod tests {
         steps: Vec<u64>,
     }
 
-    const WATCHED: u64 = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_MIST | 1 << OUT_COOLANT_FLOOD;
+    const WATCHED: u64 = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_MIST | 1 << OUT_COOLANT_FLOOD | 1 << (OUT_GPIO0 + 1);
 
     impl PinTarget for Recorder {
         fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
@@ -590,5 +597,40 @@ mod tests {
         }
         // The spindle ran (PWM at 1000/24000 of full level) while enabled.
         assert!(recorder.pwm_rises > 10, "{}", recorder.pwm_rises);
+    }
+
+    /// M64/M65 (and M62/M63) reach the chip's general output pin at rest where they are
+    /// written: output 1 on with X at 1 mm, off at 2 mm.
+    #[test]
+    fn digital_outputs_switch_on_the_pins_between_the_moves() {
+        let recorder = Recorder {
+            inner: ModelPins(Top::new(rtl_top_params())),
+            cycle: 0,
+            x: 0,
+            pwm_rises: 0,
+            changes: Vec::new(),
+            steps: Vec::new(),
+        };
+        let mut host = PinHost::new(recorder, PinTiming::default());
+        host.reset(4).unwrap();
+        host.idle(8).unwrap();
+        let mut chip = Machine::connect(SpiBus::new(host, 1)).unwrap();
+        let n_axes = chip.caps().n_axes;
+        chip.bus().set_n_axes(n_axes);
+        let limits = machine_setup::chip_limits(&chip.caps());
+        let (config, resolved) = machine_setup::resolve(MachineConfig::default(), limits, "<built-in>").unwrap();
+        let text = "G1 X1 F600\nM64 P1\nG1 X2\nM63 P1\nG1 X3\nM2\n";
+        let program = finestep_gcode::parse_str(text, "gpio.ngc").unwrap();
+        let planned = plan_program(&config, &program).unwrap();
+        assert_eq!(planned.events.len(), 2);
+        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "gpio.ngc", |_| {}).unwrap();
+        assert_eq!(report.stream.underruns, 0);
+        let recorder = chip.bus().link_mut().target();
+        let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, x)| (pins, x)).collect();
+        assert_eq!(states, vec![(1 << (OUT_GPIO0 + 1), 800), (0, 1600)], "{:?}", recorder.changes);
+        // Output 8 does not exist on the chip: refused by line before anything moves.
+        let program = finestep_gcode::parse_str("M64 P8\nG1 X1 F600\nM2\n", "gpio.ngc").unwrap();
+        let err = plan_program(&config, &program).unwrap_err();
+        assert_eq!((err.line, err.reason.as_str()), (1, "digital output P8: the chip has outputs 0 to 7"));
     }
 }

@@ -166,7 +166,8 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             BlockKind::ToolSelect { .. }
             | BlockKind::CutterComp { .. }
             | BlockKind::PathControl(_)
-            | BlockKind::Overrides(_) => {}
+            | BlockKind::Overrides(_)
+            | BlockKind::DigitalOutput { .. } => {}
         }
     }
     events

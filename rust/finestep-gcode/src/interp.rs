@@ -198,9 +198,10 @@ enum Group {
     Coolant,     // M group 8: M7 M8 M9
     ModalState,  // M group 10: M70 M71 M72 M73
     Override,    // M group 9: M48 M49 M50 M51 M52 M53
+    Io,          // M group 5: M62 M63 M64 M65
 }
 
-const GROUPS: usize = 20;
+const GROUPS: usize = 21;
 
 /// The canned cycles implemented (in tenths).
 const CYCLES: [Code; 7] = [730, 810, 820, 830, 850, 860, 890];
@@ -235,6 +236,7 @@ fn m_group(code: u32) -> Option<Group> {
         7..=9 => Group::Coolant,
         70..=73 => Group::ModalState,
         48..=53 => Group::Override,
+        62..=65 => Group::Io,
         _ => return None,
     })
 }
@@ -731,12 +733,13 @@ impl State {
                 g10,
                 cycle_move && matches!(motion, Some(820 | 860 | 890)),
                 w.group(Group::Override).is_some_and(|(code, _)| code >= 500),
+                w.group(Group::Io).is_some(),
             ];
             match users.iter().filter(|&&u| u).count() {
                 0 => {
                     return Err(LineError::new(
                         column,
-                        "P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it",
+                        "P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it",
                     ))
                 }
                 1 => {}
@@ -856,6 +859,17 @@ impl State {
                 _ => o.feed_hold = on,
             }
             kinds.push(BlockKind::Overrides(self.overrides));
+        }
+
+        // Digital outputs (M62/M63 with the next move, M64/M65 at once: finestep sets
+        // either at rest where it is written, so both act before the next move).
+        if let Some((code, column)) = w.group(Group::Io) {
+            let (p, p_column) =
+                w.param('P').ok_or_else(|| LineError::new(column, format!("M{} with no P (the output)", code / 10)))?;
+            let index = as_u32(p)
+                .filter(|&i| i < 64)
+                .ok_or_else(|| LineError::new(p_column, "digital output P must be an integer 0 to 63"))?;
+            kinds.push(BlockKind::DigitalOutput { index, on: matches!(code, 620 | 640) });
         }
 
         // Dwell.

@@ -302,6 +302,13 @@ pub enum BlockKind {
     PathControl(PathControl),
     /// M48-M53: the override switches after the block.
     Overrides(Overrides),
+    /// M62/M64 (on) and M63/M65 (off): a digital output.
+    DigitalOutput {
+        /// The output (P), 0 to 63.
+        index: u32,
+        /// On or off.
+        on: bool,
+    },
     /// M0: pause until resumed.
     Pause,
     /// M2/M30: end of program.

@@ -340,7 +340,7 @@ fn every_error_message_with_its_place() {
         ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
         ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
         ("R1", "1:1: R word with no G2, G3, canned cycle or G10 to use it"),
-        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it"),
+        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
         ("G40 D1", "1:5: D word with no G41 or G42 to use it"),
@@ -519,7 +519,7 @@ fn nurbs_errors_with_their_place() {
         ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10 or canned cycle to use it"),
         (
             "F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n",
-            "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it",
+            "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it",
         ),
         // The program ends inside the block: the error points at its G5.2.
         (
@@ -791,7 +791,7 @@ fn override_switches_read_back_as_rs274_reads_them() {
     assert_eq!(err("M48 M53\n"), format!("{FILE}:1:5: M48 and M53 are in the same modal group"));
     assert_eq!(
         err("M48 P1\n"),
-        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5.2, G10, G82, G89 or M50-M53 to use it")
+        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it")
     );
 }
 
@@ -941,4 +941,20 @@ fn boring_cycle_g86_agrees_with_rs274() {
     assert_eq!(spindle, [CounterClockwise, Off, CounterClockwise, Off, CounterClockwise]);
     assert_eq!(err("G86 X1 Z-1 R1 P1 F10\n"), format!("{FILE}:1:5: G86 with the spindle not turning (M3 or M4 first)"));
     assert_eq!(err("M3 S100 G86 X1 Z-1 R1 F10\n"), format!("{FILE}:1:13: G86 with no P (dwell)"));
+}
+
+/// M62-M65 give the digital output events (rs274 prints SET_MOTION_OUTPUT_BIT /
+/// SET_AUX_OUTPUT_BIT and their CLEAR_ forms for them); P is required and 0 to 63.
+#[test]
+fn digital_outputs_are_events() {
+    let program = parse_str("M62 P0\nM63 P0\nM64 P7\nM65 P63\nM2\n", FILE).unwrap();
+    let outputs: Vec<(u32, bool)> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::DigitalOutput { index, on } = b.kind { Some((index, on)) } else { None })
+        .collect();
+    assert_eq!(outputs, [(0, true), (0, false), (7, true), (63, false)]);
+    assert_eq!(err("M64\n"), format!("{FILE}:1:1: M64 with no P (the output)"));
+    assert_eq!(err("M64 P64\n"), format!("{FILE}:1:5: digital output P must be an integer 0 to 63"));
+    assert_eq!(err("M64 P1 M65 P2\n"), format!("{FILE}:1:8: M64 and M65 are in the same modal group"));
 }

@@ -24,7 +24,7 @@ pub const G_OTHER: &str = "not a G-code finestep implements";
 pub const M_CODES: &[(u32, u32, &str)] = &[
     (19, 19, "spindle orientation is not implemented yet"),
     (60, 60, "pallet shuttle is not implemented"),
-    (62, 68, "digital and analog I/O is not implemented yet"),
+    (66, 68, "analog outputs and waiting on inputs are not implemented yet"),
     (100, 199, "user M-codes run external programs, which finestep does not"),
 ];
 

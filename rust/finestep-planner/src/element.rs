@@ -125,6 +125,13 @@ pub enum IoAction {
         /// `rpm` over the configuration's `spindle.max_rpm` (0..=1).
         fraction: f64,
     },
+    /// M62-M65: general output `index` (the chip's GPIO bit) on or off.
+    Output {
+        /// The output, 0 to 7 (the chip has 8 at most).
+        index: u32,
+        /// On or off.
+        on: bool,
+    },
     /// The coolant after the block.
     Coolant {
         /// M7.

@@ -154,6 +154,12 @@ fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
                 Some(IoAction::Spindle { rotation, rpm, fraction: rpm / max })
             }
             BlockKind::Coolant { mist, flood } => Some(IoAction::Coolant { mist, flood }),
+            BlockKind::DigitalOutput { index, on } => {
+                if index > 7 {
+                    return Err(fail(format!("digital output P{index}: the chip has outputs 0 to 7")));
+                }
+                Some(IoAction::Output { index, on })
+            }
             _ => None,
         };
         if let Some(action) = action {
@@ -162,6 +168,7 @@ fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
                     left_on.0 = (rotation != finestep_gcode::SpindleRotation::Off).then_some(action)
                 }
                 IoAction::Coolant { mist, flood } => left_on.1 = mist || flood,
+                IoAction::Output { .. } => {}
             }
             // An exact stop where the block is: the change takes effect at rest there.
             let event = IoEvent { line: block.line, action };
