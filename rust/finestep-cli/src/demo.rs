@@ -49,7 +49,9 @@ pub fn run(out: &Path, bus: Option<BusTarget>) -> anyhow::Result<()> {
     println!();
     println!("finestep demo, part 2: a built-in part program (corners, an arc, a cutter-compensated contour)");
     let program = finestep_gcode::parse_str(DEMO_PART, "demo-part.ngc")?;
-    run_program_on(&program, "demo-part.ngc", false, &bus, MachineConfig::default(), "<built-in>", out, None)?;
+    run_program_on(&program, "demo-part.ngc", false, &bus, MachineConfig::default(), "<built-in>", out, None, &|| {
+        Ok(())
+    })?;
     if !bus.is_lockstep() {
         println!();
         println!(

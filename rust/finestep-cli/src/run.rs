@@ -165,27 +165,30 @@ pub fn run(
     let (mut config, config_name) = crate::config_file::load_or_builtin(config_path)?;
     crate::config_file::set_profile(&mut config, profile);
     let bus = BusTarget::choose(bus, config.bus.as_deref(), &config_name)?;
-    // LinuxCNC's parameter file: the program starts from what the last one left, and its
-    // persistent parameters are written back once the interpreter has reached the
-    // program's end (as LinuxCNC's interpreter does at M2/M30), before the motion runs: a
-    // `--view` run serves its page until the process ends.
+    // LinuxCNC's parameter file: the program starts from what the last one left and its
+    // persistent parameters are written back when it has run to its end (before a
+    // `--view` run goes on serving its page).
     let parameter_file = crate::parameter_file::path_of(config.parameter_file.as_deref(), config_path);
     let mut options = finestep_gcode::Options::default();
     if let Some(path) = &parameter_file {
         options.parameters = crate::parameter_file::load(path)?;
     }
     let (program, parameters) = finestep_gcode::parse_file_with_parameters(file, &options)?;
-    if let Some(path) = &parameter_file {
-        let generation = crate::parameter_file::save(path, &parameters)?;
-        println!("  parameters: {} written (generation {generation})", path.display());
-    }
-    run_program_on(&program, &file.display().to_string(), fast, &bus, config, &config_name, out, view)
+    let write_back = || -> anyhow::Result<()> {
+        if let Some(path) = &parameter_file {
+            let generation = crate::parameter_file::save(path, &parameters)?;
+            println!("  parameters: {} written (generation {generation})", path.display());
+        }
+        Ok(())
+    };
+    run_program_on(&program, &file.display().to_string(), fast, &bus, config, &config_name, out, view, &write_back)
 }
 
 /// Plans, checks, plots and runs `program` (named `name` in messages and plot files) on
 /// the machine `config` (named `config_name` in errors): on the chip on `bus`, whose
 /// CAPS and clock the configuration is resolved against, or with `fast` on the model's
-/// build (no chip). With `view`, the 3-D view is served during the run and after it, until
+/// build (no chip); `on_end` runs when it has run to its end without an error. With
+/// `view`, the 3-D view is served during the run and after it, until
 /// the process ends.
 #[allow(clippy::too_many_arguments)]
 pub fn run_program_on(
@@ -197,6 +200,7 @@ pub fn run_program_on(
     config_name: &str,
     out: &Path,
     view: Option<&ViewOptions>,
+    on_end: &dyn Fn() -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
     let stem = Path::new(name).file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
     let clock_hz = machine_setup::expected_clock_hz(&config);
@@ -269,7 +273,7 @@ pub fn run_program_on(
         if !report.passed() {
             bail!("the checker found {} violations", report.violation_count);
         }
-        Ok(())
+        on_end()
     });
     if let Some((server, live, _)) = viewer {
         {
