@@ -627,7 +627,8 @@ mod tests {
         let program = finestep_gcode::parse_str(text, "gpio.ngc").unwrap();
         let planned = plan_program(&config, &program).unwrap();
         assert_eq!(planned.events.len(), 2);
-        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "gpio.ngc", |_| {}).unwrap();
+        let report =
+            stream_planned(&mut chip, &planned, &resolved, &config.spindle, "gpio.ngc", |_, _| Ok(())).unwrap();
         assert_eq!(report.stream.underruns, 0);
         let recorder = chip.bus().link_mut().target();
         let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, x)| (pins, x)).collect();
