@@ -553,11 +553,12 @@ mod tests {
         }
     }
 
+    type RecordedChip = Machine<SpiBus<PinHost<Recorder>>>;
+
     /// `finestep run`'s machinery (resolution against the chip, planner, streamer with
-    /// events) on the model's pins: the spindle turns on with X at rest at 1 mm, flood at
-    /// 2 mm, both off at 3 mm, and X moves only between them.
-    #[test]
-    fn spindle_and_coolant_switch_on_the_pins_between_the_moves() {
+    /// events) on the model's pins behind a recorder: `text` (named `name`) planned with
+    /// `events` events and streamed; the chip and the configuration it was resolved to.
+    fn stream_on_recorded_pins(text: &str, name: &str, events: usize) -> (RecordedChip, MachineConfig) {
         let recorder = Recorder {
             inner: ModelPins(Top::new(rtl_top_params())),
             cycle: 0,
@@ -574,13 +575,22 @@ mod tests {
         chip.bus().set_n_axes(n_axes);
         let limits = machine_setup::chip_limits(&chip.caps());
         let (config, resolved) = machine_setup::resolve(MachineConfig::default(), limits, "<built-in>").unwrap();
-        let text = "G1 X1 F600\nM3 S1000\nG1 X2\nM8\nG1 X3\nM5 M9\nM2\n";
-        let program = finestep_gcode::parse_str(text, "io.ngc").unwrap();
+        let program = finestep_gcode::parse_str(text, name).unwrap();
         let planned = plan_program(&config, &program).unwrap();
-        assert_eq!(planned.events.len(), 4);
-        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "io.ngc", |_, _| Ok(())).unwrap();
+        assert_eq!(planned.events.len(), events);
+        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, name, |_, _| Ok(())).unwrap();
         assert_eq!(report.stream.underruns, 0);
         assert_eq!(report.end.steps[0], 3 * 800);
+        (chip, config)
+    }
+
+    /// `finestep run`'s machinery (resolution against the chip, planner, streamer with
+    /// events) on the model's pins: the spindle turns on with X at rest at 1 mm, flood at
+    /// 2 mm, both off at 3 mm, and X moves only between them.
+    #[test]
+    fn spindle_and_coolant_switch_on_the_pins_between_the_moves() {
+        let text = "G1 X1 F600\nM3 S1000\nG1 X2\nM8\nG1 X3\nM5 M9\nM2\n";
+        let (mut chip, _) = stream_on_recorded_pins(text, "io.ngc", 4);
         let recorder = chip.bus().link_mut().target();
         assert_eq!(recorder.x, 3 * 800);
         // Each pin change with X's position then: exactly the block's point.
@@ -607,29 +617,8 @@ mod tests {
     /// written: output 1 on with X at 1 mm, off at 2 mm.
     #[test]
     fn digital_outputs_switch_on_the_pins_between_the_moves() {
-        let recorder = Recorder {
-            inner: ModelPins(Top::new(rtl_top_params())),
-            cycle: 0,
-            x: 0,
-            pwm_rises: 0,
-            changes: Vec::new(),
-            steps: Vec::new(),
-        };
-        let mut host = PinHost::new(recorder, PinTiming::default());
-        host.reset(4).unwrap();
-        host.idle(8).unwrap();
-        let mut chip = Machine::connect(SpiBus::new(host, 1)).unwrap();
-        let n_axes = chip.caps().n_axes;
-        chip.bus().set_n_axes(n_axes);
-        let limits = machine_setup::chip_limits(&chip.caps());
-        let (config, resolved) = machine_setup::resolve(MachineConfig::default(), limits, "<built-in>").unwrap();
         let text = "G1 X1 F600\nM64 P1\nG1 X2\nM63 P1\nG1 X3\nM2\n";
-        let program = finestep_gcode::parse_str(text, "gpio.ngc").unwrap();
-        let planned = plan_program(&config, &program).unwrap();
-        assert_eq!(planned.events.len(), 2);
-        let report =
-            stream_planned(&mut chip, &planned, &resolved, &config.spindle, "gpio.ngc", |_, _| Ok(())).unwrap();
-        assert_eq!(report.stream.underruns, 0);
+        let (mut chip, config) = stream_on_recorded_pins(text, "gpio.ngc", 2);
         let recorder = chip.bus().link_mut().target();
         let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, x)| (pins, x)).collect();
         assert_eq!(states, vec![(1 << (OUT_GPIO0 + 1), 800), (0, 1600)], "{:?}", recorder.changes);
