@@ -72,6 +72,8 @@ pub mod gantry_sync;
 pub mod hand_wheel;
 pub mod input_filter;
 pub mod jog_generator;
+pub mod keypad_scan;
+pub mod led_menu;
 pub mod limits;
 pub mod logic_outputs;
 pub mod motion_control;
