@@ -161,6 +161,10 @@ fn main() {
         "finestep_core_sim.v",
         "pbp_interp_sim.cpp",
         "pbp_interp_sim.h",
+        "keypad_scan_sim.cpp",
+        "keypad_scan_sim.h",
+        "led_menu_sim.cpp",
+        "led_menu_sim.h",
     ] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
@@ -221,7 +225,11 @@ fn main() {
         .define("FT_HAS_OUTPUTS", params.has_outputs.to_string().as_str())
         .define("FT_N_GPIO", params.n_gpio.to_string().as_str())
         .define("PI_COORD_W", PBP_COORD_W.to_string().as_str())
-        .define("PI_DIV_W", PBP_DIV_W.to_string().as_str());
+        .define("PI_DIV_W", PBP_DIV_W.to_string().as_str())
+        .define("KP_PRE_W", KEYPAD_PRE_W.to_string().as_str())
+        .define("KP_DEB_W", KEYPAD_DEB_W.to_string().as_str())
+        .define("LM_PRE_W", LED_PRE_W.to_string().as_str())
+        .define("LM_LOW_N_DIG", LED_LOW_N_DIG.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -253,6 +261,11 @@ fn main() {
         (Build::Top { motion: true }, "Vfinestep_top_motion", None),
         // The point-by-point comparison interpolator alone (its own lockstep test).
         (Build::PbpInterp, "Vpbp_interp", Some(trace_flag)),
+        // The gantry card's keypad scan and LED menu alone (their own lockstep tests);
+        // the menu also with 5 digits and active-low segments and digits.
+        (Build::KeypadScan, "Vkeypad_scan", Some(trace_flag)),
+        (Build::LedMenu { low: false }, "Vled_menu", Some(trace_flag)),
+        (Build::LedMenu { low: true }, "Vled_menu_low", Some(trace_flag)),
     ];
     if netlist.is_some() {
         // A netlist is Verilated once, without tracing (with it, the trace code of its
@@ -298,6 +311,8 @@ fn main() {
     files.push(sim.join("finestep_sim.cpp"));
     files.push(sim.join("finestep_top_sim.cpp"));
     files.push(sim.join("pbp_interp_sim.cpp"));
+    files.push(sim.join("keypad_scan_sim.cpp"));
+    files.push(sim.join("led_menu_sim.cpp"));
     if netlist.as_ref().is_some_and(|n| n.family == "mutants") {
         files.push(sim.join("mutants_rtl/finestep_mutsel.cpp"));
     }
@@ -315,8 +330,10 @@ fn main() {
         .header(sim.join("finestep_sim.h").to_string_lossy())
         .header(sim.join("finestep_top_sim.h").to_string_lossy())
         .header(sim.join("pbp_interp_sim.h").to_string_lossy())
-        .allowlist_function("fs_.*|ft_.*|pi_.*")
-        .allowlist_type("fs_.*|ft_.*|pi_.*")
+        .header(sim.join("keypad_scan_sim.h").to_string_lossy())
+        .header(sim.join("led_menu_sim.h").to_string_lossy())
+        .allowlist_function("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*")
+        .allowlist_type("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*")
         .allowlist_var("FS_.*|FT_.*")
         .clang_arg(format!("-I{}", gen.display()))
         .derive_default(true)
@@ -365,12 +382,26 @@ enum Build {
     Top { motion: bool },
     /// `pbp_interp` alone, with [`PBP_COORD_W`] and [`PBP_DIV_W`].
     PbpInterp,
+    /// `keypad_scan` alone, with [`KEYPAD_PRE_W`] and [`KEYPAD_DEB_W`].
+    KeypadScan,
+    /// `led_menu` alone, with [`LED_PRE_W`]: its defaults (8 digits, active high), or
+    /// (`low`) [`LED_LOW_N_DIG`] digits with active-low segments and digits.
+    LedMenu { low: bool },
 }
 
 /// The parameters the Verilated `pbp_interp` is built with (its defaults); the shim
 /// reports them.
 const PBP_COORD_W: u32 = 24;
 const PBP_DIV_W: u32 = 16;
+
+/// The parameters of the Verilated `keypad_scan` (its defaults); the shim reports them.
+const KEYPAD_PRE_W: u32 = 16;
+const KEYPAD_DEB_W: u32 = 4;
+
+/// The parameters of the Verilated `led_menu`s: `PRE_W` (its default) and the digits of
+/// the active-low build; the shim reports them.
+const LED_PRE_W: u32 = 16;
+const LED_LOW_N_DIG: u32 = 5;
 
 /// Runs Verilator on `build` into `dir` and returns the variables of its `*_classes.mk`.
 #[allow(clippy::too_many_arguments)]
@@ -389,6 +420,8 @@ fn verilate(
         Build::Core { gantry } => ("finestep_core_sim", Some(gantry), None),
         Build::Top { motion } => ("finestep_top", None, Some(motion)),
         Build::PbpInterp => ("pbp_interp", None, None),
+        Build::KeypadScan => ("keypad_scan", None, None),
+        Build::LedMenu { .. } => ("led_menu", None, None),
     };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
@@ -432,6 +465,28 @@ fn verilate(
             .status()
             .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
         assert!(status.success(), "verilator failed on hdl/ (pbp_interp)");
+        return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
+    }
+    if let Build::KeypadScan = build {
+        let status = command
+            .arg(format!("-GPRE_W={KEYPAD_PRE_W}"))
+            .arg(format!("-GDEB_W={KEYPAD_DEB_W}"))
+            .args(sources)
+            .status()
+            .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+        assert!(status.success(), "verilator failed on hdl/ (keypad_scan)");
+        return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
+    }
+    if let Build::LedMenu { low } = build {
+        let low_params =
+            [format!("-GN_DIG={LED_LOW_N_DIG}"), "-GSEG_ACTIVE_LOW=1".to_string(), "-GDIG_ACTIVE_LOW=1".to_string()];
+        let status = command
+            .arg(format!("-GPRE_W={LED_PRE_W}"))
+            .args(if low { &low_params[..] } else { &[] })
+            .args(sources)
+            .status()
+            .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+        assert!(status.success(), "verilator failed on hdl/ (led_menu)");
         return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
     }
     let status = command

@@ -25,8 +25,12 @@ use std::ptr::NonNull;
 use finestep_interface::{CoreParams, DriveTiming, MAX_AXES};
 use finestep_model::{ChunkEnd, CoreInputs, CoreOutputs, Event};
 
+pub mod keypad_scan;
+pub mod led_menu;
 pub mod pbp_interp;
 pub mod top;
+pub use keypad_scan::{keypad_params, RtlKeypadScan};
+pub use led_menu::{led_variants, RtlLedMenu};
 pub use pbp_interp::{pbp_params, RtlPbpInterp};
 pub use top::{top_build, top_build_of, PinEvent, RtlTop, TopBuild, TopVariant};
 
