@@ -12,7 +12,7 @@ use anyhow::{bail, Context};
 use finestep_gcode::conformance::Event;
 use finestep_gcode::conformance::{compare, events_of, rs274_events};
 use finestep_gcode::Options;
-use finestep_planner::cutter_comp::{compensate, ToolTable};
+use finestep_planner::cutter_comp::{compensate, EntryExit, ToolTable};
 
 /// A program interprets for at most this long before it counts as hung.
 const TIMEOUT: Duration = Duration::from_secs(10);
@@ -31,7 +31,8 @@ pub fn options(tool_table: Option<&Path>) -> anyhow::Result<Options> {
 
 /// The radii of a LinuxCNC tool table's tools (its D column, a diameter in inches).
 pub fn radii(tool_table: Option<&Path>) -> anyhow::Result<ToolTable> {
-    let mut table = ToolTable::new();
+    // rs274 lays out the entry and exit moves of cutter compensation its own way.
+    let mut table = ToolTable::new().with_entry_exit(EntryExit::LinuxCnc);
     if let Some(path) = tool_table {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
         for line in text.lines() {

@@ -11,6 +11,8 @@
 //! lookahead_moves = 2000        # every move is planned seeing at least this many ahead
 //! parameter_file = "sim.var"    # LinuxCNC's parameter file: read before a program, the
 //!                               # persistent parameters written back at its end (none)
+//! cutter_comp_entry = "tangent" # G41/G42 entry and G40 exit moves: "tangent" lines, or
+//!                               # "linuxcnc" (LinuxCNC's, which can cut into the part)
 //!
 //! [drive]                       # step/dir timing of every axis, ns
 //! step_len_ns = 2000
@@ -149,6 +151,9 @@ pub struct MachineConfig {
     /// back, crash-safe, when the program has run to its end. A relative path is taken
     /// from the configuration file's folder. The planner does not read it.
     pub parameter_file: Option<std::path::PathBuf>,
+    /// How cutter compensation lays out the entry move after G41/G42 and the exit move
+    /// after G40 ([`crate::cutter_comp::EntryExit`]).
+    pub cutter_comp_entry: crate::cutter_comp::EntryExit,
     /// The core the configuration is resolved against (not read from the file; see
     /// [`MachineConfig::for_core`]): the default build's unless set.
     #[serde(skip)]
@@ -300,6 +305,7 @@ impl Default for MachineConfig {
             lookahead_moves: 2000,
             bus: None,
             parameter_file: None,
+            cutter_comp_entry: crate::cutter_comp::EntryExit::Tangent,
             measure: MeasureConfig::default(),
             spindle: SpindleConfig::default(),
             drive: DriveTimingNs::default(),
@@ -406,6 +412,7 @@ impl MachineConfig {
         self.tools
             .iter()
             .fold(crate::cutter_comp::ToolTable::new(), |table, tool| table.with_radius_mm(tool.number, tool.radius_mm))
+            .with_entry_exit(self.cutter_comp_entry)
     }
 
     /// The same configuration, to be resolved against `core` (the chip's CAPS and clock).

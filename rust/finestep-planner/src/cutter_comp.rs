@@ -54,18 +54,28 @@
 //!   and, for a feed move, its feed; after a rapid, the feed of the move before or the
 //!   last programmed feed).
 //! - **Entry.** After G41/G42 the first move in XY (the entry move) must be a straight
-//!   line longer than the tool radius. As in LinuxCNC, it runs from the current
-//!   (uncompensated) point along the tangent to the circle of the tool radius around
-//!   its programmed end point, on the compensation side; it then joins the next move
-//!   like any other corner: an entry that comes in from the compensation side (from
-//!   outside for an outside contour) is cut back where it crosses the first offset move,
-//!   one from the other side gets a corner arc.
+//!   line longer than the tool radius. With [`EntryExit::Tangent`] (the default) it runs
+//!   from the current (uncompensated) point along the tangent to the circle of the tool
+//!   radius around its programmed end point, on the compensation side; it then joins the
+//!   next move like any other corner: an entry that comes in from the compensation side
+//!   (from outside for an outside contour) is cut back where it crosses the first offset
+//!   move, one from the other side gets a corner arc.
 //! - **Exit.** After G40 the first move in XY (the exit move) must be a straight line
-//!   longer than the tool radius. It is the mirror image of the entry: it leaves the
-//!   circle of the tool radius around the last compensated point along the tangent
-//!   through its programmed end point, which it reaches exactly, and joins the last
-//!   compensated move like any other corner. (LinuxCNC instead moves straight from the
-//!   last offset point, which can cut into the part.)
+//!   (with [`EntryExit::Tangent`] longer than the tool radius). With
+//!   [`EntryExit::Tangent`] it is the mirror image of the entry: it leaves the circle of
+//!   the tool radius around the last compensated point along the tangent through its
+//!   programmed end point, which it reaches exactly, and joins the last compensated move
+//!   like any other corner.
+//! - **LinuxCNC's entry and exit** ([`EntryExit::LinuxCnc`], what LinuxCNC 2.9's
+//!   interpreter does, `convert_straight_comp1` and the first move after G40): the entry
+//!   ends at the programmed end point plus the tool radius along the normal of the
+//!   *programmed* entry direction, and that end joins the next move as the end of the
+//!   programmed line's offset would (at an inside corner it slides along that offset to
+//!   the crossing, the entry itself being the straight line from the uncompensated
+//!   start); the exit runs straight from the last offset end point to the programmed
+//!   point. Both pass closer than the tool radius to the programmed corner they touch,
+//!   so they can cut into the part (in `comp-g1.ngc`, LinuxCNC's own example, by about
+//!   0.09 inch at the entry): the tangent lines are finestep's default.
 //! - **Tools.** The radius comes from the [`ToolTable`] entry of the `D` word, or of the
 //!   tool in the spindle (the last M6) when `D` is not given. A radius of zero leaves the
 //!   path as programmed. A tool change (M6) while compensation is on is an error, as in
@@ -106,10 +116,26 @@ const PLANAR_ZERO_MM: f64 = 1e-12;
 /// Turns closer than this to exactly backwards (sine of the angle) count as reversals.
 const REVERSAL_SINE: f64 = 1e-12;
 
-/// Tool radii by tool number, in mm.
+/// How the entry move (the first XY move after G41/G42) and the exit move (the first
+/// after G40) are laid out (see the [module documentation](self)).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Deserialize)]
+pub enum EntryExit {
+    /// Tangent lines to the circle of the tool radius around the programmed point they
+    /// meet: they never come closer than the tool radius to it.
+    #[default]
+    #[serde(rename = "tangent")]
+    Tangent,
+    /// LinuxCNC 2.9's: the entry ends on the normal of the programmed entry line, the
+    /// exit leaves straight from the last offset point.
+    #[serde(rename = "linuxcnc")]
+    LinuxCnc,
+}
+
+/// Tool radii by tool number, in mm, and the layout of the entry and exit moves.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ToolTable {
     radii_mm: BTreeMap<u32, f64>,
+    entry_exit: EntryExit,
 }
 
 impl ToolTable {
@@ -133,6 +159,17 @@ impl ToolTable {
     /// Tool `tool`'s radius, if the table has the tool.
     pub fn radius_mm(&self, tool: u32) -> Option<f64> {
         self.radii_mm.get(&tool).copied()
+    }
+
+    /// The table with the entry and exit moves laid out as `entry_exit` says.
+    pub fn with_entry_exit(mut self, entry_exit: EntryExit) -> ToolTable {
+        self.entry_exit = entry_exit;
+        self
+    }
+
+    /// How the entry and exit moves are laid out.
+    pub fn entry_exit(&self) -> EntryExit {
+        self.entry_exit
     }
 }
 
@@ -408,7 +445,7 @@ impl Compensator<'_> {
 
     fn block(&mut self, block: &Block) -> Result<(), CompError> {
         match block.kind {
-            BlockKind::CutterComp { side, tool } => self.comp_change(block, side, tool),
+            BlockKind::CutterComp { side, tool } => self.comp_change(block, side, tool, None),
             BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. } => self.motion(block),
             BlockKind::Nurbs { to, feed_mm_per_min, .. } => {
                 if self.comp_on() {
@@ -455,7 +492,15 @@ impl Compensator<'_> {
         }
     }
 
-    fn comp_change(&mut self, block: &Block, side: CompSide, tool: Option<u32>) -> Result<(), CompError> {
+    /// G40, G41/G42 (the radius of tool `tool`, or of the tool in the spindle) or
+    /// G41.1/G42.1 (`given_radius`).
+    fn comp_change(
+        &mut self,
+        block: &Block,
+        side: CompSide,
+        tool: Option<u32>,
+        given_radius: Option<f64>,
+    ) -> Result<(), CompError> {
         let fail = |reason: String| CompError { line: block.line, reason };
         let side = match side {
             CompSide::Off => {
@@ -475,11 +520,25 @@ impl Compensator<'_> {
         if let Mode::Stopping { .. } = self.mode {
             return Err(fail("G41/G42 after G40 before the exit move; move out of compensation first".into()));
         }
-        let tool = tool.unwrap_or(self.spindle_tool);
-        let radius = self.tools.radius_mm(tool).ok_or_else(|| fail(format!("tool {tool} is not in the tool table")))?;
-        if !(radius.is_finite() && radius >= 0.0) {
-            return Err(fail(format!("tool {tool} has radius {radius} mm; a radius must be finite and not negative")));
-        }
+        let radius = match given_radius {
+            Some(radius) => {
+                if !(radius.is_finite() && radius >= 0.0) {
+                    return Err(fail(format!("radius {radius} mm; a radius must be finite and not negative")));
+                }
+                radius
+            }
+            None => {
+                let tool = tool.unwrap_or(self.spindle_tool);
+                let radius =
+                    self.tools.radius_mm(tool).ok_or_else(|| fail(format!("tool {tool} is not in the tool table")))?;
+                if !(radius.is_finite() && radius >= 0.0) {
+                    return Err(fail(format!(
+                        "tool {tool} has radius {radius} mm; a radius must be finite and not negative"
+                    )));
+                }
+                radius
+            }
+        };
         self.mode = Mode::Starting { side, radius };
         Ok(())
     }
@@ -548,8 +607,8 @@ impl Compensator<'_> {
                 if is_arc {
                     return Err(fail("the entry move after G41/G42 must be a straight line (G0/G1), not an arc"));
                 }
-                let element =
-                    entry_element(V2::of(&from), V2::of(&to), side, radius).map_err(|e| fail(&e.to_string()))?;
+                let element = entry_element(V2::of(&from), V2::of(&to), side, radius, self.tools.entry_exit)
+                    .map_err(|e| fail(&e.to_string()))?;
                 let current = Box::new(pending(element, V2::of(&to)));
                 self.mode = Mode::On { side, radius, current };
             }
@@ -562,6 +621,13 @@ impl Compensator<'_> {
             Mode::Stopping { current, .. } => {
                 if is_arc {
                     return Err(fail("the exit move after G40 must be a straight line (G0/G1), not an arc"));
+                }
+                if self.tools.entry_exit == EntryExit::LinuxCnc {
+                    // Straight on from the last offset end point.
+                    self.mode = Mode::Stopping { side, radius, current };
+                    self.flush();
+                    self.out.push(block.clone());
+                    return Ok(());
                 }
                 let element =
                     exit_element(V2::of(&from), V2::of(&to), side, radius).map_err(|e| fail(&e.to_string()))?;
@@ -721,12 +787,28 @@ fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result
     }
 }
 
-/// The entry line from `from` (uncompensated) to the tangent point on the circle of
-/// `radius` around `to`, on the compensation side.
-fn entry_element(from: V2, to: V2, side: f64, radius: f64) -> Result<Element, OffsetError> {
+/// The entry line from `from` (uncompensated): with [`EntryExit::Tangent`] to the
+/// tangent point on the circle of `radius` around `to`, on the compensation side; with
+/// [`EntryExit::LinuxCnc`] to `to` plus `radius` along the normal of `to - from`, its
+/// shape (for the join with the next move) the offset of the programmed line through
+/// that point.
+fn entry_element(from: V2, to: V2, side: f64, radius: f64, style: EntryExit) -> Result<Element, OffsetError> {
     let length = to.sub(from).norm();
     if length <= radius + JOIN_TOLERANCE_MM {
         return Err(OffsetError::TooShort { which: "entry move after G41/G42", length, radius });
+    }
+    if style == EntryExit::LinuxCnc {
+        let dir = to.sub(from).unit();
+        let end = to.add(dir.left().scale(side * radius));
+        return Ok(Element {
+            shape: Shape::Line { origin: end, dir },
+            start: from,
+            start_param: from.sub(end).dot(dir),
+            end,
+            end_param: 0.0,
+            radius_start: 0.0,
+            radius_end: 0.0,
+        });
     }
     let dir = to.sub(from).unit().rotate(side * (radius / length).asin());
     let end = to.add(dir.left().scale(side * radius));

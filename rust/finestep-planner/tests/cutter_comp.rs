@@ -6,7 +6,7 @@
 use std::f64::consts::{PI, TAU};
 
 use finestep_gcode::{parse_str, Block, BlockKind, CompSide, Plane, Point, Program};
-use finestep_planner::cutter_comp::{compensate, CompError, ToolTable};
+use finestep_planner::cutter_comp::{compensate, CompError, EntryExit, ToolTable};
 use proptest::prelude::*;
 use proptest::test_runner::TestCaseError;
 
@@ -1080,4 +1080,66 @@ fn random_programs_never_panic() {
             Ok(())
         })
         .unwrap();
+}
+
+// ---------------------------------------------------------------- LinuxCNC's entry and exit
+
+/// `program` compensated with LinuxCNC's entry and exit (tool table as `table`) against
+/// rs274's canonical output for it.
+fn agrees_with_rs274(program: &str, table: ToolTable, rs274: &str) {
+    use finestep_gcode::conformance::{compare, events_of, rs274_events};
+    let compensated = compensate(&parse(program), &table.with_entry_exit(EntryExit::LinuxCnc)).unwrap();
+    let theirs = rs274_events(rs274).unwrap();
+    assert_eq!(compare(&events_of(&compensated), &theirs), None);
+}
+
+/// LinuxCNC's own example `comp-g1.ngc` (its part with tool 4, 1 inch in diameter):
+/// rs274's entry ends on the normal of the programmed entry line and slides along that
+/// line's offset to the first arc's offset (an inside corner), its exit leaves straight
+/// from the last offset point. (Was a disagreement in `make conformance`: finestep's
+/// tangent entry and exit, the default, differ there by design.)
+#[test]
+fn linuxcnc_entry_and_exit_agree_with_rs274_on_comp_g1() {
+    let program = "G20 F60\nT4 M6\nG0 X0 Y3.5\nG1 Z0\nG41\nG1 X2 Y3\nG2 X3 Y2 J-1\nG1 Y-1\nG2 X2 Y-2 I-1\nG1 X-3\n\
+                   G1 X1.4 Y2.8\nG2 X2 Y3 I.6 J-.8\nG40\nG1 X3 Y3.5\nM2\n";
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_FEED_RATE(60.0000)\n\
+            8 N..... USE_LENGTH_UNITS(CANON_UNITS_INCHES)\n\
+            9 N..... SELECT_TOOL(4)\n\
+            10 N..... START_CHANGE()\n\
+            11 N..... STOP_SPINDLE_TURNING(0)\n\
+            12 N..... CHANGE_TOOL(4)\n\
+            13 N..... STRAIGHT_TRAVERSE(0.0000, 3.5000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            14 N..... STRAIGHT_FEED(0.0000, 3.5000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            16 N..... STRAIGHT_FEED(2.1438, 3.9948, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            17 N..... ARC_FEED(4.0000, 2.0000, 2.0000, 2.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            18 N..... STRAIGHT_FEED(4.0000, -1.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            19 N..... ARC_FEED(2.0000, -3.0000, 2.0000, -1.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            20 N..... STRAIGHT_FEED(-3.0000, -3.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            21 N..... ARC_FEED(-3.7372, -1.3243, -3.0000, -2.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            22 N..... STRAIGHT_FEED(0.6628, 3.4757, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            23 N..... ARC_FEED(0.8000, 3.6000, 1.4000, 2.8000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            24 N..... ARC_FEED(2.0000, 4.0000, 2.0000, 2.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            26 N..... STRAIGHT_FEED(3.0000, 3.5000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            27 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            28 N..... SET_XY_ROTATION(0.0000)\n\
+            29 N..... SET_FEED_MODE(0, 0)\n\
+            30 N..... SET_FEED_RATE(0.0000)\n\
+            31 N..... STOP_SPINDLE_TURNING(0)\n\
+            32 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+            33 N..... PROGRAM_END()\n\
+            34 N..... ON_RESET()\n\
+            35 N..... ON_RESET()\n";
+    agrees_with_rs274(program, ToolTable::new().with_radius_mm(4, 25.4), rs274);
+    // The default (tangent) entry stays clear of the programmed corner by the radius.
+    let tangent = compensate(&parse(program), &ToolTable::new().with_radius_mm(4, 25.4)).unwrap();
+    let entry = tangent.blocks.iter().find(|b| b.line == 6).unwrap();
+    let BlockKind::Linear { to, .. } = entry.kind else { panic!("{entry:?}") };
+    assert!((len(sub((to.x_mm, to.y_mm), (50.8, 76.2))) - 25.4).abs() < 1e-9);
 }
