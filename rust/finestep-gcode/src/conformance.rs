@@ -72,11 +72,14 @@ pub enum Event {
         /// Spindle and coolant.
         machine: Machine,
     },
-    /// A NURBS (G5.1, G5.2/G5.3), compared by its end point where both sides know it:
-    /// rs274 prints `NURBS_FEED(3, ...)` without its control points.
+    /// A NURBS (G5, G5.1, G5.2/G5.3), compared by its number of control points and its
+    /// end point where both sides know it: rs274 prints `NURBS_FEED(4, ...)` with the
+    /// count and without the points.
     Nurbs {
         /// End X Y Z A, if known.
         to: Option<[f64; 4]>,
+        /// The number of control points, the start included (rs274 prints it first).
+        points: usize,
     },
     /// A dwell.
     Dwell {
@@ -88,7 +91,15 @@ pub enum Event {
         /// The tool number.
         tool: u32,
     },
-    /// M0 (rs274 also prints M1 as an optional stop).
+    /// M19: the spindle oriented (and stopped).
+    SpindleOrient {
+        /// Degrees from the index.
+        angle: f64,
+        /// 0 the shorter way, 1 clockwise, 2 counter-clockwise.
+        direction: u32,
+    },
+    /// M0 (rs274 also prints M1 as an optional stop, and M60 as a pallet shuttle and a
+    /// stop).
     Pause,
     /// M2/M30.
     End,
@@ -114,10 +125,11 @@ impl fmt::Display for Event {
             Event::Arc { to, centre, plane, turn, feed, machine } => {
                 write!(f, "ARC({}) centre ({}) G{plane} turn {turn} F{feed:.4} {}", p(to), p(centre), m(machine))
             }
-            Event::Nurbs { to: Some(to) } => write!(f, "NURBS({})", p(to)),
-            Event::Nurbs { to: None } => write!(f, "NURBS(...)"),
+            Event::Nurbs { to: Some(to), points } => write!(f, "NURBS({points}; {})", p(to)),
+            Event::Nurbs { to: None, points } => write!(f, "NURBS({points}; ...)"),
             Event::Dwell { seconds } => write!(f, "DWELL({seconds:.4})"),
             Event::ToolChange { tool } => write!(f, "TOOL_CHANGE({tool})"),
+            Event::SpindleOrient { angle, direction } => write!(f, "ORIENT_SPINDLE({angle:.4}, {direction})"),
             Event::Pause => write!(f, "PAUSE"),
             Event::End => write!(f, "END"),
             Event::Other(call) => write!(f, "{call}"),
@@ -149,7 +161,9 @@ pub fn events_of(program: &Program) -> Vec<Event> {
                 let turn = if *clockwise { -turns } else { turns };
                 events.push(Event::Arc { to: point(*to), centre, plane, turn, feed: *feed_mm_per_min, machine });
             }
-            BlockKind::Nurbs { to, .. } => events.push(Event::Nurbs { to: Some(point(*to)) }),
+            BlockKind::Nurbs { to, control_points, .. } => {
+                events.push(Event::Nurbs { to: Some(point(*to)), points: control_points.len() })
+            }
             BlockKind::Dwell { seconds } => events.push(Event::Dwell { seconds: *seconds }),
             BlockKind::Spindle { rotation, rpm } => {
                 machine.rotation = match rotation {
@@ -161,10 +175,15 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             }
             BlockKind::Coolant { mist, flood } => (machine.mist, machine.flood) = (*mist, *flood),
             BlockKind::ToolChange { tool } => events.push(Event::ToolChange { tool: *tool }),
+            BlockKind::SpindleOrient { angle_deg, direction, .. } => {
+                machine.rotation = 0;
+                events.push(Event::SpindleOrient { angle: *angle_deg, direction: *direction });
+            }
             BlockKind::Pause => events.push(Event::Pause),
             BlockKind::End => events.push(Event::End),
             BlockKind::ToolSelect { .. }
             | BlockKind::CutterComp { .. }
+            | BlockKind::CutterCompRadius { .. }
             | BlockKind::PathControl(_)
             | BlockKind::Overrides(_)
             | BlockKind::DigitalOutput { .. } => {}
@@ -309,6 +328,15 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                 canon.machine.rotation = 0;
                 None
             }
+            // ORIENT_SPINDLE(spindle, angle, direction): the spindle is held at the angle.
+            "ORIENT_SPINDLE" => {
+                let v = nums()?;
+                canon.machine.rotation = 0;
+                Some(Event::SpindleOrient {
+                    angle: v.get(1).copied().unwrap_or(0.0),
+                    direction: v.get(2).copied().unwrap_or(0.0) as u32,
+                })
+            }
             "MIST_ON" | "MIST_OFF" => {
                 canon.machine.mist = name == "MIST_ON";
                 None
@@ -356,7 +384,10 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
             "CHANGE_TOOL" => Some(Event::ToolChange { tool: nums()?.first().copied().unwrap_or(0.0) as u32 }),
             "PROGRAM_STOP" | "OPTIONAL_PROGRAM_STOP" => Some(Event::Pause),
             "PROGRAM_END" => Some(Event::End),
-            "NURBS_FEED" => Some(Event::Nurbs { to: None }),
+            "NURBS_FEED" => {
+                let count = args.split(',').next().and_then(|n| n.trim().parse::<usize>().ok());
+                Some(Event::Nurbs { to: None, points: count.ok_or_else(|| at("NURBS_FEED without its count".into()))? })
+            }
             "STRAIGHT_PROBE" | "RIGID_TAP" | "START_SPEED_FEED_SYNCH" | "SPINDLE_RETRACT_TRAVERSE" => {
                 Some(Event::Other(call.to_string()))
             }
@@ -398,10 +429,15 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
                 && feed_ok(*fa, *fb)
                 && machine_close(ma, mb)
         }
-        (Event::Nurbs { to: Some(a) }, Event::Nurbs { to: Some(b) }) => close(a, b, tolerance),
-        (Event::Nurbs { .. }, Event::Nurbs { .. }) => true,
+        (Event::Nurbs { to: Some(a), points: na }, Event::Nurbs { to: Some(b), points: nb }) => {
+            na == nb && close(a, b, tolerance)
+        }
+        (Event::Nurbs { points: na, .. }, Event::Nurbs { points: nb, .. }) => na == nb,
         (Event::Dwell { seconds: a }, Event::Dwell { seconds: b }) => (a - b).abs() <= 5e-5,
         (Event::ToolChange { tool: a }, Event::ToolChange { tool: b }) => a == b,
+        (Event::SpindleOrient { angle: a, direction: da }, Event::SpindleOrient { angle: b, direction: db }) => {
+            (a - b).abs() <= 5e-5 && da == db
+        }
         (Event::Pause, Event::Pause) | (Event::End, Event::End) => true,
         _ => false,
     }
@@ -416,12 +452,12 @@ fn moving(events: &[Event], tolerance: impl Fn(usize) -> f64) -> Vec<(usize, &Ev
     for (i, e) in events.iter().enumerate() {
         let to = match e {
             Event::Traverse { to } | Event::Feed { to, .. } => Some(*to),
-            Event::Arc { to, .. } | Event::Nurbs { to: Some(to) } => {
+            Event::Arc { to, .. } | Event::Nurbs { to: Some(to), .. } => {
                 at = Some(*to);
                 out.push((i, e));
                 continue;
             }
-            Event::Nurbs { to: None } => {
+            Event::Nurbs { to: None, .. } => {
                 at = None;
                 out.push((i, e));
                 continue;

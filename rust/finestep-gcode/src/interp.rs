@@ -93,6 +93,11 @@ pub(crate) struct State {
     path: PathControl,
     /// The sticky words of a canned cycle: R, Z (program frame, mm), P, Q (mm).
     cycle: CycleWords,
+    /// G7 (lathe diameter mode): X words are diameters, halved as they are read.
+    diameter_mode: bool,
+    /// G5 without I J: the first control point's offset from the start, in program
+    /// units, the negated P Q of the last G5 (rs274's `cycle_i`, `cycle_j`; 0 at first).
+    g5_next_ij: [f64; 2],
     /// The 1-based source line being executed (set by the caller).
     pub(crate) line: usize,
 }
@@ -137,6 +142,8 @@ impl Default for State {
             retract_to_r: true,
             path: PathControl::Blend { tolerance_mm: None },
             cycle: CycleWords::default(),
+            g5_next_ij: [0.0; 2],
+            diameter_mode: false,
             line: 0,
         }
     }
@@ -151,6 +158,10 @@ struct CycleWords {
     z: Option<f64>,
     p: Option<f64>,
     q: Option<f64>,
+    /// G87's I J (program units) and K (program frame, mm).
+    i: Option<f64>,
+    j: Option<f64>,
+    k: Option<f64>,
 }
 
 /// #5220, the coordinate system in use (1 = G54).
@@ -179,22 +190,22 @@ fn rotate(x: f64, y: f64, degrees: f64) -> (f64, f64) {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Group {
     NonModal,    // G group 0: G4 G10 G28 G28.1 G30 G30.1 G53 G92 G92.1 G92.2 G92.3
-    Motion,      // G group 1: G0 G1 G2 G3 G5.2 G5.3 G73 G80 G81 G82 G83 G85 G89
+    Motion,      // G group 1: G0 G1 G2 G3 G5 G5.1 G5.2 G5.3 G73 G80 G81 G82 G83 G85 G86 G87 G89
     Plane,       // G group 2: G17 G18 G19
     Distance,    // G group 3: G90 G91
     ArcDistance, // G group 4: G90.1 G91.1
     Units,       // G group 6: G20 G21
-    Comp,        // G group 7: G40 G41 G42
+    Comp,        // G group 7: G40 G41 G41.1 G42 G42.1
     FeedMode,    // G group 5: G93 G94
     SpindleMode, // G group 14: G97
-    LatheMode,   // G group 15: G8
+    LatheMode,   // G group 15: G7 G8
     ToolLength,  // G group 8: G43 G43.1 G43.2 G49
     ReturnMode,  // G group 10: G98 G99
     Coord,       // G group 12: G54-G59.3
     Path,        // G group 13: G61 G61.1 G64
-    Stop,        // M group 4: M0 M1 M2 M30
+    Stop,        // M group 4: M0 M1 M2 M30 M60
     ToolChange,  // M group 6: M6 M61
-    Spindle,     // M group 7: M3 M4 M5
+    Spindle,     // M group 7: M3 M4 M5 M19
     Coolant,     // M group 8: M7 M8 M9
     ModalState,  // M group 10: M70 M71 M72 M73
     Override,    // M group 9: M48 M49 M50 M51 M52 M53
@@ -204,25 +215,24 @@ enum Group {
 const GROUPS: usize = 21;
 
 /// The canned cycles implemented (in tenths).
-const CYCLES: [Code; 7] = [730, 810, 820, 830, 850, 860, 890];
+const CYCLES: [Code; 8] = [730, 810, 820, 830, 850, 860, 870, 890];
 
 fn g_group(code: Code) -> Option<Group> {
     Some(match code {
         40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
-        0 | 10 | 20 | 30 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 860 | 890 => Group::Motion,
+        0 | 10 | 20 | 30 | 50 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 860 | 870 | 890 => Group::Motion,
         430 | 431 | 432 | 490 => Group::ToolLength,
-        // G94 (units per minute) is the only feed mode and always in force; likewise G97
-        // (spindle in rpm) and G8 (lathe radius mode).
+        // G97 (spindle in rpm) is the only spindle mode and always in force.
         930 | 940 => Group::FeedMode,
         970 => Group::SpindleMode,
-        80 => Group::LatheMode,
+        70 | 80 => Group::LatheMode,
         980 | 990 => Group::ReturnMode,
         540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => Group::Coord,
         170 | 180 | 190 => Group::Plane,
         900 | 910 => Group::Distance,
         901 | 911 => Group::ArcDistance,
         200 | 210 => Group::Units,
-        400 | 410 | 420 => Group::Comp,
+        400 | 410 | 411 | 420 | 421 => Group::Comp,
         610 | 611 | 640 => Group::Path,
         _ => return None,
     })
@@ -230,9 +240,9 @@ fn g_group(code: Code) -> Option<Group> {
 
 fn m_group(code: u32) -> Option<Group> {
     Some(match code {
-        0 | 1 | 2 | 30 => Group::Stop,
+        0 | 1 | 2 | 30 | 60 => Group::Stop,
         6 | 61 => Group::ToolChange,
-        3..=5 => Group::Spindle,
+        3..=5 | 19 => Group::Spindle,
         7..=9 => Group::Coolant,
         70..=73 => Group::ModalState,
         48..=53 => Group::Override,
@@ -615,8 +625,8 @@ impl State {
             "_units_per_rev" => 0.0,
             "_coord_system" => [540.0, 550.0, 560.0, 570.0, 580.0, 590.0, 591.0, 592.0, 593.0][self.system],
             "_ijk_absolute_mode" => flag(!self.arc_incremental),
-            "_lathe_diameter_mode" => 0.0,
-            "_lathe_radius_mode" => 1.0,
+            "_lathe_diameter_mode" => flag(self.diameter_mode),
+            "_lathe_radius_mode" => flag(!self.diameter_mode),
             "_spindle_on" => flag(self.rotation != SpindleRotation::Off),
             "_spindle_cw" => flag(self.rotation == SpindleRotation::Clockwise),
             "_mist" => flag(self.mist),
@@ -656,7 +666,17 @@ impl State {
 
     /// Executes one block (its values computed) in LinuxCNC's order.
     pub(crate) fn execute(&mut self, words: &[Word]) -> Result<Executed, LineError> {
-        let w = sort_words(words)?;
+        let mut w = sort_words(words)?;
+        // G7/G8 first: in G7 every X word is a diameter (LinuxCNC halves it as it reads
+        // it, for moves, G10, G28/G30, G43.1 and G92 alike; I and R are not halved).
+        if let (None, Some((code, _))) = (&self.nurbs, w.group(Group::LatheMode)) {
+            self.diameter_mode = code == 70;
+        }
+        if self.diameter_mode {
+            if let Some((x, _)) = &mut w.params[letter_index('X')] {
+                *x /= 2.0;
+            }
+        }
         if self.nurbs.is_some() && !w.has(Group::Motion, G5_3) {
             return self.nurbs_point_line(words, &w);
         }
@@ -696,11 +716,14 @@ impl State {
             let name = g_name(motion.unwrap_or(20));
             LineError::new(motion_column.unwrap_or(column), format!("{name} with no axis words"))
         };
-        // G5.1 is not modal in rs274: its I J need the G5.1 word in the block.
-        let spline_move = w.has(Group::Motion, 51) && moving;
+        // G5 and G5.1 are not modal in rs274: their I J (and G5's P Q) need the G5 or
+        // G5.1 word in the block.
+        let spline_move = w.has(Group::Motion, 51) || w.has(Group::Motion, 50);
+        let cubic_move = w.has(Group::Motion, 50);
+        let back_boring = cycle_move && motion == Some(870);
         for letter in ['I', 'J', 'K'] {
             if let Some((_, column)) = w.param(letter) {
-                if spline_move && letter != 'K' {
+                if spline_move && letter != 'K' || back_boring {
                     continue;
                 }
                 if arc_mode && !arc_move {
@@ -711,15 +734,23 @@ impl State {
                 }
             }
         }
+        let orient_words = w.has(Group::Spindle, 190);
         if let Some((_, column)) = w.param('R') {
-            if !(arc_move || cycle_move || g10) {
+            if !(arc_move || cycle_move || g10 || orient_words) {
                 if arc_mode {
                     return Err(no_axes(column));
                 }
-                return Err(LineError::new(column, "R word with no G2, G3, canned cycle or G10 to use it"));
+                return Err(LineError::new(column, "R word with no G2, G3, canned cycle, G10 or M19 to use it"));
             }
         }
+        let dynamic_comp = w.has(Group::Comp, 411) || w.has(Group::Comp, 421);
         if let Some((_, column)) = w.param('L') {
+            if dynamic_comp {
+                // The orientation of a lathe tool, for G18 only (where finestep does not
+                // compensate).
+                let name = w.group(Group::Comp).map_or(String::new(), |(code, _)| g_name(code));
+                return Err(LineError::new(column, format!("{name} with L word, but plane is not G18")));
+            }
             if !(w.has(Group::Motion, G5_2) || g10 || cycle_move) {
                 return Err(LineError::new(column, "L word with no G5.2, G10 or canned cycle to use it"));
             }
@@ -730,18 +761,18 @@ impl State {
                 w.has(Group::Path, 640),
                 arc_move,
                 w.has(Group::Motion, G5_2),
+                cubic_move,
                 g10,
                 cycle_move && matches!(motion, Some(820 | 860 | 890)),
                 w.group(Group::Override).is_some_and(|(code, _)| code >= 500),
                 w.group(Group::Io).is_some(),
+                orient_words,
             ];
             match users.iter().filter(|&&u| u).count() {
-                0 => {
-                    return Err(LineError::new(
-                        column,
-                        "P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it",
-                    ))
-                }
+                0 => return Err(LineError::new(
+                    column,
+                    "P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it",
+                )),
                 1 => {}
                 _ => return Err(LineError::new(column, "P word is used by more than one code")),
             }
@@ -753,8 +784,13 @@ impl State {
             if g64 && q < 0.0 {
                 return Err(LineError::new(column, "negative naive-CAM tolerance Q"));
             }
-            if !(g64 || w.has(Group::ToolChange, 610) || cycle_move && matches!(motion, Some(730 | 830))) {
-                return Err(LineError::new(column, "Q word with no G64, G73, G83 or M61 to use it"));
+            if !(g64
+                || cubic_move
+                || orient_words
+                || w.has(Group::ToolChange, 610)
+                || cycle_move && matches!(motion, Some(730 | 830)))
+            {
+                return Err(LineError::new(column, "Q word with no G5, G64, G73, G83, M19 or M61 to use it"));
             }
         }
         if let Some((_, column)) = w.param('H') {
@@ -763,8 +799,8 @@ impl State {
             }
         }
         if let Some((_, column)) = w.param('D') {
-            if !(w.has(Group::Comp, 410) || w.has(Group::Comp, 420)) {
-                return Err(LineError::new(column, "D word with no G41 or G42 to use it"));
+            if !(w.has(Group::Comp, 410) || w.has(Group::Comp, 420) || dynamic_comp) {
+                return Err(LineError::new(column, "D word with no G41, G41.1, G42 or G42.1 to use it"));
             }
         }
         if let (true, Some(column), None | Some(800)) = (moving, first_axis, motion) {
@@ -823,15 +859,25 @@ impl State {
         }
 
         // Spindle and coolant.
-        if let Some((code, _)) = w.group(Group::Spindle) {
+        // M19 with R or P orients the spindle (which stops it turning); a bare M19 sends
+        // the machine nothing in LinuxCNC, and changes nothing here (rs274's
+        // `#<_spindle_on>` reads 0 after it while the spindle runs on).
+        let orient = w.has(Group::Spindle, 190);
+        if let Some((code, _)) = w.group(Group::Spindle).filter(|_| !orient) {
             self.rotation = match code {
                 30 => SpindleRotation::Clockwise,
                 40 => SpindleRotation::CounterClockwise,
                 _ => SpindleRotation::Off,
             };
         }
-        if w.group(Group::Spindle).is_some() || w.param('S').is_some() {
+        if (w.group(Group::Spindle).is_some() && !orient) || w.param('S').is_some() {
             kinds.push(BlockKind::Spindle { rotation: self.rotation, rpm: self.rpm });
+        }
+        if orient {
+            if let Some(kind) = spindle_orient(&w)? {
+                self.rotation = SpindleRotation::Off;
+                kinds.push(kind);
+            }
         }
         if let Some((code, _)) = w.group(Group::Coolant) {
             match code {
@@ -911,9 +957,9 @@ impl State {
 
         // Cutter compensation.
         if let Some((code, column)) = w.group(Group::Comp) {
-            let side = match code {
-                410 => CompSide::Left,
-                420 => CompSide::Right,
+            let mut side = match code {
+                410 | 411 => CompSide::Left,
+                420 | 421 => CompSide::Right,
                 _ => CompSide::Off,
             };
             if side != CompSide::Off && self.comp != CompSide::Off {
@@ -925,14 +971,25 @@ impl State {
                     format!("unsupported: cutter compensation in G18/G19 ({})", unsupported::COMP_PLANE),
                 ));
             }
-            let tool = match w.param('D') {
-                Some((d, d_column)) => {
-                    Some(as_u32(d).ok_or_else(|| LineError::new(d_column, "D word must be a non-negative integer"))?)
+            if dynamic_comp {
+                let (d, _) =
+                    w.param('D').ok_or_else(|| LineError::new(column, format!("{} with no D word", g_name(code))))?;
+                // A negative diameter takes the other side, as in LinuxCNC.
+                if d < 0.0 {
+                    side = if side == CompSide::Left { CompSide::Right } else { CompSide::Left };
                 }
-                None => None,
-            };
-            self.comp = side;
-            kinds.push(BlockKind::CutterComp { side, tool });
+                self.comp = side;
+                kinds.push(BlockKind::CutterCompRadius { side, radius_mm: self.length_mm(d.abs()) / 2.0 });
+            } else {
+                let tool = match w.param('D') {
+                    Some((d, d_column)) => Some(
+                        as_u32(d).ok_or_else(|| LineError::new(d_column, "D word must be a non-negative integer"))?,
+                    ),
+                    None => None,
+                };
+                self.comp = side;
+                kinds.push(BlockKind::CutterComp { side, tool });
+            }
         }
 
         // Tool length offset.
@@ -1072,7 +1129,7 @@ impl State {
                 self.cycle = CycleWords::default();
             }
         }
-        if let (true, Some((code @ (51 | G5_2), column))) = (self.inverse_time, w.group(Group::Motion)) {
+        if let (true, Some((code @ (50 | 51 | G5_2), column))) = (self.inverse_time, w.group(Group::Motion)) {
             return Err(LineError::new(
                 column,
                 format!("unsupported: {} in G93 ({})", g_name(code), unsupported::INVERSE_TIME_SPLINE),
@@ -1088,11 +1145,11 @@ impl State {
                 self.motion = None;
             }
             Some((800, _)) => self.motion = None,
-            Some((51, column)) => {
+            Some((code @ (50 | 51), column)) => {
                 if !moving {
-                    return Err(LineError::new(column, "G5.1 with no axis words"));
+                    return Err(LineError::new(column, format!("{} with no axis words", g_name(code))));
                 }
-                self.motion = Some(51);
+                self.motion = Some(code);
             }
             Some((code, _)) => self.motion = Some(code),
             None => {}
@@ -1103,9 +1160,9 @@ impl State {
             if moving || full_circle {
                 if CYCLES.contains(&code) {
                     self.canned_cycle(&w, code, column, &mut kinds)?;
-                } else if code == 51 {
-                    kinds.push(self.quadratic_spline(&w, column)?);
-                    // Axis words alone do not continue a G5.1 (as in rs274).
+                } else if code == 51 || code == 50 {
+                    kinds.push(self.spline(&w, code, column)?);
+                    // Axis words alone do not continue a G5 or G5.1 (as in rs274).
                     self.motion = None;
                 } else {
                     self.move_to(&w, code, column, g53, &mut kinds)?;
@@ -1115,8 +1172,10 @@ impl State {
         // Stops.
         let mut end = false;
         if let Some((code, _)) = w.group(Group::Stop) {
-            if code == 0 || code == 10 {
+            if code == 0 || code == 10 || code == 600 {
                 // M1 (optional stop) stops as M0: finestep has no optional-stop switch.
+                // M60 (pallet change pause) stops as M0: finestep drives no pallet
+                // shuttle, the operator changes the pallet before resuming.
                 kinds.push(BlockKind::Pause);
             } else {
                 kinds.push(BlockKind::End);
@@ -1466,46 +1525,73 @@ impl State {
     }
 
     /// G5.1: a quadratic B-spline in G17 from the current point to X Y, its control point
-    /// at I J from the start; given as the equivalent NURBS of order 3.
-    fn quadratic_spline(&mut self, w: &Words, column: usize) -> Result<BlockKind, LineError> {
+    /// at I J from the start; given as the equivalent NURBS of order 3. G5: a cubic
+    /// B-spline (Bezier) from the current point to X Y, its first control point at I J
+    /// from the start (without I J: the last G5's P Q negated, so that the curve goes on
+    /// tangent to it), its second at P Q from the end; the NURBS of order 4. Both as
+    /// LinuxCNC's `convert_spline`.
+    fn spline(&mut self, w: &Words, code: Code, column: usize) -> Result<BlockKind, LineError> {
+        let name = g_name(code);
         if self.plane != Plane::Xy {
-            return Err(LineError::new(column, "G5.1 is for the G17 (XY) plane"));
+            return Err(LineError::new(column, format!("{name} is for the G17 (XY) plane")));
         }
         if self.comp != CompSide::Off {
-            return Err(LineError::new(column, "G5.1 with cutter compensation on"));
+            return Err(LineError::new(column, format!("{name} with cutter compensation on")));
         }
         for letter in ['Z', 'A'] {
             if let Some((_, c)) = w.param(letter) {
-                return Err(LineError::new(c, format!("axis {letter} in a G5.1 spline: only X and Y move")));
+                return Err(LineError::new(c, format!("axis {letter} in a {name} spline: only X and Y move")));
             }
         }
         let feed_mm_per_min = match self.feed_mm_per_min {
             Some(f) if f > 0.0 => f,
-            _ => return Err(LineError::new(column_of(w, column), "G5.1 with no feed rate")),
+            _ => return Err(LineError::new(column_of(w, column), format!("{name} with no feed rate"))),
         };
         let from = self.to_program(self.position);
         let end = self.target(w, from)?;
-        let (Some((i, _)), Some((j, _))) = (w.param('I'), w.param('J')) else {
-            return Err(LineError::new(column_of(w, column), "G5.1 needs both I and J"));
+        let offset = |base: [f64; 4], (dx, dy): (f64, f64)| {
+            let mut p = base;
+            p[0] += self.length_mm(dx);
+            p[1] += self.length_mm(dy);
+            p
         };
-        let mut control = from;
-        control[0] += self.length_mm(i);
-        control[1] += self.length_mm(j);
+        let mut program_points = vec![from];
+        match (w.param('I'), w.param('J')) {
+            (Some((i, _)), Some((j, _))) => program_points.push(offset(from, (i, j))),
+            (Some((_, c)), None) | (None, Some((_, c))) if code == 50 => {
+                return Err(LineError::new(c, "G5 needs both I and J, or neither"));
+            }
+            _ if code == 51 => return Err(LineError::new(column_of(w, column), "G5.1 needs both I and J")),
+            _ => program_points.push(offset(from, (self.g5_next_ij[0], self.g5_next_ij[1]))),
+        }
+        if code == 50 {
+            let (Some((p, _)), Some((q, _))) = (w.param('P'), w.param('Q')) else {
+                return Err(LineError::new(column_of(w, column), "G5 needs both P and Q"));
+            };
+            program_points.push(offset(end, (p, q)));
+            self.g5_next_ij = [-p, -q];
+        }
+        program_points.push(end);
         let to = self.to_machine(end);
-        if to.iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
+        let control_points: Vec<NurbsPoint> = program_points
+            .iter()
+            .map(|&p| {
+                let m = self.to_machine(p);
+                NurbsPoint { x_mm: m[0], y_mm: m[1], weight: 1.0 }
+            })
+            .collect();
+        if control_points.iter().any(|p| !(p.x_mm.abs() <= MAX_POSITION && p.y_mm.abs() <= MAX_POSITION))
+            || to.iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION)
+        {
             return Err(LineError::new(column, "position out of range"));
         }
-        let point = |p: [f64; 4]| {
-            let m = self.to_machine(p);
-            NurbsPoint { x_mm: m[0], y_mm: m[1], weight: 1.0 }
-        };
-        let control_points = vec![point(from), point(control), point(end)];
         self.position = to;
+        let order = control_points.len();
         Ok(BlockKind::Nurbs {
             to: Point::from_array(to),
+            knots: nurbs_knots(order, order),
+            order: order as u32,
             control_points,
-            order: 3,
-            knots: nurbs_knots(3, 3),
             feed_mm_per_min,
         })
     }
@@ -1631,8 +1717,8 @@ impl State {
         if self.comp != CompSide::Off {
             return Err(LineError::new(column, format!("{name} with cutter compensation on")));
         }
-        if code == 860 && self.rotation == SpindleRotation::Off {
-            return Err(LineError::new(column, "G86 with the spindle not turning (M3 or M4 first)"));
+        if matches!(code, 860 | 870) && self.rotation == SpindleRotation::Off {
+            return Err(LineError::new(column, format!("{name} with the spindle not turning (M3 or M4 first)")));
         }
         if self.inverse_time {
             // rs274 refuses it too (its feed rate is zero there).
@@ -1660,6 +1746,21 @@ impl State {
             }
             self.cycle.q = Some(self.length_mm(q));
         }
+        // G87's I J (also what a G5 without I J takes next, rs274's `cycle_i`, `cycle_j`)
+        // and K.
+        if code == 870 {
+            if let Some((i, _)) = w.param('I') {
+                self.cycle.i = Some(i);
+                self.g5_next_ij[0] = i;
+            }
+            if let Some((j, _)) = w.param('J') {
+                self.cycle.j = Some(j);
+                self.g5_next_ij[1] = j;
+            }
+            if let Some((k, _)) = w.param('K') {
+                self.cycle.k = Some(self.length_mm(k));
+            }
+        }
         let r_word = self.cycle.r.ok_or_else(|| LineError::new(column, format!("{name} with no R (retract plane)")))?;
         let z_word = self.cycle.z.ok_or_else(|| LineError::new(column, format!("{name} with no Z (depth)")))?;
         let repeats = match w.param('L') {
@@ -1684,6 +1785,16 @@ impl State {
         };
         let q = match code {
             730 | 830 => Some(self.cycle.q.ok_or_else(|| LineError::new(column, format!("{name} with no Q (peck)")))?),
+            _ => None,
+        };
+        let back_bore = match code {
+            870 => {
+                let missing = |l: char| LineError::new(column, format!("G87 with no {l} (back boring)"));
+                let (i, j) = (self.cycle.i.ok_or_else(|| missing('I'))?, self.cycle.j.ok_or_else(|| missing('J'))?);
+                let k = self.cycle.k.ok_or_else(|| missing('K'))?;
+                // In G91, K is relative to the bottom Z.
+                Some((self.length_mm(i), self.length_mm(j), if self.incremental { z + k } else { k }))
+            }
             _ => None,
         };
         /// LinuxCNC's rapid clearance above the last peck (0.010 in).
@@ -1716,6 +1827,38 @@ impl State {
             rapid(self, &mut out, cur);
             let at = |zz: f64| [cur[0], cur[1], zz, cur[3]];
             rapid(self, &mut out, at(r));
+            if let Some((i, j, k)) = back_bore {
+                // G87 as rs274 runs it: across to the offset at R, spindle stopped and
+                // oriented (LinuxCNC passes its direction code, 2 clockwise, 3
+                // counter-clockwise), down through the hole, back to the centre, spindle
+                // on, cut up to K and back down to Z, stopped and oriented again, out at
+                // the offset, up to the clearance height, back over the centre, spindle on.
+                let off = |zz: f64| [cur[0] + i, cur[1] + j, zz, cur[3]];
+                let (rotation, rpm) = (self.rotation, self.rpm);
+                let orient = BlockKind::SpindleOrient {
+                    angle_deg: 0.0,
+                    direction: if rotation == SpindleRotation::Clockwise { 2 } else { 3 },
+                    timeout_s: None,
+                };
+                let stop = BlockKind::Spindle { rotation: SpindleRotation::Off, rpm };
+                rapid(self, &mut out, off(r));
+                out.extend([stop.clone(), orient.clone()]);
+                rapid(self, &mut out, off(z));
+                rapid(self, &mut out, at(z));
+                out.push(BlockKind::Spindle { rotation, rpm });
+                cut(self, &mut out, at(k));
+                cut(self, &mut out, at(z));
+                out.extend([stop, orient]);
+                rapid(self, &mut out, off(z));
+                rapid(self, &mut out, off(clear));
+                rapid(self, &mut out, at(clear));
+                out.push(BlockKind::Spindle { rotation, rpm });
+                cur[2] = clear;
+                if out.len() > 1_000_000 {
+                    return Err(LineError::new(column, format!("{name} makes more than 10^6 moves")));
+                }
+                continue;
+            }
             match (code, q) {
                 (830, Some(q)) | (730, Some(q)) => {
                     let mut depth = r - q;
@@ -1764,6 +1907,32 @@ impl State {
 }
 
 /// The weight `P` of a NURBS control point: 1 when left out, else positive.
+/// M19: the orientation event, if R or P asks for one (rs274 sends none for a bare
+/// M19, which only stops the spindle).
+fn spindle_orient(w: &Words) -> Result<Option<BlockKind>, LineError> {
+    let angle_deg = match w.param('R') {
+        Some((r, c)) if !(0.0..=360.0).contains(&r) => {
+            return Err(LineError::new(c, "R value must be within 0..360 with M19"));
+        }
+        Some((r, _)) => r,
+        None => 0.0,
+    };
+    let direction = match w.param('P') {
+        Some((p, c)) => {
+            as_u32(p).filter(|&d| d <= 2).ok_or_else(|| LineError::new(c, "P value must be 0, 1 or 2 with M19"))?
+        }
+        None => 0,
+    };
+    let timeout_s = match w.param('Q') {
+        Some((q, c)) if q <= 0.0 => return Err(LineError::new(c, "Q value must be positive with M19")),
+        q => q.map(|(q, _)| q),
+    };
+    if w.param('R').is_none() && w.param('P').is_none() {
+        return Ok(None);
+    }
+    Ok(Some(BlockKind::SpindleOrient { angle_deg, direction, timeout_s }))
+}
+
 fn nurbs_weight(w: &Words) -> Result<f64, LineError> {
     match w.param('P') {
         None => Ok(1.0),

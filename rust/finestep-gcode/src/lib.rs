@@ -298,6 +298,26 @@ pub enum BlockKind {
         /// The tool number from `D`, if given.
         tool: Option<u32>,
     },
+    /// G41.1/G42.1: cutter radius compensation with the radius given in the block (half
+    /// its `D`, the tool's diameter: LinuxCNC's dynamic compensation; a negative `D`
+    /// takes the other side), applied by a later stage like [`BlockKind::CutterComp`].
+    CutterCompRadius {
+        /// Side ([`CompSide::Left`] or [`CompSide::Right`]).
+        side: CompSide,
+        /// The tool radius, mm (not negative).
+        radius_mm: f64,
+    },
+    /// M19 with R or P: orient the spindle to `angle_deg` (LinuxCNC's `ORIENT_SPINDLE`);
+    /// the spindle counts as stopped after it. (A bare M19 stops the spindle in the
+    /// interpreter's state and emits nothing, as in rs274.)
+    SpindleOrient {
+        /// The angle from the spindle's index, 0 to 360 degrees (R, default 0).
+        angle_deg: f64,
+        /// P: 0 the shorter way, 1 clockwise, 2 counter-clockwise.
+        direction: u32,
+        /// Q: how long to wait for the orientation to complete, seconds.
+        timeout_s: Option<f64>,
+    },
     /// G61/G64.
     PathControl(PathControl),
     /// M48-M53: the override switches after the block.

@@ -270,7 +270,7 @@ fn every_error_message_with_its_place() {
         ("#<_hal[motion.spindle-speed-out]> = 1", "1:1: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
         ("G0 X[EXISTS[#<_hal[x]>]]", "1:13: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
         // Words.
-        ("G0 X1 Q2", "1:7: Q word with no G64, G73, G83 or M61 to use it"),
+        ("G0 X1 Q2", "1:7: Q word with no G5, G64, G73, G83, M19 or M61 to use it"),
         ("G64 P0.1 Q-1", "1:10: negative naive-CAM tolerance Q"),
         ("G0 X1 B2", "1:7: unsupported: axis B (finestep drives the axes X Y Z A)"),
         (
@@ -339,12 +339,12 @@ fn every_error_message_with_its_place() {
         ("X1", "1:1: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
         ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
         ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
-        ("R1", "1:1: R word with no G2, G3, canned cycle or G10 to use it"),
-        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it"),
+        ("R1", "1:1: R word with no G2, G3, canned cycle, G10 or M19 to use it"),
+        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
-        ("G40 D1", "1:5: D word with no G41 or G42 to use it"),
-        ("D1", "1:1: D word with no G41 or G42 to use it"),
+        ("G40 D1", "1:5: D word with no G41, G41.1, G42 or G42.1 to use it"),
+        ("D1", "1:1: D word with no G41, G41.1, G42 or G42.1 to use it"),
         ("F1 G2 R1", "1:4: G2 with no axis words"),
         ("F1 G2 X1 I0.5\nI1", "2:1: G2 with no axis words"),
         ("F1 G3 X1 Y1 I1\nJ1", "2:1: G3 with no axis words"),
@@ -519,7 +519,7 @@ fn nurbs_errors_with_their_place() {
         ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10 or canned cycle to use it"),
         (
             "F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n",
-            "4:6: P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it",
+            "4:6: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it",
         ),
         // The program ends inside the block: the error points at its G5.2.
         (
@@ -791,7 +791,7 @@ fn override_switches_read_back_as_rs274_reads_them() {
     assert_eq!(err("M48 M53\n"), format!("{FILE}:1:5: M48 and M53 are in the same modal group"));
     assert_eq!(
         err("M48 P1\n"),
-        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5.2, G10, G82, G86, G89, M50-M53 or M62-M65 to use it")
+        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it")
     );
 }
 
@@ -957,4 +957,311 @@ fn digital_outputs_are_events() {
     assert_eq!(err("M64\n"), format!("{FILE}:1:1: M64 with no P (the output)"));
     assert_eq!(err("M64 P64\n"), format!("{FILE}:1:5: digital output P must be an integer 0 to 63"));
     assert_eq!(err("M64 P1 M65 P2\n"), format!("{FILE}:1:8: M64 and M65 are in the same modal group"));
+}
+
+/// G5 as LinuxCNC's `convert_spline`: I J the first control point from the start, P Q
+/// the second from the end, an order-4 NURBS; without I J the last G5's P Q negated (0 0
+/// before any G5), so a chain stays tangent; not modal; G17 only; the errors at their
+/// words.
+#[test]
+fn cubic_spline_g5_as_linuxcnc() {
+    let source = "G21 G17 F100\nG0 X1 Y1\nG5 X10 Y0 I2 J5 P-2 Q5\nG5 X20 Y0 P-2 Q-5\nG91 G5 X1 Y1 I1 J0 P0 Q1\nM2\n";
+    /// Control points (x, y, w), order, knots, end.
+    type Spline = (Vec<(f64, f64, f64)>, u32, Vec<f64>, Point);
+    let splines: Vec<Spline> = parse(source)
+        .into_iter()
+        .filter_map(|k| match k {
+            BlockKind::Nurbs { to, control_points, order, knots, .. } => {
+                Some((control_points.iter().map(|c| (c.x_mm, c.y_mm, c.weight)).collect(), order, knots, to))
+            }
+            _ => None,
+        })
+        .collect();
+    let knots = vec![0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0];
+    assert_eq!(
+        splines,
+        vec![
+            (
+                vec![(1.0, 1.0, 1.0), (3.0, 6.0, 1.0), (8.0, 5.0, 1.0), (10.0, 0.0, 1.0)],
+                4,
+                knots.clone(),
+                p(10.0, 0.0, 0.0, 0.0)
+            ),
+            (
+                vec![(10.0, 0.0, 1.0), (12.0, -5.0, 1.0), (18.0, -5.0, 1.0), (20.0, 0.0, 1.0)],
+                4,
+                knots.clone(),
+                p(20.0, 0.0, 0.0, 0.0)
+            ),
+            (
+                vec![(20.0, 0.0, 1.0), (21.0, 0.0, 1.0), (21.0, 2.0, 1.0), (21.0, 1.0, 1.0)],
+                4,
+                knots,
+                p(21.0, 1.0, 0.0, 0.0)
+            ),
+        ]
+    );
+    // The first G5 without I J: its first control point is its start (rs274's 0 0).
+    let (points, ..) = nurbs("F10 G5 X4 Y0 P-1 Q1\n");
+    assert_eq!(points[1], (0.0, 0.0, 1.0));
+    assert_eq!(err("F10 G5 X1 Y1 I1 P1 Q1\n"), format!("{FILE}:1:14: G5 needs both I and J, or neither"));
+    assert_eq!(err("F10 G5 X1 Y1 I1 J1 P1\n"), format!("{FILE}:1:5: G5 needs both P and Q"));
+    assert_eq!(err("F10 G5 I1 J1 P1 Q1\n"), format!("{FILE}:1:5: G5 with no axis words"));
+    assert_eq!(err("F10 G5 X1 Y1 Z1 I1 J1 P1 Q1\n"), format!("{FILE}:1:14: axis Z in a G5 spline: only X and Y move"));
+    assert_eq!(err("F10 G18 G5 X1 I1 J1 P1 Q1\n"), format!("{FILE}:1:12: G5 is for the G17 (XY) plane"));
+    assert_eq!(
+        err("F10 G5 X1 Y1 I1 J1 P1 Q1\nX2 Y2\n"),
+        format!("{FILE}:2:1: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it")
+    );
+    assert_eq!(err("G5 X1 Y1 I1 J1 P1 Q1\n"), format!("{FILE}:1:1: G5 with no feed rate"));
+}
+
+/// G7: X words are diameters (moves, G92, G10 L2, G28), I and R radii; G8 back to radius
+/// mode: checked against rs274's output.
+#[test]
+fn lathe_diameter_mode_agrees_with_rs274() {
+    let source =
+        "G18 G7 F10\nG0 X10 Z0\nG3 X14 Z-2 I0 K-2\nG91 G1 X2\nG90 G92 X20\nG0 X10\nG92.1\nG10 L2 P1 X4\nG0 X10\n\
+                  G10 L2 P1 X0\nG28 X6\nG8 G0 X10\nM2\n";
+    let program = parse_str(source, FILE).unwrap();
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_FEED_RATE(10.0000)\n\
+            8 N..... SELECT_PLANE(CANON_PLANE_XZ)\n\
+            10 N..... STRAIGHT_TRAVERSE(5.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            11 N..... ARC_FEED(-2.0000, 7.0000, -2.0000, 5.0000, 1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            13 N..... STRAIGHT_FEED(8.0000, 0.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+            15 N..... SET_G92_OFFSET(-2.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            16 N..... STRAIGHT_TRAVERSE(5.0000, 0.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+            17 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            18 N..... SET_G5X_OFFSET(1, 2.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            19 N..... SET_XY_ROTATION(0.0000)\n\
+            20 N..... STRAIGHT_TRAVERSE(5.0000, 0.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+            21 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            22 N..... SET_XY_ROTATION(0.0000)\n\
+            23 N..... STRAIGHT_TRAVERSE(3.0000, 0.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+            24 N..... STRAIGHT_TRAVERSE(0.0000, 0.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+            26 N..... STRAIGHT_TRAVERSE(10.0000, 0.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+            27 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            28 N..... SET_XY_ROTATION(0.0000)\n\
+            29 N..... SELECT_PLANE(CANON_PLANE_XY)\n\
+            30 N..... SET_FEED_MODE(0, 0)\n\
+            31 N..... SET_FEED_RATE(0.0000)\n\
+            32 N..... STOP_SPINDLE_TURNING(0)\n\
+            33 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+            34 N..... PROGRAM_END()\n\
+            35 N..... ON_RESET()\n\
+            36 N..... ON_RESET()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    let flags = |s: &str| {
+        let program = parse_str(
+            &format!("{s}\n#1 = #<_lathe_diameter_mode>\n#2 = #<_lathe_radius_mode>\nG0 X#1 Y#2\nM2\n"),
+            FILE,
+        )
+        .unwrap();
+        program.blocks.iter().rev().find_map(|b| {
+            if let BlockKind::Rapid { to } = b.kind {
+                Some((to.x_mm, to.y_mm))
+            } else {
+                None
+            }
+        })
+    };
+    // X#1 is read in diameter mode as well: 1 / 2.
+    assert_eq!(flags("G7"), Some((0.5, 0.0)));
+    assert_eq!(flags("G8"), Some((0.0, 1.0)));
+}
+
+/// G41.1/G42.1 carry the radius (half of D, in program units; a negative D the other
+/// side); L is refused outside G18, D is required, as rs274 does.
+#[test]
+fn dynamic_compensation_carries_the_radius() {
+    let comps: Vec<BlockKind> = parse("G20 G41.1 D0.5\nG40\nG42.1 D-1\nG40\nG21 G42.1 D3\nG40\n")
+        .into_iter()
+        .filter(|k| matches!(k, BlockKind::CutterCompRadius { .. }))
+        .collect();
+    assert_eq!(
+        comps,
+        vec![
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 6.35 },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 12.7 },
+            BlockKind::CutterCompRadius { side: CompSide::Right, radius_mm: 1.5 },
+        ]
+    );
+    assert_eq!(err("G41.1 D1 L3\n"), format!("{FILE}:1:10: G41.1 with L word, but plane is not G18"));
+    assert_eq!(err("G42.1 G1 X1 F1\n"), format!("{FILE}:1:1: G42.1 with no D word"));
+    assert_eq!(err("G41.1 D1\nG42.1 D1\n"), format!("{FILE}:2:1: cutter compensation is already on (G40 first)"));
+    assert_eq!(
+        err("G18\nG41.1 D1\n"),
+        format!("{FILE}:2:1: unsupported: cutter compensation in G18/G19 (finestep compensates in G17 only)")
+    );
+}
+
+/// M19 with R or P is an orientation event (the spindle stopped after it), a bare M19
+/// sends nothing; M60 stops as M0: checked against rs274's output (ORIENT_SPINDLE,
+/// PALLET_SHUTTLE and PROGRAM_STOP).
+#[test]
+fn spindle_orientation_and_pallet_stop_agree_with_rs274() {
+    let source = "S100 M3\nM19 R30 P1 Q2\nG1 X1 F10\nS200 M4\nM19\nG1 X2\nM60\nM2\n";
+    let program = parse_str(source, FILE).unwrap();
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_SPINDLE_SPEED(0, 100.0000)\n\
+            8 N..... START_SPINDLE_CLOCKWISE(0)\n\
+            9 N..... ORIENT_SPINDLE(0, 30.0000, 1)\n\
+            10 N..... SPINDLE.0.WAIT_ORIENT_COMPLETE(2.0000)\n\
+            11 N..... SET_FEED_RATE(10.0000)\n\
+            12 N..... STRAIGHT_FEED(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            13 N..... SET_SPINDLE_SPEED(0, 200.0000)\n\
+            14 N..... START_SPINDLE_COUNTERCLOCKWISE(0)\n\
+            15 N..... STRAIGHT_FEED(2.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            16 N..... PALLET_SHUTTLE()\n\
+            17 N..... PROGRAM_STOP()\n\
+            18 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            19 N..... SET_XY_ROTATION(0.0000)\n\
+            20 N..... SET_FEED_MODE(0, 0)\n\
+            21 N..... SET_FEED_RATE(0.0000)\n\
+            22 N..... STOP_SPINDLE_TURNING(0)\n\
+            23 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+            24 N..... PROGRAM_END()\n\
+            25 N..... ON_RESET()\n\
+            26 N..... ON_RESET()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    let kinds: Vec<&BlockKind> = program.blocks.iter().map(|b| &b.kind).collect();
+    assert!(kinds.contains(&&BlockKind::SpindleOrient { angle_deg: 30.0, direction: 1, timeout_s: Some(2.0) }));
+    assert_eq!(kinds.iter().filter(|k| matches!(k, BlockKind::SpindleOrient { .. })).count(), 1);
+    assert!(kinds.contains(&&BlockKind::Pause));
+    assert_eq!(err("M19 R400\n"), format!("{FILE}:1:5: R value must be within 0..360 with M19"));
+    assert_eq!(err("M19 P3\n"), format!("{FILE}:1:5: P value must be 0, 1 or 2 with M19"));
+    assert_eq!(err("M19 R1 Q0\n"), format!("{FILE}:1:8: Q value must be positive with M19"));
+    assert_eq!(err("M3 M19\n"), format!("{FILE}:1:4: M3 and M19 are in the same modal group"));
+}
+
+/// G87 (back boring) as rs274 runs it, in G98 and G99, G20 and G91, with M3 and M4; the
+/// spindle must turn, I J K are required (and sticky).
+#[test]
+fn back_boring_g87_agrees_with_rs274() {
+    let source = "G20 F10 S100 M3 G0 Z5\nG98 G87 X1 Y2 Z-3 R1 I0.5 J0.2 K-1\nG99 X3\nG80\nM4\nG91 G87 X1 Y0 Z-3 R-1 I-0.5 J0 K1\nM2\n";
+    let program = parse_str(source, FILE).unwrap();
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_FEED_RATE(10.0000)\n\
+            8 N..... SET_SPINDLE_SPEED(0, 100.0000)\n\
+            9 N..... START_SPINDLE_CLOCKWISE(0)\n\
+            10 N..... USE_LENGTH_UNITS(CANON_UNITS_INCHES)\n\
+            11 N..... STRAIGHT_TRAVERSE(0.0000, 0.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+            13 N..... SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH)\n\
+            14 N..... STRAIGHT_TRAVERSE(1.0000, 2.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+            15 N..... STRAIGHT_TRAVERSE(1.0000, 2.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            16 N..... STRAIGHT_TRAVERSE(1.5000, 2.2000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            17 N..... STOP_SPINDLE_TURNING(0)\n\
+            18 N..... ORIENT_SPINDLE(0, 0.0000, 2)\n\
+            19 N..... STRAIGHT_TRAVERSE(1.5000, 2.2000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            20 N..... STRAIGHT_TRAVERSE(1.0000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            21 N..... START_SPINDLE_CLOCKWISE(0)\n\
+            22 N..... STRAIGHT_FEED(1.0000, 2.0000, -1.0000, 0.0000, 0.0000, 0.0000)\n\
+            23 N..... STRAIGHT_FEED(1.0000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            24 N..... STOP_SPINDLE_TURNING(0)\n\
+            25 N..... ORIENT_SPINDLE(0, 0.0000, 2)\n\
+            26 N..... STRAIGHT_TRAVERSE(1.5000, 2.2000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            27 N..... STRAIGHT_TRAVERSE(1.5000, 2.2000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+            28 N..... STRAIGHT_TRAVERSE(1.0000, 2.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+            29 N..... START_SPINDLE_CLOCKWISE(0)\n\
+            30 N..... SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.000000)\n\
+            31 N..... SET_NAIVECAM_TOLERANCE(0.0000)\n\
+            33 N..... SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH)\n\
+            34 N..... STRAIGHT_TRAVERSE(3.0000, 2.0000, 5.0000, 0.0000, 0.0000, 0.0000)\n\
+            35 N..... STRAIGHT_TRAVERSE(3.0000, 2.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            36 N..... STRAIGHT_TRAVERSE(3.5000, 2.2000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            37 N..... STOP_SPINDLE_TURNING(0)\n\
+            38 N..... ORIENT_SPINDLE(0, 0.0000, 2)\n\
+            39 N..... STRAIGHT_TRAVERSE(3.5000, 2.2000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            40 N..... STRAIGHT_TRAVERSE(3.0000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            41 N..... START_SPINDLE_CLOCKWISE(0)\n\
+            42 N..... STRAIGHT_FEED(3.0000, 2.0000, -1.0000, 0.0000, 0.0000, 0.0000)\n\
+            43 N..... STRAIGHT_FEED(3.0000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            44 N..... STOP_SPINDLE_TURNING(0)\n\
+            45 N..... ORIENT_SPINDLE(0, 0.0000, 2)\n\
+            46 N..... STRAIGHT_TRAVERSE(3.5000, 2.2000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            47 N..... STRAIGHT_TRAVERSE(3.5000, 2.2000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            48 N..... STRAIGHT_TRAVERSE(3.0000, 2.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            49 N..... START_SPINDLE_CLOCKWISE(0)\n\
+            50 N..... SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.000000)\n\
+            51 N..... SET_NAIVECAM_TOLERANCE(0.0000)\n\
+            53 N..... START_SPINDLE_COUNTERCLOCKWISE(0)\n\
+            55 N..... SET_MOTION_CONTROL_MODE(CANON_EXACT_PATH)\n\
+            56 N..... STRAIGHT_TRAVERSE(4.0000, 2.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            57 N..... STRAIGHT_TRAVERSE(4.0000, 2.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            58 N..... STRAIGHT_TRAVERSE(3.5000, 2.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            59 N..... STOP_SPINDLE_TURNING(0)\n\
+            60 N..... ORIENT_SPINDLE(0, 0.0000, 3)\n\
+            61 N..... STRAIGHT_TRAVERSE(3.5000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            62 N..... STRAIGHT_TRAVERSE(4.0000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            63 N..... START_SPINDLE_COUNTERCLOCKWISE(0)\n\
+            64 N..... STRAIGHT_FEED(4.0000, 2.0000, -2.0000, 0.0000, 0.0000, 0.0000)\n\
+            65 N..... STRAIGHT_FEED(4.0000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            66 N..... STOP_SPINDLE_TURNING(0)\n\
+            67 N..... ORIENT_SPINDLE(0, 0.0000, 3)\n\
+            68 N..... STRAIGHT_TRAVERSE(3.5000, 2.0000, -3.0000, 0.0000, 0.0000, 0.0000)\n\
+            69 N..... STRAIGHT_TRAVERSE(3.5000, 2.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            70 N..... STRAIGHT_TRAVERSE(4.0000, 2.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            71 N..... START_SPINDLE_COUNTERCLOCKWISE(0)\n\
+            72 N..... SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.000000)\n\
+            73 N..... SET_NAIVECAM_TOLERANCE(0.0000)\n\
+            74 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            75 N..... SET_XY_ROTATION(0.0000)\n\
+            76 N..... SET_FEED_MODE(0, 0)\n\
+            77 N..... SET_FEED_RATE(0.0000)\n\
+            78 N..... STOP_SPINDLE_TURNING(0)\n\
+            79 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+            80 N..... PROGRAM_END()\n\
+            81 N..... ON_RESET()\n\
+            82 N..... ON_RESET()\n";
+    let theirs = conformance::rs274_events(rs274).unwrap();
+    assert_eq!(conformance::compare(&conformance::events_of(&program), &theirs), None);
+    assert_eq!(
+        err("F10 G87 X1 Z-1 R1 I1 J0 K0\n"),
+        format!("{FILE}:1:9: G87 with the spindle not turning (M3 or M4 first)")
+    );
+    assert_eq!(err("M3 F10 G87 X1 Z-1 R1 I1 K0\n"), format!("{FILE}:1:12: G87 with no J (back boring)"));
+}
+
+/// `skeleton.ngc`'s `T1 M6 G43 H1` on one line, then a move without Z: the machine's Z
+/// stays where it is (the tool tip is then at program Z minus the tool's length), as on
+/// separate lines, where rs274 agrees (`T1 M6`, `G43 H1`, `G0 X1`: STRAIGHT_TRAVERSE(1,
+/// 0, -1.25) with the offset 1.25, machine Z 0). On one line rs274 prints Z 0, machine
+/// Z 1.25 inch: after M6 its interpreter reads the position back from the canonical
+/// layer, and rs274's stand-alone one (saicanon's `GET_EXTERNAL_POSITION_Z`, the last Z
+/// it printed) leaves out the length offset applied in that block, which LinuxCNC's
+/// task (emccanon) takes off. finestep keeps the machine's position, as LinuxCNC does.
+#[test]
+fn a_tool_length_offset_with_the_tool_change_leaves_the_machine_where_it_is() {
+    let tools = [(1, [0.0, 0.0, 31.75, 0.0])].into_iter().collect();
+    let options = Options { machine_unit_mm: 25.4, tools, ..Options::default() };
+    for source in ["G20\nT1 M6 G43 H1\nG0 X1\nM2\n", "G20\nT1 M6\nG43 H1\nG0 X1\nM2\n"] {
+        let program = parse_str_with(source, FILE, &options).unwrap();
+        let rapids: Vec<Point> = program
+            .blocks
+            .iter()
+            .filter_map(|b| if let BlockKind::Rapid { to } = b.kind { Some(to) } else { None })
+            .collect();
+        assert_eq!(rapids, [p(25.4, 0.0, 0.0, 0.0)], "{source:?}");
+    }
 }

@@ -8,13 +8,10 @@
 pub const G_CODES: &[(&[u32], &str)] = &[
     (&[330, 331, 740, 760, 840], "spindle-synchronised motion needs the spindle feedback finestep does not have yet"),
     (&[382, 383, 384, 385], "probing needs a probe input, which finestep does not read"),
-    (&[70], "lathe diameter mode is not implemented yet"),
-    (&[50], "G5 cubic splines are not implemented yet (G5.1, G5.2/G5.3 are)"),
-    (&[411, 421], "dynamic cutter compensation is not implemented yet"),
     (&[700, 710, 711, 712, 720, 721, 722], "lathe roughing cycles are not implemented yet"),
-    (&[870, 880], "the back-boring and manual-retract cycles are not implemented yet"),
+    (&[880], "the tool is left at the bottom for the operator to retract by hand during the stop, and finestep offers no hand moves in a program"),
     (&[950], "per-revolution feed needs the spindle feedback finestep does not have yet"),
-    (&[960], "constant surface speed is not implemented yet"),
+    (&[960], "constant surface speed changes the spindle speed with X along each move; finestep sets the spindle at rest between moves"),
 ];
 
 /// Any other G number.
@@ -22,8 +19,6 @@ pub const G_OTHER: &str = "not a G-code finestep implements";
 
 /// M-codes LinuxCNC knows and finestep refuses (first, last), with why.
 pub const M_CODES: &[(u32, u32, &str)] = &[
-    (19, 19, "spindle orientation is not implemented yet"),
-    (60, 60, "pallet shuttle is not implemented"),
     (66, 68, "analog outputs and waiting on inputs are not implemented yet"),
     (100, 199, "user M-codes run external programs, which finestep does not"),
 ];

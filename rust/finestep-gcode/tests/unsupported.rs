@@ -26,7 +26,9 @@ fn rows() -> Vec<(String, String, String)> {
 #[test]
 fn every_row_of_the_list_is_refused_with_its_message_at_its_place() {
     let rows = rows();
-    assert!(rows.len() >= 30, "{} rows", rows.len());
+    // The section was read: at least a row per reason of the table (rows leave the list
+    // as codes get implemented; `every_reason_in_the_table_has_a_row` checks each).
+    assert!(rows.len() >= unsupported::reasons().len(), "{} rows", rows.len());
     let mut wrong = Vec::new();
     for (what, program, message) in &rows {
         assert!(message.starts_with("t.ngc:") && message.contains(": unsupported: "), "{what}: {message}");

@@ -446,6 +446,7 @@ impl Compensator<'_> {
     fn block(&mut self, block: &Block) -> Result<(), CompError> {
         match block.kind {
             BlockKind::CutterComp { side, tool } => self.comp_change(block, side, tool, None),
+            BlockKind::CutterCompRadius { side, radius_mm } => self.comp_change(block, side, None, Some(radius_mm)),
             BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. } => self.motion(block),
             BlockKind::Nurbs { to, feed_mm_per_min, .. } => {
                 if self.comp_on() {

@@ -210,7 +210,13 @@ fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
                 }
                 continue;
             }
-            BlockKind::CutterComp { side: CompSide::Left | CompSide::Right, .. } => {
+            BlockKind::SpindleOrient { .. } => {
+                return Err(fail(
+                    "spindle orientation (M19, G87) needs a spindle position encoder, which finestep does not read (the spindle runs open loop)".into(),
+                ));
+            }
+            BlockKind::CutterComp { side: CompSide::Left | CompSide::Right, .. }
+            | BlockKind::CutterCompRadius { .. } => {
                 return Err(fail(
                     "cutter radius compensation (G41/G42) is not wired into the planner yet; refusing to cut uncompensated".into(),
                 ));

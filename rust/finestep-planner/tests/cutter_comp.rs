@@ -1143,3 +1143,39 @@ fn linuxcnc_entry_and_exit_agree_with_rs274_on_comp_g1() {
     let BlockKind::Linear { to, .. } = entry.kind else { panic!("{entry:?}") };
     assert!((len(sub((to.x_mm, to.y_mm), (50.8, 76.2))) - 25.4).abs() < 1e-9);
 }
+
+/// G41.1/G42.1 (the diameter in the block, a negative one taking the other side) with
+/// LinuxCNC's entry and exit, against rs274.
+#[test]
+fn dynamic_compensation_agrees_with_rs274() {
+    let program = "G20 F10\nG0 X0 Y5\nG41.1 D0.5 G1 X0 Y0\nG1 X5\nG3 X6 Y1 I0 J1\nG1 Y4\nG40\nG1 X8 Y3\n\
+                   G42.1 D-0.5 G1 X8 Y0\nG1 X12\nG40 G1 X14 Y-2\nM2\n";
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_FEED_RATE(10.0000)\n\
+            8 N..... USE_LENGTH_UNITS(CANON_UNITS_INCHES)\n\
+            9 N..... STRAIGHT_TRAVERSE(0.0000, 5.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            11 N..... STRAIGHT_FEED(0.2500, 0.2500, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            12 N..... STRAIGHT_FEED(5.0000, 0.2500, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            13 N..... ARC_FEED(5.7500, 1.0000, 5.0000, 1.0000, 1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            14 N..... STRAIGHT_FEED(5.7500, 4.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            16 N..... STRAIGHT_FEED(8.0000, 3.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            18 N..... STRAIGHT_FEED(8.2500, 0.2500, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            19 N..... STRAIGHT_FEED(12.0000, 0.2500, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            21 N..... STRAIGHT_FEED(14.0000, -2.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            22 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            23 N..... SET_XY_ROTATION(0.0000)\n\
+            24 N..... SET_FEED_MODE(0, 0)\n\
+            25 N..... SET_FEED_RATE(0.0000)\n\
+            26 N..... STOP_SPINDLE_TURNING(0)\n\
+            27 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+            28 N..... PROGRAM_END()\n\
+            29 N..... ON_RESET()\n\
+            30 N..... ON_RESET()\n";
+    agrees_with_rs274(program, ToolTable::new(), rs274);
+}
