@@ -1681,12 +1681,10 @@ impl State {
                         };
                     }
                 }
-                if let Some((r, _)) = w.param('R') {
+                if let Some((r, r_column)) = w.param('R') {
+                    // LinuxCNC 2.9 refuses it too (its documentation lists R for L20).
                     if k == 20 {
-                        return Err(LineError::new(
-                            column,
-                            format!("unsupported: G10 L20 R ({})", unsupported::G10_L20_R),
-                        ));
+                        return Err(LineError::new(r_column, "R not allowed in G10 L20"));
                     }
                     self.rotation_deg[system] = r;
                 }

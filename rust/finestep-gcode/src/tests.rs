@@ -1265,3 +1265,9 @@ fn a_tool_length_offset_with_the_tool_change_leaves_the_machine_where_it_is() {
         assert_eq!(rapids, [p(25.4, 0.0, 0.0, 0.0)], "{source:?}");
     }
 }
+
+/// G10 L20 with R: rs274 2.9 refuses it ("R not allowed in G10 L20"), so does finestep.
+#[test]
+fn g10_l20_takes_no_rotation_as_rs274() {
+    assert_eq!(err("G0 X3 Y4\nG10 L20 P1 X0 R10\n"), format!("{FILE}:2:15: R not allowed in G10 L20"));
+}

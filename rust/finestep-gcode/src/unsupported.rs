@@ -43,8 +43,6 @@ pub const EXPONENT: &str = "G-code numbers have no exponent: write the digits";
 pub const COMP_PLANE: &str = "finestep compensates in G17 only";
 /// `unsupported: G81 in G18/G19` (every canned cycle).
 pub const CYCLE_PLANE: &str = "canned cycles are implemented in G17 only";
-/// `unsupported: G10 L20 R`.
-pub const G10_L20_R: &str = "rotation with L20 is not implemented";
 /// `unsupported: G5.1 in G93`, G5.2.
 pub const INVERSE_TIME_SPLINE: &str = "inverse-time feed is implemented for G1, G2 and G3";
 /// `unsupported: G10 L3` and every other L but 1, 2, 10, 11 and 20.
@@ -67,7 +65,6 @@ pub fn reasons() -> Vec<&'static str> {
         EXPONENT,
         COMP_PLANE,
         CYCLE_PLANE,
-        G10_L20_R,
         G10_L,
         INVERSE_TIME_SPLINE,
         G10_TOOL_ROTATION,
