@@ -1706,7 +1706,14 @@ impl State {
         kinds: &mut Vec<BlockKind>,
     ) -> Result<(), LineError> {
         let name = g_name(code);
-        if self.plane != Plane::Xy {
+        // The drilling axis is the plane's normal (G17 Z, G18 Y, G19 X), its word the
+        // depth; the other two place the hole, as rs274 runs them.
+        let (drill, depth_letter, place) = match self.plane {
+            Plane::Xy => (2, 'Z', [(0, 'X'), (1, 'Y')]),
+            Plane::Zx => (1, 'Y', [(2, 'Z'), (0, 'X')]),
+            Plane::Yz => (0, 'X', [(1, 'Y'), (2, 'Z')]),
+        };
+        if self.plane != Plane::Xy && code == 870 {
             return Err(LineError::new(
                 column,
                 format!("unsupported: {name} in G18/G19 ({})", unsupported::CYCLE_PLANE),
@@ -1729,7 +1736,7 @@ impl State {
         if let Some((r, _)) = w.param('R') {
             self.cycle.r = Some(self.length_mm(r));
         }
-        if let Some((z, _)) = w.param('Z') {
+        if let Some((z, _)) = w.param(depth_letter) {
             self.cycle.z = Some(self.length_mm(z));
         }
         if let Some((p, c)) = w.param('P') {
@@ -1760,7 +1767,8 @@ impl State {
             }
         }
         let r_word = self.cycle.r.ok_or_else(|| LineError::new(column, format!("{name} with no R (retract plane)")))?;
-        let z_word = self.cycle.z.ok_or_else(|| LineError::new(column, format!("{name} with no Z (depth)")))?;
+        let z_word =
+            self.cycle.z.ok_or_else(|| LineError::new(column, format!("{name} with no {depth_letter} (depth)")))?;
         let repeats = match w.param('L') {
             None => 1,
             Some((l, c)) => as_u32(l)
@@ -1768,12 +1776,12 @@ impl State {
                 .ok_or_else(|| LineError::new(c, "L for a canned cycle must be an integer from 0 to 10000"))?,
         };
         let mut cur = self.to_program(self.position);
-        let start_z = cur[2];
+        let start_z = cur[drill];
         let old_z = *self.cycle.old_z.get_or_insert(start_z);
         // In G91, R is relative to the Z the cycle began at (as rs274 does), Z to R.
         let (r, z) = if self.incremental { (old_z + r_word, old_z + r_word + z_word) } else { (r_word, z_word) };
         if z > r {
-            return Err(LineError::new(column, format!("{name} with Z above R")));
+            return Err(LineError::new(column, format!("{name} with {depth_letter} above R")));
         }
         let dwell = match code {
             820 | 860 | 890 => {
@@ -1808,22 +1816,35 @@ impl State {
         };
         // As rs274 does: up to R first when the cycle began below it; across at the
         // clearance height or higher.
-        if old_z < r && cur[2] < r {
-            cur[2] = r;
+        if old_z < r && cur[drill] < r {
+            cur[drill] = r;
             rapid(self, &mut out, cur);
         }
         let clear = if self.retract_to_r { r } else { old_z.max(r) };
         for _ in 0..repeats {
-            self.apply_xy(w, &mut cur);
+            if self.plane == Plane::Xy {
+                self.apply_xy(w, &mut cur);
+            } else {
+                for (axis, letter) in place {
+                    if let Some((v, _)) = w.param(letter) {
+                        let v = self.length_mm(v);
+                        cur[axis] = if self.incremental { cur[axis] + v } else { v };
+                    }
+                }
+            }
             if let Some((v, _)) = w.param('A') {
                 cur[3] = if self.incremental { cur[3] + v } else { v };
             }
             if cur.iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
                 return Err(LineError::new(column, "position out of range"));
             }
-            cur[2] = cur[2].max(clear);
+            cur[drill] = cur[drill].max(clear);
             rapid(self, &mut out, cur);
-            let at = |zz: f64| [cur[0], cur[1], zz, cur[3]];
+            let at = |zz: f64| {
+                let mut p = cur;
+                p[drill] = zz;
+                p
+            };
             rapid(self, &mut out, at(r));
             if let Some((i, j, k)) = back_bore {
                 // G87 as rs274 runs it: across to the offset at R, spindle stopped and
@@ -1851,7 +1872,7 @@ impl State {
                 rapid(self, &mut out, off(clear));
                 rapid(self, &mut out, at(clear));
                 out.push(BlockKind::Spindle { rotation, rpm });
-                cur[2] = clear;
+                cur[drill] = clear;
                 if out.len() > 1_000_000 {
                     return Err(LineError::new(column, format!("{name} makes more than 10^6 moves")));
                 }
@@ -1888,7 +1909,7 @@ impl State {
             if code == 860 {
                 out.push(BlockKind::Spindle { rotation: spindle.0, rpm: spindle.1 });
             }
-            cur[2] = clear;
+            cur[drill] = clear;
             if out.len() > 1_000_000 {
                 return Err(LineError::new(column, format!("{name} makes more than 10^6 moves")));
             }

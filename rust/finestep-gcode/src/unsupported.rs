@@ -41,8 +41,8 @@ pub const EXPONENT: &str = "G-code numbers have no exponent: write the digits";
 /// `unsupported: cutter compensation in G18/G19` and `plane change while cutter
 /// compensation is on`.
 pub const COMP_PLANE: &str = "finestep compensates in G17 only";
-/// `unsupported: G81 in G18/G19` (every canned cycle).
-pub const CYCLE_PLANE: &str = "canned cycles are implemented in G17 only";
+/// `unsupported: G87 in G18/G19`.
+pub const CYCLE_PLANE: &str = "back boring is implemented in G17 only";
 /// `unsupported: G5.1 in G93`, G5.2.
 pub const INVERSE_TIME_SPLINE: &str = "inverse-time feed is implemented for G1, G2 and G3";
 /// `unsupported: G10 L3` and every other L but 1, 2, 10, 11 and 20.
