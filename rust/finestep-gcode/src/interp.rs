@@ -746,9 +746,14 @@ impl State {
         let dynamic_comp = w.has(Group::Comp, 411) || w.has(Group::Comp, 421);
         if let Some((_, column)) = w.param('L') {
             if dynamic_comp {
-                // The orientation of a lathe tool, for G18 only (where finestep does not
-                // compensate).
+                // The orientation of a lathe tool, for G18 only.
                 let name = w.group(Group::Comp).map_or(String::new(), |(code, _)| g_name(code));
+                if self.plane == Plane::Zx || w.has(Group::Plane, 180) {
+                    return Err(LineError::new(
+                        column,
+                        format!("unsupported: {name} L ({})", unsupported::LATHE_ORIENTATION),
+                    ));
+                }
                 return Err(LineError::new(column, format!("{name} with L word, but plane is not G18")));
             }
             if !(w.has(Group::Motion, G5_2) || g10 || cycle_move) {
@@ -939,12 +944,9 @@ impl State {
                 180 => Plane::Zx,
                 _ => Plane::Yz,
             };
-            // Compensation offsets in XY; another plane would cut an uncompensated path.
-            if plane != Plane::Xy && self.comp != CompSide::Off {
-                return Err(LineError::new(
-                    column,
-                    format!("unsupported: plane change while cutter compensation is on ({})", unsupported::COMP_PLANE),
-                ));
+            // Compensation offsets in its plane; as in LinuxCNC, that plane stays.
+            if plane != self.plane && self.comp != CompSide::Off {
+                return Err(LineError::new(column, "Cannot change planes with cutter radius compensation on"));
             }
             self.plane = plane;
         }
@@ -965,11 +967,8 @@ impl State {
             if side != CompSide::Off && self.comp != CompSide::Off {
                 return Err(LineError::new(column, "cutter compensation is already on (G40 first)"));
             }
-            if side != CompSide::Off && self.plane != Plane::Xy {
-                return Err(LineError::new(
-                    column,
-                    format!("unsupported: cutter compensation in G18/G19 ({})", unsupported::COMP_PLANE),
-                ));
+            if side != CompSide::Off && self.plane == Plane::Yz {
+                return Err(LineError::new(column, "Cutter radius compensation allowed only in XY, XZ planes"));
             }
             if dynamic_comp {
                 let (d, _) =
@@ -979,7 +978,8 @@ impl State {
                     side = if side == CompSide::Left { CompSide::Right } else { CompSide::Left };
                 }
                 self.comp = side;
-                kinds.push(BlockKind::CutterCompRadius { side, radius_mm: self.length_mm(d.abs()) / 2.0 });
+                let radius_mm = self.length_mm(d.abs()) / 2.0;
+                kinds.push(BlockKind::CutterCompRadius { side, radius_mm, plane: self.plane });
             } else {
                 let tool = match w.param('D') {
                     Some((d, d_column)) => Some(
@@ -988,7 +988,7 @@ impl State {
                     None => None,
                 };
                 self.comp = side;
-                kinds.push(BlockKind::CutterComp { side, tool });
+                kinds.push(BlockKind::CutterComp { side, tool, plane: self.plane });
             }
         }
 

@@ -297,6 +297,9 @@ pub enum BlockKind {
         side: CompSide,
         /// The tool number from `D`, if given.
         tool: Option<u32>,
+        /// The plane compensated in: G17, or G18 (as LinuxCNC, for lathes); the plane
+        /// does not change while compensation is on.
+        plane: Plane,
     },
     /// G41.1/G42.1: cutter radius compensation with the radius given in the block (half
     /// its `D`, the tool's diameter: LinuxCNC's dynamic compensation; a negative `D`
@@ -306,6 +309,8 @@ pub enum BlockKind {
         side: CompSide,
         /// The tool radius, mm (not negative).
         radius_mm: f64,
+        /// The plane compensated in, as for [`BlockKind::CutterComp`].
+        plane: Plane,
     },
     /// M19 with R or P: orient the spindle to `angle_deg` (LinuxCNC's `ORIENT_SPINDLE`);
     /// the spindle counts as stopped after it. (A bare M19 stops the spindle in the

@@ -133,10 +133,10 @@ fn dwell_spindle_coolant_tools_comp_path() {
             BlockKind::ToolChange { tool: 4 },
             BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0 },
             BlockKind::ToolChange { tool: 4 },
-            BlockKind::CutterComp { side: CompSide::Left, tool: Some(3) },
-            BlockKind::CutterComp { side: CompSide::Off, tool: None },
-            BlockKind::CutterComp { side: CompSide::Right, tool: None },
-            BlockKind::CutterComp { side: CompSide::Off, tool: None },
+            BlockKind::CutterComp { side: CompSide::Left, tool: Some(3), plane: Plane::Xy },
+            BlockKind::CutterComp { side: CompSide::Off, tool: None, plane: Plane::Xy },
+            BlockKind::CutterComp { side: CompSide::Right, tool: None, plane: Plane::Xy },
+            BlockKind::CutterComp { side: CompSide::Off, tool: None, plane: Plane::Xy },
             BlockKind::PathControl(PathControl::ExactPath),
             BlockKind::PathControl(PathControl::Blend { tolerance_mm: None }),
             BlockKind::PathControl(PathControl::Blend { tolerance_mm: Some(0.01) }),
@@ -157,7 +157,7 @@ fn one_block_runs_in_linuxcnc_order() {
             BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 500.0 },
             BlockKind::Coolant { mist: false, flood: true },
             BlockKind::Dwell { seconds: 1.0 },
-            BlockKind::CutterComp { side: CompSide::Left, tool: Some(1) },
+            BlockKind::CutterComp { side: CompSide::Left, tool: Some(1), plane: Plane::Xy },
             BlockKind::PathControl(PathControl::ExactPath),
             BlockKind::Linear { to: p(1.0, 0.0, 0.0, 0.0), feed_mm_per_min: 100.0 },
             BlockKind::End,
@@ -403,19 +403,30 @@ fn hostile_input_is_an_error_not_a_panic() {
     assert_eq!(err(""), "t.ngc:1:1: the program is empty (no blocks)");
 }
 
+/// Compensation in G17 and G18 (carried by the block), not in G19, and the plane kept
+/// while it is on: rs274's messages.
 #[test]
-fn compensation_only_in_the_xy_plane() {
-    let err = parse_str("G18\nG41 D1\n", "p.ngc").unwrap_err();
-    assert_eq!(
-        err.to_string(),
-        "p.ngc:2:1: unsupported: cutter compensation in G18/G19 (finestep compensates in G17 only)"
-    );
+fn compensation_in_the_xy_and_xz_planes() {
+    let err = parse_str("G19\nG41 D1\n", "p.ngc").unwrap_err();
+    assert_eq!(err.to_string(), "p.ngc:2:1: Cutter radius compensation allowed only in XY, XZ planes");
     let err = parse_str("G17 G41 D1\nG1 X1 F100\nG19\n", "p.ngc").unwrap_err();
-    assert_eq!(
-        err.to_string(),
-        "p.ngc:3:1: unsupported: plane change while cutter compensation is on (finestep compensates in G17 only)"
-    );
+    assert_eq!(err.to_string(), "p.ngc:3:1: Cannot change planes with cutter radius compensation on");
+    let err = parse_str("G18 G41 D1\nG1 X1 F100\nG17\n", "p.ngc").unwrap_err();
+    assert_eq!(err.to_string(), "p.ngc:3:1: Cannot change planes with cutter radius compensation on");
     assert!(parse_str("G17 G41 D1\nG1 X1 F100\nG40\nG18\n", "p.ngc").is_ok());
+    let comps: Vec<BlockKind> = parse("G18 G42 D2\nG40\nG41.1 D1\nG40\n")
+        .into_iter()
+        .filter(|k| matches!(k, BlockKind::CutterComp { .. } | BlockKind::CutterCompRadius { .. }))
+        .collect();
+    assert_eq!(
+        comps,
+        [
+            BlockKind::CutterComp { side: CompSide::Right, tool: Some(2), plane: Plane::Zx },
+            BlockKind::CutterComp { side: CompSide::Off, tool: None, plane: Plane::Zx },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 0.5, plane: Plane::Zx },
+            BlockKind::CutterComp { side: CompSide::Off, tool: None, plane: Plane::Zx },
+        ]
+    );
 }
 
 /// A NURBS as the tests read it: control points (x, y, w), order, knots, feed, end.
@@ -1089,18 +1100,15 @@ fn dynamic_compensation_carries_the_radius() {
     assert_eq!(
         comps,
         vec![
-            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 6.35 },
-            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 12.7 },
-            BlockKind::CutterCompRadius { side: CompSide::Right, radius_mm: 1.5 },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 6.35, plane: Plane::Xy },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 12.7, plane: Plane::Xy },
+            BlockKind::CutterCompRadius { side: CompSide::Right, radius_mm: 1.5, plane: Plane::Xy },
         ]
     );
     assert_eq!(err("G41.1 D1 L3\n"), format!("{FILE}:1:10: G41.1 with L word, but plane is not G18"));
     assert_eq!(err("G42.1 G1 X1 F1\n"), format!("{FILE}:1:1: G42.1 with no D word"));
     assert_eq!(err("G41.1 D1\nG42.1 D1\n"), format!("{FILE}:2:1: cutter compensation is already on (G40 first)"));
-    assert_eq!(
-        err("G18\nG41.1 D1\n"),
-        format!("{FILE}:2:1: unsupported: cutter compensation in G18/G19 (finestep compensates in G17 only)")
-    );
+    assert_eq!(err("G19\nG41.1 D1\n"), format!("{FILE}:2:1: Cutter radius compensation allowed only in XY, XZ planes"));
 }
 
 /// M19 with R or P is an orientation event (the spindle stopped after it), a bare M19

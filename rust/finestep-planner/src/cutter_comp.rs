@@ -34,10 +34,12 @@
 //!
 //! # What it does
 //!
-//! - **Plane.** Compensation is in the XY plane (G17). Z and A are carried along: a
-//!   move's end keeps its programmed Z and A, so helices and ramps work. An arc in
-//!   G18 or G19 while compensation is on is an error. Straight moves carry no plane in
-//!   the canonical program, so they are always compensated in XY.
+//! - **Plane.** Compensation is in the plane G41/G42 (or G41.1/G42.1) was given in
+//!   (their block carries it): G17, or G18 as LinuxCNC does for lathes, where Z and X
+//!   take the places of X and Y (Z X Y is right-handed like X Y Z, so the sides and the
+//!   arc directions mean the same). Below, X Y stand for the plane's axes. The third axis
+//!   and A are carried along: a move's end keeps its programmed values, so helices and
+//!   ramps work. An arc in another plane while compensation is on is an error.
 //! - **Moves.** A line is offset by the radius along its left (G41) or right (G42)
 //!   normal; an arc keeps its centre and its radius grows or shrinks by the tool radius
 //!   (full circles and extra turns are kept). An arc whose radius would shrink to zero or
@@ -226,11 +228,78 @@ pub fn compensate(program: &Program, tools: &ToolTable) -> Result<Program, CompE
         last_feed: None,
         mode: Mode::Off,
     };
+    // Compensation in G18 runs in a frame where the plane's axes (Z, X) are (X, Y): the
+    // pass works in XY, every block goes in mapped and comes out mapped back.
+    let mut frame = Plane::Xy;
     for block in &program.blocks {
-        pass.block(block)?;
+        if let (Mode::Off, BlockKind::CutterComp { plane, .. } | BlockKind::CutterCompRadius { plane, .. }) =
+            (&pass.mode, &block.kind)
+        {
+            if *plane != frame {
+                pass.programmed = to_frame(*plane, from_frame(frame, pass.programmed));
+                frame = *plane;
+            }
+        }
+        let start = pass.out.len();
+        pass.block(&map_block(frame, block, true))?;
+        for out in &mut pass.out[start..] {
+            *out = map_block(frame, out, false);
+        }
+        if matches!(pass.mode, Mode::Off) && frame != Plane::Xy {
+            pass.programmed = from_frame(frame, pass.programmed);
+            frame = Plane::Xy;
+        }
     }
+    let start = pass.out.len();
     pass.flush();
+    for out in &mut pass.out[start..] {
+        *out = map_block(frame, out, false);
+    }
     Ok(Program { blocks: pass.out })
+}
+
+/// A point of the machine in the frame of compensation in `plane`: G18's Z X Y as X Y Z
+/// (right-handed, so sides and arc directions keep their meaning); G17 (and G19, which
+/// is not compensated) as it is.
+fn to_frame(plane: Plane, p: Point) -> Point {
+    match plane {
+        Plane::Zx => Point { x_mm: p.z_mm, y_mm: p.x_mm, z_mm: p.y_mm, a_deg: p.a_deg },
+        Plane::Xy | Plane::Yz => p,
+    }
+}
+
+/// The inverse of [`to_frame`].
+fn from_frame(plane: Plane, p: Point) -> Point {
+    match plane {
+        Plane::Zx => Point { x_mm: p.y_mm, y_mm: p.z_mm, z_mm: p.x_mm, a_deg: p.a_deg },
+        Plane::Xy | Plane::Yz => p,
+    }
+}
+
+/// `block` with its points into `frame` ([`to_frame`], `into`) or back out of it
+/// ([`from_frame`]), and an arc's plane with them: in G18's frame the ZX plane is the XY
+/// plane (and XY, YZ follow the permutation).
+fn map_block(frame: Plane, block: &Block, into: bool) -> Block {
+    let mut block = block.clone();
+    if frame == Plane::Xy {
+        return block;
+    }
+    let map = if into { to_frame } else { from_frame };
+    match &mut block.kind {
+        BlockKind::Rapid { to } | BlockKind::Linear { to, .. } => *to = map(frame, *to),
+        BlockKind::Arc { to, centre, plane, .. } => {
+            *to = map(frame, *to);
+            *centre = map(frame, *centre);
+            *plane = match (*plane, into) {
+                (Plane::Zx, true) | (Plane::Yz, false) => Plane::Xy,
+                (Plane::Xy, true) | (Plane::Zx, false) => Plane::Yz,
+                (Plane::Yz, true) | (Plane::Xy, false) => Plane::Zx,
+            };
+        }
+        BlockKind::Nurbs { to, .. } => *to = map(frame, *to),
+        _ => {}
+    }
+    block
 }
 
 /// A point or vector in the XY plane, mm.
@@ -445,8 +514,8 @@ impl Compensator<'_> {
 
     fn block(&mut self, block: &Block) -> Result<(), CompError> {
         match block.kind {
-            BlockKind::CutterComp { side, tool } => self.comp_change(block, side, tool, None),
-            BlockKind::CutterCompRadius { side, radius_mm } => self.comp_change(block, side, None, Some(radius_mm)),
+            BlockKind::CutterComp { side, tool, .. } => self.comp_change(block, side, tool, None),
+            BlockKind::CutterCompRadius { side, radius_mm, .. } => self.comp_change(block, side, None, Some(radius_mm)),
             BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. } => self.motion(block),
             BlockKind::Nurbs { to, feed_mm_per_min, .. } => {
                 if self.comp_on() {
@@ -562,11 +631,9 @@ impl Compensator<'_> {
         self.programmed = to;
         let fail = |reason: &str| CompError { line: block.line, reason: reason.into() };
         if let BlockKind::Arc { plane, .. } = block.kind {
+            // (In the frame of the compensation's plane: see `compensate`.)
             if plane != Plane::Xy && self.comp_on() {
-                let name = if plane == Plane::Zx { "G18 (ZX)" } else { "G19 (YZ)" };
-                return Err(fail(&format!(
-                    "cutter compensation works in the G17 (XY) plane only; this arc is in {name}"
-                )));
+                return Err(fail("this arc is not in the plane cutter compensation was started in (G17 or G18)"));
             }
         }
         let (side, radius) = match self.mode {

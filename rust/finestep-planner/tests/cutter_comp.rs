@@ -634,7 +634,7 @@ fn bad_programs_and_tables_are_errors_naming_the_line() {
     // A plane change while compensating is refused by the front end already.
     assert_eq!(
         finestep_gcode::parse_str("G41 D1\nG1 X5 F100\nG18\nG2 X7 Z0 I1 K0\n", "t.ngc").unwrap_err().to_string(),
-        "t.ngc:3:1: unsupported: plane change while cutter compensation is on (finestep compensates in G17 only)"
+        "t.ngc:3:1: Cannot change planes with cutter radius compensation on"
     );
     assert_eq!(
         err("G41 D1\nG1 X5 F100\nT2 M6\n", 0.5),
@@ -782,7 +782,7 @@ impl Builder {
         })
     }
     fn comp(&mut self, side: CompSide) -> usize {
-        self.push(BlockKind::CutterComp { side, tool: Some(1) })
+        self.push(BlockKind::CutterComp { side, tool: Some(1), plane: Plane::Xy })
     }
 }
 
@@ -1177,5 +1177,50 @@ fn dynamic_compensation_agrees_with_rs274() {
             28 N..... PROGRAM_END()\n\
             29 N..... ON_RESET()\n\
             30 N..... ON_RESET()\n";
+    agrees_with_rs274(program, ToolTable::new(), rs274);
+}
+
+/// Compensation in G18 (a lathe's XZ plane, from LinuxCNC's `comp.ngc` with a tool it
+/// fits: G42.1 and G41.1 D0.2 inch), lines and arcs both ways, against rs274.
+#[test]
+fn compensation_in_g18_agrees_with_rs274() {
+    let program = "g20 g64 g18 f10\ng0x-.2z-.2y0\ng42.1 d0.2\ng1x0z0\ng1z1\ng2r.25x-.25z1.25\ng1x-.5\ng3r.25x-.75z1.5\ng1z1.75\ng40\ng0x.2z-.2y0\ng41.1 d0.2\ng1x0z0\ng1z1\ng2r.25x-.25z1.25\ng1x-.5\ng3r.25x-.75z1.5\ng1z1.75\ng40\ng0x.2z-.2y0\nm2\n";
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_FEED_RATE(10.0000)\n\
+            8 N..... SELECT_PLANE(CANON_PLANE_XZ)\n\
+            9 N..... USE_LENGTH_UNITS(CANON_UNITS_INCHES)\n\
+            10 N..... SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.000000)\n\
+            11 N..... SET_NAIVECAM_TOLERANCE(0.0000)\n\
+            12 N..... STRAIGHT_TRAVERSE(-0.2000, 0.0000, -0.2000, 0.0000, 0.0000, 0.0000)\n\
+            14 N..... STRAIGHT_FEED(-0.1000, 0.0000, 0.0414, 0.0000, 0.0000, 0.0000)\n\
+            15 N..... STRAIGHT_FEED(-0.1000, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            16 N..... ARC_FEED(1.1500, -0.2500, 1.0000, -0.2500, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            17 N..... STRAIGHT_FEED(-0.5000, 0.0000, 1.1500, 0.0000, 0.0000, 0.0000)\n\
+            18 N..... ARC_FEED(1.5000, -0.8500, 1.5000, -0.5000, 1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            19 N..... STRAIGHT_FEED(-0.8500, 0.0000, 1.7500, 0.0000, 0.0000, 0.0000)\n\
+            21 N..... STRAIGHT_TRAVERSE(0.2000, 0.0000, -0.2000, 0.0000, 0.0000, 0.0000)\n\
+            23 N..... STRAIGHT_FEED(0.1000, 0.0000, 0.0414, 0.0000, 0.0000, 0.0000)\n\
+            24 N..... STRAIGHT_FEED(0.1000, 0.0000, 1.0000, 0.0000, 0.0000, 0.0000)\n\
+            25 N..... ARC_FEED(1.3500, -0.2500, 1.0000, -0.2500, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            26 N..... STRAIGHT_FEED(-0.5000, 0.0000, 1.3500, 0.0000, 0.0000, 0.0000)\n\
+            27 N..... ARC_FEED(1.5000, -0.6500, 1.5000, -0.5000, 1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            28 N..... STRAIGHT_FEED(-0.6500, 0.0000, 1.7500, 0.0000, 0.0000, 0.0000)\n\
+            30 N..... STRAIGHT_TRAVERSE(0.2000, 0.0000, -0.2000, 0.0000, 0.0000, 0.0000)\n\
+            31 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            32 N..... SET_XY_ROTATION(0.0000)\n\
+            33 N..... SELECT_PLANE(CANON_PLANE_XY)\n\
+            34 N..... SET_FEED_MODE(0, 0)\n\
+            35 N..... SET_FEED_RATE(0.0000)\n\
+            36 N..... STOP_SPINDLE_TURNING(0)\n\
+            37 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+            38 N..... PROGRAM_END()\n\
+            39 N..... ON_RESET()\n\
+            40 N..... ON_RESET()\n";
     agrees_with_rs274(program, ToolTable::new(), rs274);
 }

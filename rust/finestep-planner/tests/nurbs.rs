@@ -358,7 +358,7 @@ fn a_nurbs_with_cutter_compensation_or_a_cusp_is_refused() {
     assert!(error.reason.contains("cusp"), "{error}");
     // The parser refuses G5.2 with compensation on; a program built otherwise is refused
     // by the compensation pass, never cut without its offset.
-    use finestep_gcode::{Block, BlockKind, CompSide, NurbsPoint, Point};
+    use finestep_gcode::{Block, BlockKind, CompSide, NurbsPoint, Plane, Point};
     let point = |x_mm: f64, y_mm: f64| Point { x_mm, y_mm, z_mm: 0.0, a_deg: 0.0 };
     let control_points = vec![
         NurbsPoint { x_mm: 5.0, y_mm: 0.0, weight: 1.0 },
@@ -366,7 +366,7 @@ fn a_nurbs_with_cutter_compensation_or_a_cusp_is_refused() {
         NurbsPoint { x_mm: 0.0, y_mm: 5.0, weight: 1.0 },
     ];
     let kinds = [
-        BlockKind::CutterComp { side: CompSide::Left, tool: Some(1) },
+        BlockKind::CutterComp { side: CompSide::Left, tool: Some(1), plane: Plane::Xy },
         BlockKind::Linear { to: point(5.0, 0.0), feed_mm_per_min: 600.0 },
         BlockKind::Nurbs {
             to: point(0.0, 5.0),
