@@ -1853,6 +1853,9 @@ impl State {
                 // on, cut up to K and back down to Z, stopped and oriented again, out at
                 // the offset, up to the clearance height, back over the centre, spindle on.
                 let off = |zz: f64| [cur[0] + i, cur[1] + j, zz, cur[3]];
+                if off(z).iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
+                    return Err(LineError::new(column, "position out of range"));
+                }
                 let (rotation, rpm) = (self.rotation, self.rpm);
                 let orient = BlockKind::SpindleOrient {
                     angle_deg: 0.0,

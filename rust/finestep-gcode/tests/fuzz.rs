@@ -346,6 +346,20 @@ fn dialect_line() -> impl Strategy<Value = String> {
         "M61 Q1",
         "M6 T1",
         "F100",
+        "G5",
+        "G5.1",
+        "G7",
+        "G8",
+        "G18",
+        "G19",
+        "G41.1 D1",
+        "G42.1 D-1",
+        "G40",
+        "G86",
+        "G87",
+        "M3 S100",
+        "M19",
+        "M60",
     ])
     .prop_map(str::to_string);
     let letter = prop::sample::select("XYZAIJKRPQLFHS".chars().collect::<Vec<_>>());
