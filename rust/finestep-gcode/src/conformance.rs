@@ -443,8 +443,18 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
     }
 }
 
-/// The events without straight moves that do not move (rs274 prints one for a `G0` or
-/// a canned cycle's step that stays where it is; finestep does not).
+/// A point's in-plane coordinates in rs274's order (G17 X Y, G18 Z X, G19 Y Z).
+fn in_plane(p: &[f64; 4], plane: u8) -> [f64; 2] {
+    match plane {
+        18 => [p[2], p[0]],
+        19 => [p[1], p[2]],
+        _ => [p[0], p[1]],
+    }
+}
+
+/// The events without moves that do not move (rs274 prints a straight one for a `G0` or
+/// a canned cycle's step that stays where it is, and an arc of radius zero for a
+/// compensated concave arc as small as the tool; finestep does not).
 fn moving(events: &[Event], tolerance: impl Fn(usize) -> f64) -> Vec<(usize, &Event)> {
     // Both start at the origin.
     let mut at: Option<[f64; 4]> = Some([0.0; 4]);
@@ -452,6 +462,14 @@ fn moving(events: &[Event], tolerance: impl Fn(usize) -> f64) -> Vec<(usize, &Ev
     for (i, e) in events.iter().enumerate() {
         let to = match e {
             Event::Traverse { to } | Event::Feed { to, .. } => Some(*to),
+            // An arc of radius zero where the tool is (rs274's compensated concave arc as
+            // small as the tool) does not move either.
+            Event::Arc { to, centre, plane, .. }
+                if at.is_some_and(|from| close(to, &from, tolerance(i)))
+                    && close(centre, &in_plane(to, *plane), tolerance(i)) =>
+            {
+                continue;
+            }
             Event::Arc { to, .. } | Event::Nurbs { to: Some(to), .. } => {
                 at = Some(*to);
                 out.push((i, e));

@@ -42,9 +42,12 @@
 //!   ramps work. An arc in another plane while compensation is on is an error.
 //! - **Moves.** A line is offset by the radius along its left (G41) or right (G42)
 //!   normal; an arc keeps its centre and its radius grows or shrinks by the tool radius
-//!   (full circles and extra turns are kept). An arc whose radius would shrink to zero or
-//!   below (a concave arc no larger than the tool) is an error. Moves that do not move in
-//!   XY (Z or A alone) keep the tool where it is in XY.
+//!   (full circles and extra turns are kept). An arc whose radius would shrink below zero
+//!   (a concave arc smaller than the tool) is an error; one that shrinks to zero (within
+//!   [`JOIN_TOLERANCE_MM`]) is a pivot, the tool turning at the arc's centre, accepted
+//!   where the offsets of both neighbours meet there (LinuxCNC prints an arc of radius
+//!   zero; finestep a move of length zero), an error naming its line otherwise. Moves that
+//!   do not move in XY (Z or A alone) keep the tool where it is in XY.
 //! - **Corners**, between any two of lines and arcs, judged by the tangents at the
 //!   programmed corner: tangent moves join directly; at an outside (convex) corner an
 //!   arc of the tool radius around the programmed corner is inserted, as LinuxCNC does;
@@ -400,6 +403,11 @@ impl Element {
             radius_start: 0.0,
             radius_end: 0.0,
         }
+    }
+
+    /// A concave arc as small as the tool: the tool pivots at its centre.
+    fn is_pivot(&self) -> bool {
+        matches!(self.shape, Shape::Arc { .. }) && self.radius_start == 0.0 && self.radius_end == 0.0
     }
 
     /// Unit tangent in the direction of motion at `point` on the element.
@@ -760,6 +768,10 @@ impl Compensator<'_> {
         let element = &pending.element;
         let to = Point { x_mm: element.end.x, y_mm: element.end.y, ..pending.end };
         let kind = match (element.shape, pending.travel) {
+            // The tool stays at the centre: a move of length zero.
+            (Shape::Arc { .. }, Travel::Feed(feed)) if element.is_pivot() => {
+                BlockKind::Linear { to, feed_mm_per_min: feed }
+            }
             (Shape::Line { .. }, Travel::Rapid) => BlockKind::Rapid { to },
             (Shape::Line { .. }, Travel::Feed(feed)) => BlockKind::Linear { to, feed_mm_per_min: feed },
             (Shape::Arc { centre, ccw, .. }, travel) => {
@@ -828,13 +840,27 @@ fn offset_element(block: &Block, from: &Point, side: f64, radius: f64) -> Result
             // Left of a counter-clockwise arc is towards its centre.
             let shrink = side * if ccw { 1.0 } else { -1.0 };
             let (r0_off, r1_off) = (r0 - shrink * radius, r1 - shrink * radius);
-            if r0_off.min(r1_off) <= JOIN_TOLERANCE_MM || !(r0 > 0.0 && r1 > 0.0) {
+            // A concave arc as small as the tool: the tool pivots at its centre (LinuxCNC
+            // prints an arc of radius zero), accepted where both neighbours meet there.
+            let pivot = r0_off.abs() <= JOIN_TOLERANCE_MM && r1_off.abs() <= JOIN_TOLERANCE_MM && r0 > 0.0 && r1 > 0.0;
+            if !pivot && (r0_off.min(r1_off) <= JOIN_TOLERANCE_MM || !(r0 > 0.0 && r1 > 0.0)) {
                 let arc = r0.min(r1);
                 let relation = if radius > arc + JOIN_TOLERANCE_MM { "is larger than" } else { "equals" };
                 return Err(OffsetError::ConcaveArc { radius, relation, arc });
             }
             let theta0 = start.sub(centre).angle();
             let sweep = swept_angle(theta0, end.sub(centre).angle(), ccw, extra_turns);
+            if pivot {
+                return Ok(Element {
+                    shape: Shape::Arc { centre, ccw, theta0 },
+                    start: centre,
+                    start_param: 0.0,
+                    end: centre,
+                    end_param: sweep,
+                    radius_start: 0.0,
+                    radius_end: 0.0,
+                });
+            }
             Ok(Element {
                 shape: Shape::Arc { centre, ccw, theta0 },
                 start: centre.add(start.sub(centre).scale(r0_off / r0)),
@@ -903,6 +929,20 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64) -> Result<Join
     if a_end.sub(b_start).norm() <= JOIN_TOLERANCE_MM {
         b.element.start = a_end;
         return Ok(Join::Meet);
+    }
+    // A pivot (a concave arc as small as the tool) has no tangent: its neighbours must
+    // meet at its centre.
+    for (pending, other) in [(&*a, &*b), (&*b, &*a)] {
+        if pending.element.is_pivot() {
+            return Err(CompError {
+                line: pending.line,
+                reason: format!(
+                    "tool radius {} mm equals this concave arc's radius: the tool can only pivot at its centre, and the move on line {} does not meet it there",
+                    mm(radius),
+                    other.line
+                ),
+            });
+        }
     }
     let ta = a.element.tangent_at(a_end);
     let tb = b.element.tangent_at(b_start);

@@ -346,7 +346,10 @@ fn rounded_pocket_outside_grows_its_arcs() {
 fn a_tool_not_smaller_than_a_concave_arc_is_an_error() {
     let inside = POCKET.replace("{side}", "G41");
     assert_eq!(err(&inside, 3.5), "line 5: tool radius 3.5 mm is larger than the concave arc radius 3 mm");
-    assert_eq!(err(&inside, 3.0), "line 5: tool radius 3 mm equals the concave arc radius 3 mm");
+    // As large as the corners: the tool pivots at each corner's centre, where the sides'
+    // offsets meet (LinuxCNC prints arcs of radius zero there).
+    let pivots = run(&inside, 3.0).unwrap();
+    assert!(!pivots.blocks.iter().any(|b| matches!(b.kind, BlockKind::Arc { .. })));
     assert!(run(&inside, 2.99).is_ok());
 }
 
@@ -1223,4 +1226,54 @@ fn compensation_in_g18_agrees_with_rs274() {
             39 N..... ON_RESET()\n\
             40 N..... ON_RESET()\n";
     agrees_with_rs274(program, ToolTable::new(), rs274);
+}
+
+/// A concave arc as small as the tool (LinuxCNC's `comp.ngc`: R0.25 arcs, tool 1 of 0.5
+/// inch): the tool pivots at the arc's centre, where its neighbours meet; rs274 prints an
+/// arc of radius zero there, finestep a move of length zero. Where the neighbours do not
+/// meet at the centre (finestep's tangent entry), it is refused with the line.
+#[test]
+fn a_concave_arc_as_small_as_the_tool_is_a_pivot_as_in_rs274() {
+    let program = "g20 g64 g17 f30\ng0x-.2y-.2z0\ng42 d1\ng1x0y0\ng1y1\ng3r.25x-.25y1.25\ng1x-.5\ng2r.25x-.75y1.5\ng1y1.75\ng40\ng0x.2y-.2z0\ng41 d1\ng1x0y0\ng1y1\ng3r.25x-.25y1.25\ng1x-.5\ng2r.25x-.75y1.5\ng1y1.75\ng40\ng0x.2y-.2z0\nm2\n";
+    let rs274 = "\
+            1 N..... USE_LENGTH_UNITS(CANON_UNITS_MM)\n\
+            2 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            3 N..... SET_G92_OFFSET(0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            4 N..... SET_XY_ROTATION(0.0000)\n\
+            5 N..... SET_FEED_REFERENCE(CANON_XYZ)\n\
+            6 N..... ON_RESET()\n\
+            7 N..... SET_FEED_RATE(30.0000)\n\
+            8 N..... SELECT_PLANE(CANON_PLANE_XY)\n\
+            9 N..... USE_LENGTH_UNITS(CANON_UNITS_INCHES)\n\
+            10 N..... SET_MOTION_CONTROL_MODE(CANON_CONTINUOUS, 0.000000)\n\
+            11 N..... SET_NAIVECAM_TOLERANCE(0.0000)\n\
+            12 N..... STRAIGHT_TRAVERSE(-0.2000, -0.2000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            14 N..... STRAIGHT_FEED(0.1768, -0.1768, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            15 N..... ARC_FEED(0.2500, 0.0000, 0.0000, 0.0000, 1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            16 N..... STRAIGHT_FEED(0.2500, 1.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            17 N..... ARC_FEED(-0.2500, 1.5000, -0.2500, 1.0000, 1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            18 N..... STRAIGHT_FEED(-0.5000, 1.5000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            19 N..... ARC_FEED(-0.5000, 1.5000, -0.5000, 1.5000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            20 N..... STRAIGHT_FEED(-0.5000, 1.7500, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            22 N..... STRAIGHT_TRAVERSE(0.2000, -0.2000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            24 N..... STRAIGHT_FEED(-0.1768, -0.1768, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            25 N..... ARC_FEED(-0.2500, 0.0000, 0.0000, 0.0000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            26 N..... STRAIGHT_FEED(-0.2500, 1.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            27 N..... ARC_FEED(-0.2500, 1.0000, -0.2500, 1.0000, 1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            28 N..... STRAIGHT_FEED(-0.5000, 1.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            29 N..... ARC_FEED(-1.0000, 1.5000, -0.5000, 1.5000, -1, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            30 N..... STRAIGHT_FEED(-1.0000, 1.7500, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            32 N..... STRAIGHT_TRAVERSE(0.2000, -0.2000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            33 N..... SET_G5X_OFFSET(1, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n\
+            34 N..... SET_XY_ROTATION(0.0000)\n\
+            35 N..... SET_FEED_MODE(0, 0)\n\
+            36 N..... SET_FEED_RATE(0.0000)\n\
+            37 N..... STOP_SPINDLE_TURNING(0)\n\
+            38 N..... SET_SPINDLE_MODE(0 0.0000)\n\
+            39 N..... PROGRAM_END()\n\
+            40 N..... ON_RESET()\n\
+            41 N..... ON_RESET()\n";
+    agrees_with_rs274(program, ToolTable::new().with_radius_mm(1, 6.35), rs274);
+    let err = compensate(&parse("G21 F100\nG0 X0 Y-10\nG41 D1\nG1 X0 Y0\nG3 X-2 Y2 R2\nG1 X-4\nM2\n"), &tool(2.0));
+    assert!(err.unwrap_err().to_string().contains("can only pivot at its centre"));
 }
