@@ -616,6 +616,17 @@ mod tests {
     }
 
     #[test]
+    fn the_entry_and_exit_of_cutter_compensation_are_chosen_by_name() {
+        use crate::cutter_comp::EntryExit;
+        assert_eq!(MachineConfig::default().tool_table().entry_exit(), EntryExit::Tangent);
+        let config = MachineConfig::from_toml_str("cutter_comp_entry = \"linuxcnc\"\n", "m.toml").unwrap();
+        assert_eq!(config.tool_table().entry_exit(), EntryExit::LinuxCnc);
+        assert_eq!(config.tool_table().radius_mm(1), Some(3.0));
+        let err = MachineConfig::from_toml_str("cutter_comp_entry = \"sideways\"\n", "m.toml").unwrap_err();
+        assert!(err.reason.contains("unknown variant `sideways`, expected `tangent` or `linuxcnc`"), "{err}");
+    }
+
+    #[test]
     fn errors_name_the_file_and_the_key() {
         let err = MachineConfig::from_toml_str("[axes.X]\nmax_velocity = -1\n", "m.toml").unwrap_err();
         assert_eq!(err.to_string(), "m.toml: axes.X.max_velocity: must be a positive finite number, got -1");
