@@ -119,6 +119,8 @@ type ArcGeometry = ((usize, usize), (f64, f64), f64, f64, f64);
 const CURVE_SAMPLES_PER_SPAN: usize = 16;
 /// Chords per bounding box of the distance search.
 const CHORDS_PER_BOX: usize = 32;
+/// Pieces ahead of the tracker's the path may be found on (the tracker's reach).
+const TRACK_AHEAD: usize = 64;
 
 /// A NURBS as the checker reads it: control points `(x, y, w)`, knots, order, and the
 /// curve sampled densely as `(parameter, point)`.
@@ -634,6 +636,7 @@ pub fn check_program(
             + (p.chord_floor(&present, machine.chord_tolerance_mm) - 3.0 * p.allowance - 2.0 * rounding).max(0.0);
     }
     let mut travelled = 0.0f64;
+    let mut total_travelled = 0.0f64;
     // Stops of pieces that need no motion, reached before the first period.
     report.exact_stops += stops_reached(
         &pieces,
@@ -701,15 +704,18 @@ pub fn check_program(
         // Where on the program the period ends, and how far from it.
         if emitted && !pieces.is_empty() {
             let from_piece = piece;
+            let chord =
+                (0..4).filter(|&a| present[a]).map(|a| (point[a] - previous_point[a]).powi(2)).sum::<f64>().sqrt();
             // The path moves on through the program in order: the current piece while the
-            // point is close enough to it, else the first close enough among the next 64
+            // point is close enough to it, else the first close enough among the next
+            // `TRACK_AHEAD`
             // (never the nearest of many: a later piece can pass close by, a line coming
             // back past a corner the path is rounding, or two circles crossing).
             let fits = |i: usize| {
                 let d = pieces[i].distance(&point, &present);
                 (d <= pieces[i].allowance + base_allowance).then_some(d)
             };
-            let last = (piece + 64).min(pieces.len() - 1);
+            let last = (piece + TRACK_AHEAD).min(pieces.len() - 1);
             let found = (piece..=last).find(|&i| fits(i).is_some());
             let within = found.is_some();
             let best = found.unwrap_or(piece);
@@ -726,12 +732,30 @@ pub fn check_program(
             // The figure reported is the tool's distance in space: over X, Y and Z in mm.
             // A in degrees is held by the check above (its half step in the allowance)
             // but is no distance to add to millimetres. It is measured to every piece the
-            // path may be on, up to three ahead of the tracker: after a reversal the
-            // tracker stays on the piece the path came along while the point fits it,
-            // and the piece the path is on is the one coming back.
-            let ahead = &pieces[lo..=(best + 3).min(pieces.len() - 1)];
-            let nearest = |q: &[f64; 4]| ahead.iter().map(|p| p.distance(q, &linear)).fold(f64::INFINITY, f64::min);
-            let spatial = nearest(&point).max(nearest(&midpoint));
+            // path may be on: after a reversal the tracker stays on the piece the path
+            // came along while the point fits it, and the piece the path is on is one
+            // coming back, or one after a run of pieces retracing it (the tracker stayed
+            // four pieces behind on a path going back and forth within P, and the
+            // figure read 0.1197 mm at P 0.1139 from the piece the tracker was on while
+            // the path was 0.9 um from its own piece, seed 0x5b979e644444628e). The
+            // pieces the path may be on reach up to the last one whose chord floor the
+            // machine has travelled (`floor`), within the tracker's reach: first the
+            // three ahead of the tracker, and only where they give a new largest figure
+            // all of them (a figure that is not a new largest changes nothing).
+            total_travelled += chord;
+            let nearest = |q: &[f64; 4], ahead: &[Piece]| {
+                ahead.iter().map(|p| p.distance(q, &linear)).fold(f64::INFINITY, f64::min)
+            };
+            let near = &pieces[lo..=(best + 3).min(pieces.len() - 1)];
+            let mut spatial = nearest(&point, near).max(nearest(&midpoint, near));
+            if spatial > report.max_deviation {
+                // floor[j] is the least travel before piece j: the path may be on j once
+                // it has travelled that far.
+                let reachable = floor.partition_point(|&f| f <= total_travelled).saturating_sub(1);
+                let furthest = reachable.max(best + 3).min(best + TRACK_AHEAD).min(pieces.len() - 1);
+                let ahead = &pieces[lo..=furthest];
+                spatial = nearest(&point, ahead).max(nearest(&midpoint, ahead));
+            }
             if spatial > report.max_deviation {
                 report.max_deviation = spatial;
                 report.max_deviation_line = pieces[best].line;
@@ -768,8 +792,7 @@ pub fn check_program(
                 next_stop += 1;
             }
             moved |= record.inc.iter().any(|d| d.to_bits() != 0);
-            travelled +=
-                (0..4).filter(|&a| present[a]).map(|a| (point[a] - previous_point[a]).powi(2)).sum::<f64>().sqrt();
+            travelled += chord;
             report.exact_stops += stops_reached(
                 &pieces,
                 &stops,
