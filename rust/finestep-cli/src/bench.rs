@@ -161,13 +161,14 @@ fn plan_timed(profile: finestep_planner::ProfileKind, program: &finestep_gcode::
 }
 
 /// The programs of the memory figures: a straight move of about 10 h, a 1 000 000 mm
-/// half circle, and the 100 000-segment CAM program.
+/// half circle, and the CAM program of 100 000 and of 1 000 000 short segments.
 fn memory_program(case: &str) -> anyhow::Result<String> {
     Ok(match case {
         "line" => "G21 G90 G1 X1000000 F1666\nM2\n".to_string(),
         "arc" => "G21 G90 G17 G2 X1000000 Y0 I500000 J0 F6000\nM2\n".to_string(),
         "program" => cam_program(100_000) + "M2\n",
-        other => anyhow::bail!("no memory case {other:?} (line, arc, program)"),
+        "program-1m" => cam_program(1_000_000) + "M2\n",
+        other => anyhow::bail!("no memory case {other:?} (line, arc, program, program-1m)"),
     })
 }
 
@@ -182,22 +183,32 @@ fn peak_rss_kb() -> anyhow::Result<u64> {
 }
 
 /// Plans one memory case through the record stream on the built-in machine, reading
-/// every record and keeping none, and prints: periods, seconds to the first record,
-/// seconds in all, peak RSS in kB (run in a process of its own by [`memory_figures`]).
+/// every record and keeping none, and prints: periods, seconds to parse, seconds from
+/// the start of planning to the first record, seconds in all, peak RSS in kB, and the
+/// most path elements the stream kept at once (run in a process of its own by
+/// [`memory_figures`]).
 pub fn plan_memory(case: &str) -> anyhow::Result<()> {
     let text = memory_program(case)?;
     let start = Instant::now();
     let program = finestep_gcode::parse_str(&text, "memory.ngc")?;
     drop(text);
-    let stream = finestep_planner::plan_stream(&MachineConfig::default(), &program)
+    let parse_s = start.elapsed().as_secs_f64();
+    let plan_start = Instant::now();
+    let mut stream = finestep_planner::plan_stream(&MachineConfig::default(), &program)
         .map_err(|e| anyhow::anyhow!("memory.ngc:{}: {}", e.line, e.reason))?;
     let (mut periods, mut first) = (0u64, None);
-    for period in stream.periods {
+    for period in stream.periods.by_ref() {
         period.map_err(|e| anyhow::anyhow!("memory.ngc:{}: {}", e.line, e.reason))?;
-        first.get_or_insert_with(|| start.elapsed().as_secs_f64());
+        first.get_or_insert_with(|| plan_start.elapsed().as_secs_f64());
         periods += 1;
     }
-    println!("{periods} {} {} {}", first.unwrap_or(f64::NAN), start.elapsed().as_secs_f64(), peak_rss_kb()?);
+    println!(
+        "{periods} {parse_s} {} {} {} {}",
+        first.unwrap_or(f64::NAN),
+        start.elapsed().as_secs_f64(),
+        peak_rss_kb()?,
+        stream.periods.peak_elements_kept()
+    );
     Ok(())
 }
 
@@ -208,19 +219,22 @@ fn memory_figures() -> anyhow::Result<()> {
         ("line", "G1 X1000000 F1666 (10.0 h)"),
         ("arc", "G2 X1000000 I500000 F6000"),
         ("program", "100 000 short G1 segments"),
+        ("program-1m", "1 000 000 short G1 segments"),
     ] {
         let out = std::process::Command::new(&exe).args(["plan-memory", case]).output()?;
         anyhow::ensure!(out.status.success(), "plan-memory {case}: {}", String::from_utf8_lossy(&out.stderr));
         let text = String::from_utf8_lossy(&out.stdout);
         let fields: Vec<f64> = text.split_whitespace().filter_map(|w| w.parse().ok()).collect();
-        anyhow::ensure!(fields.len() == 4, "plan-memory {case} printed {text:?}");
+        anyhow::ensure!(fields.len() == 6, "plan-memory {case} printed {text:?}");
         println!(
-            "  {:<44} {:>7.1} MB peak RSS  {:>11.0} periods  first record {:.3} s, all {:.1} s",
+            "  {:<44} {:>7.1} MB peak RSS  {:>11.0} periods  parse {:.2} s, first record {:.3} s after it, all {:.1} s, {} elements kept at most",
             format!("plan, streamed: {what}"),
-            fields[3] / 1024.0,
+            fields[4] / 1024.0,
             fields[0],
             fields[1],
-            fields[2]
+            fields[2],
+            fields[3],
+            fields[5]
         );
     }
     Ok(())

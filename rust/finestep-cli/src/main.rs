@@ -119,12 +119,13 @@ enum Command {
         #[arg(long)]
         tool_table: Option<PathBuf>,
     },
-    /// One case of `bench --host-only`'s memory figures (line, arc, program): plans it
-    /// through the record stream and prints periods, seconds to the first record, seconds
-    /// in all and the peak RSS in kB.
+    /// One case of `bench --host-only`'s memory figures (line, arc, program,
+    /// program-1m): plans it through the record stream and prints periods, seconds to
+    /// parse, seconds from the start of planning to the first record, seconds in all, the
+    /// peak RSS in kB and the most path elements kept at once.
     #[command(hide = true)]
     PlanMemory {
-        /// line, arc or program.
+        /// line, arc, program or program-1m.
         case: String,
     },
     /// Lockstep and fast-path throughput figures.

@@ -95,6 +95,7 @@
 //! The tolerances are stated as constants: [`JOIN_TOLERANCE_MM`],
 //! [`EXTENSION_TOLERANCE_MM`] and [`SHORT_ARC_CHORD_MM`].
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::f64::consts::{PI, TAU};
 
@@ -222,6 +223,16 @@ enum OffsetError {
 /// order, compensated moves are replaced by the tool-centre path (cut back, or with
 /// corner arcs inserted, which carry the line of the move after the corner). See the
 /// [module documentation](self) for the rules.
+/// [`compensate`], without copying a program that has no G40/G41/G42 (compensation
+/// changes nothing there): the program itself, borrowed.
+pub fn compensated<'p>(program: &'p Program, tools: &ToolTable) -> Result<Cow<'p, Program>, CompError> {
+    if program.blocks.iter().any(|b| matches!(b.kind, BlockKind::CutterComp { .. })) {
+        compensate(program, tools).map(Cow::Owned)
+    } else {
+        Ok(Cow::Borrowed(program))
+    }
+}
+
 pub fn compensate(program: &Program, tools: &ToolTable) -> Result<Program, CompError> {
     let mut pass = Compensator {
         tools,

@@ -3,7 +3,7 @@
 use crate::config::ConfigError;
 
 /// Why a program cannot be planned: the block's line and the reason.
-#[derive(Debug, thiserror::Error, PartialEq)]
+#[derive(Clone, Debug, thiserror::Error, PartialEq)]
 #[error("line {line}: {reason}")]
 pub struct ProgramError {
     /// 1-based source line (0: not about one line).

@@ -18,6 +18,8 @@
 //! are not blended; their speed comes from the junction criterion in
 //! [`crate::lookahead`].
 
+use std::borrow::Cow;
+use std::collections::VecDeque;
 use std::f64::consts::TAU;
 use std::sync::Arc;
 
@@ -56,15 +58,6 @@ struct Move {
     dwell_line: usize,
     /// I/O events at the stop after the move, each after that many dwell periods.
     events: Vec<(u64, IoEvent)>,
-}
-
-/// What the program's moves give: the moves, the end, the idle periods and the I/O
-/// events (each after that many idle periods) before the first move.
-struct Moves {
-    moves: Vec<Move>,
-    end: Vec4,
-    leading_dwell: u64,
-    leading_events: Vec<(u64, IoEvent)>,
 }
 
 /// The element `e` made from `m` takes the stop, dwell and events after `m`.
@@ -115,14 +108,49 @@ fn sweep_angle(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
     base + f64::from(extra_turns) * TAU * base.signum()
 }
 
-/// Reads the program's moves: positions rounded to steps, modes resolved.
-fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
-    let mut out: Vec<Move> = Vec::new();
-    let mut at = [0.0; 4];
-    let mut at_programmed = [0.0; 4];
-    let mut blend: Option<f64> = Some(config.path_tolerance_mm); // LinuxCNC starts in G64
-    let stop_previous = |out: &mut Vec<Move>, dwell: u64, line: usize| {
-        if let Some(last) = out.last_mut() {
+/// Reads the program's moves one at a time: positions rounded to steps, modes
+/// resolved. A move is handed on once the move after it is read (or the program has
+/// ended), because what follows it until then (a dwell, an I/O change, G61) puts a stop,
+/// a dwell or an event after it.
+#[derive(Debug)]
+struct MoveReader {
+    /// The next block to read.
+    next_block: usize,
+    at: Vec4,
+    at_programmed: Vec4,
+    blend: Option<f64>,
+    /// The spindle and coolant as the program leaves them: M2 or M30 (or the program's
+    /// last line) turns on ones off, as LinuxCNC's M2 does (M5, M9).
+    left_on: (Option<IoAction>, bool),
+    last_line: usize,
+    /// Idle periods and I/O events before the first move (final once it is read).
+    leading_dwell: u64,
+    leading_events: Vec<(u64, IoEvent)>,
+    /// The last move read, what follows it not yet known.
+    pending: Option<Move>,
+    finished: bool,
+}
+
+impl MoveReader {
+    fn new(config: &Resolved, program: &Program) -> MoveReader {
+        MoveReader {
+            next_block: 0,
+            at: [0.0; 4],
+            at_programmed: [0.0; 4],
+            blend: Some(config.path_tolerance_mm), // LinuxCNC starts in G64
+            left_on: (None, false),
+            last_line: program.blocks.last().map_or(0, |b| b.line),
+            leading_dwell: 0,
+            leading_events: Vec::new(),
+            pending: None,
+            finished: false,
+        }
+    }
+
+    /// An exact stop after the last move read, with `dwell` idle periods (line `line`);
+    /// false before the first move.
+    fn stop_previous(&mut self, dwell: u64, line: usize) -> bool {
+        if let Some(last) = self.pending.as_mut() {
             last.stop_after = true;
             last.blend = None;
             last.dwell_periods += dwell;
@@ -133,210 +161,229 @@ fn moves(config: &Resolved, program: &Program) -> Result<Moves, ProgramError> {
         } else {
             false
         }
-    };
-    let mut leading_dwell = 0u64;
-    let mut leading_events = Vec::new();
-    // The spindle and coolant as the program leaves them: M2 or M30 (or the program's
-    // last line) turns on ones off, as LinuxCNC's M2 does (M5, M9).
-    let mut left_on: (Option<IoAction>, bool) = (None, false);
-    let mut last_line = program.blocks.last().map_or(0, |b| b.line);
-    for block in &program.blocks {
-        let fail = |reason: String| ProgramError { line: block.line, reason };
-        if matches!(block.kind, BlockKind::End) {
-            last_line = block.line;
+    }
+
+    /// The program has ended: the last move stops, and what the program left on is
+    /// turned off after it.
+    fn finish(&mut self) {
+        self.finished = true;
+        let mut off = Vec::new();
+        if let Some(IoAction::Spindle { rpm, fraction, .. }) = self.left_on.0 {
+            let rotation = finestep_gcode::SpindleRotation::Off;
+            off.push(IoEvent { line: self.last_line, action: IoAction::Spindle { rotation, rpm, fraction } });
         }
-        let action = match block.kind {
-            BlockKind::Spindle { rotation, rpm } => {
-                let max = config.spindle_max_rpm;
-                if !(0.0..=max).contains(&rpm) {
-                    return Err(fail(format!("S{rpm} is outside 0..={max} rev/min (spindle.max_rpm)")));
-                }
-                Some(IoAction::Spindle { rotation, rpm, fraction: rpm / max })
-            }
-            BlockKind::Coolant { mist, flood } => Some(IoAction::Coolant { mist, flood }),
-            BlockKind::DigitalOutput { index, on } => {
-                if index > 7 {
-                    return Err(fail(format!("digital output P{index}: the chip has outputs 0 to 7")));
-                }
-                Some(IoAction::Output { index, on })
-            }
-            _ => None,
-        };
-        if let Some(action) = action {
-            match action {
-                IoAction::Spindle { rotation, .. } => {
-                    left_on.0 = (rotation != finestep_gcode::SpindleRotation::Off).then_some(action)
-                }
-                IoAction::Coolant { mist, flood } => left_on.1 = mist || flood,
-                IoAction::Output { .. } => {}
-            }
-            // An exact stop where the block is: the change takes effect at rest there.
-            let event = IoEvent { line: block.line, action };
-            match out.last_mut() {
-                Some(last) => {
-                    last.stop_after = true;
-                    last.blend = None;
-                    last.events.push((last.dwell_periods, event));
-                }
-                None => leading_events.push((leading_dwell, event)),
-            }
-            continue;
+        if self.left_on.1 {
+            off.push(IoEvent { line: self.last_line, action: IoAction::Coolant { mist: false, flood: false } });
         }
-        let mut nurbs: Option<Vec<(f64, f64, f64)>> = None;
-        let mut nurbs_shape: (usize, &[f64]) = (0, &[]);
-        let (to, feed, arc) = match block.kind {
-            BlockKind::Nurbs { to, ref control_points, order, ref knots, feed_mm_per_min } => {
-                nurbs = Some(control_points.iter().map(|c| (c.x_mm, c.y_mm, c.weight)).collect());
-                nurbs_shape = (order as usize, knots);
-                (coords(&to), feed_mm_per_min / 60.0, None)
+        match self.pending.as_mut() {
+            Some(last) => {
+                last.stop_after = true;
+                last.blend = None;
+                let dwell = last.dwell_periods;
+                last.events.extend(off.into_iter().map(|event| (dwell, event)));
             }
-            BlockKind::Rapid { to } => (coords(&to), f64::INFINITY, None),
-            BlockKind::Linear { to, feed_mm_per_min } => (coords(&to), feed_mm_per_min / 60.0, None),
-            BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
-                let axes = match plane {
-                    Plane::Xy => (0, 1),
-                    Plane::Zx => (2, 0),
-                    Plane::Yz => (1, 2),
-                };
-                (coords(&to), feed_mm_per_min / 60.0, Some((coords(&centre), axes, clockwise, extra_turns)))
+            None => {
+                let dwell = self.leading_dwell;
+                self.leading_events.extend(off.into_iter().map(|event| (dwell, event)));
             }
-            BlockKind::Dwell { seconds } => {
-                let periods = (seconds / config.period_s).ceil();
-                if !(0.0..=1e9).contains(&periods) {
-                    return Err(fail(format!("dwell of {seconds} s is out of range")));
+        }
+    }
+
+    /// The next move with what follows it settled, `None` after the last.
+    fn next_move(&mut self, config: &Resolved, program: &Program) -> Result<Option<Move>, ProgramError> {
+        while !self.finished {
+            let Some(block) = program.blocks.get(self.next_block) else {
+                self.finish();
+                break;
+            };
+            self.next_block += 1;
+            let fail = |reason: String| ProgramError { line: block.line, reason };
+            if matches!(block.kind, BlockKind::End) {
+                self.last_line = block.line;
+            }
+            let action = match block.kind {
+                BlockKind::Spindle { rotation, rpm } => {
+                    let max = config.spindle_max_rpm;
+                    if !(0.0..=max).contains(&rpm) {
+                        return Err(fail(format!("S{rpm} is outside 0..={max} rev/min (spindle.max_rpm)")));
+                    }
+                    Some(IoAction::Spindle { rotation, rpm, fraction: rpm / max })
                 }
-                if !stop_previous(&mut out, periods as u64, block.line) {
-                    leading_dwell += periods as u64;
+                BlockKind::Coolant { mist, flood } => Some(IoAction::Coolant { mist, flood }),
+                BlockKind::DigitalOutput { index, on } => {
+                    if index > 7 {
+                        return Err(fail(format!("digital output P{index}: the chip has outputs 0 to 7")));
+                    }
+                    Some(IoAction::Output { index, on })
+                }
+                _ => None,
+            };
+            if let Some(action) = action {
+                match action {
+                    IoAction::Spindle { rotation, .. } => {
+                        self.left_on.0 = (rotation != finestep_gcode::SpindleRotation::Off).then_some(action)
+                    }
+                    IoAction::Coolant { mist, flood } => self.left_on.1 = mist || flood,
+                    IoAction::Output { .. } => {}
+                }
+                // An exact stop where the block is: the change takes effect at rest there.
+                let event = IoEvent { line: block.line, action };
+                match self.pending.as_mut() {
+                    Some(last) => {
+                        last.stop_after = true;
+                        last.blend = None;
+                        last.events.push((last.dwell_periods, event));
+                    }
+                    None => self.leading_events.push((self.leading_dwell, event)),
                 }
                 continue;
             }
-            BlockKind::SpindleOrient { .. } => {
-                return Err(fail(
-                    "spindle orientation (M19, G87) needs a spindle position encoder, which finestep does not read (the spindle runs open loop)".into(),
-                ));
+            let mut nurbs: Option<Vec<(f64, f64, f64)>> = None;
+            let mut nurbs_shape: (usize, &[f64]) = (0, &[]);
+            let (to, feed, arc) = match block.kind {
+                BlockKind::Nurbs { to, ref control_points, order, ref knots, feed_mm_per_min } => {
+                    nurbs = Some(control_points.iter().map(|c| (c.x_mm, c.y_mm, c.weight)).collect());
+                    nurbs_shape = (order as usize, knots);
+                    (coords(&to), feed_mm_per_min / 60.0, None)
+                }
+                BlockKind::Rapid { to } => (coords(&to), f64::INFINITY, None),
+                BlockKind::Linear { to, feed_mm_per_min } => (coords(&to), feed_mm_per_min / 60.0, None),
+                BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
+                    let axes = match plane {
+                        Plane::Xy => (0, 1),
+                        Plane::Zx => (2, 0),
+                        Plane::Yz => (1, 2),
+                    };
+                    (coords(&to), feed_mm_per_min / 60.0, Some((coords(&centre), axes, clockwise, extra_turns)))
+                }
+                BlockKind::Dwell { seconds } => {
+                    let periods = (seconds / config.period_s).ceil();
+                    if !(0.0..=1e9).contains(&periods) {
+                        return Err(fail(format!("dwell of {seconds} s is out of range")));
+                    }
+                    if !self.stop_previous(periods as u64, block.line) {
+                        self.leading_dwell += periods as u64;
+                    }
+                    continue;
+                }
+                BlockKind::SpindleOrient { .. } => {
+                    return Err(fail(
+                        "spindle orientation (M19, G87) needs a spindle position encoder, which finestep does not read (the spindle runs open loop)".into(),
+                    ));
+                }
+                BlockKind::CutterComp { side: CompSide::Left | CompSide::Right, .. }
+                | BlockKind::CutterCompRadius { .. } => {
+                    return Err(fail(
+                        "cutter radius compensation (G41/G42) is not wired into the planner yet; refusing to cut uncompensated".into(),
+                    ));
+                }
+                BlockKind::PathControl(PathControl::Blend { tolerance_mm }) => {
+                    self.blend = Some(tolerance_mm.filter(|&p| p > 0.0).unwrap_or(config.path_tolerance_mm));
+                    continue;
+                }
+                BlockKind::PathControl(PathControl::ExactPath) => {
+                    self.blend = None;
+                    continue;
+                }
+                BlockKind::Pause | BlockKind::ToolChange { .. } => {
+                    self.stop_previous(0, block.line);
+                    continue;
+                }
+                BlockKind::End => {
+                    self.finish();
+                    break;
+                }
+                _ => continue,
+            };
+            if feed.is_nan() || feed <= 0.0 {
+                return Err(fail(format!("feed {} mm/min must be positive", feed * 60.0)));
             }
-            BlockKind::CutterComp { side: CompSide::Left | CompSide::Right, .. }
-            | BlockKind::CutterCompRadius { .. } => {
-                return Err(fail(
-                    "cutter radius compensation (G41/G42) is not wired into the planner yet; refusing to cut uncompensated".into(),
-                ));
+            let programmed = (self.at_programmed, to);
+            self.at_programmed = to;
+            let to = round_to_steps(config, to);
+            for (a, axis) in config.axes.iter().enumerate() {
+                if !axis.present && to[a] != self.at[a] {
+                    return Err(fail(format!("axis {} moves but is not configured", AXIS_NAMES[a])));
+                }
+                let steps = (to[a] * axis.steps_per_unit).abs();
+                if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
+                    return Err(fail(format!(
+                        "axis {} endpoint {} is outside the core's 32-bit step position",
+                        AXIS_NAMES[a], to[a]
+                    )));
+                }
             }
-            BlockKind::PathControl(PathControl::Blend { tolerance_mm }) => {
-                blend = Some(tolerance_mm.filter(|&p| p > 0.0).unwrap_or(config.path_tolerance_mm));
-                continue;
-            }
-            BlockKind::PathControl(PathControl::ExactPath) => {
-                blend = None;
-                continue;
-            }
-            BlockKind::Pause | BlockKind::ToolChange { .. } => {
-                stop_previous(&mut out, 0, block.line);
-                continue;
-            }
-            BlockKind::End => break,
-            _ => continue,
-        };
-        if feed.is_nan() || feed <= 0.0 {
-            return Err(fail(format!("feed {} mm/min must be positive", feed * 60.0)));
-        }
-        let programmed = (at_programmed, to);
-        at_programmed = to;
-        let to = round_to_steps(config, to);
-        for (a, axis) in config.axes.iter().enumerate() {
-            if !axis.present && to[a] != at[a] {
-                return Err(fail(format!("axis {} moves but is not configured", AXIS_NAMES[a])));
-            }
-            let steps = (to[a] * axis.steps_per_unit).abs();
-            if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
-                return Err(fail(format!(
-                    "axis {} endpoint {} is outside the core's 32-bit step position",
-                    AXIS_NAMES[a], to[a]
-                )));
-            }
-        }
-        let curve = match nurbs {
-            Some(mut points) => {
-                // The first control point is where the tool is (on whole steps), the last
-                // the rounded end: the curve moves by at most half a step per axis.
-                for (x, y, _) in &points {
-                    for (a, value) in [(0usize, *x), (1, *y)] {
-                        let axis = &config.axes[a];
-                        if !axis.present && value != at[a] {
-                            return Err(fail(format!("axis {} moves but is not configured", AXIS_NAMES[a])));
-                        }
-                        let steps = (value * axis.steps_per_unit).abs();
-                        if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
-                            return Err(fail(format!(
-                                "NURBS control point {AXIS_NAMES}{value} is outside the core's 32-bit step position",
-                                AXIS_NAMES = AXIS_NAMES[a]
-                            )));
+            let curve = match nurbs {
+                Some(mut points) => {
+                    // The first control point is where the tool is (on whole steps), the last
+                    // the rounded end: the curve moves by at most half a step per axis.
+                    for (x, y, _) in &points {
+                        for (a, value) in [(0usize, *x), (1, *y)] {
+                            let axis = &config.axes[a];
+                            if !axis.present && value != self.at[a] {
+                                return Err(fail(format!("axis {} moves but is not configured", AXIS_NAMES[a])));
+                            }
+                            let steps = (value * axis.steps_per_unit).abs();
+                            if axis.present && (steps.is_nan() || steps >= 2f64.powi(31)) {
+                                return Err(fail(format!(
+                                    "NURBS control point {AXIS_NAMES}{value} is outside the core's 32-bit step position",
+                                    AXIS_NAMES = AXIS_NAMES[a]
+                                )));
+                            }
                         }
                     }
+                    let n = points.len();
+                    points[0].0 = self.at[0];
+                    points[0].1 = self.at[1];
+                    points[n - 1].0 = to[0];
+                    points[n - 1].1 = to[1];
+                    // A curve whose control points all lie within half a step (per axis) of its
+                    // ends is no curve on this machine: it moves as a line (or not at all).
+                    let near = |x: f64, y: f64, q: Vec4| {
+                        (0..2)
+                            .all(|a| ((if a == 0 { x } else { y } - q[a]) * config.axes[a].steps_per_unit).abs() <= 0.5)
+                    };
+                    if points.iter().all(|&(x, y, _)| near(x, y, self.at) || near(x, y, to)) {
+                        None
+                    } else {
+                        let (order, knots) = nurbs_shape;
+                        let curve = NurbsCurve::new(&points, order.saturating_sub(1), knots, self.at)
+                            .map_err(|e| fail(e.to_string()))?;
+                        Some(Arc::new(curve))
+                    }
                 }
-                let n = points.len();
-                points[0].0 = at[0];
-                points[0].1 = at[1];
-                points[n - 1].0 = to[0];
-                points[n - 1].1 = to[1];
-                // A curve whose control points all lie within half a step (per axis) of its
-                // ends is no curve on this machine: it moves as a line (or not at all).
-                let near = |x: f64, y: f64, q: Vec4| {
-                    (0..2).all(|a| ((if a == 0 { x } else { y } - q[a]) * config.axes[a].steps_per_unit).abs() <= 0.5)
-                };
-                if points.iter().all(|&(x, y, _)| near(x, y, at) || near(x, y, to)) {
-                    None
-                } else {
-                    let (order, knots) = nurbs_shape;
-                    let curve = NurbsCurve::new(&points, order.saturating_sub(1), knots, at)
-                        .map_err(|e| fail(e.to_string()))?;
-                    Some(Arc::new(curve))
+                None => None,
+            };
+            if arc.is_none() && curve.is_none() && to == self.at {
+                // Nothing to move on this machine; keeps neighbouring corners blendable. In
+                // G61 the move still ends in an exact stop, here: where the move before ends.
+                if self.blend.is_none() {
+                    self.stop_previous(0, block.line);
                 }
+                continue;
             }
-            None => None,
-        };
-        if arc.is_none() && curve.is_none() && to == at {
-            // Nothing to move on this machine; keeps neighbouring corners blendable. In
-            // G61 the move still ends in an exact stop, here: where the move before ends.
-            if blend.is_none() {
-                stop_previous(&mut out, 0, block.line);
+            // G61 stops at the end of every move.
+            let m = Move {
+                nurbs: curve,
+                line: block.line,
+                start: self.at,
+                end: to,
+                feed,
+                arc,
+                programmed,
+                blend: self.blend,
+                stop_after: self.blend.is_none(),
+                dwell_periods: 0,
+                dwell_line: 0,
+                events: Vec::new(),
+            };
+            self.at = to;
+            if let Some(done) = self.pending.replace(m) {
+                return Ok(Some(done));
             }
-            continue;
         }
-        // G61 stops at the end of every move.
-        out.push(Move {
-            nurbs: curve,
-            line: block.line,
-            start: at,
-            end: to,
-            feed,
-            arc,
-            programmed,
-            blend,
-            stop_after: blend.is_none(),
-            dwell_periods: 0,
-            dwell_line: 0,
-            events: Vec::new(),
-        });
-        at = to;
+        Ok(self.pending.take())
     }
-    let mut off = Vec::new();
-    if let Some(IoAction::Spindle { rpm, fraction, .. }) = left_on.0 {
-        let rotation = finestep_gcode::SpindleRotation::Off;
-        off.push(IoEvent { line: last_line, action: IoAction::Spindle { rotation, rpm, fraction } });
-    }
-    if left_on.1 {
-        off.push(IoEvent { line: last_line, action: IoAction::Coolant { mist: false, flood: false } });
-    }
-    match out.last_mut() {
-        Some(last) => {
-            last.stop_after = true;
-            last.blend = None;
-            let dwell = last.dwell_periods;
-            last.events.extend(off.into_iter().map(|event| (dwell, event)));
-        }
-        None => leading_events.extend(off.into_iter().map(|event| (leading_dwell, event))),
-    }
-    Ok(Moves { moves: out, end: at, leading_dwell, leading_events })
 }
 
 /// Per-axis shares of the path speed for a unit path speed (an upper bound on arcs).
@@ -450,57 +497,6 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
     element
 }
 
-/// Periods either side of a junction whose readings can include its jump: the jerk
-/// reads four positions, three periods.
-pub const JUMP_REACH_PERIODS: f64 = 3.0;
-
-/// Where a junction jumps (`lookahead::junction_jumps`), the elements beside it take
-/// the fixed shares of the limits (`crate::element`): every element within
-/// [`JUMP_REACH_PERIODS`] periods' travel of it (at the elements' caps), so that
-/// sub-pieces shorter than a period's travel (a NURBS near a heavy weight) do not put
-/// their full tangential acceleration into the periods that read the jump. An exact
-/// stop ends the reach.
-fn share_at_jumps(config: &Resolved, elements: &mut [Element]) {
-    let jumps: Vec<bool> =
-        elements.windows(2).map(|pair| crate::lookahead::junction_jumps(config, &pair[0], &pair[1])).collect();
-    let mut shared = vec![false; elements.len()];
-    let reach = JUMP_REACH_PERIODS * config.period_s;
-    for (i, &jump) in jumps.iter().enumerate() {
-        elements[i].jump_after = jump;
-        if !jump {
-            continue;
-        }
-        // Backward from the junction, then forward, at the fastest cap met so far.
-        let (mut covered, mut fastest) = (0.0, 0.0f64);
-        for j in (0..=i).rev() {
-            if j < i && elements[j].stop_after {
-                break;
-            }
-            shared[j] = true;
-            covered += elements[j].length;
-            fastest = fastest.max(elements[j].v_cap);
-            if covered >= reach * fastest {
-                break;
-            }
-        }
-        let (mut covered, mut fastest) = (0.0, 0.0f64);
-        for j in i + 1..elements.len() {
-            shared[j] = true;
-            covered += elements[j].length;
-            fastest = fastest.max(elements[j].v_cap);
-            if covered >= reach * fastest || elements[j].stop_after {
-                break;
-            }
-        }
-    }
-    for (e, &take) in elements.iter_mut().zip(&shared) {
-        if take {
-            let Caps { v_cap, accel, jerk } = e.shared;
-            (e.v_cap, e.accel, e.jerk) = (v_cap, accel, jerk);
-        }
-    }
-}
-
 fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) -> Option<Element> {
     let delta = sub(end, start);
     let length = norm(delta);
@@ -612,16 +608,123 @@ pub struct PathElements {
     pub notes: Vec<String>,
 }
 
-/// The program as elements, and where it ends.
+/// The program as elements, and where it ends: the whole path at once ([`PathStream`]
+/// collected).
 pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, ProgramError> {
-    let Moves { moves, end, leading_dwell, leading_events } = moves(config, program)?;
-    let mut out: Vec<Element> = Vec::with_capacity(moves.len() * 2);
-    // Where the current move's element starts (after the previous blend).
-    let mut start = moves.first().map(|m| m.start).unwrap_or([0.0; 4]);
-    let mut pending_blend: Option<Element> = None;
-    for (index, m) in moves.iter().enumerate() {
-        if let Some(b) = pending_blend.take() {
-            out.push(b);
+    let mut stream = PathStream::new(config, Cow::Borrowed(program))?;
+    let elements = stream.by_ref().collect::<Result<Vec<Element>, ProgramError>>()?;
+    let (leading_dwell, leading_events) = (stream.leading_dwell(), stream.leading_events().to_vec());
+    Ok(PathElements { elements, leading_dwell, leading_events, end: program_end(config, program), notes: Vec::new() })
+}
+
+/// Where `program` ends on the machine `config`, on whole steps: the last programmed
+/// point before the program's end, without planning the path (what [`PathStream`]
+/// reaches at its end when the program can be planned).
+pub fn program_end(config: &Resolved, program: &Program) -> Vec4 {
+    let mut at = [0.0; 4];
+    for block in &program.blocks {
+        match block.kind {
+            BlockKind::Rapid { to }
+            | BlockKind::Linear { to, .. }
+            | BlockKind::Arc { to, .. }
+            | BlockKind::Nurbs { to, .. } => at = round_to_steps(config, coords(&to)),
+            BlockKind::End => break,
+            _ => {}
+        }
+    }
+    at
+}
+
+/// The path of a program produced as it is read ([`Iterator`] of elements): the
+/// program's moves are read one at a time ([`MoveReader`]), a line's corner blend is
+/// made once the move after it is known, and an element is handed on once no junction
+/// still to come can make it take the fixed shares of the limits ([`Sharing`]). Memory
+/// stays within a few elements and the sharing stage's hold (at most
+/// [`Sharing::max_held`] elements), whatever the program's length. An error ends the
+/// stream at the block that causes it.
+#[derive(Debug)]
+pub struct PathStream<'p> {
+    config: Resolved,
+    program: Cow<'p, Program>,
+    reader: MoveReader,
+    /// The move read and not yet made into elements: the move after it decides its blend.
+    current: Option<Move>,
+    /// Where the current move's element starts (after the previous blend).
+    start: Vec4,
+    pending_blend: Option<Element>,
+    /// Elements made, the last held back: a move that makes no element puts its stop,
+    /// dwell and events after it.
+    made: VecDeque<Element>,
+    sharing: Sharing,
+    /// Elements ready to hand on, in order.
+    ready: VecDeque<Element>,
+    done: bool,
+}
+
+impl<'p> PathStream<'p> {
+    /// The path of `program` on the machine `config`, read up to its first move (so
+    /// that [`PathStream::leading_dwell`] and [`PathStream::leading_events`] are known).
+    pub fn new(config: &Resolved, program: Cow<'p, Program>) -> Result<PathStream<'p>, ProgramError> {
+        let mut reader = MoveReader::new(config, &program);
+        let current = reader.next_move(config, &program)?;
+        let start = current.as_ref().map(|m| m.start).unwrap_or([0.0; 4]);
+        let done = current.is_none();
+        Ok(PathStream {
+            config: config.clone(),
+            program,
+            reader,
+            current,
+            start,
+            pending_blend: None,
+            made: VecDeque::new(),
+            sharing: Sharing::new(config),
+            ready: VecDeque::new(),
+            done,
+        })
+    }
+
+    /// Idle periods before the first move (G4 first).
+    pub fn leading_dwell(&self) -> u64 {
+        self.reader.leading_dwell
+    }
+
+    /// I/O events before the first move, each after that many of the leading idle periods.
+    pub fn leading_events(&self) -> &[(u64, IoEvent)] {
+        &self.reader.leading_events
+    }
+
+    /// The most elements the sharing stage has held at once so far.
+    pub fn peak_held(&self) -> usize {
+        self.sharing.peak
+    }
+
+    /// Reads one move and makes the elements of the move before it.
+    fn advance(&mut self) -> Result<(), ProgramError> {
+        let next = self.reader.next_move(&self.config, &self.program)?;
+        if let Some(m) = self.current.take() {
+            self.make(&m, next.as_ref())?;
+        }
+        self.current = next;
+        if self.current.is_none() {
+            // The end: everything made goes on.
+            if let Some(b) = self.pending_blend.take() {
+                self.made.push_back(b);
+            }
+            while let Some(e) = self.made.pop_front() {
+                self.sharing.push(&self.config, e, &mut self.ready);
+            }
+            self.sharing.finish(&mut self.ready);
+            self.done = true;
+        }
+        Ok(())
+    }
+
+    /// The elements of move `m`, `next` the move after it (a line blends into a line).
+    fn make(&mut self, m: &Move, next: Option<&Move>) -> Result<(), ProgramError> {
+        let config = &self.config;
+        let out = &mut self.made;
+        if let Some(b) = self.pending_blend.take() {
+            out.push_back(b);
         }
         if let Some(curve) = &m.nurbs {
             let mut pieces = nurbs_pieces::pieces(config, Arc::clone(curve), m.feed, m.line)
@@ -630,64 +733,215 @@ pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, Pr
             last.block_end = true;
             take_after(last, m);
             out.extend(pieces);
-            start = m.end;
-            continue;
-        }
-        if m.arc.is_some() {
+            self.start = m.end;
+        } else if m.arc.is_some() {
             if let Some(mut e) = arc_element(config, m)? {
                 e.block_end = true;
                 take_after(&mut e, m);
-                out.push(e);
-            } else if let Some(last) = out.last_mut() {
+                out.push_back(e);
+            } else if let Some(last) = out.back_mut() {
                 merge_after(last, m);
             }
-            start = m.end;
-            continue;
+            self.start = m.end;
+        } else {
+            // A line: blend into the next line when both are lines and the mode allows.
+            let next = next.filter(|n| n.arc.is_none() && n.nurbs.is_none());
+            let mut end_here = m.end;
+            if let (Some(tolerance), Some(n)) = (m.blend, next) {
+                let d1 = sub(m.end, m.start);
+                let d2 = sub(n.end, n.start);
+                let (l1, l2) = (norm(d1), norm(d2));
+                let room = 0.5 * l1.min(l2);
+                if let Some((a, b, shape, length)) =
+                    blend_arc(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
+                {
+                    let blend = Element {
+                        shape,
+                        start: a,
+                        end: b,
+                        length,
+                        line: n.line,
+                        v_cap: 0.0,
+                        accel: 0.0,
+                        jerk: 0.0,
+                        shared: Caps::default(),
+                        jump_after: false,
+                        stop_after: false,
+                        dwell_periods: 0,
+                        dwell_line: 0,
+                        block_end: false,
+                        events: Vec::new(),
+                    };
+                    self.pending_blend = Some(limit(config, blend, m.feed.min(n.feed)));
+                    end_here = a;
+                }
+            }
+            if let Some(mut e) = line_element(config, m, self.start, end_here, m.feed) {
+                e.block_end = true;
+                take_after(&mut e, m);
+                out.push_back(e);
+            } else if let Some(last) = out.back_mut() {
+                merge_after(last, m);
+            }
+            self.start = self.pending_blend.as_ref().map(|b| b.end).unwrap_or(m.end);
         }
-        // A line: blend into the next line when both are lines and the mode allows.
-        let next = moves.get(index + 1).filter(|n| n.arc.is_none() && n.nurbs.is_none());
-        let mut end_here = m.end;
-        if let (Some(tolerance), Some(n)) = (m.blend, next) {
-            let d1 = sub(m.end, m.start);
-            let d2 = sub(n.end, n.start);
-            let (l1, l2) = (norm(d1), norm(d2));
-            let room = 0.5 * l1.min(l2);
-            if let Some((a, b, shape, length)) =
-                blend_arc(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
-            {
-                let blend = Element {
-                    shape,
-                    start: a,
-                    end: b,
-                    length,
-                    line: n.line,
-                    v_cap: 0.0,
-                    accel: 0.0,
-                    jerk: 0.0,
-                    shared: Caps::default(),
-                    jump_after: false,
-                    stop_after: false,
-                    dwell_periods: 0,
-                    dwell_line: 0,
-                    block_end: false,
-                    events: Vec::new(),
-                };
-                pending_blend = Some(limit(config, blend, m.feed.min(n.feed)));
-                end_here = a;
+        // All but the last element made are settled.
+        while self.made.len() > 1 {
+            let e = self.made.pop_front().expect("an element");
+            self.sharing.push(&self.config, e, &mut self.ready);
+        }
+        Ok(())
+    }
+}
+
+impl Iterator for PathStream<'_> {
+    type Item = Result<Element, ProgramError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            if let Some(e) = self.ready.pop_front() {
+                return Some(Ok(e));
+            }
+            if self.done {
+                return None;
+            }
+            if let Err(error) = self.advance() {
+                self.done = true;
+                self.ready.clear();
+                return Some(Err(error));
             }
         }
-        if let Some(mut e) = line_element(config, m, start, end_here, m.feed) {
-            e.block_end = true;
-            take_after(&mut e, m);
-            out.push(e);
-        } else if let Some(last) = out.last_mut() {
-            merge_after(last, m);
+    }
+}
+
+/// Periods either side of a junction whose readings can include its jump: the jerk
+/// reads four positions, three periods.
+pub const JUMP_REACH_PERIODS: f64 = 3.0;
+
+/// Where a junction jumps (`lookahead::junction_jumps`), the elements beside it take
+/// the fixed shares of the limits (`crate::element`): every element within
+/// [`JUMP_REACH_PERIODS`] periods' travel of it (at the elements' caps), so that
+/// sub-pieces shorter than a period's travel (a NURBS near a heavy weight) do not put
+/// their full tangential acceleration into the periods that read the jump. An exact
+/// stop ends the reach.
+///
+/// Elements pass through in order. The reach after a jump is applied to the elements
+/// as they come; the reach before it to the elements held. An element is handed on once
+/// no junction still to come can reach back to it: an exact stop at or after it, or the
+/// elements after it covering the reach at the fastest speed any element can have (the
+/// norm of the axes' velocity limits: an element's cap keeps every axis within its own
+/// limit, so its speed is within that norm). Should more than [`Sharing::max_held`]
+/// elements be held (thousands of elements within three periods' travel), the first
+/// is handed on with the fixed shares, which are within the limits wherever it is.
+#[derive(Debug)]
+struct Sharing {
+    /// Elements held, each with whether it takes the fixed shares.
+    held: VecDeque<(Element, bool)>,
+    /// Length of the held elements after the first.
+    behind_first: f64,
+    /// Held elements that stop after them.
+    stops_held: usize,
+    /// Reaches after jumps still open: length covered, fastest cap met.
+    forward: Vec<(f64, f64)>,
+    /// Travel of the reach at the fastest speed any element can have.
+    full_reach: f64,
+    reach: f64,
+    max_held: usize,
+    peak: usize,
+}
+
+impl Sharing {
+    fn new(config: &Resolved) -> Sharing {
+        let fastest: f64 =
+            config.axes.iter().filter(|a| a.present).map(|a| a.max_velocity * a.max_velocity).sum::<f64>().sqrt();
+        let reach = JUMP_REACH_PERIODS * config.period_s;
+        Sharing {
+            held: VecDeque::new(),
+            behind_first: 0.0,
+            stops_held: 0,
+            forward: Vec::new(),
+            full_reach: reach * fastest * (1.0 + 1e-9),
+            reach,
+            max_held: Sharing::max_held(config),
+            peak: 0,
         }
-        start = pending_blend.as_ref().map(|b| b.end).unwrap_or(m.end);
     }
-    if let Some(b) = pending_blend {
-        out.push(b);
+
+    /// The most elements held before the first is handed on with the fixed shares: the
+    /// look-ahead window's.
+    fn max_held(config: &Resolved) -> usize {
+        4 * config.lookahead_moves.max(1)
     }
-    share_at_jumps(config, &mut out);
-    Ok(PathElements { elements: out, leading_dwell, leading_events, end, notes: Vec::new() })
+
+    fn push(&mut self, config: &Resolved, mut e: Element, ready: &mut VecDeque<Element>) {
+        let reach = self.reach;
+        let mut shared = false;
+        if let Some((before, _)) = self.held.back_mut() {
+            let jump = crate::lookahead::junction_jumps(config, before, &e);
+            before.jump_after = jump;
+            if jump {
+                // Backward from the junction at the fastest cap met so far.
+                let (mut covered, mut fastest) = (0.0, 0.0f64);
+                let last = self.held.len() - 1;
+                for j in (0..=last).rev() {
+                    let (element, take) = &mut self.held[j];
+                    if j < last && element.stop_after {
+                        break;
+                    }
+                    *take = true;
+                    covered += element.length;
+                    fastest = fastest.max(element.v_cap);
+                    if covered >= reach * fastest {
+                        break;
+                    }
+                }
+                self.forward.push((0.0, 0.0));
+            }
+        }
+        // Forward from every open reach.
+        self.forward.retain_mut(|(covered, fastest)| {
+            shared = true;
+            *covered += e.length;
+            *fastest = fastest.max(e.v_cap);
+            !(*covered >= reach * *fastest || e.stop_after)
+        });
+        if !self.held.is_empty() {
+            self.behind_first += e.length;
+        }
+        self.stops_held += usize::from(e.stop_after);
+        e.jump_after = false;
+        self.held.push_back((e, shared));
+        self.peak = self.peak.max(self.held.len());
+        // Hand on what no junction to come can reach.
+        loop {
+            let settled = self.stops_held > 0 || self.behind_first >= self.full_reach;
+            let forced = self.held.len() > self.max_held;
+            if self.held.is_empty() || !(settled || forced) {
+                break;
+            }
+            self.release(forced && !settled, ready);
+        }
+    }
+
+    /// Hands on the first element held (with the fixed shares if `force`).
+    fn release(&mut self, force: bool, ready: &mut VecDeque<Element>) {
+        let (mut e, take) = self.held.pop_front().expect("an element held");
+        self.stops_held -= usize::from(e.stop_after);
+        match self.held.front() {
+            Some((next, _)) => self.behind_first -= next.length,
+            None => self.behind_first = 0.0,
+        }
+        if take || force {
+            let Caps { v_cap, accel, jerk } = e.shared;
+            (e.v_cap, e.accel, e.jerk) = (v_cap, accel, jerk);
+        }
+        ready.push_back(e);
+    }
+
+    /// The path's end: everything held goes on.
+    fn finish(&mut self, ready: &mut VecDeque<Element>) {
+        while !self.held.is_empty() {
+            self.release(false, ready);
+        }
+    }
 }

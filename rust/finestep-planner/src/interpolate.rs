@@ -8,9 +8,12 @@
 //! ([`RateChecker`]) before it is emitted.
 //!
 //! [`Periods`] produces the records one at a time as they are consumed, planning the
-//! junction speeds a look-ahead window at a time ([`WindowedSpeeds`]): nothing grows with
-//! the number of periods, so a move or a program of any duration streams in the same
-//! memory, and the first record is out after the first window is planned.
+//! junction speeds a look-ahead window at a time ([`WindowedSpeeds`]) and reading the
+//! path's elements from their source ([`crate::geometry::PathStream`]) only as far as
+//! that window reaches, forgetting each once the interpolation has left it: nothing
+//! grows with the number of periods or of moves, so a move or a program of any duration
+//! or length streams in the same memory, and the first record is out after the first
+//! window is planned.
 //!
 //! NURBS sub-pieces are interpolated directly: a [`NurbsCursor`] carries the curve
 //! parameter from period to period and steps it by the arc length the profile asks
@@ -22,19 +25,20 @@ use finestep_interface::{Increment, PeriodRecord};
 use crate::config::{Resolved, AXIS_NAMES};
 use crate::element::{Element, IoEvent, Shape, TimedEvent};
 use crate::error::ProgramError;
-use crate::lookahead::{element_limits, WindowedSpeeds};
+use crate::lookahead::{element_limits, ElementWindow, WindowedSpeeds};
 use crate::nurbs::NurbsCursor;
 use crate::vec4::Vec4;
 use crate::velocity::Profile;
 use finestep_interface::flags::BLOCK_END;
+use std::collections::VecDeque;
 
 /// The records of a path, one per period, produced as they are asked for (module docs):
 /// `(record, source line being executed at the end of the period)`, or the error that
 /// stops the stream (a record over the rated rate: a planner bug, refused).
 #[derive(Debug)]
-pub struct Periods {
+pub struct Periods<'p> {
     config: Resolved,
-    elements: Vec<Element>,
+    path: PathWindow<'p>,
     speeds: WindowedSpeeds,
     checker: RateChecker,
     /// Position at the end of the last record, Q16.16 steps.
@@ -54,15 +58,97 @@ pub struct Periods {
     events: Vec<TimedEvent>,
 }
 
-impl Periods {
+/// A source of a path's elements, in order, or the error that ends the path.
+pub type ElementSource<'p> = Box<dyn Iterator<Item = Result<Element, ProgramError>> + Send + 'p>;
+
+/// The elements of a path read from their source as far as the look-ahead asks, those
+/// the interpolation has left forgotten.
+struct PathWindow<'p> {
+    source: ElementSource<'p>,
+    /// Elements `base..base + elements.len()`.
+    elements: VecDeque<Element>,
+    base: usize,
+    complete: bool,
+    error: Option<ProgramError>,
+    /// The most elements kept at once.
+    peak: usize,
+}
+
+impl std::fmt::Debug for PathWindow<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PathWindow")
+            .field("base", &self.base)
+            .field("kept", &self.elements.len())
+            .field("complete", &self.complete)
+            .field("error", &self.error)
+            .finish_non_exhaustive()
+    }
+}
+
+impl PathWindow<'_> {
+    /// Forgets the elements before `i`.
+    fn release(&mut self, i: usize) {
+        while self.base < i && !self.elements.is_empty() {
+            self.elements.pop_front();
+            self.base += 1;
+        }
+    }
+}
+
+impl ElementWindow for PathWindow<'_> {
+    fn reach(&mut self, upto: usize) -> Result<(), ProgramError> {
+        while !self.complete && self.known() < upto {
+            if let Some(error) = &self.error {
+                return Err(error.clone());
+            }
+            match self.source.next() {
+                Some(Ok(e)) => {
+                    self.elements.push_back(e);
+                    self.peak = self.peak.max(self.elements.len());
+                }
+                Some(Err(error)) => {
+                    self.error = Some(error.clone());
+                    return Err(error);
+                }
+                None => self.complete = true,
+            }
+        }
+        Ok(())
+    }
+
+    fn known(&self) -> usize {
+        self.base + self.elements.len()
+    }
+
+    fn complete(&self) -> bool {
+        self.complete
+    }
+
+    fn element(&self, i: usize) -> &Element {
+        &self.elements[i - self.base]
+    }
+}
+
+impl<'p> Periods<'p> {
     /// The periods of `elements`, after `leading_dwell` idle periods, from rest at the origin.
-    pub fn new(config: Resolved, elements: Vec<Element>, leading_dwell: u64) -> Periods {
+    pub fn new(config: Resolved, elements: Vec<Element>, leading_dwell: u64) -> Periods<'static> {
+        Periods::from_source(config, Box::new(elements.into_iter().map(Ok)), leading_dwell)
+    }
+
+    /// The periods of the elements `source` produces, read as the look-ahead needs them,
+    /// after `leading_dwell` idle periods, from rest at the origin. An error from the
+    /// source ends the records there.
+    pub fn from_source(config: Resolved, source: ElementSource<'p>, leading_dwell: u64) -> Periods<'p> {
         let checker = RateChecker::with_slots(config.period_clocks, &config.timing, config.step_slots);
         let speeds = WindowedSpeeds::new(&config);
-        let idle_line = elements.first().map_or(0, |e| e.line);
+        let mut path = PathWindow { source, elements: VecDeque::new(), base: 0, complete: false, error: None, peak: 0 };
+        // The dwell before the first move is on the first element's line; an error here
+        // comes back with the first moving period.
+        let _ = path.reach(1);
+        let idle_line = path.elements.front().map_or(0, |e| e.line);
         Periods {
             config,
-            elements,
+            path,
             speeds,
             checker,
             last: [0; 4],
@@ -81,7 +167,7 @@ impl Periods {
 
     /// With the I/O events before the first move, each after that many of the leading
     /// idle periods ([`crate::geometry::PathElements::leading_events`]).
-    pub fn with_leading_events(mut self, events: &[(u64, IoEvent)]) -> Periods {
+    pub fn with_leading_events(mut self, events: &[(u64, IoEvent)]) -> Periods<'p> {
         self.events.extend(events.iter().map(|&(period, event)| TimedEvent { period, event }));
         self
     }
@@ -94,19 +180,29 @@ impl Periods {
         std::mem::take(&mut self.events)
     }
 
-    /// The elements being interpolated.
-    pub fn elements(&self) -> &[Element] {
-        &self.elements
+    /// The path's elements read so far (all of them once the records have ended).
+    pub fn elements_read(&self) -> usize {
+        self.path.known()
     }
 
-    fn profile_of(&mut self, i: usize) -> Profile {
-        let (v0, v1) = (
-            self.speeds.speed(&self.config, &self.elements, i),
-            self.speeds.speed(&self.config, &self.elements, i + 1),
-        );
+    /// The most path elements kept at once so far: within the look-ahead window
+    /// ([`WindowedSpeeds::window`]) and the two junctions around it.
+    pub fn peak_elements_kept(&self) -> usize {
+        self.path.peak
+    }
+
+    /// The look-ahead window, in elements.
+    pub fn window(&self) -> usize {
+        self.speeds.window()
+    }
+
+    fn profile_of(&mut self, i: usize) -> Result<Profile, ProgramError> {
+        let v0 = self.speeds.speed_in(&self.config, &mut self.path, i)?;
+        let v1 = self.speeds.speed_in(&self.config, &mut self.path, i + 1)?;
         self.speeds.release(i);
-        let e = &self.elements[i];
-        Profile::new(&element_limits(&self.config, e), e.length, v0, v1, e.v_cap)
+        self.path.release(i);
+        let e = self.path.element(i);
+        Ok(Profile::new(&element_limits(&self.config, e), e.length, v0, v1, e.v_cap))
     }
 
     fn emit(&mut self, grid: [i64; 4], flags: u8, line: usize) -> Result<(PeriodRecord, usize), ProgramError> {
@@ -148,48 +244,63 @@ impl Periods {
     fn step(&mut self) -> Option<Result<(PeriodRecord, usize), ProgramError>> {
         if !self.started {
             self.started = true;
-            if self.elements.is_empty() {
+            if let Err(error) = self.path.reach(1) {
+                return Some(Err(error));
+            }
+            if self.path.complete() && self.path.known() == 0 {
                 self.done = true;
                 return None;
             }
-            self.profile = self.profile_of(0);
+            self.profile = match self.profile_of(0) {
+                Ok(profile) => profile,
+                Err(error) => return Some(Err(error)),
+            };
         }
         self.t += self.config.period_s;
         let mut flags = 0;
         while self.t >= self.profile.duration {
             let (block_end, stop_after, end, line) = {
-                let e = &self.elements[self.index];
+                let e = self.path.element(self.index);
                 (e.block_end, e.stop_after, e.end, e.line)
             };
             if block_end {
                 flags |= BLOCK_END;
             }
-            let last_element = self.index + 1 == self.elements.len();
+            if let Err(error) = self.path.reach(self.index + 2) {
+                return Some(Err(error));
+            }
+            let last_element = self.path.complete() && self.index + 1 == self.path.known();
             if stop_after || last_element {
                 // An exact stop (the last element always stops): the period ends on it,
                 // at rest (block end), and its I/O events follow it and the dwell before
                 // each.
                 let grid = self.grid_exact(end);
                 let out = self.emit(grid, flags | BLOCK_END, line);
-                let e = &self.elements[self.index];
+                let e = self.path.element(self.index);
                 (self.idle, self.idle_line) = (e.dwell_periods, e.dwell_line);
                 let emitted = self.emitted;
                 self.events.extend(e.events.iter().map(|&(d, event)| TimedEvent { period: emitted + d, event }));
                 self.index += 1;
-                if self.index == self.elements.len() {
+                if last_element {
                     self.done = true;
                 } else {
-                    self.profile = self.profile_of(self.index);
+                    match self.profile_of(self.index) {
+                        Ok(profile) => self.profile = profile,
+                        Err(error) => return Some(Err(error)),
+                    }
                     self.t = 0.0;
                 }
                 return Some(out);
             }
             self.t -= self.profile.duration;
             self.index += 1;
-            self.profile = self.profile_of(self.index);
+            match self.profile_of(self.index) {
+                Ok(profile) => self.profile = profile,
+                Err(error) => return Some(Err(error)),
+            }
         }
         let s = self.profile.distance_at(self.t);
-        let element = &self.elements[self.index];
+        let element = self.path.element(self.index);
         let point = match element.shape {
             Shape::Nurbs { ref curve, u0, u1 } => {
                 if self.cursor.element != self.index {
@@ -209,7 +320,7 @@ impl Periods {
     }
 }
 
-impl Iterator for Periods {
+impl Iterator for Periods<'_> {
     type Item = Result<(PeriodRecord, usize), ProgramError>;
 
     fn next(&mut self) -> Option<Self::Item> {

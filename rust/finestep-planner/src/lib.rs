@@ -20,12 +20,16 @@
 //!    record checked against the drive's rated rate before it is emitted. On a NURBS the
 //!    curve parameter is stepped directly every period ([`nurbs::NurbsCursor`]).
 //!
-//! [`plan_stream`] gives the records as a stream ([`interpolate::Periods`]): the
-//! look-ahead runs a window at a time as the records are read, and no record is kept, so
-//! a move or program of any duration plans in the same memory (no period cap). The
-//! path itself (steps 1-2) is still built for the whole program first: memory grows with
-//! the number of programmed moves (about 1.1 kB a move with the parsed program), not
-//! with their duration. [`plan_program`] collects the stream.
+//! [`plan_stream`] gives the records as a stream ([`interpolate::Periods`]): the path
+//! (steps 1-2, [`geometry::PathStream`]) is read from the program a move at a time as
+//! the look-ahead window reaches it, the look-ahead runs a window at a time as the
+//! records are read, elements the interpolation has left and records are not kept, so a
+//! move or program of any duration or length plans in the same memory (no period cap,
+//! at most a window of `4 * lookahead_moves` elements and two more). What grows with the
+//! program is the parsed program itself ([`finestep_gcode::Program`], read whole by the
+//! parser) and a copy of it where cutter compensation (G41/G42) is on. A block that
+//! cannot be planned ends the stream where the path reaches it. [`plan_program`]
+//! collects the stream.
 //!
 //! Spindle and coolant changes (S, M3/M4/M5, M7/M8/M9) take effect where they are
 //! written, as in LinuxCNC: the path stops exactly there (no blending across them) and

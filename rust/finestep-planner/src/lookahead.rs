@@ -38,6 +38,7 @@
 
 use crate::config::{ProfileKind, Resolved};
 use crate::element::{Element, GEOMETRIC_ACCEL_SHARE, JUMP_READING, JUNCTION_JERK_SHARE};
+use crate::error::ProgramError;
 use crate::vec4::sub;
 use crate::velocity::Limits;
 
@@ -122,10 +123,45 @@ pub fn junction_speeds(config: &Resolved, elements: &[Element]) -> Vec<f64> {
     (0..=elements.len()).map(|i| windows.speed(config, elements, i)).collect()
 }
 
+/// The elements of a path as far as they are known: a whole path ([`Whole`]) or one
+/// produced as it is read ([`crate::interpolate::Periods`] over a
+/// [`crate::geometry::PathStream`]), of which only a window is kept.
+pub trait ElementWindow {
+    /// Makes the elements before `upto` known (all of them on a shorter path), or the
+    /// error that ends the path.
+    fn reach(&mut self, upto: usize) -> Result<(), ProgramError>;
+    /// How many elements are known (those below this index, less any released).
+    fn known(&self) -> usize;
+    /// Whether the path has no more elements than those known.
+    fn complete(&self) -> bool;
+    /// Element `i`, known and not released.
+    fn element(&self, i: usize) -> &Element;
+}
+
+/// A whole path as an [`ElementWindow`].
+#[derive(Clone, Copy, Debug)]
+pub struct Whole<'a>(pub &'a [Element]);
+
+impl ElementWindow for Whole<'_> {
+    fn reach(&mut self, _upto: usize) -> Result<(), ProgramError> {
+        Ok(())
+    }
+    fn known(&self) -> usize {
+        self.0.len()
+    }
+    fn complete(&self) -> bool {
+        true
+    }
+    fn element(&self, i: usize) -> &Element {
+        &self.0[i]
+    }
+}
+
 /// The junction speeds computed a window at a time, as the interpolation reaches them
 /// (module docs): the first is known after one window of `4 * lookahead_moves` elements,
 /// whatever the program's length, and only the junctions of the current window and those
-/// not yet released are kept.
+/// not yet released are kept. The path is read one window (and one element) ahead of
+/// the last committed junction, never further.
 #[derive(Clone, Debug)]
 pub struct WindowedSpeeds {
     window: usize,
@@ -151,13 +187,35 @@ impl WindowedSpeeds {
         }
     }
 
-    /// The speed at junction `i` (`0..=elements.len()`), planning further windows as needed.
+    /// The elements of the look-ahead window: the passes read at most this many
+    /// elements past the last committed junction, and one more for its last junction.
+    pub fn window(&self) -> usize {
+        self.window
+    }
+
+    /// The speed at junction `i` (`0..=elements.len()`) of a whole path, planning
+    /// further windows as needed.
     pub fn speed(&mut self, config: &Resolved, elements: &[Element], i: usize) -> f64 {
-        assert!(i >= self.base && i <= elements.len(), "junction {i} released or beyond the path");
-        while i > self.fixed {
-            self.advance(config, elements);
+        match self.speed_in(config, &mut Whole(elements), i) {
+            Ok(v) => v,
+            Err(error) => unreachable!("a whole path reads without errors: {error}"),
         }
-        self.speeds[i - self.base]
+    }
+
+    /// The speed at junction `i` of `path`, reading it and planning further windows as
+    /// needed, or the error that ends the path before the window is read.
+    pub fn speed_in<W: ElementWindow + ?Sized>(
+        &mut self,
+        config: &Resolved,
+        path: &mut W,
+        i: usize,
+    ) -> Result<f64, ProgramError> {
+        assert!(i >= self.base, "junction {i} released");
+        while i > self.fixed {
+            assert!(!(path.complete() && self.fixed >= path.known()), "junction {i} beyond the path");
+            self.advance(config, path)?;
+        }
+        Ok(self.speeds[i - self.base])
     }
 
     /// Forgets the junctions before `i`.
@@ -170,25 +228,29 @@ impl WindowedSpeeds {
 
     /// One window: backward from rest at its end, forward from the last fixed junction,
     /// the first half committed (all of it at the path's end).
-    fn advance(&mut self, config: &Resolved, elements: &[Element]) {
-        let n = elements.len();
+    fn advance<W: ElementWindow + ?Sized>(&mut self, config: &Resolved, path: &mut W) -> Result<(), ProgramError> {
         let fixed = self.fixed;
+        // The window's elements and the one after it (the window's last junction).
+        path.reach(fixed + self.window + 1)?;
+        let n = if path.complete() { path.known() } else { usize::MAX };
         let end = (fixed + self.window).min(n);
         while fixed + self.caps.len() <= end {
             let i = fixed + self.caps.len();
-            let cap = if i == 0 || i == n { 0.0 } else { junction_cap(config, &elements[i - 1], &elements[i]) };
+            let cap = if i == 0 || i == n { 0.0 } else { junction_cap(config, path.element(i - 1), path.element(i)) };
             self.caps.push_back(cap);
         }
         self.backward.clear();
         self.backward.resize(end - fixed + 1, 0.0);
         for i in (fixed..end).rev() {
             // A hair below the exact reach, so that rounding never leaves a profile short.
-            let limits = element_limits(config, &elements[i]);
-            let reach = limits.reachable(self.backward[i + 1 - fixed], elements[i].length * (1.0 - 1e-12));
+            let element = path.element(i);
+            let limits = element_limits(config, element);
+            let reach = limits.reachable(self.backward[i + 1 - fixed], element.length * (1.0 - 1e-12));
             self.backward[i - fixed] = self.caps[i - fixed].min(reach);
         }
         let commit = if end == n { n } else { fixed + self.window / 2 };
-        for (i, element) in elements.iter().enumerate().take(commit).skip(fixed) {
+        for i in fixed..commit {
+            let element = path.element(i);
             let limits = element_limits(config, element);
             let from = self.speeds[i - self.base];
             let reach = limits.reachable(from, element.length * (1.0 - 1e-12));
@@ -198,6 +260,7 @@ impl WindowedSpeeds {
             self.caps.pop_front();
         }
         self.fixed = commit;
+        Ok(())
     }
 }
 

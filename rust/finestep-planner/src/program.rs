@@ -10,10 +10,10 @@ use finestep_gcode::Program;
 use finestep_interface::PeriodRecord;
 
 use crate::config::MachineConfig;
-use crate::cutter_comp::compensate;
-use crate::element::TimedEvent;
+use crate::cutter_comp::compensated;
+use crate::element::{Element, TimedEvent};
 pub use crate::error::ProgramError;
-use crate::geometry::elements;
+use crate::geometry::{program_end, PathStream};
 use crate::interpolate::Periods;
 
 /// A whole program's periods.
@@ -36,40 +36,43 @@ pub struct PlannedProgram {
 }
 
 /// A program's periods as a stream ([`Periods`]): records are produced as they are
-/// consumed, so memory does not grow with the program's duration.
+/// consumed, and the path is read from the program as the look-ahead window reaches it,
+/// so memory grows neither with the program's duration nor with its length (beyond the
+/// parsed program itself, which the stream borrows).
 #[derive(Debug)]
-pub struct PlanStream {
+pub struct PlanStream<'p> {
     /// The records, each with the source line executed at the end of its period.
-    pub periods: Periods,
+    pub periods: Periods<'p>,
     /// Where the program ends, in axis units (X, Y, Z, A), on whole steps.
     pub end: [f64; 4],
-    /// Path elements planned (programmed moves plus corner blends).
-    pub elements: usize,
     /// What was adjusted or not carried out as programmed, for the report.
     pub notes: Vec<String>,
 }
 
-/// Plans `program` on the machine `config`, starting at rest at the origin: the path is
-/// built and checked here, the look-ahead and the periods run as the stream is read.
-pub fn plan_stream(config: &MachineConfig, program: &Program) -> Result<PlanStream, ProgramError> {
-    let resolved = config.resolve()?;
-    let compensated =
-        compensate(program, &config.tool_table()).map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
-    let path = elements(&resolved, &compensated)?;
-    for e in &path.elements {
-        if !(e.length.is_finite() && e.v_cap > 0.0 && e.v_cap.is_finite() && e.accel > 0.0 && e.jerk > 0.0) {
-            return Err(ProgramError { line: e.line, reason: format!("no usable speed limits for this move ({e:?})") });
-        }
+/// An element the interpolation can follow: a finite length and positive, finite limits.
+fn usable(e: Element) -> Result<Element, ProgramError> {
+    if e.length.is_finite() && e.v_cap > 0.0 && e.v_cap.is_finite() && e.accel > 0.0 && e.jerk > 0.0 {
+        Ok(e)
+    } else {
+        Err(ProgramError { line: e.line, reason: format!("no usable speed limits for this move ({e:?})") })
     }
-    let mut notes = resolved.notes.clone();
-    notes.extend(path.notes);
-    let count = path.elements.len();
-    Ok(PlanStream {
-        periods: Periods::new(resolved, path.elements, path.leading_dwell).with_leading_events(&path.leading_events),
-        end: path.end,
-        elements: count,
-        notes,
-    })
+}
+
+/// Plans `program` on the machine `config`, starting at rest at the origin: the
+/// configuration is resolved and cutter compensation applied here (a program with
+/// G41/G42 is compensated whole first), the program read up to its first move; the path,
+/// the look-ahead and the periods run as the stream is read, and a block that cannot be
+/// planned ends the stream with its error where the path reaches it.
+pub fn plan_stream<'p>(config: &MachineConfig, program: &'p Program) -> Result<PlanStream<'p>, ProgramError> {
+    let resolved = config.resolve()?;
+    let program =
+        compensated(program, &config.tool_table()).map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
+    let end = program_end(&resolved, &program);
+    let notes = resolved.notes.clone();
+    let path = PathStream::new(&resolved, program)?;
+    let (dwell, events) = (path.leading_dwell(), path.leading_events().to_vec());
+    let source = Box::new(path.map(|e| e.and_then(usable)));
+    Ok(PlanStream { periods: Periods::from_source(resolved, source, dwell).with_leading_events(&events), end, notes })
 }
 
 /// Plan and interpolate `program` on the machine `config`, starting at rest at the
@@ -84,7 +87,8 @@ pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<Planned
         lines.push(line);
     }
     let events = stream.periods.take_events();
-    Ok(PlannedProgram { records, lines, end: stream.end, elements: stream.elements, notes: stream.notes, events })
+    let elements = stream.periods.elements_read();
+    Ok(PlannedProgram { records, lines, end: stream.end, elements, notes: stream.notes, events })
 }
 
 #[cfg(test)]

@@ -407,5 +407,83 @@ fn the_stream_and_its_windows_agree_with_the_whole_plan() {
             windows.release(i);
         }
         assert!(whole[1..whole.len() - 1].iter().all(|&v| v > 0.0));
+        // The path read from the program as the window reaches it gives the records of
+        // the whole path, and no more than the window's elements (and the two
+        // junctions around it) are kept at once.
+        let whole_path = finestep_planner::interpolate::Periods::new(resolved, path.elements.clone(), 0);
+        let from_whole: Vec<_> = whole_path.map(|p| p.unwrap().0).collect();
+        assert_eq!(from_whole, streamed);
+        let mut stream = finestep_planner::plan_stream(&config, &program).unwrap();
+        let mut count = 0usize;
+        for period in stream.periods.by_ref() {
+            period.unwrap();
+            count += 1;
+        }
+        assert_eq!(count, streamed.len());
+        let (kept, window) = (stream.periods.peak_elements_kept(), stream.periods.window());
+        assert_eq!(stream.periods.elements_read(), path.elements.len());
+        assert!(path.elements.len() > 10 * window, "{} elements, window {window}", path.elements.len());
+        assert!(kept <= window + 2, "{kept} elements kept, window {window}");
+    }
+}
+
+/// A block that cannot be planned ends the stream where the path reaches it: the records
+/// before it come first (the path is not built whole before the first record), and
+/// `plan_program` gives the block's line.
+#[test]
+fn a_bad_block_far_into_a_program_ends_the_stream_there() {
+    let mut text = cam_program(3000);
+    let end = text.rfind("M2").unwrap();
+    text.truncate(end);
+    // An arc of 0.001 mm radius: under the 10 steps an arc needs.
+    text.push_str("G1 X0 Y0\nG2 X0.002 Y0 I0.001 J0\nM2\n");
+    let line = text.lines().count() - 1;
+    let program = parse("bad.ngc", &text);
+    let config = MachineConfig { lookahead_moves: 50, ..MachineConfig::default() };
+    let mut stream = finestep_planner::plan_stream(&config, &program).unwrap();
+    let mut records = 0usize;
+    let error = loop {
+        match stream.periods.next() {
+            Some(Ok(_)) => records += 1,
+            Some(Err(error)) => break error,
+            None => panic!("the stream ended without the error"),
+        }
+    };
+    assert_eq!(error.line, line, "{error}");
+    assert!(records > 1000, "{records}");
+    assert!(stream.periods.next().is_none());
+    assert_eq!(plan_program(&config, &program).unwrap_err().line, line);
+}
+
+/// Thousands of elements within three periods' travel of a junction that jumps (a
+/// staircase of one-step moves): the path stream holds at most the look-ahead window's
+/// elements before handing one on, with the fixed shares where it cannot yet know, and
+/// every limit holds.
+#[test]
+fn a_staircase_of_single_steps_is_held_to_the_window_and_keeps_the_limits() {
+    use finestep_planner::geometry::PathStream;
+    let mut text = String::from("G21 G90 G61 F600\n");
+    let step = 1.0 / 800.0;
+    for i in 1..=1500 {
+        let (x, y) = ((i / 2) as f64 * step, ((i + 1) / 2) as f64 * step);
+        text.push_str(&format!("G1 X{x:.6} Y{y:.6}\n"));
+    }
+    text.push_str("G64 P0.001\n");
+    for i in 1501..=3000 {
+        let (x, y) = ((i / 2) as f64 * step, ((i + 1) / 2) as f64 * step);
+        text.push_str(&format!("G1 X{x:.6} Y{y:.6}\n"));
+    }
+    text.push_str("M2\n");
+    let program = parse("stairs.ngc", &text);
+    for profile in PROFILES {
+        let config = MachineConfig { profile, lookahead_moves: 50, ..MachineConfig::default() };
+        let resolved = config.resolve().unwrap();
+        let mut path = PathStream::new(&resolved, std::borrow::Cow::Borrowed(&program)).unwrap();
+        let count = path.by_ref().inspect(|e| assert!(e.is_ok(), "{e:?}")).count();
+        assert!(count >= 3000, "{count}");
+        // The hold reaches the window (one over it, handed on at once): the case is a
+        // test of the fixed shares given where the stream cannot wait to know.
+        assert_eq!(path.peak_held(), 4 * 50 + 1);
+        plan_and_check("stairs.ngc", &program, &config);
     }
 }
