@@ -199,6 +199,14 @@ module period_timer #(
         // A boundary after a running period comes exactly P cycles after the last one.
         if (boundary && $past(active_reg) && $past(run) && !$past(boundary))
             assert (f_since_boundary == {1'b0, p_act_reg});
+        // What the DDAs see after a boundary: the record if it was taken and acceptable,
+        // else zeros (the last-period flag likewise); between boundaries it holds.
+        if ($past(run) && $past(active_reg) && $past(boundary)) begin
+            assert (inc == (($past(take_record) && $past(record_ok)) ? $past(rec_inc) : {32*N_AXES{1'b0}}));
+            assert (cur_end_reg == ($past(take_record) && $past(record_ok) && $past(rec_flags[FS_REC_FLAG_BLOCK_END_BIT])));
+        end
+        if ($past(run) && !$past(boundary)) assert (inc == $past(inc) && cur_end_reg == $past(cur_end_reg));
+        if (!$past(run)) assert (inc == {32*N_AXES{1'b0}} && !cur_end_reg);
         if ($past(take_record && run) && !$past(record_ok)) assert (record_error_reg);
         if (!$past(record_error_reg) && !($past(take_record && run) && !$past(record_ok))) assert (!record_error_reg);
         if ($past(record_error_reg) && !$past(clear_errors)) assert (record_error_reg);
