@@ -842,6 +842,20 @@ module register_file #(
         // The store never reads and writes one word for a read in one clock.
         if (store_write) assert (!(granted && !granted_we));
     end
+
+    // IRQ_MASK (spec): reset value from the map, then the value of the last served write
+    // to it, read back as written; the irq pin is |(IRQ_STATUS & IRQ_MASK) a clock later.
+    reg [IRQ_W-1:0] f_irq_mask;
+    always @(posedge clk) begin
+        if (write && bus_addr == FS_IRQ_MASK_ADDR) f_irq_mask <= bus_wdata[IRQ_W-1:0];
+        if (rst) f_irq_mask <= FS_IRQ_MASK_MASK_RESET;
+    end
+    always @(*) if (f_past_valid && !rst) assert (irq_mask_reg == f_irq_mask);
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        assert (irq == $past(|(irq_status & f_irq_mask)));
+        if ($past(read && bus_addr == FS_IRQ_MASK_ADDR && !stage_stored && feedback_rdata == 32'd0))
+            assert (rdata[IRQ_W-1:0] == $past(f_irq_mask));
+    end
 `endif
 
 endmodule
