@@ -195,6 +195,11 @@ module parallel_bus_slave (
         if (hi_valid_reg) assert (hi_data_reg == f_low_read_word[31:16] && hi_reg_reg == f_low_read_reg);
         if ($rose(ad_oe_reg) && $past(read_start && half_hi && hi_matches && !busy))
             assert (bus_ad_out == f_low_read_word[31:16]);
+        // A register request stays up, unchanged, until it is granted (the register bus's
+        // handshake): the register file may grant it cycles later (the SPI slave first).
+        if ($past(bus_req && !bus_grant))
+            assert (bus_req && bus_we == $past(bus_we) && bus_addr == $past(bus_addr) &&
+                    (!bus_we || bus_wdata == $past(bus_wdata)));
         cover (req_reg && we_reg);
         cover ($rose(ad_oe_reg) && $past(hi_matches));
     end
