@@ -296,6 +296,38 @@ module spindle #(
     always @(*) if (f_reset_seen && frame_reg) assert (f_bits == (f_word >> (FRAME_BITS - f_rises)));
     always @(*) if (f_reset_seen && frame_reg && f_zero_frame) assert (f_word[DAC_BITS-1:0] == {DAC_BITS{1'b0}});
     always @(*) if (f_reset_seen && !frame_reg) assert (!sck_reg && shift_reg == {FRAME_BITS{1'b0}} && tick_reg == 6'd0);
+
+    // A tick lasts DAC_DIV + 1 clocks (spec), seen at the pins: a tick begins when CS_n
+    // falls or SCK changes with CS_n low; f_tick_n counts its clocks from 0. A write may
+    // change DAC_DIV within a tick: the tick then lasts at most the largest DAC_DIV + 1
+    // it saw, and exactly DAC_DIV + 1 when DAC_DIV held through it.
+    reg              f_cs_n_prev, f_sck_prev, f_div_held_reg;
+    reg [DIV_W-1:0]  f_tick_n_reg, f_div_max_reg, f_div_first_reg;
+    initial f_cs_n_prev = 1'b1;
+    wire             f_tick_start = !dac_cs_n && (f_cs_n_prev || dac_sck != f_sck_prev);
+    wire [DIV_W-1:0] f_tick_n     = f_tick_start ? {DIV_W{1'b0}} : f_tick_n_reg + {{(DIV_W-1){1'b0}}, 1'b1};
+    wire [DIV_W-1:0] f_div_max    = (f_tick_start || div_reg > f_div_max_reg) ? div_reg : f_div_max_reg;
+    wire             f_div_held   = f_tick_start ? 1'b1 : (f_div_held_reg && div_reg == f_div_first_reg);
+    always @(posedge clk) begin
+        f_cs_n_prev     <= dac_cs_n;
+        f_sck_prev      <= dac_sck;
+        f_tick_n_reg    <= f_tick_n;
+        f_div_max_reg   <= f_div_max;
+        f_div_held_reg  <= f_div_held;
+        f_div_first_reg <= f_tick_start ? div_reg : f_div_first_reg;
+    end
+    always @(*) if (f_reset_seen && !dac_cs_n) begin
+        assert (f_tick_n <= f_div_max);
+`ifndef F_PINS_ONLY
+        assert (f_tick_n == div_count_reg);   // the inductive link to the divider
+`endif
+    end
+    // A tick that ends (SCK changes or CS_n rises, no abort) with DAC_DIV held lasted exactly
+    // DAC_DIV + 1 clocks.
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst && f_reset_seen && !$past(dac_cs_n) &&
+                              (dac_cs_n || dac_sck != $past(dac_sck)) && !$past(halt_rise) &&
+                              $past(dac_reg) && $past(f_div_held))
+        assert ($past(f_tick_n) == $past(div_reg));
 `endif
 
 endmodule
