@@ -73,6 +73,31 @@ module shaper_step (
                           clamp_high ? PEND_MAX :
                           clamp_low  ? -PEND_MAX : pending_sum;
 
+`ifdef FORMAL
+    // The step shaper's rules in the spec's arithmetic (step_shaper.md), pending in
+    // [-127, 127]: r = the request (+1, -1, 0), e = pending + r; a rise when level is low and
+    // e's sign matches dir (timing permitting), a direction change when it does not;
+    // pending <- e - the issued step, clamped to [-127, 127] (the clamp flagged); behind
+    // is |e| >= 2; a halt issues nothing and drops pending.
+    wire signed [9:0] f_e    = $signed({{2{pending[7]}}, pending}) +
+                               (req_up ? 10'sd1 : (req_down ? -10'sd1 : 10'sd0));
+    wire              f_move = !halt && !level && f_e != 10'sd0;
+    wire              f_fwd  = f_e > 10'sd0;
+    wire signed [9:0] f_next = f_e - (rise ? (dir ? 10'sd1 : -10'sd1) : 10'sd0);
+    always @(*) if (pending != 8'h80) begin
+        assert (behind == (!halt && (f_e >= 10'sd2 || f_e <= -10'sd2)));
+        assert (fall == (level && len_reached));
+        assert (rise == (f_move && f_fwd == dir && space_reached && setup_reached));
+        assert (dir_change == (f_move && f_fwd != dir && hold_reached));
+        assert (clamp_high == (!halt && f_next > 10'sd127));
+        assert (clamp_low == (!halt && f_next < -10'sd127));
+        if (halt) assert (pending_next == 8'd0);
+        else if (f_next > 10'sd127) assert (pending_next == 8'sd127);
+        else if (f_next < -10'sd127) assert (pending_next == -8'sd127);
+        else assert (pending_next == f_next[7:0]);
+    end
+`endif
+
 endmodule
 
 `default_nettype wire

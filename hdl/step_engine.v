@@ -351,6 +351,9 @@ module step_engine #(
             if (!$past(sh_hot[f])) assert (pin_a[f] == $past(pin_a[f]) && pin_b[f] == $past(pin_b[f]) &&
                                            position_reg[32*f +: 32] == $past(position_reg[32*f +: 32]));
             assert (pin_en[f] == $past((axis_enable[f] && !halt) ^ invert[FS_INVERT_WIDTH*f + FS_INVERT_PIN_EN_BIT]));
+            // ... and the step pins take their own axis's INVERT bits.
+            if ($past(sh_hot[f])) assert (pin_a[f] == ($past(a_next) ^ $past(invert[FS_INVERT_WIDTH*f + FS_INVERT_PIN_A_BIT])) &&
+                                          pin_b[f] == ($past(b_next) ^ $past(invert[FS_INVERT_WIDTH*f + FS_INVERT_PIN_B_BIT])));
         end
         // A request comes only from a running DDA visit that wrapped.
         assert (req_valid_reg == ($past(dda_visit) && $past(run) && ($past(wrap_up) || $past(wrap_down))));
