@@ -85,6 +85,8 @@ module input_filter #(
             assert ($changed(level_reg));
         if ($past(sample) && !$past(primed_reg)) assert (level_reg == $past(raw) && primed_reg);
         if ($past(primed_reg)) assert (primed_reg);
+        // ... and it is primed by a sample, not by time: unprimed until the first sample.
+        if (!$past(sample) && !$past(primed_reg)) assert (!primed_reg);
         if (!$past(sample)) assert ($stable(level_reg) && $stable(count_reg));
         cover ($changed(level_reg) && f_needed == 3);
     end
