@@ -107,7 +107,8 @@ module spi_slave_phy (
     assign rx_byte     = rx_byte_reg;
 
 `ifdef FORMAL
-    // An abstract master at the fastest timing above sends two arbitrary bytes in one
+    // An abstract master at the fastest timing above (but for two half periods one clock
+    // longer, below) sends two arbitrary bytes in one
     // frame and reads MISO; the frame layer offers two arbitrary bytes, the second from
     // the first rx_valid on. The slave must receive exactly the bytes sent and the master
     // read exactly the bytes offered (BMC over the whole frame).
@@ -125,6 +126,12 @@ module spi_slave_phy (
     reg [15:0] f_read;                     // what the master sampled on MISO
     reg [1:0] f_received;                  // rx_valid pulses so far
     reg       f_cs_n, f_sck;
+    // Two half periods last one clock more (the core clock at least 8x SCK allows slower,
+    // uneven SCKs): those ending in the 1st and in the 7th falling edge, so that MISO's
+    // first shift and the 8th rising edge come an odd number of clocks after the event
+    // before them.
+    wire      f_stretch  = !f_lead && (f_edge == 6'd1 || f_edge == 6'd13);
+    wire      f_half_end = f_phase == F_HALF - 1 + f_stretch;
 
     always @(*) begin
         assume (spi_cs_n == f_cs_n && spi_sck == f_sck);
@@ -141,7 +148,7 @@ module spi_slave_phy (
             if (rx_valid) f_received <= f_received + 2'd1;
             if (f_cs_n) begin
                 f_cs_n <= 1'b0; f_phase <= 4'd0; f_lead <= 1'b1; f_edge <= 6'd0;
-            end else if (f_phase != F_HALF - 1) begin
+            end else if (!f_half_end) begin
                 f_phase <= f_phase + 4'd1;
             end else if (f_lead) begin
                 f_lead <= 1'b0; f_phase <= 4'd0;
