@@ -306,6 +306,9 @@ module position_fifo #(
         if ($past(wr_en && is_full && !flush)) assert (overflow_reg);
         // A record with a lane lost while full is refused whole, and flagged.
         if ($past(|wr_lane && is_full && !flush && !wr_en && !wr_abort)) assert (lane_lost_reg);
+        // ... and only that record: the next one (after its wr_en, a flush or an abort) starts
+        // with no lane lost, even when a lane came with the wr_en into a full FIFO.
+        if ($past(wr_en || flush || wr_abort)) assert (!lane_lost_reg);
         if ($past(wr_en && lane_lost_reg && !flush)) assert (overflow_reg && staged_reg <= $past(staged_reg));
         // Only a commit makes records readable.
         if (!$past(commit)) assert (level_reg <= $past(level_reg) || $past(flush));
