@@ -755,24 +755,7 @@ impl<'p> PathStream<'p> {
                 if let Some((a, b, shape, length)) =
                     blend_arc(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
                 {
-                    let blend = Element {
-                        shape,
-                        start: a,
-                        end: b,
-                        length,
-                        line: n.line,
-                        v_cap: 0.0,
-                        accel: 0.0,
-                        jerk: 0.0,
-                        shared: Caps::default(),
-                        jump_after: false,
-                        stop_after: false,
-                        dwell_periods: 0,
-                        dwell_line: 0,
-                        block_end: false,
-                        events: Vec::new(),
-                    };
-                    self.pending_blend = Some(limit(config, blend, m.feed.min(n.feed)));
+                    self.pending_blend = Some(limited(config, shape, a, b, length, n.line, m.feed.min(n.feed)));
                     end_here = a;
                 }
             }
