@@ -89,20 +89,23 @@ impl KeypadScan {
     /// The reset state.
     pub fn new(params: KeypadParams) -> Self {
         assert!(params.pre_w >= 2 && params.pre_w <= 32 && params.deb_w >= 1 && params.deb_w <= 31);
-        let mut k = KeypadScan {
+        Self::reset_state(params)
+    }
+
+    /// The state every register takes at a clock edge with `rst` high.
+    fn reset_state(params: KeypadParams) -> Self {
+        KeypadScan {
             params,
-            sync1: 0,
-            sync2: 0,
+            sync1: 0xf,
+            sync2: 0xf,
             div: 0,
             col: 0,
-            col_drive: 0,
+            col_drive: 1,
             down: 0,
             cnt: [0; 16],
             valid: false,
             code: 0,
-        };
-        k.reset();
-        k
+        }
     }
 
     /// The outputs in this cycle.
@@ -117,15 +120,7 @@ impl KeypadScan {
 
     /// One clock edge with `rst` high.
     pub fn reset(&mut self) {
-        self.sync1 = 0xf;
-        self.sync2 = 0xf;
-        self.div = 0;
-        self.col = 0;
-        self.col_drive = 1;
-        self.down = 0;
-        self.cnt = [0; 16];
-        self.valid = false;
-        self.code = 0;
+        *self = Self::reset_state(self.params);
     }
 
     /// One rising edge.

@@ -165,55 +165,12 @@ impl LedMenu {
     /// The reset state.
     pub fn new(params: LedParams) -> Self {
         assert!((1..=8).contains(&params.n_dig) && (1..=32).contains(&params.pre_w));
-        let mut m = LedMenu {
-            params,
-            page: 0,
-            card_mode: false,
-            ovr_en: false,
-            ovr_mode: false,
-            disp_en: false,
-            disp_hex: false,
-            err_hex: false,
-            disp_val: 0,
-            latched: 0,
-            sync_mode: false,
-            pending: false,
-            rdata: 0,
-            ref_cnt: 0,
-            dig_idx: 0,
-            seg: 0,
-            dig: 0,
-            conv_step: 0,
-            conv_bin: 0,
-            conv_bcd: 0,
-            conv_neg: false,
-            bcd: 0,
-            neg: false,
-        };
-        m.reset();
-        m
+        Self::reset_state(params)
     }
 
-    fn dig_mask(&self) -> u8 {
-        ((1u16 << self.params.n_dig) - 1) as u8
-    }
-
-    /// The outputs in this cycle.
-    pub fn outputs(&self) -> LedOutputs {
-        LedOutputs {
-            host_rdata: self.rdata,
-            seg: self.seg,
-            dig: self.dig,
-            sync_mode: self.sync_mode,
-            alarm_pending: self.pending,
-            page: self.page,
-        }
-    }
-
-    /// One clock edge with `rst` high.
-    pub fn reset(&mut self) {
-        let params = self.params;
-        *self = LedMenu {
+    /// The state every register takes at a clock edge with `rst` high.
+    fn reset_state(params: LedParams) -> Self {
+        LedMenu {
             params,
             page: PAGE_MODE,
             card_mode: false,
@@ -230,15 +187,40 @@ impl LedMenu {
             ref_cnt: 0,
             dig_idx: 0,
             seg: if params.seg_active_low { 0xff } else { 0 },
-            dig: 0,
+            dig: if params.dig_active_low { Self::digits(params) } else { 0 },
             conv_step: 0,
             conv_bin: 0,
             conv_bcd: 0,
             conv_neg: false,
             bcd: 0,
             neg: false,
-        };
-        self.dig = if params.dig_active_low { self.dig_mask() } else { 0 };
+        }
+    }
+
+    /// One bit per digit of the build.
+    fn digits(params: LedParams) -> u8 {
+        ((1u16 << params.n_dig) - 1) as u8
+    }
+
+    fn dig_mask(&self) -> u8 {
+        Self::digits(self.params)
+    }
+
+    /// The outputs in this cycle.
+    pub fn outputs(&self) -> LedOutputs {
+        LedOutputs {
+            host_rdata: self.rdata,
+            seg: self.seg,
+            dig: self.dig,
+            sync_mode: self.sync_mode,
+            alarm_pending: self.pending,
+            page: self.page,
+        }
+    }
+
+    /// One clock edge with `rst` high.
+    pub fn reset(&mut self) {
+        *self = Self::reset_state(self.params);
     }
 
     /// The effective gantry mode (the override's, else the card's): true synchronised.
