@@ -389,6 +389,73 @@ module encoder_bank #(
         cover ($past(stall));
         cover ($past(copy_probe) && $past(v_count) != 32'd0);
     end
+
+`ifdef FORMAL_READBACK
+    // What a copy read returns, stated from the spec's rules: a shadow of each copy
+    // (ENC_COUNT and ENC_EDGE_TIME taken at the channel's visit at or after a position
+    // latch, ENC_INDEX_LATCH at an index event while the latch is armed, ENC_PROBE_LATCH
+    // at the visit at or after a probe event; all from the values before the visit's
+    // update, the shadow f_count / f_edge) and whether it has been written since reset;
+    // the read granted in one cycle shows, in the next, the addressed copy (0 before its
+    // first write), and nothing else shows anything. The stores are RAMs whose words the
+    // induction cannot see, so this is a bounded check from reset (task readback): the
+    // free timestamp reaches every bit of an edge time within its depth.
+    reg [32*N_ENC-1:0] f_lat_count, f_lat_edge, f_idx_count, f_prb_count;
+    reg [N_ENC-1:0]    f_lat_w, f_idx_w, f_prb_w;
+    integer fg;
+    always @(posedge clk) begin
+        for (fg = 0; fg < N_ENC; fg = fg + 1) begin
+            if (visit && ch_i == fg) begin
+                if (latch_pending_reg[fg] || latch_now) begin
+                    f_lat_count[32*fg +: 32] <= f_count[fg];
+                    f_lat_edge[32*fg +: 32]  <= f_edge[fg];
+                    f_lat_w[fg]              <= 1'b1;
+                end
+                if (index_event && latch_armed_reg[fg]) begin
+                    f_idx_count[32*fg +: 32] <= f_count[fg];
+                    f_idx_w[fg]              <= 1'b1;
+                end
+                if (probe_pending_reg[fg] || probe_event) begin
+                    f_prb_count[32*fg +: 32] <= f_count[fg];
+                    f_prb_w[fg]              <= 1'b1;
+                end
+            end
+        end
+        if (rst) begin
+            f_lat_w <= {N_ENC{1'b0}};
+            f_idx_w <= {N_ENC{1'b0}};
+            f_prb_w <= {N_ENC{1'b0}};
+        end
+    end
+    // The read granted last cycle, decoded here from the map's addresses.
+    reg       f_rd_valid;
+    reg [6:0] f_rd_addr;
+    always @(posedge clk) begin
+        f_rd_valid <= read_grant && !rst;
+        f_rd_addr  <= read_addr;
+    end
+    wire [4:0]  f_base  = f_rd_addr[6:2];
+    wire [31:0] f_ch    = {30'd0, f_rd_addr[1:0]};
+    wire        f_in    = f_ch < N_ENC;
+    reg  [31:0] f_want;
+    always @(*) begin
+        f_want = 32'd0;
+        if (f_rd_valid && f_in) begin
+            if (f_base == FS_ENC_COUNT_ADDR[6:2] && f_lat_w[f_ch])
+                f_want = f_lat_count[32*f_ch +: 32];
+            if (f_base == FS_ENC_EDGE_TIME_ADDR[6:2] && f_lat_w[f_ch])
+                f_want = f_lat_edge[32*f_ch +: 32];
+            if (f_base == FS_ENC_INDEX_LATCH_ADDR[6:2] && f_idx_w[f_ch])
+                f_want = f_idx_count[32*f_ch +: 32];
+            if (f_base == FS_ENC_PROBE_LATCH_ADDR[6:2] && f_prb_w[f_ch])
+                f_want = f_prb_count[32*f_ch +: 32];
+        end
+    end
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        assert (copy_rdata == f_want);
+        cover (f_rd_valid && f_base == FS_ENC_EDGE_TIME_ADDR[6:2] && f_want[29]);
+    end
+`endif
 `endif
 
 endmodule

@@ -66,6 +66,7 @@ LOCKSTEP_TESTS = [
     "top_feedback::jog_and_run_exclude_each_other",
     "netlist_lockstep_rate",
     "top_smoke::parallel_stream_moves_exactly",
+    "top_feedback::channels_decode_in_their_own_modes",
     "top_faults::forced_underrun_holds_and_resumes_exactly",
     "top_faults::estop_halts_mid_move",
     "top_faults::watchdog_halts_mid_move",

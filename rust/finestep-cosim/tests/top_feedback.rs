@@ -276,6 +276,55 @@ fn rated_count_rates() {
     }
 }
 
+/// Every channel decodes with its own MODE: the four channels in the four count modes,
+/// one quadrature signal on all of them, 37 cycles forward then 52 back (A leading B is
+/// forward). The spec's arithmetic per cycle: x4 counts 4 edges, x2 the 2 edges of A, x1
+/// the one edge of A while B is low (+1 rising, -1 falling), step/dir the one rising edge
+/// of A, in the direction B gives (forward: A rises with B low, -1). So after F forward and
+/// R back: 4(F - R), 2(F - R), F - R and R - F, four different counts; RTL and model in
+/// lockstep on every pin throughout (an RTL mutation decoding channel 0 with channel 1's
+/// MODE survived every other test, all of which give the channels one mode).
+#[test]
+fn channels_decode_in_their_own_modes() {
+    const FORWARD: i64 = 37;
+    const BACK: i64 = 52;
+    let plant = Plant::new(PlantConfig::default(), 0).unwrap();
+    let mut machine = connect("channels_decode_in_their_own_modes", plant);
+    assert_eq!(machine.caps().n_enc, 4, "the chip these tests build has 4 encoder channels");
+    let modes = [CountMode::X4, CountMode::X2, CountMode::X1, CountMode::StepDir];
+    machine.set_encoder_prescale(0).unwrap();
+    for (channel, &mode) in modes.iter().enumerate() {
+        machine.configure_encoder(channel, &EncoderSetup { mode, ..EncoderSetup::default() }).unwrap();
+    }
+    machine.bus().wait(40).unwrap();
+    let host_pins = machine.bus().link().inputs();
+    // (A, B) in the forward order 00 -> 10 -> 11 -> 01, on every channel at once; each
+    // state held two samples.
+    let states = [(0u64, 0u64), (1, 0), (1, 1), (0, 1)];
+    let clocks = 2 * slots() + 1;
+    let drive = |machine: &mut Chip, phase: i64| {
+        let (a, b) = states[phase.rem_euclid(4) as usize];
+        let pins = (0..4).fold(host_pins, |pins, c| pins | a << (IN_ENC_A0 + c) | b << (IN_ENC_B0 + c));
+        machine.bus().link_mut().target_mut().drive(pins, clocks).unwrap();
+    };
+    let mut phase = 0i64;
+    for target in [4 * FORWARD, 4 * (FORWARD - BACK)] {
+        while phase != target {
+            phase += (target - phase).signum();
+            drive(&mut machine, phase);
+        }
+    }
+    drive(&mut machine, phase);
+    machine.bus().wait(100).unwrap();
+    let net = FORWARD - BACK;
+    let counts = machine.feedback().unwrap().counts;
+    let got: Vec<i64> = counts[..4].iter().map(|&c| i64::from(c)).collect();
+    assert_eq!(got, vec![4 * net, 2 * net, net, -net], "x4, x2, x1, step/dir");
+    for channel in 0..4 {
+        assert_eq!(machine.encoder_errors(channel).unwrap(), (false, 0), "channel {channel}");
+    }
+}
+
 /// The counters' far ends, driven straight at the pins: the hand wheel's count and
 /// detents through 300 detents forward and 700 back (past 64, 128 and 256 detents, zero and
 /// back, so every bit of the detent count moves), and both illegal-transition counters

@@ -90,7 +90,7 @@ fn reset_word_is_the_reset_and_fixed_values_put_together() {
         let composed = register.fields.iter().try_fold(0u32, |word, info| {
             let after_reset = match info.access {
                 Access::ReadWrite => info.reset,
-                Access::ReadOnly => info.value,
+                Access::ReadOnly => info.value.or(info.reset),
                 Access::Pulse | Access::WriteOnly => Some(0),
                 Access::WriteOneToClear => None,
             };
@@ -104,6 +104,7 @@ fn reset_word_is_the_reset_and_fixed_values_put_together() {
     assert_eq!(reset_word_of("STATUS"), None, "hardware flags");
     assert_eq!(reset_word_of("IRQ_STATUS"), None, "w1c flags");
     assert_eq!(reset_word_of("COMMAND"), Some(0), "pulse fields read 0");
+    assert_eq!(reset_word_of("PROBE_TIME"), Some(0), "an ro field with a reset: 0 until the first probe event");
     assert_eq!(id::reset_word(), id::MAGIC_VALUE);
     assert_eq!(id::MAGIC_VALUE.to_be_bytes(), *b"FSTP");
 }

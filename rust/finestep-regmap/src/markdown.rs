@@ -30,8 +30,8 @@ pub fn generate(map: &MapSpec) -> String {
     }
     out.push_str(
         "\nThe reset column says what a read returns right after reset where the map fixes \
-         it: the reset value of an rw field, the constant of an ro field that has one, 0 \
-         for a pulse field; - is a hardware value.\n\n",
+         it: the reset value of an rw field, the constant or the reset value of an ro \
+         field that has one, 0 for a pulse field; - is a hardware value.\n\n",
     );
 
     out.push_str("## Address map\n\n| address | register | reset | description |\n| --- | --- | --- | --- |\n");

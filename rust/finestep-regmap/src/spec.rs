@@ -22,7 +22,8 @@ pub const MAX_ADDRESS_BITS: u32 = 8;
 /// `hdl/registers.toml`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Access {
-    /// `ro`: read-only, a hardware value.
+    /// `ro`: read-only, a hardware value (with a `reset`, what it reads out of reset until
+    /// the hardware changes it).
     ReadOnly,
     /// `rw`: read/write, holds what the host wrote; has a reset value.
     ReadWrite,
@@ -53,7 +54,9 @@ impl Access {
     /// One line saying what the access type means, for the legend in the docs.
     pub const fn meaning(self) -> &'static str {
         match self {
-            Access::ReadOnly => "read-only, a hardware value",
+            Access::ReadOnly => {
+                "read-only, a hardware value; a reset column, where given, is what it reads out of reset"
+            }
             Access::ReadWrite => "read/write, holds what the host wrote; the reset column is its value after reset",
             Access::Pulse => "write-only: writing 1 acts once, writing 0 does nothing; reads 0",
             Access::WriteOnly => "write-only data: every write acts once with the value written; reads 0",
@@ -132,7 +135,9 @@ pub struct FieldSpec {
     pub width: u32,
     /// How the host may access it.
     pub access: Access,
-    /// Value after reset; present exactly for `rw` fields.
+    /// Value after reset: present for every `rw` field, and for an `ro` field whose
+    /// hardware value out of reset the map fixes (it reads this until the hardware
+    /// changes it).
     pub reset: Option<u32>,
     /// Constant value of an `ro` field that the map fixes (such as the ID magic).
     pub value: Option<u32>,
@@ -152,12 +157,12 @@ impl FieldSpec {
     }
 
     /// What a read returns right after reset, when the map fixes it: the reset value of
-    /// an `rw` field, the `value` of an `ro` field, 0 for a `pulse` or `wo` field. `None` for a
-    /// hardware value (`ro` without `value`, `w1c`).
+    /// an `rw` field, the `value` or `reset` of an `ro` field, 0 for a `pulse` or `wo`
+    /// field. `None` for a hardware value (`ro` with neither, `w1c`).
     pub fn value_after_reset(&self) -> Option<u32> {
         match self.access {
             Access::ReadWrite => self.reset,
-            Access::ReadOnly => self.value,
+            Access::ReadOnly => self.value.or(self.reset),
             Access::Pulse | Access::WriteOnly => Some(0),
             Access::WriteOneToClear => None,
         }
@@ -641,8 +646,11 @@ impl Checker {
             if access == Access::ReadWrite && raw.reset.is_none() {
                 self.report(&place, "an rw field needs a `reset` value".to_string());
             }
-            if access != Access::ReadWrite && raw.reset.is_some() {
-                self.report(&place, format!("`reset` is only for rw fields, this one is {access}"));
+            if !matches!(access, Access::ReadWrite | Access::ReadOnly) && raw.reset.is_some() {
+                self.report(&place, format!("`reset` is only for rw and ro fields, this one is {access}"));
+            }
+            if access == Access::ReadOnly && raw.reset.is_some() && raw.value.is_some() {
+                self.report(&place, "an ro field has a `value` (constant) or a `reset`, not both".to_string());
             }
             if access != Access::ReadOnly && raw.value.is_some() {
                 self.report(&place, format!("`value` is only for ro fields, this one is {access}"));

@@ -10,7 +10,7 @@
 //! | `FS_<REG>_ADDR` | `[FS_ADDR_WIDTH-1:0]`: word address (element 0 of an array) |
 //! | `FS_<REG>_COUNT`, `FS_<REG>_STRIDE` | integers, arrays only |
 //! | `FS_<REG>_<FIELD>_LSB`, `FS_<REG>_<FIELD>_WIDTH` | integers |
-//! | `FS_<REG>_<FIELD>_RESET` | sized to the field: reset value of an `rw` field |
+//! | `FS_<REG>_<FIELD>_RESET` | sized to the field: reset value of an `rw` field (or of an `ro` field that has one) |
 //! | `FS_<REG>_<FIELD>_VALUE` | sized to the field: fixed value of an `ro` field |
 //!
 //! For example `localparam [6:0] FS_CONTROL_ADDR = 7'h04;` and

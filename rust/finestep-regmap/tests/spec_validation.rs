@@ -190,12 +190,19 @@ fn value_too_big_for_the_field() {
 fn reset_and_value_only_where_they_belong() {
     let rw_without_reset = "  { name = \"F\", lsb = 0, width = 1, access = \"rw\", description = \"d\" }";
     assert_single_problem(&map_with(&register("R", 0, rw_without_reset)), Place::field("R", "F"), "needs a `reset`");
-    let ro_with_reset = "  { name = \"F\", lsb = 0, width = 1, access = \"ro\", reset = 0, description = \"d\" }";
+    let w1c_with_reset = "  { name = \"F\", lsb = 0, width = 1, access = \"w1c\", reset = 0, description = \"d\" }";
     assert_single_problem(
-        &map_with(&register("R", 0, ro_with_reset)),
+        &map_with(&register("R", 0, w1c_with_reset)),
         Place::field("R", "F"),
-        "`reset` is only for rw fields, this one is ro",
+        "`reset` is only for rw and ro fields, this one is w1c",
     );
+    let ro_with_both =
+        "  { name = \"F\", lsb = 0, width = 1, access = \"ro\", reset = 0, value = 1, description = \"d\" }";
+    assert_single_problem(&map_with(&register("R", 0, ro_with_both)), Place::field("R", "F"), "not both");
+    // An ro field with a reset: what it reads out of reset (a hardware value after that).
+    let ro_with_reset = "  { name = \"F\", lsb = 4, width = 4, access = \"ro\", reset = 5, description = \"d\" }";
+    let map = parse(&map_with(&register("R", 0, ro_with_reset)), "test.toml").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(map.registers[0].reset_word(), Some(0x50));
     let rw_with_value =
         "  { name = \"F\", lsb = 0, width = 1, access = \"rw\", reset = 0, value = 1, description = \"d\" }";
     assert_single_problem(
