@@ -52,9 +52,18 @@ module period_timer #(
     reg [P_WIDTH-1:0]   remaining_reg;
     reg [P_WIDTH-1:0]   p_act_reg;
     reg [P_WIDTH-1:0]   p_act_minus_one_reg;
-    reg [P_WIDTH-1:0]   visits_minus_one_reg;   // p_act / 2^SL - 1
+    // The record check's three bounds, from V = p_act / 2^SL (see below), loaded with p_act.
+    reg [16:0]          bound_pos_reg;          // min(V, 2^16)
+    reg [16:0]          bound_neg_reg;          // 2^16 - min(V, 2^16)
+    reg [16:0]          bound_neg_zero_reg;     // 2^16 - min(V - 1, 2^16)
+    // The record taken at the last boundary (or zeros) and whether it was acceptable: the
+    // check's result ends at one flip-flop, which masks the increments and the flag on
+    // their way out (inc = the record if acceptable, else zeros), instead of steering the
+    // load of every increment bit.
     reg [32*N_AXES-1:0] inc_reg;
     reg                 cur_end_reg;
+    reg                 taken_ok_reg;
+    wire                cur_end = cur_end_reg && taken_ok_reg;
     reg                 block_end_reg;
     reg                 record_error_reg;
     // active && remaining == 0, kept as a register: the boundary fans out across the
@@ -67,23 +76,42 @@ module period_timer #(
     wire [P_WIDTH-1:0] period_rounded = (period_clocks >> SL) << SL;
     wire [P_WIDTH-1:0] period_sampled =
         (period_rounded == {P_WIDTH{1'b0}}) ? P_MIN : period_rounded;
-    // Visits per period V = p_act / 2^SL and V - 1, for the record check.
-    wire [P_WIDTH-1:0] visits_act = p_act_reg >> SL;
+    // V = p_act / 2^SL visits per period; sat17(x) = min(x, 2^16).
+    localparam [16:0] TWO_16 = 17'h1_0000;
+    wire [P_WIDTH-1:0] visits_sampled = period_sampled >> SL;
+    wire [P_WIDTH-1:0] visits_sampled_minus_one = visits_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
+    function [16:0] sat17;
+        input [P_WIDTH-1:0] x;
+        reg   [31:0]        wide;
+        begin
+            wide  = {{(32-P_WIDTH){1'b0}}, x};
+            sat17 = (wide >= {15'd0, TWO_16}) ? TWO_16 : wide[16:0];
+        end
+    endfunction
 
-    // A record is acceptable when every |D| < P, i.e. floor(|d| / 2^16) < P. No negation
-    // on the way from the FIFO's RAM: for d < 0, |d| = ~d + 1, so floor(|d| / 2^16) is
-    // (~d)[31:16], plus 1 when d[15:0] == 0; the test is then against P - 1 (a register).
+    // A record is acceptable when every |D| < V, i.e. floor(|d| / 2^16) < V. With h =
+    // d[31:16] (unsigned) and no negation or operand select on the way from the record:
+    //   d >= 0:              floor(|d| / 2^16) = h,            fails when h >= V;
+    //   d < 0, d[15:0] != 0: floor(|d| / 2^16) = 2^16 - 1 - h, fails when h < 2^16 - V;
+    //   d < 0, d[15:0] == 0: floor(|d| / 2^16) = 2^16 - h,     fails when h < 2^16 - (V - 1).
+    // As h < 2^16, V may be replaced by min(V, 2^16) in each test (and V - 1 by
+    // min(V - 1, 2^16)) without changing its result; the three bounds are then 17-bit
+    // registers and each test is one carry chain of h against a register. The sign and the
+    // low-half zero test only choose between the three results.
     reg record_ok;
     integer axis;
-    reg [15:0] whole_steps;      // d[31:16], or (~d)[31:16] for d < 0
-    reg        carries;          // d < 0 and d[15:0] == 0: the +1 of the negation reaches bit 16
+    reg [15:0] whole_high;       // h = d[31:16]
+    reg        low_zero;         // d[15:0] == 0
+    reg        fail_pos, fail_neg, fail_neg_zero;
     always @* begin
         record_ok = 1'b1;
         for (axis = 0; axis < N_AXES; axis = axis + 1) begin
-            whole_steps = rec_inc[32*axis+31] ? ~rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16] : rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16];
-            carries     = rec_inc[32*axis+31] && (rec_inc[32*axis +: FS_REC_INC_FRAC_BITS] == {FS_REC_INC_FRAC_BITS{1'b0}});
-            if (carries ? ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, visits_minus_one_reg})
-                        : ({{P_WIDTH{1'b0}}, whole_steps} >= {16'd0, visits_act}))
+            whole_high    = rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16];
+            low_zero      = (rec_inc[32*axis +: FS_REC_INC_FRAC_BITS] == {FS_REC_INC_FRAC_BITS{1'b0}});
+            fail_pos      = ({1'b0, whole_high} >= bound_pos_reg);
+            fail_neg      = ({1'b0, whole_high} < bound_neg_reg);
+            fail_neg_zero = ({1'b0, whole_high} < bound_neg_zero_reg);
+            if (rec_inc[32*axis+31] ? (low_zero ? fail_neg_zero : fail_neg) : fail_pos)
                 record_ok = 1'b0;
         end
     end
@@ -91,7 +119,7 @@ module period_timer #(
     wire take_record = boundary && rec_valid;
 
     always @(posedge clk) begin
-        block_end_reg <= run && boundary && cur_end_reg;
+        block_end_reg <= run && boundary && cur_end;
         // A record consumed while stopping is discarded unchecked (the abort case).
         if (take_record && run && !record_ok)
             record_error_reg <= 1'b1;
@@ -104,22 +132,28 @@ module period_timer #(
             remaining_reg <= {P_WIDTH{1'b0}};
             inc_reg       <= {32*N_AXES{1'b0}};
             cur_end_reg   <= 1'b0;
+            taken_ok_reg  <= 1'b0;
             p_act_reg     <= period_sampled;
             p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
-            visits_minus_one_reg <= (period_sampled >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            bound_pos_reg       <= sat17(visits_sampled);
+            bound_neg_reg       <= TWO_16 - sat17(visits_sampled);
+            bound_neg_zero_reg  <= TWO_16 - sat17(visits_sampled_minus_one);
         end else if (!active_reg) begin
             active_reg   <= start_ok;
             boundary_reg <= start_ok;       // remaining is 0 while stopped
             p_act_reg    <= period_sampled;
             p_act_minus_one_reg <= period_sampled - {{(P_WIDTH-1){1'b0}}, 1'b1};
-            visits_minus_one_reg <= (period_sampled >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1};
+            bound_pos_reg       <= sat17(visits_sampled);
+            bound_neg_reg       <= TWO_16 - sat17(visits_sampled);
+            bound_neg_zero_reg  <= TWO_16 - sat17(visits_sampled_minus_one);
         end else if (!boundary) begin
             remaining_reg <= remaining_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
             boundary_reg  <= (remaining_reg == {{(P_WIDTH-1){1'b0}}, 1'b1});
         end else begin
             remaining_reg <= p_act_minus_one_reg;
             boundary_reg  <= (p_act_minus_one_reg == {P_WIDTH{1'b0}});
-            if (take_record && record_ok) begin
+            taken_ok_reg <= record_ok;
+            if (take_record) begin
                 inc_reg     <= rec_inc;
                 cur_end_reg <= rec_flags[FS_REC_FLAG_BLOCK_END_BIT];
             end else begin
@@ -134,9 +168,12 @@ module period_timer #(
             remaining_reg    <= {P_WIDTH{1'b0}};
             p_act_reg        <= P_MIN;
             p_act_minus_one_reg <= P_MIN - {{(P_WIDTH-1){1'b0}}, 1'b1};
-            visits_minus_one_reg <= {P_WIDTH{1'b0}};
+            bound_pos_reg        <= 17'd1;                  // V = 1
+            bound_neg_reg        <= TWO_16 - 17'd1;
+            bound_neg_zero_reg   <= TWO_16;
             inc_reg          <= {32*N_AXES{1'b0}};
             cur_end_reg      <= 1'b0;
+            taken_ok_reg     <= 1'b0;
             block_end_reg    <= 1'b0;
             record_error_reg <= 1'b0;
         end
@@ -145,7 +182,7 @@ module period_timer #(
     assign rec_ready    = boundary;
     assign active       = active_reg;
     assign p_active     = p_act_reg;
-    assign inc          = inc_reg;
+    assign inc          = taken_ok_reg ? inc_reg : {32*N_AXES{1'b0}};
     assign block_end    = block_end_reg;
     assign record_error = record_error_reg;
 
@@ -176,7 +213,9 @@ module period_timer #(
     end
     always @(*) if (f_past_valid && !rst) begin
         assert (p_act_minus_one_reg == p_act_reg - {{(P_WIDTH-1){1'b0}}, 1'b1});
-        assert (visits_minus_one_reg == (p_act_reg >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1});
+        assert (bound_pos_reg == sat17(p_act_reg >> SL));
+        assert (bound_neg_reg == TWO_16 - sat17(p_act_reg >> SL));
+        assert (bound_neg_zero_reg == TWO_16 - sat17((p_act_reg >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1}));
         // With the shared engine a running period is a whole number of visits.
         if (active_reg && SL > 0) assert (((p_act_reg >> SL) << SL) == p_act_reg && (p_act_reg >> SL) != {P_WIDTH{1'b0}});
         assert (boundary_reg == (active_reg && remaining_reg == {P_WIDTH{1'b0}}));
@@ -187,7 +226,7 @@ module period_timer #(
         if (f_in_period) assert (active_reg && f_since_boundary + {1'b0, remaining_reg} == {1'b0, p_act_reg});
         if (!active_reg) assert (remaining_reg == {P_WIDTH{1'b0}} && inc_reg == {32*N_AXES{1'b0}});
         for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) begin
-            f_magnitude = inc_reg[32*f_axis+31] ? (~inc_reg[32*f_axis +: 32] + 32'd1) : inc_reg[32*f_axis +: 32];
+            f_magnitude = inc[32*f_axis+31] ? (~inc[32*f_axis +: 32] + 32'd1) : inc[32*f_axis +: 32];
             if (active_reg) assert ({{P_WIDTH{1'b0}}, f_magnitude[31:FS_REC_INC_FRAC_BITS]} < {16'd0, p_act_reg >> SL});
         end
     end
@@ -203,10 +242,10 @@ module period_timer #(
         // else zeros (the last-period flag likewise); between boundaries it holds.
         if ($past(run) && $past(active_reg) && $past(boundary)) begin
             assert (inc == (($past(take_record) && $past(record_ok)) ? $past(rec_inc) : {32*N_AXES{1'b0}}));
-            assert (cur_end_reg == ($past(take_record) && $past(record_ok) && $past(rec_flags[FS_REC_FLAG_BLOCK_END_BIT])));
+            assert (cur_end == ($past(take_record) && $past(record_ok) && $past(rec_flags[FS_REC_FLAG_BLOCK_END_BIT])));
         end
-        if ($past(run) && !$past(boundary)) assert (inc == $past(inc) && cur_end_reg == $past(cur_end_reg));
-        if (!$past(run)) assert (inc == {32*N_AXES{1'b0}} && !cur_end_reg);
+        if ($past(run) && !$past(boundary)) assert (inc == $past(inc) && cur_end == $past(cur_end));
+        if (!$past(run)) assert (inc == {32*N_AXES{1'b0}} && !cur_end);
         if ($past(take_record && run) && !$past(record_ok)) assert (record_error_reg);
         if (!$past(record_error_reg) && !($past(take_record && run) && !$past(record_ok))) assert (!record_error_reg);
         if ($past(record_error_reg) && !$past(clear_errors)) assert (record_error_reg);

@@ -11,8 +11,8 @@
 // The spec's arithmetic is e = pending + request (pending in [-127, 127], request in
 // {-1, 0, +1}), then pending <- e - issued, saturated at +-127. Here the decisions are
 // decoded from a few constant compares of pending (no carry chain before them), and the
-// new pending is pending + (request - issued), one 8-bit adder (the callers' formal
-// sections check both against the spec's sums).
+// new pending is pending + (request - issued), summed for both outcomes of the decision
+// and chosen by it (the callers' formal sections check both against the spec's sums).
 module shaper_step (
     input  wire [7:0] pending,          // signed, in [-127, 127]
     input  wire       level,
@@ -56,22 +56,28 @@ module shaper_step (
     assign rise       = !halt && !level && want_step && dir_matches && space_reached && setup_reached;
     assign dir_change = !halt && !level && want_step && !dir_matches && hold_reached;
 
-    // request - issued, one of -2 .. 2.
-    wire issue_up   = rise && dir;
-    wire issue_down = rise && !dir;
-    wire change_p2  = req_up && issue_down;
-    wire change_m2  = req_down && issue_up;
-    wire change_p1  = (req_up && !rise) || (!req_valid && issue_down);
-    wire change_m1  = (req_down && !rise) || (!req_valid && issue_up);
-    wire [7:0] change = change_p2 ? 8'sd2 : change_p1 ? 8'sd1 :
-                        change_m1 ? -8'sd1 : change_m2 ? -8'sd2 : 8'sd0;
-    wire [7:0] pending_sum = pending + change;
-    assign clamp_high = !halt && p_is_max && change_p1;   // a +2 needs e < 0
-    assign clamp_low  = !halt && p_is_min && change_m1;   // a -2 needs e > 0
+    // The new pending count is pending + (request - issued), saturated at +-127. Both
+    // outcomes, with and without a rise, are summed and clamped beside the decision (their
+    // terms are the request and dir, known at the visit's start), and the rise only
+    // chooses one: no adder after the timing compares. r = request (+1, -1, 0); a rise
+    // issues +1 when dir is 1, else -1.
+    wire [7:0] request     = req_up ? 8'sd1 : (req_down ? -8'sd1 : 8'sd0);
+    wire [7:0] request_rise = req_up ? (dir ? 8'sd0 : 8'sd2) :
+                              req_down ? (dir ? -8'sd2 : 8'sd0) :
+                              (dir ? -8'sd1 : 8'sd1);        // r - issued
+    wire [7:0] sum_stay    = pending + request;
+    wire [7:0] sum_rise    = pending + request_rise;
+    // +1 (no +2 can reach past 127: it needs e < 0) from 127, or -1 from -127.
+    wire clamp_high_stay = p_is_max && req_up;
+    wire clamp_low_stay  = p_is_min && req_down;
+    wire clamp_high_rise = p_is_max && !req_valid && !dir;
+    wire clamp_low_rise  = p_is_min && !req_valid && dir;
+    wire [7:0] next_stay = clamp_high_stay ? PEND_MAX : (clamp_low_stay ? -PEND_MAX : sum_stay);
+    wire [7:0] next_rise = clamp_high_rise ? PEND_MAX : (clamp_low_rise ? -PEND_MAX : sum_rise);
+    assign clamp_high = !halt && (rise ? clamp_high_rise : clamp_high_stay);
+    assign clamp_low  = !halt && (rise ? clamp_low_rise : clamp_low_stay);
     assign behind     = !halt && far;
-    assign pending_next = halt       ? 8'd0 :
-                          clamp_high ? PEND_MAX :
-                          clamp_low  ? -PEND_MAX : pending_sum;
+    assign pending_next = halt ? 8'd0 : (rise ? next_rise : next_stay);
 
 `ifdef FORMAL
     // The step shaper's rules in the spec's arithmetic (step_shaper.md), pending in

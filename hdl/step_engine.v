@@ -67,9 +67,10 @@ module step_engine #(
 
     // ---- Schedule --------------------------------------------------------------------
     reg  [SL-1:0] slot_reg;
+    reg  [SL-1:0] sh_axis_reg;                       // slot_reg - 1, as a flip-flop
     wire [SL-1:0] slot_next = slot_reg + SLOT_ONE;
     wire [SL-1:0] dda_axis  = slot_reg;               // DDA visit of this axis
-    wire [SL-1:0] sh_axis   = slot_reg - SLOT_ONE;    // shaper visit of this axis
+    wire [SL-1:0] sh_axis   = sh_axis_reg;            // shaper visit of this axis
     wire dda_visit = ({{(32-SL){1'b0}}, dda_axis} < N_AXES);
     wire sh_visit  = ({{(32-SL){1'b0}}, sh_axis} < N_AXES);
     // The axis whose configuration and flip-flops a visit reads: 0 in an idle slot (whose
@@ -89,7 +90,8 @@ module step_engine #(
     assign start_ok = (slot_reg == {SL{1'b1}} - SLOT_ONE);    // S - 2 (mod S)
 
     always @(posedge clk) begin
-        slot_reg <= rst ? {SL{1'b0}} : slot_next;
+        slot_reg    <= rst ? {SL{1'b0}} : slot_next;
+        sh_axis_reg <= rst ? {SL{1'b1}} : slot_reg;
     end
 
     // Per-axis flags: the DDA store holds the axis's accumulator of this run (its last
@@ -97,13 +99,22 @@ module step_engine #(
     // reset). Otherwise a visit starts from M/2, or from the shaper's reset values.
     reg [N_AXES-1:0] dda_live_reg;
     reg [N_AXES-1:0] sh_init_reg;
+    // The visited axes' flags, dda_live_reg[dda_ix] and sh_init_reg[sh_ix], as flip-flops
+    // loaded the cycle before from the flags' next values (the next cycle's axes are known
+    // from the slot), so no select by the slot sits in front of a visit's arithmetic.
+    reg              dda_live_cur_reg;
+    reg              sh_init_cur_reg;
+    wire [SL-1:0] dda_axis_after = slot_next;        // the next cycle's visits
+    wire [SL-1:0] sh_axis_after  = slot_reg;
+    wire [SL-1:0] dda_ix_after = ({{(32-SL){1'b0}}, dda_axis_after} < N_AXES) ? dda_axis_after : {SL{1'b0}};
+    wire [SL-1:0] sh_ix_after  = ({{(32-SL){1'b0}}, sh_axis_after} < N_AXES) ? sh_axis_after : {SL{1'b0}};
 
     // ---- DDA visit -------------------------------------------------------------------
     // M = V * 2^16 with V = p_active / S, and M/2, where the first running visit starts.
     wire [SL-1:0] unused_p_low = p_active[SL-1:0];
     wire [ACC_W-1:0]        half_modulus = {1'b0, p_active[P_WIDTH-1:SL], {(FRAC_BITS-1){1'b0}}};
     wire [ACC_W-1:0] acc_rd;
-    wire [ACC_W-1:0] acc_cur = dda_live_reg[dda_ix] ? acc_rd : half_modulus;
+    wire [ACC_W-1:0] acc_cur = dda_live_cur_reg ? acc_rd : half_modulus;
     wire [31:0]      inc_cur = inc[32*dda_ix +: 32];
     // One update (dda_step): acc + d against M = V * 2^16.
     wire [ACC_W-1:0] acc_next;   // used only after a running visit
@@ -130,7 +141,7 @@ module step_engine #(
     // ---- Shaper visit ----------------------------------------------------------------
     wire [SH_W-1:0] sh_rd;
     wire [SH_W-1:0] sh_reset = {2'd0, COUNT_MAX, COUNT_MAX, 1'b1, 1'b0, {PEND_W{1'b0}}};
-    wire [SH_W-1:0] sh_cur = sh_init_reg[sh_ix] ? sh_rd : sh_reset;
+    wire [SH_W-1:0] sh_cur = sh_init_cur_reg ? sh_rd : sh_reset;
     wire signed [PEND_W-1:0] pending = sh_cur[PEND_W-1:0];
     wire                     level   = sh_cur[PEND_W];
     wire                     dir     = sh_cur[PEND_W+1];
@@ -222,6 +233,8 @@ module step_engine #(
             if (!run) dda_live_reg[a] <= 1'b0;
             else if (dda_hot[a]) dda_live_reg[a] <= 1'b1;
         end
+        dda_live_cur_reg <= run && (dda_live_reg[dda_ix_after] || dda_hot[dda_ix_after]);
+        sh_init_cur_reg  <= sh_init_reg[sh_ix_after] || sh_hot[sh_ix_after];
         if (rst) begin
             position_reg   <= {32*N_AXES{1'b0}};
             rate_error_reg <= {N_AXES{1'b0}};
@@ -231,6 +244,8 @@ module step_engine #(
             pin_en_reg     <= {N_AXES{1'b0}};
             dda_live_reg   <= {N_AXES{1'b0}};
             sh_init_reg    <= {N_AXES{1'b0}};
+            dda_live_cur_reg <= 1'b0;
+            sh_init_cur_reg  <= 1'b0;
         end
     end
 
@@ -326,6 +341,8 @@ module step_engine #(
         if (dda_visit) assert (slot_next != dda_axis);
         if (sh_visit) assert (slot_reg != sh_axis);
         assert (start_ok == (slot_reg == S - 2));
+        assert (sh_axis_reg == slot_reg - SLOT_ONE);
+        assert (dda_live_cur_reg == dda_live_reg[dda_ix] && sh_init_cur_reg == sh_init_reg[sh_ix]);
         // Each visit starts from what the axis's last visit left.
         if (dda_visit && run) assert (acc_cur == (f_live[dda_ix] ? f_acc[dda_ix] : half_modulus));
         if (sh_visit) assert (sh_cur == f_sh[sh_ix]);
