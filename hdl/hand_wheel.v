@@ -100,8 +100,7 @@ module hand_wheel #(
     reg  [31:0] detents_prev_reg;
     wire        detent_up   = (count_low_prev_reg == 2'd1) && (count[1:0] == 2'd2);
     wire        detent_down = (count_low_prev_reg == 2'd2) && (count[1:0] == 2'd1);
-    assign detents = detent_up ? detents_prev_reg + 32'd1 :
-                     detent_down ? detents_prev_reg - 32'd1 : detents_prev_reg;
+    assign detents = detents_prev_reg + {{31{detent_down}}, detent_up || detent_down};   // one chain
     always @(posedge clk) begin
         count_low_prev_reg <= count[1:0];
         detents_prev_reg   <= detents;

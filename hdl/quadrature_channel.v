@@ -100,7 +100,7 @@ module quadrature_channel #(
     assign index_event   = live && z_after && !z_before;
     assign illegal_event = live && da && db && !step_dir;
 
-    wire [31:0] counted = step ? (step_up ? count + 32'd1 : count - 32'd1) : count;
+    wire [31:0] counted = count + {{31{step && !step_up}}, step};   // +1, -1 or 0: one chain
     assign count_next     = (index_event && clear_armed) ? 32'd0 : counted;
     assign edge_time_next = step ? timestamp : edge_time;
 
