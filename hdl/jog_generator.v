@@ -18,11 +18,14 @@
 // - The detent check stays one carry chain from registers per bound (a detent can follow
 //   a detent on the next clock: hand_wheel sampled every clock moves `detents` back and
 //   forth on consecutive clocks when its contacts bounce): the bounds travel + W and
-//   travel - W - 1 are held, and the check for -travel uses the same two against ~rem.
+//   travel - W - 1 are held, and the check for -travel runs the same two chains on ~rem.
 //   40 bits suffice: for |rem| >= 2^38 every detent is out of the window.
 // - -travel is never held: the step is travel ^ {down} with the 1 as a carry in.
 // - vel == 0 and next_vel == 0 are flags kept beside the registers, so the disengage
 //   decision (which restarts or drops the velocity computation) carries no 32-bit compare.
+// - The axis is held one-hot (a flip-flop a record lane): the record's select is no
+//   compare of a 3-bit register.
+// - jog_velocity keeps no copy of vel: vel holds while a computation runs (proven here).
 module jog_generator #(
     parameter N_AXES  = 4,
     parameter P_WIDTH = 20
@@ -62,7 +65,7 @@ module jog_generator #(
 `include "finestep_interface.vh"
 
     reg         engaged_reg;
-    reg  [2:0]  axis_reg;
+    reg  [N_AXES-1:0] axis_hot_reg;  // the spec's axis, one-hot: the record's select is one flip-flop a lane
     reg  [47:0] rem_reg;            // target - cmd: the spec's two positions held as their difference
     reg  [31:0] vel_reg;
     reg  [31:0] next_vel_reg;
@@ -88,10 +91,14 @@ module jog_generator #(
     wire        det_high   = detents[1] ^ last_det_reg[1];
     wire        det_up     = det_moved && (det_high == last_det_reg[0]);
     wire        det_down   = det_moved && (det_high != last_det_reg[0]);
+    // The way alone (down when it moved): three inputs, so the window chains' operand
+    // ~rem or rem is one LUT a bit.
+    wire        det_way    = (det_high != last_det_reg[0]);
     wire        period_ok  = ({{(32-P_WIDTH){1'b0}}, period_clocks} >= MIN_PERIOD);
     wire        axis_ok    = ({29'd0, axis_select} < N_AXES);
     wire        engage     = !engaged_reg && enable && !run && !halt && period_ok && axis_ok;
     wire        boundary   = engaged_reg && rec_ready;
+    wire [N_AXES-1:0] axis_hot;     // axis_select, one-hot (below)
     wire        disengage  = boundary && !enable && vel_zero_reg && next_vel_zero_reg;
 
     // Travel of one detent: 5s, 25s = 5 * 5s (two shift-adds in series), then s, 10s = 2 * 5s
@@ -104,22 +111,21 @@ module jog_generator #(
     wire [39:0] travel_cfg_40 = {travel_cfg_reg[38], travel_cfg_reg};
     wire [39:0] window_cfg_40 = {8'd0, window_cfg_reg, 16'd0};
 
-    // |rem + s| <= W for s = +travel and s = -travel, each as the signs of two carry
-    // chains from registers, with H = travel + W and L = travel - W - 1: up, rem + L < 0 and
+    // |rem + s| <= W for s = +travel and s = -travel, as the signs of two carry chains
+    // from registers, with H = travel + W and L = travel - W - 1: up, rem + L < 0 and
     // rem + H >= 0; down (rem - travel <= W is rem <= H, rem - travel >= -W is rem > L),
-    // H - rem >= 0 and L - rem < 0 (the down chains share ~rem). |travel| <= 100 (2^31) and
-    // W < 2^32 make |travel| + W + 1 < 2^38: in 40 bits the sums are exact for |rem| < 2^38,
-    // and a larger |rem| leaves |rem + s| > 2^38 - 100 (2^31) > W: out of the window.
+    // L - rem < 0 and H - rem >= 0. Both ways are x + L + c < 0 and x + H + c >= 0 with
+    // x = rem, c = 0 up and x = ~rem, c = 1 down (-rem = ~rem + 1): two chains for both
+    // directions. |travel| <= 100 (2^31) and W < 2^32 make |travel| + W + 1 < 2^38: in 40
+    // bits the sums are exact for |rem| < 2^38, and a larger |rem| leaves
+    // |rem + s| > 2^38 - 100 (2^31) > W: out of the window.
     wire        rem_small  = (rem_reg[47:38] == {10{rem_reg[38]}});
-    wire [39:0] rem_40     = {rem_reg[38], rem_reg[38:0]};
+    wire [39:0] rem_dir    = {rem_reg[38], rem_reg[38:0]} ^ {40{det_way}};
     wire [39:0] bound_hi   = {bound_hi_reg, travel_reg[15:0]};
-    wire [39:0] up_over    = rem_40 + bound_lo_reg;
-    wire [39:0] up_under   = rem_40 + bound_hi;
-    wire [39:0] down_over  = bound_hi - rem_40;
-    wire [39:0] down_under = bound_lo_reg - rem_40;
-    wire        in_window  = rem_small && (det_up ? (up_over[39] && !up_under[39])
-                                                  : (!down_over[39] && down_under[39]));
-    wire unused_sums = &{1'b0, up_over[38:0], up_under[38:0], down_over[38:0], down_under[38:0]};
+    wire [40:0] over       = {rem_dir, det_way} + {bound_lo_reg, det_way};   // the carry in: a low
+    wire [40:0] under      = {rem_dir, det_way} + {bound_hi, det_way};       // bit 1 on both sides
+    wire        in_window  = rem_small && over[40] && !under[40];
+    wire unused_sums = &{1'b0, over[39:0], under[39:0]};
     // The signed step of this cycle's detent, +travel or -travel (= ~travel + 1: the 1 is
     // the carry into the sum below, made by a low bit that is 1 on both sides).
     wire [47:0] step_inv   = {{9{travel_reg[38]}}, travel_reg} ^ {48{det_down}};
@@ -128,8 +134,7 @@ module jog_generator #(
 
     // rem after this cycle: minus the record taken at a boundary, plus a followed detent.
     wire [47:0] vel_wide    = {{16{next_vel_reg[31]}}, next_vel_reg};
-    wire [47:0] rem_inv     = ~rem_reg;                      // rem - v = ~(~rem + v): the
-    wire [47:0] rem_taken   = ~(rem_inv + vel_wide);         // down chains' ~rem, shared
+    wire [47:0] rem_taken   = rem_reg - vel_wide;
     wire [47:0] rem_kept    = boundary ? rem_taken : rem_reg;
     wire [48:0] moved_sum   = {rem_kept, 1'b1} + {step_inv, det_down};
     wire [47:0] rem_moved   = moved_sum[48:1];
@@ -137,11 +142,12 @@ module jog_generator #(
 
     wire        result_valid;
     wire [31:0] result;
+    wire        calc_busy;
     jog_velocity velocity_calc (
         .clk(clk), .rst(rst),
         .restart(boundary && !disengage), .drop(halt || disengage),
         .distance(rem_reg), .vel(vel_reg), .enable(enable),
-        .vmax(vmax), .accel(accel),
+        .vmax(vmax), .accel(accel), .busy(calc_busy),
         .result_valid(result_valid), .result(result)
     );
 
@@ -169,7 +175,7 @@ module jog_generator #(
 
         if (engage) begin
             engaged_reg <= 1'b1;
-            axis_reg    <= axis_select;
+            axis_hot_reg <= axis_hot;
         end
 
         if ((enable && run) || (enable && !engaged_reg && (!period_ok || !axis_ok)) ||
@@ -189,7 +195,7 @@ module jog_generator #(
         end
         if (rst) begin
             engaged_reg    <= 1'b0;
-            axis_reg       <= 3'd0;
+            axis_hot_reg   <= {{(N_AXES-1){1'b0}}, 1'b1};
             last_det_reg   <= 2'd0;
             dropped_reg    <= 16'd0;
             refused_reg    <= 1'b0;
@@ -204,7 +210,8 @@ module jog_generator #(
     genvar i;
     generate
         for (i = 0; i < N_AXES; i = i + 1) begin : record
-            assign rec_inc[32*i +: 32] = (axis_reg == i) ? next_vel_reg : 32'd0;
+            assign axis_hot[i]         = ({29'd0, axis_select} == i);
+            assign rec_inc[32*i +: 32] = axis_hot_reg[i] ? next_vel_reg : 32'd0;
         end
     endgenerate
 
@@ -213,7 +220,7 @@ module jog_generator #(
     assign refused   = refused_reg;
     assign dropped   = dropped_reg;
     assign remaining = rem_reg[47:16];
-    wire unused_jog = &{1'b0, detents[31:2]};
+    wire unused_jog = &{1'b0, detents[31:2], calc_busy};
 
 `ifdef FORMAL
     // Arbitration and bookkeeping: the jog engages only when asked, with RUN low, not
@@ -226,6 +233,13 @@ module jog_generator #(
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
+    // The spec's 3-bit axis, taken at engagement; the record's lanes select it one-hot.
+    reg  [2:0]  f_axis;
+    always @(posedge clk) if (rst) f_axis <= 3'd0; else if (engage) f_axis <= axis_select;
+    always @(*) if (f_past_valid && !rst) begin
+        assert (axis_hot_reg == ({{(N_AXES-1){1'b0}}, 1'b1} << f_axis));
+        assert ({29'd0, f_axis} < N_AXES);
+    end
     // hand_wheel's detent count moves by at most one a cycle, from 0 at reset.
     reg  [31:0] f_prev_det;
     always @(posedge clk) f_prev_det <= rst ? 32'd0 : detents;
@@ -291,6 +305,10 @@ module jog_generator #(
         assert (vel_zero_reg == (vel_reg == 32'd0));
         assert (next_vel_zero_reg == (next_vel_reg == 32'd0));
     end
+    // No computation runs while disengaged (a halt or the disengage drops it), so vel,
+    // which changes only at a boundary, a halt or an engagement, holds while one runs
+    // after its sample: jog_velocity's assumption, an assertion here (chformal in the .sby).
+    always @(*) if (f_past_valid && !rst && !engaged_reg) assert (!calc_busy);
     always @(*) if (f_past_valid && !rst && !engaged_reg) assert (rec_inc == {32*N_AXES{1'b0}} || next_vel_reg != 32'd0);
 `endif
     assign velocity  = vel_reg;

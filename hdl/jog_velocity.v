@@ -12,6 +12,9 @@
 //        v' = clamp(sign(e) min(VM, u), vel - A, vel + A)   (fastest speed that can stop)
 // Inputs are sampled in the cycle after `restart`; `result_valid` is high in cycle 80
 // after it, with `result`. A new `restart` or `drop` drops the computation in flight.
+// `vel` is not copied: the caller holds it from the sample to the result (jog_generator's
+// vel changes only at a boundary, a halt or an engagement, and each of them restarts or
+// drops the computation, or finds none running); `busy` tells the caller's proof when.
 //
 // How it is computed (the same function, fewer carry chains). With m = min(|e|, 2^40 - 1)
 // and s = sign(e):
@@ -42,6 +45,8 @@ module jog_velocity (
     input  wire        enable,
     input  wire [30:0] vmax,
     input  wire [30:0] accel,
+    // state
+    output wire        busy,        // a computation runs (vel must hold after its sample)
     // result
     output wire        result_valid,
     output wire [31:0] result
@@ -75,8 +80,7 @@ module jog_velocity (
 
     reg        busy_reg;
     reg [6:0]  step_reg;        // cycles since the restart
-    // sampled operands
-    reg [31:0] vel_reg;
+    // sampled operands (vel is held by the caller)
     reg        enable_reg;
     reg [30:0] vmax_reg;
     reg [30:0] accel_reg;
@@ -187,7 +191,7 @@ module jog_velocity (
             R_A:     right_src = a34;
             R_2A:    right_src = a2_34;
             R_VM:    right_src = {3'd0, vmax_reg};
-            R_VEL:   right_src = {{2{vel_reg[31]}}, vel_reg};
+            R_VEL:   right_src = {{2{vel[31]}}, vel};
             R_E:     right_src = {{2{sign_reg}}, p_lo_reg[31:0]};
             R_ACC:   right_src = acc_reg;
             default: right_src = 34'd0;
@@ -202,7 +206,6 @@ module jog_velocity (
         if (busy_reg) step_reg <= step_reg + 7'd1;
         {ctl_left_reg, ctl_linv_reg, ctl_right_reg, ctl_rinv_reg, ctl_cin_reg, ctl_write_reg, ctl_large_reg} <= ctl_next;
         if (busy_reg && step_reg == SAMPLE_AT) begin
-            vel_reg    <= vel;
             enable_reg <= enable;
             vmax_reg   <= vmax;
             accel_reg  <= accel;
@@ -240,7 +243,6 @@ module jog_velocity (
         if (rst) begin
             busy_reg   <= 1'b0;
             step_reg   <= 7'd0;
-            vel_reg    <= 32'd0;
             enable_reg <= 1'b0;
             vmax_reg   <= 31'd0;
             accel_reg  <= 31'd0;
@@ -263,6 +265,7 @@ module jog_velocity (
 
     assign result_valid = busy_reg && (step_reg == RESULT_AT) && !restart && !drop;
     assign result       = acc_reg[31:0];
+    assign busy         = busy_reg;
     wire unused = &{1'b0, rem_diff[34:33], acc_reg[33:32], p_lo_reg[1:0], mul_sum[33]};
 
 `ifdef FORMAL
@@ -281,7 +284,7 @@ module jog_velocity (
     wire signed [35:0] f_acc   = {{2{acc_reg[33]}}, acc_reg};
     wire signed [35:0] f_a     = {5'd0, accel_reg};
     wire signed [35:0] f_vm    = {5'd0, vmax_reg};
-    wire signed [35:0] f_vel   = {{4{vel_reg[31]}}, vel_reg};
+    wire signed [35:0] f_vel   = {{4{vel[31]}}, vel};
     wire signed [35:0] f_w     = sign_reg ? -f_vel : f_vel;           // vel in the direction of e
     wire signed [35:0] f_absw  = f_w[35] ? -f_w : f_w;
     wire signed [35:0] f_t     = f_acc - f_a;
@@ -313,10 +316,14 @@ module jog_velocity (
         end
     end
     always @(*) if (f_past_valid && !rst && result_valid) assert (busy_reg && step_reg == RESULT_AT);
+    // The caller holds vel from the sample (step SAMPLE_AT) to the result
+    // (jog_generator's proof asserts it).
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst && busy_reg && step_reg > SAMPLE_AT)
+        assume ($stable(vel));
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(restart) && !$past(drop)) assert (busy_reg && step_reg == SAMPLE_AT);
         if (busy_reg && step_reg > SAMPLE_AT + 7'd1) begin
-            assert ($stable(vel_reg) && $stable(accel_reg) && $stable(vmax_reg) && $stable(enable_reg) &&
+            assert ($stable(accel_reg) && $stable(vmax_reg) && $stable(enable_reg) &&
                     $stable(sign_reg) && $stable(sat_reg) && $stable(big_reg));
             if (step_reg > SMALL_AT + 7'd1) assert ($stable(small_reg));
         end
