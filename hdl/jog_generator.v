@@ -62,6 +62,7 @@ module jog_generator #(
 );
 
     localparam MIN_PERIOD = 128;
+    localparam [N_AXES-1:0] AXIS0_HOT = 1;   // axis 0, one-hot (the reset axis)
 `include "finestep_interface.vh"
 
     reg         engaged_reg;
@@ -195,7 +196,7 @@ module jog_generator #(
         end
         if (rst) begin
             engaged_reg    <= 1'b0;
-            axis_hot_reg   <= {{(N_AXES-1){1'b0}}, 1'b1};
+            axis_hot_reg   <= AXIS0_HOT;
             last_det_reg   <= 2'd0;
             dropped_reg    <= 16'd0;
             refused_reg    <= 1'b0;
@@ -237,7 +238,7 @@ module jog_generator #(
     reg  [2:0]  f_axis;
     always @(posedge clk) if (rst) f_axis <= 3'd0; else if (engage) f_axis <= axis_select;
     always @(*) if (f_past_valid && !rst) begin
-        assert (axis_hot_reg == ({{(N_AXES-1){1'b0}}, 1'b1} << f_axis));
+        assert (axis_hot_reg == (AXIS0_HOT << f_axis));
         assert ({29'd0, f_axis} < N_AXES);
     end
     // hand_wheel's detent count moves by at most one a cycle, from 0 at reset.
