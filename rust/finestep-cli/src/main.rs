@@ -136,6 +136,9 @@ enum Command {
         /// Only the host side: parse, plan and interpolate.
         #[arg(long)]
         host_only: bool,
+        /// Only the simulation figures (core and chip level), without the host side.
+        #[arg(long, conflicts_with = "host_only")]
+        sim_only: bool,
         /// Only the chip-level move, streamed on this bus (lockstep, model,
         /// spidev:/dev/spidevB.C[@SCK_HZ], sim:SOCKET).
         #[arg(long)]
@@ -248,13 +251,16 @@ fn main() -> anyhow::Result<()> {
         Command::View { file, config, profile, port, web } => {
             view::view(&file, config.as_deref(), profile.as_deref(), port, web.as_deref())
         }
-        Command::Bench { cycles, host_only, bus } => {
+        Command::Bench { cycles, host_only, sim_only, bus } => {
             if let Some(target) = bus {
                 bench_top::on_bus(&target, 200)
             } else if host_only {
                 bench::front_end()
             } else {
                 bench::run(cycles)?;
+                if !sim_only {
+                    bench::front_end()?;
+                }
                 bench_top::run(200)
             }
         }
