@@ -386,3 +386,40 @@ impl PinTarget for RtlPins {
         self.rtl.outputs()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use finestep_host::pins::layout::IDLE_INPUTS;
+    use finestep_model::top::top_pins::output as o;
+
+    /// A wrong output on the RTL's side is reported at its cycle, with its pin named and
+    /// the model's and the RTL's levels: the comparison must fail when a pin differs.
+    #[test]
+    fn a_wrong_pin_is_named_at_its_cycle() {
+        let mut lockstep = TopLockstep::motion("a_wrong_pin_is_named_at_its_cycle");
+        lockstep.drive(IDLE_INPUTS | 1, 4).expect("reset in lockstep");
+        lockstep.drive(IDLE_INPUTS, 20).expect("idle in lockstep");
+        let start = lockstep.cycle();
+        let good = lockstep.outputs();
+        // The RTL runs 10 more cycles; then one of its output changes is forged: the IRQ
+        // pin flips from cycle start + 7 on.
+        lockstep.events.clear();
+        lockstep.rtl.run(IDLE_INPUTS, 10, &mut lockstep.events);
+        assert!(lockstep.events.is_empty(), "an idle chip changes no pin");
+        lockstep.events.push(PinEvent { cycle: start + 7, outputs: good ^ 1 << o::IRQ });
+        let error = lockstep.compare_model(IDLE_INPUTS, 10).expect_err("a flipped pin must fail the comparison");
+        let BusError::Transport(error) = error else { panic!("not a transport error: {error:?}") };
+        let mismatch = error.downcast_ref::<TopMismatch>().expect("a TopMismatch");
+        assert_eq!(mismatch.cycle, start + 7);
+        assert_eq!(mismatch.expected, good);
+        assert_eq!(mismatch.actual, good ^ 1 << o::IRQ);
+        let report = mismatch.to_string();
+        assert!(report.contains(&format!("in cycle {}", start + 7)), "{report}");
+        assert!(
+            report.contains(&format!("irq: model {}, RTL {}", good >> o::IRQ & 1, !good >> o::IRQ & 1)),
+            "{report}"
+        );
+        assert_eq!(report.matches(": model ").count(), 1, "only the flipped pin is named: {report}");
+    }
+}

@@ -45,7 +45,7 @@ use crate::safety_monitor::{SafetyInputs, SafetyMonitor};
 use crate::spi_frame::{SpiFrame, SpiFrameInputs};
 use crate::spi_slave_phy::{SpiPins, SpiSlavePhy};
 use crate::spindle::{Spindle, SpindlePins};
-use crate::{CoreInputs, ParamError, MAX_AXES};
+use crate::{CoreInputs, CoreOutputs, ParamError, MAX_AXES};
 pub use finestep_interface::TopParams;
 
 /// `FILTER_W` of the safety monitor's E-stop filter (the width of `ESTOP_FILTER`).
@@ -537,7 +537,7 @@ impl Top {
 
     /// The value a register-bus read of `addr` would latch now.
     pub fn register(&self, addr: u8) -> u32 {
-        self.registers.read(addr, &self.hardware_status(true))
+        self.registers.read(addr, &self.hardware_status(&self.core.outputs(), true))
     }
 
     /// The outputs in the current cycle (a function of the state only).
@@ -572,11 +572,11 @@ impl Top {
         out
     }
 
-    /// The hardware values register reads show in this cycle.
-    /// `read_served`: a read is served in this cycle (the encoders' and the spindle's
-    /// and interlock's register views are built only then; nothing else reads them).
-    fn hardware_status(&self, read_served: bool) -> HardwareStatus {
-        let core_out = self.core.outputs();
+    /// The hardware values register reads show in this cycle, with `core_out` the
+    /// core's outputs in this cycle. `read_served`: a read is served in this cycle (the
+    /// encoders' and the spindle's and interlock's register views are built only then;
+    /// nothing else reads them).
+    fn hardware_status(&self, core_out: &CoreOutputs, read_served: bool) -> HardwareStatus {
         let mut rate_error = 0;
         let mut step_lost = 0;
         for axis in 0..self.params.n_axes {
@@ -655,9 +655,9 @@ impl Top {
         }
         let p = self.params;
         let served = self.bus_stage;
-        let hw = self.hardware_status(served.is_some_and(|request| !request.write));
-        let halt = hw.halt;
         let core_out = self.core.outputs();
+        let hw = self.hardware_status(&core_out, served.is_some_and(|request| !request.write));
+        let halt = hw.halt;
 
         // The register bus: SPI has priority.
         let spi_request = if p.has_spi { self.spi_frame.request() } else { None };
