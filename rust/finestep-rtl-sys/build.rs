@@ -165,6 +165,8 @@ fn main() {
         "keypad_scan_sim.h",
         "led_menu_sim.cpp",
         "led_menu_sim.h",
+        "step_serial_sim.cpp",
+        "step_serial_sim.h",
     ] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
@@ -229,7 +231,9 @@ fn main() {
         .define("KP_PRE_W", KEYPAD_PRE_W.to_string().as_str())
         .define("KP_DEB_W", KEYPAD_DEB_W.to_string().as_str())
         .define("LM_PRE_W", LED_PRE_W.to_string().as_str())
-        .define("LM_LOW_N_DIG", LED_LOW_N_DIG.to_string().as_str());
+        .define("LM_LOW_N_DIG", LED_LOW_N_DIG.to_string().as_str())
+        .define("SS_P_WIDTH", params.p_width.to_string().as_str())
+        .define("SS_TIMING_W", params.timing_w.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
     }
@@ -266,6 +270,11 @@ fn main() {
         (Build::KeypadScan, "Vkeypad_scan", Some(trace_flag)),
         (Build::LedMenu { low: false }, "Vled_menu", Some(trace_flag)),
         (Build::LedMenu { low: true }, "Vled_menu_low", Some(trace_flag)),
+        // The digit-serial step engine alone (its own lockstep test): 4 axes 4 bits a
+        // clock (the CPLD build's), 3 axes (an idle slot) bit-serial, 2 axes 2 bits.
+        (Build::StepSerial { n_axes: 4, digit: 4 }, "Vstep_serial_a4d4", Some(trace_flag)),
+        (Build::StepSerial { n_axes: 3, digit: 1 }, "Vstep_serial_a3d1", Some(trace_flag)),
+        (Build::StepSerial { n_axes: 2, digit: 2 }, "Vstep_serial_a2d2", Some(trace_flag)),
     ];
     if netlist.is_some() {
         // A netlist is Verilated once, without tracing (with it, the trace code of its
@@ -313,6 +322,7 @@ fn main() {
     files.push(sim.join("pbp_interp_sim.cpp"));
     files.push(sim.join("keypad_scan_sim.cpp"));
     files.push(sim.join("led_menu_sim.cpp"));
+    files.push(sim.join("step_serial_sim.cpp"));
     if netlist.as_ref().is_some_and(|n| n.family == "mutants") {
         files.push(sim.join("mutants_rtl/finestep_mutsel.cpp"));
     }
@@ -332,8 +342,9 @@ fn main() {
         .header(sim.join("pbp_interp_sim.h").to_string_lossy())
         .header(sim.join("keypad_scan_sim.h").to_string_lossy())
         .header(sim.join("led_menu_sim.h").to_string_lossy())
-        .allowlist_function("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*")
-        .allowlist_type("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*")
+        .header(sim.join("step_serial_sim.h").to_string_lossy())
+        .allowlist_function("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*|ss_.*")
+        .allowlist_type("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*|ss_.*")
         .allowlist_var("FS_.*|FT_.*")
         .clang_arg(format!("-I{}", gen.display()))
         .derive_default(true)
@@ -387,6 +398,8 @@ enum Build {
     /// `led_menu` alone, with [`LED_PRE_W`]: its defaults (8 digits, active high), or
     /// (`low`) [`LED_LOW_N_DIG`] digits with active-low segments and digits.
     LedMenu { low: bool },
+    /// `step_serial` alone with these axes and digit, the core's `P_WIDTH` and `TIMING_W`.
+    StepSerial { n_axes: u32, digit: u32 },
 }
 
 /// The parameters the Verilated `pbp_interp` is built with (its defaults); the shim
@@ -422,6 +435,7 @@ fn verilate(
         Build::PbpInterp => ("pbp_interp", None, None),
         Build::KeypadScan => ("keypad_scan", None, None),
         Build::LedMenu { .. } => ("led_menu", None, None),
+        Build::StepSerial { .. } => ("step_serial", None, None),
     };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
@@ -487,6 +501,18 @@ fn verilate(
             .status()
             .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
         assert!(status.success(), "verilator failed on hdl/ (led_menu)");
+        return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
+    }
+    if let Build::StepSerial { n_axes, digit } = build {
+        let status = command
+            .arg(format!("-GN_AXES={n_axes}"))
+            .arg(format!("-GDIGIT={digit}"))
+            .arg(format!("-GP_WIDTH={}", params.p_width))
+            .arg(format!("-GTIMING_W={}", params.timing_w))
+            .args(sources)
+            .status()
+            .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
+        assert!(status.success(), "verilator failed on hdl/ (step_serial)");
         return parse_make_vars(&dir.join(format!("{prefix}_classes.mk")));
     }
     let status = command

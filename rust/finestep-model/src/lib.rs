@@ -90,6 +90,7 @@ pub mod spi_frame;
 pub mod spi_slave_phy;
 pub mod spindle;
 pub mod step_engine;
+pub mod step_serial;
 pub mod step_shaper;
 pub mod top;
 
