@@ -69,7 +69,9 @@
 //!   where they are tangent, nearly a stop where they are not.
 //! - S-curve profiles bring the acceleration back to zero at every element junction,
 //!   and the jerk limit is also kept where the curvature jumps (a line entering an arc
-//!   or a blend): about `sqrt(0.25 J T R)` there, slow at the default jerk.
+//!   or a blend): about `sqrt(0.25 J T R)` there, slow at the default jerk. Around a
+//!   line shorter than three periods' travel (short segments) the two jumps are read
+//!   together ([`lookahead::pair_jerk_cap`]).
 //! - G61 stops exactly at the end of every move (LinuxCNC's G61.1); the path tolerance
 //!   at a corner is that of the move entering it. The feed applies to the length over
 //!   all four axes, A in degrees. Arcs need a radius of at least

@@ -182,9 +182,10 @@ pub struct PairCap {
 /// below the first cap returned ([`PairCap::both`]). Each junction reads on its own
 /// ([`single_jerk_cap`], its curvature jump at 3/4 as above) only when no reading sees
 /// both, below `d / (3 T)` (the jerk's readings span three periods,
-/// [`PairCap::apart_below`]): for each junction the larger of the two caps holds. Where the curvature turns over at the line (a zigzag of blends) the pair
-/// reads more than either junction alone, and its cap is the lower. `None` where the rule does
-/// not apply (not S-curve, `line` not a line, an exact stop at either junction).
+/// [`PairCap::apart_below`]): for each junction the larger of the two caps holds.
+/// Where the curvature turns over at the line (a zigzag of blends) the pair reads more
+/// than either junction alone, and its cap is the lower. `None` where the rule does not
+/// apply (not S-curve, `line` not a line, an exact stop at either junction).
 pub fn pair_jerk_cap(config: &Resolved, before: &Element, line: &Element, after: &Element) -> Option<PairCap> {
     if config.profile != ProfileKind::SCurve
         || before.stop_after
@@ -334,7 +335,11 @@ impl WindowedSpeeds {
         path.reach(fixed + self.window + 1)?;
         let n = if path.complete() { path.known() } else { usize::MAX };
         let end = (fixed + self.window).min(n);
-        while fixed + self.caps.len() <= end {
+        // The caps of the junctions before the window's last (which the window ends at
+        // rest): each is computed with the element after it known, so that a pair around
+        // a short line ([`pair_jerk_cap`]) is read the same in every window as on the
+        // whole path.
+        while fixed + self.caps.len() < end {
             let i = fixed + self.caps.len();
             let cap = if i == 0 || i == n {
                 0.0
