@@ -120,9 +120,16 @@ fn junction_cap_with(config: &Resolved, before: &Element, after: &Element, pairs
         if pairs.is_empty() {
             cap = cap.min(single_jerk_cap(config, before, after, 1.0));
         } else {
-            let alone = single_jerk_cap(config, before, after, PAIR_JUMP_READING);
+            // The junction alone only where it could raise the cap (computed once).
+            let mut alone = None;
             for pair in pairs {
-                cap = cap.min(pair.both.max(pair.apart_below.min(alone)));
+                let apart = if pair.apart_below > pair.both {
+                    let alone = *alone.get_or_insert_with(|| single_jerk_cap(config, before, after, PAIR_JUMP_READING));
+                    pair.apart_below.min(alone)
+                } else {
+                    0.0
+                };
+                cap = cap.min(pair.both.max(apart));
             }
         }
     }
