@@ -928,3 +928,69 @@ impl Sharing {
         }
     }
 }
+
+// The pair rule of `lookahead` read on a path this module builds: the test lives here,
+// where the path is made, so that `lookahead` needs nothing of `geometry`.
+#[cfg(test)]
+mod tests {
+    use crate::config::{MachineConfig, ProfileKind};
+    use crate::element::{Element, JUNCTION_JERK_SHARE};
+    use crate::lookahead::pair_jerk_cap;
+
+    /// The position `s` along the elements laid end to end.
+    fn position(elements: &[Element], mut s: f64) -> [f64; 4] {
+        for e in elements {
+            if s <= e.length {
+                return e.position(s);
+            }
+            s -= e.length;
+        }
+        elements.last().expect("elements").end
+    }
+
+    /// On short blended segments with a Z staircase (the bench's CAM program, whose Z
+    /// blends turn over at every short line), the jerk read from four period boundaries
+    /// at steady speed across a blend, a short line and a blend stays within the
+    /// junction share of every axis's jerk at the pair's cap, whatever the phase, and
+    /// comes close to it (the bound is not loose).
+    #[test]
+    fn the_pair_cap_bounds_the_jerk_read_across_a_short_line() {
+        let mut text = String::from("G21 G90 G17 G64 P0.01\nF3000\n");
+        for i in 0..300 {
+            let t = f64::from(i) * 0.01;
+            let r = 20.0 + 5.0 * (7.0 * t).sin();
+            text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * f64::from(i)));
+        }
+        text.push_str("M2\n");
+        let program = finestep_gcode::parse_str(&text, "cam.ngc").unwrap();
+        let config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
+        let path = super::elements(&config, &program).unwrap().elements;
+        let (mut pairs, mut closest) = (0, 0.0f64);
+        for w in path.windows(3) {
+            let Some(pair) = pair_jerk_cap(&config, &w[0], &w[1], &w[2]) else { continue };
+            if pair.both <= pair.apart_below {
+                continue;
+            }
+            pairs += 1;
+            let v = pair.both;
+            let step = v * config.period_s;
+            let total: f64 = w.iter().map(|e| e.length).sum();
+            let t3 = config.period_s.powi(3);
+            for phase in 0..40 {
+                let mut s = step * f64::from(phase) / 40.0;
+                while s + 3.0 * step <= total {
+                    let p = [0.0, 1.0, 2.0, 3.0].map(|k| position(w, s + k * step));
+                    for (a, axis) in config.axes.iter().enumerate().filter(|(_, axis)| axis.present) {
+                        let jerk = (p[3][a] - 3.0 * p[2][a] + 3.0 * p[1][a] - p[0][a]).abs() / t3;
+                        let share = jerk / (JUNCTION_JERK_SHARE * axis.max_jerk);
+                        assert!(share <= 1.0 + 1e-6, "axis {a} at {v} mm/s reads {jerk}");
+                        closest = closest.max(share);
+                    }
+                    s += step;
+                }
+            }
+        }
+        assert!(pairs > 100, "{pairs} pairs");
+        assert!(closest > 0.5, "the most read is {closest} of the share");
+    }
+}
