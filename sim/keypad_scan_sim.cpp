@@ -38,13 +38,7 @@ struct kp_sim {
 
     // Cycle c: inputs settled at time 2c+1, its rising edge at 2c+2.
     void edge() {
-        if (trace) trace->dump(2 * cycle + 1);
-        top->clk = 1;
-        top->eval();
-        ++cycle;
-        if (trace) trace->dump(2 * cycle);
-        top->clk = 0;
-        top->eval();
+        finestep::clock_cycle(*top, trace, cycle);
     }
 };
 

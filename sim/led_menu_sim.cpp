@@ -68,13 +68,7 @@ struct lm_model : lm_base {
 
     // Cycle c: inputs settled at time 2c+1, its rising edge at 2c+2.
     void edge() override {
-        if (trace) trace->dump(2 * cycle + 1);
-        top->clk = 1;
-        top->eval();
-        ++cycle;
-        if (trace) trace->dump(2 * cycle);
-        top->clk = 0;
-        top->eval();
+        finestep::clock_cycle(*top, trace, cycle);
     }
 
     void read(lm_outputs *out) const override {

@@ -90,13 +90,7 @@ struct ss_model : ss_base {
 
     // Cycle c: inputs settled at time 2c+1, its rising edge at 2c+2.
     void edge() override {
-        if (trace) trace->dump(2 * cycle + 1);
-        top->clk = 1;
-        top->eval();
-        ++cycle;
-        if (trace) trace->dump(2 * cycle);
-        top->clk = 0;
-        top->eval();
+        finestep::clock_cycle(*top, trace, cycle);
     }
 
     void read(ss_outputs *out) const override {

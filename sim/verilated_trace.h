@@ -42,6 +42,19 @@ int open_trace(std::unique_ptr<TraceFile> &trace, Model &model, const char *path
     return 0;
 }
 
+// Clock cycle `cycle` of a model whose inputs are set: the trace (if open) dumps the
+// settled inputs at time 2c+1, then the rising edge at 2c+2, and clk returns low.
+template <typename Model>
+void clock_cycle(Model &model, std::unique_ptr<TraceFile> &trace, uint64_t &cycle) {
+    if (trace) trace->dump(2 * cycle + 1);
+    model.clk = 1;
+    model.eval();
+    ++cycle;
+    if (trace) trace->dump(2 * cycle);
+    model.clk = 0;
+    model.eval();
+}
+
 }  // namespace finestep
 
 #endif
