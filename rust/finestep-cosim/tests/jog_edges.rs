@@ -238,3 +238,26 @@ fn zero_velocity_limit() {
     assert!(!jog.engaged && jog.remaining == 50, "{jog:?}");
     assert_eq!(machine.positions().unwrap().steps[0], 0);
 }
+
+/// JOG_ACCEL of 1 to 3 LSBs (1/65536 step a period each period): the braking bound
+/// sqrt(2 A e) is taken of small radicands near the end of every move, where a perfect
+/// square is never far (the root's last digits decide the speed there); the axis lands
+/// exactly, both ways, in lockstep.
+#[test]
+fn tiny_acceleration_lands_exactly() {
+    for (i, accel) in [1i32, 2, 3].into_iter().enumerate() {
+        let mut machine = connect(&format!("tiny_acceleration_lands_exactly_{i}"), wheel_plant(None));
+        machine.configure_hand_wheel(1, 1).unwrap();
+        let setup = JogSetup { accel: Increment::from_bits(accel), ..setup(JogMultiplier::X1, true, 1 << 16, 0) };
+        machine.configure_jog(&setup).unwrap();
+        machine.enable_jog(&setup, true).unwrap();
+        turn(&mut machine, 2, 20);
+        let jog = poll(&mut machine, 900 * u64::from(PERIOD), 1999);
+        assert_eq!((jog.remaining, jog.velocity), (0, Increment::ZERO), "accel {accel}: {jog:?}");
+        assert_eq!(machine.positions().unwrap().steps[0], 2, "accel {accel}");
+        turn(&mut machine, -1, 20);
+        let jog = poll(&mut machine, 650 * u64::from(PERIOD), 1999);
+        assert_eq!((jog.remaining, jog.velocity), (0, Increment::ZERO), "accel {accel}: {jog:?}");
+        assert_eq!(machine.positions().unwrap().steps[0], 1, "accel {accel}");
+    }
+}

@@ -17,6 +17,12 @@ use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{AxisSetup, Bus, Machine, PinHost, PinTiming, SpiBus};
 use finestep_model::{DriveTiming, PeriodRecord};
 
+// The jog's edge cases (the velocity cap, JOG_VMAX = 0, windows and scales): only for the
+// RTL mutation build, whose top has the hand wheel and the jog (the shipped iCE40 build
+// and its netlist leave them out).
+#[cfg(feature = "netlist-mutants")]
+#[path = "jog_edges.rs"]
+mod jog_edges;
 #[path = "top_faults.rs"]
 mod top_faults;
 #[path = "top_feedback.rs"]
