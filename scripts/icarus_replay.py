@@ -38,6 +38,7 @@ FULL = {"top_smoke": None, "top_faults": None, "top_feedback": None}
 VARIANTS = {
     "full": {},
     "motion": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0},
+    "motion-no-mpg": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0, "HAS_MPG": 0},
 }
 
 

@@ -1,8 +1,9 @@
 // C ABI shim around the Verilated finestep_top (see finestep_top_sim.h). As for the
 // core, each variant is linked twice: Vfinestep_top (fast) and Vfinestep_top_traced with
 // finestep_top's defaults; Vfinestep_top_motion, untraced only, without the spindle and
-// the logic outputs (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0, as every board top):
-// ft_new_traced makes it untraced, and ft_trace_open fails on it. A
+// the logic outputs (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0, as every board top), and
+// Vfinestep_top_motion_nompg, untraced only, without the hand wheel and the jog too
+// (HAS_MPG = 0): ft_new_traced makes them untraced, and ft_trace_open fails on them. A
 // synthesised netlist (FT_NETLIST, rust/finestep-rtl-sys's netlist features) is Verilated
 // once, without tracing: ft_new and ft_new_traced make that top for either variant, and
 // ft_trace_open fails on it.
@@ -13,6 +14,7 @@
 #include "Vfinestep_top.h"
 #ifndef FT_NETLIST
 #include "Vfinestep_top_motion.h"
+#include "Vfinestep_top_motion_nompg.h"
 #include "Vfinestep_top_traced.h"
 #endif
 #include "verilated_trace.h"
@@ -152,9 +154,13 @@ struct Untraced : Base {
 };
 
 #ifndef FT_NETLIST
-bool is_motion(uint32_t variant) { return variant == FT_VARIANT_MOTION; }
+bool is_motion(uint32_t variant) {
+    return variant == FT_VARIANT_MOTION || variant == FT_VARIANT_MOTION_NO_MPG;
+}
+bool is_no_mpg(uint32_t variant) { return variant == FT_VARIANT_MOTION_NO_MPG; }
 #else
 bool is_motion(uint32_t) { return false; }
+bool is_no_mpg(uint32_t) { return false; }
 #endif
 
 }  // namespace
@@ -166,18 +172,20 @@ uint32_t ft_p_width(void) { return FT_P_WIDTH; }
 uint32_t ft_timing_width(void) { return FT_TIMING_W; }
 uint32_t ft_fifo_depth_log2(void) { return FT_FIFO_DEPTH_LOG2; }
 uint32_t ft_n_enc(void) { return FT_N_ENC; }
-uint32_t ft_has_mpg(void) { return FT_HAS_MPG; }
 uint32_t ft_step_shared(void) { return FT_STEP_SHARED; }
+uint32_t ft_has_mpg(uint32_t variant) { return is_no_mpg(variant) ? 0 : FT_HAS_MPG; }
 uint32_t ft_has_spindle(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_SPINDLE; }
 uint32_t ft_has_outputs(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_OUTPUTS; }
 uint32_t ft_n_gpio(uint32_t variant) { return is_motion(variant) ? 0 : FT_N_GPIO; }
 
 #ifndef FT_NETLIST
 ft_sim *ft_new(uint32_t variant) {
+    if (is_no_mpg(variant)) return new TopSim<Untraced<Vfinestep_top_motion_nompg>, false>;
     if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
     return new TopSim<Untraced<Vfinestep_top>, false>;
 }
 ft_sim *ft_new_traced(uint32_t variant) {
+    if (is_no_mpg(variant)) return new TopSim<Untraced<Vfinestep_top_motion_nompg>, false>;
     if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
     return new TopSim<Vfinestep_top_traced, true>;
 }

@@ -64,20 +64,23 @@ typedef struct ft_event {
 typedef struct ft_sim ft_sim;
 
 /* Which Verilation of the top: finestep_top's defaults (the spindle and the logic
- * outputs built), or the motion chip every board top builds (without them). A netlist
- * build (FT_NETLIST) has one top, the default's netlist, for both. */
+ * outputs built), the motion chip every board top builds (without them), or the motion
+ * chip without the hand wheel and the jog too (HAS_MPG = 0, as the HX8K and MachXO3
+ * boards build it): what the motion tests that turn no wheel and the bench run. A
+ * netlist build (FT_NETLIST) has one top, the default's netlist, for all three. */
 #define FT_VARIANT_FULL 0
 #define FT_VARIANT_MOTION 1
+#define FT_VARIANT_MOTION_NO_MPG 2
 
-/* Build-time parameters of the Verilated top (the same in both variants). */
+/* Build-time parameters of the Verilated top (the same in every variant). */
 uint32_t ft_n_axes(void);
 uint32_t ft_p_width(void);
 uint32_t ft_timing_width(void);
 uint32_t ft_fifo_depth_log2(void);
 uint32_t ft_n_enc(void);
-uint32_t ft_has_mpg(void);
 uint32_t ft_step_shared(void);
 /* ... and those of the variant. */
+uint32_t ft_has_mpg(uint32_t variant);
 uint32_t ft_has_spindle(uint32_t variant);
 uint32_t ft_has_outputs(uint32_t variant);
 uint32_t ft_n_gpio(uint32_t variant);
@@ -85,7 +88,7 @@ uint32_t ft_n_gpio(uint32_t variant);
 /* A top of `variant` built without waveform support (the fast one). */
 ft_sim *ft_new(uint32_t variant);
 /* A top of `variant` that can write waveforms (ft_trace_open); slower. The motion
- * variant and a netlist build have no traced Verilation: this is their fast top. */
+ * variants and a netlist build have no traced Verilation: this is their fast top. */
 ft_sim *ft_new_traced(uint32_t variant);
 void ft_free(ft_sim *sim);
 

@@ -250,19 +250,23 @@ fn main() {
     // sim/finestep_core_sim.v: without the gantry block and with the shared step engine
     // (every test but the gantry's), and with the gantry block and a DDA and a shaper per
     // axis; and the top behind the host interface: with its defaults (the spindle and
-    // the logic outputs), and as the motion chip every board top builds (without them:
-    // what the motion tests and the bench run; every block it has is in the first).
+    // the logic outputs), as the motion chip every board top builds (without them: what
+    // the motion tests that turn the hand wheel run; every block it has is in the first),
+    // and as that chip without the hand wheel and the jog (HAS_MPG = 0, as the HX8K and
+    // MachXO3 boards build it: the motion tests that turn no wheel and the bench; the
+    // two blocks cost about a third of the chip's simulation time).
     let core_sim = sim.join("finestep_core_sim.v");
     let mut models = vec![
         (Build::Core { gantry: false }, "Vfinestep_core", None),
         (Build::Core { gantry: false }, "Vfinestep_core_traced", Some(trace_flag)),
         (Build::Core { gantry: true }, "Vfinestep_core_gantry", None),
         (Build::Core { gantry: true }, "Vfinestep_core_gantry_traced", Some(trace_flag)),
-        (Build::Top { motion: false }, "Vfinestep_top", None),
-        (Build::Top { motion: false }, "Vfinestep_top_traced", Some(trace_flag)),
+        (Build::Top { motion: false, mpg: true }, "Vfinestep_top", None),
+        (Build::Top { motion: false, mpg: true }, "Vfinestep_top_traced", Some(trace_flag)),
         // The motion chip once, without tracing (a second traced top would add a third
         // to the build): its lockstep mismatches name the pin and the clock, no waveform.
-        (Build::Top { motion: true }, "Vfinestep_top_motion", None),
+        (Build::Top { motion: true, mpg: true }, "Vfinestep_top_motion", None),
+        (Build::Top { motion: true, mpg: false }, "Vfinestep_top_motion_nompg", None),
         // The point-by-point comparison interpolator alone (its own lockstep test).
         (Build::PbpInterp, "Vpbp_interp", Some(trace_flag)),
         // The gantry card's keypad scan and LED menu alone (their own lockstep tests);
@@ -281,7 +285,7 @@ fn main() {
         // 18 000 named net bits makes 53 MB of C++ instead of 21): the shim (FT_NETLIST)
         // makes ft_new_traced a top that cannot open a waveform, so a mismatch reports its
         // pin and clock without one. The netlist is of the default top: the motion
-        // variant is that netlist too (the shim and top_build give it for either).
+        // variants are that netlist too (the shim and top_build give it for each).
         models
             .retain(|(_, prefix, _)| *prefix != "Vfinestep_top_traced" && !prefix.starts_with("Vfinestep_top_motion"));
     }
@@ -389,8 +393,8 @@ enum Build {
     /// step engine.
     Core { gantry: bool },
     /// `finestep_top`: with its defaults, or without the spindle and the logic outputs
-    /// (`motion`, as every board top).
-    Top { motion: bool },
+    /// (`motion`, as every board top); without the hand wheel and the jog (`!mpg`).
+    Top { motion: bool, mpg: bool },
     /// `pbp_interp` alone, with [`PBP_COORD_W`] and [`PBP_DIV_W`].
     PbpInterp,
     /// `keypad_scan` alone, with [`KEYPAD_PRE_W`] and [`KEYPAD_DEB_W`].
@@ -429,13 +433,13 @@ fn verilate(
     netlist: Option<&Netlist>,
     dir: &Path,
 ) -> BTreeMap<String, String> {
-    let (top, gantry, motion) = match build {
-        Build::Core { gantry } => ("finestep_core_sim", Some(gantry), None),
-        Build::Top { motion } => ("finestep_top", None, Some(motion)),
-        Build::PbpInterp => ("pbp_interp", None, None),
-        Build::KeypadScan => ("keypad_scan", None, None),
-        Build::LedMenu { .. } => ("led_menu", None, None),
-        Build::StepSerial { .. } => ("step_serial", None, None),
+    let (top, gantry, motion, mpg) = match build {
+        Build::Core { gantry } => ("finestep_core_sim", Some(gantry), None, None),
+        Build::Top { motion, mpg } => ("finestep_top", None, Some(motion), Some(mpg)),
+        Build::PbpInterp => ("pbp_interp", None, None, None),
+        Build::KeypadScan => ("keypad_scan", None, None, None),
+        Build::LedMenu { .. } => ("led_menu", None, None, None),
+        Build::StepSerial { .. } => ("step_serial", None, None, None),
     };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
@@ -523,7 +527,7 @@ fn verilate(
         .args(gantry.map(|g| format!("-GSTEP_SHARED={}", u8::from(!g))))
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
-        .args((top == "finestep_top").then(|| format!("-GHAS_MPG={}", params.has_mpg)))
+        .args(mpg.map(|m| format!("-GHAS_MPG={}", if m { params.has_mpg } else { 0 })))
         .args((top == "finestep_top").then(|| format!("-GSTEP_SHARED={}", params.step_shared)))
         .args(motion.map(|m| format!("-GHAS_SPINDLE={}", if m { 0 } else { params.has_spindle })))
         .args(motion.map(|m| format!("-GHAS_OUTPUTS={}", if m { 0 } else { params.has_outputs })))

@@ -8,8 +8,9 @@
 // here checks every output pin on every clock (with !==, so an X or Z differs) at the
 // falling edge, where the shim reads its outputs, and keeps the first difference.
 // The parameters are the Verilated top's: finestep_top's defaults, or the motion chip
-// (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0).
+// (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0), with or without the hand wheel (HAS_MPG).
 module finestep_top_pins #(
+    parameter HAS_MPG     = 1,
     parameter HAS_SPINDLE = 1,
     parameter HAS_OUTPUTS = 1,
     parameter N_GPIO      = 4
@@ -40,6 +41,7 @@ module finestep_top_pins #(
     finestep_top #(
         .N_AXES     (N_AXES),
         .N_ENC      (N_ENC),
+        .HAS_MPG    (HAS_MPG),
         .HAS_SPINDLE(HAS_SPINDLE),
         .HAS_OUTPUTS(HAS_OUTPUTS),
         .N_GPIO     (N_GPIO)

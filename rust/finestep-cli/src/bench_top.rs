@@ -1,7 +1,9 @@
 //! Throughput of the chip-level simulation (not timed tests): a 4-axis move streamed
 //! over SPI by the host driver into the bus-level top, on the Verilated RTL alone, the
-//! model alone and both in lockstep: the motion chip the boards build, then the RTL and
-//! the lockstep of `finestep_top`'s defaults (with the spindle and the logic outputs).
+//! model alone and both in lockstep: the motion chip without the hand wheel and the jog
+//! (as the HX8K and MachXO3 boards build it; the move turns no wheel), then the lockstep
+//! of the motion chip with them, then the RTL and the lockstep of `finestep_top`'s
+//! defaults (with the spindle and the logic outputs).
 
 use std::time::Instant;
 
@@ -78,13 +80,17 @@ pub fn run(periods: usize) -> anyhow::Result<()> {
         "finestep bench, chip level: {AXES} axes, P = {} clocks, {periods} periods streamed over SPI at clk/8, per CPU second",
         machine.period_clocks
     );
-    // The motion chip, as every board top builds it (no spindle, no logic outputs).
-    let motion = TopVariant::Motion;
+    // The motion chip, as every board top builds it (no spindle, no logic outputs), and
+    // without the hand wheel and the jog, which this move does not use.
+    let motion = TopVariant::MotionNoMpg;
     streamed("RTL top alone (Verilator), SPI-driven", RtlPins::of(motion), periods, RtlPins::cycle)?;
     let model = ModelPins(Top::new(rtl_top_params_of(motion)));
     streamed("model top alone, per clock, SPI-driven", model, periods, ModelPins::cycle)?;
-    let lockstep = TopLockstep::motion("bench");
+    let lockstep = TopLockstep::motion_no_mpg("bench");
     streamed("lockstep RTL + model top, every pin compared", lockstep, periods, TopLockstep::cycle)?;
+    // The motion chip with the hand wheel and the jog (as the ECP5 board builds it).
+    let wheel_lockstep = TopLockstep::motion("bench-mpg");
+    streamed("lockstep, motion chip with hand wheel + jog", wheel_lockstep, periods, TopLockstep::cycle)?;
     // finestep_top's defaults: the same move with the spindle and the logic outputs built.
     let full = TopVariant::Full;
     streamed("RTL top with spindle + outputs (finestep_top's defaults)", RtlPins::of(full), periods, RtlPins::cycle)?;

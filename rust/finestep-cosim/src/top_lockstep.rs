@@ -140,9 +140,15 @@ impl TopLockstep {
     }
 
     /// The motion chip every board top builds (no spindle, no logic outputs): what the
-    /// motion tests and the bench run.
+    /// motion tests that turn the hand wheel run.
     pub fn motion(name: &str) -> TopLockstep {
         Self::of(TopVariant::Motion, name)
+    }
+
+    /// The motion chip without the hand wheel and the jog (`HAS_MPG = 0`): what the
+    /// motion tests that turn no wheel and the bench run.
+    pub fn motion_no_mpg(name: &str) -> TopLockstep {
+        Self::of(TopVariant::MotionNoMpg, name)
     }
 
     /// Both sides of `variant` at power-on; drive `rst` first.
@@ -180,6 +186,7 @@ impl TopLockstep {
         let variant = match self.variant {
             TopVariant::Full => "full",
             TopVariant::Motion => "motion",
+            TopVariant::MotionNoMpg => "motion-no-mpg",
         };
         writeln!(out, "# finestep_top pins of {}, {} clocks; {}", self.name, self.cycle, finestep_rtl_sys::TOP_SOURCE)?;
         writeln!(out, "variant {variant}")?;

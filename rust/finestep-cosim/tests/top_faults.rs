@@ -56,7 +56,7 @@ struct Probe {
 
 impl Probe {
     fn new(name: &str) -> Probe {
-        let inner = TopLockstep::motion(name);
+        let inner = TopLockstep::motion_no_mpg(name);
         let outputs = inner.outputs();
         Probe {
             inner,
@@ -107,8 +107,9 @@ impl Probe {
     /// Every step pulse so far was high exactly `STEP_LEN` cycles (rounded up to whole
     /// visits of the step engine, docs/spec/step_engine.md), none is still high.
     fn assert_pulses_exact(&self) {
-        let slots =
-            u64::from(finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::Motion).core_params().step_slots());
+        let slots = u64::from(
+            finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::MotionNoMpg).core_params().step_slots(),
+        );
         let high = STEP_LEN.div_ceil(slots) * slots;
         for &(axis, rose, width) in &self.pulses {
             assert_eq!(width, high, "axis {axis}: the pulse rising in cycle {rose} was high {width} cycles");

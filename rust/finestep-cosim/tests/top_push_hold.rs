@@ -128,7 +128,8 @@ fn push_with_read(spi: &mut Spi, offset: u64, halfword: u8, strobe: u64) -> Seen
 
 #[test]
 fn a_push_holds_only_the_requests_that_touch_it() {
-    let target = Overlay { inner: TopLockstep::motion("push_hold"), cycle: 0, read: None, seen: Seen::default() };
+    let target =
+        Overlay { inner: TopLockstep::motion_no_mpg("push_hold"), cycle: 0, read: None, seen: Seen::default() };
     let mut host = PinHost::new(target, PinTiming::default());
     ok(host.reset(8));
     ok(host.idle(4));

@@ -42,7 +42,7 @@ fn ten_thousand_periods_over_spi_without_underrun() {
     let timing = DriveTiming::new(3, 3, 2, 2);
     // The rated rate of the core the Verilated top is built with (its step engine's slots).
     let mut checker = RateChecker::for_core(
-        &finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::Motion).core_params(),
+        &finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::MotionNoMpg).core_params(),
         PERIOD,
         &[timing; 4],
     );
@@ -50,7 +50,7 @@ fn ten_thousand_periods_over_spi_without_underrun() {
         checker.check(record).unwrap_or_else(|(axis, e)| panic!("record {k}, axis {axis} over the rated rate: {e}"));
     }
 
-    let mut host = PinHost::new(TopLockstep::motion("ten_thousand_periods_over_spi"), PinTiming::default());
+    let mut host = PinHost::new(TopLockstep::motion_no_mpg("ten_thousand_periods_over_spi"), PinTiming::default());
     host.reset(4).unwrap();
     let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
     let axis = AxisSetup { timing, ..AxisSetup::default() };
