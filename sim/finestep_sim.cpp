@@ -16,6 +16,10 @@
 #include "Vfinestep_core_gantry.h"
 #include "Vfinestep_core_gantry_traced.h"
 #include "Vfinestep_core_traced.h"
+#ifdef FS_CLK_PREV
+#include "Vfinestep_core___024root.h"
+#include "Vfinestep_core_gantry___024root.h"
+#endif
 #include "verilated_trace.h"
 
 #ifndef FS_N_AXES
@@ -166,8 +170,7 @@ struct Sim final : fs_sim {
         top->eval();
         ++cycle;
         if (TRACED && trace) trace->dump(2 * cycle);
-        top->clk = 0;
-        top->eval();
+        finestep::clock_fall<TRACED>(*top);
     }
 
     RawOutputs read_raw() const {

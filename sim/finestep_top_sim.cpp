@@ -17,6 +17,11 @@
 #include "Vfinestep_top_motion_nompg.h"
 #include "Vfinestep_top_traced.h"
 #endif
+#ifdef FS_CLK_PREV
+#include "Vfinestep_top___024root.h"
+#include "Vfinestep_top_motion___024root.h"
+#include "Vfinestep_top_motion_nompg___024root.h"
+#endif
 #include "verilated_trace.h"
 
 #ifndef FT_N_AXES
@@ -115,8 +120,7 @@ struct TopSim final : ft_sim {
         top->eval();
         ++cycle;
         if (TRACED && trace) trace->dump(2 * cycle);
-        top->clk = 0;
-        top->eval();
+        finestep::clock_fall<TRACED>(*top);
     }
 
     uint64_t run(uint64_t inputs, uint64_t cycles, ft_event *events, size_t capacity,

@@ -55,6 +55,27 @@ void clock_cycle(Model &model, std::unique_ptr<TraceFile> &trace, uint64_t &cycl
     model.eval();
 }
 
+// The clock's fall on an untraced model whose logic all runs on the rising edge of `clk`
+// (and of the core shim's `load`): nothing is evaluated on a fall, so instead of a second
+// eval() per clock (Verilator's per-call work, about a fifth of the core's simulation
+// time) only the value Verilator compares `clk` with at the next eval() is set low, as an
+// eval() with `clk` low would leave it. FS_CLK_PREV names that member of the model's root
+// (`__Vtrigrprev__TOP__clk` in Verilator 5.006); rust/finestep-rtl-sys's build defines it
+// only when every such model declares it and has no input-dependent (`ico`) region, and
+// never for a netlist; otherwise, and on a traced model (its trace records the fall), the
+// fall is an eval().
+template <bool TRACED, typename Model>
+inline void clock_fall(Model &model) {
+    model.clk = 0;
+#ifdef FS_CLK_PREV
+    if constexpr (!TRACED) {
+        model.rootp->FS_CLK_PREV = 0;
+        return;
+    }
+#endif
+    model.eval();
+}
+
 }  // namespace finestep
 
 #endif

@@ -290,6 +290,9 @@ fn main() {
             .retain(|(_, prefix, _)| *prefix != "Vfinestep_top_traced" && !prefix.starts_with("Vfinestep_top_motion"));
     }
     let mut files = Vec::new();
+    // The member each untraced core and top keeps `clk`'s last evaluated value in, when
+    // all have one and no input-dependent region (sim/verilated_trace.h's clock_fall).
+    let mut clk_prev = Some(None::<String>);
     for (build_of, prefix, trace) in models {
         let dir = mdir.join(prefix);
         let mut model_sources = sources.clone();
@@ -298,6 +301,14 @@ fn main() {
         }
         let top_netlist = if let Build::Top { .. } = build_of { netlist.as_ref() } else { None };
         let classes = verilate(&verilator, &model_sources, &gen, &params, build_of, prefix, trace, top_netlist, &dir);
+        if trace.is_none() && matches!(build_of, Build::Core { .. } | Build::Top { .. }) {
+            let member = if netlist.is_some() { None } else { clk_prev_member(&dir, prefix) };
+            clk_prev = match (clk_prev, member) {
+                (Some(None), Some(m)) => Some(Some(m)),
+                (Some(Some(seen)), Some(m)) if seen == m => Some(Some(m)),
+                _ => None,
+            };
+        }
         let list = |name: &str| -> Vec<String> {
             classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
         };
@@ -317,6 +328,9 @@ fn main() {
     }
     for (name, value) in &defines {
         build.define(name, value.as_str());
+    }
+    if let Some(Some(member)) = &clk_prev {
+        build.define("FS_CLK_PREV", member.as_str());
     }
     // Current Verilator's FST writer (include/fstcpp) compresses with the system lz4.
     let globals_need_lz4 = root.join("include/fstcpp").is_dir();
@@ -537,6 +551,32 @@ fn verilate(
         .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
     assert!(status.success(), "verilator failed on hdl/");
     parse_make_vars(&dir.join(format!("{prefix}_classes.mk")))
+}
+
+/// The member of the Verilated `prefix`'s root class that holds the value of `clk` at the
+/// last evaluation (Verilator 5.006: `__Vtrigrprev__TOP__clk`; later 5.x:
+/// `__Vtrigprevexpr___TOP__clk__0`), or `None` when there is not exactly one such member
+/// or the model has an input-dependent region (`_eval_ico`: logic an eval() with the clock
+/// low would evaluate): the shims' clock_fall then evaluates the fall.
+fn clk_prev_member(dir: &Path, prefix: &str) -> Option<String> {
+    let header = std::fs::read_to_string(dir.join(format!("{prefix}___024root.h"))).ok()?;
+    let members: Vec<&str> = header
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .filter(|word| *word == "__Vtrigrprev__TOP__clk" || word.starts_with("__Vtrigprevexpr___TOP__clk__"))
+        .collect();
+    if members.len() != 1 {
+        return None;
+    }
+    for entry in std::fs::read_dir(dir).ok()? {
+        let path = entry.ok()?.path();
+        if path.extension().is_some_and(|ext| ext == "cpp") {
+            let text = std::fs::read_to_string(&path).ok()?;
+            if text.contains("_eval_ico") || text.contains("_ico_sequent") {
+                return None;
+            }
+        }
+    }
+    Some(members[0].to_string())
 }
 
 /// `verilator --getenv VERILATOR_ROOT`.
