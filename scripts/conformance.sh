@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # make conformance: finestep's G-code interpretation against LinuxCNC's own interpreter.
-# Installs linuxcnc-uspace (scripts/linuxcnc_setup.sh), runs `rs274 -g -t TOOLTABLE` on
+# Installs linuxcnc-uspace (scripts/linuxcnc.sh --install), runs `rs274 -g -t TOOLTABLE` on
 # every .ngc file the package ships (in the file's folder, so that its subroutines are
 # found), and compares with `finestep conformance`: one table, build/conformance/report.txt
 # per program, build/conformance/diffs/ per disagreement.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-./scripts/linuxcnc_setup.sh
+./scripts/linuxcnc.sh --install
 out=build/conformance
 rm -rf "$out"
 mkdir -p "$out/rs274"

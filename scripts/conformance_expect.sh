@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Regenerates tests/conformance/NAME.rs274, the expected output of the quick conformance
-# slice, from LinuxCNC's rs274 (installed by scripts/linuxcnc_setup.sh) for each
+# slice, from LinuxCNC's rs274 (installed by scripts/linuxcnc.sh --install) for each
 # tests/conformance/NAME.ngc (or only those named as arguments). rs274 must accept each.
 set -euo pipefail
 cd "$(dirname "$0")/../tests/conformance"
-../../scripts/linuxcnc_setup.sh
+../../scripts/linuxcnc.sh --install
 files=("$@")
 [ ${#files[@]} -eq 0 ] && files=(*.ngc)
 for f in "${files[@]}"; do

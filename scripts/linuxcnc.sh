@@ -9,12 +9,34 @@
 #   scripts/linuxcnc.sh --quick    one short program, then the same stopped by LinuxCNC's E-stop
 #                                  and with LinuxCNC killed (the slice `make test` runs)
 #   scripts/linuxcnc.sh FILE.ngc...
+#   scripts/linuxcnc.sh --install [PKG...]
+#                                  only install Debian's LinuxCNC (linuxcnc-uspace, about
+#                                  180 MB without recommends) when `rs274`, its standalone
+#                                  interpreter, is missing, and PKG... alongside (what make
+#                                  conformance runs). Idempotent; apt's lock makes a second
+#                                  caller wait.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# LinuxCNC from Debian, and its -dev package for the component's headers (the installer
-# make conformance uses too).
-scripts/linuxcnc_setup.sh linuxcnc-uspace-dev
+install_linuxcnc() {
+    local missing=() p
+    command -v rs274 >/dev/null 2>&1 || missing+=(linuxcnc-uspace)
+    for p in "$@"; do dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p"); done
+    [ ${#missing[@]} -eq 0 ] && return 0
+    local sudo=""
+    [ "$(id -u)" -ne 0 ] && sudo=sudo
+    echo "linuxcnc: installing ${missing[*]} with apt"
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+if [ "${1:-}" = "--install" ]; then
+    shift
+    install_linuxcnc "$@"
+    exit 0
+fi
+# LinuxCNC from Debian, and its -dev package for the component's headers.
+install_linuxcnc linuxcnc-uspace-dev
 rt_user=${FINESTEP_RT_USER:-finestep-rt}
 if ! id -u "$rt_user" >/dev/null 2>&1; then
     echo "linuxcnc: creating the system user $rt_user (rtapi runs as it)"
