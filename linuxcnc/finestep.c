@@ -16,6 +16,9 @@
  *   enable, with the chip's E-stop input released and the watchdog bit clear),
  *   finestep.0.running, finestep.0.error (out), finestep.0.watchdog.has_bit (io), param
  *   finestep.0.watchdog.timeout_ns.
+ *   finestep.0.mpg.{count, detents} (out): the hand wheel in quadrature edges and in detents (4 edges),
+ *   for axis.L.jog-counts; finestep.0.sim.wheel-edges (in, a simulated chip only): where a test wants
+ *   the simulated wheel, in edges (each change turns it by the difference while the chip's time passes).
  */
 
 #include "rtapi.h"
@@ -57,6 +60,9 @@ struct finestep {
     struct stepgen *stepgens;
     struct encoder *encoders;
     hal_bit_t *enable, *estop_ok, *running, *error, *has_bit;
+    hal_s32_t *mpg_count, *mpg_detents, *wheel_edges;
+    int32_t wheel_turned;
+    int paced;
     hal_u32_t timeout_ns;
     int reported_bit;
     uint32_t errors_seen;
@@ -114,6 +120,13 @@ static void read_fn(void *arg, long period)
             *e->velocity = vel;
         }
     }
+    {
+        int32_t count = 0, detents = 0;
+        if (fs_hal_mpg(f->driver, &count, &detents) == 0) {
+            *f->mpg_count = count;
+            *f->mpg_detents = detents;
+        }
+    }
     /* hostmot2's has_bit: set when the watchdog bites, re-armed by writing false. */
     rc |= fs_hal_status(f->driver, f->reported_bit && !*f->has_bit, &estop_ok, &bit, &running);
     *f->has_bit = bit;
@@ -135,6 +148,10 @@ static void write_fn(void *arg, long period)
         struct stepgen *s = &f->stepgens[i];
         rc |= fs_hal_set_stepgen(f->driver, i, *s->position_cmd, s->position_scale, s->maxvel, *s->enable,
                                  s->steplen, s->stepspace, s->dirsetup, s->dirhold, s->step_type);
+    }
+    if (f->paced && *f->wheel_edges != f->wheel_turned) {
+        rc |= fs_hal_turn_wheel(f->driver, (int64_t)*f->wheel_edges - f->wheel_turned);
+        f->wheel_turned = *f->wheel_edges;
     }
     rc |= fs_hal_write(f->driver, period, *f->enable, f->timeout_ns);
     report(f, rc);
@@ -204,6 +221,7 @@ int rtapi_app_main(void)
         return -ENODEV;
     }
     fs_hal_caps(fs->driver, &fs->n_axes, &fs->n_enc, &clock_hz, &paced);
+    fs->paced = paced;
     fs->stepgens = hal_malloc(fs->n_axes * sizeof *fs->stepgens + 1);
     fs->encoders = hal_malloc(fs->n_enc * sizeof *fs->encoders + 1);
     if (!fs->stepgens || !fs->encoders)
@@ -219,6 +237,10 @@ int rtapi_app_main(void)
         r |= hal_pin_bit_newf(HAL_OUT, &fs->error, comp_id, NAME ".error");
         r |= hal_pin_bit_newf(HAL_IO, &fs->has_bit, comp_id, NAME ".watchdog.has_bit");
         r |= hal_param_u32_newf(HAL_RW, &fs->timeout_ns, comp_id, NAME ".watchdog.timeout_ns");
+        r |= hal_pin_s32_newf(HAL_OUT, &fs->mpg_count, comp_id, NAME ".mpg.count");
+        r |= hal_pin_s32_newf(HAL_OUT, &fs->mpg_detents, comp_id, NAME ".mpg.detents");
+        if (paced)
+            r |= hal_pin_s32_newf(HAL_IN, &fs->wheel_edges, comp_id, NAME ".sim.wheel-edges");
         fs->timeout_ns = 5000000;
     }
     if (r == 0)

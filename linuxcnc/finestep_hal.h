@@ -23,6 +23,8 @@ int fs_hal_write(struct fs_hal *h, int64_t period_ns, int enable, uint32_t watch
 int fs_hal_stepgen(struct fs_hal *h, uint32_t axis, int32_t *counts, double *position_fb, double *velocity_fb,
                    uint32_t *limited);
 int fs_hal_encoder(struct fs_hal *h, uint32_t channel, int32_t *count, double *position, double *velocity);
+int fs_hal_mpg(struct fs_hal *h, int32_t *count, int32_t *detents);
+int fs_hal_turn_wheel(struct fs_hal *h, int64_t edges);
 int fs_hal_status(struct fs_hal *h, int clear_watchdog, int *estop_ok, int *watchdog_bit, int *running);
 uint32_t fs_hal_last_error(const struct fs_hal *h, char *buf, size_t len);
 

@@ -6,8 +6,13 @@ halsampler (when FINESTEP_SAMPLES names a file), resets the E-stop, turns the ma
 on, homes every joint, opens FINESTEP_PROGRAM in auto mode, runs it, polls until the
 interpreter is idle and motion has stopped, and writes "ok" or the first error to
 FINESTEP_RESULT. With FINESTEP_ESTOP_AFTER (seconds), it presses LinuxCNC's E-stop that
-long after the start instead of waiting for the end. Needs Debian's /usr/bin/python3
-(its `linuxcnc` module).
+long after the start instead of waiting for the end. With FINESTEP_WHEEL=AXIS:DETENTS,...
+(e.g. `Y:100,-40`) it runs no program: it selects the axis through halui and turns the
+simulated hand wheel by each count of detents in turn (the `finestep.0.sim.wheel-edges`
+pin), waits for LinuxCNC's jog to end and writes the distance the chip moved every axis
+(its step counts over SCALE) next to the expected one (detents times MPG_SCALE). Like
+AXIS, it loads the INI's POSTGUI_HALFILE once LinuxCNC (and halui) run. Needs Debian's
+/usr/bin/python3 (its `linuxcnc` module).
 """
 
 import os
@@ -17,6 +22,23 @@ import sys
 import time
 
 import linuxcnc
+
+
+def halcmd(*args):
+    return subprocess.run(["halcmd"] + list(args), check=True, capture_output=True, text=True).stdout.strip()
+
+
+def ini_value(ini, section, key):
+    """The INI's [section]key (first occurrence), or None."""
+    current = None
+    with open(ini) as text:
+        for line in text:
+            line = line.strip()
+            if line.startswith("["):
+                current = line.strip("[]")
+            elif current == section and "=" in line and line.split("=", 1)[0].strip() == key:
+                return line.split("=", 1)[1].strip()
+    return None
 
 
 class Failed(Exception):
@@ -58,8 +80,12 @@ def main():
             what, stat.task_state, stat.task_mode, stat.interp_state, stat.estop, stat.enabled))
 
     outcome = "ok"
+    ini = sys.argv[sys.argv.index("-ini") + 1] if "-ini" in sys.argv else None
     try:
         wait_for(lambda: stat.task_state != 0, "LinuxCNC to come up")
+        postgui = ini and ini_value(ini, "HAL", "POSTGUI_HALFILE")
+        if postgui:
+            halcmd("-i", ini, "-f", os.path.join(os.path.dirname(ini), postgui))
         command.state(linuxcnc.STATE_ESTOP_RESET)
         wait_for(lambda: stat.task_state == linuxcnc.STATE_ESTOP_RESET, "E-stop reset")
         command.state(linuxcnc.STATE_ON)
@@ -68,6 +94,10 @@ def main():
         command.wait_complete()
         command.home(-1)
         wait_for(lambda: all(stat.homed[j] for j in range(stat.joints)), "homing")
+        wheel = os.environ.get("FINESTEP_WHEEL")
+        if wheel:
+            outcome = turn_wheel(wheel, ini, stat, command, wait_for)
+            return finish(outcome, sampler, result_path, command)
         command.mode(linuxcnc.MODE_AUTO)
         command.wait_complete()
         command.program_open(program)
@@ -98,6 +128,58 @@ def main():
     except Failed as error:
         outcome = "error: %s" % error
     return finish(outcome, sampler, result_path, command)
+
+
+def turn_wheel(spec, ini, stat, command, wait_for):
+    """Jogs one axis with the simulated hand wheel through halui's selection and LinuxCNC's
+    jog pins; "ok" when every axis moved exactly as the detents say, else the figures."""
+    axis, turns = spec.split(":")
+    axis = axis.lower()
+    coordinates = (ini_value(ini, "TRAJ", "COORDINATES") or "XYZ").lower()
+    joints = len(coordinates)
+    scales = [float(ini_value(ini, "JOINT_%d" % j, "SCALE")) for j in range(joints)]
+    slots = [int(ini_value(ini, "JOINT_%d" % j, "FINESTEP_SLOT")) for j in range(joints)]
+    mpg_scale = float(ini_value(ini, "AXIS_" + axis.upper(), "MPG_SCALE"))
+    command.teleop_enable(1)
+    command.wait_complete()
+    wait_for(lambda: stat.motion_mode == linuxcnc.TRAJ_MODE_TELEOP, "teleop mode")
+    halcmd("setp", "halui.axis.%s.select" % axis, "1")
+    time.sleep(0.3)
+    halcmd("setp", "halui.axis.%s.select" % axis, "0")
+    if halcmd("getp", "halui.axis.%s.is-selected" % axis) != "TRUE":
+        raise Failed("halui did not select axis %s" % axis)
+
+    def counts():
+        return [int(halcmd("getp", "finestep.0.stepgen.%02d.counts" % slot)) for slot in slots]
+
+    start = counts()
+    edges = 0
+    detents = 0
+    for turn in turns.split(","):
+        detents += int(turn)
+        edges += 4 * int(turn)
+        halcmd("setp", "finestep.0.sim.wheel-edges", str(edges))
+        # One edge every 10 000 clocks of the simulated chip, then LinuxCNC's jog: wait
+        # until the wheel's detents and the step counts stand still.
+        last, still = None, 0
+        end = time.time() + 300
+        while still < 10:
+            if time.time() > end:
+                raise Failed("the jog did not settle")
+            now = (halcmd("getp", "finestep.0.mpg.detents"), counts())
+            still = still + 1 if now == last else 0
+            last = now
+            time.sleep(0.2)
+        print("headless: wheel at %s detents, chip at %s steps" % (last[0], last[1]), flush=True)
+    moved = [(c - s) / scale for c, s, scale in zip(counts(), start, scales)]
+    expected = [detents * mpg_scale if name == axis else 0.0 for name in coordinates]
+    wheel_detents = int(halcmd("getp", "finestep.0.mpg.detents"))
+    figures = "; ".join("%s moved %.4f, expected %.4f" % (name.upper(), m, e)
+                        for name, m, e in zip(coordinates, moved, expected))
+    print("headless: hand wheel %d detents (chip's MPG_DETENTS %d): %s" % (detents, wheel_detents, figures),
+          flush=True)
+    exact = all(abs(m - e) * scale < 0.5 for m, e, scale in zip(moved, expected, scales))
+    return "ok" if exact and wheel_detents == detents else "error: hand wheel: " + figures
 
 
 def finish(outcome, sampler, result_path, command):

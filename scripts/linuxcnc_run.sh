@@ -4,6 +4,9 @@
 # With FINESTEP_ESTOP_AFTER=SECONDS, LinuxCNC's E-stop is pressed that long after the start.
 # With FINESTEP_KILL_AFTER=PERIODS, LinuxCNC's realtime process is killed that many servo
 # periods into the run and the chip's watchdog is checked (finestep-linuxcnc watchdog).
+# With FINESTEP_WHEEL=AXIS:DETENTS[,DETENTS...] (e.g. Y:100,-40) the program is not run: the
+# simulated hand wheel is turned and LinuxCNC jogs the axis halui selected; every axis must
+# move by the detents times MPG_SCALE (linuxcnc/headless.py), every period checked as usual.
 # Exit status: 0 checked, 1 failed, 2 LinuxCNC's interpreter refused the program.
 # Expects what scripts/linuxcnc.sh builds and installs (the finestep HAL module, the
 # finestep and finestep-linuxcnc binaries, an ordinary user for rtapi). Outputs under
@@ -22,6 +25,7 @@ fi
 config=${FINESTEP_LINUXCNC_CONFIG:-$config}
 rt_user=${FINESTEP_RT_USER:-finestep-rt}
 name=$(basename "$program" .ngc)
+[ -n "${FINESTEP_WHEEL:-}" ] && name=wheel
 work=$repo/build/linuxcnc/run/$name
 rm -rf "$work"
 mkdir -p "$work"
@@ -107,6 +111,10 @@ if [ -n "${FINESTEP_ESTOP_AFTER:-}" ]; then
     exit 0
 fi
 target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --config "$config"
+if [ -n "${FINESTEP_WHEEL:-}" ]; then
+    grep "^headless: hand wheel" "$work/linuxcnc.log" | sed 's/^headless: /  /'
+    exit 0
+fi
 # The same program planned by finestep's own planner under the same limits (the model's
 # fast path; its figure is the planned machining time).
 if target/release/finestep run --fast --config "$config" "$program" --out "$work/finestep-run" > "$work/finestep-run.log" 2>&1; then

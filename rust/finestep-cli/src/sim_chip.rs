@@ -75,6 +75,10 @@ impl<L: SpiTransfer> SpiTransfer for ReadRewrite<L> {
     fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
         self.link.drive_estop(level)
     }
+
+    fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
+        self.link.turn_wheel(edges)
+    }
 }
 
 fn wrong_identity(addr: u8, word: u32) -> u32 {

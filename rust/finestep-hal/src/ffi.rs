@@ -248,6 +248,40 @@ pub unsafe extern "C" fn fs_hal_encoder(
     })
 }
 
+/// The hand wheel at the last read: `count` in quadrature edges, `detents` (4 edges).
+///
+/// # Safety
+/// `handle` from [`fs_hal_open`]; the out-pointers are valid or null.
+#[no_mangle]
+pub unsafe extern "C" fn fs_hal_mpg(handle: *mut Handle, count: *mut i32, detents: *mut i32) -> c_int {
+    guarded(handle, |h| {
+        let (edges, turns) = h.driver.hand_wheel();
+        // SAFETY: each pointer is valid or null.
+        unsafe {
+            if let Some(p) = count.as_mut() {
+                *p = edges;
+            }
+            if let Some(p) = detents.as_mut() {
+                *p = turns;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Turns a simulated chip's hand wheel by `edges` quadrature edges while its time
+/// passes (a test's wheel); fails on a board, whose wheel the operator turns.
+///
+/// # Safety
+/// `handle` from [`fs_hal_open`].
+#[no_mangle]
+pub unsafe extern "C" fn fs_hal_turn_wheel(handle: *mut Handle, edges: i64) -> c_int {
+    guarded(handle, |h| match h.driver.turn_wheel(edges).map_err(|e| e.to_string())? {
+        true => Ok(()),
+        false => Err("the hand wheel of this chip cannot be turned from the host".into()),
+    })
+}
+
 /// The status pins: E-stop input released, watchdog bit, running; `clear_watchdog`
 /// re-arms the watchdog bit (the HAL user wrote has_bit false).
 ///
@@ -361,7 +395,7 @@ mod tests {
         let rust = prototypes(include_str!("ffi.rs"), "extern \"C\" fn fs_hal_", |params| {
             params.split(',').map(|p| p.split_once(':').expect("name: type").1.trim().to_string()).collect()
         });
-        assert_eq!(c.len(), 11, "{c:?}");
+        assert_eq!(c.len(), 13, "{c:?}");
         assert_eq!(c, rust);
     }
 }

@@ -53,6 +53,61 @@ pub const PACE_MARGIN_CLOCKS: u32 = 64;
 /// this lag.
 pub const FEEDBACK_LAG_PERIODS: usize = 2;
 
+/// Clocks from a DDA update to the step being counted in POSITION
+/// (docs/spec/finestep_core.md#latency: an update in cycle n is counted in n + 2): a step
+/// requested in a period's last two clocks is not yet in the boundary's latch.
+pub const LATCH_LAG_CLOCKS: u64 = 2;
+
+/// The longest a step requested by the DDA may take to be counted in POSITION: the
+/// [`LATCH_LAG_CLOCKS`], the longest the step shaper holds a request for the drive
+/// timing (a reversal's direction hold and set-up, docs/spec/rated_rate.md:
+/// `S * (L_v + max(S_v, H_v + U_v) - 1)` clocks in the step engine's visits) and up to
+/// `S - 1` clocks until the axis's visit (docs/spec/step_engine.md). A step requested
+/// later than this before a period boundary may be missing from that boundary's latch.
+pub fn count_latency_clocks(timing: &DriveTiming, slots: u32) -> u64 {
+    LATCH_LAG_CLOCKS + finestep_interface::rate::reversal_wait_in(timing, slots) + u64::from(slots.max(1) - 1)
+}
+
+/// The increment that lands on the same whole step as `d` from `sent` (both I16F16
+/// steps) but requests its last step at least `latency` clocks (plus a margin of
+/// `slots + 2` clocks for the DDA's visits and rounding) before the end of a period of
+/// `period_clocks`, so that the boundary's latch counts it: the DDA moves linearly over
+/// the period, and the last rounding point it crosses is crossed at
+/// `P * (h - sent) / d`; when that is too late, the landing moves past `h` within the
+/// same step (by at most `d * W / (P - W)`; the next period's increment carries the
+/// difference back). `d` itself when it crosses no rounding point, crosses in time, or
+/// when no landing within the same step and `max` (the largest |increment| allowed)
+/// crosses in time (steps closer together than the latency).
+pub fn settled_increment(sent: i64, d: i64, period_clocks: u32, latency: u64, slots: u32, max: i64) -> i64 {
+    let (q0, q1) = (quantised_steps(sent), quantised_steps(sent + d));
+    let p = i128::from(period_clocks);
+    let deadline = p - i128::from(latency) - i128::from(slots.max(1)) - 2;
+    if q0 == q1 || deadline <= 0 {
+        return d;
+    }
+    let step = 1i128 << 16;
+    let half = step / 2;
+    // Distance from the start to the last rounding point crossed, 2^-16 steps; the
+    // crossing is at clock `dist * P / |d|`.
+    let dist = if d > 0 {
+        step * i128::from(q1) - half - i128::from(sent)
+    } else {
+        i128::from(sent) - (step * (i128::from(q1) + 1) - half)
+    };
+    let mag = i128::from(d.abs());
+    if dist * p <= deadline * mag {
+        return d;
+    }
+    // Strictly past the point (a decreasing position reaches the lower step only below it).
+    let need = (dist * p + deadline - 1) / deadline + i128::from(d < 0);
+    let Ok(need) = i64::try_from(need) else { return d };
+    let settled = need * d.signum();
+    if need > max || quantised_steps(sent + settled) != q1 {
+        return d;
+    }
+    settled
+}
+
 /// Records queued before a board starts (slack for the host's jitter); a paced
 /// simulated chip starts at one.
 pub const BOARD_START_LEVEL: u16 = 3;
@@ -366,6 +421,8 @@ pub struct Driver {
     watchdog_bit: bool,
     read_once: bool,
     records: u64,
+    /// The hand wheel's count (edges) and detents at the last read (0 without one).
+    wheel: (i32, i32),
 }
 
 impl Driver {
@@ -423,6 +480,7 @@ impl Driver {
             watchdog_bit: false,
             read_once: false,
             records: 0,
+            wheel: (0, 0),
         })
     }
 
@@ -507,9 +565,26 @@ impl Driver {
             }
             channel.velocity = if dt > 0.0 { delta as f64 / dt } else { 0.0 };
         }
+        if self.machine.caps().has_mpg {
+            let wheel = self.machine.hand_wheel().map_err(self.bus_err())?;
+            self.wheel = (wheel.edges, wheel.detents);
+        }
         self.read_once = true;
         self.note_status();
         Ok(())
+    }
+
+    /// The hand wheel (MPG) at the last read: its count in quadrature edges and in
+    /// detents (`MPG_COUNT`, `MPG_DETENTS`); both 0 on a chip without one.
+    pub fn hand_wheel(&self) -> (i32, i32) {
+        self.wheel
+    }
+
+    /// Turns a simulated chip's hand wheel by `edges` quadrature edges (4 a detent),
+    /// one edge every [`finestep_host::pins::WHEEL_EDGE_CLOCKS`] while its time passes;
+    /// `false` on a board (the operator turns the wheel).
+    pub fn turn_wheel(&mut self, edges: i64) -> Result<bool, HalError> {
+        self.machine.bus().link_mut().turn_wheel(edges).map_err(self.bus_err())
     }
 
     fn apply_encoder_setup(&mut self) -> Result<(), HalError> {
@@ -724,6 +799,7 @@ impl Driver {
         }
         let period_s = f64::from(self.period_clocks) / f64::from(self.machine.caps().clock_hz);
         let mut record = PeriodRecord::from_raw(&[], 0);
+        let slots = self.machine.caps().step_slots;
         let Some(rate) = self.rate.as_mut() else { return Ok(()) };
         for (axis, (state, cmd)) in self.axes.iter_mut().zip(&self.stepgens).enumerate() {
             if !cmd.enable {
@@ -741,9 +817,14 @@ impl Driver {
                 let by_maxvel = (cmd.maxvel * cmd.position_scale.abs() * period_s * 65536.0).floor();
                 max = max.min(by_maxvel.max(0.0) as i64);
             }
-            let d = want.clamp(-max, max);
+            let mut d = want.clamp(-max, max);
             if d != want {
                 state.limited = state.limited.wrapping_add(1);
+            } else {
+                // The last step of the period is requested early enough for the
+                // boundary's latch to count it (the whole step is the command's).
+                let latency = count_latency_clocks(&self.applied[axis].0, slots);
+                d = settled_increment(state.sent, d, self.period_clocks, latency, slots, max);
             }
             record.inc[axis] = Increment::from_bits(d as i32);
         }

@@ -176,3 +176,60 @@ fn quantisation_rounds_half_up_like_the_dda() {
     assert_eq!(quantised_steps(command_fixed(2.4999, 1.0).unwrap()), 2);
     assert_eq!(command_fixed(f64::INFINITY, 1.0), None);
 }
+
+#[test]
+fn a_step_crossed_at_the_end_of_a_period_is_requested_in_time_for_the_latch() {
+    // Every period lands 0.00002 steps past a rounding point: the DDA would request the
+    // period's last step 0.02 clocks before the boundary, after the latch's lag. The
+    // driver lands past the point within the same step, early enough to be counted.
+    let mut driver = driver();
+    let n = driver.n_axes();
+    let mut history: Vec<Vec<f64>> = Vec::new();
+    let mut checked = 0;
+    for k in 0..60 {
+        // Axis 0 up at 10 steps a period, axis 1 down at 7 (the chip starts pointing up:
+        // a reversal, rated 8.3 steps a period with the default timing), axis 2
+        // reverses every 10 periods.
+        let zigzag = if (k / 10) % 2 == 0 { (k % 10) as f64 } else { (10 - k % 10) as f64 };
+        let positions = [k as f64 * 10.0 + 0.50002, -(k as f64) * 7.0 - 0.50002, zigzag * 7.0 + 0.50002, 0.0];
+        let cmds: Vec<StepgenCommand> = (0..n).map(|a| stepgen(positions[a], 1.0)).collect();
+        let counts = cycle(&mut driver, true, &cmds);
+        if k > FEEDBACK_LAG_PERIODS {
+            let sent = &history[k - FEEDBACK_LAG_PERIODS];
+            for a in 0..n {
+                let expected = quantised_steps(command_fixed(sent[a], 1.0).unwrap());
+                assert_eq!(i64::from(counts[a]), expected, "period {k} axis {a}");
+                checked += 1;
+            }
+        }
+        history.push(positions[..n].to_vec());
+    }
+    assert!(checked > 200);
+    for a in 0..n {
+        assert_eq!(driver.stepgen_feedback(a).unwrap().limited, 0, "axis {a}");
+    }
+    let status = driver.machine.status().unwrap();
+    assert_eq!(status::RATE_ERROR.get(status) | status::UNDERRUN.get(status) | status::HALT.get(status), 0);
+}
+
+#[test]
+fn the_settled_increment_keeps_the_step_and_moves_only_a_late_crossing() {
+    let (p, latency, slots, max) = (10_000u32, 100u64, 4u32, 1i64 << 30);
+    let deadline = i64::from(p) - 100 - 4 - 2;
+    // 10.00002 steps from 0.5: crosses 10.5 at 0.02 clocks before the end.
+    let d = 655_361;
+    let s = settled_increment(32768, d, p, latency, slots, max);
+    assert!(s > d && quantised_steps(32768 + s) == quantised_steps(32768 + d), "{s}");
+    // The last point (10.5 steps, 10 steps from the start) is now crossed by the deadline.
+    assert!(10 * 65536 * i64::from(p) <= deadline * s, "{s}");
+    // Downwards likewise, strictly below the point.
+    let s = settled_increment(-32768, -d, p, latency, slots, max);
+    assert!(s < -d && quantised_steps(-32768 + s) == quantised_steps(-32768 - d), "{s}");
+    // Early crossings, no crossing, and a move whose steps are closer than the latency
+    // (no landing in the same step helps) are left alone.
+    assert_eq!(settled_increment(0, 655_360 + 30_000, p, latency, slots, max), 655_360 + 30_000);
+    assert_eq!(settled_increment(0, 20_000, p, latency, slots, max), 20_000);
+    assert_eq!(settled_increment(32768, 200 * 65536 + 1, p, latency, slots, max), 200 * 65536 + 1);
+    // Nor past the largest increment allowed.
+    assert_eq!(settled_increment(32768, d, p, latency, slots, d), d);
+}

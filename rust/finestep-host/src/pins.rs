@@ -138,6 +138,22 @@ pub struct PinHost<T> {
     target: T,
     inputs: u64,
     timing: PinTiming,
+    wheel: WheelTurn,
+}
+
+/// Clocks between two quadrature edges of the hand wheel turned by
+/// [`PinHost::turn_wheel`]: well over the chip's default hand-wheel filter (FILTER = 4
+/// samples every PRESCALE + 1 = 500 clocks, docs/registers.md#mpg_control).
+pub const WHEEL_EDGE_CLOCKS: u64 = 10_000;
+
+/// A hand wheel on the MPG pins turning while clocks pass: edges still to make (the
+/// sign is the direction) and the quadrature phase (0..4: A, B = 00, 10, 11, 01, so A
+/// leads B turning up).
+#[derive(Clone, Copy, Debug, Default)]
+struct WheelTurn {
+    pending: i64,
+    phase: u8,
+    until_edge: u64,
 }
 
 fn with_bit(word: u64, bit: u32, level: bool) -> u64 {
@@ -151,7 +167,7 @@ fn with_bit(word: u64, bit: u32, level: bool) -> u64 {
 impl<T: PinTarget> PinHost<T> {
     /// A host on `target` with idle pins.
     pub fn new(target: T, timing: PinTiming) -> PinHost<T> {
-        PinHost { target, inputs: IDLE_INPUTS, timing }
+        PinHost { target, inputs: IDLE_INPUTS, timing, wheel: WheelTurn::default() }
     }
 
     /// The target.
@@ -174,8 +190,34 @@ impl<T: PinTarget> PinHost<T> {
         self.inputs
     }
 
-    fn hold(&mut self, cycles: u64) -> Result<(), BusError> {
+    fn hold(&mut self, mut cycles: u64) -> Result<(), BusError> {
+        while self.wheel.pending != 0 && cycles > 0 {
+            let run = cycles.min(self.wheel.until_edge);
+            self.target.drive(self.inputs, run)?;
+            cycles -= run;
+            self.wheel.until_edge -= run;
+            if self.wheel.until_edge == 0 {
+                let up = self.wheel.pending > 0;
+                self.wheel.phase = if up { (self.wheel.phase + 1) % 4 } else { (self.wheel.phase + 3) % 4 };
+                self.wheel.pending -= if up { 1 } else { -1 };
+                self.wheel.until_edge = WHEEL_EDGE_CLOCKS;
+                let (a, b) =
+                    [(false, false), (true, false), (true, true), (false, true)][usize::from(self.wheel.phase)];
+                self.set(IN_MPG_A, a);
+                self.set(IN_MPG_B, b);
+            }
+        }
         self.target.drive(self.inputs, cycles)
+    }
+
+    /// Turns the hand wheel on the MPG pins by `edges` quadrature edges (4 a detent;
+    /// negative: down) while clocks pass, one edge every [`WHEEL_EDGE_CLOCKS`], after any
+    /// turn not yet made.
+    pub fn start_wheel_turn(&mut self, edges: i64) {
+        if self.wheel.pending == 0 {
+            self.wheel.until_edge = WHEEL_EDGE_CLOCKS;
+        }
+        self.wheel.pending += edges;
     }
 
     fn set(&mut self, bit: u32, level: bool) {
@@ -314,6 +356,11 @@ impl<T: PinTarget> SpiTransfer for PinHost<T> {
 
     fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
         self.set_estop_pin(level);
+        Ok(true)
+    }
+
+    fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
+        self.start_wheel_turn(edges);
         Ok(true)
     }
 }

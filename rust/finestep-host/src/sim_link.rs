@@ -9,10 +9,11 @@
 //! | transfer | `b'T'`, `len: u32`, `len` bytes sent on MOSI in one chip-select frame |
 //! | wait | `b'W'`, `8: u32`, `clocks: u64` core clocks to let pass |
 //! | E-stop | `b'E'`, `1: u32`, the level to drive on the E-stop input (0 or 1) |
+//! | hand wheel | `b'M'`, `8: u32`, `edges: i64` quadrature edges to turn the wheel by while clocks pass |
 //!
 //! | reply | bytes |
 //! | --- | --- |
-//! | done | `0`, `len: u32`, the `len` bytes received on MISO (0 for a wait; for an E-stop, one byte: 1 when driven) |
+//! | done | `0`, `len: u32`, the `len` bytes received on MISO (0 for a wait; for an E-stop or a wheel turn, one byte: 1 when driven) |
 //! | failed | `1`, `len: u32`, a UTF-8 message (a lockstep mismatch, an unknown op) |
 //!
 //! Simulated time advances only by transfers and waits: a result never depends on how
@@ -39,6 +40,8 @@ pub const OP_TRANSFER: u8 = b'T';
 pub const OP_WAIT: u8 = b'W';
 /// Request op: drive the E-stop input.
 pub const OP_ESTOP: u8 = b'E';
+/// Request op: turn the hand wheel.
+pub const OP_WHEEL: u8 = b'M';
 /// Reply status: done.
 pub const REPLY_DONE: u8 = 0;
 /// Reply status: failed, the payload is the message.
@@ -155,6 +158,10 @@ impl SpiTransfer for SimSocket {
     fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
         Ok(self.request(OP_ESTOP, &[u8::from(level)])? == [1])
     }
+
+    fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
+        Ok(self.request(OP_WHEEL, &edges.to_le_bytes())? == [1])
+    }
 }
 
 /// Serves `link` to one client on `stream` until the client closes it: each transfer
@@ -173,6 +180,13 @@ pub fn serve<S: Read + Write, L: SpiTransfer + ?Sized>(stream: &mut S, link: &mu
                     link.drive_estop(level == 1).map(|driven| vec![u8::from(driven)]).map_err(|e| e.to_string())
                 }
                 _ => Err(format!("an E-stop level of {payload:?}, not [0] or [1]")),
+            },
+            OP_WHEEL => match <[u8; 8]>::try_from(payload.as_slice()) {
+                Ok(edges) => link
+                    .turn_wheel(i64::from_le_bytes(edges))
+                    .map(|driven| vec![u8::from(driven)])
+                    .map_err(|e| e.to_string()),
+                Err(_) => Err(format!("a wheel turn of {} bytes, not 8", payload.len())),
             },
             other => Err(format!("unknown op {other:#04x}")),
         };

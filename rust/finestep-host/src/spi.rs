@@ -35,6 +35,12 @@ pub trait SpiTransfer {
         let _ = level;
         Ok(false)
     }
+    /// Turns a simulated hand wheel by `edges` quadrature edges (4 a detent) while
+    /// clocks pass; `Ok(false)` when the link cannot (a board: the operator turns it).
+    fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
+        let _ = edges;
+        Ok(false)
+    }
 }
 
 impl<T: SpiTransfer + ?Sized> SpiTransfer for Box<T> {
@@ -48,6 +54,10 @@ impl<T: SpiTransfer + ?Sized> SpiTransfer for Box<T> {
 
     fn drive_estop(&mut self, level: bool) -> Result<bool, BusError> {
         (**self).drive_estop(level)
+    }
+
+    fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
+        (**self).turn_wheel(edges)
     }
 }
 
