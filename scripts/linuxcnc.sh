@@ -7,7 +7,8 @@
 # through headless LinuxCNC on the simulated chip and checks every servo period.
 #   scripts/linuxcnc.sh            tests/programs/ and a set of LinuxCNC's shipped examples
 #   scripts/linuxcnc.sh --quick    one short program, then the same stopped by LinuxCNC's E-stop
-#                                  and with LinuxCNC killed (the slice `make test` runs)
+#                                  and with LinuxCNC killed, and the hand wheel jogging Y
+#                                  (the slice `make test` runs)
 #   scripts/linuxcnc.sh FILE.ngc...
 #   scripts/linuxcnc.sh --install [PKG...]
 #                                  only install Debian's LinuxCNC (linuxcnc-uspace, about
@@ -65,6 +66,8 @@ if [ "${1:-}" = "--quick" ]; then
     # The program's moves start about 0.3 s in and end about 1.2 s in.
     quick env FINESTEP_ESTOP_AFTER=0.6 scripts/linuxcnc_run.sh linuxcnc/quick.ngc model
     quick env FINESTEP_KILL_AFTER=600 scripts/linuxcnc_run.sh linuxcnc/quick.ngc model
+    # The hand wheel jogging Y through halui's selection and LinuxCNC's jog pins.
+    quick env FINESTEP_WHEEL=Y:100,-40 scripts/linuxcnc_run.sh linuxcnc/quick.ngc model
     echo "linuxcnc: quick slice passed"
     exit 0
 elif [ $# -gt 0 ]; then
