@@ -142,11 +142,9 @@ module step_serial #(
     reg  [S-1:0]    live_ring;         // per axis: its last DDA visit ran (entry 0: this slot's)
     reg  [S-1:0]    wrap_up_ring;      // per axis: its last s >= M
     reg  [S-1:0]    wrap_down_ring;    // per axis: its last s < 0
-    reg             run_v_reg;         // run at this visit's first clock
     reg             live_v_reg;        // the visit continues its axis's accumulator
     reg             live_w_reg;        // run has stayed 1 since the first clock
     reg             cy1_reg, cy2_reg, cy3_reg;
-    wire run_v  = first ? run : run_v_reg;
     wire live_v = first ? (run && live_ring[0]) : live_v_reg;
     wire up_v   = live_v && wrap_up_ring[0];
     wire down_v = live_v && wrap_down_ring[0];
@@ -168,7 +166,6 @@ module step_serial #(
         cy2_reg  <= sum2[D];
         cy3_reg  <= sum3[D];
         if (first) begin
-            run_v_reg  <= run;
             live_v_reg <= run && live_ring[0];
         end
         live_w_reg <= live_new;
@@ -190,7 +187,7 @@ module step_serial #(
     reg req_negative_reg;
     always @(posedge clk) begin
         if (last) begin
-            req_valid_reg    <= dda_visit && run_v && (s_ge_m || s_neg);
+            req_valid_reg    <= dda_visit && live_new && (s_ge_m || s_neg);
             req_negative_reg <= s_neg;
         end
         if (rst) begin
@@ -384,6 +381,239 @@ module step_serial #(
     assign pos_digit  = pos_digit_reg;
     assign pos_index  = pos_index_reg;
     assign pos_axis   = pos_axis_reg;
+
+`ifdef FORMAL
+    // The engine against the spec's per-axis arithmetic (docs/spec/step_serial.md), in
+    // its own words: a shadow state per axis (acc, live, the request, pending, level,
+    // dir, quad, the two counters, the compares the last visit left, the position, the
+    // pins and the sticky flags) is updated once per visit, at the visit's first clock,
+    // by the spec's rules; at the first clock of every slot every ring word and ring flag
+    // must be what the shadow says (a ring neither loses nor mixes an axis's words), and
+    // in every clock the pins, flags, enables and the position stream must be the
+    // shadow's. On the shadow: no step is lost or made up (per axis, position + pending
+    // equals the net requests the shaper took, until a clamp; a halt drops the pending
+    // ones), and every DDA request reaches the shaper before the axis's next DDA visit.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+
+    // Environment: while run = 1, inc changes only at a round's first clock and p_active
+    // not at all; while run = 0 both may change in any clock (the period timer zeroes inc
+    // and samples P); a run rises only at a round's first clock; p_active is a whole
+    // number (>= 1) of rounds; an axis's timings are constant over its shaper visit
+    // (they may change at its first clock).
+    wire [V_W-1:0] f_v = p_active[P_WIDTH-1:LR];
+    always @(*) assume (p_active[LR-1:0] == {LR{1'b0}} && f_v != {V_W{1'b0}});
+    always @(posedge clk) if (f_past_valid && !rst) begin
+        if (run && phase_reg != {LR{1'b0}}) assume ($stable(inc) && $stable(p_active));
+        if (run && $past(run)) assume ($stable(p_active));
+        if (run && !$past(run)) assume (phase_reg == {LR{1'b0}});
+    end
+    wire signed [35:0] f_m = $signed({{(20-V_W){1'b0}}, f_v, 16'd0});
+    wire [TIMING_W-1:0] f_max = {TIMING_W{1'b1}};
+    wire f_chk = f_past_valid && !rst;
+
+    wire [32*S-1:0] f_pos_new_all;
+    generate
+        if (S > N_AXES) begin : f_pad
+            assign f_pos_new_all[32*S-1:32*N_AXES] = {(32*(S-N_AXES)){1'b0}};
+        end
+    endgenerate
+    genvar fa;
+    generate
+        for (fa = 0; fa < N_AXES; fa = fa + 1) begin : f_axis
+            // ---- The shadow, in the spec's words ----
+            reg [31:0]         acc;        // in [0, M) while live
+            reg [31:0]         m_used;     // M of the last visit that ran
+            reg                live, running;
+            reg                req_on, req_neg;   // the last DDA visit's request
+            reg                unconsumed;        // a request the shaper has not taken
+            reg                init;
+            reg [7:0]          pend;
+            reg                lvl, dr;
+            reg [1:0]          qd;
+            reg [TIMING_W-1:0] cnt, dcnt;
+            reg                len_ok, space_ok, hold_ok, setup_ok;
+            reg [31:0]         pos, net;
+            reg                clamped;
+            reg                pa, pb, rate, lost;
+
+            wire dda_now = (slot == fa) && first;
+            wire sh_now  = sh_visit && (sh_axis == fa) && first;
+            wire in_sh   = sh_visit && (sh_axis == fa);
+            wire [TIMING_W-1:0] len_a   = step_len[TIMING_W*fa +: TIMING_W];
+            wire [TIMING_W-1:0] space_a = step_space[TIMING_W*fa +: TIMING_W];
+            wire [TIMING_W-1:0] setup_a = dir_setup[TIMING_W*fa +: TIMING_W];
+            wire [TIMING_W-1:0] hold_a  = dir_hold[TIMING_W*fa +: TIMING_W];
+            always @(posedge clk) if (f_past_valid && !rst && in_sh && !first) begin
+                assume ($stable(len_a) && $stable(space_a) && $stable(setup_a) && $stable(hold_a));
+            end
+
+            // DDA visit: s = (live ? acc : M/2) + d, wrapped into [0, M) with a request.
+            wire signed [35:0] d  = $signed({{4{inc[32*fa+31]}}, inc[32*fa +: 32]});
+            wire signed [35:0] b  = live ? $signed({4'b0000, acc}) : (f_m >>> 1);
+            wire signed [35:0] sm = b + d;
+            wire               up   = sm >= f_m;
+            wire               down = sm < 0;
+            wire signed [35:0] acc_new = up ? sm - f_m : (down ? sm + f_m : sm);
+            always @(*) if (f_chk && dda_now && run) assume (acc_new < f_m && acc_new >= 0);
+
+            // Shaper visit: step_shaper's rule with the counters counting visits.
+            wire signed [9:0] e     = $signed({{2{pend[7]}}, pend}) +
+                                      (req_on ? (req_neg ? -10'sd1 : 10'sd1) : 10'sd0);
+            wire              move  = !lvl && e != 10'sd0 && !halt;
+            wire              rise_s = move && ((e > 10'sd0) == dr) && space_ok && setup_ok;
+            wire              fall_s = lvl && len_ok;
+            wire              turn_s = move && ((e > 10'sd0) != dr) && hold_ok;
+            wire signed [9:0] iss   = rise_s ? (dr ? 10'sd1 : -10'sd1) : 10'sd0;
+            wire signed [9:0] left  = e - iss;
+            wire [7:0]        pend_new = halt ? 8'd0 : (left > 10'sd127 ? 8'sd127 :
+                                         (left < -10'sd127 ? -8'sd127 : left[7:0]));
+            wire [31:0]       pos_new  = pos + {{22{iss[9]}}, iss};
+            wire              lvl_new  = rise_s ? 1'b1 : (fall_s ? 1'b0 : lvl);
+            wire              dr_new   = turn_s ? !dr : dr;
+            wire [1:0]        qd_new   = qd + iss[1:0];
+            wire [TIMING_W-1:0] cnt_new  = (rise_s || fall_s) ? {{(TIMING_W-1){1'b0}}, 1'b1} :
+                                           (cnt == f_max ? cnt : cnt + 1'b1);
+            wire [TIMING_W-1:0] dcnt_new = turn_s ? {{(TIMING_W-1){1'b0}}, 1'b1} :
+                                           (dcnt == f_max ? dcnt : dcnt + 1'b1);
+            wire [31:0] cnt_clk  = {{(32-TIMING_W){1'b0}}, cnt_new} << LR;    // cnt * R
+            wire [31:0] dcnt_clk = {{(32-TIMING_W){1'b0}}, dcnt_new} << LR;
+            wire [1:0]  mode_a   = out_mode[2*fa +: 2];
+            wire [2:0]  inv_a    = invert[3*fa +: 3];
+            wire pa_new = (mode_a == FS_OUT_MODE_UP_DOWN) ? (lvl_new && dr_new) :
+                          (mode_a == FS_OUT_MODE_QUADRATURE) ? (qd_new[0] ^ qd_new[1]) : lvl_new;
+            wire pb_new = (mode_a == FS_OUT_MODE_UP_DOWN) ? (lvl_new && !dr_new) :
+                          (mode_a == FS_OUT_MODE_QUADRATURE) ? qd_new[1] : dr_new;
+            wire rate_set = sh_now && !halt && (e >= 10'sd2 || e <= -10'sd2);
+            wire lost_set = sh_now && !halt && (left > 10'sd127 || left < -10'sd127);
+            assign f_pos_new_all[32*fa +: 32] = pos_new;
+
+            always @(posedge clk) begin
+                // DDA
+                if (slot == fa && dda_visit) begin
+                    if (first) running <= run;
+                    else running <= running && run;
+                    if (last) live <= (first ? run : running) && run;
+                    // A visit during which the run falls makes no request.
+                    if (last && !((first ? run : running) && run)) begin
+                        req_on     <= 1'b0;
+                        req_neg    <= 1'b0;
+                        unconsumed <= 1'b0;
+                    end
+                end
+                if (dda_now) begin
+                    req_on     <= run && (up || down);
+                    req_neg    <= run && down;
+                    unconsumed <= run && (up || down);
+                    if (run) begin
+                        acc    <= acc_new[31:0];
+                        m_used <= f_m[31:0];
+                    end
+                end
+                if (!run) live <= 1'b0;
+                // Shaper
+                if (sh_now) begin
+                    unconsumed <= 1'b0;
+                    init     <= 1'b1;
+                    pend     <= pend_new;
+                    lvl      <= lvl_new;
+                    dr       <= dr_new;
+                    qd       <= qd_new;
+                    cnt      <= cnt_new;
+                    dcnt     <= dcnt_new;
+                    len_ok   <= cnt_clk >= {{(32-TIMING_W){1'b0}}, len_a};
+                    space_ok <= cnt_clk >= {{(32-TIMING_W){1'b0}}, space_a};
+                    hold_ok  <= cnt_clk >= {{(32-TIMING_W){1'b0}}, hold_a};
+                    setup_ok <= dcnt_clk >= {{(32-TIMING_W){1'b0}}, setup_a};
+                    pos      <= pos_new;
+                    net      <= halt ? pos : net + (req_on ? (req_neg ? 32'hffffffff : 32'd1) : 32'd0);
+                    if (lost_set) clamped <= 1'b1;
+                    pa       <= pa_new ^ inv_a[FS_INVERT_PIN_A_BIT];
+                    pb       <= pb_new ^ inv_a[FS_INVERT_PIN_B_BIT];
+                end
+                if (rate_set) rate <= 1'b1;
+                else if (clear_errors) rate <= 1'b0;
+                if (lost_set) lost <= 1'b1;
+                else if (clear_errors) lost <= 1'b0;
+                if (rst) begin
+                    live <= 1'b0; running <= 1'b0;
+                    req_on <= 1'b0; req_neg <= 1'b0; unconsumed <= 1'b0;
+                    init <= 1'b0; pend <= 8'd0; lvl <= 1'b0; dr <= 1'b1; qd <= 2'd0;
+                    cnt <= f_max; dcnt <= f_max;
+                    len_ok <= 1'b1; space_ok <= 1'b1; hold_ok <= 1'b1; setup_ok <= 1'b1;
+                    pos <= 32'd0; net <= 32'd0; clamped <= 1'b0;
+                    pa <= 1'b0; pb <= 1'b0; rate <= 1'b0; lost <= 1'b0;
+                end
+            end
+
+            // ---- The rings against the shadow, at every slot's first clock ----
+            wire [SL-1:0] i_dda = fa - slot;        // its entry in the DDA rings
+            wire [SL-1:0] i_sh  = fa - sh_axis;     // ... in the shaper rings
+            wire [31:0] acc_w = acc_ring >> (32 * i_dda);
+            wire [31:0] pos_w = pos_ring >> (32 * i_sh);
+            wire [31:0] cnt_w = cnt_ring >> (32 * i_sh);
+            wire [E_W-1:0] sh_e = sh_ring >> (E_W * i_sh);
+            wire wu = wrap_up_ring[i_dda];
+            wire wd = wrap_down_ring[i_dda];
+            always @(*) if (f_chk) begin
+                // The shadow's own invariants.
+                assert (pend != 8'h80);
+                if (live) assert (acc < m_used && m_used != 32'd0 && m_used[31] == 1'b0);
+                if (!clamped) assert (pos + {{24{pend[7]}}, pend} == net);
+                if (!init) assert (pend == 8'd0 && !lvl && dr && qd == 2'd0 && cnt == f_max &&
+                                   dcnt == f_max && pos == 32'd0 && len_ok && space_ok &&
+                                   hold_ok && setup_ok && !pa && !pb);
+                // No request is overwritten before the shaper takes it: one waits only from
+                // its DDA visit to the first clock of the axis's shaper visit, the next slot.
+                if (unconsumed) assert ((slot == fa && !first) || (sh_axis == fa && first));
+                if (!req_on) assert (!unconsumed && !req_neg);
+                assert (rate_error[fa] == rate && step_lost[fa] == lost);
+                assert (pin_a[fa] == pa && pin_b[fa] == pb);
+                if (first) begin
+                    assert (live_ring[i_dda] == live);
+                    if (live && run) begin
+                        assert (!(wu && wd));
+                        assert (m_used == f_m[31:0]);
+                        assert (acc_w - (wu ? m_used : (wd ? -m_used : 32'd0)) == acc);
+                    end
+                    assert (sh_e[E_INIT] == init);
+                    if (init) begin
+                        assert (sh_e[E_PEND +: PEND_W] == pend && sh_e[E_LEVEL] == lvl &&
+                                sh_e[E_DIR] == dr && sh_e[E_QUAD +: 2] == qd);
+                        assert (sh_e[E_LEN] == len_ok && sh_e[E_SPACE] == space_ok &&
+                                sh_e[E_HOLD] == hold_ok && sh_e[E_SETUP] == setup_ok);
+                        assert (sh_e[E_CFULL] == (cnt == f_max) && sh_e[E_DFULL] == (dcnt == f_max));
+                        assert (cnt_w == {{(16-TIMING_W){1'b0}}, dcnt, {(16-TIMING_W){1'b0}}, cnt});
+                        assert (pos_w == pos);
+                    end
+                end
+                // The shaper visit takes this axis's request.
+                if (sh_now) assert (req_valid_reg == req_on && (!req_on || req_negative_reg == req_neg));
+            end
+            always @(posedge clk) if (f_chk && !$past(rst)) begin
+                assert (pin_en[fa] == $past((axis_enable[fa] && !halt) ^ invert[3*fa + FS_INVERT_PIN_EN_BIT]));
+                cover (init && rate && lvl && !dr);
+                // A halt dropping a pending step; a run falling in a DDA visit.
+                cover (sh_now && halt && pend != 8'd0);
+                cover (slot == fa && !first && running && !run && live);
+            end
+        end
+    endgenerate
+
+    // The position stream: in clock n + 1, digit j (of clock n) of the position the
+    // shaper visit left; 0 in an idle slot.
+    reg [31:0] f_stream;
+    always @(posedge clk) if (sh_visit && first) f_stream <= f_pos_new_all[32*sh_axis +: 32];
+    always @(posedge clk) if (f_chk && !$past(rst)) begin
+        assert (pos_index == {{(8-QL){1'b0}}, $past(j)} && pos_axis == {{(3-SL){1'b0}}, $past(sh_axis)});
+        if ($past(sh_visit)) assert (pos_digit == f_stream[D*$past(j) +: D]);
+        else assert (pos_digit == {D{1'b0}});
+        assert (phase_reg == $past(phase_reg) + PHASE_ONE);
+    end
+    always @(*) if (f_chk) assert (start_ok == (phase_reg == {LR{1'b1}} - PHASE_ONE));
+`endif
 
 endmodule
 

@@ -3,8 +3,8 @@
 //! (axes, digit): random periods, records (up to one step per visit, so rate errors and
 //! direction reversals), drive timings, output modes and inversions changed at round
 //! starts, stops, runs dropped in the middle of a visit, halts and error clears. The
-//! environment keeps the engine's contract: `inc` and `p_active` change only at round
-//! starts (period boundaries), a run starts only at a round start. A failure prints the
+//! environment keeps the engine's contract: while running `inc` and `p_active` change only at round
+//! starts (period boundaries), a stopped run zeroes `inc` (the period timer), a run starts only at a round start. A failure prints the
 //! variant and the first cycle and output, and leaves a waveform in
 //! target/cosim-failures/step_serial_lockstep.vcd.
 
@@ -135,7 +135,10 @@ fn inputs_of(run: &Run, p: SerialParams) -> Vec<SerialInputs> {
             if halt || per.drop.is_some_and(|at| t16 >= at) {
                 running = false;
             }
-            out.push(SerialInputs { run: running, halt, clear_errors: per.clear == Some(t16), ..base });
+            // A stopped run: the period timer zeroes the increments (also in the middle of
+            // a visit, which then makes no request).
+            let inc = if running { base.inc } else { [0; 8] };
+            out.push(SerialInputs { run: running, halt, clear_errors: per.clear == Some(t16), inc, ..base });
         }
     }
     // Drain: stopped rounds until every pulse is out.

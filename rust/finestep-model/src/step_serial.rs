@@ -11,7 +11,7 @@
 //!   clock; the environment keeps `inc` and `p_active` constant over a visit) with
 //!   `V = p_active / R` and `M = V * 65536`: `s = (live ? acc : M/2) + d`, wrapped into
 //!   `[0, M)`, a request of +1 / -1 on a wrap; the request is the shaper's from the next
-//!   slot on. `live[a]` clears in every clock with `run = 0`; a visit whose first clock
+//!   slot on, unless the run falls before the visit's last clock (then none). `live[a]` clears in every clock with `run = 0`; a visit whose first clock
 //!   runs sets it at its end when `run` has stayed 1 throughout.
 //! - the shaper visit at its first clock: `step_shaper`'s rule with the counters
 //!   counting visits and every compare `cnt >= X` read as `cnt * R >= X`, made with the
@@ -158,7 +158,7 @@ struct Axis {
 }
 
 /// The engine.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct StepSerial {
     params: SerialParams,
     phase: u32,
@@ -285,6 +285,10 @@ impl StepSerial {
             self.dda_running &= inp.run;
             if last {
                 ax.live = self.dda_running;
+                // A visit during which the run falls makes no request.
+                if !self.dda_running {
+                    ax.req = 0;
+                }
             }
         }
         if !inp.run {
