@@ -15,10 +15,13 @@
 #include "Vfinestep_core.h"
 #include "Vfinestep_core_gantry.h"
 #include "Vfinestep_core_gantry_traced.h"
+#include "Vfinestep_core_serial.h"
+#include "Vfinestep_core_serial_traced.h"
 #include "Vfinestep_core_traced.h"
 #ifdef FS_CLK_PREV
 #include "Vfinestep_core___024root.h"
 #include "Vfinestep_core_gantry___024root.h"
+#include "Vfinestep_core_serial___024root.h"
 #endif
 #include "verilated_trace.h"
 
@@ -283,12 +286,16 @@ uint32_t fs_p_width(void) { return FS_P_WIDTH; }
 uint32_t fs_timing_width(void) { return FS_TIMING_W; }
 int fs_trace_is_fst(void) { return VM_TRACE_FST ? 1 : 0; }
 
-fs_sim *fs_new(int gantry) {
-    if (gantry) return new Sim<Untraced<Vfinestep_core_gantry>, false>;
+uint32_t fs_serial_digit(void) { return FS_SERIAL_DIGIT; }
+
+fs_sim *fs_new(int variant) {
+    if (variant == 1) return new Sim<Untraced<Vfinestep_core_gantry>, false>;
+    if (variant == 2) return new Sim<Untraced<Vfinestep_core_serial>, false>;
     return new Sim<Untraced<Vfinestep_core>, false>;
 }
-fs_sim *fs_new_traced(int gantry) {
-    if (gantry) return new Sim<Vfinestep_core_gantry_traced, true>;
+fs_sim *fs_new_traced(int variant) {
+    if (variant == 1) return new Sim<Vfinestep_core_gantry_traced, true>;
+    if (variant == 2) return new Sim<Vfinestep_core_serial_traced, true>;
     return new Sim<Vfinestep_core_traced, true>;
 }
 void fs_free(fs_sim *sim) { delete sim; }
