@@ -442,8 +442,9 @@ impl Core {
         }
         let serial = self.serial.as_mut().expect("built with the digit-serial engine");
         let phase = serial.engine.phase();
-        serial.engine.step(&inp);
+        // The digit the engine shows in this cycle is taken at this edge.
         serial.collect_digit();
+        serial.engine.step(&inp);
         let bits = self.params.step_round_bits();
         self.timer_edge(inputs, period, bits, phase);
         self.outputs() != before
