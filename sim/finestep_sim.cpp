@@ -1,8 +1,8 @@
 // C ABI shim around the Verilated finestep_core (see finestep_sim.h).
 //
-// Four Verilations of the same RTL are linked: the core without the gantry block
-// (HAS_GANTRY = 0, what every test that does not exercise the gantry runs) and with it,
-// each without tracing (fast) and with it (Vfinestep_core*_traced); tracing support costs
+// Six Verilations of the same RTL are linked: the core without the gantry block
+// (HAS_GANTRY = 0, what every test that does not exercise the gantry runs), with it, and
+// with the digit-serial step engine (STEP_DIGIT 4, the CPLD's), each without tracing (fast) and with it (Vfinestep_core*_traced); tracing support costs
 // about a third of the speed even when no waveform is open. Each is Verilated from
 // sim/finestep_core_sim.v: the core behind registers that hold its inputs, loaded by a
 // pulse of `load` whenever the inputs are set, so no logic depends combinationally on
