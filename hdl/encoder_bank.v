@@ -34,6 +34,10 @@ module encoder_bank #(
     input  wire [2*N_ENC-1:0]           mode,
     input  wire [N_ENC-1:0]             z_active_high,
     input  wire [FILTER_W*N_ENC-1:0]    filter_len,
+    // the three above as they will be after this clock's edge (a visit's are chosen ahead)
+    input  wire [2*N_ENC-1:0]           mode_next,
+    input  wire [N_ENC-1:0]             z_active_high_next,
+    input  wire [FILTER_W*N_ENC-1:0]    filter_len_next,
     input  wire                         probe_active_high,
     input  wire [FILTER_W-1:0]          probe_filter_len,
     // host commands (one-cycle pulses)
@@ -119,7 +123,9 @@ module encoder_bank #(
 
     // ---- Per-channel flip-flops ---------------------------------------------------------
     reg [N_ENC-1:0] sync1_a_reg, sync1_b_reg, sync1_z_reg;   // two-flop synchronisers
-    reg [N_ENC-1:0] raw_a_reg, raw_b_reg, raw_z_reg;
+`ifdef FORMAL
+    reg [N_ENC-1:0] raw_a_reg, raw_b_reg, raw_z_reg;   // the synchronisers' second stage, per pin
+`endif
     reg [N_ENC-1:0] primed_reg, a_reg, b_reg, z_reg;
     reg [N_ENC-1:0] illegal_reg, index_seen_reg, latch_armed_reg, clear_armed_reg;
     reg [N_ENC-1:0] latch_pending_reg, probe_pending_reg;
@@ -129,10 +135,29 @@ module encoder_bank #(
     // The visited channel's view of them (slot_reg < N_ENC at a visit).
     wire [CH_W-1:0] ch = slot_reg;
     wire [31:0]     ch_i = {{(32-CH_W){1'b0}}, ch};
-    wire [1:0]          v_mode   = mode[2*ch_i +: 2];
-    wire                v_zah    = z_active_high[ch_i];
-    wire [FILTER_W-1:0] v_filter = filter_len[FILTER_W*ch_i +: FILTER_W];
-    wire                v_primed = primed_reg[ch_i];
+    // The visited channel's flip-flops, configuration and synchronised pins are chosen a
+    // clock ahead (by the next slot, into the v_*_reg below), so the visit's datapath
+    // starts at flip-flops, not at multiplexers steered by the slot (the ECP5 board
+    // build's critical path ran from the slot through that choice and the decoder into
+    // the live store's write data). A channel's state changes only at its own visits (or
+    // by the host's arm, or at reset), and the next slot is never the one visited now
+    // (slot_next = slot only in a stall, which visits nothing), so the state chosen ahead
+    // is the state at the visit; the configuration is taken as it will be after the edge
+    // (mode_next ...), and the pins from the synchronisers' first stage, so that the
+    // chosen flip-flop is the second stage of the visited pin's two-flop synchroniser.
+    wire [CH_W-1:0] ahead = rst ? {CH_W{1'b0}} : slot_next;   // the slot after this edge
+    wire [31:0]     nx_i = {{(32-CH_W){1'b0}}, ahead};
+    wire            nx_is_channel = (nx_i < N_ENC);
+    reg             v_primed_reg, v_a_reg, v_b_reg, v_z_reg, v_clear_armed_reg;
+    reg             v_raw_a_reg, v_raw_b_reg, v_raw_z_reg;
+    reg  [1:0]          v_mode_reg;
+    reg                 v_zah_reg;
+    reg  [FILTER_W-1:0] v_filter_reg;
+    wire [1:0]          v_mode   = v_mode_reg;
+    wire                v_zah    = v_zah_reg;
+    wire [FILTER_W-1:0] v_filter = v_filter_reg;
+    wire unused_config = &{1'b0, mode, filter_len};   // the visits read mode_next, filter_len_next
+    wire                v_primed = v_primed_reg;
 
     // ---- The store: live state, read the clock before the visit -------------------------
     wire [LIVE_W-1:0] live_rd;
@@ -153,11 +178,11 @@ module encoder_bank #(
     wire [31:0]         n_count, n_edge;
     quadrature_channel #(.FILTER_W(FILTER_W)) decoder (
         .mode(v_mode), .z_active_high(v_zah), .filter_len(v_filter),
-        .sampling(sample_now), .raw_a(raw_a_reg[ch_i]), .raw_b(raw_b_reg[ch_i]),
-        .raw_z(raw_z_reg[ch_i]), .timestamp(timestamp),
-        .primed(v_primed), .a(a_reg[ch_i]), .b(b_reg[ch_i]), .z_level(z_reg[ch_i]),
+        .sampling(sample_now), .raw_a(v_raw_a_reg), .raw_b(v_raw_b_reg),
+        .raw_z(v_raw_z_reg), .timestamp(timestamp),
+        .primed(v_primed), .a(v_a_reg), .b(v_b_reg), .z_level(v_z_reg),
         .cnt_a(v_cnt_a), .cnt_b(v_cnt_b), .cnt_z(v_cnt_z),
-        .count(v_count), .edge_time(v_edge), .clear_armed(clear_armed_reg[ch_i]),
+        .count(v_count), .edge_time(v_edge), .clear_armed(v_clear_armed_reg),
         .primed_next(n_primed), .a_next(n_a), .b_next(n_b), .z_level_next(n_z),
         .cnt_a_next(n_cnt_a), .cnt_b_next(n_cnt_b), .cnt_z_next(n_cnt_z),
         .count_next(n_count), .edge_time_next(n_edge),
@@ -255,16 +280,34 @@ module encoder_bank #(
         sync1_a_reg <= enc_a;
         sync1_b_reg <= enc_b;
         sync1_z_reg <= enc_z;
+        // The next slot's channel, as its flip-flops will be at the next edge (see above).
+        if (nx_is_channel) begin
+            v_primed_reg      <= primed_reg[nx_i];
+            v_a_reg           <= a_reg[nx_i];
+            v_b_reg           <= b_reg[nx_i];
+            v_z_reg           <= z_reg[nx_i];
+            v_clear_armed_reg <= arm_index_clear[nx_i] || clear_armed_reg[nx_i];
+            v_raw_a_reg       <= sync1_a_reg[nx_i];
+            v_raw_b_reg       <= sync1_b_reg[nx_i];
+            v_raw_z_reg       <= sync1_z_reg[nx_i];
+            v_mode_reg        <= mode_next[2*nx_i +: 2];
+            v_zah_reg         <= z_active_high_next[nx_i];
+            v_filter_reg      <= filter_len_next[FILTER_W*nx_i +: FILTER_W];
+        end
+`ifdef FORMAL
         raw_a_reg   <= sync1_a_reg;
         raw_b_reg   <= sync1_b_reg;
         raw_z_reg   <= sync1_z_reg;
+`endif
         if (rst) begin
             sync1_a_reg       <= {N_ENC{1'b0}};
             sync1_b_reg       <= {N_ENC{1'b0}};
             sync1_z_reg       <= {N_ENC{1'b0}};
+`ifdef FORMAL
             raw_a_reg         <= {N_ENC{1'b0}};
             raw_b_reg         <= {N_ENC{1'b0}};
             raw_z_reg         <= {N_ENC{1'b0}};
+`endif
             illegal_count_reg <= {16*N_ENC{1'b0}};
             primed_reg        <= {N_ENC{1'b0}};
             a_reg             <= {N_ENC{1'b0}};
@@ -279,6 +322,14 @@ module encoder_bank #(
             count_copied_reg  <= {N_ENC{1'b0}};
             index_copied_reg  <= {N_ENC{1'b0}};
             probe_copied_reg  <= {N_ENC{1'b0}};
+            v_primed_reg      <= 1'b0;
+            v_a_reg           <= 1'b0;
+            v_b_reg           <= 1'b0;
+            v_z_reg           <= 1'b0;
+            v_clear_armed_reg <= 1'b0;
+            v_raw_a_reg       <= 1'b0;
+            v_raw_b_reg       <= 1'b0;
+            v_raw_z_reg       <= 1'b0;
         end
     end
 
@@ -348,6 +399,9 @@ module encoder_bank #(
     always @(posedge clk) f_past_valid <= 1'b1;
     always @(posedge clk) if (f_past_valid) assume (!(read_grant && $past(read_grant) && $past(read_grant, 2)));
     always @(posedge clk) if (f_past_valid) assume ($stable(mode) && $stable(filter_len) && $stable(z_active_high));
+    // The configuration's next value is its value (held still above; feedback_registers
+    // makes the registers load exactly their next value).
+    always @(*) assume (mode_next == mode && filter_len_next == filter_len && z_active_high_next == z_active_high);
 
     reg [31:0] f_count [0:N_ENC-1];
     reg [31:0] f_edge  [0:N_ENC-1];
@@ -372,6 +426,14 @@ module encoder_bank #(
         // Before its first sample a channel has count 0 and nothing decoded.
         if (visit && !v_primed) assert (f_count[ch_i] == 32'd0 && f_edge[ch_i] == 32'd0);
         if (visit) assert (v_count == f_count[ch_i] && v_edge == f_edge[ch_i]);
+        // The visit's flip-flops, chosen a clock ahead, are the visited channel's.
+        if (slot_is_channel) assert (v_primed_reg == primed_reg[ch_i] && v_a_reg == a_reg[ch_i] &&
+                                     v_b_reg == b_reg[ch_i] && v_z_reg == z_reg[ch_i] &&
+                                     v_clear_armed_reg == clear_armed_reg[ch_i] &&
+                                     v_raw_a_reg == raw_a_reg[ch_i] && v_raw_b_reg == raw_b_reg[ch_i] &&
+                                     v_raw_z_reg == raw_z_reg[ch_i] && v_mode_reg == mode[2*ch_i +: 2] &&
+                                     v_zah_reg == z_active_high[ch_i] &&
+                                     v_filter_reg == filter_len[FILTER_W*ch_i +: FILTER_W]);
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(stall)) assert (slot_reg == $past(slot_reg));

@@ -25,6 +25,11 @@ module feedback_registers #(
     output wire [2*N_ENC-1:0]    enc_mode,
     output wire [N_ENC-1:0]      enc_z_active_high,
     output wire [4*N_ENC-1:0]    enc_filter,
+    // The three above as they will be after this clock's edge (this cycle's write and
+    // reset applied): the encoder bank chooses a visit's configuration a clock ahead.
+    output wire [2*N_ENC-1:0]    enc_mode_next,
+    output wire [N_ENC-1:0]      enc_z_active_high_next,
+    output wire [4*N_ENC-1:0]    enc_filter_next,
     output wire [N_ENC-1:0]      enc_arm_index_latch,
     output wire [N_ENC-1:0]      enc_arm_index_clear,
     output wire                  probe_active_high,
@@ -98,7 +103,33 @@ module feedback_registers #(
     integer w, r;   // loop indices, one per process
     reg [31:0] enc_control_word, enc_status_word;   // one channel's ENC_CONTROL and ENC_STATUS
 
+    // The channels' configuration after this edge: the registers load exactly these.
+    reg [2*N_ENC-1:0] enc_mode_nx;
+    reg [N_ENC-1:0]   enc_z_active_high_nx;
+    reg [4*N_ENC-1:0] enc_filter_nx;
+    integer x;
+    always @* begin
+        enc_mode_nx          = enc_mode_reg;
+        enc_z_active_high_nx = enc_z_active_high_reg;
+        enc_filter_nx        = enc_filter_reg;
+        for (x = 0; x < N_ENC; x = x + 1) begin
+            if (write && {25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + x * FS_ENC_CONTROL_STRIDE) begin
+                enc_mode_nx[2*x +: 2]   = wdata[FS_ENC_CONTROL_MODE_LSB +: 2];
+                enc_z_active_high_nx[x] = wdata[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB];
+                enc_filter_nx[4*x +: 4] = wdata[FS_ENC_CONTROL_FILTER_LSB +: 4];
+            end
+        end
+        if (rst) begin
+            enc_mode_nx          = {N_ENC{FS_ENC_CONTROL_MODE_RESET}};
+            enc_z_active_high_nx = {N_ENC{FS_ENC_CONTROL_Z_ACTIVE_HIGH_RESET}};
+            enc_filter_nx        = {N_ENC{FS_ENC_CONTROL_FILTER_RESET}};
+        end
+    end
+
     always @(posedge clk) begin
+        enc_mode_reg          <= enc_mode_nx;
+        enc_z_active_high_reg <= enc_z_active_high_nx;
+        enc_filter_reg        <= enc_filter_nx;
         enc_arm_latch_reg <= {N_ENC{1'b0}};
         enc_arm_clear_reg <= {N_ENC{1'b0}};
         probe_arm_reg     <= 1'b0;
@@ -128,9 +159,6 @@ module feedback_registers #(
             endcase
             for (w = 0; w < N_ENC; w = w + 1) begin
                 if ({25'd0, addr} == {25'd0, FS_ENC_CONTROL_ADDR} + w * FS_ENC_CONTROL_STRIDE) begin
-                    enc_mode_reg[2*w +: 2]       <= wdata[FS_ENC_CONTROL_MODE_LSB +: 2];
-                    enc_z_active_high_reg[w]     <= wdata[FS_ENC_CONTROL_Z_ACTIVE_HIGH_LSB];
-                    enc_filter_reg[4*w +: 4]     <= wdata[FS_ENC_CONTROL_FILTER_LSB +: 4];
                     enc_arm_latch_reg[w]         <= wdata[FS_ENC_CONTROL_ARM_INDEX_LATCH_LSB];
                     enc_arm_clear_reg[w]         <= wdata[FS_ENC_CONTROL_ARM_INDEX_CLEAR_LSB];
                 end
@@ -140,9 +168,6 @@ module feedback_registers #(
         if (halt) jog_enable_reg <= 1'b0;
         if (rst) begin
             enc_prescale_reg      <= FS_ENC_PRESCALE_PRESCALE_RESET;
-            enc_mode_reg          <= {N_ENC{FS_ENC_CONTROL_MODE_RESET}};
-            enc_z_active_high_reg <= {N_ENC{FS_ENC_CONTROL_Z_ACTIVE_HIGH_RESET}};
-            enc_filter_reg        <= {N_ENC{FS_ENC_CONTROL_FILTER_RESET}};
             enc_arm_latch_reg     <= {N_ENC{1'b0}};
             enc_arm_clear_reg     <= {N_ENC{1'b0}};
             probe_active_high_reg <= FS_PROBE_CONTROL_ACTIVE_HIGH_RESET;
@@ -248,6 +273,9 @@ module feedback_registers #(
     assign enc_mode            = enc_mode_reg;
     assign enc_z_active_high   = enc_z_active_high_reg;
     assign enc_filter          = enc_filter_reg;
+    assign enc_mode_next          = enc_mode_nx;
+    assign enc_z_active_high_next = enc_z_active_high_nx;
+    assign enc_filter_next        = enc_filter_nx;
     assign enc_arm_index_latch = enc_arm_latch_reg;
     assign enc_arm_index_clear = enc_arm_clear_reg;
     assign probe_active_high   = probe_active_high_reg;

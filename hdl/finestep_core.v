@@ -52,6 +52,11 @@ module finestep_core #(
     output wire                       rec_ready,
     input  wire [32*N_AXES-1:0]       rec_inc,
     input  wire [7:0]                 rec_flags,
+    // the alternate record (period_timer): rec_alt_inc on the rec_alt_lane lanes, zero
+    // on the others, offered instead of rec_inc while rec_alt
+    input  wire                       rec_alt,
+    input  wire [N_AXES-1:0]          rec_alt_lane,
+    input  wire [31:0]                rec_alt_inc,
     // drive pins
     output wire [N_AXES-1:0]          pin_a,
     output wire [N_AXES-1:0]          pin_b,
@@ -111,6 +116,9 @@ module finestep_core #(
         .rec_ready(rec_ready),
         .rec_inc(rec_inc),
         .rec_flags(rec_flags),
+        .rec_alt(rec_alt),
+        .rec_alt_lane(rec_alt_lane),
+        .rec_alt_inc(rec_alt_inc),
         .active(timer_active),
         .p_active(p_active),
         .inc(inc),

@@ -136,14 +136,17 @@ module finestep_top #(
     wire        jog_engaged, jog_stopping, jog_refused;
     wire [15:0] jog_dropped;
     wire [31:0] jog_remaining, jog_velocity;
-    wire [32*N_AXES-1:0] jog_inc;
+    wire [N_AXES-1:0]    jog_lane;     // the jog's record: jog_word on its axis's lane
+    wire [31:0]          jog_word;
     // Motion: the FIFO runs on RUN, the core also while the jog is engaged.
     wire fifo_run = run_request && !halt;
     wire core_run = (run_request || jog_engaged) && !halt;
     wire rec_ready, fifo_rec_valid, gate, underrun, underrun_event;
     wire boundary = core_run && rec_ready;
     wire rec_valid = jog_engaged ? 1'b1 : fifo_rec_valid;
-    wire [INC_W-1:0]              rec_inc   = jog_engaged ? jog_inc : fifo_head[INC_W-1:0];
+    // The jog's record goes to the core's alternate record port: the core checks it apart
+    // and chooses after the checks (period_timer), so jog_engaged is not in front of them.
+    wire [INC_W-1:0]              rec_inc   = fifo_head[INC_W-1:0];
     wire [FS_REC_FLAGS_WIDTH-1:0] rec_flags = jog_engaged ? {FS_REC_FLAGS_WIDTH{1'b0}} : fifo_head[INC_W +: FS_REC_FLAGS_WIDTH];
     wire [32*N_AXES-1:0] position;
     wire [N_AXES-1:0]    rate_error, step_lost;
@@ -154,6 +157,9 @@ module finestep_top #(
     wire [2*N_ENC-1:0]    enc_mode;
     wire [N_ENC-1:0]      enc_z_active_high, enc_arm_index_latch, enc_arm_index_clear;
     wire [4*N_ENC-1:0]    enc_filter;
+    wire [2*N_ENC-1:0]    enc_mode_next;
+    wire [N_ENC-1:0]      enc_z_active_high_next;
+    wire [4*N_ENC-1:0]    enc_filter_next;
     wire                  probe_active_high, probe_arm;
     wire [3:0]            probe_filter, mpg_filter;
     wire                  jog_enable, jog_follow;
@@ -362,6 +368,7 @@ module finestep_top #(
         .enc_master(32'd0), .enc_slave(32'd0), .clear_counters(1'b0),
         .rec_valid(rec_valid), .rec_ready(rec_ready),
         .rec_inc(rec_inc), .rec_flags(rec_flags),
+        .rec_alt(jog_engaged), .rec_alt_lane(jog_lane), .rec_alt_inc(jog_word),
         .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
         .position(position), .rate_error(rate_error), .step_lost(step_lost),
         .record_error(record_error), .block_end(block_end),
@@ -380,7 +387,9 @@ module finestep_top #(
         .write(bus_write), .addr(bus_address), .wdata(bus_write_data), .rdata(feedback_rdata),
         .halt(halt),
         .enc_prescale(enc_prescale), .enc_mode(enc_mode), .enc_z_active_high(enc_z_active_high),
-        .enc_filter(enc_filter), .enc_arm_index_latch(enc_arm_index_latch),
+        .enc_filter(enc_filter), .enc_mode_next(enc_mode_next),
+        .enc_z_active_high_next(enc_z_active_high_next), .enc_filter_next(enc_filter_next),
+        .enc_arm_index_latch(enc_arm_index_latch),
         .enc_arm_index_clear(enc_arm_index_clear),
         .probe_active_high(probe_active_high), .probe_filter(probe_filter), .probe_arm(probe_arm),
         .mpg_prescale(mpg_prescale), .mpg_filter(mpg_filter),
@@ -404,7 +413,9 @@ module finestep_top #(
         .clk(clk), .rst(rst),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
         .prescale(enc_prescale), .mode(enc_mode), .z_active_high(enc_z_active_high),
-        .filter_len(enc_filter), .probe_active_high(probe_active_high), .probe_filter_len(probe_filter),
+        .filter_len(enc_filter), .mode_next(enc_mode_next), .z_active_high_next(enc_z_active_high_next),
+        .filter_len_next(enc_filter_next),
+        .probe_active_high(probe_active_high), .probe_filter_len(probe_filter),
         .arm_index_latch(enc_arm_index_latch), .arm_index_clear(enc_arm_index_clear),
         .probe_arm(probe_arm), .clear_errors(clear_errors), .clear_counters(clear_counters),
         .read_grant(grant_read), .read_addr(grant_addr), .copy_rdata(enc_copy_rdata),
@@ -418,11 +429,13 @@ module finestep_top #(
 
     generate
         if (HAS_MPG != 0) begin : mpg
+            wire mpg_detent_up, mpg_detent_down;   // the detent count's step, hand wheel to jog
             hand_wheel #(.FILTER_W(FS_MPG_CONTROL_FILTER_WIDTH)) wheel (
                 .clk(clk), .rst(rst), .mpg_a(mpg_a), .mpg_b(mpg_b),
                 .prescale(mpg_prescale), .filter_len(mpg_filter),
                 .clear_errors(clear_errors), .clear_counters(clear_counters),
-                .count(mpg_count), .detents(mpg_detents), .illegal(mpg_illegal),
+                .count(mpg_count), .detents(mpg_detents),
+                .detent_up(mpg_detent_up), .detent_down(mpg_detent_down), .illegal(mpg_illegal),
                 .illegal_count(mpg_illegal_count), .a_level(mpg_a_level), .b_level(mpg_b_level)
             );
             jog_generator #(.N_AXES(N_AXES), .P_WIDTH(P_WIDTH)) jog (
@@ -431,8 +444,9 @@ module finestep_top #(
                 .follow(jog_follow), .scale(jog_scale), .vmax(jog_vmax), .accel(jog_accel),
                 .window(jog_window), .period_clocks(period_clocks),
                 .run(run_request), .run_write_one(run_write_one), .halt(halt), .rec_ready(rec_ready),
-                .clear_errors(clear_errors), .clear_counters(clear_counters), .detents(mpg_detents),
-                .rec_inc(jog_inc), .engaged(jog_engaged), .stopping(jog_stopping), .refused(jog_refused),
+                .clear_errors(clear_errors), .clear_counters(clear_counters),
+                .detent_up(mpg_detent_up), .detent_down(mpg_detent_down),
+                .rec_lane(jog_lane), .rec_word(jog_word), .engaged(jog_engaged), .stopping(jog_stopping), .refused(jog_refused),
                 .dropped(jog_dropped), .remaining(jog_remaining), .velocity(jog_velocity)
             );
         end else begin : no_mpg
@@ -445,7 +459,8 @@ module finestep_top #(
             assign mpg_illegal_count = 16'd0;
             assign mpg_a_level = 1'b0;
             assign mpg_b_level = 1'b0;
-            assign jog_inc = {32*N_AXES{1'b0}};
+            assign jog_lane = {N_AXES{1'b0}};
+            assign jog_word = 32'd0;
             assign jog_engaged = 1'b0;
             assign jog_stopping = 1'b0;
             assign jog_refused = 1'b0;

@@ -22,6 +22,8 @@ module hand_wheel #(
     // state
     output wire [31:0]         count,
     output wire [31:0]         detents,
+    output wire                detent_up,      // detents = detents_prev + 1 in this cycle
+    output wire                detent_down,    // detents = detents_prev - 1 in this cycle
     output wire                illegal,
     output wire [15:0]         illegal_count,
     output wire                a_level,
@@ -96,22 +98,29 @@ module hand_wheel #(
     // count moves by at most one a clock, so its low bits going 1 -> 2 or 2 -> 1 is
     // crossing a detent boundary; a counter of those wraps with the count, where
     // floor((count + 2) / 4) of the 32-bit count would jump at the wrap.
-    reg  [1:0]  count_low_prev_reg;
+    // The crossing is decoded a clock ahead, from the count and its next value (the
+    // count's low two bits, 1 -> 2 up and 2 -> 1 down), into two flip-flops: the jog
+    // takes them as they are, with no decode or carry chain in front of its detent logic
+    // (the ECP5 board build's critical path ran from the count through the detents'
+    // chains into the jog's window check).
+    reg         detent_up_reg, detent_down_reg;
     reg  [31:0] detents_prev_reg;
-    wire        detent_up   = (count_low_prev_reg == 2'd1) && (count[1:0] == 2'd2);
-    wire        detent_down = (count_low_prev_reg == 2'd2) && (count[1:0] == 2'd1);
     // Two chains from the flip-flops, the decode choosing after them: with one chain
     // (detents_prev + {31{down}, moved}) the decode sat in front of the carry chain and
     // the jog's detent logic after it, the ECP5 board build's critical path (lowest of
     // three seeds 80.0 -> 74.5 MHz).
-    assign detents = detent_up ? detents_prev_reg + 32'd1 :
-                     detent_down ? detents_prev_reg - 32'd1 : detents_prev_reg;
+    assign detents = detent_up_reg ? detents_prev_reg + 32'd1 :
+                     detent_down_reg ? detents_prev_reg - 32'd1 : detents_prev_reg;
+    assign detent_up   = detent_up_reg;
+    assign detent_down = detent_down_reg;
     always @(posedge clk) begin
-        count_low_prev_reg <= count[1:0];
-        detents_prev_reg   <= detents;
+        detent_up_reg    <= (count[1:0] == 2'd1) && (count_next[1:0] == 2'd2);
+        detent_down_reg  <= (count[1:0] == 2'd2) && (count_next[1:0] == 2'd1);
+        detents_prev_reg <= detents;
         if (rst) begin
-            count_low_prev_reg <= 2'd0;
-            detents_prev_reg   <= 32'd0;
+            detent_up_reg    <= 1'b0;
+            detent_down_reg  <= 1'b0;
+            detents_prev_reg <= 32'd0;
         end
     end
 
@@ -130,7 +139,8 @@ module hand_wheel #(
     wire [31:0] f_prev_plus2 = f_prev_count + 32'd2;
     wire [31:0] f_plus2      = count + 32'd2;
     always @(*) if (f_past_valid && !rst) begin
-        assert (count_low_prev_reg == f_prev_count[1:0]);
+        assert (detent_up_reg == (f_prev_count[1:0] == 2'd1 && count[1:0] == 2'd2));
+        assert (detent_down_reg == (f_prev_count[1:0] == 2'd2 && count[1:0] == 2'd1));
         assert (detents_prev_reg[29:0] == f_prev_plus2[31:2]);
         assert (detents[29:0] == f_plus2[31:2]);
     end

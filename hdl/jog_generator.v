@@ -50,9 +50,11 @@ module jog_generator #(
     input  wire                 rec_ready,        // the core's period boundary
     input  wire                 clear_errors,
     input  wire                 clear_counters,
-    input  wire [31:0]          detents,
+    input  wire                 detent_up,        // hand_wheel: the detent count moves +1,
+    input  wire                 detent_down,      // -1 in this cycle (flip-flops, never both)
     // record to the core and state
-    output wire [32*N_AXES-1:0] rec_inc,
+    output wire [N_AXES-1:0]    rec_lane,         // the record: rec_word on the lanes marked
+    output wire [31:0]          rec_word,         // here (the axis, one-hot), zero on the others
     output wire                 engaged,
     output wire                 stopping,
     output wire                 refused,
@@ -72,7 +74,6 @@ module jog_generator #(
     reg  [31:0] next_vel_reg;
     reg         vel_zero_reg;       // vel == 0 and next_vel == 0, kept beside them so that the
     reg         next_vel_zero_reg;  // disengage decision carries no 32-bit compare
-    reg  [1:0]  last_det_reg;
     reg  [15:0] dropped_reg;
     reg         refused_reg;
     // The detent configuration through two registers (the spec's travel_cfg/window_cfg, then
@@ -85,16 +86,11 @@ module jog_generator #(
     reg  [38:0] travel_reg;
     reg  [39:16] bound_hi_reg;      // travel + W, bits 39..16
     reg  [39:0] bound_lo_reg;       // travel - W - 1
-    // `detents` moves by at most one a cycle (hand_wheel): its low two bits tell the way.
-    // (detents - last_det)[1:0] is 1 (up) or 3 (down): bit 0 moved, and bit 1 is last_det's
-    // bit 1 plus the carry (up) or the borrow (down) of bit 0. One LUT4 each.
-    wire        det_moved  = (detents[0] != last_det_reg[0]);
-    wire        det_high   = detents[1] ^ last_det_reg[1];
-    wire        det_up     = det_moved && (det_high == last_det_reg[0]);
-    wire        det_down   = det_moved && (det_high != last_det_reg[0]);
-    // The way alone (down when it moved): three inputs, so the window chains' operand
-    // ~rem or rem is one LUT a bit.
-    wire        det_way    = (det_high != last_det_reg[0]);
+    // The spec's delta = detents - last_det (+1, -1 or 0) comes from hand_wheel as two
+    // flip-flops, decoded there a clock ahead: no decode in front of the window chains.
+    wire        det_up     = detent_up;
+    wire        det_down   = detent_down;
+    wire        det_way    = detent_down;
     wire        period_ok  = ({{(32-P_WIDTH){1'b0}}, period_clocks} >= MIN_PERIOD);
     wire        axis_ok    = ({29'd0, axis_select} < N_AXES);
     wire        engage     = !engaged_reg && enable && !run && !halt && period_ok && axis_ok;
@@ -153,7 +149,6 @@ module jog_generator #(
     );
 
     always @(posedge clk) begin
-        last_det_reg   <= detents[1:0];
         travel_cfg_reg <= detent_travel;
         window_cfg_reg <= window;
         travel_reg     <= travel_cfg_reg;
@@ -197,7 +192,6 @@ module jog_generator #(
         if (rst) begin
             engaged_reg    <= 1'b0;
             axis_hot_reg   <= AXIS0_HOT;
-            last_det_reg   <= 2'd0;
             dropped_reg    <= 16'd0;
             refused_reg    <= 1'b0;
             travel_cfg_reg <= 39'd0;
@@ -211,17 +205,18 @@ module jog_generator #(
     genvar i;
     generate
         for (i = 0; i < N_AXES; i = i + 1) begin : record
-            assign axis_hot[i]         = ({29'd0, axis_select} == i);
-            assign rec_inc[32*i +: 32] = axis_hot_reg[i] ? next_vel_reg : 32'd0;
+            assign axis_hot[i] = ({29'd0, axis_select} == i);
         end
     endgenerate
 
+    assign rec_lane  = axis_hot_reg;
+    assign rec_word  = next_vel_reg;
     assign engaged   = engaged_reg;
     assign stopping  = engaged_reg && !enable;
     assign refused   = refused_reg;
     assign dropped   = dropped_reg;
     assign remaining = rem_reg[47:16];
-    wire unused_jog = &{1'b0, detents[31:2], calc_busy};
+    wire unused_jog = &{1'b0, calc_busy};
 
 `ifdef FORMAL
     // Arbitration and bookkeeping: the jog engages only when asked, with RUN low, not
@@ -241,11 +236,8 @@ module jog_generator #(
         assert (axis_hot_reg == (AXIS0_HOT << f_axis));
         assert ({29'd0, f_axis} < N_AXES);
     end
-    // hand_wheel's detent count moves by at most one a cycle, from 0 at reset.
-    reg  [31:0] f_prev_det;
-    always @(posedge clk) f_prev_det <= rst ? 32'd0 : detents;
-    wire [31:0] f_det_step = detents - f_prev_det;
-    always @(*) if (f_past_valid) assume (f_det_step == 32'd0 || f_det_step == 32'd1 || f_det_step == 32'hFFFF_FFFF);
+    // hand_wheel's detent count moves by at most one a cycle: up or down, never both.
+    always @(*) assume (!(detent_up && detent_down));
     // The configuration the detents use: two cycles behind, consistent. The travel is the
     // spec's m * JOG_SCALE as a product (not the RTL's shift-adds).
     wire [47:0] f_scale_48  = {{16{scale[31]}}, scale};
@@ -302,7 +294,6 @@ module jog_generator #(
         assert (f_travel_cfg_48 == f_travel_1);
         assert ({16'd0, window_cfg_reg, 16'd0} == f_window_1);
         assert (f_travel_1[47] ? (-f_travel_1 <= f_travel_max) : (f_travel_1 <= f_travel_max));
-        assert (last_det_reg == f_prev_det[1:0]);
         assert (vel_zero_reg == (vel_reg == 32'd0));
         assert (next_vel_zero_reg == (next_vel_reg == 32'd0));
     end
@@ -310,7 +301,7 @@ module jog_generator #(
     // which changes only at a boundary, a halt or an engagement, holds while one runs
     // after its sample: jog_velocity's assumption, an assertion here (chformal in the .sby).
     always @(*) if (f_past_valid && !rst && !engaged_reg) assert (!calc_busy);
-    always @(*) if (f_past_valid && !rst && !engaged_reg) assert (rec_inc == {32*N_AXES{1'b0}} || next_vel_reg != 32'd0);
+    always @(*) if (f_past_valid && !rst) assert (rec_lane == (AXIS0_HOT << f_axis));
 `endif
     assign velocity  = vel_reg;
 

@@ -36,6 +36,13 @@ module period_timer #(
     output wire                 rec_ready,
     input  wire [32*N_AXES-1:0] rec_inc,
     input  wire [7:0]           rec_flags,
+    // The alternate record (the jog's): when rec_alt, the record offered is rec_alt_inc on
+    // the lanes rec_alt_lane marks and zero on the others, in place of rec_inc. It is
+    // checked by a carry chain of its own and chosen after the checks, so the select
+    // (the jog's engagement) sits behind the record check, not in front of it.
+    input  wire                 rec_alt,
+    input  wire [N_AXES-1:0]    rec_alt_lane,
+    input  wire [31:0]          rec_alt_inc,
     // to the DDAs
     output wire                 active,        // periods are running
     output wire [P_WIDTH-1:0]   p_active,
@@ -98,22 +105,37 @@ module period_timer #(
     // min(V - 1, 2^16)) without changing its result; the three bounds are then 17-bit
     // registers and each test is one carry chain of h against a register. The sign and the
     // low-half zero test only choose between the three results.
-    reg record_ok;
-    integer axis;
-    reg [15:0] whole_high;       // h = d[31:16]
-    reg        low_zero;         // d[15:0] == 0
-    reg        fail_pos, fail_neg, fail_neg_zero;
-    always @* begin
-        record_ok = 1'b1;
-        for (axis = 0; axis < N_AXES; axis = axis + 1) begin
-            whole_high    = rec_inc[32*axis+FS_REC_INC_FRAC_BITS +: 16];
-            low_zero      = (rec_inc[32*axis +: FS_REC_INC_FRAC_BITS] == {FS_REC_INC_FRAC_BITS{1'b0}});
-            fail_pos      = ({1'b0, whole_high} >= bound_pos_reg);
-            fail_neg      = ({1'b0, whole_high} < bound_neg_reg);
-            fail_neg_zero = ({1'b0, whole_high} < bound_neg_zero_reg);
-            if (rec_inc[32*axis+31] ? (low_zero ? fail_neg_zero : fail_neg) : fail_pos)
-                record_ok = 1'b0;
+    function lane_fails;          // the check of one increment d against the bounds
+        input [31:0] d;
+        input [16:0] b_pos, b_neg, b_neg_zero;
+        reg   [15:0] whole_high;      // h = d[31:16]
+        reg          low_zero;        // d[15:0] == 0
+        begin
+            whole_high = d[FS_REC_INC_FRAC_BITS +: 16];
+            low_zero   = (d[FS_REC_INC_FRAC_BITS-1:0] == {FS_REC_INC_FRAC_BITS{1'b0}});
+            lane_fails = d[31] ? (low_zero ? ({1'b0, whole_high} < b_neg_zero) : ({1'b0, whole_high} < b_neg))
+                               : ({1'b0, whole_high} >= b_pos);
         end
+    endfunction
+    reg main_ok;
+    integer axis;
+    always @* begin
+        main_ok = 1'b1;
+        for (axis = 0; axis < N_AXES; axis = axis + 1)
+            if (lane_fails(rec_inc[32*axis +: 32], bound_pos_reg, bound_neg_reg, bound_neg_zero_reg))
+                main_ok = 1'b0;
+    end
+    // The alternate record: its lanes are rec_alt_inc or zero, and a zero lane always
+    // passes (h = 0 < min(V, 2^16), V >= 1).
+    wire alt_ok = !(|rec_alt_lane) ||
+                  !lane_fails(rec_alt_inc, bound_pos_reg, bound_neg_reg, bound_neg_zero_reg);
+    wire record_ok = rec_alt ? alt_ok : main_ok;
+    // The record offered (loaded at a boundary: flip-flop to flip-flop through the select).
+    reg [32*N_AXES-1:0] rec_offer;
+    integer lane;
+    always @* begin
+        for (lane = 0; lane < N_AXES; lane = lane + 1)
+            rec_offer[32*lane +: 32] = rec_alt ? (rec_alt_lane[lane] ? rec_alt_inc : 32'd0) : rec_inc[32*lane +: 32];
     end
 
     wire take_record = boundary && rec_valid;
@@ -154,7 +176,7 @@ module period_timer #(
             boundary_reg  <= (p_act_minus_one_reg == {P_WIDTH{1'b0}});
             taken_ok_reg <= record_ok;
             if (take_record) begin
-                inc_reg     <= rec_inc;
+                inc_reg     <= rec_offer;
                 cur_end_reg <= rec_flags[FS_REC_FLAG_BLOCK_END_BIT];
             end else begin
                 inc_reg     <= {32*N_AXES{1'b0}};
@@ -207,7 +229,7 @@ module period_timer #(
     always @(*) begin
         f_record_ok = 1'b1;
         for (f_rec_axis = 0; f_rec_axis < N_AXES; f_rec_axis = f_rec_axis + 1) begin
-            f_rec_magnitude = rec_inc[32*f_rec_axis+31] ? (~rec_inc[32*f_rec_axis +: 32] + 32'd1) : rec_inc[32*f_rec_axis +: 32];
+            f_rec_magnitude = rec_offer[32*f_rec_axis+31] ? (~rec_offer[32*f_rec_axis +: 32] + 32'd1) : rec_offer[32*f_rec_axis +: 32];
             if ({{P_WIDTH{1'b0}}, f_rec_magnitude[31:FS_REC_INC_FRAC_BITS]} >= {16'd0, p_act_reg >> SL}) f_record_ok = 1'b0;
         end
     end
@@ -241,7 +263,7 @@ module period_timer #(
         // What the DDAs see after a boundary: the record if it was taken and acceptable,
         // else zeros (the last-period flag likewise); between boundaries it holds.
         if ($past(run) && $past(active_reg) && $past(boundary)) begin
-            assert (inc == (($past(take_record) && $past(record_ok)) ? $past(rec_inc) : {32*N_AXES{1'b0}}));
+            assert (inc == (($past(take_record) && $past(record_ok)) ? $past(rec_offer) : {32*N_AXES{1'b0}}));
             assert (cur_end == ($past(take_record) && $past(record_ok) && $past(rec_flags[FS_REC_FLAG_BLOCK_END_BIT])));
         end
         if ($past(run) && !$past(boundary)) assert (inc == $past(inc) && cur_end == $past(cur_end));
@@ -251,6 +273,8 @@ module period_timer #(
         if ($past(record_error_reg) && !$past(clear_errors)) assert (record_error_reg);
         cover (boundary && f_in_period && p_act_reg == 3 && $past(take_record, 3) && $past(record_ok, 3));
         cover (record_error_reg);
+        // The alternate record refused where the main one would pass (the select counts).
+        cover ($past(take_record && run && rec_alt && !alt_ok && main_ok) && record_error_reg);
         cover (block_end_reg);
     end
 `endif

@@ -148,6 +148,9 @@ module finestep_core_sim #(
         .rec_ready(rec_ready),
         .rec_inc(rec_inc_q),
         .rec_flags(rec_flags_q),
+        .rec_alt(1'b0),                         // the core's record port only (the jog's is the chip's)
+        .rec_alt_lane({N_AXES{1'b0}}),
+        .rec_alt_inc(32'd0),
         .pin_a(pin_a),
         .pin_b(pin_b),
         .pin_en(pin_en),
