@@ -333,6 +333,20 @@ module register_file #(
         end
     endgenerate
     wire [5:0]        grant_map  = store_map(granted_addr);
+    // The store's ports take the address with no grant decode in front of them (the ECP5
+    // board build's critical path ran from the SPI address through the push-hold decode
+    // and the grant into the store's read address). The read address matters only at a
+    // read's grant while no push holds the bus (during a hold the port reads the push's
+    // words, and a read granted then is of no stored word); then nothing is held, so the
+    // granted master is the requesting one, SPI first. The write address and data matter
+    // only at a granted write: with one master that is its own.
+    wire [ADDR_W-1:0] rd_src_addr = (HAS_PARALLEL == 0) ? spi_addr : (HAS_SPI == 0) ? par_addr :
+                                    (spi_req ? spi_addr : par_addr);
+    wire [ADDR_W-1:0] wr_src_addr = (HAS_PARALLEL == 0) ? spi_addr : (HAS_SPI == 0) ? par_addr : granted_addr;
+    wire [WORD_W-1:0] wr_src_data = (HAS_PARALLEL == 0) ? spi_wdata : (HAS_SPI == 0) ? par_wdata : granted_wdata;
+    wire [5:0]        rd_map     = store_map(rd_src_addr);
+    wire [5:0]        wr_map     = store_map(wr_src_addr);
+    wire unused_maps = &{1'b0, grant_map[4:0], rd_map[5], wr_map[5]};   // grant_map's word: the proof's
     // RECORD_INC[k]'s store word, k = the push sequence's cycle (0 while serving the write).
     wire [4:0]        push_read_word = {push_seq_reg[2:0], 2'd3};
     wire [5:0]        stage_map  = store_map(stage_addr_reg);
@@ -346,9 +360,9 @@ module register_file #(
     generate
         if (STORED) begin : readback
             store_ram #(.WIDTH(WORD_W), .DEPTH(32), .ADDR_W(5), .BLOCK(RAM_BLOCK)) store (
-                .clk(clk), .wr_en(store_write), .wr_addr(grant_map[4:0]),
-                .wr_data(store_fields(grant_map[1:0], granted_wdata)),
-                .rd_addr(bus_hold ? push_read_word : grant_map[4:0]), .rd_data(store_rd)
+                .clk(clk), .wr_en(store_write), .wr_addr(wr_map[4:0]),
+                .wr_data(store_fields(wr_map[1:0], wr_src_data)),
+                .rd_addr(bus_hold ? push_read_word : rd_map[4:0]), .rd_data(store_rd)
 `ifdef FORMAL
                 , .f_peek_addr(f_word), .f_peek_data(f_word_data)
 `endif
@@ -362,7 +376,7 @@ module register_file #(
     endgenerate
     always @(posedge clk) begin
         if (rst || !STORED) written_reg <= 32'd0;
-        else if (store_write) written_reg[grant_map[4:0]] <= 1'b1;
+        else if (store_write) written_reg[wr_map[4:0]] <= 1'b1;
     end
     wire              stage_stored = STORED && stage_map[5];
     wire [WORD_W-1:0] stored_word  = written_reg[stage_map[4:0]] ? store_rd : store_reset(stage_map[1:0]);
@@ -738,6 +752,9 @@ module register_file #(
         if (par_req && !par_held && !spi_req) assert (grant_par);
         // The store's port the push reads is not written on the word it reads.
         if (bus_hold && store_write) assert (grant_map[4:0] != push_read_word);
+        // The store's grant-free addresses are the granted ones where they matter.
+        if (store_write) assert (wr_map == grant_map && wr_src_data == granted_wdata);
+        if (granted && !bus_hold) assert (rd_map == grant_map);
     end
     always @(*) if (f_past_valid && !rst) begin
         // The sequence counts 1..N_AXES after the cycle serving the write; the hold's
