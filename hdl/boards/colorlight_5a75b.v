@@ -10,7 +10,13 @@ module colorlight_5a75b #(
     parameter N_AXES          = 4,
     parameter N_ENC           = 4,
     parameter HAS_MPG         = 1,
-    parameter FIFO_DEPTH_LOG2 = 8
+    parameter FIFO_DEPTH_LOG2 = 8,
+    // The PLL (below): parameters so that `scripts/bitstream.sh ecp5 --variant NAME -set ...`
+    // can place and route another clock without editing this file.
+    parameter CLOCK_HZ        = 62500000,
+    parameter CLKI_DIV        = 2,
+    parameter CLKFB_DIV       = 5,
+    parameter CLKOP_DIV       = 10
 ) (
     // clock, reset
     input  wire              clk25,      // 25 MHz oscillator
@@ -38,10 +44,6 @@ module colorlight_5a75b #(
     // 25 MHz * CLKFB_DIV / CLKI_DIV; VCO = CLOCK_HZ * CLKOP_DIV = 625 MHz (400-800 MHz).
     // 62.5 MHz: the clock this build meets on every seed `make report` sweeps
     // (docs/bitstreams.md); raised as the datapath gets faster, never shipped above it.
-    localparam CLOCK_HZ  = 62500000;
-    localparam CLKI_DIV  = 2;
-    localparam CLKFB_DIV = 5;
-    localparam CLKOP_DIV = 10;
 
     wire clk, pll_locked, rst;
 
