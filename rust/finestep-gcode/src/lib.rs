@@ -420,6 +420,68 @@ impl Options {
     }
 }
 
+/// A part program executed as its blocks are read: an [`Iterator`] of [`Block`]s that
+/// reads, lexes and executes the program's lines only as far as the blocks asked for
+/// need (the O-word structure is matched by a scan ahead of execution, to a structure's
+/// end when it is entered and to the file's end for a subroutine not defined before),
+/// so that memory does not grow with the program's length: a file is read through a
+/// buffer, neither its text nor its blocks are held. The blocks and the errors are those
+/// of [`parse_file_with`] (which collects this stream); the first error ends the stream.
+///
+/// ```
+/// use finestep_gcode::{stream_str, Options};
+/// let mut blocks = stream_str("G1 X1 F100\nG1 X1 X2\n", "part.ngc", &Options::default()).unwrap();
+/// assert_eq!(blocks.next().unwrap().unwrap().line, 1);
+/// assert_eq!(blocks.next().unwrap().unwrap_err().to_string(), "part.ngc:2:7: word X appears twice");
+/// assert!(blocks.next().is_none());
+/// ```
+pub struct BlockStream<'t> {
+    runner: program::Runner<'t>,
+}
+
+impl BlockStream<'_> {
+    /// The persistent parameters as the program leaves them (once the stream has ended):
+    /// see [`parse_str_with_parameters`].
+    pub fn parameters(&self) -> Parameters {
+        self.runner.parameters()
+    }
+}
+
+impl Iterator for BlockStream<'_> {
+    type Item = Result<Block, GcodeError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.runner.next_block()
+    }
+}
+
+impl std::fmt::Debug for BlockStream<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("BlockStream")
+    }
+}
+
+/// The blocks of a part program held in memory, as a stream ([`BlockStream`]);
+/// `file_name` is only used in errors, subroutine files are searched in the
+/// [`Options::subroutine_path`] only. The parameters given are checked and an empty
+/// program refused here.
+pub fn stream_str<'t>(source: &'t str, file_name: &str, options: &Options) -> Result<BlockStream<'t>, GcodeError> {
+    Ok(BlockStream { runner: program::Runner::in_memory(source, file_name, None, options)? })
+}
+
+/// The blocks of a part program file, as a stream ([`BlockStream`]) reading the file as
+/// it goes; errors name the file as `path` displays, subroutine files are searched in
+/// the program's folder first.
+pub fn stream_file(path: impl AsRef<Path>, options: &Options) -> Result<BlockStream<'static>, GcodeError> {
+    Ok(BlockStream { runner: program::Runner::file(path.as_ref(), options)? })
+}
+
+/// The whole stream collected, and the parameters it leaves.
+fn collect(mut stream: BlockStream<'_>) -> Result<(Program, Parameters), GcodeError> {
+    let blocks = stream.by_ref().collect::<Result<Vec<Block>, GcodeError>>()?;
+    Ok((Program { blocks }, stream.parameters()))
+}
+
 /// Parses a part program held in memory. `file_name` is only used in errors;
 /// subroutine files are searched in the [`Options::subroutine_path`] only.
 pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
@@ -428,7 +490,7 @@ pub fn parse_str(source: &str, file_name: &str) -> Result<Program, GcodeError> {
 
 /// [`parse_str`] with the machine configuration's [`Options`].
 pub fn parse_str_with(source: &str, file_name: &str, options: &Options) -> Result<Program, GcodeError> {
-    program::run(source, file_name, None, options).map(|(program, _)| program)
+    parse_str_with_parameters(source, file_name, options).map(|(program, _)| program)
 }
 
 /// [`parse_str_with`] that also gives the persistent parameters as the program leaves
@@ -440,7 +502,7 @@ pub fn parse_str_with_parameters(
     file_name: &str,
     options: &Options,
 ) -> Result<(Program, Parameters), GcodeError> {
-    program::run(source, file_name, None, options)
+    collect(stream_str(source, file_name, options)?)
 }
 
 /// Parses raw bytes. Bytes that are not UTF-8 are refused where they stand outside a
@@ -457,10 +519,7 @@ pub fn parse_file(path: impl AsRef<Path>) -> Result<Program, GcodeError> {
 
 /// [`parse_file`] with the machine configuration's [`Options`].
 pub fn parse_file_with(path: impl AsRef<Path>, options: &Options) -> Result<Program, GcodeError> {
-    let path = path.as_ref();
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| GcodeError::Io { file: file.clone(), source })?;
-    program::run(&String::from_utf8_lossy(&bytes), &file, path.parent(), options).map(|(program, _)| program)
+    parse_file_with_parameters(path, options).map(|(program, _)| program)
 }
 
 /// [`parse_file_with`] that also gives the persistent parameters as the program leaves
@@ -469,10 +528,7 @@ pub fn parse_file_with_parameters(
     path: impl AsRef<Path>,
     options: &Options,
 ) -> Result<(Program, Parameters), GcodeError> {
-    let path = path.as_ref();
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| GcodeError::Io { file: file.clone(), source })?;
-    program::run(&String::from_utf8_lossy(&bytes), &file, path.parent(), options)
+    collect(stream_file(path, options)?)
 }
 
 #[cfg(test)]

@@ -1,8 +1,13 @@
-//! Running a part program: lines lexed up front, O-word structure resolved per file,
-//! then executed with a program counter through subroutine calls and control flow, with
-//! the parameters (numbered, local and global named, predefined) each block reads.
+//! Running a part program: executed with a program counter (a byte offset and line
+//! number) through subroutine calls and control flow, each line read and lexed when it
+//! is reached, with the parameters (numbered, local and global named, predefined) each
+//! block reads. The O-word structure of each file is matched by a scan that runs ahead
+//! of execution only as far as execution needs it, so that a program is executed (and
+//! its blocks handed on) as it is read: neither its text nor its blocks are held whole.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
+use std::fs::File;
+use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 use crate::error::LineError;
@@ -10,7 +15,7 @@ use crate::expr::{parameter_index, Params};
 use crate::interp::{Modal, ModalOp, State};
 use crate::lexer::{lex_into, lex_line_into, Line, OKind, OWord, Target, Word};
 use crate::persistent::{required_parameters, Parameters};
-use crate::{Block, GcodeError, Options, Program};
+use crate::{Block, GcodeError, Options};
 
 /// Loop iterations (backward jumps) and subroutine calls a program may make in all
 /// before it is refused as running away (`while` without end).
@@ -23,15 +28,6 @@ pub const MAX_REPEATED_LINES: u64 = 1_000_000;
 pub const MAX_CALL_DEPTH: usize = 9;
 /// Subroutine parameters #1-#30 are saved around a call.
 const SUB_PARAMS: usize = 30;
-
-/// One line of a source file: its number, where its text stands, and, for a line with an
-/// O-word, what it lexed to. Other lines are lexed when they are reached (so an error
-/// is raised only then, as LinuxCNC reads lines only when it gets to them).
-struct Entry {
-    line: usize,
-    text: std::ops::Range<usize>,
-    lexed: Option<Box<Result<Line, LineError>>>,
-}
 
 /// Whether a line holds anything outside comments, and whether an `O` stands there.
 fn scan(text: &str) -> (bool, bool) {
@@ -66,171 +62,345 @@ struct Links {
     shared_label: bool,
 }
 
-/// A lexed file with its O-word structure.
+/// An O-word line of a source file: its number, where it stands (byte offsets of its
+/// start and of the line after it) and what it lexed to. Other lines are not kept: they
+/// are read and lexed when they are reached (so an error is raised only then, as
+/// LinuxCNC reads lines only when it gets to them).
+struct Entry {
+    line: usize,
+    offset: usize,
+    next: usize,
+    lexed: Line,
+}
+
+/// Where execution stands in a file: the byte offset of a line and its 1-based number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Pc {
+    offset: usize,
+    line: usize,
+}
+
+/// Reads a file's lines from a byte offset: from memory, or from the file itself through
+/// a buffer (moved by a relative seek, so a loop's jump back within the buffer reads
+/// nothing again), so that a program file is never held whole.
+enum Reader {
+    Memory,
+    File { file: BufReader<File>, pos: usize, bytes: Vec<u8> },
+}
+
+impl Reader {
+    fn open(path: &Path) -> std::io::Result<Reader> {
+        Ok(Reader::File { file: BufReader::with_capacity(64 * 1024, File::open(path)?), pos: 0, bytes: Vec::new() })
+    }
+
+    /// The line starting at `offset` into `out` (without its `\n` and a `\r` before it),
+    /// and the offset of the line after it; `None` at the end of the text.
+    fn read(&mut self, memory: &str, offset: usize, out: &mut String) -> std::io::Result<Option<usize>> {
+        out.clear();
+        let next = match self {
+            Reader::Memory => {
+                let Some(rest) = memory.get(offset..).filter(|r| !r.is_empty()) else { return Ok(None) };
+                let (line, next) = match rest.find('\n') {
+                    Some(end) => (&rest[..end], offset + end + 1),
+                    None => (rest, memory.len() + 1),
+                };
+                out.push_str(line);
+                next
+            }
+            Reader::File { file, pos, bytes } => {
+                if offset != *pos {
+                    file.seek_relative(offset as i64 - *pos as i64)?;
+                    *pos = offset;
+                }
+                bytes.clear();
+                let n = file.read_until(b'\n', bytes)?;
+                if n == 0 {
+                    return Ok(None);
+                }
+                *pos += n;
+                if bytes.last() == Some(&b'\n') {
+                    bytes.pop();
+                }
+                // Line by line as for the whole text: a `\n` ends any sequence that is
+                // not UTF-8, so each is replaced the same way.
+                out.push_str(&String::from_utf8_lossy(bytes));
+                offset + n
+            }
+        };
+        if out.ends_with('\r') {
+            out.pop();
+        }
+        Ok(Some(next))
+    }
+}
+
+/// A source file: its text read as execution reaches it, and its O-word structure
+/// matched by a scan that runs ahead of execution only as far as execution needs (at
+/// least past the line being run; to a structure's end when it is entered; to the end of
+/// the file for a subroutine it does not define so far).
 struct Source<'t> {
     name: String,
-    text: std::borrow::Cow<'t, str>,
+    memory: std::borrow::Cow<'t, str>,
+    /// Execution's reader, and the scan's.
+    reader: Reader,
+    scan_reader: Reader,
+    /// The scan: the next line's offset and number, the line buffer and lexer scratch.
+    scan_at: Pc,
+    scan_line: String,
+    chars: Vec<char>,
+    columns: Vec<usize>,
+    /// The scan has met a line with content, reached the end, the closing `%` at this offset.
+    seen_content: bool,
+    complete: bool,
+    end_offset: Option<usize>,
+    /// Lines with content scanned, and the last one's number.
+    content_lines: u64,
+    last_content_line: usize,
+    /// A read error met by the scan (raised by execution at its next line).
+    failed: Option<std::io::Error>,
     entries: Vec<Entry>,
     links: Vec<Links>,
     /// A structure error found at an entry, raised if it is reached.
     broken: Vec<Option<String>>,
     /// Subroutines defined here: label to the entry of their `sub`.
     subs: HashMap<Box<str>, usize>,
+    /// Structures open at the scan: (kind, label, entry, last branch entry).
+    open: Vec<(OKind, Box<str>, usize, usize)>,
+    /// The statements opening if, while, do and repeat, by (enclosing sub, label).
+    openers: HashMap<(Option<usize>, Box<str>), Vec<usize>>,
 }
 
-fn oword(entry: &Entry) -> Option<&OWord> {
-    entry.lexed.as_deref().and_then(|l| l.as_ref().ok()).and_then(|l| l.oword.as_ref())
+fn oword(entry: &Entry) -> &OWord {
+    entry.lexed.oword.as_ref().expect("an entry is an O-word line")
 }
 
 impl<'t> Source<'t> {
-    fn new(text: std::borrow::Cow<'t, str>, name: &str) -> Source<'t> {
-        let mut entries = Vec::new();
-        let mut seen_content = false;
-        let (mut chars, mut columns) = (Vec::new(), Vec::new());
-        let mut start = 0;
-        for (index, raw) in text.split('\n').enumerate() {
-            let range = start..start + raw.len();
-            start += raw.len() + 1;
-            let text = raw.strip_suffix('\r').unwrap_or(raw);
-            let range = range.start..range.start + text.len();
-            if text.trim_matches([' ', '\t']) == "%" {
-                if seen_content {
-                    break;
-                }
-                seen_content = true;
-                continue;
-            }
-            let (content, o) = scan(text);
-            if !content {
-                continue;
-            }
-            seen_content = true;
-            let lexed = o.then(|| Box::new(lex_line_into(text, &mut chars, &mut columns)));
-            entries.push(Entry { line: index + 1, text: range, lexed });
-        }
-        let mut source = Source {
+    fn new(memory: std::borrow::Cow<'t, str>, reader: Reader, scan_reader: Reader, name: &str) -> Source<'t> {
+        Source {
             name: name.to_string(),
-            text,
-            links: vec![Links::default(); entries.len()],
-            broken: vec![None; entries.len()],
-            entries,
+            memory,
+            reader,
+            scan_reader,
+            scan_at: Pc { offset: 0, line: 1 },
+            scan_line: String::new(),
+            chars: Vec::new(),
+            columns: Vec::new(),
+            seen_content: false,
+            complete: false,
+            end_offset: None,
+            content_lines: 0,
+            last_content_line: 0,
+            failed: None,
+            entries: Vec::new(),
+            links: Vec::new(),
+            broken: Vec::new(),
             subs: HashMap::new(),
-        };
-        source.link();
-        source
+            open: Vec::new(),
+            openers: HashMap::new(),
+        }
     }
 
-    /// Matches every O-word structure by a stack over the file.
-    fn link(&mut self) {
-        // Open structures: (kind, label, entry, last branch entry).
-        let mut open: Vec<(OKind, Box<str>, usize, usize)> = Vec::new();
-        // The statements opening if, while, do and repeat, by (enclosing sub, label).
-        let mut openers: HashMap<(Option<usize>, Box<str>), Vec<usize>> = HashMap::new();
-        for i in 0..self.entries.len() {
-            let Some(o) = oword(&self.entries[i]) else { continue };
-            let (kind, label) = (o.kind, o.label.clone());
-            let top_is = |open: &[(OKind, Box<str>, usize, usize)], kinds: &[OKind]| {
-                open.last().is_some_and(|(k, l, _, _)| kinds.contains(k) && *l == label)
-            };
-            let fail = |s: &mut Source, message: String| s.broken[i] = Some(message);
-            match kind {
-                OKind::Sub => {
-                    if open.iter().any(|(k, _, _, _)| *k == OKind::Sub) {
-                        fail(self, format!("o{label} sub inside another subroutine's definition"));
-                        continue;
-                    }
-                    self.subs.entry(label.clone()).or_insert(i);
-                    open.push((kind, label, i, i));
+    fn in_memory(text: std::borrow::Cow<'t, str>, name: &str) -> Source<'t> {
+        Source::new(text, Reader::Memory, Reader::Memory, name)
+    }
+
+    /// The entry of the O-word line at `offset`, if it is one.
+    fn entry_at(&self, offset: usize) -> Option<usize> {
+        self.entries.binary_search_by_key(&offset, |e| e.offset).ok()
+    }
+
+    /// Scans one more line; false once the scan is complete.
+    fn scan_one(&mut self) -> bool {
+        if self.complete {
+            return false;
+        }
+        let at = self.scan_at;
+        let next = match self.scan_reader.read(&self.memory, at.offset, &mut self.scan_line) {
+            Ok(Some(next)) => next,
+            Ok(None) => {
+                self.finish_scan();
+                return false;
+            }
+            Err(e) => {
+                self.failed = Some(e);
+                self.finish_scan();
+                return false;
+            }
+        };
+        self.scan_at = Pc { offset: next, line: at.line + 1 };
+        let text = self.scan_line.as_str();
+        if text.trim_matches([' ', '\t']) == "%" {
+            if self.seen_content {
+                self.end_offset = Some(at.offset);
+                self.finish_scan();
+                return false;
+            }
+            self.seen_content = true;
+            return true;
+        }
+        let (content, o) = scan(text);
+        if !content {
+            return true;
+        }
+        self.seen_content = true;
+        self.content_lines += 1;
+        self.last_content_line = at.line;
+        if o {
+            if let Ok(lexed) = lex_line_into(text, &mut self.chars, &mut self.columns) {
+                if lexed.oword.is_some() {
+                    self.entries.push(Entry { line: at.line, offset: at.offset, next, lexed });
+                    self.links.push(Links::default());
+                    self.broken.push(None);
+                    self.link(self.entries.len() - 1);
                 }
-                OKind::If | OKind::While | OKind::Do | OKind::Repeat => {
-                    if kind == OKind::While && top_is(&open, &[OKind::Do]) {
-                        let (_, _, start, _) = open.pop().expect("do");
-                        self.links[start].end = Some(i);
-                        self.links[i].start = Some(start);
-                        self.links[i].closes_do = true;
-                        continue;
-                    }
-                    let sub = open.iter().find(|(k, _, _, _)| *k == OKind::Sub).map(|&(_, _, entry, _)| entry);
-                    openers.entry((sub, label.clone())).or_default().push(i);
-                    open.push((kind, label, i, i));
-                }
-                OKind::Elseif | OKind::Else => {
-                    if !top_is(&open, &[OKind::If]) {
-                        fail(self, format!("o{label} {kind:?} without a matching o{label} if").to_lowercase());
-                        continue;
-                    }
-                    let top = open.last_mut().expect("if");
-                    self.links[top.3].next_branch = Some(i);
-                    top.3 = i;
-                }
-                OKind::Endif | OKind::Endwhile | OKind::Endrepeat | OKind::Endsub => {
-                    let opener = match kind {
-                        OKind::Endif => OKind::If,
-                        OKind::Endwhile => OKind::While,
-                        OKind::Endrepeat => OKind::Repeat,
-                        _ => OKind::Sub,
-                    };
-                    if !top_is(&open, &[opener]) {
-                        let what = format!("{kind:?}").to_lowercase();
-                        fail(self, format!("o{label} {what} without a matching o{label} {:?}", opener).to_lowercase());
-                        continue;
-                    }
-                    let (_, _, start, last) = open.pop().expect("opener");
-                    self.links[last].next_branch = Some(i);
-                    self.links[start].end = Some(i);
-                    self.links[i].start = Some(start);
-                    // Every branch of an if jumps to its endif at its end.
-                    let mut b = start;
-                    while let Some(next) = self.links[b].next_branch {
-                        self.links[b].end = Some(i);
-                        if next == i {
-                            break;
-                        }
-                        b = next;
-                    }
-                }
-                OKind::Break | OKind::Continue => {
-                    let found = open
-                        .iter()
-                        .rev()
-                        .take_while(|(k, _, _, _)| *k != OKind::Sub)
-                        .find(|(k, l, _, _)| matches!(k, OKind::While | OKind::Do | OKind::Repeat) && *l == label);
-                    match found {
-                        // rs274: "no matching while/do label ... (found 'repeat' ...)".
-                        Some(&(OKind::Repeat, _, _, _)) => {
-                            let word = if kind == OKind::Break { "break" } else { "continue" };
-                            fail(
-                                self,
-                                format!(
-                                    "o{label} {word} inside o{label} repeat: LinuxCNC's break and continue serve \
-                                     while and do loops only"
-                                ),
-                            )
-                        }
-                        Some(&(_, _, start, _)) => self.links[i].start = Some(start),
-                        None => {
-                            fail(self, format!("o{label} {kind:?} outside a loop labelled o{label}").to_lowercase())
-                        }
-                    }
-                }
-                OKind::Call | OKind::Return => {}
             }
         }
-        for (kind, label, start, _) in open {
+        true
+    }
+
+    /// Scans past the line at `offset` (or to the end).
+    fn scan_past(&mut self, offset: usize) {
+        while self.scan_at.offset <= offset && self.scan_one() {}
+    }
+
+    /// Scans until entry `i`'s structure is closed (or to the end).
+    fn settle(&mut self, i: usize) {
+        while self.links[i].end.is_none() && !self.links[i].closes_do && self.scan_one() {}
+    }
+
+    /// Scans to the end.
+    fn scan_all(&mut self) {
+        while self.scan_one() {}
+    }
+
+    /// Subroutine `label` defined here: the first definition (scanning to the end for one
+    /// not met so far).
+    fn sub(&mut self, label: &str) -> Option<usize> {
+        if let Some(&entry) = self.subs.get(label) {
+            return Some(entry);
+        }
+        self.scan_all();
+        self.subs.get(label).copied()
+    }
+
+    /// The end of the file: what is still open is never closed; labels shared between
+    /// statements are marked.
+    fn finish_scan(&mut self) {
+        self.complete = true;
+        for (kind, label, start, _) in std::mem::take(&mut self.open) {
             self.broken[start] = Some(format!("o{label} {kind:?} is never closed").to_lowercase());
         }
-        for entries in openers.values().filter(|e| e.len() > 1) {
+        for entries in self.openers.values().filter(|e| e.len() > 1) {
             for &e in entries {
                 self.links[e].shared_label = true;
             }
         }
+    }
+
+    /// Matches O-word entry `i` into the structures open (a stack over the file).
+    fn link(&mut self, i: usize) {
+        let o = oword(&self.entries[i]);
+        let (kind, label) = (o.kind, o.label.clone());
+        let top_is = |open: &[(OKind, Box<str>, usize, usize)], kinds: &[OKind]| {
+            open.last().is_some_and(|(k, l, _, _)| kinds.contains(k) && *l == label)
+        };
+        let fail = |s: &mut Source, message: String| s.broken[i] = Some(message);
+        match kind {
+            OKind::Sub => {
+                if self.open.iter().any(|(k, _, _, _)| *k == OKind::Sub) {
+                    fail(self, format!("o{label} sub inside another subroutine's definition"));
+                    return;
+                }
+                self.subs.entry(label.clone()).or_insert(i);
+                self.open.push((kind, label, i, i));
+            }
+            OKind::If | OKind::While | OKind::Do | OKind::Repeat => {
+                if kind == OKind::While && top_is(&self.open, &[OKind::Do]) {
+                    let (_, _, start, _) = self.open.pop().expect("do");
+                    self.links[start].end = Some(i);
+                    self.links[i].start = Some(start);
+                    self.links[i].closes_do = true;
+                    return;
+                }
+                let sub = self.open.iter().find(|(k, _, _, _)| *k == OKind::Sub).map(|&(_, _, entry, _)| entry);
+                self.openers.entry((sub, label.clone())).or_default().push(i);
+                self.open.push((kind, label, i, i));
+            }
+            OKind::Elseif | OKind::Else => {
+                if !top_is(&self.open, &[OKind::If]) {
+                    fail(self, format!("o{label} {kind:?} without a matching o{label} if").to_lowercase());
+                    return;
+                }
+                let top = self.open.last_mut().expect("if");
+                self.links[top.3].next_branch = Some(i);
+                top.3 = i;
+            }
+            OKind::Endif | OKind::Endwhile | OKind::Endrepeat | OKind::Endsub => {
+                let opener = match kind {
+                    OKind::Endif => OKind::If,
+                    OKind::Endwhile => OKind::While,
+                    OKind::Endrepeat => OKind::Repeat,
+                    _ => OKind::Sub,
+                };
+                if !top_is(&self.open, &[opener]) {
+                    let what = format!("{kind:?}").to_lowercase();
+                    fail(self, format!("o{label} {what} without a matching o{label} {:?}", opener).to_lowercase());
+                    return;
+                }
+                let (_, _, start, last) = self.open.pop().expect("opener");
+                self.links[last].next_branch = Some(i);
+                self.links[start].end = Some(i);
+                self.links[i].start = Some(start);
+                // Every branch of an if jumps to its endif at its end.
+                let mut b = start;
+                while let Some(next) = self.links[b].next_branch {
+                    self.links[b].end = Some(i);
+                    if next == i {
+                        break;
+                    }
+                    b = next;
+                }
+            }
+            OKind::Break | OKind::Continue => {
+                let found = self
+                    .open
+                    .iter()
+                    .rev()
+                    .take_while(|(k, _, _, _)| *k != OKind::Sub)
+                    .find(|(k, l, _, _)| matches!(k, OKind::While | OKind::Do | OKind::Repeat) && *l == label);
+                match found {
+                    // rs274: "no matching while/do label ... (found 'repeat' ...)".
+                    Some(&(OKind::Repeat, _, _, _)) => {
+                        let word = if kind == OKind::Break { "break" } else { "continue" };
+                        fail(
+                            self,
+                            format!(
+                                "o{label} {word} inside o{label} repeat: LinuxCNC's break and continue serve \
+                                 while and do loops only"
+                            ),
+                        )
+                    }
+                    Some(&(_, _, start, _)) => self.links[i].start = Some(start),
+                    None => fail(self, format!("o{label} {kind:?} outside a loop labelled o{label}").to_lowercase()),
+                }
+            }
+            OKind::Call | OKind::Return => {}
+        }
+    }
+
+    /// Where execution goes to run entry `i` itself, and to run the line after it.
+    fn at_entry(&self, i: usize) -> Pc {
+        Pc { offset: self.entries[i].offset, line: self.entries[i].line }
+    }
+    fn after_entry(&self, i: usize) -> Pc {
+        Pc { offset: self.entries[i].next, line: self.entries[i].line + 1 }
     }
 }
 
 /// One subroutine call in progress (or the main program, at the bottom).
 struct Frame {
     source: usize,
-    pc: usize,
+    pc: Pc,
     /// The caller's #1-#30.
     params_saved: Option<[f64; SUB_PARAMS]>,
     /// Named parameters without a leading `_`.
@@ -290,150 +460,236 @@ impl Params for Scope<'_> {
     }
 }
 
-struct Runner<'o, 't> {
+/// A part program executed as its blocks are asked for ([`crate::BlockStream`]).
+pub(crate) struct Runner<'t> {
     sources: Vec<Source<'t>>,
     frames: Vec<Frame>,
     globals: HashMap<Box<str>, f64>,
     state: State,
-    blocks: Vec<Block>,
+    /// Blocks executed and not yet handed on.
+    blocks: VecDeque<Block>,
     iterations: u64,
-    /// Lines executed so far, and how many the files hold.
+    /// Lines executed so far.
     executed: u64,
-    lines_held: u64,
-    options: &'o Options,
+    options: Options,
     /// The main program's folder, searched first for subroutine files.
     folder: Option<PathBuf>,
+    /// The program has ended (or failed).
+    finished: bool,
     /// Scratch space reused from line to line.
+    text: String,
     line: Line,
     words: Vec<Word>,
     chars: Vec<char>,
     columns: Vec<usize>,
 }
 
-/// An error at an entry of a source.
-fn located(source: &Source<'_>, entry: usize, e: LineError) -> GcodeError {
-    GcodeError::Parse {
-        file: source.name.clone(),
-        line: source.entries.get(entry).map_or(0, |e| e.line),
-        column: e.column,
-        message: e.message,
-    }
+/// An error on line `line` of a source.
+fn located(source: &Source<'_>, line: usize, e: LineError) -> GcodeError {
+    GcodeError::Parse { file: source.name.clone(), line, column: e.column, message: e.message }
 }
 
-/// Runs a part program held in memory.
-pub(crate) fn run(
-    text: &str,
-    file_name: &str,
-    folder: Option<&Path>,
-    options: &Options,
-) -> Result<(Program, Parameters), GcodeError> {
-    crate::persistent::check(&options.parameters.values)?;
-    let main = Source::new(std::borrow::Cow::Borrowed(text), file_name);
-    let mut runner = Runner {
-        sources: vec![main],
-        frames: vec![Frame {
-            source: 0,
-            pc: 0,
-            params_saved: None,
-            locals: HashMap::new(),
-            repeats: HashMap::new(),
-            labels: HashMap::new(),
-            saved: None,
-        }],
-        globals: HashMap::new(),
-        state: State::default(),
-        blocks: Vec::new(),
-        iterations: 0,
-        executed: 0,
-        lines_held: 0,
-        options,
-        folder: folder.map(Path::to_path_buf),
-        line: Line::default(),
-        words: Vec::new(),
-        chars: Vec::new(),
-        columns: Vec::new(),
-    };
-    runner.lines_held = runner.sources[0].entries.len() as u64;
-    runner.state.set_tools(&options.tools);
-    runner.state.set_machine_unit(options.machine_unit_mm);
-    runner.state.load_parameters(&options.parameters.values);
-    if runner.sources[0].entries.is_empty() {
-        return Err(GcodeError::Parse {
-            file: file_name.to_string(),
-            line: 1,
-            column: 1,
-            message: "the program is empty (no blocks)".into(),
-        });
+impl<'t> Runner<'t> {
+    /// A program held in memory.
+    pub(crate) fn in_memory(
+        text: &'t str,
+        file_name: &str,
+        folder: Option<&Path>,
+        options: &Options,
+    ) -> Result<Runner<'t>, GcodeError> {
+        Runner::new(Source::in_memory(std::borrow::Cow::Borrowed(text), file_name), folder, options)
     }
-    runner.run()?;
-    if let Some((line, column)) = runner.state.open_nurbs() {
-        return Err(GcodeError::Parse {
-            file: file_name.to_string(),
-            line,
-            column,
-            message: "the program ends inside the NURBS block opened here (G5.3 missing)".into(),
-        });
-    }
-    // The persistent parameters as the program leaves them: LinuxCNC's required ones
-    // and every one the parameter file held.
-    let values = required_parameters()
-        .chain(options.parameters.values.keys().copied())
-        .map(|n| (n, runner.state.parameter(n)))
-        .collect();
-    Ok((Program { blocks: runner.blocks }, Parameters { values }))
-}
 
-impl Runner<'_, '_> {
-    fn run(&mut self) -> Result<(), GcodeError> {
+    /// A program file, read as it runs; errors name it as `path` displays.
+    pub(crate) fn file(path: &Path, options: &Options) -> Result<Runner<'static>, GcodeError> {
+        let name = path.display().to_string();
+        let open = || Reader::open(path).map_err(|source| GcodeError::Io { file: name.clone(), source });
+        let source = Source::new(std::borrow::Cow::Borrowed(""), open()?, open()?, &name);
+        Runner::new(source, path.parent(), options)
+    }
+
+    fn new(main: Source<'t>, folder: Option<&Path>, options: &Options) -> Result<Runner<'t>, GcodeError> {
+        crate::persistent::check(&options.parameters.values)?;
+        let mut runner = Runner {
+            sources: vec![main],
+            frames: vec![Frame {
+                source: 0,
+                pc: Pc { offset: 0, line: 1 },
+                params_saved: None,
+                locals: HashMap::new(),
+                repeats: HashMap::new(),
+                labels: HashMap::new(),
+                saved: None,
+            }],
+            globals: HashMap::new(),
+            state: State::default(),
+            blocks: VecDeque::new(),
+            iterations: 0,
+            executed: 0,
+            options: options.clone(),
+            folder: folder.map(Path::to_path_buf),
+            finished: false,
+            text: String::new(),
+            line: Line::default(),
+            words: Vec::new(),
+            chars: Vec::new(),
+            columns: Vec::new(),
+        };
+        runner.state.set_tools(&options.tools);
+        runner.state.set_machine_unit(options.machine_unit_mm);
+        runner.state.load_parameters(&options.parameters.values);
+        // Scanned up to the first line with content: an empty program is refused.
+        let main = &mut runner.sources[0];
+        while main.content_lines == 0 && main.scan_one() {}
+        if let Some(source) = main.failed.take() {
+            return Err(GcodeError::Io { file: main.name.clone(), source });
+        }
+        if main.content_lines == 0 {
+            return Err(GcodeError::Parse {
+                file: main.name.clone(),
+                line: 1,
+                column: 1,
+                message: "the program is empty (no blocks)".into(),
+            });
+        }
+        Ok(runner)
+    }
+
+    /// The next block, `None` after the program's end; an error ends the program.
+    pub(crate) fn next_block(&mut self) -> Option<Result<Block, GcodeError>> {
         loop {
-            let frame = self.frames.last().expect("a frame");
-            let (s, pc) = (frame.source, frame.pc);
-            let source = &self.sources[s];
-            let Some(entry) = source.entries.get(pc) else {
-                if self.frames.len() > 1 {
-                    let at = source.entries.len().saturating_sub(1);
-                    return Err(located(
-                        source,
-                        at,
-                        LineError::new(1, "the file ends inside a subroutine (endsub missing)"),
-                    ));
-                }
-                return Ok(());
-            };
-            let is_oword = match entry.lexed.as_deref() {
-                Some(Ok(line)) => {
-                    if let (Some(o), Some(message)) = (&line.oword, &source.broken[pc]) {
-                        return Err(located(source, pc, LineError::new(o.column, message.clone())));
+            if let Some(block) = self.blocks.pop_front() {
+                return Some(Ok(block));
+            }
+            if self.finished {
+                return None;
+            }
+            match self.step() {
+                Ok(true) => {}
+                Ok(false) => {
+                    self.finished = true;
+                    if let Some((line, column)) = self.state.open_nurbs() {
+                        return Some(Err(GcodeError::Parse {
+                            file: self.sources[0].name.clone(),
+                            line,
+                            column,
+                            message: "the program ends inside the NURBS block opened here (G5.3 missing)".into(),
+                        }));
                     }
-                    line.oword.is_some()
                 }
-                Some(Err(e)) => return Err(located(source, pc, e.clone())),
-                None => false,
+                Err(e) => {
+                    self.finished = true;
+                    self.blocks.clear();
+                    return Some(Err(e));
+                }
+            }
+        }
+    }
+
+    /// The persistent parameters as the program leaves them: LinuxCNC's required ones and
+    /// every one the parameter file held.
+    pub(crate) fn parameters(&self) -> Parameters {
+        let values = required_parameters()
+            .chain(self.options.parameters.values.keys().copied())
+            .map(|n| (n, self.state.parameter(n)))
+            .collect();
+        Parameters { values }
+    }
+
+    /// Lines the loaded files hold, every file scanned to its end first.
+    fn lines_held(&mut self) -> u64 {
+        self.sources
+            .iter_mut()
+            .map(|s| {
+                s.scan_all();
+                s.content_lines
+            })
+            .sum()
+    }
+
+    /// Executes the next line with content; false when the program has ended.
+    fn step(&mut self) -> Result<bool, GcodeError> {
+        let frame = self.frames.last().expect("a frame");
+        let (s, mut pc) = (frame.source, frame.pc);
+        // The next line with content, the scan past it.
+        let (next, is_o) = loop {
+            let source = &mut self.sources[s];
+            source.scan_past(pc.offset);
+            if let Some(e) = source.failed.take() {
+                return Err(GcodeError::Io { file: source.name.clone(), source: e });
+            }
+            let read = if source.end_offset.is_some_and(|end| pc.offset >= end) {
+                Ok(None)
+            } else {
+                source.reader.read(&source.memory, pc.offset, &mut self.text)
             };
-            self.state.line = entry.line;
-            self.executed += 1;
-            if self.executed > self.lines_held + MAX_REPEATED_LINES {
-                let column = entry
-                    .lexed
-                    .as_deref()
-                    .and_then(|l| l.as_ref().ok())
-                    .and_then(|l| l.oword.as_ref())
-                    .map_or(1, |o| o.column);
+            let next = match read {
+                Ok(Some(next)) => next,
+                Ok(None) => {
+                    if self.frames.len() > 1 {
+                        let line = source.last_content_line;
+                        return Err(located(
+                            source,
+                            line,
+                            LineError::new(1, "the file ends inside a subroutine (endsub missing)"),
+                        ));
+                    }
+                    return Ok(false);
+                }
+                Err(e) => return Err(GcodeError::Io { file: source.name.clone(), source: e }),
+            };
+            let (content, o) = scan(&self.text);
+            // The opening `%` (the closing one ends the file above).
+            if !content || self.text.trim_matches([' ', '\t']) == "%" {
+                pc = Pc { offset: next, line: pc.line + 1 };
+                continue;
+            }
+            break (Pc { offset: next, line: pc.line + 1 }, o);
+        };
+        let entry = if is_o { self.sources[s].entry_at(pc.offset) } else { None };
+        if let Some(i) = entry {
+            let source = &mut self.sources[s];
+            let o = oword(&source.entries[i]);
+            match o.kind {
+                OKind::Break | OKind::Continue => {
+                    if let Some(start) = source.links[i].start {
+                        source.settle(start)
+                    }
+                }
+                OKind::If | OKind::Elseif | OKind::Else | OKind::While | OKind::Do | OKind::Repeat | OKind::Sub => {
+                    source.settle(i)
+                }
+                _ => {}
+            }
+            if let Some(message) = &source.broken[i] {
                 return Err(located(
                     source,
-                    pc,
-                    LineError::new(
-                        column,
-                        format!("execution limit reached: loops and calls ran {MAX_REPEATED_LINES} lines again (a loop that never ends?)"),
-                    ),
+                    pc.line,
+                    LineError::new(oword(&source.entries[i]).column, message.clone()),
                 ));
             }
-            let step = if is_oword { self.oword(s, pc) } else { self.block(s, pc) };
-            match step {
-                Ok(true) => {}
-                Ok(false) => return Ok(()),
-                Err(e) => return Err(located(&self.sources[s], pc, e)),
-            }
+        }
+        self.state.line = pc.line;
+        self.executed += 1;
+        if self.executed > MAX_REPEATED_LINES && self.executed > self.lines_held() + MAX_REPEATED_LINES {
+            let column = entry.map_or(1, |i| oword(&self.sources[s].entries[i]).column);
+            return Err(located(
+                &self.sources[s],
+                pc.line,
+                LineError::new(
+                    column,
+                    format!("execution limit reached: loops and calls ran {MAX_REPEATED_LINES} lines again (a loop that never ends?)"),
+                ),
+            ));
+        }
+        self.frames.last_mut().expect("frame").pc = next;
+        let step = match entry {
+            Some(i) => self.oword(s, i),
+            None => self.block(),
+        };
+        match step {
+            Ok(go_on) => Ok(go_on),
+            Err(e) => Err(located(&self.sources[s], pc.line, e)),
         }
     }
 
@@ -459,24 +715,17 @@ impl Runner<'_, '_> {
         Ok(())
     }
 
-    fn jump(&mut self, to: usize) {
+    fn jump(&mut self, to: Pc) {
         self.frames.last_mut().expect("frame").pc = to;
     }
 
-    /// Executes an ordinary block; false when it ends the program.
-    fn block(&mut self, s: usize, pc: usize) -> Result<bool, LineError> {
+    /// Executes the ordinary block in `self.text`; false when it ends the program.
+    fn block(&mut self) -> Result<bool, LineError> {
         let mut buffer = std::mem::take(&mut self.line);
         let mut words = std::mem::take(&mut self.words);
         words.clear();
-        let entry = &self.sources[s].entries[pc];
-        let line = match entry.lexed.as_deref() {
-            Some(Ok(line)) => line,
-            _ => {
-                let text = &self.sources[s].text[entry.text.clone()];
-                lex_into(text, &mut self.chars, &mut self.columns, &mut buffer)?;
-                &buffer
-            }
-        };
+        lex_into(&self.text, &mut self.chars, &mut self.columns, &mut buffer)?;
+        let line = &buffer;
         let scope = Scope {
             state: &self.state,
             locals: &self.frames.last().expect("frame").locals,
@@ -519,7 +768,6 @@ impl Runner<'_, '_> {
                 self.frames.last_mut().expect("frame").locals.insert(name, value);
             }
         }
-        self.jump(pc + 1);
         if words.is_empty() {
             self.words = words;
             return Ok(true);
@@ -550,7 +798,7 @@ impl Runner<'_, '_> {
 
     /// Executes an O-word line.
     fn oword(&mut self, s: usize, pc: usize) -> Result<bool, LineError> {
-        let o = oword(&self.sources[s].entries[pc]).expect("oword").clone();
+        let o = oword(&self.sources[s].entries[pc]).clone();
         let links = self.sources[s].links[pc];
         let column = o.column;
         let missing = |what: &str| LineError::new(column, format!("o{} {what} has no partner", o.label));
@@ -562,7 +810,9 @@ impl Runner<'_, '_> {
             }
         }
         let condition = values.first().is_some_and(|&v| v != 0.0);
-        if links.shared_label {
+        // Until the scan has read the whole file, a label may yet be shared: each is kept.
+        let opens = matches!(o.kind, OKind::If | OKind::While | OKind::Do | OKind::Repeat) && !links.closes_do;
+        if links.shared_label || (opens && !self.sources[s].complete) {
             let frame = self.frames.last_mut().expect("frame");
             let first = match frame.labels.get(&o.label) {
                 Some(&first) => first,
@@ -581,9 +831,9 @@ impl Runner<'_, '_> {
             }
         }
         match o.kind {
-            OKind::Sub => self.jump(links.end.ok_or_else(|| missing("sub"))? + 1),
+            OKind::Sub => self.jump_after(s, links.end.ok_or_else(|| missing("sub"))?),
             OKind::Call => {
-                self.jump(pc + 1);
+                self.jump_after(s, pc);
                 self.call(&o, &values)?;
             }
             OKind::Return | OKind::Endsub => {
@@ -622,12 +872,12 @@ impl Runner<'_, '_> {
                 let mut taken = condition;
                 loop {
                     if taken {
-                        self.jump(at + 1);
+                        self.jump_after(s, at);
                         break;
                     }
                     let next = self.sources[s].links[at].next_branch.ok_or_else(|| missing("if"))?;
                     let entry = &self.sources[s].entries[next];
-                    let branch = oword(entry).expect("branch");
+                    let branch = oword(entry);
                     match branch.kind {
                         OKind::Elseif => {
                             let cond = branch.args[0].clone();
@@ -636,45 +886,45 @@ impl Runner<'_, '_> {
                             taken = v != 0.0;
                         }
                         OKind::Else => {
-                            self.jump(next + 1);
+                            self.jump_after(s, next);
                             break;
                         }
                         _ => {
-                            self.jump(next + 1);
+                            self.jump_after(s, next);
                             break;
                         }
                     }
                 }
             }
-            OKind::Elseif | OKind::Else => self.jump(links.end.ok_or_else(|| missing("elseif"))? + 1),
-            OKind::Endif | OKind::Do => self.jump(pc + 1),
+            OKind::Elseif | OKind::Else => self.jump_after(s, links.end.ok_or_else(|| missing("elseif"))?),
+            OKind::Endif | OKind::Do => self.jump_after(s, pc),
             OKind::While if links.closes_do => {
                 if condition {
                     self.count_iteration(column)?;
-                    self.jump(links.start.expect("do") + 1);
+                    self.jump_after(s, links.start.expect("do"));
                 } else {
-                    self.jump(pc + 1);
+                    self.jump_after(s, pc);
                 }
             }
             OKind::While => {
                 if condition {
-                    self.jump(pc + 1);
+                    self.jump_after(s, pc);
                 } else {
-                    self.jump(links.end.ok_or_else(|| missing("while"))? + 1);
+                    self.jump_after(s, links.end.ok_or_else(|| missing("while"))?);
                 }
             }
             OKind::Endwhile => {
                 self.count_iteration(column)?;
-                self.jump(links.start.expect("while"));
+                self.jump_to(s, links.start.expect("while"));
             }
             OKind::Repeat => {
                 let end = links.end.ok_or_else(|| missing("repeat"))?;
                 let count = values[0].round();
                 if count >= 1.0 {
                     self.frames.last_mut().expect("frame").repeats.insert(pc, count.min(u64::MAX as f64) as u64);
-                    self.jump(pc + 1);
+                    self.jump_after(s, pc);
                 } else {
-                    self.jump(end + 1);
+                    self.jump_after(s, end);
                 }
             }
             OKind::Endrepeat => {
@@ -684,33 +934,45 @@ impl Runner<'_, '_> {
                 if left > 0 {
                     frame.repeats.insert(start, left);
                     self.count_iteration(column)?;
-                    self.jump(start + 1);
+                    self.jump_after(s, start);
                 } else {
                     frame.repeats.remove(&start);
-                    self.jump(pc + 1);
+                    self.jump_after(s, pc);
                 }
             }
             OKind::Break | OKind::Continue => {
                 let start = links.start.expect("loop");
                 let start_links = self.sources[s].links[start];
                 let end = start_links.end.ok_or_else(|| missing("loop"))?;
-                let start_kind = oword(&self.sources[s].entries[start]).expect("loop").kind;
+                let start_kind = oword(&self.sources[s].entries[start]).kind;
                 if o.kind == OKind::Break {
                     self.frames.last_mut().expect("frame").repeats.remove(&start);
-                    self.jump(end + 1);
+                    self.jump_after(s, end);
                 } else {
                     // continue: the while re-tests; a do's closing while tests; a repeat counts down.
                     match start_kind {
                         OKind::While => {
                             self.count_iteration(column)?;
-                            self.jump(start)
+                            self.jump_to(s, start)
                         }
-                        _ => self.jump(end),
+                        _ => self.jump_to(s, end),
                     }
                 }
             }
         }
         Ok(true)
+    }
+
+    /// Runs entry `i` of source `s` next.
+    fn jump_to(&mut self, s: usize, i: usize) {
+        let to = self.sources[s].at_entry(i);
+        self.jump(to);
+    }
+
+    /// Runs the line after entry `i` of source `s` next.
+    fn jump_after(&mut self, s: usize, i: usize) {
+        let to = self.sources[s].after_entry(i);
+        self.jump(to);
     }
 
     /// `oLABEL call [args]`: finds the subroutine (in a file of its own if need be) and
@@ -726,11 +988,12 @@ impl Runner<'_, '_> {
         let current = self.frames.last().expect("frame").source;
         let found = std::iter::once(current)
             .chain(0..self.sources.len())
-            .find_map(|s| self.sources[s].subs.get(&o.label).map(|&e| (s, e)));
+            .find_map(|s| self.sources[s].sub(&o.label).map(|e| (s, e)));
         let (s, entry) = match found {
             Some(found) => found,
             None => self.load_sub_file(o)?,
         };
+        self.sources[s].settle(entry);
         if let Some(message) = &self.sources[s].broken[entry] {
             return Err(LineError::new(o.column, format!("o{} cannot be called: {message}", o.label)));
         }
@@ -741,7 +1004,7 @@ impl Runner<'_, '_> {
         }
         self.frames.push(Frame {
             source: s,
-            pc: entry + 1,
+            pc: self.sources[s].after_entry(entry),
             params_saved: Some(saved),
             locals: HashMap::new(),
             repeats: HashMap::new(),
@@ -767,9 +1030,9 @@ impl Runner<'_, '_> {
             let path = dir.join(&file);
             if let Ok(bytes) = std::fs::read(&path) {
                 let text = String::from_utf8_lossy(&bytes).into_owned();
-                let source = Source::new(std::borrow::Cow::Owned(text), &path.display().to_string());
+                let mut source = Source::in_memory(std::borrow::Cow::Owned(text), &path.display().to_string());
+                source.scan_all();
                 let entry = source.subs.get(&o.label).copied();
-                self.lines_held += source.entries.len() as u64;
                 self.sources.push(source);
                 let s = self.sources.len() - 1;
                 return entry.map(|e| (s, e)).ok_or_else(|| {
