@@ -45,8 +45,7 @@ pub const MAX_SAMPLES: usize = 4000;
 /// the motion only, dwells not counted.
 pub fn time_lower_bound(config: &MachineConfig, program: &Program) -> Result<f64, ProgramError> {
     let resolved = config.resolve()?;
-    let compensated =
-        compensate(program, &config.tool_table()).map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
+    let compensated = compensate(program, &config.tool_table()).map_err(|e| ProgramError::new(e.line, e.reason))?;
     let path = elements(&resolved, &compensated)?;
     let mut feeds = std::collections::HashMap::new();
     for block in &compensated.blocks {

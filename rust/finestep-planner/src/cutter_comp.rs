@@ -226,7 +226,11 @@ enum OffsetError {
 /// [`compensate`], without copying a program that has no G40/G41/G42 (compensation
 /// changes nothing there): the program itself, borrowed.
 pub fn compensated<'p>(program: &'p Program, tools: &ToolTable) -> Result<Cow<'p, Program>, CompError> {
-    if program.blocks.iter().any(|b| matches!(b.kind, BlockKind::CutterComp { .. })) {
+    if program
+        .blocks
+        .iter()
+        .any(|b| matches!(b.kind, BlockKind::CutterComp { .. } | BlockKind::CutterCompRadius { .. }))
+    {
         compensate(program, tools).map(Cow::Owned)
     } else {
         Ok(Cow::Borrowed(program))
@@ -234,42 +238,126 @@ pub fn compensated<'p>(program: &'p Program, tools: &ToolTable) -> Result<Cow<'p
 }
 
 pub fn compensate(program: &Program, tools: &ToolTable) -> Result<Program, CompError> {
-    let mut pass = Compensator {
-        tools,
-        out: Vec::with_capacity(program.blocks.len() + program.blocks.len() / 2),
-        programmed: Point::default(),
-        spindle_tool: 0,
-        last_feed: None,
-        mode: Mode::Off,
-    };
-    // Compensation in G18 runs in a frame where the plane's axes (Z, X) are (X, Y): the
-    // pass works in XY, every block goes in mapped and comes out mapped back.
-    let mut frame = Plane::Xy;
+    let mut pass = Pass::new(Cow::Borrowed(tools), program.blocks.len() + program.blocks.len() / 2);
     for block in &program.blocks {
+        pass.feed(block)?;
+    }
+    pass.finish();
+    Ok(Program { blocks: pass.pass.out })
+}
+
+/// The compensation pass over blocks given one at a time: a block handed out is final
+/// (the pass only appends), so it can be handed on at once.
+struct Pass<'a> {
+    pass: Compensator<'a>,
+    frame: Plane,
+}
+
+impl<'a> Pass<'a> {
+    fn new(tools: Cow<'a, ToolTable>, capacity: usize) -> Pass<'a> {
+        let pass = Compensator {
+            tools,
+            out: Vec::with_capacity(capacity),
+            programmed: Point::default(),
+            spindle_tool: 0,
+            last_feed: None,
+            mode: Mode::Off,
+        };
+        Pass { pass, frame: Plane::Xy }
+    }
+
+    /// The next block of the program.
+    fn feed(&mut self, block: &Block) -> Result<(), CompError> {
+        // Compensation in G18 runs in a frame where the plane's axes (Z, X) are (X, Y): the
+        // pass works in XY, every block goes in mapped and comes out mapped back.
+        let pass = &mut self.pass;
         if let (Mode::Off, BlockKind::CutterComp { plane, .. } | BlockKind::CutterCompRadius { plane, .. }) =
             (&pass.mode, &block.kind)
         {
-            if *plane != frame {
-                pass.programmed = to_frame(*plane, from_frame(frame, pass.programmed));
-                frame = *plane;
+            if *plane != self.frame {
+                pass.programmed = to_frame(*plane, from_frame(self.frame, pass.programmed));
+                self.frame = *plane;
             }
         }
         let start = pass.out.len();
-        pass.block(&map_block(frame, block, true))?;
+        pass.block(&map_block(self.frame, block, true))?;
         for out in &mut pass.out[start..] {
-            *out = map_block(frame, out, false);
+            *out = map_block(self.frame, out, false);
         }
-        if matches!(pass.mode, Mode::Off) && frame != Plane::Xy {
-            pass.programmed = from_frame(frame, pass.programmed);
-            frame = Plane::Xy;
+        if matches!(pass.mode, Mode::Off) && self.frame != Plane::Xy {
+            pass.programmed = from_frame(self.frame, pass.programmed);
+            self.frame = Plane::Xy;
+        }
+        Ok(())
+    }
+
+    /// The program has ended.
+    fn finish(&mut self) {
+        let start = self.pass.out.len();
+        self.pass.flush();
+        for out in &mut self.pass.out[start..] {
+            *out = map_block(self.frame, out, false);
         }
     }
-    let start = pass.out.len();
-    pass.flush();
-    for out in &mut pass.out[start..] {
-        *out = map_block(frame, out, false);
+}
+
+/// Compensation applied to blocks as they are read ([`compensate`] as a stream): each
+/// block the pass gives is handed on as soon as it is final, so that only the moves the
+/// offset is still resolving (around the corner being read) are held. The first error,
+/// of the blocks read or of the compensation, ends the stream.
+pub struct Compensating<'a, I> {
+    blocks: I,
+    pass: Pass<'a>,
+    /// Blocks of the pass handed on so far.
+    handed: usize,
+    done: bool,
+}
+
+impl<'a, I> Compensating<'a, I> {
+    /// `blocks` compensated with the radii of `tools`.
+    pub fn new(blocks: I, tools: ToolTable) -> Compensating<'a, I> {
+        Compensating { blocks, pass: Pass::new(Cow::Owned(tools), 0), handed: 0, done: false }
     }
-    Ok(Program { blocks: pass.out })
+}
+
+impl<I: Iterator<Item = Result<Block, crate::ProgramError>>> Iterator for Compensating<'_, I> {
+    type Item = Result<Block, crate::ProgramError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            let out = &mut self.pass.pass.out;
+            if self.handed < out.len() {
+                let block = std::mem::replace(&mut out[self.handed], Block { line: 0, n: None, kind: BlockKind::End });
+                self.handed += 1;
+                if self.handed == out.len() {
+                    out.clear();
+                    self.handed = 0;
+                }
+                return Some(Ok(block));
+            }
+            if self.done {
+                return None;
+            }
+            match self.blocks.next() {
+                Some(Ok(block)) => {
+                    if let Err(e) = self.pass.feed(&block) {
+                        self.done = true;
+                        self.pass.pass.out.clear();
+                        return Some(Err(crate::ProgramError::new(e.line, e.reason)));
+                    }
+                }
+                Some(Err(e)) => {
+                    self.done = true;
+                    self.pass.pass.out.clear();
+                    return Some(Err(e));
+                }
+                None => {
+                    self.done = true;
+                    self.pass.finish();
+                }
+            }
+        }
+    }
 }
 
 /// A point of the machine in the frame of compensation in `plane`: G18's Z X Y as X Y Z
@@ -507,7 +595,7 @@ enum Mode {
 
 /// The pass: the output so far and what it needs to know about the program so far.
 struct Compensator<'a> {
-    tools: &'a ToolTable,
+    tools: Cow<'a, ToolTable>,
     out: Vec<Block>,
     /// The programmed (uncompensated) position.
     programmed: Point,

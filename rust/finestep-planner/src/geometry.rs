@@ -21,9 +21,9 @@
 use std::borrow::Cow;
 use std::collections::VecDeque;
 use std::f64::consts::TAU;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
-use finestep_gcode::{BlockKind, CompSide, PathControl, Plane, Point, Program};
+use finestep_gcode::{Block, BlockKind, CompSide, PathControl, Plane, Point, Program};
 
 use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
 pub use crate::element::{
@@ -114,9 +114,10 @@ fn sweep_angle(start: f64, end: f64, clockwise: bool, extra_turns: u32) -> f64 {
 /// a dwell or an event after it.
 #[derive(Debug)]
 struct MoveReader {
-    /// The next block to read.
-    next_block: usize,
     at: Vec4,
+    /// The last programmed point read, on whole steps ([`program_end`] once the program
+    /// has ended).
+    end: Vec4,
     at_programmed: Vec4,
     blend: Option<f64>,
     /// The spindle and coolant as the program leaves them: M2 or M30 (or the program's
@@ -132,14 +133,14 @@ struct MoveReader {
 }
 
 impl MoveReader {
-    fn new(config: &Resolved, program: &Program) -> MoveReader {
+    fn new(config: &Resolved) -> MoveReader {
         MoveReader {
-            next_block: 0,
             at: [0.0; 4],
+            end: [0.0; 4],
             at_programmed: [0.0; 4],
             blend: Some(config.path_tolerance_mm), // LinuxCNC starts in G64
             left_on: (None, false),
-            last_line: program.blocks.last().map_or(0, |b| b.line),
+            last_line: 0,
             leading_dwell: 0,
             leading_events: Vec::new(),
             pending: None,
@@ -190,17 +191,19 @@ impl MoveReader {
     }
 
     /// The next move with what follows it settled, `None` after the last.
-    fn next_move(&mut self, config: &Resolved, program: &Program) -> Result<Option<Move>, ProgramError> {
+    fn next_move(&mut self, config: &Resolved, blocks: &mut BlockSource<'_>) -> Result<Option<Move>, ProgramError> {
         while !self.finished {
-            let Some(block) = program.blocks.get(self.next_block) else {
-                self.finish();
-                break;
+            let block = match blocks.next() {
+                Some(block) => block?,
+                None => {
+                    self.finish();
+                    break;
+                }
             };
-            self.next_block += 1;
-            let fail = |reason: String| ProgramError { line: block.line, reason };
-            if matches!(block.kind, BlockKind::End) {
-                self.last_line = block.line;
-            }
+            let block = &block;
+            let fail = |reason: String| ProgramError::new(block.line, reason);
+            // The program's last line: that of M2 or M30, or of the last block.
+            self.last_line = block.line;
             let action = match block.kind {
                 BlockKind::Spindle { rotation, rpm } => {
                     let max = config.spindle_max_rpm;
@@ -301,6 +304,7 @@ impl MoveReader {
             let programmed = (self.at_programmed, to);
             self.at_programmed = to;
             let to = round_to_steps(config, to);
+            self.end = to;
             for (a, axis) in config.axes.iter().enumerate() {
                 if !axis.present && to[a] != self.at[a] {
                     return Err(fail(format!("axis {} moves but is not configured", AXIS_NAMES[a])));
@@ -510,7 +514,7 @@ fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) 
 /// The element of an arc move; `None` when rounding to steps left nothing to move.
 fn arc_element(config: &Resolved, m: &Move) -> Result<Option<Element>, ProgramError> {
     let (centre, (u, v), clockwise, extra_turns) = m.arc.expect("arc move");
-    let fail = |reason: String| ProgramError { line: m.line, reason };
+    let fail = |reason: String| ProgramError::new(m.line, reason);
     let (cu, cv) = (centre[u], centre[v]);
     let r0 = (m.start[u] - cu).hypot(m.start[v] - cv);
     let r1 = (m.end[u] - cu).hypot(m.end[v] - cv);
@@ -642,10 +646,9 @@ pub fn program_end(config: &Resolved, program: &Program) -> Vec4 {
 /// stays within a few elements and the sharing stage's hold (at most
 /// [`Sharing::max_held`] elements), whatever the program's length. An error ends the
 /// stream at the block that causes it.
-#[derive(Debug)]
 pub struct PathStream<'p> {
     config: Resolved,
-    program: Cow<'p, Program>,
+    blocks: BlockSource<'p>,
     reader: MoveReader,
     /// The move read and not yet made into elements: the move after it decides its blend.
     current: Option<Move>,
@@ -659,19 +662,43 @@ pub struct PathStream<'p> {
     /// Elements ready to hand on, in order.
     ready: VecDeque<Element>,
     done: bool,
+    end: Arc<OnceLock<Vec4>>,
+}
+
+/// Canonical blocks as the path reads them, one at a time; an error ends them.
+pub type BlockSource<'p> = Box<dyn Iterator<Item = Result<Block, ProgramError>> + Send + 'p>;
+
+impl std::fmt::Debug for PathStream<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PathStream").field("reader", &self.reader).field("done", &self.done).finish_non_exhaustive()
+    }
 }
 
 impl<'p> PathStream<'p> {
     /// The path of `program` on the machine `config`, read up to its first move (so
     /// that [`PathStream::leading_dwell`] and [`PathStream::leading_events`] are known).
     pub fn new(config: &Resolved, program: Cow<'p, Program>) -> Result<PathStream<'p>, ProgramError> {
-        let mut reader = MoveReader::new(config, &program);
-        let current = reader.next_move(config, &program)?;
+        let blocks: BlockSource<'p> = match program {
+            Cow::Borrowed(program) => Box::new(program.blocks.iter().cloned().map(Ok)),
+            Cow::Owned(program) => Box::new(program.blocks.into_iter().map(Ok)),
+        };
+        PathStream::from_blocks(config, blocks)
+    }
+
+    /// The path of the program whose blocks `blocks` gives as it is read (a parser's
+    /// stream, [`finestep_gcode::BlockStream`]), read up to its first move.
+    pub fn from_blocks(config: &Resolved, mut blocks: BlockSource<'p>) -> Result<PathStream<'p>, ProgramError> {
+        let mut reader = MoveReader::new(config);
+        let current = reader.next_move(config, &mut blocks)?;
         let start = current.as_ref().map(|m| m.start).unwrap_or([0.0; 4]);
         let done = current.is_none();
+        let end = Arc::new(OnceLock::new());
+        if done {
+            let _ = end.set(reader.end);
+        }
         Ok(PathStream {
             config: config.clone(),
-            program,
+            blocks,
             reader,
             current,
             start,
@@ -680,6 +707,7 @@ impl<'p> PathStream<'p> {
             sharing: Sharing::new(config),
             ready: VecDeque::new(),
             done,
+            end,
         })
     }
 
@@ -693,6 +721,12 @@ impl<'p> PathStream<'p> {
         &self.reader.leading_events
     }
 
+    /// Where the program ends, on whole steps ([`program_end`]): set once the path has
+    /// been read to the program's end without an error.
+    pub fn end(&self) -> Arc<OnceLock<Vec4>> {
+        Arc::clone(&self.end)
+    }
+
     /// The most elements the sharing stage has held at once so far.
     pub fn peak_held(&self) -> usize {
         self.sharing.peak
@@ -700,7 +734,7 @@ impl<'p> PathStream<'p> {
 
     /// Reads one move and makes the elements of the move before it.
     fn advance(&mut self) -> Result<(), ProgramError> {
-        let next = self.reader.next_move(&self.config, &self.program)?;
+        let next = self.reader.next_move(&self.config, &mut self.blocks)?;
         if let Some(m) = self.current.take() {
             self.make(&m, next.as_ref())?;
         }
@@ -715,6 +749,7 @@ impl<'p> PathStream<'p> {
             }
             self.sharing.finish(&mut self.ready);
             self.done = true;
+            let _ = self.end.set(self.reader.end);
         }
         Ok(())
     }
@@ -728,7 +763,7 @@ impl<'p> PathStream<'p> {
         }
         if let Some(curve) = &m.nurbs {
             let mut pieces = nurbs_pieces::pieces(config, Arc::clone(curve), m.feed, m.line)
-                .map_err(|e| ProgramError { line: m.line, reason: e.to_string() })?;
+                .map_err(|e| ProgramError::new(m.line, e.to_string()))?;
             let last = pieces.last_mut().expect("a NURBS has a piece");
             last.block_end = true;
             take_after(last, m);

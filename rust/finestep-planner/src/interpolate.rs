@@ -209,15 +209,16 @@ impl<'p> Periods<'p> {
         let mut record = PeriodRecord { flags, ..PeriodRecord::default() };
         for a in 0..4 {
             let delta = grid[a] - self.last[a];
-            let raw = i32::try_from(delta).map_err(|_| ProgramError {
-                line,
-                reason: format!("axis {} would move {} steps in one period", AXIS_NAMES[a], delta as f64 / 65536.0),
+            let raw = i32::try_from(delta).map_err(|_| {
+                let reason =
+                    format!("axis {} would move {} steps in one period", AXIS_NAMES[a], delta as f64 / 65536.0);
+                ProgramError::new(line, reason)
             })?;
             record.inc[a] = Increment::from_bits(raw);
         }
-        self.checker.check(&record).map_err(|(axis, why)| ProgramError {
-            line,
-            reason: format!("axis {}: {why} (planner bug: refusing to emit)", AXIS_NAMES.get(axis).unwrap_or(&"?")),
+        self.checker.check(&record).map_err(|(axis, why)| {
+            let axis = AXIS_NAMES.get(axis).unwrap_or(&"?");
+            ProgramError::new(line, format!("axis {axis}: {why} (planner bug: refusing to emit)"))
         })?;
         self.last = grid;
         self.emitted += 1;

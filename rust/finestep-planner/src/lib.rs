@@ -25,11 +25,14 @@
 //! the look-ahead window reaches it, the look-ahead runs a window at a time as the
 //! records are read, elements the interpolation has left and records are not kept, so a
 //! move or program of any duration or length plans in the same memory (no period cap,
-//! at most a window of `4 * lookahead_moves` elements and two more). What grows with the
-//! program is the parsed program itself ([`finestep_gcode::Program`], read whole by the
-//! parser) and a copy of it where cutter compensation (G41/G42) is on. A block that
-//! cannot be planned ends the stream where the path reaches it. [`plan_program`]
-//! collects the stream.
+//! at most a window of `4 * lookahead_moves` elements and two more). [`plan_stream`]
+//! borrows a parsed program ([`finestep_gcode::Program`], held whole, and copied whole
+//! where cutter compensation is on); [`plan_blocks`] reads the program as the window
+//! reaches it from the parser's stream ([`finestep_gcode::stream_file`]: the file read
+//! through a buffer, only its O-word lines kept), compensation applied to the blocks as
+//! they come ([`cutter_comp::Compensating`]), so that nothing grows with the program's
+//! length, and gives the same records. A block that cannot be planned ends the stream
+//! where the path reaches it. [`plan_program`] collects the stream.
 //!
 //! Spindle and coolant changes (S, M3/M4/M5, M7/M8/M9) take effect where they are
 //! written, as in LinuxCNC: the path stops exactly there (no blending across them) and
@@ -103,4 +106,4 @@ pub use bound::time_lower_bound;
 pub use checker::{check_program, CheckReport};
 pub use config::{ConfigError, MachineConfig, MeasureConfig, ProfileKind, SpindleConfig};
 pub use element::{IoAction, IoEvent, TimedEvent};
-pub use program::{plan_program, plan_stream, PlanStream, PlannedProgram, ProgramError};
+pub use program::{plan_blocks, plan_program, plan_stream, PlanStream, PlannedProgram, ProgramError};

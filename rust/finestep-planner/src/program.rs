@@ -6,14 +6,16 @@
 //! Cutter radius compensation (G41/G42, [`crate::cutter_comp`]) runs first, on the
 //! canonical blocks, with the radii of the configuration's tool table.
 
-use finestep_gcode::Program;
+use std::sync::{Arc, OnceLock};
+
+use finestep_gcode::{GcodeError, Program};
 use finestep_interface::PeriodRecord;
 
 use crate::config::MachineConfig;
-use crate::cutter_comp::compensated;
+use crate::cutter_comp::{compensated, Compensating};
 use crate::element::{Element, TimedEvent};
 pub use crate::error::ProgramError;
-use crate::geometry::{program_end, PathStream};
+use crate::geometry::{program_end, BlockSource, PathStream};
 use crate::interpolate::Periods;
 
 /// A whole program's periods.
@@ -38,15 +40,24 @@ pub struct PlannedProgram {
 /// A program's periods as a stream ([`Periods`]): records are produced as they are
 /// consumed, and the path is read from the program as the look-ahead window reaches it,
 /// so memory grows neither with the program's duration nor with its length (beyond the
-/// parsed program itself, which the stream borrows).
+/// parsed program itself, which [`plan_stream`]'s stream borrows; [`plan_blocks`] reads
+/// the program as it goes).
 #[derive(Debug)]
 pub struct PlanStream<'p> {
     /// The records, each with the source line executed at the end of its period.
     pub periods: Periods<'p>,
-    /// Where the program ends, in axis units (X, Y, Z, A), on whole steps.
-    pub end: [f64; 4],
     /// What was adjusted or not carried out as programmed, for the report.
     pub notes: Vec<String>,
+    end: Arc<OnceLock<[f64; 4]>>,
+}
+
+impl PlanStream<'_> {
+    /// Where the program ends, in axis units (X, Y, Z, A), on whole steps: known from
+    /// the start for [`plan_stream`], once the path has been read to the program's end
+    /// for [`plan_blocks`].
+    pub fn end(&self) -> Option<[f64; 4]> {
+        self.end.get().copied()
+    }
 }
 
 /// An element the interpolation can follow: a finite length and positive, finite limits.
@@ -54,7 +65,7 @@ fn usable(e: Element) -> Result<Element, ProgramError> {
     if e.length.is_finite() && e.v_cap > 0.0 && e.v_cap.is_finite() && e.accel > 0.0 && e.jerk > 0.0 {
         Ok(e)
     } else {
-        Err(ProgramError { line: e.line, reason: format!("no usable speed limits for this move ({e:?})") })
+        Err(ProgramError::new(e.line, format!("no usable speed limits for this move ({e:?})")))
     }
 }
 
@@ -65,14 +76,35 @@ fn usable(e: Element) -> Result<Element, ProgramError> {
 /// planned ends the stream with its error where the path reaches it.
 pub fn plan_stream<'p>(config: &MachineConfig, program: &'p Program) -> Result<PlanStream<'p>, ProgramError> {
     let resolved = config.resolve()?;
-    let program =
-        compensated(program, &config.tool_table()).map_err(|e| ProgramError { line: e.line, reason: e.reason })?;
-    let end = program_end(&resolved, &program);
+    let program = compensated(program, &config.tool_table()).map_err(|e| ProgramError::new(e.line, e.reason))?;
+    let end = Arc::new(OnceLock::from(program_end(&resolved, &program)));
     let notes = resolved.notes.clone();
     let path = PathStream::new(&resolved, program)?;
     let (dwell, events) = (path.leading_dwell(), path.leading_events().to_vec());
     let source = Box::new(path.map(|e| e.and_then(usable)));
-    Ok(PlanStream { periods: Periods::from_source(resolved, source, dwell).with_leading_events(&events), end, notes })
+    Ok(PlanStream { periods: Periods::from_source(resolved, source, dwell).with_leading_events(&events), notes, end })
+}
+
+/// [`plan_stream`] of a program read as it is planned: `blocks` gives its canonical
+/// blocks as the parser executes them ([`finestep_gcode::stream_file`]), and they are read
+/// only as the look-ahead window reaches them, so that neither the program's text nor
+/// its blocks are held (cutter compensation runs on them as they are read,
+/// [`Compensating`]). The records are those [`plan_stream`] gives for the program
+/// collected; an error of the parser or of compensation ends the stream where the path
+/// reaches it ([`ProgramError::located`] holds the parser's).
+pub fn plan_blocks<'p>(
+    config: &MachineConfig,
+    blocks: impl Iterator<Item = Result<finestep_gcode::Block, GcodeError>> + Send + 'p,
+) -> Result<PlanStream<'p>, ProgramError> {
+    let resolved = config.resolve()?;
+    let notes = resolved.notes.clone();
+    let blocks = blocks.map(|b| b.map_err(|e| ProgramError::parse(&e)));
+    let blocks: BlockSource<'p> = Box::new(Compensating::new(blocks, config.tool_table()));
+    let path = PathStream::from_blocks(&resolved, blocks)?;
+    let end = path.end();
+    let (dwell, events) = (path.leading_dwell(), path.leading_events().to_vec());
+    let source = Box::new(path.map(|e| e.and_then(usable)));
+    Ok(PlanStream { periods: Periods::from_source(resolved, source, dwell).with_leading_events(&events), notes, end })
 }
 
 /// Plan and interpolate `program` on the machine `config`, starting at rest at the
@@ -88,7 +120,8 @@ pub fn plan_program(config: &MachineConfig, program: &Program) -> Result<Planned
     }
     let events = stream.periods.take_events();
     let elements = stream.periods.elements_read();
-    Ok(PlannedProgram { records, lines, end: stream.end, elements, notes: stream.notes, events })
+    let end = stream.end().expect("known from the start");
+    Ok(PlannedProgram { records, lines, end, elements, notes: stream.notes, events })
 }
 
 #[cfg(test)]
