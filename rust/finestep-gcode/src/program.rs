@@ -23,6 +23,10 @@ pub const MAX_ITERATIONS: u64 = 1_000_000;
 /// Lines a program may execute beyond one pass over its files (lines that loops and
 /// calls run again), so that no program interprets for long (about a second).
 pub const MAX_REPEATED_LINES: u64 = 1_000_000;
+/// How far the structure scan reads ahead of execution, bytes: a small program is
+/// scanned whole at its first line (its labels' sharing then known, so loops need not
+/// keep them), a long one a bounded stretch at a time.
+const SCAN_AHEAD_BYTES: usize = 64 * 1024;
 /// Subroutine calls nest at most this deep: rs274 runs a call at `#<_call_level>` 9 and
 /// refuses the next one ("Too many subroutine levels").
 pub const MAX_CALL_DEPTH: usize = 9;
@@ -62,10 +66,11 @@ struct Links {
     shared_label: bool,
 }
 
-/// An O-word line of a source file: its number, where it stands (byte offsets of its
-/// start and of the line after it) and what it lexed to. Other lines are not kept: they
-/// are read and lexed when they are reached (so an error is raised only then, as
-/// LinuxCNC reads lines only when it gets to them).
+/// A line of a source file with an `O` outside comments (an O-word, or a function such
+/// as COS or MOD) that lexes: its number, where it stands (byte offsets of its start and
+/// of the line after it) and what it lexed to, so that loops do not lex it again. Other
+/// lines are not kept: they are read and lexed when they are reached (so an error is
+/// raised only then, as LinuxCNC reads lines only when it gets to them).
 struct Entry {
     line: usize,
     offset: usize,
@@ -171,7 +176,7 @@ struct Source<'t> {
 }
 
 fn oword(entry: &Entry) -> &OWord {
-    entry.lexed.oword.as_ref().expect("an entry is an O-word line")
+    entry.lexed.oword.as_ref().expect("an O-word line")
 }
 
 impl<'t> Source<'t> {
@@ -247,10 +252,11 @@ impl<'t> Source<'t> {
         self.last_content_line = at.line;
         if o {
             if let Ok(lexed) = lex_line_into(text, &mut self.chars, &mut self.columns) {
-                if lexed.oword.is_some() {
-                    self.entries.push(Entry { line: at.line, offset: at.offset, next, lexed });
-                    self.links.push(Links::default());
-                    self.broken.push(None);
+                let is_oword = lexed.oword.is_some();
+                self.entries.push(Entry { line: at.line, offset: at.offset, next, lexed });
+                self.links.push(Links::default());
+                self.broken.push(None);
+                if is_oword {
                     self.link(self.entries.len() - 1);
                 }
             }
@@ -258,9 +264,11 @@ impl<'t> Source<'t> {
         true
     }
 
-    /// Scans past the line at `offset` (or to the end).
+    /// Scans past the line at `offset` and [`SCAN_AHEAD_BYTES`] beyond (or to the end).
     fn scan_past(&mut self, offset: usize) {
-        while self.scan_at.offset <= offset && self.scan_one() {}
+        if self.scan_at.offset <= offset {
+            while self.scan_at.offset <= offset + SCAN_AHEAD_BYTES && self.scan_one() {}
+        }
     }
 
     /// Scans until entry `i`'s structure is closed (or to the end).
@@ -611,12 +619,15 @@ impl<'t> Runner<'t> {
     fn step(&mut self) -> Result<bool, GcodeError> {
         let frame = self.frames.last().expect("a frame");
         let (s, mut pc) = (frame.source, frame.pc);
-        // The next line with content, the scan past it.
-        let (next, is_o) = loop {
+        // The next line with content, the scan past it; a line the scan lexed is not read.
+        let (next, lexed) = loop {
             let source = &mut self.sources[s];
             source.scan_past(pc.offset);
             if let Some(e) = source.failed.take() {
                 return Err(GcodeError::Io { file: source.name.clone(), source: e });
+            }
+            if let Some(i) = source.entry_at(pc.offset) {
+                break (source.after_entry(i), Some(i));
             }
             let read = if source.end_offset.is_some_and(|end| pc.offset >= end) {
                 Ok(None)
@@ -638,15 +649,17 @@ impl<'t> Runner<'t> {
                 }
                 Err(e) => return Err(GcodeError::Io { file: source.name.clone(), source: e }),
             };
-            let (content, o) = scan(&self.text);
+            let (content, _) = scan(&self.text);
             // The opening `%` (the closing one ends the file above).
             if !content || self.text.trim_matches([' ', '\t']) == "%" {
                 pc = Pc { offset: next, line: pc.line + 1 };
                 continue;
             }
-            break (Pc { offset: next, line: pc.line + 1 }, o);
+            // A line with an `O` that the scan did not keep does not lex: lexed (and
+            // refused) as an ordinary block.
+            break (Pc { offset: next, line: pc.line + 1 }, None);
         };
-        let entry = if is_o { self.sources[s].entry_at(pc.offset) } else { None };
+        let entry = lexed.filter(|&i| self.sources[s].entries[i].lexed.oword.is_some());
         if let Some(i) = entry {
             let source = &mut self.sources[s];
             let o = oword(&source.entries[i]);
@@ -685,7 +698,7 @@ impl<'t> Runner<'t> {
         self.frames.last_mut().expect("frame").pc = next;
         let step = match entry {
             Some(i) => self.oword(s, i),
-            None => self.block(),
+            None => self.block(lexed.map(|i| (s, i))),
         };
         match step {
             Ok(go_on) => Ok(go_on),
@@ -719,13 +732,19 @@ impl<'t> Runner<'t> {
         self.frames.last_mut().expect("frame").pc = to;
     }
 
-    /// Executes the ordinary block in `self.text`; false when it ends the program.
-    fn block(&mut self) -> Result<bool, LineError> {
+    /// Executes the ordinary block in `self.text` (lexed already when `lexed` names its
+    /// entry); false when it ends the program.
+    fn block(&mut self, lexed: Option<(usize, usize)>) -> Result<bool, LineError> {
         let mut buffer = std::mem::take(&mut self.line);
         let mut words = std::mem::take(&mut self.words);
         words.clear();
-        lex_into(&self.text, &mut self.chars, &mut self.columns, &mut buffer)?;
-        let line = &buffer;
+        let line = match lexed {
+            Some((s, i)) => &self.sources[s].entries[i].lexed,
+            None => {
+                lex_into(&self.text, &mut self.chars, &mut self.columns, &mut buffer)?;
+                &buffer
+            }
+        };
         let scope = Scope {
             state: &self.state,
             locals: &self.frames.last().expect("frame").locals,
