@@ -182,28 +182,40 @@ fn peak_rss_kb() -> anyhow::Result<u64> {
         .ok_or_else(|| anyhow::anyhow!("no VmHWM in /proc/self/status"))
 }
 
-/// Plans one memory case through the record stream on the built-in machine, reading
-/// every record and keeping none, and prints: periods, seconds to parse, seconds from
-/// the start of planning to the first record, seconds in all, peak RSS in kB, and the
-/// most path elements the stream kept at once (run in a process of its own by
-/// [`memory_figures`]).
-pub fn plan_memory(case: &str) -> anyhow::Result<()> {
-    let text = memory_program(case)?;
-    let start = Instant::now();
-    let program = finestep_gcode::parse_str(&text, "memory.ngc")?;
-    drop(text);
-    let parse_s = start.elapsed().as_secs_f64();
-    let plan_start = Instant::now();
-    let mut stream = finestep_planner::plan_stream(&MachineConfig::default(), &program)
-        .map_err(|e| anyhow::anyhow!("memory.ngc:{}: {}", e.line, e.reason))?;
+/// Plans `file` through the record stream on the built-in machine, reading every record
+/// and keeping none: the program read as it is planned (`finestep_gcode::stream_file`
+/// into `plan_blocks`, as `finestep run` reads it), or with `whole` parsed whole first
+/// (`plan_stream`). Prints `first` as the first record is read, then: periods, seconds
+/// from `start` (the process's start) to the first record, seconds in all, peak RSS in
+/// kB, and the most path elements the stream kept at once (run in a process of its own
+/// by [`memory_figures`]).
+pub fn plan_memory(file: &std::path::Path, whole: bool) -> anyhow::Result<()> {
+    use std::io::Write;
+    let start = crate::PROCESS_START.get().copied().unwrap_or_else(Instant::now);
+    let name = file.display().to_string();
+    let fail = |e: finestep_planner::ProgramError| anyhow::anyhow!("{}", e.in_file(&name));
+    let config = MachineConfig::default();
+    let program;
+    let mut stream = if whole {
+        program = finestep_gcode::parse_file(file)?;
+        finestep_planner::plan_stream(&config, &program).map_err(fail)?
+    } else {
+        let blocks = finestep_gcode::stream_file(file, &finestep_gcode::Options::default())?;
+        finestep_planner::plan_blocks(&config, blocks).map_err(fail)?
+    };
     let (mut periods, mut first) = (0u64, None);
     for period in stream.periods.by_ref() {
-        period.map_err(|e| anyhow::anyhow!("memory.ngc:{}: {}", e.line, e.reason))?;
-        first.get_or_insert_with(|| plan_start.elapsed().as_secs_f64());
+        period.map_err(fail)?;
+        if first.is_none() {
+            first = Some(start.elapsed().as_secs_f64());
+            let mut out = std::io::stdout().lock();
+            writeln!(out, "first")?;
+            out.flush()?;
+        }
         periods += 1;
     }
     println!(
-        "{periods} {parse_s} {} {} {} {}",
+        "{periods} {} {} {} {}",
         first.unwrap_or(f64::NAN),
         start.elapsed().as_secs_f64(),
         peak_rss_kb()?,
@@ -212,31 +224,59 @@ pub fn plan_memory(case: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Peak memory of planning, each case in a fresh process (`finestep plan-memory CASE`).
+/// Peak memory of planning and the first record's latency, each case in a fresh
+/// process (`finestep plan-memory FILE`) planning a program file: read as it is planned
+/// and, for the long programs, parsed whole first as before. The latency is from the
+/// spawn of the process to its `first` line (measured here) and from its own start.
 fn memory_figures() -> anyhow::Result<()> {
+    use std::io::BufRead;
     let exe = std::env::current_exe()?;
+    let dir = std::env::temp_dir().join(format!("finestep-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
     for (case, what) in [
         ("line", "G1 X1000000 F1666 (10.0 h)"),
         ("arc", "G2 X1000000 I500000 F6000"),
         ("program", "100 000 short G1 segments"),
         ("program-1m", "1 000 000 short G1 segments"),
     ] {
-        let out = std::process::Command::new(&exe).args(["plan-memory", case]).output()?;
-        anyhow::ensure!(out.status.success(), "plan-memory {case}: {}", String::from_utf8_lossy(&out.stderr));
-        let text = String::from_utf8_lossy(&out.stdout);
-        let fields: Vec<f64> = text.split_whitespace().filter_map(|w| w.parse().ok()).collect();
-        anyhow::ensure!(fields.len() == 6, "plan-memory {case} printed {text:?}");
-        println!(
-            "  {:<44} {:>7.1} MB peak RSS  {:>11.0} periods  parse {:.2} s, first record {:.3} s after it, all {:.1} s, {} elements kept at most",
-            format!("plan, streamed: {what}"),
-            fields[4] / 1024.0,
-            fields[0],
-            fields[1],
-            fields[2],
-            fields[3],
-            fields[5]
-        );
+        let file = dir.join(format!("{case}.ngc"));
+        std::fs::write(&file, memory_program(case)?)?;
+        let ways: &[bool] = if case.starts_with("program") { &[false, true] } else { &[false] };
+        for &whole in ways {
+            let mut command = std::process::Command::new(&exe);
+            command.arg("plan-memory").arg(&file).stdout(std::process::Stdio::piped());
+            if whole {
+                command.arg("--whole");
+            }
+            let spawned = Instant::now();
+            let mut child = command.spawn()?;
+            let stdout = child.stdout.take().ok_or_else(|| anyhow::anyhow!("plan-memory {case}: no stdout"))?;
+            let (mut first_s, mut last) = (f64::NAN, String::new());
+            for line in std::io::BufReader::new(stdout).lines() {
+                let line = line?;
+                if line == "first" {
+                    first_s = spawned.elapsed().as_secs_f64();
+                } else {
+                    last = line;
+                }
+            }
+            anyhow::ensure!(child.wait()?.success(), "plan-memory {case} failed");
+            let fields: Vec<f64> = last.split_whitespace().filter_map(|w| w.parse().ok()).collect();
+            anyhow::ensure!(fields.len() == 5, "plan-memory {case} printed {last:?}");
+            println!(
+                "  {:<44} {:>7.1} MB peak RSS  {:>11.0} periods  first record {:.3} s after the spawn ({:.3} s after main), all {:.1} s, {} elements kept at most",
+                format!("plan {}: {what}", if whole { "(parsed whole)" } else { "(read as planned)" }),
+                fields[3] / 1024.0,
+                fields[0],
+                first_s,
+                fields[1],
+                fields[2],
+                fields[4]
+            );
+        }
+        std::fs::remove_file(&file)?;
     }
+    std::fs::remove_dir(&dir)?;
     Ok(())
 }
 

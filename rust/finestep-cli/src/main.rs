@@ -18,6 +18,8 @@ mod sim_chip;
 mod view;
 
 use std::path::PathBuf;
+use std::sync::OnceLock;
+use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 
@@ -119,14 +121,19 @@ enum Command {
         #[arg(long)]
         tool_table: Option<PathBuf>,
     },
-    /// One case of `bench --host-only`'s memory figures (line, arc, program,
-    /// program-1m): plans it through the record stream and prints periods, seconds to
-    /// parse, seconds from the start of planning to the first record, seconds in all, the
-    /// peak RSS in kB and the most path elements kept at once.
+    /// One case of `bench --host-only`'s memory figures: plans FILE through the record
+    /// stream, the program read as it is planned (or parsed whole first with `--whole`),
+    /// prints `first` at the first record, then periods, seconds from the process's start
+    /// to the first record, seconds in all, the peak RSS in kB and the most path elements
+    /// kept at once.
     #[command(hide = true)]
     PlanMemory {
-        /// line, arc, program or program-1m.
-        case: String,
+        /// The part program.
+        file: PathBuf,
+        /// Parse the program whole before planning (`plan_stream`), as before the
+        /// parser streamed.
+        #[arg(long)]
+        whole: bool,
     },
     /// Lockstep and fast-path throughput figures.
     Bench {
@@ -241,7 +248,11 @@ enum ConfigAction {
     },
 }
 
+/// When `main` started: the figures of latency from the process's start.
+pub(crate) static PROCESS_START: OnceLock<Instant> = OnceLock::new();
+
 fn main() -> anyhow::Result<()> {
+    PROCESS_START.get_or_init(Instant::now);
     match Cli::parse().command {
         Command::Demo { out, bus } => demo::run(&out, bus),
         Command::Run { file, fast, bus, config, profile, out, view, port, pace } => {
@@ -264,7 +275,7 @@ fn main() -> anyhow::Result<()> {
                 bench_top::run(200)
             }
         }
-        Command::PlanMemory { case } => bench::plan_memory(&case),
+        Command::PlanMemory { file, whole } => bench::plan_memory(&file, whole),
         Command::GcodeCanon { file, tool_table, var } => {
             conformance::canon(&file, tool_table.as_deref(), var.as_deref())
         }
