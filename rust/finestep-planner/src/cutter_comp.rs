@@ -320,8 +320,8 @@ impl<'a, I> Compensating<'a, I> {
     }
 }
 
-impl<I: Iterator<Item = Result<Block, crate::error::ProgramError>>> Iterator for Compensating<'_, I> {
-    type Item = Result<Block, crate::error::ProgramError>;
+impl<E: From<CompError>, I: Iterator<Item = Result<Block, E>>> Iterator for Compensating<'_, I> {
+    type Item = Result<Block, E>;
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
@@ -343,7 +343,7 @@ impl<I: Iterator<Item = Result<Block, crate::error::ProgramError>>> Iterator for
                     if let Err(e) = self.pass.feed(&block) {
                         self.done = true;
                         self.pass.pass.out.clear();
-                        return Some(Err(crate::error::ProgramError::new(e.line, e.reason)));
+                        return Some(Err(e.into()));
                     }
                 }
                 Some(Err(e)) => {

@@ -18,6 +18,12 @@ pub use crate::error::ProgramError;
 use crate::geometry::{program_end, BlockSource, PathStream};
 use crate::interpolate::Periods;
 
+impl From<crate::cutter_comp::CompError> for ProgramError {
+    fn from(e: crate::cutter_comp::CompError) -> Self {
+        ProgramError::new(e.line, e.reason)
+    }
+}
+
 /// A whole program's periods.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct PlannedProgram {
