@@ -9,7 +9,10 @@
 // and gratings, latch them on the probe, and decode the hand wheel, whose jog generator
 // drives the core in place of the FIFO while RUN is 0. The spindle (PWM or SPI DAC) and
 // the logic outputs (coolant, light, general outputs, the interlock input) hang on the
-// same register bus [HAS_SPINDLE, HAS_OUTPUTS]; a halt turns them off or safe.
+// same register bus [HAS_SPINDLE, HAS_OUTPUTS]; a halt turns them off or safe. The
+// gantry card's panel (a 4x4 keypad and a 7-segment LED menu choosing the gantry's mode)
+// [HAS_PANEL] and the gantry pair's registers and channel decoders [HAS_GANTRY, with a
+// DDA and a shaper per axis] hang there too.
 //
 // Every output is a flip-flop. rst must be held for at least 2 cycles.
 module finestep_top #(
@@ -29,7 +32,9 @@ module finestep_top #(
     parameter FIFO_HEAD_REG   = 1,
     parameter HAS_SPINDLE     = 1,
     parameter HAS_OUTPUTS     = 1,
-    parameter N_GPIO          = 4
+    parameter N_GPIO          = 4,
+    parameter HAS_PANEL       = 0,
+    parameter HAS_GANTRY      = 0
 ) (
     // clock, reset
     input  wire              clk,
@@ -73,7 +78,13 @@ module finestep_top #(
     output wire              coolant_mist,
     output wire              coolant_flood,
     output wire              light,
-    output wire [((N_GPIO > 0) ? N_GPIO : 1)-1:0] gpio
+    output wire [((N_GPIO > 0) ? N_GPIO : 1)-1:0] gpio,
+    // the panel: keypad matrix (rows pulled up, asynchronous; a column driven low where
+    // panel_col is 1: the board makes it open drain) and 8 multiplexed 7-segment digits
+    input  wire [3:0]        panel_row_n,
+    output wire [3:0]        panel_col,
+    output wire [7:0]        panel_seg,
+    output wire [7:0]        panel_dig
 );
 
 `include "finestep_regs.vh"
@@ -186,7 +197,7 @@ module finestep_top #(
     wire                  fifo_pop_request;
     // Spindle and logic outputs
     localparam GPIO_W = (N_GPIO > 0) ? N_GPIO : 1;
-    wire [31:0]           spindle_rdata, outputs_rdata;
+    wire [31:0]           spindle_rdata, outputs_rdata, panel_rdata, gantry_rdata;
     wire                  interlock_inhibit, start_blocked;
 
     // The halt's rising edge empties the FIFO: its records belong to the motion that
@@ -276,7 +287,7 @@ module finestep_top #(
         .par_req(par_req), .par_we(par_we), .par_addr(par_addr), .par_wdata(par_wdata), .par_grant(par_grant),
         .rdata(rdata),
         .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
-        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata), .grant_read(grant_read), .grant_addr(grant_addr),
+        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata), .grant_read(grant_read), .grant_addr(grant_addr),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
@@ -345,15 +356,23 @@ module finestep_top #(
         .start_blocked(start_blocked)
     );
 
-    wire        gantry_engaged_unused, gantry_alarm_unused, gantry_refused_unused;
-    wire [31:0] gantry_error_unused;
-    wire [15:0] gantry_corrections_unused;
+    // The gantry pair: built with HAS_GANTRY where the core has a DDA and a shaper per
+    // axis (gantry_sync is not in the step engine).
+    localparam GANTRY_BUILT = (HAS_GANTRY != 0) && (STEP_SHARED == 0);
+    wire        gantry_enable, gantry_sync_mode, panel_sync;
+    wire [2:0]  gantry_master, gantry_slave;
+    wire [23:0] gantry_tick;
+    wire [15:0] gantry_deadband, gantry_limit, gantry_error16;
+    wire [31:0] gantry_enc_master, gantry_enc_slave;
+    wire        gantry_engaged, gantry_alarm, gantry_refused;
+    wire [31:0] gantry_error;
+    wire [15:0] gantry_corrections;
 
     finestep_core #(
         .N_AXES(N_AXES),
         .P_WIDTH(P_WIDTH),
         .TIMING_W(TIMING_W),
-        .HAS_GANTRY(0),   // not in the register map yet
+        .HAS_GANTRY(GANTRY_BUILT ? 1 : 0),
         .STEP_SHARED(STEP_SHARED),
         .RAM_BLOCK(RAM_BLOCK)
     ) core (
@@ -362,19 +381,19 @@ module finestep_top #(
         .axis_enable(axis_enable),
         .step_len(step_len), .step_space(step_space), .dir_setup(dir_setup), .dir_hold(dir_hold),
         .out_mode(out_mode), .invert(invert),
-        // The gantry's registers and channel selection are not in the map yet: built without it.
-        .gantry_enable(1'b0), .gantry_sync_mode(1'b0), .gantry_master(3'd0), .gantry_slave(3'd0),
-        .gantry_tick(24'd0), .gantry_deadband(16'd0), .gantry_limit(16'd0),
-        .enc_master(32'd0), .enc_slave(32'd0), .clear_counters(1'b0),
+        .gantry_enable(gantry_enable), .gantry_sync_mode(gantry_sync_mode),
+        .gantry_master(gantry_master), .gantry_slave(gantry_slave),
+        .gantry_tick(gantry_tick), .gantry_deadband(gantry_deadband), .gantry_limit(gantry_limit),
+        .enc_master(gantry_enc_master), .enc_slave(gantry_enc_slave), .clear_counters(clear_counters),
         .rec_valid(rec_valid), .rec_ready(rec_ready),
         .rec_inc(rec_inc), .rec_flags(rec_flags),
         .rec_alt(jog_engaged), .rec_alt_lane(jog_lane), .rec_alt_inc(jog_word),
         .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
         .position(position), .rate_error(rate_error), .step_lost(step_lost),
         .record_error(record_error), .block_end(block_end),
-        .gantry_engaged(gantry_engaged_unused), .gantry_alarm(gantry_alarm_unused),
-        .gantry_refused(gantry_refused_unused), .gantry_error(gantry_error_unused),
-        .gantry_corrections(gantry_corrections_unused)
+        .gantry_engaged(gantry_engaged), .gantry_alarm(gantry_alarm),
+        .gantry_refused(gantry_refused), .gantry_error(gantry_error),
+        .gantry_corrections(gantry_corrections)
     );
 
     // While the jog is engaged the FIFO is not popped (RUN is 0 then, so its gate is shut).
@@ -509,8 +528,57 @@ module finestep_top #(
         end
     endgenerate
 
-    wire unused_top = &{1'b0, fifo_overflow_unused, gantry_engaged_unused, gantry_alarm_unused,
-                        gantry_refused_unused, gantry_error_unused, gantry_corrections_unused};
+    generate
+        if (GANTRY_BUILT) begin : gantry_block
+            gantry_link #(.N_ENC(N_ENC), .HAS_PANEL(HAS_PANEL), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH)) gantry (
+                .clk(clk), .rst(rst),
+                .write(bus_write), .addr(bus_address), .wdata(bus_write_data), .rdata(gantry_rdata),
+                .enc_a(enc_a), .enc_b(enc_b), .enc_prescale(enc_prescale), .enc_filter(enc_filter),
+                .clear_errors(clear_errors), .clear_counters(clear_counters),
+                .panel_sync(panel_sync),
+                .enable(gantry_enable), .sync(gantry_sync_mode), .master(gantry_master), .slave(gantry_slave),
+                .tick(gantry_tick), .deadband(gantry_deadband), .limit(gantry_limit),
+                .enc_master(gantry_enc_master), .enc_slave(gantry_enc_slave),
+                .engaged(gantry_engaged), .alarm(gantry_alarm), .refused(gantry_refused),
+                .error(gantry_error), .corrections(gantry_corrections),
+                .error16(gantry_error16)
+            );
+        end else begin : no_gantry
+            wire unused_gantry = &{1'b0, panel_sync, gantry_engaged, gantry_error, gantry_corrections};
+            assign gantry_rdata      = 32'd0;
+            assign gantry_enable     = 1'b0;
+            assign gantry_sync_mode  = 1'b0;
+            assign gantry_master     = 3'd0;
+            assign gantry_slave      = 3'd0;
+            assign gantry_tick       = 24'd0;
+            assign gantry_deadband   = 16'd0;
+            assign gantry_limit      = 16'd0;
+            assign gantry_enc_master = 32'd0;
+            assign gantry_enc_slave  = 32'd0;
+            assign gantry_error16    = 16'd0;
+        end
+
+        if (HAS_PANEL != 0) begin : panel_block
+            // alarm_in: {watchdog expired, E-stop, gantry refused, gantry alarm}
+            panel #(.N_DIG(8)) card (
+                .clk(clk), .rst(rst),
+                .write(bus_write), .addr(bus_address), .wdata(bus_write_data), .rdata(panel_rdata),
+                .sync_err(gantry_error16),
+                .alarm_in({fault_watchdog, fault_estop, gantry_refused, gantry_alarm}),
+                .sync_mode(panel_sync),
+                .row_n(panel_row_n), .col_drive(panel_col), .seg(panel_seg), .dig(panel_dig)
+            );
+        end else begin : no_panel
+            wire unused_panel = &{1'b0, panel_row_n, gantry_error16, gantry_refused, gantry_alarm};
+            assign panel_rdata = 32'd0;
+            assign panel_sync  = 1'b0;
+            assign panel_col   = 4'd0;
+            assign panel_seg   = 8'd0;
+            assign panel_dig   = 8'd0;
+        end
+    endgenerate
+
+    wire unused_top = &{1'b0, fifo_overflow_unused};
 
 endmodule
 

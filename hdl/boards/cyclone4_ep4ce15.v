@@ -74,7 +74,9 @@ module cyclone4_ep4ce15 #(
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi), .spi_miso(spi_miso), .irq(irq),
         .estop_pin(estop_pin), .probe_pin(probe_pin), .mpg_a(mpg_a), .mpg_b(mpg_b),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z),
-        .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en)
+        .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
+        // no panel in this build (HAS_PANEL 0)
+        .panel_row_n(4'hF), .panel_col(), .panel_seg(), .panel_dig()
     );
     assign led_n = rst;
 

@@ -72,7 +72,9 @@ module max2_epm1270 #(
         .spindle_pwm(io_unused[0]), .spindle_dir(io_unused[1]), .spindle_en(io_unused[2]),
         .dac_cs_n(io_unused[3]), .dac_sck(io_unused[4]), .dac_sdi(io_unused[5]),
         .interlock_pin(1'b0), .coolant_mist(io_unused[6]), .coolant_flood(io_unused[7]),
-        .light(io_unused[8]), .gpio(gpio_unused)
+        .light(io_unused[8]), .gpio(gpio_unused),
+        // no panel in this build (HAS_PANEL 0)
+        .panel_row_n(4'hF), .panel_col(), .panel_seg(), .panel_dig()
     );
 
     assign bus_ad = bus_ad_oe ? bus_ad_out : 16'bz;

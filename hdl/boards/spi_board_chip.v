@@ -11,7 +11,9 @@ module spi_board_chip #(
     parameter CLOCK_HZ        = 50000000,
     parameter RAM_BLOCK       = 0,
     parameter STEP_SHARED     = 1,
-    parameter FIFO_HEAD_REG   = 1
+    parameter FIFO_HEAD_REG   = 1,
+    parameter HAS_PANEL       = 0,
+    parameter HAS_GANTRY      = 0
 ) (
     // clock, reset
     input  wire              clk,
@@ -34,7 +36,12 @@ module spi_board_chip #(
     input  wire [N_ENC-1:0]  enc_z,
     output wire [N_AXES-1:0] pin_a,
     output wire [N_AXES-1:0] pin_b,
-    output wire [N_AXES-1:0] pin_en
+    output wire [N_AXES-1:0] pin_en,
+    // the panel (HAS_PANEL; a board without one ties panel_row_n high, leaves the rest)
+    input  wire [3:0]        panel_row_n,
+    output wire [3:0]        panel_col,
+    output wire [7:0]        panel_seg,
+    output wire [7:0]        panel_dig
 );
 
     wire miso, miso_oe;
@@ -52,7 +59,8 @@ module spi_board_chip #(
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
-        .RAM_BLOCK(RAM_BLOCK), .STEP_SHARED(STEP_SHARED), .FIFO_HEAD_REG(FIFO_HEAD_REG)
+        .RAM_BLOCK(RAM_BLOCK), .STEP_SHARED(STEP_SHARED), .FIFO_HEAD_REG(FIFO_HEAD_REG),
+        .HAS_PANEL(HAS_PANEL), .HAS_GANTRY(HAS_GANTRY)
     ) chip (
         .clk(clk), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),
@@ -68,7 +76,8 @@ module spi_board_chip #(
         .spindle_pwm(io_unused[0]), .spindle_dir(io_unused[1]), .spindle_en(io_unused[2]),
         .dac_cs_n(io_unused[3]), .dac_sck(io_unused[4]), .dac_sdi(io_unused[5]),
         .interlock_pin(1'b0), .coolant_mist(io_unused[6]), .coolant_flood(io_unused[7]),
-        .light(io_unused[8]), .gpio(gpio_unused)
+        .light(io_unused[8]), .gpio(gpio_unused),
+        .panel_row_n(panel_row_n), .panel_col(panel_col), .panel_seg(panel_seg), .panel_dig(panel_dig)
     );
 
     assign spi_miso = miso_oe ? miso : 1'bz;

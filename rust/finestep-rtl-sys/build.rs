@@ -167,6 +167,8 @@ fn main() {
         "led_menu_sim.h",
         "step_serial_sim.cpp",
         "step_serial_sim.h",
+        "panel_chip_sim.cpp",
+        "panel_chip_sim.h",
     ] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
@@ -272,6 +274,9 @@ fn main() {
         // to the build): its lockstep mismatches name the pin and the clock, no waveform.
         (Build::Top { motion: true, mpg: true }, "Vfinestep_top_motion", None),
         (Build::Top { motion: true, mpg: false }, "Vfinestep_top_motion_nompg", None),
+        // The gantry card's chip: the top with the panel and the gantry pair (a DDA and a
+        // shaper per axis), traced (its own lockstep tests, sim/panel_chip_sim.cpp).
+        (Build::PanelChip, "Vfinestep_top_panel", Some(trace_flag)),
         // The point-by-point comparison interpolator alone (its own lockstep test).
         (Build::PbpInterp, "Vpbp_interp", Some(trace_flag)),
         // The gantry card's keypad scan and LED menu alone (their own lockstep tests);
@@ -346,6 +351,7 @@ fn main() {
     files.push(sim.join("keypad_scan_sim.cpp"));
     files.push(sim.join("led_menu_sim.cpp"));
     files.push(sim.join("step_serial_sim.cpp"));
+    files.push(sim.join("panel_chip_sim.cpp"));
     if netlist.as_ref().is_some_and(|n| n.family == "mutants") {
         files.push(sim.join("mutants_rtl/finestep_mutsel.cpp"));
     }
@@ -366,8 +372,9 @@ fn main() {
         .header(sim.join("keypad_scan_sim.h").to_string_lossy())
         .header(sim.join("led_menu_sim.h").to_string_lossy())
         .header(sim.join("step_serial_sim.h").to_string_lossy())
-        .allowlist_function("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*|ss_.*")
-        .allowlist_type("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*|ss_.*")
+        .header(sim.join("panel_chip_sim.h").to_string_lossy())
+        .allowlist_function("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*|ss_.*|pc_.*")
+        .allowlist_type("fs_.*|ft_.*|pi_.*|kp_.*|lm_.*|ss_.*|pc_.*")
         .allowlist_var("FS_.*|FT_.*")
         .clang_arg(format!("-I{}", gen.display()))
         .derive_default(true)
@@ -423,6 +430,9 @@ enum Build {
     LedMenu { low: bool },
     /// `step_serial` alone with these axes and digit, the core's `P_WIDTH` and `TIMING_W`.
     StepSerial { n_axes: u32, digit: u32 },
+    /// `finestep_top` with the panel and the gantry pair (`HAS_PANEL = HAS_GANTRY = 1`,
+    /// `STEP_SHARED = 0`), its other parameters as the default top's.
+    PanelChip,
 }
 
 /// The digit of the Verilated core with the digit-serial step engine
@@ -463,6 +473,7 @@ fn verilate(
         Build::KeypadScan => ("keypad_scan", None, None, None),
         Build::LedMenu { .. } => ("led_menu", None, None, None),
         Build::StepSerial { .. } => ("step_serial", None, None, None),
+        Build::PanelChip => ("finestep_top", None, Some(false), Some(true)),
     };
     let core_digit = if let Build::Core { digit, .. } = build { Some(digit) } else { None };
     let _ = std::fs::remove_dir_all(dir);
@@ -553,7 +564,11 @@ fn verilate(
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
         .args(mpg.map(|m| format!("-GHAS_MPG={}", if m { params.has_mpg } else { 0 })))
-        .args((top == "finestep_top").then(|| format!("-GSTEP_SHARED={}", params.step_shared)))
+        .args((top == "finestep_top").then(|| {
+            let shared = if let Build::PanelChip = build { 0 } else { params.step_shared };
+            format!("-GSTEP_SHARED={shared}")
+        }))
+        .args(matches!(build, Build::PanelChip).then_some(["-GHAS_PANEL=1", "-GHAS_GANTRY=1"]).into_iter().flatten())
         .args(motion.map(|m| format!("-GHAS_SPINDLE={}", if m { 0 } else { params.has_spindle })))
         .args(motion.map(|m| format!("-GHAS_OUTPUTS={}", if m { 0 } else { params.has_outputs })))
         .args(motion.map(|m| format!("-GN_GPIO={}", if m { 0 } else { params.n_gpio })))

@@ -18,6 +18,7 @@
 //! ```
 
 mod mismatch;
+pub mod panel_chip;
 pub mod plant_loop;
 pub mod top_lockstep;
 
@@ -29,6 +30,7 @@ use finestep_rtl_sys::Rtl;
 pub use finestep_rtl_sys::{TopVariant, TraceDepth};
 
 pub use mismatch::{describe_difference, Mismatch, WaveformError};
+pub use panel_chip::{panel_chip_params, GantryPlant, PanelChipLockstep, PanelChipMismatch};
 pub use plant_loop::PlantLoop;
 pub use top_lockstep::{rtl_top_params, rtl_top_params_of, ModelPins, RtlPins, TopLockstep, TopMismatch};
 

@@ -19,6 +19,7 @@ pub mod feedback;
 pub mod frame;
 pub mod machine;
 pub mod machine_io;
+pub mod machine_panel;
 pub mod parallel;
 pub mod pins;
 #[cfg(unix)]
@@ -35,6 +36,7 @@ pub use feedback::{
 pub use finestep_interface::regs;
 pub use machine::{AxisSetup, Caps, Machine, Positions};
 pub use machine_io::{InterlockSetup, Outputs, SpindleSetup, SpindleStatus};
+pub use machine_panel::{GantrySetup, GantryStatus, PanelDisplay, PanelKeys, PanelMenu, PanelScan};
 pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};
 pub use spi::{SpiBus, SpiTransfer};

@@ -34,6 +34,10 @@ pub struct Caps {
     pub has_spindle: bool,
     /// The logic outputs and the interlock are built (`CAPS.HAS_OUTPUTS`).
     pub has_outputs: bool,
+    /// The card's panel (keypad, LED menu) is built (`CAPS.HAS_PANEL`).
+    pub has_panel: bool,
+    /// The gantry pair is built (`CAPS.HAS_GANTRY`).
+    pub has_gantry: bool,
 }
 
 impl Caps {
@@ -108,6 +112,8 @@ impl<B: Bus> Machine<B> {
             step_slots: 1 << caps::STEP_SLOTS_LOG2.get(caps_word),
             has_spindle: caps::HAS_SPINDLE.get(caps_word) != 0,
             has_outputs: caps::HAS_OUTPUTS.get(caps_word) != 0,
+            has_panel: caps::HAS_PANEL.get(caps_word) != 0,
+            has_gantry: caps::HAS_GANTRY.get(caps_word) != 0,
         };
         let build = finestep_interface::TopParams {
             n_axes: caps.n_axes,
@@ -120,6 +126,8 @@ impl<B: Bus> Machine<B> {
             step_shared: caps.step_slots > 1,
             has_spindle: caps.has_spindle,
             has_outputs: caps.has_outputs,
+            has_panel: caps.has_panel,
+            has_gantry: caps.has_gantry,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;

@@ -236,6 +236,11 @@ pub struct TopParams {
     pub has_outputs: bool,
     /// `N_GPIO`: general outputs (with `has_outputs`).
     pub n_gpio: usize,
+    /// `HAS_PANEL`: the card's panel (keypad and LED menu) is built.
+    pub has_panel: bool,
+    /// `HAS_GANTRY`: the gantry pair is built where the core has a DDA and a shaper per
+    /// axis ([`Self::gantry_built`]).
+    pub has_gantry: bool,
 }
 
 impl Default for TopParams {
@@ -256,6 +261,8 @@ impl Default for TopParams {
             has_spindle: finestep_top::HAS_SPINDLE.default != 0,
             has_outputs: finestep_top::HAS_OUTPUTS.default != 0,
             n_gpio: finestep_top::N_GPIO.default as usize,
+            has_panel: finestep_top::HAS_PANEL.default != 0,
+            has_gantry: finestep_top::HAS_GANTRY.default != 0,
         }
     }
 }
@@ -277,17 +284,24 @@ impl TopParams {
         finestep_top::HAS_SPINDLE.check(self.has_spindle)?;
         finestep_top::HAS_OUTPUTS.check(self.has_outputs)?;
         finestep_top::N_GPIO.check(self.n_gpio as u64)?;
+        finestep_top::HAS_PANEL.check(self.has_panel)?;
+        finestep_top::HAS_GANTRY.check(self.has_gantry)?;
         self.core_params().validate()
     }
 
-    /// The parameters of the core inside (`finestep_top` builds it without the gantry
-    /// block until the gantry has registers).
+    /// The gantry pair is built: `HAS_GANTRY` with a DDA and a shaper per axis
+    /// (`gantry_sync` is not in the step engine); `CAPS.HAS_GANTRY`.
+    pub fn gantry_built(&self) -> bool {
+        self.has_gantry && !self.step_shared
+    }
+
+    /// The parameters of the core inside (the gantry block where [`Self::gantry_built`]).
     pub fn core_params(&self) -> CoreParams {
         CoreParams {
             n_axes: self.n_axes,
             p_width: self.p_width,
             timing_width: self.timing_w,
-            has_gantry: false,
+            has_gantry: self.gantry_built(),
             step_shared: self.step_shared,
             // finestep_top builds the step engine (STEP_DIGIT is a core parameter only).
             step_digit: 0,

@@ -123,6 +123,12 @@ pub struct IoStatus {
     pub interlock_active: bool,
     /// `INTERLOCK.BLOCKED`.
     pub interlock_blocked: bool,
+    /// `PANEL_KEYS` (with `HAS_PANEL`).
+    pub panel_keys: u32,
+    /// `PANEL_MENU` (with `HAS_PANEL`): the menu's shadows, not a stored word.
+    pub panel_menu: u32,
+    /// `GANTRY_STATUS` (where the gantry is built).
+    pub gantry_status: u32,
 }
 
 /// The feedback blocks' register view in one cycle (all 0 for blocks not built).
@@ -298,6 +304,12 @@ const SPINDLE_REGISTERS: [u8; 5] = [
 /// The logic outputs' and the interlock's registers: absent without `HAS_OUTPUTS`.
 const OUTPUT_REGISTERS: [u8; 3] = [regs::outputs::ADDR, regs::outputs_safe::ADDR, regs::interlock::ADDR];
 
+/// The panel's registers: absent without `HAS_PANEL`.
+const PANEL_REGISTERS: [u8; 3] = [regs::panel_scan::ADDR, regs::panel_keys::ADDR, regs::panel_menu::ADDR];
+
+/// The gantry pair's registers: absent where it is not built.
+const GANTRY_REGISTERS: [u8; 3] = [regs::gantry_control::ADDR, regs::gantry_limits::ADDR, regs::gantry_status::ADDR];
+
 /// The `rw` bits this build implements, per address, and their reset values.
 fn implemented_rw(params: &TopParams) -> ([u32; ADDRESSES], [u32; ADDRESSES]) {
     let mut mask = [0u32; ADDRESSES];
@@ -312,6 +324,13 @@ fn implemented_rw(params: &TopParams) -> ([u32; ADDRESSES], [u32; ADDRESSES]) {
             continue;
         }
         if !params.has_outputs && OUTPUT_REGISTERS.contains(&register.addr) {
+            continue;
+        }
+        // PANEL_MENU's fields are the menu's (read through its shadows), not stored here.
+        if (!params.has_panel && PANEL_REGISTERS.contains(&register.addr)) || register.addr == regs::panel_menu::ADDR {
+            continue;
+        }
+        if !params.gantry_built() && GANTRY_REGISTERS.contains(&register.addr) {
             continue;
         }
         for index in 0..register.count() {
@@ -386,6 +405,11 @@ impl RegisterFile {
 
     fn refresh_axis_configs(&mut self) {
         self.axis_configs = std::array::from_fn(|axis| self.axis_config_of_rw(axis));
+    }
+
+    /// The `rw` bits of the register at `addr` as they are held now.
+    pub fn word(&self, addr: u8) -> u32 {
+        self.rw[usize::from(addr) & (ADDRESSES - 1)]
     }
 
     fn rw_field(&self, addr: u8, field: Field) -> u32 {
@@ -745,6 +769,8 @@ impl RegisterFile {
                     (c::STEP_SLOTS_LOG2, p.core_params().step_slots().trailing_zeros()),
                     (c::HAS_SPINDLE, u32::from(p.has_spindle)),
                     (c::HAS_OUTPUTS, u32::from(p.has_outputs)),
+                    (c::HAS_PANEL, u32::from(p.has_panel)),
+                    (c::HAS_GANTRY, u32::from(p.gantry_built())),
                 ]
                 .iter()
                 .fold(0, |word, &(field, value)| field.set(word, value & field.max()))
@@ -797,6 +823,9 @@ impl RegisterFile {
                 use regs::interlock as i;
                 i::BLOCKED.set(i::ACTIVE.set(0, u32::from(io.interlock_active)), u32::from(io.interlock_blocked))
             }
+            regs::panel_keys::ADDR if p.has_panel => io.panel_keys,
+            regs::panel_menu::ADDR if p.has_panel => io.panel_menu,
+            regs::gantry_status::ADDR if p.gantry_built() => io.gantry_status,
             _ => 0,
         }
     }

@@ -31,10 +31,12 @@ use finestep_interface::regs;
 
 use crate::core::Core;
 use crate::encoder_bank::{EncoderBank, EncoderBankInputs, EncoderBankStatus};
+use crate::gantry_link::{saturate, GantryLink, GantryLinkInputs};
 use crate::hand_wheel::{HandWheel, HandWheelInputs};
 use crate::jog_generator::JogGenerator;
 use crate::logic_outputs::Interlock;
 use crate::motion_control::{MotionControl, MotionInputs};
+use crate::panel::{Panel, PanelInputs, PanelPins};
 use crate::parallel_bus_slave::{ParallelBusSlave, ParallelPins};
 use crate::position_fifo::PositionFifo;
 use crate::register_file::{
@@ -89,6 +91,8 @@ pub mod top_pins {
         pub const MPG_A: u32 = 57;
         /// `mpg_b`.
         pub const MPG_B: u32 = 58;
+        /// Lowest bit of `panel_row_n[3:0]` (bits 59..=62).
+        pub const PANEL_ROW_N: u32 = 59;
     }
 
     /// Bits of [`TopOutputs::pack`](super::TopOutputs::pack).
@@ -175,6 +179,9 @@ pub struct TopInputs {
     pub mpg_b: bool,
     /// The interlock input; its active level is `INTERLOCK.ACTIVE_HIGH`.
     pub interlock_pin: bool,
+    /// The panel's keypad rows (4 bits, pulled up: low where a closed key joins the
+    /// row to the driven column).
+    pub panel_row_n: u8,
 }
 
 impl Default for TopInputs {
@@ -201,6 +208,7 @@ impl Default for TopInputs {
             mpg_a: false,
             mpg_b: false,
             interlock_pin: false,
+            panel_row_n: 0xf,
         }
     }
 }
@@ -226,6 +234,7 @@ impl TopInputs {
             | u64::from(self.mpg_a) << i::MPG_A
             | u64::from(self.mpg_b) << i::MPG_B
             | u64::from(self.interlock_pin) << i::INTERLOCK_PIN
+            | u64::from(self.panel_row_n & 0xf) << i::PANEL_ROW_N
     }
 
     /// The pins from one word (bits not in [`top_pins::input`] are ignored).
@@ -250,6 +259,7 @@ impl TopInputs {
             mpg_a: bit(i::MPG_A),
             mpg_b: bit(i::MPG_B),
             interlock_pin: bit(i::INTERLOCK_PIN),
+            panel_row_n: (word >> i::PANEL_ROW_N) as u8 & 0xf,
         }
     }
 }
@@ -283,6 +293,9 @@ pub struct TopOutputs {
     pub light: bool,
     /// `gpio`, bit `i` for output `i` (0 at and above `N_GPIO`).
     pub gpio: u8,
+    /// The panel's pins (columns, segments, digits; 0 without `HAS_PANEL`); not in
+    /// [`TopOutputs::pack`]'s word.
+    pub panel: PanelPins,
 }
 
 impl Default for TopOutputs {
@@ -302,6 +315,7 @@ impl Default for TopOutputs {
             coolant_flood: false,
             light: false,
             gpio: 0,
+            panel: PanelPins::default(),
         }
     }
 }
@@ -355,6 +369,7 @@ impl TopOutputs {
             coolant_flood: bit(o::COOLANT_FLOOD),
             light: bit(o::LIGHT),
             gpio: (word >> o::GPIO) as u8,
+            panel: PanelPins::default(),
         }
     }
 
@@ -391,6 +406,8 @@ pub struct Top {
     jog: JogGenerator,
     spindle: Spindle,
     interlock: Interlock,
+    panel: Panel,
+    gantry_link: GantryLink,
     cycle: u64,
     /// The SPI frame layer committed a FIFO frame last cycle: the kick's flip-flop
     /// (`kick <- served write || wr_commit`) for the commit half.
@@ -433,6 +450,8 @@ impl Top {
             jog: JogGenerator::default(),
             spindle: Spindle::default(),
             interlock: Interlock::default(),
+            panel: Panel::default(),
+            gantry_link: GantryLink::default(),
             cycle: 0,
             committed_last_cycle: false,
             bus_stage: None,
@@ -515,6 +534,27 @@ impl Top {
         &self.spindle
     }
 
+    /// The panel (its state; meaningful with `HAS_PANEL`).
+    pub fn panel(&self) -> &Panel {
+        &self.panel
+    }
+
+    /// The gantry link's decoders (meaningful with `HAS_GANTRY`).
+    pub fn gantry_link(&self) -> &GantryLink {
+        &self.gantry_link
+    }
+
+    /// The gantry's mode in this cycle: the panel's with `HAS_PANEL`, else
+    /// `GANTRY_CONTROL.SYNC` (true synchronised).
+    pub fn gantry_sync_mode(&self) -> bool {
+        if self.params.has_panel {
+            self.panel.sync_mode()
+        } else {
+            let control = self.registers.word(regs::gantry_control::ADDR);
+            regs::gantry_control::SYNC.get(control) != 0
+        }
+    }
+
     /// The interlock (meaningful with `HAS_OUTPUTS`).
     pub fn interlock(&self) -> &Interlock {
         &self.interlock
@@ -569,6 +609,9 @@ impl Top {
             out.light = o::LIGHT.get(word) != 0;
             out.gpio = o::GPIO.get(word) as u8;
         }
+        if self.params.has_panel {
+            out.panel = self.panel.pins();
+        }
         out
     }
 
@@ -613,6 +656,13 @@ impl Top {
         if self.params.has_outputs {
             io.interlock_active = self.interlock.active(&self.registers.interlock_config());
             io.interlock_blocked = self.interlock.blocked();
+        }
+        if self.params.has_panel {
+            io.panel_keys = self.panel.keys_word();
+            io.panel_menu = self.panel.menu_word();
+        }
+        if self.params.gantry_built() {
+            io.gantry_status = GantryLink::status_word(self.core.gantry(), self.gantry_sync_mode());
         }
         io
     }
@@ -700,6 +750,7 @@ impl Top {
         for (axis, config) in core_inputs.axes.iter_mut().enumerate().take(p.n_axes) {
             *config = self.registers.axis_config(axis);
         }
+        self.step_panel_gantry(inputs, served, &hw, &mut core_inputs);
         let mut safety_inputs = safety_config(&self.registers);
         safety_inputs.kick = self.registers.kick() || self.committed_last_cycle;
         self.committed_last_cycle = spi_port.commit;
@@ -816,6 +867,57 @@ impl Top {
     }
 }
 
+impl Top {
+    /// The panel's and the gantry link's edge (their inputs from this cycle's state,
+    /// before anything else steps), and the core's gantry inputs of this cycle.
+    fn step_panel_gantry(
+        &mut self,
+        inputs: &TopInputs,
+        served: Option<BusRequest>,
+        hw: &HardwareStatus,
+        core_inputs: &mut CoreInputs,
+    ) {
+        let p = self.params;
+        if !p.has_panel && !p.gantry_built() {
+            return;
+        }
+        let clear_counters = self.registers.clear_counters();
+        let gantry = p.gantry_built().then(|| *self.core.gantry());
+        if p.gantry_built() {
+            let control = self.registers.word(regs::gantry_control::ADDR);
+            let limits = self.registers.word(regs::gantry_limits::ADDR);
+            core_inputs.gantry =
+                self.gantry_link.gantry_inputs(control, limits, self.gantry_sync_mode(), clear_counters);
+            let channels = self.registers.encoder_configs();
+            let enc_mask = ((1u16 << p.n_enc.min(8)) - 1) as u8;
+            self.gantry_link.step(&GantryLinkInputs {
+                control,
+                enc_a: inputs.enc_a & enc_mask,
+                enc_b: inputs.enc_b & enc_mask,
+                prescale: self.registers.enc_prescale(),
+                filters: std::array::from_fn(|c| channels[c].filter),
+                clear_errors: self.registers.clear_errors(),
+                clear_counters,
+            });
+        }
+        if p.has_panel {
+            let menu_write =
+                served.filter(|r| r.write && r.addr & (ADDRESSES - 1) as u8 == regs::panel_menu::ADDR).map(|r| r.wdata);
+            let (sync_err, gantry_flags) = match &gantry {
+                Some(g) => (saturate(g.error()), u8::from(g.refused()) << 1 | u8::from(g.alarm())),
+                None => (0, 0),
+            };
+            self.panel.step(&PanelInputs {
+                scan: self.registers.word(regs::panel_scan::ADDR),
+                menu_write,
+                row_n: inputs.panel_row_n,
+                sync_err,
+                alarm_in: u8::from(hw.fault_watchdog) << 3 | u8::from(hw.fault_estop) << 2 | gantry_flags,
+            });
+        }
+    }
+}
+
 /// The safety monitor's configuration from the register file (kick, clear and pin
 /// left inactive).
 fn safety_config(registers: &RegisterFile) -> SafetyInputs {
@@ -837,7 +939,7 @@ mod tests {
         let inputs =
             TopInputs { rst: true, spi_mosi: true, bus_ad_in: 0xBEEF, estop_pin: true, ..TopInputs::default() };
         let word = inputs.pack();
-        assert_eq!(word, 1 | 0b10 | 0b1000 | 0b1111_0000 | 1 << 8 | 0xBEEF << 16);
+        assert_eq!(word, 1 | 0b10 | 0b1000 | 0b1111_0000 | 1 << 8 | 0xBEEF << 16 | 0xF << 59);
         assert_eq!(TopInputs::unpack(word), inputs);
         let feedback =
             TopInputs { enc_a: 0x81, enc_b: 0x02, enc_z: 0x40, probe_pin: true, mpg_b: true, ..TopInputs::default() };

@@ -36,6 +36,8 @@ fn params() -> impl Strategy<Value = TopParams> {
                 has_spindle,
                 has_outputs,
                 n_gpio,
+                has_panel: false,
+                has_gantry: false,
             };
             host::engine_if_valid(p)
         },

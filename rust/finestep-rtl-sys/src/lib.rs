@@ -27,11 +27,13 @@ use finestep_model::{ChunkEnd, CoreInputs, CoreOutputs, Event};
 
 pub mod keypad_scan;
 pub mod led_menu;
+pub mod panel_chip;
 pub mod pbp_interp;
 pub mod step_serial;
 pub mod top;
 pub use keypad_scan::{keypad_params, RtlKeypadScan};
 pub use led_menu::{led_variants, RtlLedMenu};
+pub use panel_chip::RtlPanelChip;
 pub use pbp_interp::{pbp_params, RtlPbpInterp};
 pub use step_serial::{serial_variants, RtlStepSerial};
 pub use top::{top_build, top_build_of, PinEvent, RtlTop, TopBuild, TopVariant};
