@@ -104,3 +104,17 @@ impl GantryLink {
         self.slave.step(&pins(s));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_error_saturates_to_16_bits() {
+        for (error, shown) in [(0i32, 0i16), (32767, 32767), (32768, 32767), (-32768, -32768), (-32769, -32768)] {
+            assert_eq!(saturate(error as u32), shown);
+        }
+        assert_eq!(saturate(i32::MIN as u32), i16::MIN);
+        assert_eq!(saturate(i32::MAX as u32), i16::MAX);
+    }
+}

@@ -187,3 +187,42 @@ impl Panel {
         self.sel = (sel + 1) & 3;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn idle(scan: u32) -> PanelInputs {
+        PanelInputs { scan, menu_write: None, row_n: 0xf, sync_err: 0, alarm_in: 0 }
+    }
+
+    /// A PANEL_MENU write reaches the menu within 4 clocks at every phase of the
+    /// selector, and the word reads back within 2 more; a second write within the 4
+    /// clocks wins whole.
+    #[test]
+    fn menu_writes_arrive_within_four_clocks_and_read_back() {
+        use regs::panel_menu as m;
+        let scan = regs::panel_scan::SCAN_DIV.set(0, 3);
+        for phase in 0..4 {
+            let mut panel = Panel::default();
+            for _ in 0..phase {
+                panel.step(&idle(scan));
+            }
+            let first = m::VALUE.set(m::OVR_EN.set(0, 1), 0x1234);
+            let word = m::VALUE.set(m::DISP_EN.set(m::OVR_MODE.set(m::OVR_EN.set(0, 1), 1), 1), 0xBEEF);
+            panel.step(&PanelInputs { menu_write: Some(first), ..idle(scan) });
+            panel.step(&PanelInputs { menu_write: Some(word), ..idle(scan) });
+            for _ in 0..4 {
+                panel.step(&idle(scan));
+            }
+            assert!(panel.menu().effective_mode(), "phase {phase}: the override's mode");
+            panel.step(&idle(scan));
+            panel.step(&idle(scan));
+            let read = panel.menu_word();
+            assert_eq!(m::VALUE.get(read), 0xBEEF, "phase {phase}");
+            assert_eq!(m::MODE.get(read), 1, "phase {phase}");
+            assert_eq!((m::OVR_EN.get(read), m::OVR_MODE.get(read), m::DISP_EN.get(read)), (1, 1, 1));
+            assert!(panel.sync_mode());
+        }
+    }
+}

@@ -11,14 +11,15 @@ use std::ptr::NonNull;
 use crate::{ffi, open_trace, TraceDepth};
 
 /// The panel's pins in [`RtlPanelChip::panel`]'s word: columns in bits 0..3, segments
-/// 8..15, digits 16..23.
+/// 8..15, digits 16..23 (mirrors `PC_PANEL_*` of `sim/panel_chip_sim.h` bit for bit, as
+/// `finestep_model::top_pins` mirrors `finestep_top_sim.h`).
 pub mod panel_bits {
     /// Lowest bit of `panel_col`.
-    pub const COL: u32 = crate::ffi::PC_PANEL_COL0;
+    pub const COL: u32 = 0;
     /// Lowest bit of `panel_seg`.
-    pub const SEG: u32 = crate::ffi::PC_PANEL_SEG0;
+    pub const SEG: u32 = 8;
     /// Lowest bit of `panel_dig`.
-    pub const DIG: u32 = crate::ffi::PC_PANEL_DIG0;
+    pub const DIG: u32 = 16;
 }
 
 /// One Verilated gantry-card chip with its own clock, every register 0 at construction
