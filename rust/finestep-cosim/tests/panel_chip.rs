@@ -12,7 +12,7 @@
 //! pin closing the error, and the gantry's alarm latched and shown on the panel.
 
 use finestep_cosim::{GantryPlant, PanelChipLockstep};
-use finestep_host::regs::status;
+use finestep_host::regs::{panel_menu, status};
 use finestep_host::{Bus, BusError, GantrySetup, Machine, PanelDisplay, PanelScan, PinHost, PinTiming, SpiBus};
 use finestep_rtl_sys::panel_chip::panel_bits;
 
@@ -44,6 +44,15 @@ fn machine(name: &str) -> M {
     ok(m.clear_faults_and_errors());
     assert_eq!(status::HALT.get(ok(m.status())), 0);
     ok(m.configure_panel(&SCAN));
+    // The E-stop fault of power-up (cleared above) is latched in the menu, which shows
+    // its ALARM page: the host acknowledges it and shows the MODE page.
+    let menu = ok(m.panel_menu());
+    assert_eq!((menu.alarms, menu.page), (0b0100, 2), "the power-up E-stop fault on the panel");
+    ok(m.clear_panel_alarms(0b1111));
+    ok(m.bus().write(panel_menu::ADDR, panel_menu::PAGE.set(0, 0)));
+    ok(m.bus().wait(8));
+    let menu = ok(m.panel_menu());
+    assert_eq!((menu.alarms, menu.page), (0, 0));
     m
 }
 
