@@ -292,3 +292,29 @@ fn gantry_alarm_reaches_the_panel() {
     assert_eq!(ok(m.panel_menu()).alarms, 0);
     assert_eq!(read_display(&mut m), ("AL  0000".to_string(), false));
 }
+
+/// Right after reset the panel's and the gantry's registers read the map's reset words
+/// (PANEL_MENU but its ALARM flags and PAGE: the power-up E-stop fault is latched there
+/// and shows the ALARM page).
+#[test]
+fn panel_and_gantry_registers_read_their_reset_words() {
+    let mut host = PinHost::new(PanelChipLockstep::new("panel_and_gantry_reset_words"), PinTiming::default());
+    ok(host.reset(4));
+    ok(host.idle(4));
+    let mut m = ok(Machine::connect(SpiBus::new(host, 4)));
+    let mut checked = 0;
+    for register in finestep_host::regs::REGISTERS {
+        if !(register.name.starts_with("PANEL_") || register.name.starts_with("GANTRY_")) {
+            continue;
+        }
+        let word = register.reset_word.unwrap_or(0);
+        let mut read = ok(m.bus().read_one(register.addr));
+        if register.name == "PANEL_MENU" {
+            assert_eq!((panel_menu::ALARM.get(read), panel_menu::PAGE.get(read)), (0b0100, 2));
+            read = panel_menu::PAGE.set(panel_menu::ALARM.set(read, 0), 0);
+        }
+        assert_eq!(read, word, "{} at {:#04x}: {read:#010x}, the map says {word:#010x}", register.name, register.addr);
+        checked += 1;
+    }
+    assert_eq!(checked, 6);
+}
