@@ -115,12 +115,14 @@ module gantry_link #(
     wire [31:0] det_m_unused, det_s_unused;
     wire [15:0] ill_m_unused, ill_s_unused;
     wire [3:0]  lvl_unused;
+    wire [3:0]  step_unused;   // the detent flags (the jog's), unused here
     hand_wheel #(.FILTER_W(FILTER_W)) dec_master (
         .clk(clk), .rst(rst), .mpg_a(a4[enc_m_reg]), .mpg_b(b4[enc_m_reg]),
         .prescale(enc_prescale), .filter_len(f4[FILTER_W*enc_m_reg +: FILTER_W]),
         .clear_errors(clear_errors), .clear_counters(clear_counters),
         .count(enc_master), .detents(det_m_unused), .illegal(lvl_unused[0]),
-        .illegal_count(ill_m_unused), .a_level(lvl_unused[1]), .b_level(lvl_unused[2])
+        .illegal_count(ill_m_unused), .a_level(lvl_unused[1]), .b_level(lvl_unused[2]),
+        .detent_up(step_unused[0]), .detent_down(step_unused[1])
     );
     wire ill_s_flag_unused, a_s_unused, b_s_unused;
     hand_wheel #(.FILTER_W(FILTER_W)) dec_slave (
@@ -128,11 +130,12 @@ module gantry_link #(
         .prescale(enc_prescale), .filter_len(f4[FILTER_W*enc_s_reg +: FILTER_W]),
         .clear_errors(clear_errors), .clear_counters(clear_counters),
         .count(enc_slave), .detents(det_s_unused), .illegal(ill_s_flag_unused),
-        .illegal_count(ill_s_unused), .a_level(a_s_unused), .b_level(b_s_unused)
+        .illegal_count(ill_s_unused), .a_level(a_s_unused), .b_level(b_s_unused),
+        .detent_up(step_unused[2]), .detent_down(step_unused[3])
     );
     assign lvl_unused[3] = 1'b0;
     wire unused_dec = &{1'b0, det_m_unused, det_s_unused, ill_m_unused, ill_s_unused, lvl_unused,
-                        ill_s_flag_unused, a_s_unused, b_s_unused,
+                        ill_s_flag_unused, a_s_unused, b_s_unused, step_unused,
                         corrections[15:FS_GANTRY_STATUS_CORRECTIONS_WIDTH]};
 
     assign enable   = enable_reg;
