@@ -157,6 +157,7 @@ fn main() {
         "finestep_sim.h",
         "finestep_top_sim.cpp",
         "finestep_top_sim.h",
+        "finestep_top_pins.h",
         "verilated_trace.h",
         "finestep_core_sim.v",
         "pbp_interp_sim.cpp",
