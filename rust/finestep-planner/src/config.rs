@@ -59,7 +59,8 @@ pub enum ProfileKind {
     /// Jerk-limited: every speed change is a 7-segment-style S-curve half (jerk up,
     /// constant acceleration, jerk down), acceleration and deceleration planned separately.
     /// The jerk limit also holds where the path's curvature jumps (a line meeting an arc
-    /// or a corner blend), which caps the speed there at about `sqrt(0.25 J T R)`.
+    /// or a corner blend), which caps the speed there at about `sqrt(0.25 J T R)`
+    /// (`sqrt(0.45 J T R)` where every element within the jump's reach is short).
     #[serde(rename = "s-curve")]
     SCurve,
 }

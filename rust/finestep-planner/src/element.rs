@@ -27,7 +27,13 @@
 //! periods whose readings include the jump; several elements where NURBS sub-pieces are
 //! shorter than a period's travel) take the fixed shares ([`Element::shared`]:
 //! [`TANGENTIAL_ACCEL_SHARE`], [`TANGENTIAL_JERK_SHARE`], [`ARC_JERK_SHARE`]), as
-//! [`crate::lookahead`] describes. Where the path is smooth,
+//! [`crate::lookahead`] describes. The jerk's split between a jump and the tangential
+//! jerk of the elements within its reach follows their lengths: an element shorter than
+//! [`short_length`] takes [`SHORT_TANGENTIAL_JERK_SHARE`] (on short segments the jumps
+//! cap the speed, not the time the speed changes take), and a jump takes what the
+//! elements within its reach leave of [`JUMP_BUDGET_JERK_SHARE`], their tangential share
+//! and what their turning reads at their caps ([`jump_jerk_share`]): at least
+//! [`JUNCTION_JERK_SHARE`], more beside lines, gentle arcs and short elements. Where the path is smooth,
 //! the acceleration read over the periods around a junction is an average of the
 //! accelerations on either side, each within the limit, so no share is kept for it.
 
@@ -96,6 +102,18 @@ pub struct Element {
     /// The caps under the fixed shares of the limits, which the element takes when a
     /// junction beside it jumps (module docs).
     pub shared: Caps,
+    /// The share of the tangential jerk [`Element::shared`] takes
+    /// ([`tangential_jerk_share`]).
+    pub tangential_jerk_share: f64,
+    /// The most of any axis's jerk (as a share of its limit) turning takes on this
+    /// element at the caps of [`Element::shared`]: 0 on a line, what `k^2 v^3` and
+    /// `3 k v a_t` read at those caps on an arc or a NURBS sub-piece (with its curvature
+    /// change, `k'` v^3, on a NURBS), at most `2 * ARC_JERK_SHARE`.
+    pub turning_jerk_share: f64,
+    /// The share of each axis's jerk the jump at the junction after this element may
+    /// take ([`jump_jerk_share`] of the most the elements within its reach use, set
+    /// where the path is built; [`JUNCTION_JERK_SHARE`] until then).
+    pub junction_jerk_share: f64,
     /// The junction after this element jumps ([`crate::lookahead::junction_jumps`],
     /// decided on the path's caps before the fixed shares are taken).
     pub jump_after: bool,
@@ -331,13 +349,54 @@ pub const TANGENTIAL_ACCEL_SHARE: f64 = 0.5;
 /// Share of each axis's acceleration spent on turning at a jump (and inside the
 /// elements beside it).
 pub const GEOMETRIC_ACCEL_SHARE: f64 = 0.45;
-/// Share of each axis's jerk spent on changing the acceleration along the path.
+/// Share of each axis's jerk spent on changing the acceleration along the path, on an
+/// element beside a jump that is at least [`short_length`] long.
 pub const TANGENTIAL_JERK_SHARE: f64 = 0.4;
+/// [`TANGENTIAL_JERK_SHARE`] on an element shorter than [`short_length`] (short
+/// segments): there the jumps around it cap the speed far more than the speed changes
+/// along it take time, so the jerk goes to the jumps ([`jump_jerk_share`]).
+pub const SHORT_TANGENTIAL_JERK_SHARE: f64 = 0.2;
 /// Share of each axis's jerk spent inside arcs (rotation of the normal acceleration, and
 /// the tangential acceleration turning with the path), each.
 pub const ARC_JERK_SHARE: f64 = 0.15;
-/// Share of each axis's jerk spent at a junction (tangent or curvature jump within a period).
+/// Share of each axis's jerk spent at a junction (tangent or curvature jump within a
+/// period) where an element within its reach may take [`TANGENTIAL_JERK_SHARE`].
 pub const JUNCTION_JERK_SHARE: f64 = 0.25;
+/// Share of each axis's jerk for a jump, the tangential jerk of the elements within its
+/// reach and their turning (on arcs, each at most `2 * ARC_JERK_SHARE`) together.
+pub const JUMP_BUDGET_JERK_SHARE: f64 = JUNCTION_JERK_SHARE + TANGENTIAL_JERK_SHARE + 2.0 * ARC_JERK_SHARE;
+
+/// Periods either side of a junction whose readings can include its jump: the jerk
+/// reads four positions, three periods.
+pub const JUMP_REACH_PERIODS: f64 = 3.0;
+
+/// The length under which an element is short: the travel of [`JUMP_REACH_PERIODS`]
+/// periods at the fastest speed any element can have (the norm of the axes' velocity
+/// limits), so that every element within a jump's reach beyond an element beside it
+/// has a short element for a neighbour.
+pub fn short_length(config: &crate::config::Resolved) -> f64 {
+    let fastest: f64 =
+        config.axes.iter().filter(|a| a.present).map(|a| a.max_velocity * a.max_velocity).sum::<f64>().sqrt();
+    JUMP_REACH_PERIODS * config.period_s * fastest * (1.0 + 1e-9)
+}
+
+/// The share of each axis's jerk an element of `length` takes for its tangential jerk
+/// where a jump is within reach: [`SHORT_TANGENTIAL_JERK_SHARE`] under
+/// [`short_length`], else [`TANGENTIAL_JERK_SHARE`].
+pub fn tangential_jerk_share(length: f64, short_length: f64) -> f64 {
+    if length < short_length {
+        SHORT_TANGENTIAL_JERK_SHARE
+    } else {
+        TANGENTIAL_JERK_SHARE
+    }
+}
+
+/// The share of each axis's jerk a jump may take when the elements within its reach
+/// take at most `used` of it for their tangential jerk and turning together
+/// ([`Element::tangential_jerk_share`] + [`Element::turning_jerk_share`]).
+pub fn jump_jerk_share(used: f64) -> f64 {
+    JUMP_BUDGET_JERK_SHARE - used
+}
 
 #[cfg(test)]
 mod tests {

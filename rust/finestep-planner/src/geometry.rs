@@ -27,10 +27,10 @@ use finestep_gcode::{Block, BlockKind, CompSide, PathControl, Plane, Point, Prog
 
 use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
 pub use crate::element::{
-    full_caps, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE,
-    TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
+    full_caps, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, JUMP_REACH_PERIODS,
+    JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
 };
-use crate::element::{IoAction, IoEvent};
+use crate::element::{jump_jerk_share, short_length, tangential_jerk_share, IoAction, IoEvent};
 use crate::error::ProgramError;
 use crate::nurbs::NurbsCurve;
 use crate::nurbs_pieces;
@@ -415,6 +415,9 @@ fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64,
         accel: 0.0,
         jerk: 0.0,
         shared: Caps::default(),
+        tangential_jerk_share: tangential_jerk_share(length, short_length(config)),
+        turning_jerk_share: 0.0,
+        junction_jerk_share: JUNCTION_JERK_SHARE,
         jump_after: false,
         stop_after: false,
         dwell_periods: 0,
@@ -435,7 +438,7 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
         if w > 1e-12 && axis.present {
             v_cap = v_cap.min(axis.max_velocity / w);
             accel = accel.min(TANGENTIAL_ACCEL_SHARE * axis.max_acceleration / w);
-            jerk = jerk.min(TANGENTIAL_JERK_SHARE * axis.max_jerk / w);
+            jerk = jerk.min(element.tangential_jerk_share * axis.max_jerk / w);
         }
     }
     if let Shape::Arc { e1, e2, .. } = element.shape {
@@ -469,6 +472,20 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
                 }
             }
         }
+        // What turning reads at these caps, the most of any axis (each term within
+        // ARC_JERK_SHARE by the caps above; both ARC_JERK_SHARE where not S-curve).
+        element.turning_jerk_share = if scurve {
+            (0..4)
+                .filter(|&axis| config.axes[axis].present && e1[axis].hypot(e2[axis]) >= 1e-12)
+                .map(|axis| {
+                    let h = e1[axis].hypot(e2[axis]);
+                    (k * k * v_cap.powi(3) * h + 3.0 * k * v_cap * accel * h) / config.axes[axis].max_jerk
+                })
+                .fold(0.0, f64::max)
+                .min(2.0 * ARC_JERK_SHARE)
+        } else {
+            2.0 * ARC_JERK_SHARE
+        };
     }
     element.shared = Caps { v_cap, accel, jerk };
     // The limits shared by what the element needs (`crate::element`).
@@ -832,10 +849,6 @@ impl Iterator for PathStream<'_> {
     }
 }
 
-/// Periods either side of a junction whose readings can include its jump: the jerk
-/// reads four positions, three periods.
-pub const JUMP_REACH_PERIODS: f64 = 3.0;
-
 /// Where a junction jumps (`lookahead::junction_jumps`), the elements beside it take
 /// the fixed shares of the limits (`crate::element`): every element within
 /// [`JUMP_REACH_PERIODS`] periods' travel of it (at the elements' caps), so that
@@ -851,6 +864,12 @@ pub const JUMP_REACH_PERIODS: f64 = 3.0;
 /// limit, so its speed is within that norm). Should more than [`Sharing::max_held`]
 /// elements be held (thousands of elements within three periods' travel), the first
 /// is handed on with the fixed shares, which are within the limits wherever it is.
+///
+/// Each jump's share of the jerk ([`Element::junction_jerk_share`]) is set once its
+/// reach is closed on both sides, from the most of the jerk the elements within it use
+/// ([`crate::element::jump_jerk_share`]); a reach still open when its element
+/// is handed on (forced, or at the path's end) leaves [`JUNCTION_JERK_SHARE`], which
+/// holds beside any element.
 #[derive(Debug)]
 struct Sharing {
     /// Elements held, each with whether it takes the fixed shares.
@@ -859,8 +878,11 @@ struct Sharing {
     behind_first: f64,
     /// Held elements that stop after them.
     stops_held: usize,
-    /// Reaches after jumps still open: length covered, fastest cap met.
-    forward: Vec<(f64, f64)>,
+    /// Reaches after jumps still open: length covered, fastest cap met, the number of
+    /// the element before the jump, the most of the jerk an element met uses.
+    forward: Vec<(f64, f64, usize, f64)>,
+    /// Elements pushed so far (the number of the next).
+    pushed: usize,
     /// Travel of the reach at the fastest speed any element can have.
     full_reach: f64,
     reach: f64,
@@ -878,6 +900,7 @@ impl Sharing {
             behind_first: 0.0,
             stops_held: 0,
             forward: Vec::new(),
+            pushed: 0,
             full_reach: reach * fastest * (1.0 + 1e-9),
             reach,
             max_held: Sharing::max_held(config),
@@ -899,7 +922,7 @@ impl Sharing {
             before.jump_after = jump;
             if jump {
                 // Backward from the junction at the fastest cap met so far.
-                let (mut covered, mut fastest) = (0.0, 0.0f64);
+                let (mut covered, mut fastest, mut share) = (0.0, 0.0f64, 0.0f64);
                 let last = self.held.len() - 1;
                 for j in (0..=last).rev() {
                     let (element, take) = &mut self.held[j];
@@ -909,20 +932,34 @@ impl Sharing {
                     *take = true;
                     covered += element.length;
                     fastest = fastest.max(element.v_cap);
+                    share = share.max(element.tangential_jerk_share + element.turning_jerk_share);
                     if covered >= reach * fastest {
                         break;
                     }
                 }
-                self.forward.push((0.0, 0.0));
+                self.forward.push((0.0, 0.0, self.pushed - 1, share));
             }
         }
-        // Forward from every open reach.
-        self.forward.retain_mut(|(covered, fastest)| {
+        // Forward from every open reach; a reach closed sets its jump's share.
+        let first = self.pushed - self.held.len();
+        let mut closed = Vec::new();
+        self.forward.retain_mut(|(covered, fastest, before, share)| {
             shared = true;
             *covered += e.length;
             *fastest = fastest.max(e.v_cap);
-            !(*covered >= reach * *fastest || e.stop_after)
+            *share = share.max(e.tangential_jerk_share + e.turning_jerk_share);
+            let open = !(*covered >= reach * *fastest || e.stop_after);
+            if !open {
+                closed.push((*before, *share));
+            }
+            open
         });
+        for (before, share) in closed {
+            if let Some((element, _)) = before.checked_sub(first).and_then(|j| self.held.get_mut(j)) {
+                element.junction_jerk_share = jump_jerk_share(share);
+            }
+        }
+        self.pushed += 1;
         if !self.held.is_empty() {
             self.behind_first += e.length;
         }
@@ -969,7 +1006,7 @@ impl Sharing {
 #[cfg(test)]
 mod tests {
     use crate::config::{MachineConfig, ProfileKind};
-    use crate::element::{Element, JUNCTION_JERK_SHARE};
+    use crate::element::Element;
     use crate::lookahead::pair_jerk_cap;
 
     /// The position `s` along the elements laid end to end.
@@ -1007,6 +1044,7 @@ mod tests {
                 continue;
             }
             pairs += 1;
+            let junction_share = w[0].junction_jerk_share.min(w[1].junction_jerk_share);
             let v = pair.both;
             let step = v * config.period_s;
             let total: f64 = w.iter().map(|e| e.length).sum();
@@ -1017,7 +1055,7 @@ mod tests {
                     let p = [0.0, 1.0, 2.0, 3.0].map(|k| position(w, s + k * step));
                     for (a, axis) in config.axes.iter().enumerate().filter(|(_, axis)| axis.present) {
                         let jerk = (p[3][a] - 3.0 * p[2][a] + 3.0 * p[1][a] - p[0][a]).abs() / t3;
-                        let share = jerk / (JUNCTION_JERK_SHARE * axis.max_jerk);
+                        let share = jerk / (junction_share * axis.max_jerk);
                         assert!(share <= 1.0 + 1e-6, "axis {a} at {v} mm/s reads {jerk}");
                         closest = closest.max(share);
                     }

@@ -20,8 +20,11 @@
 //!   The elements within three periods' travel of it take the fixed shares
 //!   ([`crate::element::Element::shared`], [`crate::geometry::JUMP_REACH_PERIODS`]).
 //! - S-curve only: the same jumps read as jerk, `v |dt_a| / T^2` from the tangent jump
-//!   and `|dk_a| v^2 / T` from a curvature jump (a line meeting an arc), within
-//!   [`JUNCTION_JERK_SHARE`] of the axis's jerk limit. Around a line shorter than the
+//!   and `|dk_a| v^2 / T` from a curvature jump (a line meeting an arc), within the
+//!   junction's share of the axis's jerk limit ([`Element::junction_jerk_share`]: what
+//!   the tangential jerk of the elements within its reach leaves,
+//!   [`crate::element::JUNCTION_JERK_SHARE`] beside an element of
+//!   [`crate::element::short_length`] or longer, 0.45 where all are shorter). Around a line shorter than the
 //!   jerk's three periods of travel (the line left between two blends on short
 //!   segments) both junctions' jumps are read together ([`pair_jerk_cap`]): the
 //!   curvature jump across the line at 3/4, plus the curvature the line interrupts over
@@ -42,7 +45,7 @@
 //! moves on, because a later window end only allows higher speeds.
 
 use crate::config::{ProfileKind, Resolved};
-use crate::element::{Element, GEOMETRIC_ACCEL_SHARE, JUMP_READING, JUNCTION_JERK_SHARE};
+use crate::element::{Element, GEOMETRIC_ACCEL_SHARE, JUMP_READING};
 use crate::error::ProgramError;
 use crate::vec4::sub;
 use crate::velocity::Limits;
@@ -137,7 +140,8 @@ fn junction_cap_with(config: &Resolved, before: &Element, after: &Element, pairs
 }
 
 /// S-curve: the speed at which the jumps of one junction alone read within
-/// [`JUNCTION_JERK_SHARE`] of every axis's jerk: `v |dt_a| / T^2 + r |dk_a| v^2 / T`,
+/// the junction's share of every axis's jerk ([`Element::junction_jerk_share`]):
+/// `v |dt_a| / T^2 + r |dk_a| v^2 / T`,
 /// the curvature jump read at the share `r` (1, or [`PAIR_JUMP_READING`] where no
 /// other jump is read with it, [`pair_jerk_cap`]).
 fn single_jerk_cap(config: &Resolved, before: &Element, after: &Element, r: f64) -> f64 {
@@ -150,7 +154,7 @@ fn single_jerk_cap(config: &Resolved, before: &Element, after: &Element, r: f64)
             cap = cap.min(quadratic_cap(
                 r * curvature_jump[a].abs() / period,
                 tangent_jump[a].abs() / (period * period),
-                JUNCTION_JERK_SHARE * axis.max_jerk,
+                before.junction_jerk_share * axis.max_jerk,
             ));
         }
     }
@@ -185,7 +189,8 @@ pub struct PairCap {
 /// d apart read `k2 G(s2) - k0 G(s1) = (k2 - k0) G(s2) + k0 (G(s2) - G(s1))` (or the
 /// same with k0 and k2 exchanged), so at most
 /// `3/4 |k2 - k0| v^2 / T + min(|k0|, |k2|) d v / T^2` whatever the phase, the tangent
-/// jumps adding `v |dt| / T^2` each: within [`JUNCTION_JERK_SHARE`] of every axis's jerk
+/// jumps adding `v |dt| / T^2` each: within the smaller of the two junctions' shares
+/// ([`Element::junction_jerk_share`]) of every axis's jerk
 /// below the first cap returned ([`PairCap::both`]). Each junction reads on its own
 /// ([`single_jerk_cap`], its curvature jump at 3/4 as above) only when no reading sees
 /// both, below `d / (3 T)` (the jerk's readings span three periods,
@@ -207,13 +212,15 @@ pub fn pair_jerk_cap(config: &Resolved, before: &Element, line: &Element, after:
     let k2 = after.curvature(false);
     let dt0 = sub(line.tangent(false), before.tangent(true));
     let dt2 = sub(after.tangent(false), line.tangent(true));
+    // Both jumps' reaches together: the smaller of their shares.
+    let share = before.junction_jerk_share.min(line.junction_jerk_share);
     let mut pair = f64::INFINITY;
     for (a, axis) in config.axes.iter().enumerate() {
         if axis.present {
             pair = pair.min(quadratic_cap(
                 PAIR_JUMP_READING * (k2[a] - k0[a]).abs() / period,
                 (dt0[a].abs() + dt2[a].abs() + k0[a].abs().min(k2[a].abs()) * d) / (period * period),
-                JUNCTION_JERK_SHARE * axis.max_jerk,
+                share * axis.max_jerk,
             ));
         }
     }

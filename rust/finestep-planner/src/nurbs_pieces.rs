@@ -30,8 +30,8 @@ use std::sync::Arc;
 
 use crate::config::{ProfileKind, Resolved};
 use crate::element::{
-    full_caps, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, TANGENTIAL_ACCEL_SHARE,
-    TANGENTIAL_JERK_SHARE,
+    full_caps, short_length, tangential_jerk_share, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE,
+    GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE,
 };
 use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
 
@@ -253,6 +253,8 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 }
             });
             let (u0, u1) = (samples[j].u, samples[end].u);
+            let length: f64 = ds[j..end].iter().sum();
+            let tangential_share = tangential_jerk_share(length, short_length(config));
             let mut v_cap = feed.min(lo);
             let mut accel = f64::INFINITY;
             let mut jerk = f64::INFINITY;
@@ -262,7 +264,7 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 if limits.present && w > 1e-12 {
                     v_cap = v_cap.min(limits.max_velocity / w);
                     accel = accel.min(TANGENTIAL_ACCEL_SHARE * limits.max_acceleration / w);
-                    jerk = jerk.min(TANGENTIAL_JERK_SHARE * limits.max_jerk / w);
+                    jerk = jerk.min(tangential_share * limits.max_jerk / w);
                 }
             }
             if scurve && k_max > 1e-12 {
@@ -280,6 +282,22 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
             // the normal's components are the tangent's, swapped.
             let k_top = inner_k[j..end].iter().fold(k_max, |a, &b| a.max(b));
             let dk_top = dk[j.saturating_sub(1)..=(end + 1).min(m)].iter().fold(0.0, |a: f64, &b| a.max(b));
+            // What turning reads at the shared caps, `(k^2 + k') v^3 + 3 k v a_t`, at the
+            // largest curvature and curvature change around the sub-piece, the most of
+            // any axis (each term within ARC_JERK_SHARE by the caps above).
+            let turning_share = if scurve {
+                plane_axes
+                    .iter()
+                    .filter(|&&a| config.axes[a].present)
+                    .map(|&a| {
+                        let (k, v) = (k_top.max(k_max), shared.v_cap);
+                        ((k * k + dk_top) * v.powi(3) + 3.0 * k * v * shared.accel) / config.axes[a].max_jerk
+                    })
+                    .fold(0.0, f64::max)
+                    .min(2.0 * ARC_JERK_SHARE)
+            } else {
+                2.0 * ARC_JERK_SHARE
+            };
             let mut v_limit = feed;
             if k_top > 1e-12 {
                 let rho = 1.0 / k_top;
@@ -298,7 +316,6 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 }
             });
             let Caps { v_cap, accel, jerk } = full_caps(&axes, v_limit, k_top, dk_top, scurve);
-            let length: f64 = ds[j..end].iter().sum();
             let start = curve.point(u0);
             let end_point = curve.point(u1);
             out.push(Element {
@@ -311,6 +328,9 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 accel,
                 jerk,
                 shared,
+                tangential_jerk_share: tangential_share,
+                turning_jerk_share: turning_share,
+                junction_jerk_share: JUNCTION_JERK_SHARE,
                 jump_after: false,
                 stop_after: false,
                 dwell_periods: 0,
