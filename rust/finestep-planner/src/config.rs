@@ -60,7 +60,8 @@ pub enum ProfileKind {
     /// constant acceleration, jerk down), acceleration and deceleration planned separately.
     /// The jerk limit also holds where the path's curvature jumps (a line meeting an arc
     /// or a corner blend), which caps the speed there at about `sqrt(0.25 J T R)`
-    /// (`sqrt(0.45 J T R)` where every element within the jump's reach is short).
+    /// (up to `sqrt(0.7 J T R)` beside lines and short elements, which take less of the
+    /// jerk for themselves).
     #[serde(rename = "s-curve")]
     SCurve,
 }

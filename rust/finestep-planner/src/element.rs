@@ -355,7 +355,7 @@ pub const TANGENTIAL_JERK_SHARE: f64 = 0.4;
 /// [`TANGENTIAL_JERK_SHARE`] on an element shorter than [`short_length`] (short
 /// segments): there the jumps around it cap the speed far more than the speed changes
 /// along it take time, so the jerk goes to the jumps ([`jump_jerk_share`]).
-pub const SHORT_TANGENTIAL_JERK_SHARE: f64 = 0.2;
+pub const SHORT_TANGENTIAL_JERK_SHARE: f64 = 0.25;
 /// Share of each axis's jerk spent inside arcs (rotation of the normal acceleration, and
 /// the tangential acceleration turning with the path), each.
 pub const ARC_JERK_SHARE: f64 = 0.15;

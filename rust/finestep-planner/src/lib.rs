@@ -73,7 +73,7 @@
 //! - S-curve profiles bring the acceleration back to zero at every element junction,
 //!   and the jerk limit is also kept where the curvature jumps (a line entering an arc
 //!   or a blend): about `sqrt(0.25 J T R)` there, slow at the default jerk
-//!   (`sqrt(0.45 J T R)` where the elements around are short and take less of the jerk
+//!   (up to `sqrt(0.7 J T R)` where the elements around take less of the jerk
 //!   for speeding up, [`element::jump_jerk_share`]). Around a
 //!   line shorter than three periods' travel (short segments) the two jumps are read
 //!   together ([`lookahead::pair_jerk_cap`]).

@@ -22,9 +22,8 @@
 //! - S-curve only: the same jumps read as jerk, `v |dt_a| / T^2` from the tangent jump
 //!   and `|dk_a| v^2 / T` from a curvature jump (a line meeting an arc), within the
 //!   junction's share of the axis's jerk limit ([`Element::junction_jerk_share`]: what
-//!   the tangential jerk of the elements within its reach leaves,
-//!   [`crate::element::JUNCTION_JERK_SHARE`] beside an element of
-//!   [`crate::element::short_length`] or longer, 0.45 where all are shorter). Around a line shorter than the
+//!   the tangential jerk and turning of the elements within its reach leave, at least
+//!   [`crate::element::JUNCTION_JERK_SHARE`]). Around a line shorter than the
 //!   jerk's three periods of travel (the line left between two blends on short
 //!   segments) both junctions' jumps are read together ([`pair_jerk_cap`]): the
 //!   curvature jump across the line at 3/4, plus the curvature the line interrupts over
