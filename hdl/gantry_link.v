@@ -181,6 +181,52 @@ module gantry_link #(
         endcase
     end
 
+`ifdef FORMAL
+    // The registers hold the last word written to them; gantry_sync sees them (the mode
+    // the panel's with HAS_PANEL); the tick is a whole number of 16 clocks (TICK * 16 +
+    // 15, never 0); GANTRY_STATUS.ERROR is the error saturated: equal inside the signed
+    // 16-bit range, the range's end of the same sign outside it, so the panel and the
+    // host never see an error of the wrong sign or one smaller than the limit it passed.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+
+    wire signed [31:0] f_err = error;
+    always @(*) begin
+        if (f_err > 32'sd32767) assert (error16 == 16'h7FFF);
+        else if (f_err < -32'sd32768) assert (error16 == 16'h8000);
+        else assert (error16 == error[15:0]);
+        assert (error16[15] == error[31]);
+        assert (tick[3:0] == 4'hF && tick[23:20] == 4'd0 && tick != 24'd0);
+        assert (sync == ((HAS_PANEL != 0) ? panel_sync : sync_reg));
+        assert (enable == enable_reg && limit == limit_reg && deadband == deadband_reg
+                && master == master_reg && slave == slave_reg);
+        if (addr == FS_GANTRY_STATUS_ADDR)
+            assert (rdata[FS_GANTRY_STATUS_ALARM_LSB] == alarm
+                    && rdata[FS_GANTRY_STATUS_ERROR_LSB +: FS_GANTRY_STATUS_ERROR_WIDTH] == error16);
+    end
+
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if ($past(control_write)) begin
+            assert (enable_reg == $past(wdata[FS_GANTRY_CONTROL_ENABLE_LSB]));
+            assert (sync_reg == $past(wdata[FS_GANTRY_CONTROL_SYNC_LSB]));
+            assert (tick_reg == $past(wdata[FS_GANTRY_CONTROL_TICK_LSB +: FS_GANTRY_CONTROL_TICK_WIDTH]));
+            assert (slave_reg == $past(wdata[FS_GANTRY_CONTROL_SLAVE_LSB +: FS_GANTRY_CONTROL_SLAVE_WIDTH]));
+        end else begin
+            assert ($stable(enable_reg) && $stable(sync_reg) && $stable(tick_reg) && $stable(master_reg)
+                    && $stable(slave_reg) && $stable(enc_m_reg) && $stable(enc_s_reg));
+        end
+        if ($past(limits_write))
+            assert (limit_reg == $past(wdata[FS_GANTRY_LIMITS_LIMIT_LSB +: FS_GANTRY_LIMITS_LIMIT_WIDTH])
+                    && deadband_reg == $past(wdata[FS_GANTRY_LIMITS_DEADBAND_LSB +: FS_GANTRY_LIMITS_DEADBAND_WIDTH]));
+        else
+            assert ($stable(limit_reg) && $stable(deadband_reg));
+        cover (error16 == 16'h8000 && error != 32'hFFFF8000);
+        cover (enable && sync && limit == 16'd5 && $past(control_write));
+    end
+`endif
+
 endmodule
 
 `default_nettype wire

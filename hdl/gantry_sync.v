@@ -216,6 +216,8 @@ module gantry_sync #(
         assert (error_reg == ($past(engaged_reg) ? $past(diff_reg) - $past(offset_reg) : 32'd0));
         if ($past(engaged_reg) && $past(error_mag) > {16'd0, $past(limit)}) assert (alarm_reg);
         if (!$past(engaged_reg) && !$past(clear_errors)) assert (alarm_reg == $past(alarm_reg));
+        // ... and only then: the alarm rises exactly when the error passed the limit.
+        if (alarm_reg && !$past(alarm_reg)) assert ($past(engaged_reg) && $past(error_mag) > {16'd0, $past(limit)});
         if ($past(engage)) assert (engaged_reg && offset_reg == $past(enc_master) - $past(enc_slave));
         // Engaged only from rest.
         if (engaged_reg && !$past(engaged_reg))

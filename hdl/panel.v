@@ -171,6 +171,106 @@ module panel #(
         endcase
     end
 
+`ifdef FORMAL
+    // The sequencer (the menu's host port one register a clock): the selector turns
+    // every clock; a register is written only while pending, with its field of the last
+    // PANEL_MENU word; a write is taken whole in the 4 clocks after it; and, the menu
+    // left alone (no key event, no alarm input), the shadows PANEL_MENU reads equal the
+    // last word's fields (10 clocks after it: the last register written 4 clocks after
+    // the write, read 4 later, copied the clock after). Keys: every press event counts.
+    // Registers: PANEL_SCAN holds the last word written to it.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+
+    reg        f_written;      // a PANEL_MENU write since reset
+    reg [31:0] f_word;         // the last one
+    reg [3:0]  f_age;          // clocks since it (saturates at 15)
+    reg        f_quiet;        // no key event and no alarm input since it
+    reg [3:0]  f_done;         // the registers written since it
+    reg [7:0]  f_presses;      // key events since reset
+    always @(posedge clk) begin
+        if (rst) begin
+            f_written <= 1'b0;
+            f_age     <= 4'd0;
+            f_quiet   <= 1'b0;
+            f_done    <= 4'd0;
+            f_presses <= 8'd0;
+        end else begin
+            if (key_valid) f_presses <= f_presses + 8'd1;
+            if (menu_write) begin
+                f_written <= 1'b1;
+                f_word    <= wdata;
+                f_age     <= 4'd1;
+                f_quiet   <= 1'b1;
+                f_done    <= 4'd0;
+            end else begin
+                if (f_age != 4'd15 && f_age != 4'd0) f_age <= f_age + 4'd1;
+                if (key_valid || alarm_in != 4'd0) f_quiet <= 1'b0;
+                if (pend_reg[sel_reg]) f_done[sel_reg] <= 1'b1;
+            end
+        end
+    end
+
+    // The menu's registers as the last word sets them (PAGE 3 leaves the page).
+    wire [2:0] f_mode  = {f_word[FS_PANEL_MENU_OVR_MODE_LSB], f_word[FS_PANEL_MENU_OVR_EN_LSB],
+                          f_word[FS_PANEL_MENU_CARD_MODE_LSB]};
+    wire [1:0] f_page  = f_word[FS_PANEL_MENU_PAGE_LSB +: FS_PANEL_MENU_PAGE_WIDTH];
+    wire [2:0] f_pflag = {f_word[FS_PANEL_MENU_ERR_HEX_LSB], f_word[FS_PANEL_MENU_DISP_HEX_LSB],
+                          f_word[FS_PANEL_MENU_DISP_EN_LSB]};
+    wire [15:0] f_value = f_word[FS_PANEL_MENU_VALUE_LSB +: FS_PANEL_MENU_VALUE_WIDTH];
+    wire [3:0]  f_clear = f_word[FS_PANEL_MENU_ALARM_LSB +: FS_PANEL_MENU_ALARM_WIDTH];
+
+    always @(*) if (f_past_valid && !rst) begin
+        // Pending registers: only after a write, still to be written, its word kept.
+        if (pend_reg != 4'd0) assert (f_written && pend_word_reg == f_word);
+        if (f_age != 4'd0) assert ((pend_reg & f_done) == 4'd0 && (pend_reg | f_done) == 4'b1111);
+        if (f_age >= 4'd5) assert (pend_reg == 4'd0);
+        // The register written now is the one named now, with its field of the word.
+        if (pend_reg[sel_reg]) begin
+            case (sel_reg)
+                M_MODE:  assert (menu_wdata == {13'd0, f_mode});
+                M_PAGE:  assert (menu_wdata == {11'd0, f_pflag, f_page});
+                M_VALUE: assert (menu_wdata == f_value);
+                default: assert (menu_wdata == {12'd0, f_clear});
+            endcase
+        end
+        // Keys are never lost: the count is the press events (mod 256).
+        assert (key_count_reg == f_presses);
+        // The read side: the shadows are the written word once the sequence is through.
+        if (f_written && f_quiet && f_age >= 4'd10) begin
+            assert (sh_mode_reg[2:0] == f_mode);
+            assert (sh_mode_reg[3] == (f_mode[1] ? f_mode[2] : f_mode[0]));
+            if (f_page != 2'd3) assert (sh_page_reg[1:0] == f_page);
+            assert (sh_page_reg[4:2] == f_pflag);
+            assert (sh_value_reg == f_value);
+            assert ((sh_alarm_reg & f_clear) == 4'd0);
+            // ... and so does the bus's read of PANEL_MENU.
+            if (addr == FS_PANEL_MENU_ADDR)
+                assert (rdata[FS_PANEL_MENU_VALUE_LSB +: FS_PANEL_MENU_VALUE_WIDTH] == f_value
+                        && rdata[FS_PANEL_MENU_CARD_MODE_LSB] == f_mode[0]
+                        && rdata[FS_PANEL_MENU_DISP_EN_LSB] == f_pflag[0]);
+        end
+    end
+
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        assert (sel_prev_reg == sel_reg - 2'd1);   // the selector turns every clock
+        // PANEL_SCAN: the last word written, unchanged otherwise.
+        if ($past(scan_write))
+            assert (scan_div_reg == $past(wdata[FS_PANEL_SCAN_SCAN_DIV_LSB +: FS_PANEL_SCAN_SCAN_DIV_WIDTH])
+                    && deb_scans_reg == $past(wdata[FS_PANEL_SCAN_DEB_SCANS_LSB +: FS_PANEL_SCAN_DEB_SCANS_WIDTH])
+                    && refresh_reg == $past(wdata[FS_PANEL_SCAN_REFRESH_DIV_LSB +: FS_PANEL_SCAN_REFRESH_DIV_WIDTH]));
+        else
+            assert ($stable(scan_div_reg) && $stable(deb_scans_reg) && $stable(refresh_reg));
+        // A press event is counted the clock after.
+        assert (key_count_reg == $past(key_count_reg) + {7'd0, $past(key_valid)});
+        cover (f_written && f_quiet && f_age == 4'd10 && f_value == 16'hBEEF && f_mode == 3'b101);
+        cover (f_written && $past(menu_write) && $past(pend_reg) != 4'd0);   // a later write wins
+        cover ($past(key_valid) && key_count_reg == 8'd2);
+    end
+`endif
+
 endmodule
 
 `default_nettype wire
