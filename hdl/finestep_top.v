@@ -9,7 +9,8 @@
 // and gratings, latch them on the probe, and decode the hand wheel, whose jog generator
 // drives the core in place of the FIFO while RUN is 0. The spindle (PWM or SPI DAC) and
 // the logic outputs (coolant, light, general outputs, the interlock input) hang on the
-// same register bus [HAS_SPINDLE, HAS_OUTPUTS]; a halt turns them off or safe. The
+// same register bus [HAS_SPINDLE, HAS_OUTPUTS]; a halt (a safety fault or the gantry's
+// alarm) turns them off or safe. The
 // gantry card's panel (a 4x4 keypad and a 7-segment LED menu choosing the gantry's mode)
 // [HAS_PANEL] and the gantry pair's registers and channel decoders [HAS_GANTRY, with a
 // DDA and a shaper per axis] hang there too.
@@ -120,7 +121,7 @@ module finestep_top #(
     wire [FS_INVERT_WIDTH*N_AXES-1:0]   invert;
     wire                       clear_errors, clear_faults, flush_cmd, kick;
     // Safety
-    wire estop_active, fault_estop, fault_watchdog, halt;
+    wire estop_active, fault_estop, fault_watchdog, safety_halt, halt;
     reg  halt_prev_reg;
     // FIFO
     wire               spi_wr_en, spi_wr_commit, spi_wr_abort, spi_fifo_busy;
@@ -320,7 +321,7 @@ module finestep_top #(
         .estop_active_high(estop_active_high), .estop_filter(estop_filter),
         .kick(kick), .clear_faults(clear_faults), .estop_pin(estop_pin),
         .estop_active(estop_active), .fault_estop(fault_estop), .fault_watchdog(fault_watchdog),
-        .halt(halt)
+        .halt(safety_halt)
     );
 
     // The SPI frame layer owns the write port while it uses it, and RECORD_PUSH is
@@ -365,6 +366,11 @@ module finestep_top #(
     wire [15:0] gantry_deadband, gantry_limit, gantry_error16;
     wire [31:0] gantry_enc_master, gantry_enc_slave;
     wire        gantry_engaged, gantry_alarm, gantry_refused;
+    // The machine halts on a safety fault and on the gantry's alarm (sticky in
+    // gantry_sync, 0 without the gantry): the same stop as an E-stop (no pulse after the
+    // alarm's clock, enables dropped, RUN cleared, the FIFO emptied, spindle and outputs
+    // safe). Both are flip-flops: one gate between them and the axes.
+    assign halt = safety_halt || gantry_alarm;
     wire [31:0] gantry_error;
     wire [15:0] gantry_corrections;
 

@@ -157,6 +157,11 @@ pub struct PanelChipLockstep {
     outputs: u64,
     panel: u32,
     cycle: u64,
+    /// The last cycle a step pin (any axis's `pin_a`) rose in.
+    pub last_step_rise: Option<u64>,
+    /// The first cycle of the halt now in force (the machine's `halt`: a safety fault
+    /// or the gantry's alarm), `None` while not halted.
+    pub halted_since: Option<u64>,
 }
 
 /// The panel pins of the model in [`panel_bits`]' layout.
@@ -190,12 +195,19 @@ impl PanelChipLockstep {
             outputs,
             panel,
             cycle: 0,
+            last_step_rise: None,
+            halted_since: None,
         }
     }
 
     /// The model.
     pub fn model(&self) -> &Top {
         &self.model
+    }
+
+    /// The chip's packed outputs in this cycle.
+    pub fn outputs_now(&self) -> u64 {
+        self.outputs
     }
 
     /// Clock edges run.
@@ -243,6 +255,15 @@ impl PanelChipLockstep {
             self.rtl.trace_close();
             return Err(PanelChipMismatch { name: self.name.clone(), cycle: self.cycle, expected, actual });
         }
+        let step_pins = (0..self.model.params().n_axes).fold(0u64, |m, a| m | 1 << top_pins::output::pin_a(a));
+        if actual.0 & !self.outputs & step_pins != 0 {
+            self.last_step_rise = Some(self.cycle);
+        }
+        self.halted_since = match (self.model.halt(), self.halted_since) {
+            (true, None) => Some(self.cycle),
+            (true, since) => since,
+            (false, _) => None,
+        };
         self.outputs = actual.0;
         self.panel = actual.1;
         if let Some(plant) = &mut self.plant {

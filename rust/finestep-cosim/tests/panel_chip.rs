@@ -12,8 +12,12 @@
 //! pin closing the error, and the gantry's alarm latched and shown on the panel.
 
 use finestep_cosim::{GantryPlant, PanelChipLockstep};
-use finestep_host::regs::{panel_menu, status};
-use finestep_host::{Bus, BusError, GantrySetup, Machine, PanelDisplay, PanelScan, PinHost, PinTiming, SpiBus};
+use finestep_host::regs::{control, panel_menu, status};
+use finestep_host::{
+    AxisSetup, Bus, BusError, GantrySetup, Machine, PanelDisplay, PanelScan, PinHost, PinTiming, SpiBus,
+};
+use finestep_model::top::top_pins;
+use finestep_model::{DriveTiming, PeriodRecord};
 use finestep_rtl_sys::panel_chip::panel_bits;
 
 type M = Machine<SpiBus<PinHost<PanelChipLockstep>>>;
@@ -291,6 +295,67 @@ fn gantry_alarm_reaches_the_panel() {
     settle(&mut m, end);
     assert_eq!(ok(m.panel_menu()).alarms, 0);
     assert_eq!(read_display(&mut m), ("AL  0000".to_string(), false));
+}
+
+/// The gantry's alarm halts the machine as an E-stop does (docs/spec/finestep_top.md,
+/// panel and gantry): the master runs half a step a period in forward mode while the
+/// slave's motor stalls (every step lost), so the error grows a count a master step;
+/// from the clock the alarm is raised (the error past the limit of 6) no step pin rises
+/// again though the program had 20 steps, STATUS.HALT reads 1, RUN is cleared and the
+/// enables drop; the gantry disengaged and CLEAR_ERRORS given, the machine runs again.
+#[test]
+fn gantry_alarm_halts_the_machine() {
+    let mut m = machine("gantry_alarm_halts_the_machine");
+    let mut plant = GantryPlant::new(0, 1, 0, 1);
+    plant.stall_steps = u32::MAX;
+    chip(&mut m).plant = Some(plant);
+    let axis = AxisSetup { timing: DriveTiming::new(3, 3, 2, 2), ..AxisSetup::default() };
+    for i in 0..2 {
+        ok(m.configure_axis(i, &axis));
+    }
+    const LIMIT: u16 = 6;
+    let setup = GantrySetup { master: 0, slave: 1, enc_master: 0, enc_slave: 1, tick: 31, deadband: 1, limit: LIMIT };
+    ok(m.configure_gantry(&setup));
+    ok(m.enable_gantry(true));
+    ok(m.bus().wait(16));
+    assert!(ok(m.gantry_status()).engaged);
+    ok(m.set_period(200));
+    ok(m.set_start_level(1));
+    // 40 periods of half a step on the master: 20 steps.
+    let records: Vec<PeriodRecord> =
+        (0..40).map(|k| PeriodRecord::from_raw(&[1 << 15, 0, 0, 0], u8::from(k == 39))).collect();
+    for burst in records.chunks(20) {
+        ok(m.bus().push_records(burst));
+    }
+    ok(m.set_control(true, false, true));
+    ok(m.bus().wait(40 * 200 + 2000));
+
+    let s = ok(m.gantry_status());
+    assert!(s.alarm && !s.sync, "{s:?}");
+    let word = ok(m.status());
+    assert_eq!(status::HALT.get(word), 1, "STATUS {word:#x}");
+    assert_eq!(control::RUN.get(ok(m.bus().read_one(control::ADDR))), 0, "RUN cleared by the halt");
+    let c = chip(&mut m);
+    let halted = c.halted_since.expect("halted");
+    let last_rise = c.last_step_rise.expect("the master stepped");
+    assert!(last_rise <= halted, "a step pin rose at cycle {last_rise}, after the halt at {halted}");
+    let plant = c.plant.clone().unwrap();
+    // The master stopped one step past the limit (error = master - slave, the slave at
+    // 0), well before the program's 20 steps.
+    assert_eq!(plant.position, [i64::from(LIMIT) + 1, 0], "lost {}", plant.lost);
+    let outputs = c.outputs_now();
+    for axis in 0..4 {
+        assert_eq!(outputs >> top_pins::output::pin_en(axis) & 1, 0, "axis {axis}'s enable pin");
+    }
+
+    // Disengaged (the error reads 0 then) and cleared: the halt is gone.
+    ok(m.enable_gantry(false));
+    ok(m.bus().wait(8));
+    ok(m.clear_faults_and_errors());
+    ok(m.bus().wait(8));
+    assert!(!ok(m.gantry_status()).alarm);
+    assert_eq!(status::HALT.get(ok(m.status())), 0);
+    assert!(chip(&mut m).halted_since.is_none());
 }
 
 /// Right after reset the panel's and the gantry's registers read the map's reset words

@@ -83,7 +83,7 @@ pub struct HardwareStatus {
     pub core_run: bool,
     /// Motion control's gate (`STATUS.STREAMING`).
     pub gate: bool,
-    /// The safety monitor's `halt`.
+    /// The machine's `halt`: the safety monitor's, or the gantry's alarm.
     pub halt: bool,
     /// Sticky E-stop fault.
     pub fault_estop: bool,

@@ -560,9 +560,12 @@ impl Top {
         &self.interlock
     }
 
-    /// `halt`: the safety monitor stops the machine.
+    /// `halt`: the machine stops on a safety fault (E-stop, watchdog) and on the
+    /// gantry's alarm (sticky until `clear_errors` with the error back within the limit
+    /// or the gantry disengaged): a gantry whose two sides disagree past the limit must
+    /// not go on moving, as a machine whose E-stop is pressed.
     pub fn halt(&self) -> bool {
-        self.safety.halt()
+        self.safety.halt() || (self.params.gantry_built() && self.core.gantry().alarm())
     }
 
     /// The core's run, `(CONTROL.RUN || jog engaged) && !halt` (`STATUS.RUNNING`).
