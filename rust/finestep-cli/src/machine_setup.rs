@@ -6,12 +6,12 @@
 
 use std::collections::BTreeMap;
 
-use anyhow::Context;
+use anyhow::{bail, Context};
 use finestep_host::stream::StreamConfig;
-use finestep_host::{AxisSetup, Bus, Caps, Machine, PinHost, PinTarget, PinTiming, SpiBus};
+use finestep_host::{AxisSetup, Bus, Caps, GantrySetup, Machine, PinHost, PinTarget, PinTiming, SpiBus};
 use finestep_model::top::TopParams;
-use finestep_model::PeriodRecord;
 use finestep_model::{AxisConfig, CoreParams};
+use finestep_model::{Increment, PeriodRecord};
 use finestep_planner::config::{AxisLimits, CoreLimits, Resolved};
 use finestep_planner::MachineConfig;
 
@@ -95,10 +95,20 @@ pub fn axis_config(resolved: &Resolved, axis: usize) -> AxisConfig {
 }
 
 /// Writes `resolved` to the chip: drive timing of every configured axis (and only those
-/// enabled), the period, a start level of one record; clears faults and errors.
+/// enabled), the period, a start level of one record; clears faults and errors. With
+/// `[gantry]` enabled, the slave is configured and enabled too, the pair's registers and
+/// mode written and the pair engaged (the axes are at rest before a run); a chip
+/// without the gantry (CAPS.HAS_GANTRY 0) is refused before anything is written.
 pub fn configure<B: Bus>(machine: &mut Machine<B>, resolved: &Resolved) -> anyhow::Result<()> {
+    if resolved.gantry.is_some() && !machine.caps().has_gantry {
+        bail!(
+            "the configuration enables [gantry], but the chip has no gantry (CAPS.HAS_GANTRY 0: a build with \
+             HAS_GANTRY 1 and STEP_SHARED 0)"
+        );
+    }
+    let slave = resolved.gantry.map(|g| usize::from(g.slave));
     let mut mask = 0;
-    for axis in (0..resolved.axes.len()).filter(|&a| resolved.axes[a].present) {
+    for axis in (0..resolved.axes.len()).filter(|&a| resolved.axes[a].present || Some(a) == slave) {
         machine.configure_axis(axis, &axis_setup(resolved, axis))?;
         mask |= 1 << axis;
     }
@@ -106,6 +116,37 @@ pub fn configure<B: Bus>(machine: &mut Machine<B>, resolved: &Resolved) -> anyho
     machine.set_period(resolved.period_clocks)?;
     machine.set_start_level(1)?;
     machine.clear_faults_and_errors()?;
+    if let Some(g) = resolved.gantry {
+        let setup = GantrySetup {
+            master: g.master,
+            slave: g.slave,
+            enc_master: g.enc_master,
+            enc_slave: g.enc_slave,
+            tick: g.tick,
+            deadband: g.deadband,
+            limit: g.limit,
+        };
+        machine.configure_gantry(&setup)?;
+        machine.set_gantry_mode(Some(g.sync))?;
+        machine.enable_gantry(true)?;
+    }
+    Ok(())
+}
+
+/// Refuses `records` that move the gantry's slave axis when `resolved` enables the pair
+/// (the slave follows the master: its own increments would be dropped), naming `name`.
+pub fn check_gantry_records(resolved: &Resolved, records: &[PeriodRecord], name: &str) -> anyhow::Result<()> {
+    if let Some(g) = resolved.gantry {
+        let (slave, master) = (usize::from(g.slave), usize::from(g.master));
+        if let Some(period) = records.iter().position(|r| r.inc[slave] != Increment::ZERO) {
+            let names = finestep_planner::config::AXIS_NAMES;
+            bail!(
+                "{name}: the program moves {} (period {period}), the gantry's slave: it follows {} ([gantry])",
+                names[slave],
+                names[master]
+            );
+        }
+    }
     Ok(())
 }
 

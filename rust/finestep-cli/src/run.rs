@@ -86,6 +86,7 @@ pub fn stream_planned<B: Bus>(
     name: &str,
     mut watch: impl FnMut(&mut Machine<B>, u64) -> Result<(), BusError>,
 ) -> anyhow::Result<RunReport> {
+    machine_setup::check_gantry_records(resolved, &planned.records, name)?;
     machine_setup::configure(chip, resolved)?;
     let config = machine_setup::stream_config(resolved);
     let mut queued_so_far = 0;
@@ -212,6 +213,7 @@ pub fn run_program_on(
     let (config, resolved) = machine_setup::resolve(config, core, config_name)?;
     let planned = plan_program(&config, program).map_err(|e| anyhow!("{name}:{}: {}", e.line, e.reason))?;
     let records = &planned.records;
+    machine_setup::check_gantry_records(&resolved, records, name)?;
     for note in &planned.notes {
         println!("  note: {note}");
     }
@@ -352,6 +354,9 @@ fn run_records<B: Bus>(
     let progress = ProgressBar::new(records.len() as u64)
         .with_style(ProgressStyle::with_template("  {bar:40} {pos}/{len} periods {per_sec} {msg}")?);
     let drain = 2 * u64::from(period_clocks);
+    if fast && resolved.gantry.is_some() {
+        println!("  note: the fast path runs the motion core alone: [gantry] not carried out (the slave stays)");
+    }
     if fast && !planned.events.is_empty() {
         println!(
             "  note: the fast path runs the motion core alone: {} spindle/coolant changes not carried out",
@@ -626,5 +631,54 @@ mod tests {
         let program = finestep_gcode::parse_str("M64 P8\nG1 X1 F600\nM2\n", "gpio.ngc").unwrap();
         let err = plan_program(&config, &program).unwrap_err();
         assert_eq!((err.line, err.reason.as_str()), (1, "digital output P8: the chip has outputs 0 to 7"));
+    }
+
+    /// `[gantry]` from the machine configuration reaches the chip through `finestep run`'s
+    /// machinery: on the gantry card's build (its model at the pins) the pair's registers
+    /// are written from the section, the slave axis enabled, the pair engaged in the
+    /// configured mode, and X streams to its end; a program moving the slave is refused
+    /// by name, and so is a chip without the gantry.
+    #[test]
+    fn gantry_section_configures_and_engages_the_pair() {
+        use finestep_host::regs::{axis_enable, gantry_control, gantry_limits};
+        let text = "[gantry]\nenabled = true\nmaster = \"X\"\nslave = \"A\"\nenc_master = 2\nenc_slave = 0\n\
+                    sync = false\ntick_us = 20.0\ndeadband_counts = 3\nlimit_counts = 50\n";
+        let connect = |params| {
+            let mut host = PinHost::new(ModelPins(Top::new(params)), PinTiming::default());
+            host.reset(4).unwrap();
+            host.idle(8).unwrap();
+            Machine::connect(SpiBus::new(host, 1)).unwrap()
+        };
+        let mut chip = connect(finestep_cosim::panel_chip_params());
+        let limits = machine_setup::chip_limits(&chip.caps());
+        let config = MachineConfig::from_toml_str(text, "g.toml").unwrap();
+        let (config, resolved) = machine_setup::resolve(config, limits, "g.toml").unwrap();
+        let program = finestep_gcode::parse_str("G1 X1 F600\nM2\n", "x.ngc").unwrap();
+        let planned = plan_program(&config, &program).unwrap();
+        let report = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "x.ngc", |_, _| Ok(())).unwrap();
+        assert_eq!(report.end.steps[0], 800);
+        let status = chip.gantry_status().unwrap();
+        assert!(status.engaged && !status.sync && !status.alarm, "{status:?}");
+        let control = chip.bus().read_one(gantry_control::ADDR).unwrap();
+        let fields =
+            [gantry_control::MASTER, gantry_control::SLAVE, gantry_control::ENC_MASTER, gantry_control::ENC_SLAVE];
+        assert_eq!(fields.map(|f| f.get(control)), [0, 3, 2, 0]);
+        // 20 us at 50 MHz = 1000 clocks: 16 * 62 + 15 the nearest tick.
+        assert_eq!(gantry_control::TICK.get(control), 62);
+        let limits_word = chip.bus().read_one(gantry_limits::ADDR).unwrap();
+        assert_eq!((gantry_limits::DEADBAND.get(limits_word), gantry_limits::LIMIT.get(limits_word)), (3, 50));
+        let enabled = axis_enable::ENABLE.get(chip.bus().read_one(axis_enable::ADDR).unwrap());
+        assert_eq!(enabled & 0b1001, 0b1001, "X and its slave A enabled: {enabled:#b}");
+
+        // A program that moves A, the slave, is refused before anything is written.
+        let program = finestep_gcode::parse_str("G1 X1 A2 F600\nM2\n", "xa.ngc").unwrap();
+        let planned = plan_program(&config, &program).unwrap();
+        let err = stream_planned(&mut chip, &planned, &resolved, &config.spindle, "xa.ngc", |_, _| Ok(())).unwrap_err();
+        assert!(err.to_string().starts_with("xa.ngc: the program moves A"), "{err}");
+        // A chip without the gantry: refused with the reason.
+        let mut plain = connect(rtl_top_params());
+        let planned = plan_program(&config, &finestep_gcode::parse_str("G1 X1 F600\nM2\n", "x.ngc").unwrap()).unwrap();
+        let err = stream_planned(&mut plain, &planned, &resolved, &config.spindle, "x.ngc", |_, _| Ok(())).unwrap_err();
+        assert!(err.to_string().contains("the chip has no gantry (CAPS.HAS_GANTRY 0"), "{err}");
     }
 }

@@ -82,7 +82,7 @@ pub struct GantrySetup {
     pub enc_master: u8,
     /// The encoder channel on the slave's side.
     pub enc_slave: u8,
-    /// A correction is decided every `tick * 16 + 16` clocks.
+    /// A correction is decided at most every `tick * 16 + 15` clocks.
     pub tick: u16,
     /// No correction while `|error| <= deadband` counts.
     pub deadband: u16,

@@ -26,6 +26,17 @@
 //! ramp_step = 0                 # most the level moves per period (0: no ramp)
 //! dac = false                   # the SPI DAC instead of the PWM pin
 //!
+//! [gantry]                      # seed 001's gantry pair (docs/spec/gantry_sync.md)
+//! enabled = false               # true: the slave axis follows the master's steps
+//! master = "X"                  # the axis the program moves
+//! slave = "A"                   # the second motor of that axis (the program must not move it)
+//! enc_master = 0                # encoder channels on the two sides (0..=3, different)
+//! enc_slave = 1
+//! sync = true                   # corrections from the encoders (false: forward only)
+//! tick_us = 100.0               # a correction decided at most every tick
+//! deadband_counts = 2           # no correction while |error| <= deadband
+//! limit_counts = 100            # the alarm (which halts the machine) past it
+//!
 //! [axes.X]                      # X, Y, Z (mm) and A (degrees); a listed [axes] table
 //! steps_per_unit = 800.0        # replaces the default axes, missing keys take defaults
 //! max_velocity = 100.0          # units/s
@@ -144,6 +155,8 @@ pub struct MachineConfig {
     pub spindle: SpindleConfig,
     /// `finestep measure`'s traverse and gratings (seed 000's roller gauge).
     pub measure: MeasureConfig,
+    /// The gantry pair: a slave axis following a master, corrected from two encoders.
+    pub gantry: GantryConfig,
     /// The host link the `finestep` tools talk over (`lockstep`, `model`,
     /// `spidev:/dev/spidevB.C[@SCK_HZ]`, `sim:SOCKET`); `--bus` overrides it. The planner
     /// does not read it.
@@ -235,6 +248,146 @@ impl Default for SpindleConfig {
     }
 }
 
+/// The gantry pair (`[gantry]`, seed 001; docs/spec/gantry_sync.md): two motors on one
+/// axis. The slave axis's shaper takes the master's step requests; in synchronised mode
+/// a correction from the difference of two encoder channels inserts or deletes a slave
+/// step at most once a tick; an error past the limit raises the alarm, which halts the
+/// machine. The planner does not read it (`finestep run` writes it to the chip).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GantryConfig {
+    /// Engage the pair for a run (the chip must have CAPS.HAS_GANTRY).
+    pub enabled: bool,
+    /// The master axis's name (X, Y, Z, A): the one the program moves.
+    pub master: String,
+    /// The slave axis's name: it follows the master (a program must not move it).
+    pub slave: String,
+    /// The encoder channel on the master's side (0..=3).
+    pub enc_master: u8,
+    /// The encoder channel on the slave's side (0..=3, not the master's).
+    pub enc_slave: u8,
+    /// Synchronised (corrections) or forward only (the slave copies the master).
+    pub sync: bool,
+    /// The correction tick, us: rounded to the chip's `16 * TICK + 15` clocks.
+    pub tick_us: f64,
+    /// No correction while |error| <= this, encoder counts.
+    pub deadband_counts: u16,
+    /// The alarm (a halt) when |error| > this, encoder counts; above the deadband.
+    pub limit_counts: u16,
+}
+
+impl Default for GantryConfig {
+    /// Off; X with A as its slave, channels 0 and 1, synchronised, 100 us ticks, a
+    /// deadband of 2 counts and a limit of 100.
+    fn default() -> Self {
+        GantryConfig {
+            enabled: false,
+            master: "X".into(),
+            slave: "A".into(),
+            enc_master: 0,
+            enc_slave: 1,
+            sync: true,
+            tick_us: 100.0,
+            deadband_counts: 2,
+            limit_counts: 100,
+        }
+    }
+}
+
+/// `[gantry]` resolved: record slots, channels and the chip's register fields.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ResolvedGantry {
+    /// The master's record slot.
+    pub master: u8,
+    /// The slave's record slot.
+    pub slave: u8,
+    /// The master side's encoder channel.
+    pub enc_master: u8,
+    /// The slave side's encoder channel.
+    pub enc_slave: u8,
+    /// Synchronised mode.
+    pub sync: bool,
+    /// `GANTRY_CONTROL.TICK`: a tick every `16 * tick + 15` clocks.
+    pub tick: u16,
+    /// Deadband, counts.
+    pub deadband: u16,
+    /// Alarm limit, counts.
+    pub limit: u16,
+}
+
+/// The highest encoder channel `GANTRY_CONTROL.ENC_MASTER`/`ENC_SLAVE` can name.
+const GANTRY_CHANNEL_MAX: u8 = 3;
+
+impl GantryConfig {
+    /// Validates the section against a core of `n_axes` axes at `clock_hz`; `None` when
+    /// not enabled (the values are checked all the same, but the axes against the core
+    /// only when enabled). Errors name `gantry.<key>`.
+    pub fn resolve(&self, n_axes: usize, clock_hz: f64) -> Result<Option<ResolvedGantry>, (String, String)> {
+        let slot = |key: &str, name: &str| -> Result<u8, (String, String)> {
+            let fail = |reason: String| (format!("gantry.{key}"), reason);
+            let slot = AXIS_NAMES
+                .iter()
+                .position(|n| *n == name)
+                .ok_or_else(|| fail(format!("\"{name}\" is not an axis (X, Y, Z, A)")))?;
+            if self.enabled && slot >= n_axes {
+                return Err(fail(format!("{name} is axis {slot}, but the core has {n_axes} axes (CAPS.N_AXES)")));
+            }
+            Ok(slot as u8)
+        };
+        let master = slot("master", &self.master)?;
+        let slave = slot("slave", &self.slave)?;
+        if master == slave {
+            return Err(("gantry.slave".into(), format!("{} is the master too", self.slave)));
+        }
+        for (key, channel) in [("enc_master", self.enc_master), ("enc_slave", self.enc_slave)] {
+            if channel > GANTRY_CHANNEL_MAX {
+                return Err((
+                    format!("gantry.{key}"),
+                    format!("channel {channel} is not within 0..={GANTRY_CHANNEL_MAX}"),
+                ));
+            }
+        }
+        if self.enc_master == self.enc_slave {
+            return Err(("gantry.enc_slave".into(), format!("channel {} is the master's too", self.enc_slave)));
+        }
+        if !(self.tick_us.is_finite() && self.tick_us > 0.0) {
+            return Err(("gantry.tick_us".into(), format!("must be a positive finite time, got {}", self.tick_us)));
+        }
+        let clocks = (self.tick_us * 1e-6 * clock_hz).round();
+        let tick = ((clocks - 15.0) / 16.0).round();
+        if !(0.0..=f64::from(u16::MAX)).contains(&tick) {
+            return Err((
+                "gantry.tick_us".into(),
+                format!(
+                    "{} us is {clocks} clocks at {} MHz, outside the chip's 15..={} (16 * GANTRY_CONTROL.TICK + 15)",
+                    self.tick_us,
+                    clock_hz / 1e6,
+                    16 * u32::from(u16::MAX) + 15
+                ),
+            ));
+        }
+        if self.limit_counts <= self.deadband_counts {
+            return Err((
+                "gantry.limit_counts".into(),
+                format!(
+                    "{} counts must exceed deadband_counts ({}): the alarm would come before any correction",
+                    self.limit_counts, self.deadband_counts
+                ),
+            ));
+        }
+        Ok(self.enabled.then_some(ResolvedGantry {
+            master,
+            slave,
+            enc_master: self.enc_master,
+            enc_slave: self.enc_slave,
+            sync: self.sync,
+            tick: tick as u16,
+            deadband: self.deadband_counts,
+            limit: self.limit_counts,
+        }))
+    }
+}
+
 /// `finestep measure` (`[measure]`): a traverse of one axis at a steady feed while the chip
 /// latches two encoder channels on one clock at every period boundary: the traverse
 /// axis's own grating and a gauge. The planner does not read it.
@@ -309,6 +462,7 @@ impl Default for MachineConfig {
             parameter_file: None,
             cutter_comp_entry: crate::cutter_comp::EntryExit::Tangent,
             measure: MeasureConfig::default(),
+            gantry: GantryConfig::default(),
             spindle: SpindleConfig::default(),
             drive: DriveTimingNs::default(),
             axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
@@ -374,6 +528,8 @@ pub struct Resolved {
     pub lookahead_moves: usize,
     /// S at full spindle level, rev/min.
     pub spindle_max_rpm: f64,
+    /// The gantry pair, when `[gantry]` enables it.
+    pub gantry: Option<ResolvedGantry>,
     /// What was adjusted (velocity caps), for the report.
     pub notes: Vec<String>,
 }
@@ -573,6 +729,18 @@ impl MachineConfig {
         if !axes.iter().any(|a| a.present) {
             return Err(fail("axes".into(), "no axis configured".into()));
         }
+        let gantry = self.gantry.resolve(core.n_axes, clock_hz).map_err(|(key, reason)| fail(key, reason))?;
+        if let Some(g) = gantry {
+            if !axes[usize::from(g.master)].present {
+                return Err(fail(
+                    "gantry.master".into(),
+                    format!(
+                        "{} is not configured in [axes]: the master is the axis the program moves",
+                        self.gantry.master
+                    ),
+                ));
+            }
+        }
         Ok(Resolved {
             clock_hz,
             period_s,
@@ -585,6 +753,7 @@ impl MachineConfig {
             chord_tolerance_mm: self.chord_tolerance_mm,
             lookahead_moves: self.lookahead_moves,
             spindle_max_rpm: self.spindle.max_rpm,
+            gantry,
             notes,
         })
     }
@@ -689,5 +858,61 @@ mod tests {
         // 50 000 clocks / (100 + 100) clocks per step = 250 steps per ms, less 5 %.
         assert!((resolved.axes[0].max_velocity - 250.0 * 0.95 / 0.001 / 800.0).abs() < 1e-9);
         assert_eq!(resolved.notes.len(), 1);
+    }
+
+    #[test]
+    fn gantry_section_enables_the_pair_with_its_limits() {
+        let text = "[gantry]\nenabled = true\nmaster = \"Y\"\nslave = \"Z\"\nenc_master = 2\nenc_slave = 3\n\
+                    sync = false\ntick_us = 20.0\ndeadband_counts = 4\nlimit_counts = 40\n";
+        let resolved = MachineConfig::from_toml_str(text, "m.toml").unwrap().resolve().unwrap();
+        // 20 us at 50 MHz: 1000 clocks, 16 * 62 + 15 = 1007 the nearest the chip has.
+        let expected = ResolvedGantry {
+            master: 1,
+            slave: 2,
+            enc_master: 2,
+            enc_slave: 3,
+            sync: false,
+            tick: 62,
+            deadband: 4,
+            limit: 40,
+        };
+        assert_eq!(resolved.gantry, Some(expected));
+        // Off by default, and off when the section says so.
+        assert_eq!(MachineConfig::default().resolve().unwrap().gantry, None);
+        let off = MachineConfig::from_toml_str("[gantry]\nlimit_counts = 7\n", "m.toml").unwrap();
+        assert_eq!(off.resolve().unwrap().gantry, None);
+    }
+
+    #[test]
+    fn bad_gantry_values_are_refused_by_key() {
+        let err = |text: &str| MachineConfig::from_toml_str(text, "m.toml").unwrap_err();
+        let cases = [
+            ("[gantry]\nmaster = \"Q\"\n", "gantry.master", "\"Q\" is not an axis"),
+            ("[gantry]\nslave = \"X\"\n", "gantry.slave", "X is the master too"),
+            ("[gantry]\nenc_slave = 4\n", "gantry.enc_slave", "not within 0..=3"),
+            ("[gantry]\nenc_slave = 0\n", "gantry.enc_slave", "channel 0 is the master's too"),
+            ("[gantry]\ntick_us = 0\n", "gantry.tick_us", "positive finite"),
+            ("[gantry]\ntick_us = 1e6\n", "gantry.tick_us", "outside the chip's 15..=1048575"),
+            ("[gantry]\nlimit_counts = 2\n", "gantry.limit_counts", "must exceed deadband_counts (2)"),
+            ("[gantry]\nlimit = 2\n", "-", "unknown field `limit`"),
+            ("[gantry]\nlimit_counts = 70000\n", "-", "limit_counts"),
+        ];
+        for (text, key, reason) in cases {
+            let e = err(text);
+            assert_eq!(e.key, key, "{text}: {e}");
+            assert!(e.reason.contains(reason), "{text}: {e}");
+        }
+        // The master must be an axis the program can move; the axes must be the core's.
+        let e = err("[gantry]\nenabled = true\nmaster = \"Y\"\nslave = \"X\"\n[axes.X]\n");
+        assert_eq!((e.key.as_str(), e.reason.contains("not configured in [axes]")), ("gantry.master", true), "{e}");
+        let two_axes = CoreLimits { n_axes: 2, ..CoreLimits::default() };
+        let enabled = MachineConfig::from_toml_str("[gantry]\nenabled = true\n", "m.toml").unwrap();
+        let e = enabled.for_core(two_axes).resolve_in("m.toml").unwrap_err();
+        assert_eq!(e.key, "gantry.slave", "{e}");
+        assert!(e.reason.contains("the core has 2 axes"), "{e}");
+        // Not enabled, the default slave A does not stop a two-axis core.
+        let xy = MachineConfig::default().axes.into_iter().filter(|(name, _)| name == "X" || name == "Y").collect();
+        let config = MachineConfig { axes: xy, ..Default::default() };
+        assert_eq!(config.for_core(two_axes).resolve().unwrap().gantry, None);
     }
 }
