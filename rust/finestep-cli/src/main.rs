@@ -8,6 +8,7 @@ mod config_file;
 mod conformance;
 mod demo;
 mod demo_feedback;
+mod gantry_figure;
 mod machine_setup;
 mod parameter_file;
 mod plot;
@@ -150,6 +151,10 @@ enum Command {
         /// spidev:/dev/spidevB.C[@SCK_HZ], sim:SOCKET).
         #[arg(long)]
         bus: Option<bus::BusTarget>,
+        /// Only the gantry figure (seed 001's result: the slave's error forward vs
+        /// synchronised), printed and plotted to build/figures/gantry-sync-error.png.
+        #[arg(long, conflicts_with_all = ["host_only", "sim_only", "bus"])]
+        gantry_only: bool,
     },
     /// The bring-up pass/fail table: identity, registers, CRC refusal, FIFO, watchdog,
     /// E-stop, a move counted back on an encoder. Exits non-zero on any failure.
@@ -262,8 +267,11 @@ fn main() -> anyhow::Result<()> {
         Command::View { file, config, profile, port, web } => {
             view::view(&file, config.as_deref(), profile.as_deref(), port, web.as_deref())
         }
-        Command::Bench { cycles, host_only, sim_only, bus } => {
-            if let Some(target) = bus {
+        Command::Bench { cycles, host_only, sim_only, bus, gantry_only } => {
+            let gantry_png = PathBuf::from("build/figures/gantry-sync-error.png");
+            if gantry_only {
+                gantry_figure::print_figure(Some(&gantry_png))
+            } else if let Some(target) = bus {
                 bench_top::on_bus(&target, 200)
             } else if host_only {
                 bench::front_end()
@@ -272,7 +280,8 @@ fn main() -> anyhow::Result<()> {
                 if !sim_only {
                     bench::front_end()?;
                 }
-                bench_top::run(200)
+                bench_top::run(200)?;
+                gantry_figure::print_figure(Some(&gantry_png))
             }
         }
         Command::PlanMemory { file, whole } => bench::plan_memory(&file, whole),
