@@ -647,7 +647,10 @@ mod tests {
             let mut host = PinHost::new(ModelPins(Top::new(params)), PinTiming::default());
             host.reset(4).unwrap();
             host.idle(8).unwrap();
-            Machine::connect(SpiBus::new(host, 1)).unwrap()
+            let mut chip = Machine::connect(SpiBus::new(host, 1)).unwrap();
+            let n_axes = chip.caps().n_axes;
+            chip.bus().set_n_axes(n_axes);
+            chip
         };
         let mut chip = connect(finestep_cosim::panel_chip_params());
         let limits = machine_setup::chip_limits(&chip.caps());
