@@ -906,13 +906,16 @@ mod tests {
         let e = err("[gantry]\nenabled = true\nmaster = \"Y\"\nslave = \"X\"\n[axes.X]\n");
         assert_eq!((e.key.as_str(), e.reason.contains("not configured in [axes]")), ("gantry.master", true), "{e}");
         let two_axes = CoreLimits { n_axes: 2, ..CoreLimits::default() };
-        let enabled = MachineConfig::from_toml_str("[gantry]\nenabled = true\n", "m.toml").unwrap();
+        let xy: BTreeMap<String, AxisLimits> =
+            MachineConfig::default().axes.into_iter().filter(|(name, _)| name == "X" || name == "Y").collect();
+        // Not enabled, the default slave A does not stop a two-axis core.
+        let config = MachineConfig { axes: xy.clone(), ..Default::default() };
+        assert_eq!(config.for_core(two_axes).resolve().unwrap().gantry, None);
+        // Enabled, it does.
+        let gantry = GantryConfig { enabled: true, ..Default::default() };
+        let enabled = MachineConfig { axes: xy, gantry, ..Default::default() };
         let e = enabled.for_core(two_axes).resolve_in("m.toml").unwrap_err();
         assert_eq!(e.key, "gantry.slave", "{e}");
         assert!(e.reason.contains("the core has 2 axes"), "{e}");
-        // Not enabled, the default slave A does not stop a two-axis core.
-        let xy = MachineConfig::default().axes.into_iter().filter(|(name, _)| name == "X" || name == "Y").collect();
-        let config = MachineConfig { axes: xy, ..Default::default() };
-        assert_eq!(config.for_core(two_axes).resolve().unwrap().gantry, None);
     }
 }
