@@ -270,7 +270,7 @@ fn main() -> anyhow::Result<()> {
         Command::Bench { cycles, host_only, sim_only, bus, gantry_only } => {
             let gantry_png = PathBuf::from("build/figures/gantry-sync-error.png");
             if gantry_only {
-                gantry_figure::print_figure(Some(&gantry_png))
+                gantry_figure::print_figure(Some(gantry_png.as_path()))
             } else if let Some(target) = bus {
                 bench_top::on_bus(&target, 200)
             } else if host_only {
@@ -281,7 +281,7 @@ fn main() -> anyhow::Result<()> {
                     bench::front_end()?;
                 }
                 bench_top::run(200)?;
-                gantry_figure::print_figure(Some(&gantry_png))
+                gantry_figure::print_figure(Some(gantry_png.as_path()))
             }
         }
         Command::PlanMemory { file, whole } => bench::plan_memory(&file, whole),
