@@ -39,18 +39,18 @@ impl Default for Machine {
     }
 }
 
-/// One canonical event, positions in the machine frame in mm (A in degrees).
+/// One canonical event, positions in the machine frame in mm (A B C in degrees).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Event {
     /// A rapid move.
     Traverse {
-        /// End X Y Z A.
-        to: [f64; 4],
+        /// End X Y Z A B C U V W.
+        to: [f64; 9],
     },
     /// A straight feed move.
     Feed {
-        /// End X Y Z A.
-        to: [f64; 4],
+        /// End X Y Z A B C U V W.
+        to: [f64; 9],
         /// mm/min.
         feed: f64,
         /// Spindle and coolant.
@@ -58,8 +58,8 @@ pub enum Event {
     },
     /// An arc or helix.
     Arc {
-        /// End X Y Z A.
-        to: [f64; 4],
+        /// End X Y Z A B C U V W.
+        to: [f64; 9],
         /// The centre's in-plane coordinates, in rs274's order (G17 X Y, G18 Z X, G19 Y Z).
         centre: [f64; 2],
         /// 17, 18 or 19.
@@ -76,8 +76,8 @@ pub enum Event {
     /// end point where both sides know it: rs274 prints `NURBS_FEED(4, ...)` with the
     /// count and without the points.
     Nurbs {
-        /// End X Y Z A, if known.
-        to: Option<[f64; 4]>,
+        /// End X Y Z A B C U V W, if known.
+        to: Option<[f64; 9]>,
         /// The number of control points, the start included (rs274 prints it first).
         points: usize,
     },
@@ -109,7 +109,11 @@ pub enum Event {
 
 impl fmt::Display for Event {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let p = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", ");
+        // B C U V W only when one is away from 0.
+        let p = |v: &[f64]| {
+            let shown = if v.len() == 9 && v[4..].iter().all(|&x| x == 0.0) { &v[..4] } else { v };
+            shown.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", ")
+        };
         let m = |m: &Machine| {
             format!(
                 "spindle {} {:.1} rpm{}{}",
@@ -137,8 +141,8 @@ impl fmt::Display for Event {
     }
 }
 
-fn point(p: crate::Point) -> [f64; 4] {
-    [p.x_mm, p.y_mm, p.z_mm, p.a_deg]
+fn point(p: crate::Point) -> [f64; 9] {
+    p.to_array()
 }
 
 /// finestep's canonical events for `program`.
@@ -204,9 +208,9 @@ pub struct Rs274Output {
 /// The interpreter state rs274's calls set, to bring its values to the machine frame.
 struct Canon {
     scale: f64,
-    g5x: [f64; 6],
-    g92: [f64; 6],
-    tool: [f64; 6],
+    g5x: [f64; 9],
+    g92: [f64; 9],
+    tool: [f64; 9],
     rotation_deg: f64,
     feed: f64,
     plane: u8,
@@ -222,31 +226,30 @@ fn numbers(args: &str) -> Result<Vec<f64>, String> {
 }
 
 impl Canon {
-    /// A position in program units (x y z a b c) to the machine frame in mm.
-    fn machine(&self, v: &[f64]) -> Result<[f64; 4], String> {
-        if v.len() < 6 {
-            return Err(format!("expected 6 coordinates, got {}", v.len()));
+    /// A position in program units (x y z a b c, and u v w when rs274 prints them) to
+    /// the machine frame in mm (A B C in degrees).
+    fn machine(&self, v: &[f64]) -> Result<[f64; 9], String> {
+        if v.len() != 6 && v.len() != 9 {
+            return Err(format!("expected 6 or 9 coordinates, got {}", v.len()));
         }
-        if v[4].abs() > 1e-9 || v[5].abs() > 1e-9 {
-            return Err("B or C moves".into());
+        let mut p = [0.0; 9];
+        for (axis, value) in v.iter().enumerate() {
+            p[axis] = if (3..6).contains(&axis) { *value } else { value * self.scale } + self.g92[axis];
         }
-        let mut x = v[0] * self.scale + self.g92[0];
-        let mut y = v[1] * self.scale + self.g92[1];
         let (s, c) = self.rotation_deg.to_radians().sin_cos();
-        (x, y) = (x * c - y * s, x * s + y * c);
-        Ok([
-            x + self.g5x[0] + self.tool[0],
-            y + self.g5x[1] + self.tool[1],
-            v[2] * self.scale + self.g92[2] + self.g5x[2] + self.tool[2],
-            v[3] + self.g92[3] + self.g5x[3] + self.tool[3],
-        ])
+        (p[0], p[1]) = (p[0] * c - p[1] * s, p[0] * s + p[1] * c);
+        for (axis, value) in p.iter_mut().enumerate() {
+            *value += self.g5x[axis] + self.tool[axis];
+        }
+        Ok(p)
     }
 
-    /// Offsets given in program units, stored in mm (rotary ones in degrees).
-    fn offsets(&self, v: &[f64]) -> [f64; 6] {
-        let mut out = [0.0; 6];
-        for (i, value) in v.iter().take(6).enumerate() {
-            out[i] = if i < 3 { value * self.scale } else { *value };
+    /// Offsets given in program units (x y z a b c, then u v w if given), stored in mm
+    /// (rotary ones in degrees).
+    fn offsets(&self, v: &[f64]) -> [f64; 9] {
+        let mut out = [0.0; 9];
+        for (i, value) in v.iter().take(9).enumerate() {
+            out[i] = if (3..6).contains(&i) { *value } else { value * self.scale };
         }
         out
     }
@@ -256,9 +259,9 @@ impl Canon {
 pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
     let mut canon = Canon {
         scale: 1.0,
-        g5x: [0.0; 6],
-        g92: [0.0; 6],
-        tool: [0.0; 6],
+        g5x: [0.0; 9],
+        g92: [0.0; 9],
+        tool: [0.0; 9],
         rotation_deg: 0.0,
         feed: 0.0,
         plane: 17,
@@ -355,7 +358,9 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                     return Err(at("ARC_FEED with fewer than 9 values".into()));
                 }
                 // first end, second end, first centre, second centre, turn, axis end, a b c
-                let (mut e, mut c) = ([0.0; 6], [0.0; 6]);
+                // (and u v w when rs274 prints them)
+                let n = if v.len() >= 12 { 9 } else { 6 };
+                let (mut e, mut c) = (vec![0.0; n], vec![0.0; n]);
                 let (first, second, normal) = match canon.plane {
                     18 => (2, 0, 1),
                     19 => (1, 2, 0),
@@ -364,7 +369,7 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                 e[first] = v[0];
                 e[second] = v[1];
                 e[normal] = v[5];
-                e[3..6].copy_from_slice(&v[6..9]);
+                e[3..n].copy_from_slice(&v[6..n + 3]);
                 c[first] = v[2];
                 c[second] = v[3];
                 c[normal] = v[5];
@@ -444,7 +449,7 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
 }
 
 /// A point's in-plane coordinates in rs274's order (G17 X Y, G18 Z X, G19 Y Z).
-fn in_plane(p: &[f64; 4], plane: u8) -> [f64; 2] {
+fn in_plane(p: &[f64; 9], plane: u8) -> [f64; 2] {
     match plane {
         18 => [p[2], p[0]],
         19 => [p[1], p[2]],
@@ -457,7 +462,7 @@ fn in_plane(p: &[f64; 4], plane: u8) -> [f64; 2] {
 /// compensated concave arc as small as the tool; finestep does not).
 fn moving(events: &[Event], tolerance: impl Fn(usize) -> f64) -> Vec<(usize, &Event)> {
     // Both start at the origin.
-    let mut at: Option<[f64; 4]> = Some([0.0; 4]);
+    let mut at: Option<[f64; 9]> = Some([0.0; 9]);
     let mut out = Vec::new();
     for (i, e) in events.iter().enumerate() {
         let to = match e {

@@ -19,6 +19,17 @@ pub(crate) const ARC_RELATIVE_TOLERANCE: f64 = 0.001;
 /// Lengths below this are zero (end equal to start, zero radius).
 const ZERO_MM: f64 = 1e-9;
 
+/// LinuxCNC's axes X Y Z A B C U V W.
+const N_AXES: usize = 9;
+/// A value per axis, in LinuxCNC's order (mm for X Y Z U V W, degrees for A B C).
+type Axes = [f64; N_AXES];
+
+/// Whether axis `axis` (LinuxCNC's order) is rotary (A B C, in degrees, not scaled by
+/// the units).
+fn rotary(axis: usize) -> bool {
+    (3..6).contains(&axis)
+}
+
 /// A G code in tenths: G90.1 is 901.
 type Code = u32;
 
@@ -42,7 +53,7 @@ struct OpenNurbs {
 /// The modal state between blocks.
 #[derive(Debug, Clone)]
 pub(crate) struct State {
-    position: [f64; 4],
+    position: Axes,
     motion: Option<Code>,
     plane: Plane,
     inches: bool,
@@ -67,26 +78,26 @@ pub(crate) struct State {
     /// computed from them when read.
     params: Vec<f64>,
     /// G54-G59.3 offsets (mm, A in degrees) and XY rotations (degrees).
-    g5x: [[f64; 4]; 9],
+    g5x: [Axes; 9],
     rotation_deg: [f64; 9],
     /// The coordinate system in use, 0 (G54) to 8 (G59.3).
     system: usize,
     /// The G92 offsets as #5211-#5214 hold them (mm), and whether they apply (#5210).
-    g92: [f64; 4],
+    g92: Axes,
     g92_on: bool,
     /// The offsets in force: G5x and its rotation, G92 (the parameters above act only
     /// when a code loads them, as in LinuxCNC).
-    active_g5x: [f64; 4],
+    active_g5x: Axes,
     active_rotation_deg: f64,
-    active_g92: [f64; 4],
+    active_g92: Axes,
     /// Millimetres per machine unit, the unit of the offset parameters (#5161-#5389).
     machine_unit_mm: f64,
     /// The tool length offset in force (G43), mm.
-    tool_offset: [f64; 4],
+    tool_offset: Axes,
     /// Tool lengths from the tool table, mm.
-    tools: std::collections::HashMap<u32, [f64; 4]>,
+    tools: std::collections::HashMap<u32, Axes>,
     /// G28 and G30 positions (machine frame, mm).
-    home: [[f64; 4]; 2],
+    home: [Axes; 2],
     /// G99 (retract to R) rather than G98.
     retract_to_r: bool,
     /// The path control mode in force (G61/G64).
@@ -107,7 +118,7 @@ impl Default for State {
     /// at 0 rpm, coolant off, tool 0.
     fn default() -> Self {
         State {
-            position: [0.0; 4],
+            position: [0.0; N_AXES],
             motion: None,
             plane: Plane::Xy,
             inches: false,
@@ -126,18 +137,18 @@ impl Default for State {
             tool_in_spindle: 0,
             nurbs: None,
             params: default_parameters(),
-            g5x: [[0.0; 4]; 9],
+            g5x: [[0.0; N_AXES]; 9],
             rotation_deg: [0.0; 9],
             system: 0,
-            g92: [0.0; 4],
+            g92: [0.0; N_AXES],
             g92_on: false,
-            active_g5x: [0.0; 4],
+            active_g5x: [0.0; N_AXES],
             active_rotation_deg: 0.0,
-            active_g92: [0.0; 4],
+            active_g92: [0.0; N_AXES],
             machine_unit_mm: 1.0,
-            tool_offset: [0.0; 4],
+            tool_offset: [0.0; N_AXES],
             tools: std::collections::HashMap::new(),
-            home: [[0.0; 4]; 2],
+            home: [[0.0; N_AXES]; 2],
             // rs274 starts in G99.
             retract_to_r: true,
             path: PathControl::Blend { tolerance_mm: None },
@@ -255,21 +266,23 @@ fn m_group(code: u32) -> Option<Group> {
 /// `max(0.1, length * F)` (F0 included).
 const INVERSE_TIME_MIN_RATE: f64 = 0.1;
 
-/// A straight move's length for G93, as LinuxCNC's `find_straight_length`: X Y Z in mm,
-/// or the turn of A (degrees) when X Y Z stand still; and whether it is X Y Z's.
-fn straight_length(from: [f64; 4], to: [f64; 4]) -> (f64, bool) {
-    let xyz = ((to[0] - from[0]).powi(2) + (to[1] - from[1]).powi(2) + (to[2] - from[2]).powi(2)).sqrt();
-    if xyz > 0.0 {
-        (xyz, true)
+/// A straight move's length for G93, as LinuxCNC's `find_straight_length`: X Y Z U V W
+/// in mm, or the turn of A B C (degrees) when those stand still; and whether it is the
+/// linear axes'.
+fn straight_length(from: Axes, to: Axes) -> (f64, bool) {
+    let norm = |axes: &[usize]| axes.iter().map(|&a| (to[a] - from[a]).powi(2)).sum::<f64>().sqrt();
+    let linear = norm(&[0, 1, 2, 6, 7, 8]);
+    if linear > 0.0 {
+        (linear, true)
     } else {
-        ((to[3] - from[3]).abs(), false)
+        (norm(&[3, 4, 5]), false)
     }
 }
 
 /// An arc's (helix's) length for G93, as LinuxCNC's `find_arc_length`: the in-plane arc
 /// (radius at the start times the swept angle, full turns included) and the normal
 /// axis's travel, at right angles.
-fn arc_length(from: [f64; 4], to: [f64; 4], centre: [f64; 4], plane: Plane, clockwise: bool, extra_turns: u32) -> f64 {
+fn arc_length(from: Axes, to: Axes, centre: Axes, plane: Plane, clockwise: bool, extra_turns: u32) -> f64 {
     let (a, b, n) = match plane {
         Plane::Xy => (0, 1, 2),
         Plane::Zx => (2, 0, 1),
@@ -302,8 +315,8 @@ fn as_u32(value: f64) -> Option<u32> {
 }
 
 /// The parameter letters a block may carry once each (besides G, M and N).
-const PARAMS: &str = "ADFHIJKLPQRSTXYZ@^";
-const AXES: [char; 4] = ['X', 'Y', 'Z', 'A'];
+const PARAMS: &str = "ABCDFHIJKLPQRSTUVWXYZ@^";
+const AXES: [char; N_AXES] = crate::AXIS_LETTERS;
 
 /// The words of one block, sorted by meaning.
 #[derive(Default)]
@@ -369,9 +382,6 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 }
                 *slot = Some((value, column));
                 continue;
-            }
-            'B' | 'C' | 'U' | 'V' | 'W' => {
-                return Err(LineError::new(column, format!("unsupported: axis {letter} ({})", unsupported::AXIS)))
             }
             'E' => return Err(LineError::new(column, format!("unsupported: word E ({})", unsupported::WORD_E))),
             l => return Err(LineError::new(column, format!("unknown word {l}"))),
@@ -488,19 +498,18 @@ impl State {
 
     /// `#n` (1 <= n <= 5601), with the predefined ones computed from the state.
     pub(crate) fn parameter(&self, n: usize) -> f64 {
-        let user = |axis: usize, mm: f64| if axis < 3 { mm / self.machine_unit_mm } else { mm };
+        let user = |axis: usize, mm: f64| if rotary(axis) { mm } else { mm / self.machine_unit_mm };
         match n {
-            5161..=5164 => user(n - 5161, self.home[0][n - 5161]),
-            5181..=5184 => user(n - 5181, self.home[1][n - 5181]),
+            5161..=5169 => user(n - 5161, self.home[0][n - 5161]),
+            5181..=5189 => user(n - 5181, self.home[1][n - 5181]),
             5210 => f64::from(u8::from(self.g92_on)),
-            5211..=5214 => user(n - 5211, self.g92[n - 5211]),
+            5211..=5219 => user(n - 5211, self.g92[n - 5211]),
             PARAM_COORD_SYSTEM => (self.system + 1) as f64,
-            5221..=5400 if (n - 5221) % 20 < 4 => user((n - 5221) % 20, self.g5x[(n - 5221) / 20][(n - 5221) % 20]),
+            5221..=5400 if (n - 5221) % 20 < 9 => user((n - 5221) % 20, self.g5x[(n - 5221) / 20][(n - 5221) % 20]),
             5221..=5400 if (n - 5221) % 20 == 9 => self.rotation_deg[(n - 5221) / 20],
             PARAM_TOOL => f64::from(self.tool_in_spindle),
-            5401..=5404 => self.user_units(n - 5401, self.tool_offset[n - 5401]),
-            PARAM_POSITION..=5423 => self.program_position(n - PARAM_POSITION),
-            5424..=5428 => 0.0,
+            5401..=5409 => self.user_units(n - 5401, self.tool_offset[n - 5401]),
+            PARAM_POSITION..=5428 => self.program_position(n - PARAM_POSITION),
             _ => self.params.get(n).copied().unwrap_or(0.0),
         }
     }
@@ -508,13 +517,13 @@ impl State {
     /// Sets `#n`; the offsets' parameters set the offsets, the computed read-only ones
     /// (tool, position) keep their values.
     pub(crate) fn set_parameter(&mut self, n: usize, value: f64) {
-        let mm = |axis: usize| if axis < 3 { value * self.machine_unit_mm } else { value };
+        let mm = |axis: usize| if rotary(axis) { value } else { value * self.machine_unit_mm };
         match n {
-            5161..=5164 => self.home[0][n - 5161] = mm(n - 5161),
-            5181..=5184 => self.home[1][n - 5181] = mm(n - 5181),
+            5161..=5169 => self.home[0][n - 5161] = mm(n - 5161),
+            5181..=5189 => self.home[1][n - 5181] = mm(n - 5181),
             5210 => self.g92_on = value != 0.0,
-            5211..=5214 => self.g92[n - 5211] = mm(n - 5211),
-            5221..=5400 if (n - 5221) % 20 < 4 => self.g5x[(n - 5221) / 20][(n - 5221) % 20] = mm((n - 5221) % 20),
+            5211..=5219 => self.g92[n - 5211] = mm(n - 5211),
+            5221..=5400 if (n - 5221) % 20 < 9 => self.g5x[(n - 5221) / 20][(n - 5221) % 20] = mm((n - 5221) % 20),
             5221..=5400 if (n - 5221) % 20 == 9 => self.rotation_deg[(n - 5221) / 20] = value,
             _ => {
                 if let Some(p) = self.params.get_mut(n) {
@@ -525,13 +534,13 @@ impl State {
     }
 
     /// The tool table's lengths (mm, per axis X Y Z A).
-    pub(crate) fn set_tools(&mut self, tools: &std::collections::HashMap<u32, [f64; 4]>) {
+    pub(crate) fn set_tools(&mut self, tools: &std::collections::HashMap<u32, Axes>) {
         self.tools = tools.clone();
     }
 
     /// A length in mm (or an angle) in program units.
     fn user_units(&self, axis: usize, mm: f64) -> f64 {
-        if axis < 3 && self.inches {
+        if !rotary(axis) && self.inches {
             mm / MM_PER_INCH
         } else {
             mm
@@ -539,7 +548,7 @@ impl State {
     }
 
     /// The G92 offsets in force.
-    fn g92_now(&self) -> [f64; 4] {
+    fn g92_now(&self) -> Axes {
         self.active_g92
     }
 
@@ -576,21 +585,29 @@ impl State {
 
     /// A point in the program frame (mm) to the machine frame, as LinuxCNC's canonical
     /// layer does: G92, then the XY rotation, then the G5x and tool offsets.
-    fn to_machine(&self, p: [f64; 4]) -> [f64; 4] {
+    fn to_machine(&self, p: Axes) -> Axes {
         let g92 = self.g92_now();
         let o = self.active_g5x;
         let t = self.tool_offset;
         let (x, y) = rotate(p[0] + g92[0], p[1] + g92[1], self.active_rotation_deg);
-        [x + o[0] + t[0], y + o[1] + t[1], p[2] + g92[2] + o[2] + t[2], p[3] + g92[3] + o[3] + t[3]]
+        let mut m = [0.0; N_AXES];
+        for axis in 0..N_AXES {
+            m[axis] = if axis < 2 { [x, y][axis] } else { p[axis] + g92[axis] } + o[axis] + t[axis];
+        }
+        m
     }
 
     /// The inverse of [`State::to_machine`].
-    fn to_program(&self, m: [f64; 4]) -> [f64; 4] {
+    fn to_program(&self, m: Axes) -> Axes {
         let g92 = self.g92_now();
         let o = self.active_g5x;
         let t = self.tool_offset;
         let (x, y) = rotate(m[0] - o[0] - t[0], m[1] - o[1] - t[1], -self.active_rotation_deg);
-        [x - g92[0], y - g92[1], m[2] - o[2] - t[2] - g92[2], m[3] - o[3] - t[3] - g92[3]]
+        let mut p = [0.0; N_AXES];
+        for axis in 0..N_AXES {
+            p[axis] = if axis < 2 { [x, y][axis] } else { m[axis] - o[axis] - t[axis] } - g92[axis];
+        }
+        p
     }
 
     /// The current position of axis `axis` (X Y Z A) in the program frame and units.
@@ -641,7 +658,11 @@ impl State {
             "_y" | "_abs_y" => self.program_position(1),
             "_z" | "_abs_z" => self.program_position(2),
             "_a" | "_abs_a" => self.program_position(3),
-            "_b" | "_c" | "_u" | "_v" | "_w" | "_abs_b" | "_abs_c" | "_abs_u" | "_abs_v" | "_abs_w" => 0.0,
+            "_b" | "_abs_b" => self.program_position(4),
+            "_c" | "_abs_c" => self.program_position(5),
+            "_u" | "_abs_u" => self.program_position(6),
+            "_v" | "_abs_v" => self.program_position(7),
+            "_w" | "_abs_w" => self.program_position(8),
             "_current_tool" => f64::from(self.tool_in_spindle),
             "_current_pocket" => f64::from(self.tool_in_spindle),
             "_selected_tool" => f64::from(self.tool),
@@ -1003,7 +1024,7 @@ impl State {
                         None => self.tool_in_spindle,
                     };
                     if tool == 0 {
-                        [0.0; 4]
+                        [0.0; N_AXES]
                     } else {
                         *self.tools.get(&tool).ok_or_else(|| {
                             LineError::new(column, format!("G43: tool {tool} is not in the tool table"))
@@ -1033,7 +1054,7 @@ impl State {
                         (None, Some(_)) => {
                             for (axis, &letter) in AXES.iter().enumerate() {
                                 if let Some((v, _)) = w.param(letter) {
-                                    offset[axis] += if letter == 'A' { v } else { self.length_mm(v) };
+                                    offset[axis] += if rotary(axis) { v } else { self.length_mm(v) };
                                 }
                             }
                         }
@@ -1041,15 +1062,15 @@ impl State {
                     offset
                 }
                 431 => {
-                    let mut offset = [0.0; 4];
+                    let mut offset = [0.0; N_AXES];
                     for (axis, &letter) in AXES.iter().enumerate() {
                         if let Some((v, _)) = w.param(letter) {
-                            offset[axis] = if letter == 'A' { v } else { self.length_mm(v) };
+                            offset[axis] = if rotary(axis) { v } else { self.length_mm(v) };
                         }
                     }
                     offset
                 }
-                _ => [0.0; 4],
+                _ => [0.0; N_AXES],
             };
         }
 
@@ -1092,14 +1113,14 @@ impl State {
                 let here = self.to_program(self.position);
                 for (axis, &letter) in AXES.iter().enumerate() {
                     if let Some((v, _)) = w.param(letter) {
-                        let v = if letter == 'A' { v } else { self.length_mm(v) };
+                        let v = if rotary(axis) { v } else { self.length_mm(v) };
                         g92[axis] = here[axis] + g92[axis] - v;
                     }
                 }
                 (self.g92, self.g92_on, self.active_g92) = (g92, true, g92);
             }
-            Some((921, _)) => (self.g92, self.g92_on, self.active_g92) = ([0.0; 4], false, [0.0; 4]),
-            Some((922, _)) => (self.g92_on, self.active_g92) = (false, [0.0; 4]),
+            Some((921, _)) => (self.g92, self.g92_on, self.active_g92) = ([0.0; N_AXES], false, [0.0; N_AXES]),
+            Some((922, _)) => (self.g92_on, self.active_g92) = (false, [0.0; N_AXES]),
             Some((923, _)) => (self.g92_on, self.active_g92) = (true, self.g92),
             _ => {}
         }
@@ -1200,7 +1221,9 @@ impl State {
         for word in words {
             let message = match word.letter {
                 'N' | 'X' | 'Y' | 'P' => continue,
-                'Z' | 'A' => format!("axis {} inside a NURBS block: only X and Y move in a NURBS (G17)", word.letter),
+                'Z' | 'A' | 'B' | 'C' | 'U' | 'V' | 'W' => {
+                    format!("axis {} inside a NURBS block: only X and Y move in a NURBS (G17)", word.letter)
+                }
                 'G' => format!("G{} inside a NURBS block: only X, Y and P words until G5.3 closes it", word.value),
                 letter => format!("{letter} word inside a NURBS block: only X, Y and P words until G5.3 closes it"),
             };
@@ -1246,7 +1269,7 @@ impl State {
         if !self.feed_mm_per_min.is_some_and(|f| f > 0.0) {
             return Err(LineError::new(column, "G5.2 with no feed rate"));
         }
-        for letter in ['Z', 'A'] {
+        for letter in ['Z', 'A', 'B', 'C', 'U', 'V', 'W'] {
             if let Some((_, c)) = w.param(letter) {
                 return Err(LineError::new(c, format!("axis {letter} in a NURBS: only X and Y move in a NURBS (G17)")));
             }
@@ -1319,13 +1342,13 @@ impl State {
 
     /// The block's end point in the program frame, absolute, in mm (and degrees for A),
     /// from `from` (the current position in the program frame).
-    fn target(&self, w: &Words, from: [f64; 4]) -> Result<[f64; 4], LineError> {
+    fn target(&self, w: &Words, from: Axes) -> Result<Axes, LineError> {
         let mut to = from;
         self.apply_xy(w, &mut to);
         for (axis, &letter) in AXES.iter().enumerate() {
             if let Some((value, column)) = w.param(letter) {
                 if axis != 0 && axis != 1 {
-                    let value = if letter == 'A' { value } else { self.length_mm(value) };
+                    let value = if rotary(axis) { value } else { self.length_mm(value) };
                     to[axis] = if self.incremental { to[axis] + value } else { value };
                 }
                 if to[axis].abs() > MAX_POSITION {
@@ -1344,7 +1367,7 @@ impl State {
     /// X and Y from the block's X Y words, or from its polar words `@` (radius) and `^`
     /// (angle in degrees) around the program origin: in G90 each replaces the current
     /// radius or angle, in G91 each adds to it (LinuxCNC's rule).
-    fn apply_xy(&self, w: &Words, p: &mut [f64; 4]) {
+    fn apply_xy(&self, w: &Words, p: &mut Axes) {
         if w.param('@').is_some() || w.param('^').is_some() {
             let (r, a) = (p[0].hypot(p[1]), p[1].atan2(p[0]).to_degrees());
             let (r, a) = match (self.incremental, w.param('@'), w.param('^')) {
@@ -1369,11 +1392,11 @@ impl State {
     fn arc_centre(
         &self,
         w: &Words,
-        from: [f64; 4],
-        to: [f64; 4],
+        from: Axes,
+        to: Axes,
         name: String,
         column: usize,
-    ) -> Result<([f64; 4], u32), LineError> {
+    ) -> Result<(Axes, u32), LineError> {
         // In-plane axes (p, q) and normal, right-handed; the centre-offset letters of
         // p and q, and the letter of the normal axis.
         let (p, q, [lp, lq, ln], plane_code) = match self.plane {
@@ -1399,7 +1422,7 @@ impl State {
                     let offset = w.param(letter).map_or(0.0, |(v, _)| self.length_mm(v));
                     centre[axis] = if self.arc_incremental { from[axis] + offset } else { offset };
                 }
-                let radius = |point: [f64; 4]| (point[p] - centre[p]).hypot(point[q] - centre[q]);
+                let radius = |point: Axes| (point[p] - centre[p]).hypot(point[q] - centre[q]);
                 let (r_start, r_end) = (radius(from), radius(to));
                 if r_start <= ZERO_MM {
                     return Err(LineError::new(column, "arc radius is zero"));
@@ -1462,7 +1485,7 @@ impl State {
             let mut to = self.position;
             for (axis, &letter) in AXES.iter().enumerate() {
                 if let Some((v, _)) = w.param(letter) {
-                    to[axis] = if letter == 'A' { v } else { self.length_mm(v) };
+                    to[axis] = if rotary(axis) { v } else { self.length_mm(v) };
                 }
             }
             (self.to_program(to), to)
@@ -1538,7 +1561,7 @@ impl State {
         if self.comp != CompSide::Off {
             return Err(LineError::new(column, format!("{name} with cutter compensation on")));
         }
-        for letter in ['Z', 'A'] {
+        for letter in ['Z', 'A', 'B', 'C', 'U', 'V', 'W'] {
             if let Some((_, c)) = w.param(letter) {
                 return Err(LineError::new(c, format!("axis {letter} in a {name} spline: only X and Y move")));
             }
@@ -1549,7 +1572,7 @@ impl State {
         };
         let from = self.to_program(self.position);
         let end = self.target(w, from)?;
-        let offset = |base: [f64; 4], (dx, dy): (f64, f64)| {
+        let offset = |base: Axes, (dx, dy): (f64, f64)| {
             let mut p = base;
             p[0] += self.length_mm(dx);
             p[1] += self.length_mm(dy);
@@ -1629,14 +1652,14 @@ impl State {
         let (l, l_column) = w.param('L').ok_or_else(|| LineError::new(column, "G10 with no L word"))?;
         let (p, p_column) = w.param('P').ok_or_else(|| LineError::new(column, "G10 with no P word"))?;
         let scale = if self.inches { MM_PER_INCH } else { 1.0 };
-        let value = move |letter: char, v: f64| if letter == 'A' { v } else { v * scale };
+        let value = move |axis: usize, v: f64| if rotary(axis) { v } else { v * scale };
         match as_u32(l) {
             Some(1) => {
                 let tool = as_u32(p).ok_or_else(|| LineError::new(p_column, "G10 L1 P must be a tool number"))?;
                 let mut entry = self.tools.get(&tool).copied().unwrap_or_default();
                 for (axis, &letter) in AXES.iter().enumerate() {
                     if let Some((v, _)) = w.param(letter) {
-                        entry[axis] = value(letter, v);
+                        entry[axis] = value(axis, v);
                     }
                 }
                 self.tools.insert(tool, entry);
@@ -1656,11 +1679,12 @@ impl State {
                         format!("unsupported: G10 L{k} X/Y under an XY rotation ({})", unsupported::G10_TOOL_ROTATION),
                     ));
                 }
-                let (origin, g92) = if k == 10 { (self.active_g5x, self.g92_now()) } else { (self.g5x[8], [0.0; 4]) };
+                let (origin, g92) =
+                    if k == 10 { (self.active_g5x, self.g92_now()) } else { (self.g5x[8], [0.0; N_AXES]) };
                 let mut entry = self.tools.get(&tool).copied().unwrap_or_default();
                 for (axis, &letter) in AXES.iter().enumerate() {
                     if let Some((v, _)) = w.param(letter) {
-                        entry[axis] = self.position[axis] - origin[axis] - g92[axis] - value(letter, v);
+                        entry[axis] = self.position[axis] - origin[axis] - g92[axis] - value(axis, v);
                     }
                 }
                 self.tools.insert(tool, entry);
@@ -1675,9 +1699,9 @@ impl State {
                 for (axis, &letter) in AXES.iter().enumerate() {
                     if let Some((v, _)) = w.param(letter) {
                         self.g5x[system][axis] = if k == 2 {
-                            value(letter, v)
+                            value(axis, v)
                         } else {
-                            here[axis] - self.tool_offset[axis] - g92[axis] - value(letter, v)
+                            here[axis] - self.tool_offset[axis] - g92[axis] - value(axis, v)
                         };
                     }
                 }
@@ -1808,10 +1832,10 @@ impl State {
         let restore = self.path;
         kinds.push(BlockKind::PathControl(PathControl::ExactPath));
         let mut out: Vec<BlockKind> = Vec::new();
-        let rapid = |state: &Self, out: &mut Vec<BlockKind>, p: [f64; 4]| {
+        let rapid = |state: &Self, out: &mut Vec<BlockKind>, p: Axes| {
             out.push(BlockKind::Rapid { to: Point::from_array(state.to_machine(p)) })
         };
-        let cut = |state: &Self, out: &mut Vec<BlockKind>, p: [f64; 4]| {
+        let cut = |state: &Self, out: &mut Vec<BlockKind>, p: Axes| {
             out.push(BlockKind::Linear { to: Point::from_array(state.to_machine(p)), feed_mm_per_min: feed })
         };
         // As rs274 does: up to R first when the cycle began below it; across at the
@@ -1832,8 +1856,11 @@ impl State {
                     }
                 }
             }
-            if let Some((v, _)) = w.param('A') {
-                cur[3] = if self.incremental { cur[3] + v } else { v };
+            for axis in 3..N_AXES {
+                if let Some((v, _)) = w.param(AXES[axis]) {
+                    let v = if rotary(axis) { v } else { self.length_mm(v) };
+                    cur[axis] = if self.incremental { cur[axis] + v } else { v };
+                }
             }
             if cur.iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
                 return Err(LineError::new(column, "position out of range"));
@@ -1852,7 +1879,11 @@ impl State {
                 // counter-clockwise), down through the hole, back to the centre, spindle
                 // on, cut up to K and back down to Z, stopped and oriented again, out at
                 // the offset, up to the clearance height, back over the centre, spindle on.
-                let off = |zz: f64| [cur[0] + i, cur[1] + j, zz, cur[3]];
+                let off = |zz: f64| {
+                    let mut p = cur;
+                    (p[0], p[1], p[2]) = (cur[0] + i, cur[1] + j, zz);
+                    p
+                };
                 if off(z).iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
                     return Err(LineError::new(column, "position out of range"));
                 }

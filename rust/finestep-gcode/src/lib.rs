@@ -50,7 +50,7 @@
 //! - G0 G1 G2 G3 G4 G5.1 G5.2 G5.3 G10 L1/L2/L10/L11/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G40
 //!   G41 G42 G43 G43.1 G43.2 G49 G53 G54-G59.3 G61 G64 G73 G80 G81 G82 G83 G85 G86 G89 G90 G91
 //!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
-//!   M48-M53 M61 M70 M71 M72 M73; F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A. What LinuxCNC has
+//!   M48-M53 M61 M70 M71 M72 M73; F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A B C U V W. What LinuxCNC has
 //!   beyond that is refused as `unsupported: <what> (<why>)` at its word (`unsupported:
 //!   G33 (spindle-synchronised motion ...)`, `unsupported: axis B (...)`); other letters
 //!   as `unknown word E`.
@@ -85,8 +85,8 @@ pub use error::GcodeError;
 pub use persistent::{required_parameters, ParameterFileError, Parameters};
 pub use program::{MAX_CALL_DEPTH, MAX_ITERATIONS, MAX_REPEATED_LINES};
 
-/// A position: named axis fields whose names carry their units. Linear axes are in
-/// millimetres, the rotary axis A in degrees.
+/// A position: named axis fields whose names carry their units. Linear axes (X Y Z U V
+/// W) are in millimetres, the rotary axes A B C in degrees.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Point {
     /// X in mm.
@@ -97,11 +97,36 @@ pub struct Point {
     pub z_mm: f64,
     /// A (rotary) in degrees.
     pub a_deg: f64,
+    /// B (rotary) in degrees.
+    pub b_deg: f64,
+    /// C (rotary) in degrees.
+    pub c_deg: f64,
+    /// U (linear, parallel to X) in mm.
+    pub u_mm: f64,
+    /// V (linear, parallel to Y) in mm.
+    pub v_mm: f64,
+    /// W (linear, parallel to Z) in mm.
+    pub w_mm: f64,
 }
 
+/// The axes LinuxCNC's interpreter knows, in its order: X Y Z A B C U V W.
+pub const AXIS_LETTERS: [char; 9] = ['X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'];
+
 impl Point {
-    fn from_array([x_mm, y_mm, z_mm, a_deg]: [f64; 4]) -> Self {
-        Point { x_mm, y_mm, z_mm, a_deg }
+    fn from_array([x_mm, y_mm, z_mm, a_deg, b_deg, c_deg, u_mm, v_mm, w_mm]: [f64; 9]) -> Self {
+        Point { x_mm, y_mm, z_mm, a_deg, b_deg, c_deg, u_mm, v_mm, w_mm }
+    }
+
+    /// Every axis in LinuxCNC's order ([`AXIS_LETTERS`]).
+    pub fn to_array(&self) -> [f64; 9] {
+        [self.x_mm, self.y_mm, self.z_mm, self.a_deg, self.b_deg, self.c_deg, self.u_mm, self.v_mm, self.w_mm]
+    }
+
+    /// The first of the axes B C U V W away from 0 (the machine's start), if any: the
+    /// planner refuses them, the chip drives X Y Z A.
+    pub fn extra_axis_away(&self) -> Option<char> {
+        let a = self.to_array();
+        (4..9).find(|&i| a[i] != 0.0).map(|i| AXIS_LETTERS[i])
     }
 }
 
@@ -369,8 +394,9 @@ pub struct Options {
     /// `o<NAME> call` names a subroutine the program does not define (LinuxCNC's
     /// SUBROUTINE_PATH).
     pub subroutine_path: Vec<std::path::PathBuf>,
-    /// Tool length offsets by tool number (X Y Z in mm, A in degrees), for G43.
-    pub tools: std::collections::HashMap<u32, [f64; 4]>,
+    /// Tool length offsets by tool number (X Y Z A B C U V W: mm, rotary ones in
+    /// degrees), for G43.
+    pub tools: std::collections::HashMap<u32, [f64; 9]>,
     /// Numbered parameters set before the program runs, as LinuxCNC's parameter file
     /// gives them ([`Parameters::read`]; lengths in the machine unit). The coordinate
     /// system #5220, its offsets and the G92 offsets (when #5210 is set) are in force from
@@ -393,23 +419,21 @@ impl Default for Options {
 impl Options {
     /// Reads the tool lengths of a LinuxCNC tool table (`T1 P1 Z0.511 D0.125 ;comment`
     /// lines) whose lengths are in `mm_per_unit` millimetres (25.4 for inches).
-    pub fn read_tool_table(text: &str, mm_per_unit: f64) -> Result<std::collections::HashMap<u32, [f64; 4]>, String> {
+    pub fn read_tool_table(text: &str, mm_per_unit: f64) -> Result<std::collections::HashMap<u32, [f64; 9]>, String> {
         let mut tools = std::collections::HashMap::new();
         for (index, line) in text.lines().enumerate() {
             let line = line.split(';').next().unwrap_or("");
             let mut tool = None;
-            let mut offset = [0.0; 4];
+            let mut offset = [0.0; 9];
             for word in line.split_whitespace() {
                 let (letter, number) = word.split_at(1);
                 let value =
                     number.parse::<f64>().map_err(|_| format!("tool table line {}: bad word {word:?}", index + 1))?;
-                match letter.to_ascii_uppercase().as_str() {
-                    "T" => tool = Some(value as u32),
-                    "X" => offset[0] = value * mm_per_unit,
-                    "Y" => offset[1] = value * mm_per_unit,
-                    "Z" => offset[2] = value * mm_per_unit,
-                    "A" => offset[3] = value,
-                    _ => {}
+                let letter = letter.to_ascii_uppercase();
+                if letter == "T" {
+                    tool = Some(value as u32);
+                } else if let Some(axis) = AXIS_LETTERS.iter().position(|&l| letter.starts_with(l)) {
+                    offset[axis] = if (3..6).contains(&axis) { value } else { value * mm_per_unit };
                 }
             }
             if let Some(tool) = tool {

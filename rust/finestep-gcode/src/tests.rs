@@ -19,7 +19,7 @@ fn err(source: &str) -> String {
 }
 
 fn p(x_mm: f64, y_mm: f64, z_mm: f64, a_deg: f64) -> Point {
-    Point { x_mm, y_mm, z_mm, a_deg }
+    Point { x_mm, y_mm, z_mm, a_deg, ..Point::default() }
 }
 
 fn close(a: Point, b: Point) -> bool {
@@ -272,7 +272,7 @@ fn every_error_message_with_its_place() {
         // Words.
         ("G0 X1 Q2", "1:7: Q word with no G5, G64, G73, G83, M19 or M61 to use it"),
         ("G64 P0.1 Q-1", "1:10: negative naive-CAM tolerance Q"),
-        ("G0 X1 B2", "1:7: unsupported: axis B (finestep drives the axes X Y Z A)"),
+        ("F1 G5.1 X1 Y1 I1 J0 B2", "1:21: axis B in a G5.1 spline: only X and Y move"),
         (
             "G0 X1e5",
             "1:6: unsupported: exponent in the number of word X (G-code numbers have no exponent: write the digits)",
@@ -811,7 +811,10 @@ fn override_switches_read_back_as_rs274_reads_them() {
 /// tool 2 Z 2.5 in); the axis-word form adds the words, as LinuxCNC's documentation says.
 #[test]
 fn additional_tool_length_offset_agrees_with_rs274() {
-    let tools = [(1, [0.0, 0.0, 31.75, 0.0]), (2, [0.0, 0.0, 63.5, 0.0])].into_iter().collect();
+    let tools =
+        [(1, [0.0, 0.0, 31.75, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]), (2, [0.0, 0.0, 63.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])]
+            .into_iter()
+            .collect();
     let options = Options { machine_unit_mm: 25.4, tools, ..Options::default() };
     let source =
         "G21\nG43 H1\nG0 X1 Z0\nG43.2 H2\nG0 X2 Z0\nG43.2 H0\nG0 X3 Z0\nG43.2 H1\nG0 X4 Z0\nG49\nG0 X5 Z0\nM2\n";
@@ -1261,7 +1264,7 @@ fn back_boring_g87_agrees_with_rs274() {
 /// task (emccanon) takes off. finestep keeps the machine's position, as LinuxCNC does.
 #[test]
 fn a_tool_length_offset_with_the_tool_change_leaves_the_machine_where_it_is() {
-    let tools = [(1, [0.0, 0.0, 31.75, 0.0])].into_iter().collect();
+    let tools = [(1, [0.0, 0.0, 31.75, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])].into_iter().collect();
     let options = Options { machine_unit_mm: 25.4, tools, ..Options::default() };
     for source in ["G20\nT1 M6 G43 H1\nG0 X1\nM2\n", "G20\nT1 M6\nG43 H1\nG0 X1\nM2\n"] {
         let program = parse_str_with(source, FILE, &options).unwrap();
@@ -1278,4 +1281,31 @@ fn a_tool_length_offset_with_the_tool_change_leaves_the_machine_where_it_is() {
 #[test]
 fn g10_l20_takes_no_rotation_as_rs274() {
     assert_eq!(err("G0 X3 Y4\nG10 L20 P1 X0 R10\n"), format!("{FILE}:2:15: R not allowed in G10 L20"));
+}
+
+#[test]
+fn the_axes_b_c_u_v_w_move_with_their_units_offsets_and_parameters() {
+    // B and C are rotary (degrees whatever G20 says), U V W linear (scaled by G20), as
+    // LinuxCNC's X Y Z A B C U V W; G92, G10 L2 and #5420-#5428 / #<_u> cover them all.
+    let source = "G20 G0 B30 C-45 U1 V2 W3\nG92 U0 B0\nG10 L2 P1 V1\nG0 U1 B10 V[#<_v> + #5427]\n\
+                  G91 G0 W-0.5 C5\nM2\n";
+    let program = parse_str(source, "t.ngc").unwrap();
+    let ends: Vec<[f64; 9]> = program
+        .blocks
+        .iter()
+        .filter_map(|b| match b.kind {
+            BlockKind::Rapid { to } => Some(to.to_array()),
+            _ => None,
+        })
+        .collect();
+    let inch = 25.4;
+    assert_eq!(ends[0], [0.0, 0.0, 0.0, 0.0, 30.0, -45.0, inch, 2.0 * inch, 3.0 * inch]);
+    // G92 U0 B0 there: U1 is 2 inches in the machine frame, B10 is 40 degrees; V: G54's
+    // V offset of 1 inch, the program's V (2 - 1 = 1 inch) read twice, plus the offset.
+    let second = ends[1];
+    assert!((second[6] - 2.0 * inch).abs() < 1e-9, "{second:?}");
+    assert!((second[4] - 40.0).abs() < 1e-9, "{second:?}");
+    assert!((second[7] - 3.0 * inch).abs() < 1e-9, "{second:?}");
+    let third = ends[2];
+    assert!((third[8] - 2.5 * inch).abs() < 1e-9 && (third[5] + 40.0).abs() < 1e-9, "{third:?}");
 }

@@ -26,8 +26,6 @@ pub const M_CODES: &[(u32, u32, &str)] = &[
 /// Any other M number.
 pub const M_OTHER: &str = "not an M-code finestep implements";
 
-/// `unsupported: axis B`, C, U, V, W.
-pub const AXIS: &str = "finestep drives the axes X Y Z A";
 /// `unsupported: word E`.
 pub const WORD_E: &str = "LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not implement";
 /// `unsupported: $ spindle selection`.
@@ -57,7 +55,6 @@ pub fn reasons() -> Vec<&'static str> {
     all.extend([
         G_OTHER,
         M_OTHER,
-        AXIS,
         WORD_E,
         SPINDLE_SELECTION,
         INI,

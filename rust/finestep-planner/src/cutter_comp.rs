@@ -365,7 +365,7 @@ impl<E: From<CompError>, I: Iterator<Item = Result<Block, E>>> Iterator for Comp
 /// is not compensated) as it is.
 fn to_frame(plane: Plane, p: Point) -> Point {
     match plane {
-        Plane::Zx => Point { x_mm: p.z_mm, y_mm: p.x_mm, z_mm: p.y_mm, a_deg: p.a_deg },
+        Plane::Zx => Point { x_mm: p.z_mm, y_mm: p.x_mm, z_mm: p.y_mm, ..p },
         Plane::Xy | Plane::Yz => p,
     }
 }
@@ -373,7 +373,7 @@ fn to_frame(plane: Plane, p: Point) -> Point {
 /// The inverse of [`to_frame`].
 fn from_frame(plane: Plane, p: Point) -> Point {
     match plane {
-        Plane::Zx => Point { x_mm: p.y_mm, y_mm: p.z_mm, z_mm: p.x_mm, a_deg: p.a_deg },
+        Plane::Zx => Point { x_mm: p.y_mm, y_mm: p.z_mm, z_mm: p.x_mm, ..p },
         Plane::Xy | Plane::Yz => p,
     }
 }

@@ -298,6 +298,17 @@ impl MoveReader {
                 }
                 _ => continue,
             };
+            if let BlockKind::Rapid { to }
+            | BlockKind::Linear { to, .. }
+            | BlockKind::Arc { to, .. }
+            | BlockKind::Nurbs { to, .. } = block.kind
+            {
+                if let Some(axis) = to.extra_axis_away() {
+                    return Err(fail(format!(
+                        "axis {axis} moves, but the chip drives the axes X Y Z A (B C U V W are interpreted, not driven)"
+                    )));
+                }
+            }
             if feed.is_nan() || feed <= 0.0 {
                 return Err(fail(format!("feed {} mm/min must be positive", feed * 60.0)));
             }

@@ -284,6 +284,21 @@ mod tests {
     }
 
     #[test]
+    fn the_axes_b_c_u_v_w_are_interpreted_but_refused() {
+        // The interpreter takes LinuxCNC's nine axes; the chip drives X Y Z A.
+        let config = MachineConfig::default();
+        for (axis, word) in [('B', "B10"), ('C', "C-1"), ('U', "U1"), ('V', "V1"), ('W', "W0.5")] {
+            let source = format!("G0 X1 B0 C0 U0 V0 W0\nG1 {word} F600\n");
+            let program = finestep_gcode::parse_str(&source, "b.ngc").unwrap();
+            let error = plan_program(&config, &program).unwrap_err();
+            assert_eq!(
+                (error.line, error.reason.as_str()),
+                (2, format!("axis {axis} moves, but the chip drives the axes X Y Z A (B C U V W are interpreted, not driven)").as_str()),
+            );
+        }
+    }
+
+    #[test]
     fn blending_keeps_speed_through_shallow_corners_and_exact_stop_does_not() {
         // A zig-zag of 40 short segments turning 10 degrees each way.
         let mut text = String::from("G21 G90 F3000\n");

@@ -542,7 +542,7 @@ fn moves_of_z_alone_keep_the_tool_where_it_is() {
     assert_eq!(retract.len(), 1);
     assert_eq!(retract[0].z_mm, 5.0);
     assert!((retract[0].y_mm + 2.0).abs() < 1e-9, "{retract:?}");
-    assert_eq!(find(12).last().unwrap(), &Point { x_mm: 5.0, y_mm: -5.0, z_mm: 5.0, a_deg: 0.0 });
+    assert_eq!(find(12).last().unwrap(), &Point { x_mm: 5.0, y_mm: -5.0, z_mm: 5.0, ..Point::default() });
 }
 
 #[test]
@@ -766,7 +766,7 @@ impl Builder {
         line
     }
     fn point(p: P2) -> Point {
-        Point { x_mm: p.0, y_mm: p.1, z_mm: 0.0, a_deg: 0.0 }
+        Point { x_mm: p.0, y_mm: p.1, ..Point::default() }
     }
     fn rapid(&mut self, to: P2) -> usize {
         self.push(BlockKind::Rapid { to: Builder::point(to) })
@@ -1067,7 +1067,7 @@ fn random_programs_never_panic() {
                     4 => builder.comp(if cw { CompSide::Left } else { CompSide::Right }),
                     5 => builder.comp(CompSide::Off),
                     6 => builder.push(BlockKind::Linear {
-                        to: Point { x_mm: x, y_mm: y, z_mm: cx, a_deg: cy },
+                        to: Point { x_mm: x, y_mm: y, z_mm: cx, a_deg: cy, ..Point::default() },
                         feed_mm_per_min: 100.0,
                     }),
                     _ => builder.push(BlockKind::Dwell { seconds: 0.1 }),

@@ -359,7 +359,7 @@ fn a_nurbs_with_cutter_compensation_or_a_cusp_is_refused() {
     // The parser refuses G5.2 with compensation on; a program built otherwise is refused
     // by the compensation pass, never cut without its offset.
     use finestep_gcode::{Block, BlockKind, CompSide, NurbsPoint, Plane, Point};
-    let point = |x_mm: f64, y_mm: f64| Point { x_mm, y_mm, z_mm: 0.0, a_deg: 0.0 };
+    let point = |x_mm: f64, y_mm: f64| Point { x_mm, y_mm, ..Point::default() };
     let control_points = vec![
         NurbsPoint { x_mm: 5.0, y_mm: 0.0, weight: 1.0 },
         NurbsPoint { x_mm: 5.0, y_mm: 5.0, weight: 1.0 },
