@@ -213,6 +213,8 @@ struct Canon {
     tool: [f64; 9],
     rotation_deg: f64,
     feed: f64,
+    /// G95: the feed rate is per spindle revolution (`SET_FEED_MODE(spindle, 1)`).
+    per_rev: bool,
     plane: u8,
     machine: Machine,
 }
@@ -244,6 +246,15 @@ impl Canon {
         Ok(p)
     }
 
+    /// The feed rate of a move, mm/min: in G95 the rate per revolution times the speed.
+    fn feed_now(&self) -> f64 {
+        if self.per_rev {
+            self.feed * self.machine.rpm
+        } else {
+            self.feed
+        }
+    }
+
     /// Offsets given in program units (x y z a b c, then u v w if given), stored in mm
     /// (rotary ones in degrees).
     fn offsets(&self, v: &[f64]) -> [f64; 9] {
@@ -264,6 +275,7 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
         tool: [0.0; 9],
         rotation_deg: 0.0,
         feed: 0.0,
+        per_rev: false,
         plane: 17,
         machine: Machine::default(),
     };
@@ -301,6 +313,10 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
             }
             "USE_TOOL_LENGTH_OFFSET" => {
                 canon.tool = canon.offsets(&nums()?);
+                None
+            }
+            "SET_FEED_MODE" => {
+                canon.per_rev = nums()?.get(1).copied() == Some(1.0);
                 None
             }
             "SET_FEED_RATE" => {
@@ -349,9 +365,11 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                 None
             }
             "STRAIGHT_TRAVERSE" => Some(Event::Traverse { to: canon.machine(&nums()?).map_err(at)? }),
-            "STRAIGHT_FEED" => {
-                Some(Event::Feed { to: canon.machine(&nums()?).map_err(at)?, feed: canon.feed, machine: canon.machine })
-            }
+            "STRAIGHT_FEED" => Some(Event::Feed {
+                to: canon.machine(&nums()?).map_err(at)?,
+                feed: canon.feed_now(),
+                machine: canon.machine,
+            }),
             "ARC_FEED" => {
                 let v = nums()?;
                 if v.len() < 9 {
@@ -381,7 +399,7 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                     centre,
                     plane: canon.plane,
                     turn: v[4] as i32,
-                    feed: canon.feed,
+                    feed: canon.feed_now(),
                     machine: canon.machine,
                 })
             }

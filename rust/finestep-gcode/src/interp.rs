@@ -63,6 +63,10 @@ pub(crate) struct State {
     feed_mm_per_min: Option<f64>,
     /// G93: F is the inverse of a move's time in minutes, given on every feed move.
     inverse_time: bool,
+    /// G95: F is a length per spindle revolution (`feed_mm_per_min` then holds mm per
+    /// revolution), fed at F times the programmed speed S, as LinuxCNC's interpreter
+    /// computes it.
+    per_rev: bool,
     /// The F of the block being executed in G93 (1/min), none without one.
     inverse_f: Option<f64>,
     /// M48-M53: the override switches.
@@ -127,6 +131,7 @@ impl Default for State {
             comp: CompSide::Off,
             feed_mm_per_min: None,
             inverse_time: false,
+            per_rev: false,
             inverse_f: None,
             overrides: Overrides { feed: true, speed: true, adaptive_feed: false, feed_hold: true },
             rotation: SpindleRotation::Off,
@@ -207,7 +212,7 @@ enum Group {
     ArcDistance, // G group 4: G90.1 G91.1
     Units,       // G group 6: G20 G21
     Comp,        // G group 7: G40 G41 G41.1 G42 G42.1
-    FeedMode,    // G group 5: G93 G94
+    FeedMode,    // G group 5: G93 G94 G95
     SpindleMode, // G group 14: G97
     LatheMode,   // G group 15: G7 G8
     ToolLength,  // G group 8: G43 G43.1 G43.2 G49
@@ -234,7 +239,7 @@ fn g_group(code: Code) -> Option<Group> {
         0 | 10 | 20 | 30 | 50 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 860 | 870 | 890 => Group::Motion,
         430 | 431 | 432 | 490 => Group::ToolLength,
         // G97 (spindle in rpm) is the only spindle mode and always in force.
-        930 | 940 => Group::FeedMode,
+        930 | 940 | 950 => Group::FeedMode,
         970 => Group::SpindleMode,
         70 | 80 => Group::LatheMode,
         980 | 990 => Group::ReturnMode,
@@ -444,6 +449,7 @@ pub(crate) struct Modal {
     arc_incremental: bool,
     feed_mm_per_min: Option<f64>,
     inverse_time: bool,
+    per_rev: bool,
     rpm: f64,
     rotation: SpindleRotation,
     mist: bool,
@@ -462,6 +468,7 @@ impl State {
             arc_incremental: self.arc_incremental,
             feed_mm_per_min: self.feed_mm_per_min,
             inverse_time: self.inverse_time,
+            per_rev: self.per_rev,
             rpm: self.rpm,
             rotation: self.rotation,
             mist: self.mist,
@@ -490,6 +497,7 @@ impl State {
         self.arc_incremental = saved.arc_incremental;
         self.feed_mm_per_min = saved.feed_mm_per_min;
         self.inverse_time = saved.inverse_time;
+        self.per_rev = saved.per_rev;
         (self.rpm, self.rotation, self.mist, self.flood) = (saved.rpm, saved.rotation, saved.mist, saved.flood);
         self.path = saved.path;
         self.retract_to_r = saved.retract_to_r;
@@ -638,8 +646,8 @@ impl State {
             "_absolute" => flag(!self.incremental),
             "_incremental" => flag(self.incremental),
             "_inverse_time" => flag(self.inverse_time),
-            "_units_per_minute" => flag(!self.inverse_time),
-            "_units_per_rev" => 0.0,
+            "_units_per_minute" => flag(!self.inverse_time && !self.per_rev),
+            "_units_per_rev" => flag(self.per_rev),
             "_coord_system" => [540.0, 550.0, 560.0, 570.0, 580.0, 590.0, 591.0, 592.0, 593.0][self.system],
             "_ijk_absolute_mode" => flag(!self.arc_incremental),
             "_lathe_diameter_mode" => flag(self.diameter_mode),
@@ -670,6 +678,13 @@ impl State {
             "_task" => 0.0,
             _ => return None,
         })
+    }
+
+    /// The feed rate of a feed move now, mm/min: F, or in G95 F (mm per revolution)
+    /// times the programmed speed S, as LinuxCNC's interpreter feeds it (S is what counts,
+    /// whether the spindle turns or not).
+    fn feed_now(&self) -> Option<f64> {
+        self.feed_mm_per_min.map(|f| if self.per_rev { f * self.rpm } else { f })
     }
 
     fn length_mm(&self, value: f64) -> f64 {
@@ -844,8 +859,8 @@ impl State {
 
         // Feed mode (before F, as LinuxCNC orders them): a change unsets the feed rate.
         if let Some((code, _)) = w.group(Group::FeedMode) {
-            if (code == 930) != self.inverse_time {
-                self.inverse_time = code == 930;
+            if (code == 930, code == 950) != (self.inverse_time, self.per_rev) {
+                (self.inverse_time, self.per_rev) = (code == 930, code == 950);
                 self.feed_mm_per_min = None;
             }
         }
@@ -1266,7 +1281,7 @@ impl State {
         if self.comp != CompSide::Off {
             return Err(LineError::new(column, "G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"));
         }
-        if !self.feed_mm_per_min.is_some_and(|f| f > 0.0) {
+        if !self.feed_now().is_some_and(|f| f > 0.0) {
             return Err(LineError::new(column, "G5.2 with no feed rate"));
         }
         for letter in ['Z', 'A', 'B', 'C', 'U', 'V', 'W'] {
@@ -1322,7 +1337,7 @@ impl State {
                 ),
             ));
         }
-        let feed_mm_per_min = match self.feed_mm_per_min {
+        let feed_mm_per_min = match self.feed_now() {
             Some(f) if f > 0.0 => f,
             _ => return Err(LineError::new(column, "G5.3 with no feed rate")),
         };
@@ -1496,8 +1511,12 @@ impl State {
         if to.iter().any(|v| v.abs() > MAX_POSITION) {
             return Err(LineError::new(column, "position out of range"));
         }
-        let feed = || match self.feed_mm_per_min {
+        let feed = || match self.feed_now() {
             Some(f) if f > 0.0 => Ok(f),
+            Some(_) if self.per_rev && self.rpm == 0.0 => Err(LineError::new(
+                column_of(w, column),
+                format!("{} with zero spindle speed in feed per revolution (G95): S first", g_name(code)),
+            )),
             _ => Err(LineError::new(column_of(w, column), format!("{} with no feed rate", g_name(code)))),
         };
         let from_machine = self.position;
@@ -1566,7 +1585,7 @@ impl State {
                 return Err(LineError::new(c, format!("axis {letter} in a {name} spline: only X and Y move")));
             }
         }
-        let feed_mm_per_min = match self.feed_mm_per_min {
+        let feed_mm_per_min = match self.feed_now() {
             Some(f) if f > 0.0 => f,
             _ => return Err(LineError::new(column_of(w, column), format!("{name} with no feed rate"))),
         };
@@ -1753,7 +1772,7 @@ impl State {
             // rs274 refuses it too (its feed rate is zero there).
             return Err(LineError::new(column, format!("{name} in inverse-time feed (G93): G94 first")));
         }
-        let feed = match self.feed_mm_per_min {
+        let feed = match self.feed_now() {
             Some(f) if f > 0.0 => f,
             _ => return Err(LineError::new(column, format!("{name} with no feed rate"))),
         };

@@ -49,7 +49,7 @@
 //!   run again by loops and calls (each an error at the line that reaches it).
 //! - G0 G1 G2 G3 G4 G5.1 G5.2 G5.3 G10 L1/L2/L10/L11/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G40
 //!   G41 G42 G43 G43.1 G43.2 G49 G53 G54-G59.3 G61 G64 G73 G80 G81 G82 G83 G85 G86 G89 G90 G91
-//!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
+//!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G95 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
 //!   M48-M53 M61 M70 M71 M72 M73; F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A B C U V W. What LinuxCNC has
 //!   beyond that is refused as `unsupported: <what> (<why>)` at its word (`unsupported:
 //!   G33 (spindle-synchronised motion ...)`, `unsupported: axis B (...)`); other letters

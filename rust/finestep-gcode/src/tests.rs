@@ -273,6 +273,7 @@ fn every_error_message_with_its_place() {
         ("G0 X1 Q2", "1:7: Q word with no G5, G64, G73, G83, M19 or M61 to use it"),
         ("G64 P0.1 Q-1", "1:10: negative naive-CAM tolerance Q"),
         ("F1 G5.1 X1 Y1 I1 J0 B2", "1:21: axis B in a G5.1 spline: only X and Y move"),
+        ("G95 F0.1\nG1 X1", "2:1: G1 with zero spindle speed in feed per revolution (G95): S first"),
         (
             "G0 X1e5",
             "1:6: unsupported: exponent in the number of word X (G-code numbers have no exponent: write the digits)",

@@ -10,7 +10,6 @@ pub const G_CODES: &[(&[u32], &str)] = &[
     (&[382, 383, 384, 385], "probing needs a probe input, which finestep does not read"),
     (&[700, 710, 711, 712, 720, 721, 722], "lathe roughing cycles are not implemented yet"),
     (&[880], "the tool is left at the bottom for the operator to retract by hand during the stop, and finestep offers no hand moves in a program"),
-    (&[950], "per-revolution feed needs the spindle feedback finestep does not have yet"),
     (&[960], "constant surface speed changes the spindle speed with X along each move; finestep sets the spindle at rest between moves"),
 ];
 
