@@ -11,7 +11,7 @@
 //! let source = "G20 G91 F10\n#<dy> = -0.25\nG1 X1 Y[2 * #<dy>] (inches, incremental)\nM2\n";
 //! let program = parse_str(source, "part.ngc").unwrap();
 //! let BlockKind::Linear { to, feed_mm_per_min } = program.blocks[0].kind else { panic!() };
-//! assert_eq!(to, Point { x_mm: 25.4, y_mm: -12.7, z_mm: 0.0, a_deg: 0.0 });
+//! assert_eq!(to, Point { x_mm: 25.4, y_mm: -12.7, ..Point::default() });
 //! // As in LinuxCNC, F is read before G20 acts on its block: 10 mm/min.
 //! assert_eq!(feed_mm_per_min, 10.0);
 //! assert_eq!(program.blocks[0].line, 3);
