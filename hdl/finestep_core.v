@@ -17,7 +17,8 @@ module finestep_core #(
     parameter TIMING_W = 12,
     parameter HAS_GANTRY = 1,    // 0: no gantry block (its outputs read 0, every axis its own)
     parameter STEP_SHARED = 0,   // 1: one step engine visits the axes (no gantry block then)
-    parameter RAM_BLOCK  = 0     // 1: the step engine's stores in block RAM
+    parameter RAM_BLOCK  = 0,    // 1: the step engine's stores in block RAM
+    parameter STEP_DIGIT = 0     // with STEP_SHARED: 0 step_engine; 1, 2, 4, 8 step_serial
 ) (
     // clock, reset
     input  wire                       clk,
@@ -76,11 +77,19 @@ module finestep_core #(
 `include "finestep_interface.vh"
 `include "finestep_core_checks.vh"
 
-    // log2 of the step engine's slots (0: a DDA and a shaper per axis).
-    localparam SL = (STEP_SHARED == 0) ? 0 : ((N_AXES <= 2) ? 1 : ((N_AXES <= 4) ? 2 : 3));
+    // log2 of the step engine's slots (0: a DDA and a shaper per axis); with the
+    // digit-serial engine log2 of its round R = slots * 32 / STEP_DIGIT clocks, the
+    // quantum of the periods (docs/spec/step_serial.md#environment).
+    localparam SLOTS_L = (N_AXES <= 2) ? 1 : ((N_AXES <= 4) ? 2 : 3);
+    localparam DIGIT_L = (STEP_DIGIT <= 1) ? 0 : ((STEP_DIGIT == 2) ? 1 : ((STEP_DIGIT == 4) ? 2 : 3));
+    localparam SERIAL  = (STEP_SHARED != 0 && STEP_DIGIT != 0) ? 1 : 0;
+    localparam SL = (STEP_SHARED == 0) ? 0 : ((SERIAL != 0) ? SLOTS_L + 5 - DIGIT_L : SLOTS_L);
     generate
         if (STEP_SHARED != 0 && P_WIDTH <= SL) begin : fs_check_shared_p_width
             finestep_core_STEP_SHARED_needs_P_WIDTH_above_log2_slots out_of_range ();
+        end
+        if (STEP_DIGIT != 0 && STEP_DIGIT != 1 && STEP_DIGIT != 2 && STEP_DIGIT != 4 && STEP_DIGIT != 8) begin : fs_check_step_digit
+            finestep_core_STEP_DIGIT_must_be_0_1_2_4_or_8 out_of_range ();
         end
     endgenerate
 
@@ -171,7 +180,48 @@ module finestep_core #(
 
     genvar i;
     generate
-        if (STEP_SHARED != 0) begin : shared
+        if (SERIAL != 0) begin : serial
+            wire [STEP_DIGIT-1:0] pos_digit;
+            wire [7:0]            pos_index;
+            wire [2:0]            pos_axis;
+            step_serial #(
+                .N_AXES(N_AXES),
+                .P_WIDTH(P_WIDTH),
+                .TIMING_W(TIMING_W),
+                .DIGIT(STEP_DIGIT)
+            ) engine (
+                .clk(clk), .rst(rst),
+                .run(dda_run), .p_active(p_active), .inc(inc),
+                .start_ok(start_ok),
+                .axis_enable(axis_enable),
+                .step_len(step_len), .step_space(step_space), .dir_setup(dir_setup), .dir_hold(dir_hold),
+                .out_mode(out_mode), .invert(invert),
+                .clear_errors(clear_errors), .halt(halt),
+                .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
+                .rate_error(rate_error), .step_lost(step_lost),
+                .pos_digit(pos_digit), .pos_index(pos_index), .pos_axis(pos_axis)
+            );
+            // The position words, collected from the engine's digit stream: a visit's
+            // digits shift into one word, written to its axis with the last digit, so a
+            // word never shows a mix of two visits (docs/spec/step_serial.md#in-the-core).
+            localparam QL = 5 - DIGIT_L;
+            reg [31-STEP_DIGIT:0] collect_reg;      // the digits so far, the newest on top
+            reg [32*N_AXES-1:0]   position_reg;
+            wire [31:0]           collected = {pos_digit, collect_reg};
+            integer a;
+            always @(posedge clk) begin
+                collect_reg <= collected[31:STEP_DIGIT];
+                for (a = 0; a < N_AXES; a = a + 1) begin
+                    if (pos_index == (1 << QL) - 1 && {29'd0, pos_axis} == a) position_reg[32*a +: 32] <= collected;
+                end
+                if (rst) position_reg <= {32*N_AXES{1'b0}};
+            end
+            assign position = position_reg;
+            wire unused_slave = &{1'b0, slave_req_valid, slave_req_negative, slave_axis};
+            assign dda_req_valid    = {N_AXES{1'b0}};
+            assign dda_req_negative = {N_AXES{1'b0}};
+            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, RAM_BLOCK[0]};
+        end else if (STEP_SHARED != 0) begin : shared
             step_engine #(
                 .N_AXES(N_AXES),
                 .P_WIDTH(P_WIDTH),

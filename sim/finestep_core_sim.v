@@ -13,7 +13,8 @@ module finestep_core_sim #(
     parameter P_WIDTH    = 20,
     parameter TIMING_W   = 12,
     parameter HAS_GANTRY = 1,
-    parameter STEP_SHARED = 0
+    parameter STEP_SHARED = 0,
+    parameter STEP_DIGIT = 0
 ) (
     input  wire                       load,
     input  wire                       clk,
@@ -117,7 +118,8 @@ module finestep_core_sim #(
         .P_WIDTH(P_WIDTH),
         .TIMING_W(TIMING_W),
         .HAS_GANTRY(HAS_GANTRY),
-        .STEP_SHARED(STEP_SHARED)
+        .STEP_SHARED(STEP_SHARED),
+        .STEP_DIGIT(STEP_DIGIT)
     ) core (
         .clk(clk),
         .rst(rst_q),

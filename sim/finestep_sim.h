@@ -86,11 +86,14 @@ uint32_t fs_timing_width(void);
 /* 1 when waveforms are written as FST, 0 for VCD. */
 int fs_trace_is_fst(void);
 
-/* A core built without waveform support (the fast one); with the gantry block
- * (HAS_GANTRY = 1) when `gantry` is non-zero, else without it (HAS_GANTRY = 0). */
-fs_sim *fs_new(int gantry);
+/* STEP_DIGIT of the core with the digit-serial step engine (variant 2). */
+uint32_t fs_serial_digit(void);
+/* A core built without waveform support (the fast one): variant 1 with the gantry block
+ * and a DDA and a shaper per axis, 2 with the digit-serial step engine (STEP_DIGIT =
+ * fs_serial_digit()), else (0) with the step engine. */
+fs_sim *fs_new(int variant);
 /* A core that can write waveforms (fs_trace_open); slower. */
-fs_sim *fs_new_traced(int gantry);
+fs_sim *fs_new_traced(int variant);
 void fs_free(fs_sim *sim);
 
 /* One clock with rst high and all other inputs zero; the cycle count restarts at 0 and

@@ -226,6 +226,7 @@ fn main() {
         .define("FT_N_ENC", params.n_enc.to_string().as_str())
         .define("FT_HAS_MPG", params.has_mpg.to_string().as_str())
         .define("FT_STEP_SHARED", params.step_shared.to_string().as_str())
+        .define("FS_SERIAL_DIGIT", SERIAL_CORE_DIGIT.to_string().as_str())
         .define("FT_HAS_SPINDLE", params.has_spindle.to_string().as_str())
         .define("FT_HAS_OUTPUTS", params.has_outputs.to_string().as_str())
         .define("FT_N_GPIO", params.n_gpio.to_string().as_str())
@@ -260,10 +261,14 @@ fn main() {
     // two blocks cost about a third of the chip's simulation time).
     let core_sim = sim.join("finestep_core_sim.v");
     let mut models = vec![
-        (Build::Core { gantry: false }, "Vfinestep_core", None),
-        (Build::Core { gantry: false }, "Vfinestep_core_traced", Some(trace_flag)),
-        (Build::Core { gantry: true }, "Vfinestep_core_gantry", None),
-        (Build::Core { gantry: true }, "Vfinestep_core_gantry_traced", Some(trace_flag)),
+        (Build::Core { gantry: false, digit: 0 }, "Vfinestep_core", None),
+        (Build::Core { gantry: false, digit: 0 }, "Vfinestep_core_traced", Some(trace_flag)),
+        (Build::Core { gantry: true, digit: 0 }, "Vfinestep_core_gantry", None),
+        (Build::Core { gantry: true, digit: 0 }, "Vfinestep_core_gantry_traced", Some(trace_flag)),
+        // The core with the digit-serial step engine (the CPLD's), SERIAL_CORE_DIGIT bits
+        // a clock.
+        (Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT }, "Vfinestep_core_serial", None),
+        (Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT }, "Vfinestep_core_serial_traced", Some(trace_flag)),
         (Build::Top { motion: false, mpg: true }, "Vfinestep_top", None),
         (Build::Top { motion: false, mpg: true }, "Vfinestep_top_traced", Some(trace_flag)),
         // The motion chip once, without tracing (a second traced top would add a third
@@ -412,8 +417,8 @@ fn compile_parallel(build: &mut cc::Build, mut files: Vec<PathBuf>) {
 enum Build {
     /// `finestep_core` behind its input registers (`sim/finestep_core_sim.v`): with the
     /// gantry block and a DDA and a shaper per axis, or without it and with the shared
-    /// step engine.
-    Core { gantry: bool },
+    /// step engine (`digit` 0: step_engine; 1, 2, 4, 8: step_serial with that digit).
+    Core { gantry: bool, digit: u32 },
     /// `finestep_top`: with its defaults, or without the spindle and the logic outputs
     /// (`motion`, as every board top); without the hand wheel and the jog (`!mpg`).
     Top { motion: bool, mpg: bool },
@@ -430,6 +435,10 @@ enum Build {
     /// `STEP_SHARED = 0`), its other parameters as the default top's.
     PanelChip,
 }
+
+/// The digit of the Verilated core with the digit-serial step engine
+/// (`Vfinestep_core_serial`: `STEP_DIGIT`, 4 as the CPLD builds); the shim reports it.
+const SERIAL_CORE_DIGIT: u32 = 4;
 
 /// The parameters the Verilated `pbp_interp` is built with (its defaults); the shim
 /// reports them.
@@ -459,7 +468,7 @@ fn verilate(
     dir: &Path,
 ) -> BTreeMap<String, String> {
     let (top, gantry, motion, mpg) = match build {
-        Build::Core { gantry } => ("finestep_core_sim", Some(gantry), None, None),
+        Build::Core { gantry, .. } => ("finestep_core_sim", Some(gantry), None, None),
         Build::Top { motion, mpg } => ("finestep_top", None, Some(motion), Some(mpg)),
         Build::PbpInterp => ("pbp_interp", None, None, None),
         Build::KeypadScan => ("keypad_scan", None, None, None),
@@ -467,6 +476,7 @@ fn verilate(
         Build::StepSerial { .. } => ("step_serial", None, None, None),
         Build::PanelChip => ("finestep_top", None, Some(false), Some(true)),
     };
+    let core_digit = if let Build::Core { digit, .. } = build { Some(digit) } else { None };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     let mut command = Command::new(verilator);
@@ -551,6 +561,7 @@ fn verilate(
         .arg(format!("-GTIMING_W={}", params.timing_w))
         .args(gantry.map(|g| format!("-GHAS_GANTRY={}", u8::from(g))))
         .args(gantry.map(|g| format!("-GSTEP_SHARED={}", u8::from(!g))))
+        .args(core_digit.map(|d| format!("-GSTEP_DIGIT={d}")))
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))
         .args(mpg.map(|m| format!("-GHAS_MPG={}", if m { params.has_mpg } else { 0 })))

@@ -72,6 +72,12 @@ impl Harness {
         Harness::for_params(name, path, finestep_rtl_sys::params())
     }
 
+    /// Both sides fresh out of reset, with the digit-serial step engine
+    /// ([`finestep_rtl_sys::serial_params`]).
+    pub fn serial(name: &str, path: ModelPath) -> Harness {
+        Harness::for_params(name, path, finestep_rtl_sys::serial_params())
+    }
+
     /// Both sides fresh out of reset, with the gantry block.
     pub fn with_gantry(name: &str, path: ModelPath) -> Harness {
         Harness::for_params(name, path, finestep_rtl_sys::gantry_params())

@@ -89,6 +89,10 @@ pub struct CoreParams {
     /// block is built then, whatever `has_gantry` says (docs/spec/step_engine.md): see
     /// [`CoreParams::gantry_built`].
     pub step_shared: bool,
+    /// `STEP_DIGIT`: with `step_shared`, 0 for the step engine (`step_engine`), or 1, 2,
+    /// 4 or 8 for the digit-serial step engine (`step_serial`, docs/spec/step_serial.md)
+    /// with that many bits a clock ([`finestep_core::STEP_DIGIT`]).
+    pub step_digit: u32,
 }
 
 impl Default for CoreParams {
@@ -100,6 +104,7 @@ impl Default for CoreParams {
             timing_width: finestep_core::TIMING_W.default,
             has_gantry: finestep_core::HAS_GANTRY.default != 0,
             step_shared: finestep_core::STEP_SHARED.default != 0,
+            step_digit: finestep_core::STEP_DIGIT.default,
         }
     }
 }
@@ -114,7 +119,18 @@ impl CoreParams {
         finestep_core::TIMING_W.check(self.timing_width)?;
         finestep_core::HAS_GANTRY.check(self.has_gantry)?;
         finestep_core::STEP_SHARED.check(self.step_shared)?;
-        let least_width = self.step_slot_bits() + 1;
+        finestep_core::STEP_DIGIT.check(self.step_digit)?;
+        if !matches!(self.step_digit, 0 | 1 | 2 | 4 | 8) {
+            let because = "STEP_DIGIT is 0, 1, 2, 4 or 8";
+            return Err(finestep_core::STEP_DIGIT.narrowed(self.step_digit.into(), 0, 8, because));
+        }
+        let least_width = self.step_round_bits() + 1;
+        // step_serial: at most 2^15 - 1 visits a period (M = V * 2^16 < 2^31).
+        if self.step_serial() && self.p_width > self.step_round_bits() + 15 {
+            let because = "STEP_DIGIT > 0 (at most 2^15 - 1 visits of R clocks a period)";
+            let max = self.step_round_bits() + 15;
+            return Err(finestep_core::P_WIDTH.narrowed(self.p_width.into(), least_width, max, because));
+        }
         if self.step_shared && self.p_width < least_width {
             let because = "STEP_SHARED = 1 (the shortest period, S = 2^SL clocks, must fit P_WIDTH bits)";
             let max = finestep_core::P_WIDTH.max;
@@ -144,9 +160,26 @@ impl CoreParams {
     /// multiples of it.
     pub fn step_slots(&self) -> u32 {
         if self.step_shared {
-            1 << self.step_slot_bits()
+            1 << self.step_round_bits()
         } else {
             1
+        }
+    }
+
+    /// Whether the core is built with the digit-serial step engine (`step_shared` and
+    /// `step_digit` > 0).
+    pub fn step_serial(&self) -> bool {
+        self.step_shared && self.step_digit != 0
+    }
+
+    /// `log2` of the clocks between two visits of an axis with the shared engines: `SL`
+    /// with the step engine, `log2 R = SL + log2(32 / STEP_DIGIT)` with the digit-serial
+    /// one (docs/spec/step_serial.md).
+    pub fn step_round_bits(&self) -> u32 {
+        if self.step_serial() {
+            self.step_slot_bits() + 5 - self.step_digit.trailing_zeros()
+        } else {
+            self.step_slot_bits()
         }
     }
 
@@ -270,6 +303,8 @@ impl TopParams {
             timing_width: self.timing_w,
             has_gantry: self.gantry_built(),
             step_shared: self.step_shared,
+            // finestep_top builds the step engine (STEP_DIGIT is a core parameter only).
+            step_digit: 0,
         }
     }
 }
@@ -285,7 +320,14 @@ mod tests {
         assert_eq!(p.timing_mask(), 0xFFF);
         assert_eq!(p.effective_period(0), 1);
         assert_eq!(p.effective_period(0x10_0005), 5);
-        let wide = CoreParams { n_axes: 8, p_width: 32, timing_width: 32, has_gantry: true, step_shared: false };
+        let wide = CoreParams {
+            n_axes: 8,
+            p_width: 32,
+            timing_width: 32,
+            has_gantry: true,
+            step_shared: false,
+            step_digit: 0,
+        };
         assert_eq!(wide.period_mask(), u32::MAX);
         assert!(wide.validate().is_ok());
     }

@@ -15,6 +15,7 @@ use crate::dda_axis::{DdaAxis, ONE_STEP};
 use crate::gantry_sync::{GantryContext, GantrySync};
 use crate::period_timer::{PeriodTimer, TimerInputs};
 use crate::step_engine::{EngineInputs, StepEngine};
+use crate::step_serial::{SerialInputs, SerialParams, StepSerial};
 use crate::step_shaper::StepShaper;
 use crate::MAX_AXES;
 
@@ -152,7 +153,46 @@ pub struct Core {
     /// The step engine's schedule when built with `step_shared`; the `dda` and `shaper`
     /// arrays are then its stores, visited in turn.
     pub(crate) engine: Option<StepEngine>,
+    /// The digit-serial step engine when built with `step_digit` > 0.
+    pub(crate) serial: Option<SerialCore>,
     pub(crate) cycle: u64,
+}
+
+/// The digit-serial step engine in the core (docs/spec/step_serial.md#in-the-core): the
+/// engine and the `position` words collected from its digit stream.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct SerialCore {
+    engine: StepSerial,
+    /// The digits of the current visit so far, the newest on top.
+    collect: u32,
+    positions: [u32; MAX_AXES],
+}
+
+impl SerialCore {
+    fn new(params: &CoreParams) -> SerialCore {
+        SerialCore {
+            engine: StepSerial::new(SerialParams {
+                n_axes: params.n_axes,
+                p_width: params.p_width,
+                timing_w: params.timing_width,
+                digit: params.step_digit,
+            }),
+            collect: 0,
+            positions: [0; MAX_AXES],
+        }
+    }
+
+    /// The position word a visit's last digit completes, written to its axis.
+    fn collect_digit(&mut self) {
+        let out = self.engine.outputs();
+        let p = self.engine.params();
+        let d = p.digit;
+        let word = (u32::from(out.pos_digit) << (32 - d)) | (self.collect >> d);
+        if u32::from(out.pos_index) == p.visit_clocks() - 1 && usize::from(out.pos_axis) < p.n_axes {
+            self.positions[usize::from(out.pos_axis)] = word;
+        }
+        self.collect = word;
+    }
 }
 
 impl Core {
@@ -186,7 +226,8 @@ impl Core {
             dda: [DdaAxis::default(); MAX_AXES],
             shaper: [StepShaper::new(counter_max); MAX_AXES],
             gantry: GantrySync::default(),
-            engine: params.step_shared.then(|| StepEngine::new(params.step_slot_bits())),
+            engine: (params.step_shared && !params.step_serial()).then(|| StepEngine::new(params.step_slot_bits())),
+            serial: params.step_serial().then(|| SerialCore::new(&params)),
             cycle: 0,
         })
     }
@@ -240,7 +281,22 @@ impl Core {
     /// The outputs in the current cycle (a function of the state only).
     pub fn outputs(&self) -> CoreOutputs {
         let mut out = CoreOutputs::default();
+        if let Some(serial) = &self.serial {
+            let o = serial.engine.outputs();
+            for i in 0..self.params.n_axes {
+                let bit = |mask: u8| u64::from((mask >> i) & 1);
+                out.pins |= bit(o.pin_a) << pins::pin_a(i)
+                    | bit(o.pin_b) << pins::pin_b(i)
+                    | bit(o.pin_en) << pins::pin_en(i)
+                    | bit(o.rate_error) << pins::rate_error(i)
+                    | bit(o.step_lost) << pins::step_lost(i);
+                out.positions[i] = serial.positions[i];
+            }
+        }
         for (i, sh) in self.shaper[..self.params.n_axes].iter().enumerate() {
+            if self.serial.is_some() {
+                break;
+            }
             out.pins |= u64::from(sh.pins) << pins::pin_a(i)
                 | u64::from(sh.rate_error) << pins::rate_error(i)
                 | u64::from(sh.step_lost) << pins::step_lost(i);
@@ -286,6 +342,9 @@ impl Core {
     fn edge(&mut self, inputs: &CoreInputs, period: u32, axis: impl Fn(usize) -> AxisSettings) -> bool {
         if let Some(engine) = self.engine {
             return self.engine_edge(engine, inputs, period, axis);
+        }
+        if self.serial.is_some() {
+            return self.serial_edge(inputs, period, axis);
         }
         let n = self.params.n_axes;
         let m = i64::from(self.timer.p_act) * ONE_STEP;
@@ -352,6 +411,43 @@ impl Core {
         );
         self.engine = Some(engine);
         changed | self.timer_edge(inputs, period, engine.slot_bits, slot)
+    }
+
+    /// One rising edge of a core with the digit-serial step engine: the engine's clock
+    /// (with the timer's `run && active`, `p_act` and increments), the position words
+    /// collected from its digit stream, then the period timer with `SL = log2 R` and the
+    /// engine's `phase` as its slot.
+    #[inline(always)]
+    fn serial_edge(&mut self, inputs: &CoreInputs, period: u32, axis: impl Fn(usize) -> AxisSettings) -> bool {
+        let n = self.params.n_axes;
+        let before = self.outputs();
+        let mut inp = SerialInputs {
+            run: inputs.run && self.timer.active,
+            p_active: self.timer.p_act,
+            clear_errors: inputs.clear_errors,
+            halt: inputs.halt,
+            ..SerialInputs::default()
+        };
+        for i in 0..n {
+            let set = axis(i);
+            inp.inc[i] = self.timer.inc[i];
+            inp.axis_enable |= u8::from(inputs.axes[i].enable) << i;
+            let [len, space, setup, hold] = set.timing.to_array();
+            inp.step_len[i] = len as u16;
+            inp.step_space[i] = space as u16;
+            inp.dir_setup[i] = setup as u16;
+            inp.dir_hold[i] = hold as u16;
+            inp.out_mode[i] = set.mode;
+            inp.invert[i] = set.invert;
+        }
+        let serial = self.serial.as_mut().expect("built with the digit-serial engine");
+        let phase = serial.engine.phase();
+        // The digit the engine shows in this cycle is taken at this edge.
+        serial.collect_digit();
+        serial.engine.step(&inp);
+        let bits = self.params.step_round_bits();
+        self.timer_edge(inputs, period, bits, phase);
+        self.outputs() != before
     }
 
     /// The period timer's edge (with the engine's `SL` and this cycle's `slot`, 0 and 0

@@ -176,7 +176,7 @@ fn case() -> impl Strategy<Value = Case> {
         prop::bool::weighted(0.4),
     )
         .prop_map(|(n_axes, p_width, timing_width, has_gantry, step_shared)| {
-            let params = CoreParams { n_axes, p_width, timing_width, has_gantry, step_shared: false };
+            let params = CoreParams { n_axes, p_width, timing_width, has_gantry, step_shared: false, step_digit: 0 };
             if step_shared {
                 // The engine needs a period register holding S = 2^SL; it builds no
                 // gantry whatever has_gantry says (the gantry inputs still change).

@@ -64,6 +64,7 @@ pub fn params() -> CoreParams {
             timing_width: ffi::fs_timing_width(),
             has_gantry: false,
             step_shared: true,
+            step_digit: 0,
         }
     }
 }
@@ -72,6 +73,13 @@ pub fn params() -> CoreParams {
 /// gantry block and a DDA and a shaper per axis.
 pub fn gantry_params() -> CoreParams {
     CoreParams { has_gantry: true, step_shared: false, ..params() }
+}
+
+/// The parameters of the Verilated core [`Rtl::for_params`] makes with the digit-serial
+/// step engine (docs/spec/step_serial.md#in-the-core): [`params`] with its `STEP_DIGIT`.
+pub fn serial_params() -> CoreParams {
+    // SAFETY: pure function returning a build-time constant.
+    CoreParams { step_digit: unsafe { ffi::fs_serial_digit() }, ..params() }
 }
 
 /// Whether waveforms are written as FST (feature `fst`) rather than VCD.
@@ -128,40 +136,44 @@ impl Rtl {
     /// A core fresh out of reset, at cycle 0, built without waveform support (fast) and
     /// without the gantry block ([`params`]).
     pub fn new() -> Rtl {
-        Self::build(false, false)
+        Self::build(0, false)
     }
 
     /// The same core, able to write waveforms ([`Rtl::trace_open`]); about a third slower.
     pub fn new_traced() -> Rtl {
-        Self::build(false, true)
+        Self::build(0, true)
     }
 
     /// A core with the gantry block ([`gantry_params`]), without waveform support.
     pub fn with_gantry() -> Rtl {
-        Self::build(true, false)
+        Self::build(1, false)
     }
 
-    /// The core built as `params` say ([`params`] or [`gantry_params`]), able to write
-    /// waveforms when `traced`.
+    /// The core built as `params` say ([`params`], [`gantry_params`] or
+    /// [`serial_params`]), able to write waveforms when `traced`.
     ///
     /// # Panics
-    /// If `params` are neither.
+    /// If `params` are none of them.
     pub fn for_params(params: &CoreParams, traced: bool) -> Rtl {
-        assert!(
-            *params == self::params() || *params == gantry_params(),
-            "no Verilated core was built with these parameters"
-        );
-        Self::build(params.has_gantry, traced)
+        let variant = if *params == self::params() {
+            0
+        } else if *params == gantry_params() {
+            1
+        } else if *params == serial_params() {
+            2
+        } else {
+            panic!("no Verilated core was built with these parameters")
+        };
+        Self::build(variant, traced)
     }
 
-    fn build(gantry: bool, traced: bool) -> Rtl {
-        let gantry = i32::from(gantry);
+    fn build(variant: i32, traced: bool) -> Rtl {
         // SAFETY: fs_new and fs_new_traced return a valid owned pointer, freed in Drop.
         Self::from_raw(unsafe {
             if traced {
-                ffi::fs_new_traced(gantry)
+                ffi::fs_new_traced(variant)
             } else {
-                ffi::fs_new(gantry)
+                ffi::fs_new(variant)
             }
         })
     }

@@ -154,6 +154,11 @@ pub fn play_engine(name: &str, path: ModelPath, scenario: &Scenario) -> Result<H
     play_on(Harness::new(name, path), scenario)
 }
 
+/// The same on the core with the digit-serial step engine (the CPLD's).
+pub fn play_serial(name: &str, path: ModelPath, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
+    play_on(Harness::serial(name, path), scenario)
+}
+
 fn play_on(mut harness: Harness, scenario: &Scenario) -> Result<Harness, Box<Mismatch>> {
     let mut inputs =
         CoreInputs { run: true, period_clocks: scenario.period_clocks, gantry: scenario.gantry, ..Default::default() };
