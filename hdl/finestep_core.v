@@ -84,14 +84,9 @@ module finestep_core #(
     localparam DIGIT_L = (STEP_DIGIT <= 1) ? 0 : ((STEP_DIGIT == 2) ? 1 : ((STEP_DIGIT == 4) ? 2 : 3));
     localparam SERIAL  = (STEP_SHARED != 0 && STEP_DIGIT != 0) ? 1 : 0;
     localparam SL = (STEP_SHARED == 0) ? 0 : ((SERIAL != 0) ? SLOTS_L + 5 - DIGIT_L : SLOTS_L);
-    generate
-        if (STEP_SHARED != 0 && P_WIDTH <= SL) begin : fs_check_shared_p_width
-            finestep_core_STEP_SHARED_needs_P_WIDTH_above_log2_slots out_of_range ();
-        end
-        if (STEP_DIGIT != 0 && STEP_DIGIT != 1 && STEP_DIGIT != 2 && STEP_DIGIT != 4 && STEP_DIGIT != 8) begin : fs_check_step_digit
-            finestep_core_STEP_DIGIT_must_be_0_1_2_4_or_8 out_of_range ();
-        end
-    endgenerate
+    // The checks across parameters (P_WIDTH above log2 of the round; the digit-serial
+    // engine's TIMING_W and P_WIDTH limits) are in finestep_core_checks.vh, generated
+    // from hdl/interface.toml's constraints.
 
     wire                 timer_active;
     wire [P_WIDTH-1:0]   p_active;

@@ -253,10 +253,13 @@ module step_serial #(
     wire         ones_all  = cnt_ones && (k_first || ones_reg);
 
     // Compares cnt * R >= X, i.e. cnt >= (X >> LR) + (X mod R != 0): a borrow chain each.
-    wire [TIMING_W-1:0] len_x   = len_all[TIMING_W*sh_axis +: TIMING_W];
-    wire [TIMING_W-1:0] space_x = space_all[TIMING_W*sh_axis +: TIMING_W];
-    wire [TIMING_W-1:0] setup_x = setup_all[TIMING_W*sh_axis +: TIMING_W];
-    wire [TIMING_W-1:0] hold_x  = hold_all[TIMING_W*sh_axis +: TIMING_W];
+    // The visit's timings are the ones its first clock sees: held for its later digits,
+    // so a timing written in the middle of a visit applies from the axis's next visit.
+    reg  [TIMING_W-1:0] len_reg, space_reg, setup_reg, hold_reg;
+    wire [TIMING_W-1:0] len_x   = first ? len_all[TIMING_W*sh_axis +: TIMING_W] : len_reg;
+    wire [TIMING_W-1:0] space_x = first ? space_all[TIMING_W*sh_axis +: TIMING_W] : space_reg;
+    wire [TIMING_W-1:0] setup_x = first ? setup_all[TIMING_W*sh_axis +: TIMING_W] : setup_reg;
+    wire [TIMING_W-1:0] hold_x  = first ? hold_all[TIMING_W*sh_axis +: TIMING_W] : hold_reg;
     wire [TIMING_W-1:0] cmp_a_x = c_half ? setup_x : len_x;     // dcnt against dir_setup
     wire [15:0] ya = {{(16-TIMING_W+LR){1'b0}}, cmp_a_x[TIMING_W-1:LR]};
     wire [15:0] yb = {{(16-TIMING_W+LR){1'b0}}, space_x[TIMING_W-1:LR]};
@@ -317,6 +320,10 @@ module step_serial #(
             cfull_new_reg <= ones_all;
         end
         if (first) begin
+            len_reg      <= len_x;
+            space_reg    <= space_x;
+            setup_reg    <= setup_x;
+            hold_reg     <= hold_x;
             rise_reg     <= rise;
             dir_old_reg  <= dir;
             cnt_one_reg  <= rise || fall;
@@ -401,8 +408,8 @@ module step_serial #(
     // Environment: while run = 1, inc changes only at a round's first clock and p_active
     // not at all; while run = 0 both may change in any clock (the period timer zeroes inc
     // and samples P); a run rises only at a round's first clock; p_active is a whole
-    // number (>= 1) of rounds; an axis's timings are constant over its shaper visit
-    // (they may change at its first clock).
+    // number (>= 1) of rounds. The timings may change in any clock (the engine takes a
+    // visit's timings at its first clock, as the shadow does).
     wire [V_W-1:0] f_v = p_active[P_WIDTH-1:LR];
     always @(*) assume (p_active[LR-1:0] == {LR{1'b0}} && f_v != {V_W{1'b0}});
     always @(posedge clk) if (f_past_valid && !rst) begin
@@ -441,14 +448,10 @@ module step_serial #(
 
             wire dda_now = (slot == fa) && first;
             wire sh_now  = sh_visit && (sh_axis == fa) && first;
-            wire in_sh   = sh_visit && (sh_axis == fa);
             wire [TIMING_W-1:0] len_a   = step_len[TIMING_W*fa +: TIMING_W];
             wire [TIMING_W-1:0] space_a = step_space[TIMING_W*fa +: TIMING_W];
             wire [TIMING_W-1:0] setup_a = dir_setup[TIMING_W*fa +: TIMING_W];
             wire [TIMING_W-1:0] hold_a  = dir_hold[TIMING_W*fa +: TIMING_W];
-            always @(posedge clk) if (f_past_valid && !rst && in_sh && !first) begin
-                assume ($stable(len_a) && $stable(space_a) && $stable(setup_a) && $stable(hold_a));
-            end
 
             // DDA visit: s = (live ? acc : M/2) + d, wrapped into [0, M) with a request.
             wire signed [35:0] d  = $signed({{4{inc[32*fa+31]}}, inc[32*fa +: 32]});

@@ -65,7 +65,6 @@ fn random_streams_are_bit_exact_step_engine_fast_model() {
 }
 
 #[test]
-#[ignore = "fails: a drive timing written in the middle of an axis's shaper visit reaches step_serial's digit-serial compares digit by digit (docs/spec/step_serial.md assumes timings constant over the visit; the core does not guarantee it): latch the visit's timings at its first clock, then un-ignore"]
 fn random_streams_are_bit_exact_step_serial_per_clock_model() {
     let mut runner = finestep_testkit::runner("random_streams_are_bit_exact_step_serial_per_clock_model", 5000);
     runner
@@ -81,7 +80,6 @@ fn random_streams_are_bit_exact_step_serial_per_clock_model() {
 }
 
 #[test]
-#[ignore = "fails: a drive timing written in the middle of an axis's shaper visit reaches step_serial's digit-serial compares digit by digit (docs/spec/step_serial.md assumes timings constant over the visit; the core does not guarantee it): latch the visit's timings at its first clock, then un-ignore"]
 fn random_streams_are_bit_exact_step_serial_fast_model() {
     let mut runner = finestep_testkit::runner("random_streams_are_bit_exact_step_serial_fast_model", 5000);
     runner

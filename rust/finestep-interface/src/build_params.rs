@@ -112,7 +112,9 @@ impl Default for CoreParams {
 impl CoreParams {
     /// Checks the parameters are in the supported ranges, and that with the step engine
     /// (`STEP_SHARED = 1`) the period register holds the shortest period it runs,
-    /// `S = 2^SL` clocks (`P_WIDTH > SL`; the RTL's elaboration check).
+    /// `S = 2^SL` clocks (`P_WIDTH > SL`), with the digit-serial one `R` clocks, and
+    /// `TIMING_W` and `P_WIDTH` fit that engine's words: the constraints of
+    /// hdl/interface.toml, which the RTL's elaboration checks state too.
     pub fn validate(&self) -> Result<(), ParamError> {
         finestep_core::N_AXES.check(self.n_axes as u64)?;
         finestep_core::P_WIDTH.check(self.p_width)?;
@@ -130,6 +132,11 @@ impl CoreParams {
             let because = "STEP_DIGIT > 0 (at most 2^15 - 1 visits of R clocks a period)";
             let max = self.step_round_bits() + 15;
             return Err(finestep_core::P_WIDTH.narrowed(self.p_width.into(), least_width, max, because));
+        }
+        // step_serial: a shaper counter (TIMING_W - log2 R bits, at least 1) in half a word.
+        if self.step_serial() && !(least_width..=16).contains(&self.timing_width) {
+            let because = "STEP_DIGIT > 0 (a counter of TIMING_W - log2 R bits, 1 to 16 - log2 R)";
+            return Err(finestep_core::TIMING_W.narrowed(self.timing_width.into(), least_width, 16, because));
         }
         if self.step_shared && self.p_width < least_width {
             let because = "STEP_SHARED = 1 (the shortest period, S = 2^SL clocks, must fit P_WIDTH bits)";

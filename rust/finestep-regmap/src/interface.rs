@@ -12,6 +12,7 @@
 //! refused with toml's line and column), then [`parse`] reports every broken rule, each
 //! naming its place.
 
+use crate::expr::Expr;
 use crate::spec::{is_upper_snake, low_bits, naming, MapSpec, Place, Problem};
 use serde::Deserialize;
 use std::collections::{BTreeMap, HashSet};
@@ -248,12 +249,93 @@ pub struct ModuleSpec {
     pub description: String,
     /// The parameters, in file order.
     pub parameters: Vec<ParameterSpec>,
+    /// Values derived from the parameters, for the constraints, in file order (each
+    /// reads only parameters and the derived values before it).
+    pub derived: Vec<DerivedSpec>,
+    /// Constraints across parameters, beyond each one's range, in file order.
+    pub constraints: Vec<ConstraintSpec>,
 }
 
 impl ModuleSpec {
     /// The parameter called `name`.
     pub fn parameter(&self, name: &str) -> Option<&ParameterSpec> {
         self.parameters.iter().find(|parameter| parameter.name == name)
+    }
+
+    /// The parameters' values (`values`, the defaults for the others) and the derived
+    /// values computed from them.
+    pub fn values(&self, values: &[(&str, i64)]) -> BTreeMap<String, i64> {
+        let mut all: BTreeMap<String, i64> = self
+            .parameters
+            .iter()
+            .map(|p| {
+                let value = values.iter().find(|(name, _)| *name == p.name).map_or(p.default, |(_, v)| *v);
+                (p.name.clone(), value)
+            })
+            .collect();
+        for derived in &self.derived {
+            // The parse checked that every name resolves: a value is always there.
+            let value = derived.value.eval(&all).unwrap_or_default();
+            all.insert(derived.name.clone(), value);
+        }
+        all
+    }
+
+    /// The constraints that `values` (as [`ModuleSpec::values`] takes them) break.
+    pub fn violated(&self, values: &[(&str, i64)]) -> Vec<&ConstraintSpec> {
+        let all = self.values(values);
+        self.constraints.iter().filter(|c| !c.holds(&all)).collect()
+    }
+}
+
+/// A named value derived from a module's parameters (`log2` of a period quantum, say).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DerivedSpec {
+    /// UPPER_SNAKE name, unlike every parameter's.
+    pub name: String,
+    /// Its expression ([`crate::expr`]).
+    pub value: Expr,
+    /// The expression as the file writes it.
+    pub value_text: String,
+    /// One line of prose.
+    pub description: String,
+}
+
+impl DerivedSpec {
+    /// Its name in the generated Verilog checks (`FS_CHECK_<NAME>`, a localparam).
+    pub fn verilog_name(&self) -> String {
+        format!("FS_CHECK_{}", self.name)
+    }
+}
+
+/// A constraint across build parameters: when `when` holds, `require` must.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ConstraintSpec {
+    /// Its name, a Verilog identifier: the elaboration check of a combination that breaks
+    /// it instantiates `<module>_<name>`, a module that does not exist.
+    pub name: String,
+    /// The condition under which it applies (always, when `None`).
+    pub when: Option<Expr>,
+    /// What must hold then.
+    pub require: Expr,
+    /// `when` and `require` as the file writes them.
+    pub when_text: Option<String>,
+    /// See `when_text`.
+    pub require_text: String,
+    /// One line of prose: why.
+    pub description: String,
+}
+
+impl ConstraintSpec {
+    /// The name of the module its elaboration check instantiates: `<module>_<name>`.
+    pub fn check_module(&self, module: &str) -> String {
+        format!("{module}_{}", self.name)
+    }
+
+    /// Whether it holds for `values` (parameters and derived values).
+    pub fn holds(&self, values: &BTreeMap<String, i64>) -> bool {
+        let applies = self.when.as_ref().is_none_or(|when| when.eval(values).unwrap_or(1) != 0);
+        !applies || self.require.eval(values).unwrap_or(0) != 0
     }
 }
 
@@ -459,6 +541,27 @@ struct RawModule {
     name: String,
     description: String,
     parameters: Vec<RawParameter>,
+    #[serde(default)]
+    derived: Vec<RawDerived>,
+    #[serde(default)]
+    constraints: Vec<RawConstraint>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDerived {
+    name: String,
+    value: String,
+    description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawConstraint {
+    name: String,
+    when: Option<String>,
+    require: String,
+    description: String,
 }
 
 #[derive(Deserialize)]
@@ -877,7 +980,73 @@ impl Checker<'_> {
             });
         }
         self.unique(&owner, "parameter", parameters.iter().map(|p: &ParameterSpec| p.name.as_str()));
-        ModuleSpec { name: raw.name, description: raw.description, parameters }
+        let mut known: Vec<String> = parameters.iter().map(|p| p.name.clone()).collect();
+        let mut derived = Vec::new();
+        for raw in raw.derived {
+            let at = place(format!("{owner}, derived {}", raw.name));
+            self.name(&at, &raw.name);
+            self.text(&at, &raw.description);
+            if known.contains(&raw.name) {
+                self.report(&at, format!("{} is already a parameter or a derived value", raw.name));
+            }
+            if let Some(value) = self.expression(&at, "value", &raw.value, &known) {
+                derived.push(DerivedSpec {
+                    name: raw.name.clone(),
+                    value,
+                    value_text: raw.value,
+                    description: raw.description,
+                });
+            }
+            known.push(raw.name);
+        }
+        let mut constraints = Vec::new();
+        for raw in raw.constraints {
+            let at = place(format!("{owner}, constraint {}", raw.name));
+            self.text(&at, &raw.description);
+            let identifier = raw.name.starts_with(|c: char| c.is_ascii_alphabetic())
+                && raw.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            if !identifier {
+                self.report(&at, format!("constraint name {:?} is not a Verilog identifier", raw.name));
+            }
+            let when = match &raw.when {
+                Some(text) => self.expression(&at, "when", text, &known).map(Some),
+                None => Some(None),
+            };
+            let require = self.expression(&at, "require", &raw.require, &known);
+            if let (Some(when), Some(require)) = (when, require) {
+                constraints.push(ConstraintSpec {
+                    name: raw.name,
+                    when,
+                    require,
+                    when_text: raw.when,
+                    require_text: raw.require,
+                    description: raw.description,
+                });
+            }
+        }
+        self.unique(&owner, "constraint", constraints.iter().map(|c: &ConstraintSpec| c.name.as_str()));
+        ModuleSpec { name: raw.name, description: raw.description, parameters, derived, constraints }
+    }
+
+    /// `text` parsed, every name in `known`; else a problem and `None`.
+    fn expression(&mut self, at: &Place, what: &str, text: &str, known: &[String]) -> Option<Expr> {
+        match Expr::parse(text) {
+            Ok(expr) => {
+                let unknown: Vec<&str> = expr.names().into_iter().filter(|n| !known.iter().any(|k| k == n)).collect();
+                if unknown.is_empty() {
+                    Some(expr)
+                } else {
+                    let message =
+                        format!("{what} reads {}: not a parameter or an earlier derived value", unknown.join(", "));
+                    self.report(at, message);
+                    None
+                }
+            }
+            Err(message) => {
+                self.report(at, format!("{what}: {message}"));
+                None
+            }
+        }
     }
 
     /// Names across the whole description: enum and bit-set names unique, modules unique,

@@ -174,6 +174,35 @@ pub fn generate(spec: &InterfaceSpec) -> String {
                 cell(&parameter.description)
             );
         }
+        if !module.derived.is_empty() {
+            let _ = writeln!(
+                out,
+                "\nDerived values (for the constraints below):\n\n| name | value | meaning |\n| --- | --- | --- |"
+            );
+            for derived in &module.derived {
+                let value = cell(&format!("`{}`", derived.value_text));
+                let _ = writeln!(out, "| {} | {value} | {} |", derived.name, cell(&derived.description));
+            }
+        }
+        if !module.constraints.is_empty() {
+            let _ = writeln!(
+                out,
+                "\nConstraints across parameters: a combination that breaks one stops elaboration at \
+                 `{}_<name>`.\n\n| name | when | requires | why |\n| --- | --- | --- | --- |",
+                module.name
+            );
+            for constraint in &module.constraints {
+                let when =
+                    constraint.when_text.as_ref().map_or_else(|| "always".to_string(), |w| cell(&format!("`{w}`")));
+                let _ = writeln!(
+                    out,
+                    "| `{}` | {when} | {} | {} |",
+                    constraint.name,
+                    cell(&format!("`{}`", constraint.require_text)),
+                    cell(&constraint.description)
+                );
+            }
+        }
     }
     out
 }

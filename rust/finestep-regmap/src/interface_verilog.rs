@@ -152,6 +152,14 @@ pub fn generate_checks(module: &ModuleSpec) -> String {
          // and Diamond all stop there and print that name. Plain Verilog-2005.",
         module.name
     );
+    if !module.derived.is_empty() {
+        out.push_str("\n// Values derived from the parameters, for the constraints below.\n");
+    }
+    for derived in &module.derived {
+        let _ = writeln!(out, "// {}: {}", derived.name, derived.description);
+        let _ =
+            writeln!(out, "localparam integer {} = {};", derived.verilog_name(), verilog_expr(module, &derived.value));
+    }
     out.push_str("\ngenerate\n");
     for parameter in &module.parameters {
         let _ = writeln!(out, "    // {}: {}", parameter.name, parameter.description);
@@ -167,6 +175,38 @@ pub fn generate_checks(module: &ModuleSpec) -> String {
             module = parameter.check_module(&module.name)
         );
     }
+    if !module.constraints.is_empty() {
+        let _ = writeln!(
+            out,
+            "    // Constraints across parameters: a combination that breaks one instantiates\n\
+             \x20   // {}_<constraint>, a module that does not exist.",
+            module.name
+        );
+    }
+    for constraint in &module.constraints {
+        let _ = writeln!(out, "    // {}", constraint.description);
+        let require = verilog_expr(module, &constraint.require);
+        let broken = match &constraint.when {
+            Some(when) => format!("({}) && !({require})", verilog_expr(module, when)),
+            None => format!("!({require})"),
+        };
+        let _ = writeln!(
+            out,
+            "    if ({broken}) begin : fs_constraint_{lower}\n\
+             \x20       {module} out_of_range ();\n\
+             \x20   end",
+            lower = constraint.name.to_ascii_lowercase(),
+            module = constraint.check_module(&module.name)
+        );
+    }
     out.push_str("endgenerate\n");
     out
+}
+
+/// `expr` in `module`'s checks header: a derived value by its localparam.
+fn verilog_expr(module: &ModuleSpec, expr: &crate::expr::Expr) -> String {
+    expr.verilog(&|name| match module.derived.iter().find(|d| d.name == name) {
+        Some(derived) => derived.verilog_name(),
+        None => name.to_string(),
+    })
 }

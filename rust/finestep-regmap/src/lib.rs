@@ -37,6 +37,7 @@
 #![warn(missing_docs)]
 
 pub mod c_header;
+pub mod expr;
 pub mod interface;
 pub mod interface_markdown;
 pub mod interface_rust;

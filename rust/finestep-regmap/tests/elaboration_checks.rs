@@ -1,8 +1,13 @@
 //! The generated elaboration checks in the real RTL: `finestep_top` and `finestep_core`
 //! elaborated by Verilator (`--lint-only`, `-G`) with each build parameter just outside
 //! its legal range must fail naming the parameter; with every parameter at its least and
-//! at its greatest legal value they must elaborate. Yosys (when on PATH) must name the
-//! parameter too. Skipped with a note when Verilator is not on PATH.
+//! at its greatest legal value they must elaborate, unless that breaks a constraint the
+//! module declares across its parameters (`constraints` in hdl/interface.toml): then it
+//! must fail naming each broken constraint, and the legal combination nearest to it must
+//! elaborate. Every declared constraint is tried both ways: a combination that breaks it
+//! (and no other) must fail naming it, one where it applies and holds must elaborate.
+//! Yosys (when on PATH) must name the parameter too. Skipped with a note when Verilator
+//! is not on PATH.
 //!
 //! One exception, stated here rather than hidden: given a width parameter of 0, Debian's
 //! Verilator 5.006 stops with an internal error at the first zero-width vector inside a
@@ -12,6 +17,7 @@
 
 use finestep_regmap::interface::{ModuleSpec, MAX_PARAMETER};
 use finestep_regmap::{default_root, hdl_headers, load_interface};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -106,14 +112,135 @@ fn every_parameter_at_its_bounds_elaborates() {
     let (modules, include, sources) = setup("inside");
     for module in &modules {
         for (bound, pick) in [("least", true), ("greatest", false)] {
-            let values: Vec<(&str, i64)> = module
+            let mut values: Vec<(&str, i64)> = module
                 .parameters
                 .iter()
                 .map(|p| (p.name.as_str(), if pick { p.min.value } else { p.max.value }))
                 .collect();
-            if let Err(log) = verilate(&module.name, &values, &include, &sources) {
-                panic!("{} with every parameter at its {bound} value {values:?}:\n{log}", module.name);
+            let broken = module.violated(&values);
+            if !broken.is_empty() {
+                let log = match verilate(&module.name, &values, &include, &sources) {
+                    Ok(()) => panic!("{} elaborated with {values:?}, which breaks {broken:?}", module.name),
+                    Err(log) => log,
+                };
+                for constraint in &broken {
+                    let expected = constraint.check_module(&module.name);
+                    assert!(
+                        log.contains(&expected),
+                        "{} with {values:?}: the errors do not name {expected}:\n{log}",
+                        module.name
+                    );
+                }
+                values = nearest(module, &values, |all| module.constraints.iter().all(|c| c.holds(all)))
+                    .unwrap_or_else(|| panic!("{}: no combination keeps every constraint", module.name));
             }
+            if let Err(log) = verilate(&module.name, &values, &include, &sources) {
+                panic!(
+                    "{} with every parameter at its {bound} value (or the nearest legal) {values:?}:\n{log}",
+                    module.name
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_combination_breaking_a_declared_constraint_is_refused_naming_it() {
+    if !on_path("verilator") {
+        return;
+    }
+    let (modules, include, sources) = setup("constraints");
+    let mut tried = 0;
+    for module in &modules {
+        let defaults: Vec<(&str, i64)> = module.parameters.iter().map(|p| (p.name.as_str(), p.default)).collect();
+        let greatest: Vec<(&str, i64)> = module.parameters.iter().map(|p| (p.name.as_str(), p.max.value)).collect();
+        for constraint in &module.constraints {
+            let applies = |all: &BTreeMap<String, i64>| {
+                constraint.when.as_ref().is_none_or(|when| when.eval(all).is_some_and(|v| v != 0))
+            };
+            let others_hold = |all: &BTreeMap<String, i64>| {
+                module.constraints.iter().all(|c| c.name == constraint.name || c.holds(all))
+            };
+            let expected = constraint.check_module(&module.name);
+            // Broken, nearest to the defaults: refused, naming it.
+            let bad = nearest(module, &defaults, |all| applies(all) && !constraint.holds(all) && others_hold(all))
+                .unwrap_or_else(|| panic!("{expected}: no combination in range breaks it alone"));
+            match verilate(&module.name, &bad, &include, &sources) {
+                Ok(()) => panic!("{} elaborated with {bad:?}, which breaks {}", module.name, constraint.name),
+                Err(log) => assert!(
+                    log.contains(&expected),
+                    "{} with {bad:?}: the errors do not name {expected}:\n{log}",
+                    module.name
+                ),
+            }
+            // Applying and kept, nearest to the greatest values: elaborates.
+            let good = nearest(module, &greatest, |all| applies(all) && all_hold(module, all))
+                .unwrap_or_else(|| panic!("{expected}: no legal combination where it applies"));
+            if let Err(log) = verilate(&module.name, &good, &include, &sources) {
+                panic!("{} with {good:?} (keeps {}):\n{log}", module.name, constraint.name);
+            }
+            tried += 1;
+        }
+    }
+    assert!(tried > 0, "hdl/interface.toml declares no constraint to try");
+}
+
+fn all_hold(module: &ModuleSpec, all: &BTreeMap<String, i64>) -> bool {
+    module.constraints.iter().all(|c| c.holds(all))
+}
+
+/// The combination nearest to `target` (the sum over the parameters of the distance in
+/// units of each one's range) for which `keep` holds on the parameters and derived
+/// values: only the parameters the constraints and derived values read move, each over
+/// its whole range (or its least, default and greatest value when that is above 64
+/// values); the first of equals in the order tried.
+fn nearest<'m>(
+    module: &'m ModuleSpec,
+    target: &[(&'m str, i64)],
+    keep: impl Fn(&BTreeMap<String, i64>) -> bool,
+) -> Option<Vec<(&'m str, i64)>> {
+    let read: Vec<&str> = module
+        .constraints
+        .iter()
+        .flat_map(|c| c.when.iter().chain(std::iter::once(&c.require)))
+        .chain(module.derived.iter().map(|d| &d.value))
+        .flat_map(|e| e.names())
+        .collect();
+    let moving: Vec<(usize, Vec<i64>, f64)> = module
+        .parameters
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| read.contains(&p.name.as_str()))
+        .map(|(i, p)| {
+            let (min, max) = (p.min.value, p.max.value);
+            let candidates = if max - min <= 64 { (min..=max).collect() } else { vec![min, p.default, max] };
+            (i, candidates, ((max - min) as f64).max(1.0))
+        })
+        .collect();
+    let mut best: Option<(f64, Vec<(&str, i64)>)> = None;
+    let mut at = vec![0usize; moving.len()];
+    loop {
+        let mut values = target.to_vec();
+        let mut distance = 0.0;
+        for ((i, candidates, span), &k) in moving.iter().zip(&at) {
+            distance += (candidates[k] - values[*i].1).abs() as f64 / span;
+            values[*i].1 = candidates[k];
+        }
+        if best.as_ref().is_none_or(|(d, _)| distance < *d) && keep(&module.values(&values)) {
+            best = Some((distance, values));
+        }
+        // The next combination, the last parameter fastest.
+        let mut digit = moving.len();
+        loop {
+            if digit == 0 {
+                return best.map(|(_, values)| values);
+            }
+            digit -= 1;
+            at[digit] += 1;
+            if at[digit] < moving[digit].1.len() {
+                break;
+            }
+            at[digit] = 0;
         }
     }
 }
