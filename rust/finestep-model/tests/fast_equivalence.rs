@@ -3,7 +3,8 @@
 //! chunk sequences, identical events, chunk ends and states, with the gantry pair
 //! engaging, disengaging and being refused mid-run and its channel counts changing
 //! between chunks; and for cores built with the step engine (`step_shared`, no gantry
-//! block), whose visits the fast path skips as exactly.
+//! block), whose visits the fast path skips as exactly, and with the digit-serial engine
+//! (`step_digit`), which it runs clock by clock.
 
 use finestep_model::{
     AxisConfig, ChunkEnd, Core, CoreInputs, CoreParams, DriveTiming, Event, GantryInputs, Increment, PeriodRecord,
@@ -174,10 +175,19 @@ fn case() -> impl Strategy<Value = Case> {
         prop_oneof![Just(12u32), Just(4u32), 1..=16u32, Just(32u32)],
         prop::bool::weighted(0.8),
         prop::bool::weighted(0.4),
+        prop_oneof![3 => Just(0u32), 1 => Just(1u32), 1 => Just(2u32), 1 => Just(4u32), 1 => Just(8u32)],
     )
-        .prop_map(|(n_axes, p_width, timing_width, has_gantry, step_shared)| {
+        .prop_map(|(n_axes, p_width, timing_width, has_gantry, step_shared, step_digit)| {
             let params = CoreParams { n_axes, p_width, timing_width, has_gantry, step_shared: false, step_digit: 0 };
-            if step_shared {
+            if step_shared && step_digit != 0 {
+                // The digit-serial engine (its constraints: log2 R < TIMING_W <= 16,
+                // log2 R < P_WIDTH <= log2 R + 15).
+                let serial = CoreParams { step_shared, step_digit, ..params };
+                let lr = serial.step_round_bits();
+                let p_width = p_width.clamp(lr + 1, lr + 15);
+                let timing_width = timing_width.clamp(lr + 1, 16);
+                CoreParams { p_width, timing_width, ..serial }
+            } else if step_shared {
                 // The engine needs a period register holding S = 2^SL; it builds no
                 // gantry whatever has_gantry says (the gantry inputs still change).
                 let p_width = p_width.max(params.step_slot_bits() + 1);
