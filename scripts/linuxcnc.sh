@@ -9,6 +9,12 @@
 #   scripts/linuxcnc.sh --quick    one short program, then the same stopped by LinuxCNC's E-stop
 #                                  and with LinuxCNC killed, and the hand wheel jogging Y
 #                                  (the slice `make test` runs)
+#   scripts/linuxcnc.sh --closed [FILE.ngc...]
+#                                  closed loop through PID on the simulated closed-loop machine,
+#                                  each program twice: finestep's stepgens, then LinuxCNC's
+#                                  software stepgen on the same machine; prints the peak and RMS
+#                                  following error per joint side by side (default programs:
+#                                  linuxcnc/quick.ngc, arcs.ngc, contour.ngc; FINESTEP_PID tunes)
 #   scripts/linuxcnc.sh FILE.ngc...
 #   scripts/linuxcnc.sh --install [PKG...]
 #                                  only install Debian's LinuxCNC (linuxcnc-uspace, about
@@ -44,14 +50,44 @@ if ! id -u "$rt_user" >/dev/null 2>&1; then
     useradd --system --no-create-home --shell /usr/sbin/nologin "$rt_user"
 fi
 
-cargo build --release -q -p finestep-hal -p finestep-linuxcnc -p finestep-cli
+cargo build --release -q -p finestep-hal -p finestep-hal-plant -p finestep-linuxcnc -p finestep-cli
 make -s -C linuxcnc
 modules=$(sed -n 's/^RTLIBDIR := //p' /usr/share/linuxcnc/Makefile.modinc | tail -1)
 install -m 0644 build/linuxcnc/finestep.so "$modules/finestep.so"
+install -m 0644 build/linuxcnc/fsplant.so "$modules/fsplant.so"
+
+# Closed loop, both step generators on the same machine, the figures side by side.
+closed_loop() {
+    local program loop log status=0
+    local table=build/linuxcnc/closed-loop.txt
+    : > "$table"
+    for program in "$@"; do
+        for loop in finestep stepgen; do
+            log=build/linuxcnc/closed-$(basename "$program" .ngc)-$loop.log
+            FINESTEP_LOOP=$loop scripts/linuxcnc_run.sh "$program" model > "$log" 2>&1 || status=1
+            cat "$log"
+        done
+        # "  ferror X: peak P RMS R (units); ..." of each run, joined by axis.
+        awk -v prog="$(basename "$program")" '
+            FNR == 1 { run++ }
+            /^  ferror / { axis = $2; sub(":", "", axis); if (!(axis in seen)) { seen[axis] = 1; order[++n] = axis }
+                           peak[run, axis] = $4; rms[run, axis] = $6 }
+            END { for (i = 1; i <= n; i++) { a = order[i]
+                    printf "%-16s %-5s %12s %12s %12s %12s\n", prog, a, peak[1, a], rms[1, a], peak[2, a], rms[2, a] } }' \
+            "build/linuxcnc/closed-$(basename "$program" .ngc)-finestep.log" \
+            "build/linuxcnc/closed-$(basename "$program" .ngc)-stepgen.log" >> "$table"
+    done
+    echo "linuxcnc: closed loop, following error (machine units; PID: ${FINESTEP_PID:-the generator's default})"
+    printf "%-16s %-5s %12s %12s %12s %12s\n" program joint "finestep pk" "finestep RMS" "stepgen pk" "stepgen RMS"
+    cat "$table"
+    return $status
+}
 
 # Two of LinuxCNC's own examples in its dialect beyond finestep's (inches, polar coordinates,
 # G81 drilling cycles), short enough to run here (cds.ngc and spiral.ngc take many minutes).
 shipped=(hole-circle.ngc polar.ngc)
+# The closed loop's programs (each runs twice, finestep's and LinuxCNC's software stepgen).
+closed_programs=(linuxcnc/quick.ngc tests/programs/arcs.ngc tests/programs/contour.ngc)
 if [ "${1:-}" = "--quick" ]; then
     # LinuxCNC's task has been seen to keep a stale motion status after the chip finished
     # (docs/linuxcnc.md, not understood yet): the display then waits for an end it never
@@ -70,6 +106,11 @@ if [ "${1:-}" = "--quick" ]; then
     quick env FINESTEP_WHEEL=Y:100,-40 scripts/linuxcnc_run.sh linuxcnc/quick.ngc model
     echo "linuxcnc: quick slice passed"
     exit 0
+elif [ "${1:-}" = "--closed" ]; then
+    shift
+    [ $# -gt 0 ] || set -- "${closed_programs[@]}"
+    closed_loop "$@"
+    exit $?
 elif [ $# -gt 0 ]; then
     programs=("$@")
 else
@@ -87,6 +128,9 @@ for program in "${programs[@]}"; do
         *) failed=$((failed + 1)) ;;
     esac
 done
+if [ $# -eq 0 ]; then
+    closed_loop "${closed_programs[@]}" || failed=$((failed + 1))
+fi
 [ ${#refused[@]} -eq 0 ] || echo "linuxcnc: refused by LinuxCNC's interpreter (its dialect, not finestep's): ${refused[*]}"
 if [ "$failed" -ne 0 ]; then
     echo "linuxcnc: $failed of ${#programs[@]} programs failed"

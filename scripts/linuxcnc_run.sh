@@ -7,6 +7,11 @@
 # With FINESTEP_WHEEL=AXIS:DETENTS[,DETENTS...] (e.g. Y:100,-40) the program is not run: the
 # simulated hand wheel is turned and LinuxCNC jogs the axis halui selected; every axis must
 # move by the detents times MPG_SCALE (linuxcnc/headless.py), every period checked as usual.
+# With FINESTEP_LOOP=finestep or stepgen, the mill runs in closed loop through PID on the
+# simulated closed-loop machine (docs/linuxcnc.md#closed-loop): finestep's stepgens with
+# the machine on the simulated chip's pins, or LinuxCNC's software stepgen into the same
+# machine (the fsplant HAL component); FINESTEP_PID=KEY=VALUE,... changes the PID tuning.
+# It prints each joint's peak and RMS following error instead of the open-loop check.
 # Exit status: 0 checked, 1 failed, 2 LinuxCNC's interpreter refused the program.
 # Expects what scripts/linuxcnc.sh builds and installs (the finestep HAL module, the
 # finestep and finestep-linuxcnc binaries, an ordinary user for rtapi). Outputs under
@@ -26,24 +31,34 @@ config=${FINESTEP_LINUXCNC_CONFIG:-$config}
 rt_user=${FINESTEP_RT_USER:-finestep-rt}
 name=$(basename "$program" .ngc)
 [ -n "${FINESTEP_WHEEL:-}" ] && name=wheel
+loop=${FINESTEP_LOOP:-open}
+[ "$loop" = open ] || name=$name-$loop
 work=$repo/build/linuxcnc/run/$name
 rm -rf "$work"
 mkdir -p "$work"
 chmod 0777 "$work"
 
+target/release/finestep-linuxcnc config --config "$config" --bus "sim:$work/chip.sock" \
+    --display "$repo/linuxcnc/headless.py" --record --out "$work" --loop "$loop" ${FINESTEP_PID:+--pid "$FINESTEP_PID"} > /dev/null
+joints=$(sed -n 's/^JOINTS = //p' "$work/finestep.ini")
+period_ns=$(sed -n 's/^SERVO_PERIOD = //p' "$work/finestep.ini")
+
 chip_pid=""
 cleanup() { [ -n "$chip_pid" ] && kill "$chip_pid" 2>/dev/null; true; }
 trap cleanup EXIT
-target/release/finestep sim-chip "$work/chip.sock" --target "$target" > "$work/sim-chip.log" 2>&1 &
-chip_pid=$!
-for _ in $(seq 100); do [ -S "$work/chip.sock" ] && break; sleep 0.1; done
-[ -S "$work/chip.sock" ] || { cat "$work/sim-chip.log"; echo "linuxcnc_run: sim-chip did not come up"; exit 1; }
-chmod 0666 "$work/chip.sock"
-
-target/release/finestep-linuxcnc config --config "$config" --bus "sim:$work/chip.sock" \
-    --display "$repo/linuxcnc/headless.py" --record --out "$work" > /dev/null
-joints=$(sed -n 's/^JOINTS = //p' "$work/finestep.ini")
-period_ns=$(sed -n 's/^SERVO_PERIOD = //p' "$work/finestep.ini")
+if [ "$loop" != stepgen ]; then
+    # The closed loop's machine on the chip's pins, as the INI's [PLANT] says.
+    plant=()
+    if [ "$loop" = finestep ]; then
+        plant=(--lag-clocks "$(sed -n 's/^LAG_CLOCKS = //p' "$work/finestep.ini")"
+            --counts-per-step "$(sed -n 's/^COUNTS_PER_STEP = //p' "$work/finestep.ini")")
+    fi
+    target/release/finestep sim-chip "$work/chip.sock" --target "$target" "${plant[@]}" > "$work/sim-chip.log" 2>&1 &
+    chip_pid=$!
+    for _ in $(seq 100); do [ -S "$work/chip.sock" ] && break; sleep 0.1; done
+    [ -S "$work/chip.sock" ] || { cat "$work/sim-chip.log"; echo "linuxcnc_run: sim-chip did not come up"; exit 1; }
+    chmod 0666 "$work/chip.sock"
+fi
 
 # The process of this run whose environment holds $2 (found through /proc, so that
 # only this run's processes are ever signalled).
@@ -97,12 +112,20 @@ end=$(date +%s.%N)
 result=$(cat "$work/result.txt" 2>/dev/null || echo "no result (LinuxCNC exited $status)")
 periods=$(wc -l < "$work/samples.txt" 2>/dev/null || echo 0)
 rate=$(awk -v p="$periods" -v a="$start" -v b="$end" 'BEGIN { printf "%.0f", p / (b - a) }')
-echo "$name: LinuxCNC on the $target chip: $result; $periods servo periods in $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }') s ($rate periods/s incl. start-up)"
+chip="the $target chip"
+[ "$loop" = stepgen ] && chip="LinuxCNC's software stepgen"
+[ "$loop" = open ] || chip="$chip, closed loop"
+echo "$name: LinuxCNC on $chip: $result; $periods servo periods in $(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.1f", b - a }') s ($rate periods/s incl. start-up)"
 if [ "$result" != "ok" ]; then
     grep -iE "error|finestep" "$work/linuxcnc.log" | grep -v "terminated with an error" | head -20 || true
     # Exit status 2: LinuxCNC's own interpreter refused the program (not finestep's doing).
     grep -q "interp_error" "$work/linuxcnc.log" && exit 2
     exit 1
+fi
+if [ "$loop" != open ]; then
+    # The closed loop: LinuxCNC's following error per joint (joint.N.f-error).
+    target/release/finestep-linuxcnc ferror "$work/samples.txt" --ini "$work/finestep.ini"
+    exit 0
 fi
 if [ -n "${FINESTEP_ESTOP_AFTER:-}" ]; then
     # LinuxCNC's E-stop pressed mid-program (linuxcnc/headless.py): checked up to the

@@ -228,6 +228,14 @@ enum Command {
         /// channel 0 on axis 0 at one count per step.
         #[arg(long)]
         plant: bool,
+        /// Put the closed-loop machine on the pins instead (`PlantConfig::lagging`): a
+        /// drive on every axis lagging its step pins with this time constant in core
+        /// clocks, and a linear grating on each axis an encoder channel has.
+        #[arg(long, conflicts_with = "plant")]
+        lag_clocks: Option<u64>,
+        /// The gratings' counts per step with `--lag-clocks`.
+        #[arg(long, default_value_t = 1, requires = "lag_clocks")]
+        counts_per_step: u32,
         /// Inject a fault (repeatable), for tests that must notice it.
         #[arg(long, value_enum)]
         fault: Vec<sim_chip::Fault>,
@@ -289,7 +297,14 @@ fn main() -> anyhow::Result<()> {
             conformance::canon(&file, tool_table.as_deref(), var.as_deref())
         }
         Command::Conformance { manifest, out, tool_table } => conformance::run(&manifest, &out, tool_table.as_deref()),
-        Command::SimChip { socket, target, plant, fault, once } => sim_chip::run(&socket, target, plant, &fault, once),
+        Command::SimChip { socket, target, plant, lag_clocks, counts_per_step, fault, once } => {
+            let machine = match lag_clocks {
+                Some(tau) => sim_chip::Machine::Lagging { tau, counts_per_step },
+                None if plant => sim_chip::Machine::Loopback,
+                None => sim_chip::Machine::None,
+            };
+            sim_chip::run(&socket, target, machine, &fault, once)
+        }
         Command::Selftest { bus, loopback } => selftest::run(bus, loopback),
         Command::Measure { out, bus, config } => {
             if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {

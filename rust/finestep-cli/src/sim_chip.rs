@@ -12,6 +12,7 @@ use anyhow::{bail, Context};
 use finestep_cosim::rtl_top_params;
 use finestep_host::frame::{self, Command, FRAME_CRC};
 use finestep_host::{regs, sim_link, BusError, SpiTransfer};
+use finestep_plant::{CountsPerStep, Plant, PlantConfig, LAGGING_SEED};
 
 /// What serves the chip.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -20,6 +21,24 @@ pub enum Target {
     Lockstep,
     /// The reference model alone (faster; nothing to compare against).
     Model,
+}
+
+/// The machine on the chip's pins.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Machine {
+    /// Nothing: the feedback pins idle.
+    None,
+    /// The self-test's loopback machine ([`crate::bus::loopback_plant`]).
+    Loopback,
+    /// The closed-loop machine of `finestep_plant::PlantConfig::lagging`: a drive
+    /// lagging by `tau` clocks on every axis, a grating of `counts_per_step` on every
+    /// axis with an encoder channel.
+    Lagging {
+        /// The drives' time constant, core clocks.
+        tau: u64,
+        /// The gratings' counts per step.
+        counts_per_step: u32,
+    },
 }
 
 /// A fault the server injects, for tests of the tools that must notice it.
@@ -98,9 +117,8 @@ fn stuck_bit(addr: u8, word: u32) -> u32 {
 }
 
 /// Serves the chip on `socket` (a stale socket file there is replaced) until killed,
-/// or until the first client leaves with `once`; with `plant`, the self-test's loopback
-/// machine is on its pins ([`crate::bus::loopback_plant`]).
-pub fn run(socket: &Path, target: Target, plant: bool, faults: &[Fault], once: bool) -> anyhow::Result<()> {
+/// or until the first client leaves with `once`, with `machine` on its pins.
+pub fn run(socket: &Path, target: Target, machine: Machine, faults: &[Fault], once: bool) -> anyhow::Result<()> {
     if let Ok(meta) = std::fs::symlink_metadata(socket) {
         if !meta.file_type().is_socket() {
             bail!("{} exists and is not a socket", socket.display());
@@ -108,10 +126,16 @@ pub fn run(socket: &Path, target: Target, plant: bool, faults: &[Fault], once: b
         std::fs::remove_file(socket).with_context(|| format!("removing the stale socket {}", socket.display()))?;
     }
     let dead_encoder = faults.contains(&Fault::DeadEncoder);
-    let plant = if plant || dead_encoder {
-        Some(crate::bus::loopback_plant(rtl_top_params().n_axes, dead_encoder)?)
-    } else {
-        None
+    let params = rtl_top_params();
+    let plant = match machine {
+        Machine::Lagging { tau, counts_per_step } => {
+            let config =
+                PlantConfig::lagging(params.n_axes, params.n_enc, tau, CountsPerStep::integer(counts_per_step)?);
+            Some(Plant::new(config, LAGGING_SEED)?)
+        }
+        Machine::Loopback => Some(crate::bus::loopback_plant(params.n_axes, dead_encoder)?),
+        Machine::None if dead_encoder => Some(crate::bus::loopback_plant(params.n_axes, dead_encoder)?),
+        Machine::None => None,
     };
     let mut link = crate::bus::sim_link(target == Target::Lockstep, "sim-chip", plant)?;
     for fault in faults {
@@ -122,7 +146,10 @@ pub fn run(socket: &Path, target: Target, plant: bool, faults: &[Fault], once: b
         };
     }
     let listener = UnixListener::bind(socket).with_context(|| format!("binding {}", socket.display()))?;
-    println!("finestep sim-chip: {target:?} chip on {} (faults: {faults:?})", socket.display());
+    println!(
+        "finestep sim-chip: {target:?} chip on {} ({machine:?} on its pins; faults: {faults:?})",
+        socket.display()
+    );
     for stream in listener.incoming() {
         let mut stream = stream.context("accepting a client")?;
         if let Err(e) = sim_link::serve(&mut stream, &mut link) {

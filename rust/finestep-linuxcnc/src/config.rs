@@ -19,6 +19,8 @@ use finestep_interface::TopParams;
 use finestep_planner::config::{CoreLimits, AXIS_NAMES};
 use finestep_planner::MachineConfig;
 
+use crate::closed_loop::{self, Loop};
+
 /// Travel of every axis in the generated INI, machine units either side of 0 (the TOML
 /// has no soft limits).
 const TRAVEL: f64 = 10_000.0;
@@ -29,12 +31,12 @@ const MPG_SCALE: f64 = 0.01;
 
 /// The joints of a configuration: (record slot, axis name, steps per unit, max velocity,
 /// max acceleration).
-struct Joint {
-    slot: usize,
-    name: &'static str,
-    scale: f64,
-    max_velocity: f64,
-    max_acceleration: f64,
+pub(crate) struct Joint {
+    pub(crate) slot: usize,
+    pub(crate) name: &'static str,
+    pub(crate) scale: f64,
+    pub(crate) max_velocity: f64,
+    pub(crate) max_acceleration: f64,
 }
 
 fn joints(config: MachineConfig, file: &str) -> anyhow::Result<(Vec<Joint>, MachineConfig, f64)> {
@@ -62,24 +64,47 @@ fn joints(config: MachineConfig, file: &str) -> anyhow::Result<(Vec<Joint>, Mach
 /// Writes `finestep.ini`, `finestep.hal`, `tool.tbl` (and `record.hal` with `record`)
 /// into `out` for the configuration at `config_path` (the built-in machine when absent)
 /// on the chip at `bus`; `display` is the INI's DISPLAY program.
-pub fn write(config_path: Option<&Path>, bus: &str, display: &str, out: &Path, record: bool) -> anyhow::Result<()> {
+/// `which` picks open loop or a closed loop (`pid`: the PID tuning's overrides,
+/// [`closed_loop::tuning`]).
+pub fn write(
+    config_path: Option<&Path>,
+    bus: &str,
+    display: &str,
+    out: &Path,
+    record: bool,
+    which: Loop,
+    pid: Option<&str>,
+) -> anyhow::Result<()> {
     let (config, name) = match config_path {
         Some(path) => (MachineConfig::load(path)?, path.display().to_string()),
         None => (MachineConfig::default(), "<built-in>".to_string()),
     };
-    bus.parse::<finestep_hal::Transport>()?;
+    if which != Loop::Stepgen {
+        bus.parse::<finestep_hal::Transport>()?;
+    }
     let (joints, config, period_s) = joints(config, &name)?;
     if joints.is_empty() {
         bail!("{name}: no axes");
     }
+    let gains = closed_loop::tuning(pid)?;
+    let closed = (which != Loop::Open).then_some(gains.as_slice());
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let (hal_text, record_text) = match which {
+        Loop::Open => (hal(&joints, bus, &name), record_hal(&joints)),
+        _ => (closed_loop::hal(&joints, bus, &name, which), closed_loop::record_hal(&joints, which)),
+    };
+    let mut ini_text = ini(&joints, &config, period_s, display, &name, record, closed);
+    if which == Loop::Stepgen {
+        ini_text = ini_text
+            .replace("SERVO_PERIOD = ", &format!("BASE_PERIOD = {}\nSERVO_PERIOD = ", closed_loop::BASE_PERIOD_NS));
+    }
     let files = [
-        ("finestep.ini", ini(&joints, &config, period_s, display, &name, record)),
-        ("finestep.hal", hal(&joints, bus, &name)),
+        ("finestep.ini", ini_text),
+        ("finestep.hal", hal_text),
         ("postgui.hal", postgui_hal(&joints, &name)),
         ("tool.tbl", tools(&config)),
     ];
-    for (file, text) in files.iter().chain(record.then(|| ("record.hal", record_hal(&joints))).iter()) {
+    for (file, text) in files.iter().chain(record.then_some(("record.hal", record_text)).iter()) {
         let path = out.join(file);
         std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
     }
@@ -92,7 +117,16 @@ pub fn write(config_path: Option<&Path>, bus: &str, display: &str, out: &Path, r
     Ok(())
 }
 
-fn ini(joints: &[Joint], config: &MachineConfig, period_s: f64, display: &str, name: &str, record: bool) -> String {
+/// `closed`: the PID tuning of a closed loop (its [PLANT] section and joint keys).
+fn ini(
+    joints: &[Joint],
+    config: &MachineConfig,
+    period_s: f64,
+    display: &str,
+    name: &str,
+    record: bool,
+    closed: Option<&[(&str, f64)]>,
+) -> String {
     let coordinates: String = joints.iter().map(|j| j.name).collect();
     let max_velocity = joints.iter().filter(|j| j.name != "A").map(|j| j.max_velocity).fold(f64::INFINITY, f64::min);
     let mut text = format!(
@@ -118,6 +152,9 @@ fn ini(joints: &[Joint], config: &MachineConfig, period_s: f64, display: &str, n
         default_v = max_velocity / 4.0,
         n = joints.len(),
     );
+    if closed.is_some() {
+        text.push_str(&closed_loop::ini_plant(TopParams::default().clock_hz));
+    }
     let drive = &config.drive;
     for (index, joint) in joints.iter().enumerate() {
         let limits = format!(
@@ -136,7 +173,7 @@ fn ini(joints: &[Joint], config: &MachineConfig, period_s: f64, display: &str, n
              # Open loop: the feedback lags the command by {lag} servo periods (docs/linuxcnc.md).\n\
              FERROR = 1.0\nMIN_FERROR = 0.25\n\
              STEPLEN = {l}\nSTEPSPACE = {s}\nDIRSETUP = {u}\nDIRHOLD = {h}\n\
-             HOME_OFFSET = 0\nHOME_SEARCH_VEL = 0\nHOME_LATCH_VEL = 0\nHOME_SEQUENCE = 0\n\n",
+             HOME_OFFSET = 0\nHOME_SEARCH_VEL = 0\nHOME_LATCH_VEL = 0\nHOME_SEQUENCE = 0\n{closed}\n",
             kind = if joint.name == "A" { "ANGULAR" } else { "LINEAR" },
             stepgen_v = joint.max_velocity * 1.25,
             scale = joint.scale,
@@ -146,6 +183,7 @@ fn ini(joints: &[Joint], config: &MachineConfig, period_s: f64, display: &str, n
             s = drive.step_space_ns.ceil(),
             u = drive.dir_setup_ns.ceil(),
             h = drive.dir_hold_ns.ceil(),
+            closed = closed.map_or(String::new(), |gains| closed_loop::ini_joint(joint, gains)),
         );
     }
     text
@@ -596,7 +634,7 @@ mod tests {
         .unwrap();
         let (joints, config, period_s) = joints(config, "m.toml").unwrap();
         assert_eq!(joints.iter().map(|j| j.slot).collect::<Vec<_>>(), [0, 1, 2]);
-        let ini = ini(&joints, &config, period_s, "/x/headless.py", "m.toml", true);
+        let ini = ini(&joints, &config, period_s, "/x/headless.py", "m.toml", true, None);
         assert!(ini.contains("SERVO_PERIOD = 1000000\n"), "{ini}");
         assert!(ini.contains("[JOINT_2]\nTYPE = LINEAR\n") && ini.contains("SCALE = 400\n"), "{ini}");
         assert!(ini.contains("KINEMATICS = trivkins coordinates=XYZ\nJOINTS = 3\n"), "{ini}");
@@ -607,7 +645,7 @@ mod tests {
         let record = record_hal(&joints);
         assert!(record.contains("cfg=fsfsfsb\n") && record.contains("setp scale.2.gain 2.62144e7\n"), "{record}");
         let (four, config, period_s) = super::joints(MachineConfig::default(), "d.toml").unwrap();
-        let text = super::ini(&four, &config, period_s, "axis", "d.toml", false);
+        let text = super::ini(&four, &config, period_s, "axis", "d.toml", false, None);
         assert!(
             text.contains("[JOINT_3]\nTYPE = ANGULAR\n") && text.contains("coordinates=XYZA\nJOINTS = 4\n"),
             "{text}"

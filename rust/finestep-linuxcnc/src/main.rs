@@ -3,6 +3,7 @@
 //! `finestep` HAL component; `check` runs the open-loop check over a recorded run
 //! (`scripts/linuxcnc_run.sh` does both around a headless LinuxCNC; docs/linuxcnc.md).
 
+mod closed_loop;
 mod config;
 mod watchdog;
 
@@ -41,6 +42,22 @@ enum Command {
         /// Where the files go.
         #[arg(long)]
         out: PathBuf,
+        /// Open loop, or a closed loop through PID on the simulated closed-loop machine
+        /// with finestep's or LinuxCNC's software stepgen (docs/linuxcnc.md#closed-loop).
+        #[arg(long = "loop", value_enum, default_value = "open")]
+        which: closed_loop::Loop,
+        /// A closed loop's PID tuning over the default: KEY=VALUE,... (P, I, D, FF0, FF1,
+        /// FF2, BIAS, DEADBAND, MAX_OUTPUT).
+        #[arg(long)]
+        pid: Option<String>,
+    },
+    /// Peak and RMS following error per joint over a closed loop's recording.
+    Ferror {
+        /// The recording (`halsampler -t` of the closed loop's record.hal).
+        samples: PathBuf,
+        /// The run's INI (joints, axis names, scales).
+        #[arg(long)]
+        ini: PathBuf,
     },
     /// The open-loop check over a recording of record.hal (`halsampler -t`): every
     /// period's step count against LinuxCNC's commanded position quantised to steps.
@@ -76,12 +93,39 @@ enum Command {
 
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
-        Command::Config { config, bus, display, record, out } => {
-            config::write(config.as_deref(), &bus, &display, &out, record)
+        Command::Config { config, bus, display, record, out, which, pid } => {
+            config::write(config.as_deref(), &bus, &display, &out, record, which, pid.as_deref())
+        }
+        Command::Ferror { samples, ini } => {
+            let text = std::fs::read_to_string(&ini).map_err(|e| anyhow::anyhow!("{}: {e}", ini.display()))?;
+            let key = |section: &str, key: &str| ini_value(&text, section, key);
+            let names = key("TRAJ", "COORDINATES").unwrap_or_default();
+            let joints: usize = key("KINS", "JOINTS").and_then(|j| j.parse().ok()).unwrap_or(names.len());
+            let scales: Vec<f64> = (0..joints)
+                .map(|j| key(&format!("JOINT_{j}"), "SCALE").and_then(|s| s.parse().ok()).unwrap_or(1.0))
+                .collect();
+            closed_loop::ferror(&samples, joints, &names, &scales)
         }
         Command::Check { samples, joints, period_ns, config, expect_stop } => {
             config::check(&samples, joints, period_ns, config.as_deref(), expect_stop)
         }
         Command::Watchdog { socket, timeout_ns } => watchdog::run(&socket, timeout_ns),
     }
+}
+
+/// The INI's `[section]key` (the first), trimmed.
+fn ini_value(text: &str, section: &str, key: &str) -> Option<String> {
+    let mut current = "";
+    for line in text.lines().map(str::trim) {
+        if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            current = name;
+        } else if current == section {
+            if let Some((k, v)) = line.split_once('=') {
+                if k.trim() == key {
+                    return Some(v.trim().to_string());
+                }
+            }
+        }
+    }
+    None
 }

@@ -86,7 +86,7 @@ mod testutil;
 pub use drive::{Drive, DriveConfig, Mechanics, StepInput};
 pub use encoder::{Decoded, Encoder, EncoderConfig, FaultLog, Faults, Glitches, Index, Levels};
 pub use hand_wheel::{Bounce, HandWheel, HandWheelConfig};
-pub use plant::{ChannelConfig, Plant, PlantConfig, PlantPins, MAX_CHANNELS};
+pub use plant::{ChannelConfig, Plant, PlantConfig, PlantPins, LAGGING_SEED, MAX_CHANNELS};
 pub use probe::{Probe, ProbeConfig};
 pub use roller::{Roller, RollerConfig, RollerMode, Surface};
 

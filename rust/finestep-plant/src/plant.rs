@@ -7,8 +7,8 @@
 //! axis are two channels with different [`CountsPerStep`](crate::CountsPerStep).
 
 use crate::{
-    Drive, DriveConfig, Encoder, EncoderConfig, HandWheel, HandWheelConfig, Levels, PlantError, Probe, ProbeConfig,
-    Roller, RollerConfig, RollerMode,
+    CountsPerStep, Drive, DriveConfig, Encoder, EncoderConfig, HandWheel, HandWheelConfig, Levels, PlantError, Probe,
+    ProbeConfig, Roller, RollerConfig, RollerMode,
 };
 
 /// Encoder channels the pin masks hold.
@@ -38,6 +38,30 @@ pub struct PlantConfig {
     pub probe: Option<ProbeConfig>,
     /// The hand wheel (its pins are low without one).
     pub hand_wheel: Option<HandWheelConfig>,
+}
+
+/// The seed of [`PlantConfig::lagging`]'s machine (its gratings have no faults, so
+/// nothing is drawn from it; one constant so that both ways of driving it agree).
+pub const LAGGING_SEED: u64 = 0x1A66;
+
+impl PlantConfig {
+    /// The closed-loop machine LinuxCNC's PID runs against (docs/linuxcnc.md#closed-loop):
+    /// `axes` step/dir drives, each a first-order lag of `tau` cycles, and on the first
+    /// `channels` axes a linear grating of `counts_per_step` (channel `c` on axis `c`).
+    /// The one definition both ways of driving it take: the simulated finestep chip's
+    /// pins (`finestep sim-chip --lag-clocks`) and LinuxCNC's software stepgen (the
+    /// `fsplant` HAL component), so the two runs differ only in the step generator.
+    pub fn lagging(axes: usize, channels: usize, tau: u64, counts_per_step: CountsPerStep) -> PlantConfig {
+        let drive = DriveConfig { mechanics: crate::Mechanics::Lag { tau }, ..DriveConfig::default() };
+        PlantConfig {
+            drives: vec![drive; axes],
+            channels: (0..channels.min(axes))
+                .map(|axis| ChannelConfig { axis, encoder: EncoderConfig::linear_grating(counts_per_step, None) })
+                .collect(),
+            probe: None,
+            hand_wheel: None,
+        }
+    }
 }
 
 /// The plant's output pins, the chip's feedback inputs.
