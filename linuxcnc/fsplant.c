@@ -5,12 +5,17 @@
  * The plant and the lockstep of the two threads are rust/finestep-hal-plant, linked in
  * as a static library and called through linuxcnc/fsplant.h.
  *
- *   loadrt fsplant axes=3 lag_clocks=50000 counts_per_step=1 clock_hz=50000000 base_ns=10000 servo_ns=1000000
- *   addf fsplant.0.gate   base-thread    (first: waits for the servo period this slot belongs to)
- *   addf stepgen.make-pulses base-thread
- *   addf fsplant.0.sample base-thread    (last: the step pins of this slot)
- *   addf fsplant.0.read   servo-thread   (first: the gratings' counts at the period boundary)
- *   addf fsplant.0.write  servo-thread   (last, after stepgen.update-freq: releases the period's slots)
+ *   loadrt stepgen step_type=0,0,0
+ *   loadrt fsplant axes=3 lag_clocks=50000 counts_per_step=1 clock_hz=50000000 base_ns=5000 servo_ns=1000000
+ *   addf fsplant.0.read servo-thread    (first: the gratings' counts at the period boundary)
+ *   addf fsplant.0.run  servo-thread    (last, after stepgen.update-freq: the period's base periods)
+ *
+ * No base thread: LinuxCNC's uspace build without a real-time kernel serialises its
+ * threads under one lock, so a base thread cannot wait for the servo thread (and a free
+ * base thread runs a varying number of times per servo period on a loaded host). Instead
+ * fsplant.0.run calls stepgen's own make-pulses function (found by name in HAL) servo_ns /
+ * base_ns times per servo period, each call one base period of base_ns, and samples the
+ * step pins after each: the pulses of a perfectly periodic base thread, deterministic.
  *
  * Pins: fsplant.0.axis.N.{step, dir} (in: stepgen's; dir high = negative steps, as stepgen
  * drives it), fsplant.0.encoder.NN.{count, position} (out) with param scale (counts per unit),
@@ -41,6 +46,21 @@ RTAPI_MP_INT(base_ns, "the base thread's period, ns");
 static int servo_ns = 1000000;
 RTAPI_MP_INT(servo_ns, "the servo thread's period, ns (a multiple of base_ns)");
 
+static char *pulses = "stepgen.make-pulses";
+RTAPI_MP_STRING(pulses, "the HAL function making the step pulses, run base_ns by base_ns");
+
+/* hal_lib's lookup (exported by hal_lib.so; its header hal_priv.h is not installed). */
+struct hal_funct_view;
+extern struct hal_funct_view *halpr_find_funct_by_name(const char *name);
+/* The head of hal_priv.h's hal_funct_t up to the two fields used here, as LinuxCNC 2.9 on
+ * a 64-bit host lays it out (read from memory: next_ptr and owner_ptr are 8-byte SHMFIELDs):
+ * next_ptr, uses_fp, owner_ptr, reentrant and users fill 32 bytes, then arg and funct. */
+struct hal_funct_view {
+    char head[32];
+    void *arg;
+    void (*funct)(void *, long);
+};
+
 #define NAME "fsplant.0"
 #define MAX_AXES 16
 
@@ -53,6 +73,9 @@ struct axis {
 
 struct fsplant {
     struct fs_plant *plant;
+    void *pulses_arg;
+    void (*pulses)(void *, long);
+    int primed;
     struct axis axis[MAX_AXES];
     hal_u32_t *sync_errors;
 };
@@ -60,24 +83,23 @@ struct fsplant {
 static int comp_id;
 static struct fsplant *fp;
 
-static void gate_fn(void *arg, long period)
+static void run_fn(void *arg, long period)
 {
     struct fsplant *f = arg;
-    (void)period;
-    fs_plant_gate(f->plant);
-}
-
-static void sample_fn(void *arg, long period)
-{
-    struct fsplant *f = arg;
-    uint32_t levels = 0;
+    long slot, slots = servo_ns / base_ns;
     int i;
     (void)period;
-    for (i = 0; i < axes; i++) {
-        levels |= (uint32_t)(*f->axis[i].step != 0) << (2 * i);
-        levels |= (uint32_t)(*f->axis[i].dir == 0) << (2 * i + 1);
+    fs_plant_write(f->plant);
+    for (slot = 0; slot < slots; slot++) {
+        uint32_t levels = 0;
+        fs_plant_gate(f->plant);
+        f->pulses(f->pulses_arg, base_ns);
+        for (i = 0; i < axes; i++) {
+            levels |= (uint32_t)(*f->axis[i].step != 0) << (2 * i);
+            levels |= (uint32_t)(*f->axis[i].dir == 0) << (2 * i + 1);
+        }
+        fs_plant_sample(f->plant, levels);
     }
-    fs_plant_sample(f->plant, levels);
 }
 
 static void read_fn(void *arg, long period)
@@ -86,6 +108,12 @@ static void read_fn(void *arg, long period)
     int64_t counts[MAX_AXES];
     int i;
     (void)period;
+    if (!f->primed) {
+        /* stepgen's update-freq takes the base period from make-pulses' last call: one
+         * call before the first (the machine still off, the step generators idle). */
+        f->pulses(f->pulses_arg, base_ns);
+        f->primed = 1;
+    }
     fs_plant_read(f->plant, counts, (uint32_t)axes);
     for (i = 0; i < axes; i++) {
         struct axis *a = &f->axis[i];
@@ -93,13 +121,6 @@ static void read_fn(void *arg, long period)
         *a->position = a->scale != 0.0 ? (double)counts[i] / a->scale : 0.0;
     }
     *f->sync_errors = fs_plant_sync_errors(f->plant);
-}
-
-static void write_fn(void *arg, long period)
-{
-    struct fsplant *f = arg;
-    (void)period;
-    fs_plant_write(f->plant);
 }
 
 int rtapi_app_main(void)
@@ -127,6 +148,16 @@ int rtapi_app_main(void)
         return -ENOMEM;
     }
     memset(fp, 0, sizeof *fp);
+    {
+        struct hal_funct_view *f = halpr_find_funct_by_name(pulses);
+        if (!f || !f->funct) {
+            rtapi_print_msg(RTAPI_MSG_ERR, NAME ": no HAL function %s (load stepgen first)\n", pulses);
+            hal_exit(comp_id);
+            return -ENOENT;
+        }
+        fp->pulses = f->funct;
+        fp->pulses_arg = f->arg;
+    }
     fp->plant = fs_plant_new((uint32_t)axes, (uint64_t)lag_clocks, (uint32_t)counts_per_step, slot_clocks,
                              (uint64_t)(servo_ns / base_ns));
     if (!fp->plant) {
@@ -145,13 +176,9 @@ int rtapi_app_main(void)
     if (r == 0)
         r = hal_pin_u32_newf(HAL_OUT, &fp->sync_errors, comp_id, NAME ".sync-errors");
     if (r == 0)
-        r = hal_export_funct(NAME ".gate", gate_fn, fp, 0, 0, comp_id);
-    if (r == 0)
-        r = hal_export_funct(NAME ".sample", sample_fn, fp, 0, 0, comp_id);
-    if (r == 0)
         r = hal_export_funct(NAME ".read", read_fn, fp, 1, 0, comp_id);
     if (r == 0)
-        r = hal_export_funct(NAME ".write", write_fn, fp, 0, 0, comp_id);
+        r = hal_export_funct(NAME ".run", run_fn, fp, 1, 0, comp_id);
     if (r != 0) {
         rtapi_print_msg(RTAPI_MSG_ERR, NAME ": exporting pins and functions failed (%d)\n", r);
         fs_plant_free(fp->plant);

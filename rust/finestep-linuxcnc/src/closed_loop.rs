@@ -28,9 +28,10 @@ pub const LAG_CLOCKS: u64 = 50_000;
 pub const COUNTS_PER_STEP: u32 = 1;
 
 /// LinuxCNC's base thread for the software stepgen, ns: the fastest step/dir at the
-/// sample mill's timing (one base period high, one low) is then 50 kHz, over X's and Y's
-/// 40 kHz (50 mm/s at 800 steps/mm); the simulated chip's clock makes it 500 clocks.
-pub const BASE_PERIOD_NS: u64 = 10_000;
+/// sample mill's timing (one base period high, one low) is then 100 kHz, over the
+/// stepgen limit of X and Y (1.25 times 50 mm/s at 800 steps/mm: 50 kHz; stepgen refuses
+/// that with a 10 µs base period); the simulated chip's clock makes it 250 clocks.
+pub const BASE_PERIOD_NS: u64 = 5_000;
 
 /// The PID tuning both loops get unless `--pid` says otherwise (pid(9)'s gains, as the
 /// INI's [JOINT_n] keys): the output is a position command (FF0 = 1 passes the joint's
@@ -125,16 +126,13 @@ pub fn hal(joints: &[Joint], bus: &str, name: &str, which: Loop) -> String {
             let types = vec!["0"; n].join(",");
             let _ = write!(
                 text,
-                "loadrt [EMCMOT]EMCMOT base_period_nsec=[EMCMOT]BASE_PERIOD servo_period_nsec=[EMCMOT]SERVO_PERIOD num_joints=[KINS]JOINTS\n\
+                "loadrt [EMCMOT]EMCMOT servo_period_nsec=[EMCMOT]SERVO_PERIOD num_joints=[KINS]JOINTS\n\
                  loadrt stepgen step_type={types}\n\
                  loadrt fsplant axes={n} lag_clocks=[PLANT]LAG_CLOCKS counts_per_step=[PLANT]COUNTS_PER_STEP \
                  clock_hz=[PLANT]CLOCK_HZ base_ns=[EMCMOT]BASE_PERIOD servo_ns=[EMCMOT]SERVO_PERIOD\n\
                  loadrt pid num_chan={n}\n\n\
-                 # The base thread: each run one slot of the plant's time (fsplant locks the threads).\n\
-                 addf fsplant.0.gate base-thread\n\
-                 addf stepgen.make-pulses base-thread\n\
-                 addf fsplant.0.sample base-thread\n\n\
-                 # The gratings' counts at the period boundary first; the base thread released last.\n\
+                 # No base thread: fsplant.0.run calls stepgen.make-pulses once per base period\n\
+                 # ([EMCMOT]BASE_PERIOD) after stepgen.update-freq (linuxcnc/fsplant.c says why).\n\
                  addf fsplant.0.read servo-thread\n\
                  addf motion-command-handler servo-thread\n\
                  addf motion-controller servo-thread\n"
@@ -158,7 +156,7 @@ pub fn hal(joints: &[Joint], bus: &str, name: &str, which: Loop) -> String {
     }
     match which {
         Loop::Stepgen => text.push_str(
-            "addf stepgen.update-freq servo-thread\naddf fsplant.0.write servo-thread\n\n\
+            "addf stepgen.update-freq servo-thread\naddf fsplant.0.run servo-thread\n\n\
              # No E-stop input on this machine: LinuxCNC's enable loops back.\n\
              net estop-loop iocontrol.0.user-enable-out => iocontrol.0.emc-enable-in\n",
         ),
