@@ -7,22 +7,20 @@
 //!
 //! # Time, exactly
 //!
-//! The plant counts core clock cycles; LinuxCNC's threads run on the wall clock, and a
-//! loaded machine runs the base thread any number of times per servo period. So the
-//! component locks the two threads together: base slot `i` (one run of the base thread:
-//! [`StepgenPlant::gate`], `stepgen.make-pulses`, [`StepgenPlant::sample`]) stands for the
-//! cycles `i * B .. (i + 1) * B` (`B` = the base period in clocks), and servo period `k`
-//! owns slots `k * M .. (k + 1) * M` (`M` = servo period / base period). The gate holds the
-//! base thread until the servo thread has run period `k` (its last function,
-//! [`StepgenPlant::write`], after `stepgen.update-freq`), and the servo thread's first
-//! function, [`StepgenPlant::read`], waits until the base thread has sampled every slot of
-//! period `k - 1`, runs the plant to the boundary `k * M * B` and gives the encoder counts
-//! there. So each servo period runs exactly `M` base periods, whatever the host's
-//! jitter, as it would on a real-time kernel; the run only slows down.
+//! The plant counts core clock cycles. Base slot `i` (one call of stepgen's
+//! `make-pulses`, framed by [`StepgenPlant::gate`] and [`StepgenPlant::sample`]) stands for
+//! the cycles `i * B .. (i + 1) * B` (`B` = the base period in clocks), and servo period
+//! `k` owns slots `k * M .. (k + 1) * M` (`M` = servo period / base period):
+//! [`StepgenPlant::write`] releases a period's slots, [`StepgenPlant::read`] runs the plant
+//! to the boundary `k * M * B` over the slots sampled and gives the encoder counts there.
+//! `fsplant.c` makes every call from the servo thread (LinuxCNC's uspace build serialises
+//! its threads without a real-time kernel, so a base thread could not wait for the servo
+//! thread), so the waits below never wait there; they hold if the calls come from two
+//! threads (the tests), and each servo period then runs exactly `M` base periods.
 //!
-//! A wait longer than [`SYNC_TIMEOUT`] (a thread stopped: LinuxCNC shutting down) lets
-//! the waiting thread go on and is counted ([`StepgenPlant::sync_errors`]): the run's
-//! figures are then not exact, and the comparison fails. The next period locks again.
+//! A wait longer than [`SYNC_TIMEOUT`] lets the waiting thread go on and is counted
+//! ([`StepgenPlant::sync_errors`]): the run's figures are then not exact, and the
+//! comparison fails.
 //!
 //! # Example
 //!
@@ -57,7 +55,7 @@ use finestep_plant::{CountsPerStep, Plant, PlantConfig, PlantError, LAGGING_SEED
 
 /// The longest either thread waits for the other, wall time: LinuxCNC's servo period has
 /// taken up to 0.85 s on this project's loaded machine.
-pub const SYNC_TIMEOUT: Duration = Duration::from_secs(20);
+pub const SYNC_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// What the component cannot do.
 #[derive(Debug, thiserror::Error)]

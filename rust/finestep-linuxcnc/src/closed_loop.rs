@@ -277,7 +277,9 @@ pub struct FerrorReport {
 /// Peak and RMS following error per joint over a `halsampler -t` recording of
 /// [`record_hal`].
 pub fn ferror_text(text: &str, joints: usize, file: &str) -> anyhow::Result<FerrorReport> {
-    let mut rows: Vec<(u64, Vec<(f64, f64)>, bool, u64)> = Vec::new();
+    // (sample, per joint (f-error, command), motion enabled, lost locksteps)
+    type Row = (u64, Vec<(f64, f64)>, bool, u64);
+    let mut rows: Vec<Row> = Vec::new();
     for (line_no, line) in text.lines().enumerate() {
         let fields: Vec<&str> = line.split_whitespace().collect();
         if fields.is_empty() {
