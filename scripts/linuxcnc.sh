@@ -77,7 +77,7 @@ closed_loop() {
             "build/linuxcnc/closed-$(basename "$program" .ngc)-finestep.log" \
             "build/linuxcnc/closed-$(basename "$program" .ngc)-stepgen.log" >> "$table"
     done
-    echo "linuxcnc: closed loop, following error (machine units; PID: ${FINESTEP_PID:-the generator's default})"
+    echo "linuxcnc: closed loop, following error (machine units; PID: ${FINESTEP_PID:-the default tuning})"
     printf "%-16s %-5s %12s %12s %12s %12s\n" program joint "finestep pk" "finestep RMS" "stepgen pk" "stepgen RMS"
     cat "$table"
     return $status
