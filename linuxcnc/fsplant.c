@@ -179,6 +179,18 @@ int rtapi_app_main(void)
         r = hal_export_funct(NAME ".read", read_fn, fp, 1, 0, comp_id);
     if (r == 0)
         r = hal_export_funct(NAME ".run", run_fn, fp, 1, 0, comp_id);
+    if (r == 0) {
+        /* The layout above is an assumption about this LinuxCNC: checked on our own function
+         * (its argument and code are known), refused with a clear message if it differs. */
+        struct hal_funct_view *own = halpr_find_funct_by_name(NAME ".run");
+        if (own == 0 || own->arg != (void *)fp || own->funct != run_fn) {
+            rtapi_print_msg(RTAPI_MSG_ERR,
+                            NAME ": hal_lib's hal_funct_t is not laid out as this component assumes "
+                            "(LinuxCNC 2.9, 64-bit); cannot drive %s\n",
+                            pulses);
+            r = -EINVAL;
+        }
+    }
     if (r != 0) {
         rtapi_print_msg(RTAPI_MSG_ERR, NAME ": exporting pins and functions failed (%d)\n", r);
         fs_plant_free(fp->plant);

@@ -127,15 +127,16 @@ pub fn print_figure(png: Option<&Path>) -> anyhow::Result<()> {
          in periods {}..{} ({} steps)",
         load.every, load.from, load.to, forward.lost
     );
-    println!("  {:<14} {:>10} {:>10} {:>10} {:>12}", "mode", "peak", "RMS", "final", "corrections");
+    println!("  {:<14} {:>10} {:>10} {:>10} {:>12} {:>6}", "mode", "peak", "RMS", "final", "corrections", "alarm");
     for (name, run) in [("forward", &forward), ("synchronised", &sync)] {
         println!(
-            "  {:<14} {:>7} ct {:>7.1} ct {:>7} ct {:>12}",
+            "  {:<14} {:>7} ct {:>7.1} ct {:>7} ct {:>12} {:>6}",
             name,
             run.peak(),
             run.rms(),
             run.last(),
-            run.corrections
+            run.corrections,
+            if run.alarm { "yes" } else { "no" }
         );
     }
     print!("  error every 100 periods, forward:     ");
