@@ -18,7 +18,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context};
 
-use crate::config::Joint;
+use crate::joints::Joint;
 
 /// The closed-loop machine: the drives' lag time constant, core clocks (1 ms at 50 MHz:
 /// a drive that takes a servo period to follow).

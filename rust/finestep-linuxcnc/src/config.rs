@@ -16,10 +16,10 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use finestep_hal::{count_latency_clocks, quantised_steps, round_fixed, FEEDBACK_LAG_PERIODS, LATCH_LAG_CLOCKS};
 use finestep_interface::TopParams;
-use finestep_planner::config::{CoreLimits, AXIS_NAMES};
 use finestep_planner::MachineConfig;
 
 use crate::closed_loop::{self, Loop};
+use crate::joints::{joints, Joint};
 
 /// Travel of every axis in the generated INI, machine units either side of 0 (the TOML
 /// has no soft limits).
@@ -28,38 +28,6 @@ const TRAVEL: f64 = 10_000.0;
 /// The hand wheel's travel per detent on every axis, machine units (mm or degrees): the
 /// x1 step of a mill's wheel (the TOML has no hand wheel section).
 const MPG_SCALE: f64 = 0.01;
-
-/// The joints of a configuration: (record slot, axis name, steps per unit, max velocity,
-/// max acceleration).
-pub(crate) struct Joint {
-    pub(crate) slot: usize,
-    pub(crate) name: &'static str,
-    pub(crate) scale: f64,
-    pub(crate) max_velocity: f64,
-    pub(crate) max_acceleration: f64,
-}
-
-fn joints(config: MachineConfig, file: &str) -> anyhow::Result<(Vec<Joint>, MachineConfig, f64)> {
-    // The default build's limits (the chip's CAPS are checked again when the HAL
-    // component connects).
-    let core = CoreLimits::of_build(&TopParams::default());
-    let config = config.for_core(core);
-    let resolved = config.resolve_in(file)?;
-    let joints: Vec<Joint> = (0..AXIS_NAMES.len())
-        .filter(|&slot| resolved.axes[slot].present)
-        .map(|slot| {
-            let axis = &resolved.axes[slot];
-            Joint {
-                slot,
-                name: AXIS_NAMES[slot],
-                scale: axis.steps_per_unit,
-                max_velocity: axis.max_velocity,
-                max_acceleration: axis.max_acceleration,
-            }
-        })
-        .collect();
-    Ok((joints, config, resolved.period_s))
-}
 
 /// Writes `finestep.ini`, `finestep.hal`, `tool.tbl` (and `record.hal` with `record`)
 /// into `out` for the configuration at `config_path` (the built-in machine when absent)

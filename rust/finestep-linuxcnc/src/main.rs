@@ -5,6 +5,7 @@
 
 mod closed_loop;
 mod config;
+mod joints;
 mod watchdog;
 
 use std::path::PathBuf;
