@@ -81,7 +81,8 @@ module finestep_top_pins #(
         .coolant_mist (coolant_mist),
         .coolant_flood(coolant_flood),
         .light        (light),
-        .gpio         (gpio)
+        .gpio         (gpio),
+        .panel_row_n  (4'hF)  // the keypad's rows idle (active low; HAS_PANEL is 0 here)
     );
 
     // As the shim: gpio as the top drives it (one bit, unused, when N_GPIO = 0).
