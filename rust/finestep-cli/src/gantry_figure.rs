@@ -15,16 +15,13 @@
 use std::path::Path;
 
 use anyhow::Context;
-use finestep_cosim::{Harness, ModelPath};
-use finestep_model::{AxisConfig, CoreInputs, DriveTiming, GantryInputs, Increment, PeriodRecord};
+use finestep_cosim::{GantryPair, ModelPath};
 use plotters::prelude::*;
 
 /// Clocks a period.
 const PERIOD: u32 = 200;
 /// Encoder counts a motor step.
-pub const COUNTS_PER_STEP: i64 = 4;
-const MASTER: usize = 0;
-const SLAVE: usize = 1;
+pub const COUNTS_PER_STEP: i64 = GantryPair::COUNTS_PER_STEP;
 
 /// The slave motor's load: one step lost every `every` periods in `from..to`.
 #[derive(Clone, Copy, Debug)]
@@ -72,39 +69,17 @@ impl GantryRun {
 /// Runs `periods` periods in forward (`sync` false) or synchronised mode with the slave
 /// disturbed by `load`; a deadband of `deadband` counts; no alarm below 65 535 counts.
 pub fn simulate(sync: bool, periods: usize, load: Disturbance, deadband: u16) -> anyhow::Result<GantryRun> {
-    let mut harness =
-        Harness::with_gantry(if sync { "gantry_figure_sync" } else { "gantry_figure_forward" }, ModelPath::PerClock);
-    let axis = AxisConfig { timing: DriveTiming::new(2, 2, 2, 2), mode: 0, invert: 0, enable: true };
-    let mut inputs = CoreInputs { run: true, period_clocks: PERIOD, ..Default::default() };
-    inputs.axes[MASTER] = axis;
-    inputs.axes[SLAVE] = axis;
-    inputs.gantry = GantryInputs {
-        enable: true,
-        sync,
-        master: MASTER as u8,
-        slave: SLAVE as u8,
-        tick: 2 * PERIOD,
-        deadband,
-        limit: u16::MAX,
-        ..Default::default()
-    };
-    let mut record = PeriodRecord::default();
-    record.inc[MASTER] = Increment::from_num(0.75);
+    let name = if sync { "gantry_figure_sync" } else { "gantry_figure_forward" };
+    let mut pair = GantryPair::new(name, ModelPath::PerClock, sync, PERIOD, 0.75, deadband, u16::MAX);
     let mut lost = 0i64;
     let mut errors = Vec::with_capacity(periods);
     for period in 0..periods {
         if (load.from..load.to).contains(&period) && (period - load.from) % load.every == load.every - 1 {
             lost += 1;
         }
-        let positions = harness.outputs().positions;
-        let master = COUNTS_PER_STEP * i64::from(positions[MASTER] as i32);
-        let slave = COUNTS_PER_STEP * (i64::from(positions[SLAVE] as i32) - lost);
-        inputs.gantry.enc_master = master as u32;
-        inputs.gantry.enc_slave = slave as u32;
-        errors.push(master - slave);
-        harness.feed(&mut inputs, [record]).map_err(|m| anyhow::anyhow!("{m}"))?;
+        errors.push(pair.feed_period(lost).map_err(|m| anyhow::anyhow!("{m}"))?);
     }
-    let out = harness.outputs();
+    let out = pair.outputs();
     Ok(GantryRun { errors, lost, corrections: out.gantry_corrections as i16, alarm: out.gantry_flags & 2 != 0 })
 }
 

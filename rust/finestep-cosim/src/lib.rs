@@ -17,6 +17,7 @@
 //! harness.feed(&mut inputs, std::iter::repeat(PeriodRecord::default()).take(10)).unwrap();
 //! ```
 
+pub mod gantry_pair;
 mod mismatch;
 pub mod panel_chip;
 pub mod plant_loop;
@@ -29,6 +30,7 @@ use finestep_model::{pins, ChunkEnd, Core, CoreInputs, CoreOutputs, Event, Perio
 use finestep_rtl_sys::Rtl;
 pub use finestep_rtl_sys::{TopVariant, TraceDepth};
 
+pub use gantry_pair::GantryPair;
 pub use mismatch::{describe_difference, Mismatch, WaveformError};
 pub use panel_chip::{panel_chip_params, GantryPlant, PanelChipLockstep, PanelChipMismatch};
 pub use plant_loop::PlantLoop;

@@ -5,13 +5,12 @@
 //! reversing the slave), forward mode does not, and a racking past the limit raises the
 //! alarm.
 
+use finestep_cosim::gantry_pair::{GantryPair, MASTER, SLAVE};
 use finestep_cosim::{Harness, ModelPath};
-use finestep_model::{AxisConfig, CoreInputs, DriveTiming, GantryInputs, Increment, PeriodRecord};
+use finestep_model::{CoreInputs, GantryInputs, Increment};
 
 const PERIOD: u32 = 200;
-const COUNTS_PER_STEP: i64 = 4;
-const MASTER: usize = 0;
-const SLAVE: usize = 1;
+const COUNTS_PER_STEP: i64 = GantryPair::COUNTS_PER_STEP;
 
 struct Outcome {
     master: i64,
@@ -23,52 +22,28 @@ struct Outcome {
     alarm: bool,
 }
 
-/// Streams `periods` records moving the master at `speed` steps per period; the slave's
-/// motor loses `lost` steps at period `at`. The encoders are read once per period (the
-/// counts the chip sees lag the motors by up to a period, as a slow feedback path would).
+/// Streams `periods` records moving the master at 0.75 step a period; the slave's motor
+/// loses `lost` steps at period `at`. The encoders are read once per period (the counts
+/// the chip sees lag the motors by up to a period, as a slow feedback path would).
 fn run(path: ModelPath, sync: bool, lost: i64, at: usize, periods: usize, limit: u16) -> Outcome {
-    let mut harness = Harness::with_gantry("gantry", path);
-    let axis = AxisConfig { timing: DriveTiming::new(2, 2, 2, 2), mode: 0, invert: 0, enable: true };
-    let mut inputs = CoreInputs { run: true, period_clocks: PERIOD, ..Default::default() };
-    inputs.axes[MASTER] = axis;
-    inputs.axes[SLAVE] = axis;
-    inputs.gantry = GantryInputs {
-        enable: true,
-        sync,
-        master: MASTER as u8,
-        slave: SLAVE as u8,
-        tick: 2 * PERIOD, // a correction at most every other period
-        deadband: (COUNTS_PER_STEP / 2) as u16,
-        limit,
-        ..Default::default()
-    };
-    let mut record = PeriodRecord::default();
-    record.inc[MASTER] = Increment::from_num(0.75);
+    let mut pair = GantryPair::new("gantry", path, sync, PERIOD, 0.75, (COUNTS_PER_STEP / 2) as u16, limit);
     let mut slave_loss = 0i64;
     for period in 0..periods {
         if period == at {
             slave_loss = lost;
         }
-        let positions = harness.outputs().positions;
-        let master = i64::from(positions[MASTER] as i32);
-        let slave = i64::from(positions[SLAVE] as i32) - slave_loss;
-        inputs.gantry.enc_master = (COUNTS_PER_STEP * master) as u32;
-        inputs.gantry.enc_slave = (COUNTS_PER_STEP * slave) as u32;
-        harness.feed(&mut inputs, [record]).unwrap_or_else(|m| panic!("{m}"));
+        pair.feed_period(slave_loss).unwrap_or_else(|m| panic!("{m}"));
     }
     // Hold still long enough for the last corrections (one per tick) to land.
-    record.inc[MASTER] = Increment::ZERO;
+    pair.record.inc[MASTER] = Increment::ZERO;
     for _ in 0..(4 * lost.unsigned_abs() as usize + 20) {
-        let positions = harness.outputs().positions;
-        inputs.gantry.enc_master = (COUNTS_PER_STEP * i64::from(positions[MASTER] as i32)) as u32;
-        inputs.gantry.enc_slave = (COUNTS_PER_STEP * (i64::from(positions[SLAVE] as i32) - slave_loss)) as u32;
-        harness.feed(&mut inputs, [record]).unwrap_or_else(|m| panic!("{m}"));
+        pair.feed_period(slave_loss).unwrap_or_else(|m| panic!("{m}"));
     }
-    let out = harness.outputs();
+    let out = pair.outputs();
     Outcome {
         master: i64::from(out.positions[MASTER] as i32),
         slave: i64::from(out.positions[SLAVE] as i32),
-        slave_pulses: harness.pulses()[SLAVE],
+        slave_pulses: pair.harness.pulses()[SLAVE],
         corrections: out.gantry_corrections as i16,
         error: out.gantry_error as i32,
         alarm: out.gantry_flags & 2 != 0,
