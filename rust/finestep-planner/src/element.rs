@@ -114,6 +114,10 @@ pub struct Element {
     /// take ([`jump_jerk_share`] of the most the elements within its reach use, set
     /// where the path is built; [`JUNCTION_JERK_SHARE`] until then).
     pub junction_jerk_share: f64,
+    /// What the element's caps were derived from where it takes the limits by what the
+    /// path needs (a NURBS sub-piece away from jumps): its caps may be derived again
+    /// for a lower speed cap ([`Needs::caps_at`]); `None` elsewhere.
+    pub needs: Option<Needs>,
     /// The junction after this element jumps ([`crate::lookahead::junction_jumps`],
     /// decided on the path's caps before the fixed shares are taken).
     pub jump_after: bool,
@@ -256,6 +260,46 @@ impl Element {
                 (planar, r0.min(r1))
             }
         }
+    }
+}
+
+/// The inputs of [`full_caps`] an element's caps came from (on two axes, X and Y).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Needs {
+    /// The axes as the element sees them.
+    pub axes: [AxisShare; 2],
+    /// Largest curvature, 1/units.
+    pub k: f64,
+    /// Largest |dk/ds|, 1/units^2.
+    pub dk: f64,
+    /// S-curve.
+    pub scurve: bool,
+}
+
+impl Needs {
+    /// The caps where the speed stays at or below `v` (below the element's cap): the
+    /// normal acceleration and turning at `v` leave more of each limit to the
+    /// tangential acceleration than at the element's cap. The tangential jerk is kept
+    /// at least `jerk` by holding the acceleration's turning term `3 k v a_t` at or below
+    /// its value at (`v_cap`, `accel`).
+    pub fn caps_at(&self, v: f64, v_cap: f64, accel: f64, jerk: f64) -> Caps {
+        let caps = full_caps(&self.axes, v, self.k, self.dk, self.scurve);
+        if caps.jerk >= jerk {
+            return caps;
+        }
+        // The acceleration held to `accel * v_cap / v`, the jerk again at it.
+        let accel_kept = caps.accel.min(accel * v_cap / v.max(1e-300)).max(accel);
+        let turning = self.k * self.k + self.dk;
+        let mut jerk_kept = f64::INFINITY;
+        for axis in self.axes.iter().filter(|a| a.w > 1e-12) {
+            let turning_jerk = if self.scurve {
+                turning * v.powi(3) * axis.w.max(axis.n) + 3.0 * self.k * v * accel_kept * axis.n
+            } else {
+                0.0
+            };
+            jerk_kept = jerk_kept.min((FULL_SHARE * axis.jerk - turning_jerk) / axis.w);
+        }
+        Caps { v_cap: caps.v_cap, accel: accel_kept, jerk: jerk_kept }
     }
 }
 

@@ -426,6 +426,7 @@ fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64,
         accel: 0.0,
         jerk: 0.0,
         shared: Caps::default(),
+        needs: None,
         tangential_jerk_share: tangential_jerk_share(length, short_length(config)),
         turning_jerk_share: 0.0,
         junction_jerk_share: JUNCTION_JERK_SHARE,
@@ -1000,6 +1001,7 @@ impl Sharing {
         if take || force {
             let Caps { v_cap, accel, jerk } = e.shared;
             (e.v_cap, e.accel, e.jerk) = (v_cap, accel, jerk);
+            e.needs = None;
         }
         ready.push_back(e);
     }

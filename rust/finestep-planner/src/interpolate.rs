@@ -17,18 +17,22 @@
 //!
 //! NURBS sub-pieces are interpolated directly: a [`NurbsCursor`] carries the curve
 //! parameter from period to period and steps it by the arc length the profile asks
-//! for (second-order Taylor step and Newton correction, [`crate::nurbs`]).
+//! for (second-order Taylor step and Newton correction, [`crate::nurbs`]). In S-curve
+//! mode, where the junction speeds of consecutive smooth sub-pieces rise (or fall) all
+//! the way, they take one profile over the run ([`crate::velocity::run_profiles`]),
+//! each sub-piece its part of it, so the acceleration is not brought to zero at every
+//! sub-piece's end.
 
 use finestep_interface::rate::RateChecker;
 use finestep_interface::{Increment, PeriodRecord};
 
-use crate::config::{Resolved, AXIS_NAMES};
+use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
 use crate::element::{Element, IoEvent, Shape, TimedEvent};
 use crate::error::ProgramError;
 use crate::lookahead::{element_limits, ElementWindow, WindowedSpeeds};
 use crate::nurbs::NurbsCursor;
 use crate::vec4::Vec4;
-use crate::velocity::Profile;
+use crate::velocity::{run_profiles, Limits, Profile, RunElement, MAX_RUN_ELEMENTS};
 use finestep_interface::flags::BLOCK_END;
 use std::collections::VecDeque;
 
@@ -56,6 +60,10 @@ pub struct Periods<'p> {
     emitted: u64,
     /// I/O events placed but not yet taken ([`Periods::take_events`]).
     events: Vec<TimedEvent>,
+    /// The profiles of the run of elements from `run_first` on planned as one
+    /// ([`Periods::try_run`]).
+    run: Vec<Profile>,
+    run_first: usize,
 }
 
 /// A source of a path's elements, in order, or the error that ends the path.
@@ -162,6 +170,8 @@ impl<'p> Periods<'p> {
             done: false,
             emitted: 0,
             events: Vec::new(),
+            run: Vec::new(),
+            run_first: usize::MAX,
         }
     }
 
@@ -197,12 +207,86 @@ impl<'p> Periods<'p> {
     }
 
     fn profile_of(&mut self, i: usize) -> Result<Profile, ProgramError> {
+        if let Some(profile) = i.checked_sub(self.run_first).and_then(|k| self.run.get(k)) {
+            let profile = *profile;
+            self.speeds.release(i);
+            self.path.release(i);
+            return Ok(profile);
+        }
         let v0 = self.speeds.speed_in(&self.config, &mut self.path, i)?;
         let v1 = self.speeds.speed_in(&self.config, &mut self.path, i + 1)?;
         self.speeds.release(i);
         self.path.release(i);
+        if self.config.profile == ProfileKind::SCurve && self.try_run(i, v0, v1)? {
+            return Ok(self.run[0]);
+        }
         let e = self.path.element(i);
-        Ok(Profile::new(&element_limits(&self.config, e), e.length, v0, v1, e.v_cap))
+        let profile = Profile::new(&element_limits(&self.config, e), e.length, v0, v1, e.v_cap);
+        if self.config.profile == ProfileKind::SCurve {
+            // The caps again at the speed the profile reaches, where that is below the
+            // element's cap (`Needs::caps_at`): the faster profile where it fits.
+            let top = profile.peak();
+            if let Some((limits, cap)) = needs_limits(&self.config, e, top) {
+                let again = Profile::new(&limits, e.length, v0, v1, cap);
+                if again.covers() && again.duration < profile.duration {
+                    return Ok(again);
+                }
+            }
+        }
+        Ok(profile)
+    }
+
+    /// S-curve: plans the NURBS sub-pieces from `i` on whose junction speeds rise (or
+    /// fall) all the way as one run ([`run_profiles`]), so that the acceleration is
+    /// carried across their junctions; the longest such run (at most
+    /// [`MAX_RUN_ELEMENTS`]) where that is possible and faster, else halves of it.
+    /// Whether a run was planned (its profiles in `self.run` from `i`).
+    fn try_run(&mut self, i: usize, v0: f64, v1: f64) -> Result<bool, ProgramError> {
+        let smooth = |e: &Element| matches!(e.shape, Shape::Nurbs { .. }) && !e.stop_after && !e.jump_after;
+        if v0 == v1 || !smooth(self.path.element(i)) {
+            return Ok(false);
+        }
+        let rising = v1 > v0;
+        let mut speeds = vec![v0, v1];
+        // Elements i..i + speeds.len() - 1 so far; extend while the junction after the
+        // last is smooth and the speeds keep going the same way.
+        while speeds.len() <= MAX_RUN_ELEMENTS {
+            let last = i + speeds.len() - 2;
+            if !smooth(self.path.element(last)) {
+                break;
+            }
+            self.path.reach(last + 2)?;
+            if self.path.known() <= last + 1 || !matches!(self.path.element(last + 1).shape, Shape::Nurbs { .. }) {
+                break;
+            }
+            let v = self.speeds.speed_in(&self.config, &mut self.path, last + 2)?;
+            let previous = speeds[speeds.len() - 1];
+            if v == previous || (v > previous) != rising {
+                break;
+            }
+            speeds.push(v);
+        }
+        // The speed never passes the run's higher end: each element's caps at it.
+        let top = speeds[0].max(speeds[speeds.len() - 1]);
+        let elements: Vec<RunElement> = (0..speeds.len() - 1)
+            .map(|k| {
+                let e = self.path.element(i + k);
+                match needs_limits(&self.config, e, top) {
+                    Some((limits, cap)) => RunElement { length: e.length, limits, cap },
+                    None => RunElement { length: e.length, limits: element_limits(&self.config, e), cap: e.v_cap },
+                }
+            })
+            .collect();
+        let mut n = elements.len();
+        while n >= 2 {
+            if let Some(run) = run_profiles(&elements[..n], &speeds[..=n]) {
+                self.run = run;
+                self.run_first = i;
+                return Ok(true);
+            }
+            n /= 2;
+        }
+        Ok(false)
     }
 
     fn emit(&mut self, grid: [i64; 4], flags: u8, line: usize) -> Result<(PeriodRecord, usize), ProgramError> {
@@ -319,6 +403,19 @@ impl<'p> Periods<'p> {
         let grid = self.grid(point);
         Some(self.emit(grid, flags, line))
     }
+}
+
+/// The profile limits and speed cap of `e` where its speed stays at or below `top`, from
+/// what its caps were derived from ([`crate::element::Needs::caps_at`]); `None` where
+/// they cannot be derived again or `top` is not below its cap.
+fn needs_limits(config: &Resolved, e: &Element, top: f64) -> Option<(Limits, f64)> {
+    let needs = e.needs?;
+    if !(top > 0.0 && top < e.v_cap * (1.0 - 1e-9)) {
+        return None;
+    }
+    let caps = needs.caps_at(top, e.v_cap, e.accel, e.jerk);
+    (caps.accel >= e.accel && caps.jerk >= e.jerk && caps.v_cap >= top * (1.0 - 1e-12))
+        .then_some((Limits { kind: config.profile, accel: caps.accel, jerk: caps.jerk }, top))
 }
 
 impl Iterator for Periods<'_> {

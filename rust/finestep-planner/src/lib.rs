@@ -13,7 +13,9 @@
 //! 3. [`lookahead`]: junction speeds from the corner criterion, backward and forward
 //!    passes over a window of at least `lookahead_moves` moves.
 //! 4. [`velocity`]: per element a trapezoid or S-curve profile, acceleration and
-//!    deceleration halves planned separately (seed 002).
+//!    deceleration halves planned separately (seed 002); in S-curve mode a run of NURBS
+//!    sub-pieces whose junction speeds rise or fall all the way as one speed change
+//!    over the run ([`velocity::run_profiles`]), the acceleration carried across them.
 //! 5. [`interpolate`]: seed 000's time-division interpolation, a period straddling
 //!    elements where the path flows on, positions quantised to the Q16.16 grid from their
 //!    exact values so the increments sum exactly to every exact stop and the end; every
@@ -65,13 +67,15 @@
 //!   jump, in S-curve mode also a curvature jump such as a line entering an arc or a
 //!   blend). Each element keeps one tangential acceleration and jerk over its length (set
 //!   at its speed cap), and an S-curve brings the acceleration to zero at every element's
-//!   end, so the limits are reached where the path allows, not followed everywhere.
+//!   end (except inside a run of NURBS sub-pieces whose speeds rise or fall all the way,
+//!   planned as one change under the run's smallest limits, [`velocity::run_profiles`]),
+//!   so the limits are reached where the path allows, not followed everywhere.
 //! - [`bound`] gives an independent lower bound on the machining time, for figures.
 //! - Only line-line corners are blended; where a line meets an arc, or two arcs meet,
 //!   the junction speed comes from the tangent jump read over one period: full speed
 //!   where they are tangent, nearly a stop where they are not.
-//! - S-curve profiles bring the acceleration back to zero at every element junction,
-//!   and the jerk limit is also kept where the curvature jumps (a line entering an arc
+//! - S-curve profiles bring the acceleration back to zero at every element junction
+//!   (NURBS runs aside, above), and the jerk limit is also kept where the curvature jumps (a line entering an arc
 //!   or a blend): about `sqrt(0.25 J T R)` there, slow at the default jerk
 //!   (up to `sqrt(0.7 J T R)` where the elements around take less of the jerk
 //!   for speeding up, [`element::jump_jerk_share`]). Around a

@@ -30,7 +30,7 @@ use std::sync::Arc;
 
 use crate::config::{ProfileKind, Resolved};
 use crate::element::{
-    full_caps, short_length, tangential_jerk_share, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE,
+    full_caps, short_length, tangential_jerk_share, AxisShare, Caps, Element, Needs, Shape, ARC_JERK_SHARE,
     GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE,
 };
 use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
@@ -328,6 +328,7 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 accel,
                 jerk,
                 shared,
+                needs: Some(Needs { axes, k: k_top, dk: dk_top, scurve }),
                 tangential_jerk_share: tangential_share,
                 turning_jerk_share: turning_share,
                 junction_jerk_share: JUNCTION_JERK_SHARE,

@@ -8,6 +8,11 @@
 //! `t = dv/a + a/j` when `dv >= a^2/j` (the acceleration reaches a) and `t = 2 sqrt(dv/j)`
 //! otherwise; its speed is point-symmetric about the middle, so it covers
 //! `(v_a + v_b)/2 * t`. The trapezoid takes `t = dv/a`.
+//!
+//! A run of elements whose junction speeds rise (or fall) all the way may instead be
+//! planned as one speed change over their whole length ([`run_profiles`]; the
+//! interpolation does so on NURBS sub-pieces in S-curve mode), so that the
+//! acceleration is carried across the junctions inside the run.
 
 use crate::config::ProfileKind;
 
@@ -115,6 +120,37 @@ impl Half {
         }
     }
 
+    /// Speed `t` (0..=time) into the half.
+    fn speed_at(&self, t: f64) -> f64 {
+        let (s, v0, tj, ta, ap, j) = (self.sign, self.v_from, self.t_jerk, self.t_accel, self.a_peak, self.jerk);
+        if t <= tj {
+            return v0 + s * 0.5 * j * t * t;
+        }
+        let v1 = v0 + s * 0.5 * j * tj * tj;
+        let t2 = t - tj;
+        if t2 <= ta {
+            return v1 + s * ap * t2;
+        }
+        let v2 = v1 + s * ap * ta;
+        let t3 = (t2 - ta).min(tj);
+        v2 + s * (ap * t3 - 0.5 * j * t3 * t3)
+    }
+
+    /// The distance into the half at which its speed passes `v` (between its ends).
+    fn distance_to_speed(&self, v: f64) -> f64 {
+        let target = self.sign * (v - self.v_from);
+        let (mut lo, mut hi) = (0.0, self.time);
+        for _ in 0..80 {
+            let mid = 0.5 * (lo + hi);
+            if self.sign * (self.speed_at(mid) - self.v_from) < target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        self.distance_at(lo)
+    }
+
     /// Distance covered `t` (0..=time) into the half.
     #[inline]
     fn distance_at(&self, t: f64) -> f64 {
@@ -135,13 +171,23 @@ impl Half {
     }
 }
 
-/// The speed profile of one element: accelerate, cruise, decelerate.
+/// The speed profile of one element: accelerate, cruise, decelerate; or the part of a
+/// run's profile ([`run_profiles`]) on one of its elements: a cruise before the
+/// acceleration and one after the deceleration, read from `t0` and `s0` on.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct Profile {
+    /// Cruise at `up.v_from` before the acceleration (a run's), s.
+    pre_time: f64,
     up: Half,
     cruise_speed: f64,
     cruise_time: f64,
     down: Half,
+    /// Cruise at `end_speed` after the deceleration (a run's), s.
+    post_time: f64,
+    end_speed: f64,
+    /// Where this element's part of a run's profile starts: time and distance into it.
+    t0: f64,
+    s0: f64,
     length: f64,
     /// Duration, s.
     pub duration: f64,
@@ -204,22 +250,201 @@ impl Profile {
         let rest = (length - up.distance - down.distance).max(0.0);
         let cruise_time = if peak > 0.0 { rest / peak } else { 0.0 };
         let duration = up.time + cruise_time + down.time;
-        Profile { up, cruise_speed: peak, cruise_time, down, length, duration }
+        Profile { up, cruise_speed: peak, cruise_time, down, end_speed: v1, length, duration, ..Profile::default() }
+    }
+
+    /// The highest speed of the profile (an element's own).
+    pub fn peak(&self) -> f64 {
+        self.cruise_speed.max(self.up.v_from).max(self.end_speed)
+    }
+
+    /// Whether the profile's speed changes fit in its length (an element's own profile
+    /// reaches its end speed within the element).
+    pub fn covers(&self) -> bool {
+        self.up.distance + self.down.distance <= self.length * (1.0 + 1e-9)
     }
 
     /// Distance along the element `t` seconds after its start (clamped to the length).
     #[inline]
     pub fn distance_at(&self, t: f64) -> f64 {
-        let s = if t <= self.up.time {
-            self.up.distance_at(t)
-        } else if t <= self.up.time + self.cruise_time {
-            self.up.distance + self.cruise_speed * (t - self.up.time)
-        } else {
-            let into = (t - self.up.time - self.cruise_time).min(self.down.time);
-            self.up.distance + self.cruise_speed * self.cruise_time + self.down.distance_at(into)
-        };
-        s.clamp(0.0, self.length)
+        (self.raw_distance_at(t + self.t0) - self.s0).clamp(0.0, self.length)
     }
+
+    /// Distance along the whole profile (a run's, from its start) `t` seconds into it.
+    #[inline]
+    fn raw_distance_at(&self, t: f64) -> f64 {
+        let pre = self.up.v_from * self.pre_time;
+        if t <= self.pre_time {
+            return self.up.v_from * t;
+        }
+        let t = t - self.pre_time;
+        if t <= self.up.time {
+            pre + self.up.distance_at(t)
+        } else if t <= self.up.time + self.cruise_time {
+            pre + self.up.distance + self.cruise_speed * (t - self.up.time)
+        } else {
+            let into = t - self.up.time - self.cruise_time;
+            let before = pre + self.up.distance + self.cruise_speed * self.cruise_time;
+            if into <= self.down.time {
+                before + self.down.distance_at(into)
+            } else {
+                before + self.down.distance + self.end_speed * (into - self.down.time).min(self.post_time)
+            }
+        }
+    }
+
+    /// The time into the whole profile at which it has covered `s` (bisection: the
+    /// distance rises with time).
+    fn raw_time_at(&self, s: f64, total: f64) -> f64 {
+        let (mut lo, mut hi) = (0.0, total);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if self.raw_distance_at(mid) < s {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+            if hi - lo <= 1e-15 * total {
+                break;
+            }
+        }
+        hi
+    }
+}
+
+/// One element of a run for [`run_profiles`]: its length, profile limits and speed cap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunElement {
+    /// Path length, units.
+    pub length: f64,
+    /// Its tangential acceleration and jerk limits.
+    pub limits: Limits,
+    /// Its speed cap, units/s.
+    pub cap: f64,
+}
+
+/// The most elements a run planned as one profile spans ([`run_profiles`]).
+pub const MAX_RUN_ELEMENTS: usize = 64;
+
+/// A run of elements whose junction speeds `speeds` (one more than `elements`) rise
+/// (or fall) all the way, planned as one speed change instead of one per element, so
+/// that the acceleration is carried across the junctions inside the run instead of
+/// returning to zero at each: a cruise at the first speed, one half from the first to
+/// the last speed under the smallest acceleration and jerk limits of the run's
+/// elements, and a cruise at the last speed. The half is placed as early (rising) or as
+/// late (falling) as every element's speed cap allows (the speed is monotone, so it is
+/// checked at the end of each element where it rises and at its start where it
+/// falls). The run starts and ends at its junction speeds with zero acceleration, as
+/// the per-element profiles do, so everything outside it is unchanged and its limits
+/// hold inside: every element's speed cap, and the acceleration and jerk within each
+/// element's. Each element's part as a [`Profile`]; `None` where the run is not
+/// monotone, the half does not fit, a cap cannot be kept, or the run would not be
+/// faster than the per-element profiles.
+pub fn run_profiles(elements: &[RunElement], speeds: &[f64]) -> Option<Vec<Profile>> {
+    let n = elements.len();
+    if n < 2 || speeds.len() != n + 1 {
+        return None;
+    }
+    let (v_a, v_b) = (speeds[0], speeds[n]);
+    let rising = v_b > v_a;
+    if v_a == v_b || speeds.windows(2).any(|w| (w[1] > w[0]) != rising || w[1] == w[0]) {
+        return None;
+    }
+    let kind = elements[0].limits.kind;
+    let limits = Limits {
+        kind,
+        accel: elements.iter().map(|e| e.limits.accel).fold(f64::INFINITY, f64::min),
+        jerk: elements.iter().map(|e| e.limits.jerk).fold(f64::INFINITY, f64::min),
+    };
+    if !(limits.accel > 0.0 && limits.jerk > 0.0) || elements.iter().any(|e| e.limits.kind != kind) {
+        return None;
+    }
+    let length: f64 = elements.iter().map(|e| e.length).sum();
+    let half = Half::new(&limits, v_a, v_b);
+    let spare = length - half.distance;
+    if spare.is_nan() || spare < 0.0 {
+        return None;
+    }
+    // The cruise before the half, x units long.
+    let mut start = 0.0;
+    let x = if rising {
+        // The speed at each element's end within its cap: the half reaches the cap at or
+        // after that end.
+        let mut x: f64 = 0.0;
+        for e in elements {
+            start += e.length;
+            if e.cap < v_a {
+                return None;
+            }
+            if e.cap < v_b {
+                x = x.max(start - half.distance_to_speed(e.cap));
+            }
+        }
+        if x > spare || x > 0.0 && v_a <= 0.0 {
+            return None;
+        }
+        x
+    } else {
+        // The speed at each element's start within its cap: the half has come down to
+        // the cap at or before that start.
+        let mut x = spare;
+        for e in elements {
+            if e.cap < v_b {
+                return None;
+            }
+            if e.cap < v_a {
+                x = x.min(start - half.distance_to_speed(e.cap));
+            }
+            start += e.length;
+        }
+        if x < 0.0 || spare - x > 1e-12 * length && v_b <= 0.0 {
+            return None;
+        }
+        x
+    };
+    let pre_time = if x > 0.0 { x / v_a } else { 0.0 };
+    let post = spare - x;
+    let post_time = if post > 0.0 && v_b > 0.0 { post / v_b } else { 0.0 };
+    let total = pre_time + half.time + post_time;
+    let separate: f64 = elements
+        .iter()
+        .zip(speeds.windows(2))
+        .map(|(e, v)| Profile::new(&e.limits, e.length, v[0], v[1], e.cap).duration)
+        .sum();
+    if total.is_nan() || total >= separate * (1.0 - 1e-9) {
+        return None;
+    }
+    let still = |v: f64| Half::new(&limits, v, v);
+    let base = if rising {
+        Profile {
+            pre_time,
+            up: half,
+            cruise_speed: v_b,
+            cruise_time: post_time,
+            down: still(v_b),
+            end_speed: v_b,
+            ..Profile::default()
+        }
+    } else {
+        Profile {
+            up: still(v_a),
+            cruise_speed: v_a,
+            cruise_time: pre_time,
+            down: half,
+            post_time,
+            end_speed: v_b,
+            ..Profile::default()
+        }
+    };
+    let mut out = Vec::with_capacity(n);
+    let (mut s0, mut t0) = (0.0, 0.0);
+    for (k, e) in elements.iter().enumerate() {
+        let t1 = if k + 1 == n { total } else { base.raw_time_at(s0 + e.length, total) };
+        out.push(Profile { t0, s0, length: e.length, duration: (t1 - t0).max(0.0), ..base });
+        s0 += e.length;
+        t0 = t1;
+    }
+    Some(out)
 }
 
 #[cfg(test)]
@@ -244,6 +469,78 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// A run of elements with rising (then falling) junction speeds and different caps
+    /// and limits, planned as one: faster than the elements one by one, its speed
+    /// within each element's cap, its acceleration and jerk within each element's
+    /// limits, continuous across the junctions (so not back to zero there), and each
+    /// element's part covering its length.
+    #[test]
+    fn a_run_carries_the_acceleration_within_every_element_limit() {
+        let l = |accel: f64, jerk: f64| Limits { kind: ProfileKind::SCurve, accel, jerk };
+        let elements = [
+            RunElement { length: 0.6, limits: l(280.0, 2900.0), cap: 40.0 },
+            RunElement { length: 1.1, limits: l(250.0, 2500.0), cap: 60.0 },
+            RunElement { length: 2.0, limits: l(290.0, 2800.0), cap: 90.0 },
+            RunElement { length: 3.0, limits: l(260.0, 2950.0), cap: 120.0 },
+        ];
+        // Junction speeds of the per-element plan: each element a half from rest
+        // acceleration, within the caps.
+        let mut rising = vec![10.0];
+        for e in &elements {
+            let v = *rising.last().unwrap();
+            rising.push(e.limits.reachable(v, e.length * (1.0 - 1e-12)).min(e.cap));
+        }
+        let mut reversed: Vec<RunElement> = elements.to_vec();
+        reversed.reverse();
+        let mut falling = rising.clone();
+        falling.reverse();
+        for (elements, speeds) in [(&elements[..], &rising), (&reversed[..], &falling)] {
+            let run = run_profiles(elements, speeds).expect("a run");
+            let separate: f64 = elements
+                .iter()
+                .zip(speeds.windows(2))
+                .map(|(e, v)| Profile::new(&e.limits, e.length, v[0], v[1], e.cap).duration)
+                .sum();
+            let total: f64 = run.iter().map(|p| p.duration).sum();
+            assert!(total < 0.97 * separate, "run {total} s against {separate} s");
+            // Sample the whole run at dt, element by element.
+            let dt = 1e-4;
+            let mut samples: Vec<(f64, usize)> = Vec::new();
+            let mut offset = 0.0;
+            let mut t = 0.0;
+            for (k, (p, e)) in run.iter().zip(elements).enumerate() {
+                assert!((p.distance_at(p.duration) - e.length).abs() < 1e-9, "element {k} short");
+                while t <= p.duration {
+                    samples.push((offset + p.distance_at(t), k));
+                    t += dt;
+                }
+                t -= p.duration;
+                offset += e.length;
+            }
+            let mut a_top: f64 = 0.0;
+            for w in samples.windows(4) {
+                let k = w[3].1.max(w[0].1);
+                let e = &elements[k];
+                let lo = &elements[w[0].1];
+                let v = (w[3].0 - w[2].0) / dt;
+                assert!(v <= e.cap.max(lo.cap) + 1e-6, "speed {v} over the cap");
+                assert!(v <= elements[w[2].1].cap + 0.02 * e.cap, "speed {v} in element {}", w[2].1);
+                let a = (w[3].0 - 2.0 * w[2].0 + w[1].0) / dt / dt;
+                let limit = e.limits.accel.max(lo.limits.accel);
+                assert!(a.abs() <= limit * (1.0 + 1e-4) + 1e-2, "accel {a}");
+                let j = (w[3].0 - 3.0 * w[2].0 + 3.0 * w[1].0 - w[0].0) / dt / dt / dt;
+                let limit = e.limits.jerk.max(lo.limits.jerk);
+                assert!(j.abs() <= limit * (1.0 + 1e-3) + 1.0, "jerk {j}");
+                a_top = a_top.max(a.abs());
+            }
+            // One half over the run under its smallest limits (250, 2500), not four: its
+            // peak acceleration is that of the whole speed change.
+            let dv = (speeds[speeds.len() - 1] - speeds[0]).abs();
+            let expected = (dv * 2500.0).sqrt().min(250.0);
+            assert!(a_top > 0.98 * expected, "peak acceleration {a_top}, {expected} expected");
         }
     }
 
