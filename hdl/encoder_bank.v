@@ -10,8 +10,13 @@
 // or after the cycle asking for them, from the values before the visit's update, which
 // are the values of that cycle: one instant for every channel, within S clocks.
 //
-// A register read of a channel's copy granted in the cycle of that channel's visit
+// A register read of a channel's copy served in the cycle of that channel's visit
 // stalls the engine one clock, so a RAM never reads and writes one word on one clock.
+// The read comes from the register bus's stage (flip-flops), not from its arbiter: no
+// bus address decode in front of the grant reaches the schedule. The copy is read at
+// the edge ending the serving cycle and shown from the next cycle until the next read
+// (the register file ORs it after its read register, so a read's rdata still appears
+// in the cycle after its serving cycle).
 //
 // Latency: a pin change reaches the count 2 clocks plus max(FILTER, 1) samples later,
 // samples of a channel coming every S * (PRESCALE + 1) clocks at its slot (plus stalls).
@@ -46,10 +51,10 @@ module encoder_bank #(
     input  wire                         probe_arm,
     input  wire                         clear_errors,
     input  wire                         clear_counters,
-    // register bus: the read granted in this cycle (served in the next)
-    input  wire                         read_grant,
+    // register bus: the read served in this cycle (the bus stage's flip-flops)
+    input  wire                         read_served,
     input  wire [6:0]                   read_addr,
-    output wire [31:0]                  copy_rdata,     // the served read's copy, else 0
+    output wire [31:0]                  copy_rdata,     // the last served read's copy, else 0
     // shared state
     input  wire [31:0]                  timestamp,
     input  wire [32*N_AXES-1:0]         position,
@@ -80,7 +85,7 @@ module encoder_bank #(
     localparam [CH_W-1:0] LAST_SLOT = LAST[CH_W-1:0];
     localparam [CH_W-1:0] CH_ONE    = {{(CH_W-1){1'b0}}, 1'b1};
 
-    // ---- The read side: which copy the granted read addresses -------------------------
+    // ---- The read side: which copy the served read addresses --------------------------
     // The four copy arrays, one word per channel each, at bases aligned to the four
     // channels the map has room for (stride 1: both checked below), so the array is the
     // address's high bits and the channel its low two.
@@ -93,7 +98,7 @@ module encoder_bank #(
     wire hit_edge  = (read_addr[6:2] == FS_ENC_EDGE_TIME_ADDR[6:2]);
     wire [CH_W-1:0] rd_ch   = rd_low[CH_W-1:0];
     wire [1:0]      rd_kind = hit_count ? KIND_COUNT : hit_index ? KIND_INDEX : hit_probe ? KIND_PROBE : KIND_EDGE;
-    wire            rd_copy = read_grant && (hit_count || hit_index || hit_probe || hit_edge) && ({1'b0, rd_low} < N_CH);
+    wire            rd_copy = read_served && (hit_count || hit_index || hit_probe || hit_edge) && ({1'b0, rd_low} < N_CH);
 
     // ---- Schedule -----------------------------------------------------------------------
     reg  [CH_W-1:0] slot_reg;
@@ -163,7 +168,7 @@ module encoder_bank #(
     wire [LIVE_W-1:0] live_rd;
     wire [LIVE_W-1:0] live_wr;
     store_ram #(.WIDTH(LIVE_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) live_store (
-        .clk(clk), .wr_en(visit), .wr_addr(ch), .wr_data(live_wr), .rd_addr(slot_next), .rd_data(live_rd)
+        .clk(clk), .wr_en(visit), .wr_addr(ch), .wr_data(live_wr), .rd_en(1'b1), .rd_addr(slot_next), .rd_data(live_rd)
     );
     // Until its first sample a channel's live state is 0 (reset), whatever the RAM holds.
     wire [LIVE_W-1:0] live = v_primed ? live_rd : {LIVE_W{1'b0}};
@@ -213,29 +218,33 @@ module encoder_bank #(
 
     wire [31:0] count_rd, edge_rd, index_rd, probe_rd;
     store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) count_store (
-        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_count), .rd_addr(rd_ch), .rd_data(count_rd)
+        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(count_rd)
     );
     store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) edge_store (
-        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_edge), .rd_addr(rd_ch), .rd_data(edge_rd)
+        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_edge), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(edge_rd)
     );
     store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) index_store (
-        .clk(clk), .wr_en(copy_index), .wr_addr(ch), .wr_data(v_count), .rd_addr(rd_ch), .rd_data(index_rd)
+        .clk(clk), .wr_en(copy_index), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(index_rd)
     );
     store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) probe_store (
-        .clk(clk), .wr_en(copy_probe), .wr_addr(ch), .wr_data(v_count), .rd_addr(rd_ch), .rd_data(probe_rd)
+        .clk(clk), .wr_en(copy_probe), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(probe_rd)
     );
-    // What the served read shows: the addressed copy, 0 before its first write.
+    // What the last served read shows, from the cycle after its serving cycle until the
+    // next served read: the addressed copy, 0 before its first write (and 0 after a read
+    // of anything else).
     reg        served_reg;
     reg [1:0]  served_kind_reg;
     reg        served_written_reg;
     wire written = (rd_kind == KIND_INDEX) ? index_copied_reg[rd_ch] :
                    (rd_kind == KIND_PROBE) ? probe_copied_reg[rd_ch] : count_copied_reg[rd_ch];
     always @(posedge clk) begin
-        served_reg         <= rd_copy;
-        served_kind_reg    <= rd_kind;
-        // A copy written at this edge cannot be the read one (the stall), so the flag of
-        // this cycle is the flag of the serving cycle for the addressed word.
-        served_written_reg <= written;
+        if (read_served) begin
+            served_reg         <= rd_copy;
+            served_kind_reg    <= rd_kind;
+            // A copy written at this edge cannot be the read one (the stall), so the flag
+            // of this cycle is the flag of the serving cycle for the addressed word.
+            served_written_reg <= written;
+        end
         if (rst) served_reg <= 1'b0;
     end
     assign copy_rdata = !(served_reg && served_written_reg) ? 32'd0 :
@@ -391,13 +400,13 @@ module encoder_bank #(
     // hands the next visit of that channel (so the store neither loses nor mixes a
     // channel's count); the stores never read and write one word on one clock (what
     // store_ram's no_rw_check relies on); the schedule moves one slot per clock unless
-    // stalled. The register bus never grants reads in three cycles in a row (each master
+    // stalled. The register bus never serves reads in three cycles in a row (each master
     // has one request at a time and spaces its reads).
     reg f_past_valid;
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
-    always @(posedge clk) if (f_past_valid) assume (!(read_grant && $past(read_grant) && $past(read_grant, 2)));
+    always @(posedge clk) if (f_past_valid) assume (!(read_served && $past(read_served) && $past(read_served, 2)));
     always @(posedge clk) if (f_past_valid) assume ($stable(mode) && $stable(filter_len) && $stable(z_active_high));
     // The configuration's next value is its value (held still above; feedback_registers
     // makes the registers load exactly their next value).
@@ -458,8 +467,9 @@ module encoder_bank #(
     // latch, ENC_INDEX_LATCH at an index event while the latch is armed, ENC_PROBE_LATCH
     // at the visit at or after a probe event; all from the values before the visit's
     // update, the shadow f_count / f_edge) and whether it has been written since reset;
-    // the read granted in one cycle shows, in the next, the addressed copy (0 before its
-    // first write), and nothing else shows anything. The stores are RAMs whose words the
+    // the read served in one cycle shows, from the next until the next served read, the
+    // addressed copy as of its serving cycle (0 before its first write), and a read of
+    // anything else shows 0. The stores are RAMs whose words the
     // induction cannot see, so this is a bounded check from reset (task readback): the
     // free timestamp reaches every bit of an edge time within its depth.
     reg [32*N_ENC-1:0] f_lat_count, f_lat_edge, f_idx_count, f_prb_count;
@@ -489,33 +499,32 @@ module encoder_bank #(
             f_prb_w <= {N_ENC{1'b0}};
         end
     end
-    // The read granted last cycle, decoded here from the map's addresses.
-    reg       f_rd_valid;
-    reg [6:0] f_rd_addr;
-    always @(posedge clk) begin
-        f_rd_valid <= read_grant && !rst;
-        f_rd_addr  <= read_addr;
-    end
-    wire [4:0]  f_base  = f_rd_addr[6:2];
-    wire [31:0] f_ch    = {30'd0, f_rd_addr[1:0]};
+    // The read served in this cycle, decoded here from the map's addresses; what it must
+    // show from the next cycle until the next served read.
+    wire [4:0]  f_base  = read_addr[6:2];
+    wire [31:0] f_ch    = {30'd0, read_addr[1:0]};
     wire        f_in    = f_ch < N_ENC;
-    reg  [31:0] f_want;
+    reg  [31:0] f_now, f_want;
     always @(*) begin
-        f_want = 32'd0;
-        if (f_rd_valid && f_in) begin
+        f_now = 32'd0;
+        if (f_in) begin
             if (f_base == FS_ENC_COUNT_ADDR[6:2] && f_lat_w[f_ch])
-                f_want = f_lat_count[32*f_ch +: 32];
+                f_now = f_lat_count[32*f_ch +: 32];
             if (f_base == FS_ENC_EDGE_TIME_ADDR[6:2] && f_lat_w[f_ch])
-                f_want = f_lat_edge[32*f_ch +: 32];
+                f_now = f_lat_edge[32*f_ch +: 32];
             if (f_base == FS_ENC_INDEX_LATCH_ADDR[6:2] && f_idx_w[f_ch])
-                f_want = f_idx_count[32*f_ch +: 32];
+                f_now = f_idx_count[32*f_ch +: 32];
             if (f_base == FS_ENC_PROBE_LATCH_ADDR[6:2] && f_prb_w[f_ch])
-                f_want = f_prb_count[32*f_ch +: 32];
+                f_now = f_prb_count[32*f_ch +: 32];
         end
+    end
+    always @(posedge clk) begin
+        if (read_served) f_want <= f_now;
+        if (rst) f_want <= 32'd0;
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (copy_rdata == f_want);
-        cover (f_rd_valid && f_base == FS_ENC_EDGE_TIME_ADDR[6:2] && f_want[29]);
+        cover ($past(read_served) && $past(f_base) == FS_ENC_EDGE_TIME_ADDR[6:2] && f_want[29]);
     end
 `endif
 `endif

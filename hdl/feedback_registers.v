@@ -47,7 +47,6 @@ module feedback_registers #(
     output wire [30:0]           jog_accel,
     output wire [15:0]           jog_window,
     // encoder and probe state
-    input  wire [31:0]           enc_copy_rdata,   // the encoder bank's copy for this read, else 0
     input  wire [16*N_ENC-1:0]   enc_illegal_count,
     input  wire [N_ENC-1:0]      enc_illegal,
     input  wire [N_ENC-1:0]      enc_index_seen,
@@ -260,8 +259,7 @@ module feedback_registers #(
                 | ({32{{25'd0, addr} == {25'd0, FS_ENC_STATUS_ADDR} + r * FS_ENC_STATUS_STRIDE}} & enc_status_word);
         end
         // ENC_COUNT, ENC_INDEX_LATCH, ENC_PROBE_LATCH, ENC_EDGE_TIME: the encoder bank's
-        // store answers them (it reads the word in the grant cycle).
-        rdata = rdata | enc_copy_rdata;
+        // store answers them, after the register file's read register (late_rdata).
         for (r = 0; r < N_AXES; r = r + 1) begin
             rdata = rdata
                 | ({32{{25'd0, addr} == {25'd0, FS_PROBE_POSITION_ADDR} + r * FS_PROBE_POSITION_STRIDE}} &

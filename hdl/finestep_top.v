@@ -180,8 +180,7 @@ module finestep_top #(
     wire [31:0]           jog_scale;
     wire [30:0]           jog_vmax, jog_accel;
     wire [15:0]           jog_window;
-    wire                  grant_read;
-    wire [6:0]            grant_addr;
+    wire                  bus_read;
     wire [31:0]           enc_copy_rdata;
     wire [16*N_ENC-1:0]   enc_illegal_count;
     wire [N_ENC-1:0]      enc_illegal, enc_index_seen, enc_latch_armed, enc_clear_armed;
@@ -288,7 +287,7 @@ module finestep_top #(
         .par_req(par_req), .par_we(par_we), .par_addr(par_addr), .par_wdata(par_wdata), .par_grant(par_grant),
         .rdata(rdata),
         .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
-        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata), .grant_read(grant_read), .grant_addr(grant_addr),
+        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata), .bus_read(bus_read), .late_rdata(enc_copy_rdata),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
@@ -421,7 +420,7 @@ module finestep_top #(
         .jog_enable(jog_enable), .jog_axis(jog_axis), .jog_multiplier(jog_multiplier),
         .jog_follow(jog_follow), .jog_scale(jog_scale), .jog_vmax(jog_vmax), .jog_accel(jog_accel),
         .jog_window(jog_window),
-        .enc_copy_rdata(enc_copy_rdata), .enc_illegal_count(enc_illegal_count),
+        .enc_illegal_count(enc_illegal_count),
         .enc_illegal(enc_illegal), .enc_index_seen(enc_index_seen), .enc_latch_armed(enc_latch_armed),
         .enc_clear_armed(enc_clear_armed), .enc_a(enc_a_level), .enc_b(enc_b_level), .enc_z(enc_z_level),
         .probe_armed(probe_armed), .probe_seen(probe_seen), .probe_active(probe_active),
@@ -443,7 +442,7 @@ module finestep_top #(
         .probe_active_high(probe_active_high), .probe_filter_len(probe_filter),
         .arm_index_latch(enc_arm_index_latch), .arm_index_clear(enc_arm_index_clear),
         .probe_arm(probe_arm), .clear_errors(clear_errors), .clear_counters(clear_counters),
-        .read_grant(grant_read), .read_addr(grant_addr), .copy_rdata(enc_copy_rdata),
+        .read_served(bus_read), .read_addr(bus_address), .copy_rdata(enc_copy_rdata),
         .timestamp(timestamp), .position(position), .latch_now(latch_now),
         .illegal_count(enc_illegal_count), .illegal(enc_illegal), .index_seen(enc_index_seen),
         .index_latch_armed(enc_latch_armed), .index_clear_armed(enc_clear_armed),

@@ -12,7 +12,9 @@
 // stage) and served in n+1: a write takes effect at the edge ending n+1 (its command
 // pulses, push and watchdog kick are high in n+2); a read returns rdata in n+2, computed
 // from the state of cycle n+1. Neither the grant nor the masters' multiplexer sits in
-// front of the read multiplexer or the write decode.
+// front of the read multiplexer or the write decode. The encoder bank's copies are read
+// from its store at the edge ending n+1 (addressed by the bus stage, so no grant decode
+// reaches its schedule) and come in as `late_rdata` in n+2, ORed after rdata's register.
 module register_file #(
     parameter N_AXES          = 4,
     parameter P_WIDTH         = 20,
@@ -49,8 +51,8 @@ module register_file #(
     output wire [6:0]                   bus_address,
     output wire [31:0]                  bus_write_data,
     input  wire [31:0]                  feedback_rdata,
-    output wire                         grant_read,     // a read granted in this cycle
-    output wire [6:0]                   grant_addr,     // its address (served next cycle)
+    output wire                         bus_read,       // a read served in this cycle (at bus_address)
+    input  wire [31:0]                  late_rdata,     // a served read's word from the cycle after, held
     // configuration out
     output wire                         run,
     output wire                         watchdog_enable,
@@ -362,7 +364,7 @@ module register_file #(
             store_ram #(.WIDTH(WORD_W), .DEPTH(32), .ADDR_W(5), .BLOCK(RAM_BLOCK)) store (
                 .clk(clk), .wr_en(store_write), .wr_addr(wr_map[4:0]),
                 .wr_data(store_fields(wr_map[1:0], wr_src_data)),
-                .rd_addr(bus_hold ? push_read_word : rd_map[4:0]), .rd_data(store_rd)
+                .rd_en(1'b1), .rd_addr(bus_hold ? push_read_word : rd_map[4:0]), .rd_data(store_rd)
 `ifdef FORMAL
                 , .f_peek_addr(f_word), .f_peek_data(f_word_data)
 `endif
@@ -702,9 +704,8 @@ module register_file #(
     assign bus_write_data    = bus_wdata;
     assign spi_grant         = grant_spi;
     assign par_grant         = grant_par;
-    assign grant_read        = granted && !granted_we;
-    assign grant_addr        = granted_addr;
-    assign rdata             = rdata_reg;
+    assign bus_read          = read;
+    assign rdata             = rdata_reg | late_rdata;
     assign run               = run_reg;
     assign watchdog_enable   = watchdog_enable_reg;
     assign estop_active_high = estop_active_high_reg;
@@ -871,7 +872,7 @@ module register_file #(
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (irq == $past(|(irq_status & f_irq_mask)));
         if ($past(read && bus_addr == FS_IRQ_MASK_ADDR && !stage_stored && feedback_rdata == 32'd0))
-            assert (rdata[IRQ_W-1:0] == $past(f_irq_mask));
+            assert (rdata_reg[IRQ_W-1:0] == $past(f_irq_mask));
     end
 `endif
 

@@ -127,7 +127,7 @@ module step_engine #(
 
     store_ram #(.WIDTH(ACC_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) dda_store (
         .clk(clk), .wr_en(dda_visit), .wr_addr(dda_axis), .wr_data(acc_next),
-        .rd_addr(slot_next), .rd_data(acc_rd)
+        .rd_en(1'b1), .rd_addr(slot_next), .rd_data(acc_rd)
     );
 
     // The visit's request, taken by the shaper visit of the same axis in the next cycle.
@@ -183,7 +183,7 @@ module step_engine #(
 
     store_ram #(.WIDTH(SH_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) shaper_store (
         .clk(clk), .wr_en(sh_visit), .wr_addr(sh_axis), .wr_data(sh_next),
-        .rd_addr(slot_reg), .rd_data(sh_rd)
+        .rd_en(1'b1), .rd_addr(slot_reg), .rd_data(sh_rd)
     );
 
     // Pin functions of the state the visit leaves.

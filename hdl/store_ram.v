@@ -2,7 +2,8 @@
 `default_nettype none
 // Specification: docs/spec/encoder_bank.md (the store)
 // A small simple-dual-port RAM with a registered read: the word at `rd_addr` appears on
-// `rd_data` after the edge, `wr_data` is written at `wr_addr` at the edge when `wr_en`.
+// `rd_data` after an edge with `rd_en` (and stays until the next), `wr_data` is written
+// at `wr_addr` at the edge when `wr_en`.
 // The owner never reads and writes one word on one clock (the encoder bank's stall and
 // schedule guarantee it, and its formal properties prove it), so the RAM is marked
 // `no_rw_check`: the tools need no logic for read-during-write. BLOCK = 1 asks for block
@@ -22,6 +23,7 @@ module store_ram #(
     input  wire              wr_en,
     input  wire [ADDR_W-1:0] wr_addr,
     input  wire [WIDTH-1:0]  wr_data,
+    input  wire              rd_en,
     input  wire [ADDR_W-1:0] rd_addr,
     output wire [WIDTH-1:0]  rd_data
 `ifdef FORMAL
@@ -37,7 +39,7 @@ module store_ram #(
             (* no_rw_check, ram_style = "block" *) reg [WIDTH-1:0] mem [0:DEPTH-1];
             reg [WIDTH-1:0] rd_reg;
             always @(posedge clk) if (wr_en) mem[wr_addr] <= wr_data;
-            always @(posedge clk) rd_reg <= mem[rd_addr];
+            always @(posedge clk) if (rd_en) rd_reg <= mem[rd_addr];
             assign rd_data = rd_reg;
 `ifdef FORMAL
             assign f_peek_data = mem[f_peek_addr];
@@ -46,7 +48,7 @@ module store_ram #(
             (* no_rw_check *) reg [WIDTH-1:0] mem [0:DEPTH-1];
             reg [WIDTH-1:0] rd_reg;
             always @(posedge clk) if (wr_en) mem[wr_addr] <= wr_data;
-            always @(posedge clk) rd_reg <= mem[rd_addr];
+            always @(posedge clk) if (rd_en) rd_reg <= mem[rd_addr];
             assign rd_data = rd_reg;
 `ifdef FORMAL
             assign f_peek_data = mem[f_peek_addr];

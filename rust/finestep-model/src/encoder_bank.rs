@@ -5,7 +5,7 @@
 //!
 //! `S = max(N_ENC, 2)` slots: in every cycle the decoder visits the channel of the
 //! current `slot` (slots at and above `N_ENC` visit nothing) and the slot moves on, unless
-//! the register bus grants in this cycle a read of the visited channel's count, edge
+//! the register bus serves in this cycle a read of the visited channel's count, edge
 //! time or latches (`stall`): the copies live in a RAM whose read port serves the bus and
 //! whose write port the visit uses, and the stall keeps a read and a write of the same
 //! word out of one clock. A round of `S` slots ends with the prescaler (`ENC_PRESCALE`,
@@ -115,10 +115,10 @@ pub struct EncoderBankInputs {
     /// The position latch takes `POSITION` in this cycle (`latch_now`): the counts and
     /// edge times of this cycle are asked for with it.
     pub latch: bool,
-    /// The address of the read the register bus grants in this cycle (cycle `n`; it is
-    /// served in `n + 1`), if it grants a read: a read of the store of the channel the
-    /// decoder would visit stalls the visit.
-    pub granted_read: Option<u8>,
+    /// The address of the read the register bus serves in this cycle (its bus stage: the
+    /// read granted in the cycle before), if it serves a read: a read of the store of the
+    /// channel the decoder would visit stalls the visit.
+    pub served_read: Option<u8>,
 }
 
 /// One channel's register view (all 0 for a channel the build does not have).
@@ -259,14 +259,14 @@ impl EncoderBank {
         self.sampling
     }
 
-    /// `stall` in this cycle if the bus grants a read of `granted_read`.
-    pub fn stall(&self, granted_read: Option<u8>) -> bool {
-        granted_read.is_some_and(|addr| store_channel(addr, self.n_enc) == Some(self.slot))
+    /// `stall` in this cycle if the bus serves a read of `served_read`.
+    pub fn stall(&self, served_read: Option<u8>) -> bool {
+        served_read.is_some_and(|addr| store_channel(addr, self.n_enc) == Some(self.slot))
     }
 
-    /// The channel visited in this cycle if the bus grants a read of `granted_read`.
-    pub fn visit(&self, granted_read: Option<u8>) -> Option<usize> {
-        (self.slot < self.n_enc && !self.stall(granted_read)).then_some(self.slot)
+    /// The channel visited in this cycle if the bus serves a read of `served_read`.
+    pub fn visit(&self, served_read: Option<u8>) -> Option<usize> {
+        (self.slot < self.n_enc && !self.stall(served_read)).then_some(self.slot)
     }
 
     /// Channel `c`'s state (a channel at or above `N_ENC` stays in reset).
@@ -344,8 +344,8 @@ impl EncoderBank {
 
     /// One rising clock edge.
     pub fn step(&mut self, inp: &EncoderBankInputs) {
-        let stall = self.stall(inp.granted_read);
-        let visit = self.visit(inp.granted_read);
+        let stall = self.stall(inp.served_read);
+        let visit = self.visit(inp.served_read);
         let probe_event = self.probe_event(&inp.probe);
         let probe_active = self.probe_active(&inp.probe);
 
@@ -552,7 +552,7 @@ mod tests {
                     // The unstalled bank runs one cycle per unstalled cycle of the other.
                     free_visits.push((free.visit(None), free.sampling()));
                 }
-                stalled.step(&EncoderBankInputs { granted_read: read, ..inp });
+                stalled.step(&EncoderBankInputs { served_read: read, ..inp });
                 if stall {
                     assert_eq!(stalled.slot(), slot, "a stall keeps the slot");
                 } else {
@@ -609,7 +609,7 @@ mod tests {
                         probe_asked[c] = Some((ch.count(), cycle));
                     }
                 }
-                bank.step(&EncoderBankInputs { granted_read: read, ..inp });
+                bank.step(&EncoderBankInputs { served_read: read, ..inp });
                 let status = bank.status(&inp.channels, &inp.probe);
                 if probe_event {
                     // An arm in the event's cycle wins over SEEN.
@@ -653,8 +653,8 @@ mod tests {
         bank.step(&EncoderBankInputs { latch: true, ..inp });
         assert_eq!(bank.pending(1), (true, false));
         assert_eq!(bank.status(&inp.channels, &inp.probe).channels[1].count, 0);
-        // A read of ENC_COUNT[1] granted at 17 stalls channel 1's visit to 18.
-        bank.step(&EncoderBankInputs { granted_read: Some(regs::enc_count::addr(1)), ..inp });
+        // A read of ENC_COUNT[1] served at 17 stalls channel 1's visit to 18.
+        bank.step(&EncoderBankInputs { served_read: Some(regs::enc_count::addr(1)), ..inp });
         assert_eq!((bank.slot(), bank.pending(1)), (1, (true, false)));
         bank.step(&inp);
         assert_eq!(bank.pending(1), (false, false));

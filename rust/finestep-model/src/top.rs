@@ -817,9 +817,10 @@ impl Top {
             timestamp,
             positions: core_out.positions,
             latch: position_latch(hw.core_run, core_out.rec_ready(), latch_hold),
-            // This cycle's grant (not the bus stage's): a read of the visited channel's
-            // store stalls the visit, so the read served next cycle sees no write.
-            granted_read: grant.filter(|(_, request)| !request.write).map(|(_, request)| request.addr),
+            // The bus stage's read (served in this cycle, granted in the last): a read of
+            // the visited channel's store stalls the visit, so the store's read at this
+            // cycle's edge sees no write.
+            served_read: served.filter(|request| !request.write).map(|request| request.addr),
         });
         if p.has_mpg {
             let (prescale, filter) = self.registers.mpg_control();
