@@ -29,6 +29,7 @@ module finestep_top #(
     parameter HAS_MPG         = 1,
     parameter RAM_BLOCK       = 0,
     parameter STEP_SHARED     = 1,
+    parameter STEP_DIGIT      = 0,   // with STEP_SHARED: 0 step_engine; 1, 2, 4, 8 step_serial
     parameter READ_STORE      = 1,
     parameter FIFO_HEAD_REG   = 1,
     parameter HAS_SPINDLE     = 1,
@@ -92,9 +93,11 @@ module finestep_top #(
 `include "finestep_interface.vh"
 `include "finestep_top_checks.vh"
 
-    // log2 of the step engine's slots, reported in CAPS.STEP_SLOTS_LOG2 (0: a DDA and a
-    // shaper per axis); finestep_core and step_engine derive the same from N_AXES.
-    localparam STEP_SLOTS_LOG2 = (STEP_SHARED == 0) ? 0 : ((N_AXES <= 2) ? 1 : ((N_AXES <= 4) ? 2 : 3));
+    // log2 of the round R, the clocks between two visits of an axis, reported in
+    // CAPS.STEP_ROUND_LOG2 (0: a DDA and a shaper per axis): the step engine's slots S,
+    // times 32 / STEP_DIGIT with the digit-serial engine (derived in hdl/interface.toml,
+    // as finestep_core derives it).
+    localparam STEP_ROUND_LOG2 = FS_CHECK_STEP_ROUND_LOG2;
 
     // A FIFO record: the increments, then the flags (FS_REC_*).
     localparam INC_W   = FS_REC_INC_WIDTH * N_AXES;
@@ -280,7 +283,7 @@ module finestep_top #(
         .N_AXES(N_AXES), .P_WIDTH(P_WIDTH), .TIMING_W(TIMING_W), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
         .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK),
-        .STEP_SLOTS_LOG2(STEP_SLOTS_LOG2)
+        .STEP_ROUND_LOG2(STEP_ROUND_LOG2)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),
@@ -379,7 +382,8 @@ module finestep_top #(
         .TIMING_W(TIMING_W),
         .HAS_GANTRY(GANTRY_BUILT ? 1 : 0),
         .STEP_SHARED(STEP_SHARED),
-        .RAM_BLOCK(RAM_BLOCK)
+        .RAM_BLOCK(RAM_BLOCK),
+        .STEP_DIGIT(STEP_DIGIT)
     ) core (
         .clk(clk), .rst(rst),
         .run(core_run), .period_clocks(period_clocks), .clear_errors(clear_errors), .halt(halt),

@@ -28,7 +28,7 @@ module register_file #(
     parameter HAS_MPG         = 1,
     parameter READ_STORE      = 1,    // 1: the per-axis arrays read back from a store (RAM)
     parameter RAM_BLOCK       = 0,    // 1: that store in block RAM
-    parameter STEP_SLOTS_LOG2 = 0     // CAPS.STEP_SLOTS_LOG2: the step engine's slots (0: none)
+    parameter STEP_ROUND_LOG2 = 0     // CAPS.STEP_ROUND_LOG2: log2 of the step engine's round (0: none)
 ) (
     // clock, reset
     input  wire                         clk,
@@ -147,7 +147,7 @@ module register_file #(
                                   (TIMING_W << FS_CAPS_TIMING_W_LSB) |
                                   ((HAS_SPI != 0 ? 1 : 0) << FS_CAPS_HAS_SPI_LSB) |
                                   ((HAS_PARALLEL != 0 ? 1 : 0) << FS_CAPS_HAS_PARALLEL_LSB) |
-                                  (STEP_SLOTS_LOG2 << FS_CAPS_STEP_SLOTS_LOG2_LSB);
+                                  (STEP_ROUND_LOG2 << FS_CAPS_STEP_ROUND_LOG2_LSB);
 
     // Host registers
     reg                        run_reg;

@@ -3,7 +3,9 @@
 // finestep_top's defaults; Vfinestep_top_motion, untraced only, without the spindle and
 // the logic outputs (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0, as every board top), and
 // Vfinestep_top_motion_nompg, untraced only, without the hand wheel and the jog too
-// (HAS_MPG = 0): ft_new_traced makes them untraced, and ft_trace_open fails on them. A
+// (HAS_MPG = 0), and Vfinestep_top_motion_serial, untraced only, the motion chip with
+// the core's digit-serial step engine (STEP_DIGIT = FT_SERIAL_DIGIT, as the CPLD boards):
+// ft_new_traced makes them untraced, and ft_trace_open fails on them. A
 // synthesised netlist (FT_NETLIST, rust/finestep-rtl-sys's netlist features) is Verilated
 // once, without tracing: ft_new and ft_new_traced make that top for either variant, and
 // ft_trace_open fails on it.
@@ -15,6 +17,7 @@
 #ifndef FT_NETLIST
 #include "Vfinestep_top_motion.h"
 #include "Vfinestep_top_motion_nompg.h"
+#include "Vfinestep_top_motion_serial.h"
 #include "Vfinestep_top_traced.h"
 #endif
 #ifdef FS_CLK_PREV
@@ -119,12 +122,14 @@ struct Untraced : Base {
 
 #ifndef FT_NETLIST
 bool is_motion(uint32_t variant) {
-    return variant == FT_VARIANT_MOTION || variant == FT_VARIANT_MOTION_NO_MPG;
+    return variant == FT_VARIANT_MOTION || variant == FT_VARIANT_MOTION_NO_MPG || variant == FT_VARIANT_MOTION_SERIAL;
 }
 bool is_no_mpg(uint32_t variant) { return variant == FT_VARIANT_MOTION_NO_MPG; }
+bool is_serial(uint32_t variant) { return variant == FT_VARIANT_MOTION_SERIAL; }
 #else
 bool is_motion(uint32_t) { return false; }
 bool is_no_mpg(uint32_t) { return false; }
+bool is_serial(uint32_t) { return false; }
 #endif
 
 }  // namespace
@@ -141,14 +146,17 @@ uint32_t ft_has_mpg(uint32_t variant) { return is_no_mpg(variant) ? 0 : FT_HAS_M
 uint32_t ft_has_spindle(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_SPINDLE; }
 uint32_t ft_has_outputs(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_OUTPUTS; }
 uint32_t ft_n_gpio(uint32_t variant) { return is_motion(variant) ? 0 : FT_N_GPIO; }
+uint32_t ft_step_digit(uint32_t variant) { return is_serial(variant) ? FT_SERIAL_DIGIT : 0; }
 
 #ifndef FT_NETLIST
 ft_sim *ft_new(uint32_t variant) {
+    if (is_serial(variant)) return new TopSim<Untraced<Vfinestep_top_motion_serial>, false>;
     if (is_no_mpg(variant)) return new TopSim<Untraced<Vfinestep_top_motion_nompg>, false>;
     if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
     return new TopSim<Untraced<Vfinestep_top>, false>;
 }
 ft_sim *ft_new_traced(uint32_t variant) {
+    if (is_serial(variant)) return new TopSim<Untraced<Vfinestep_top_motion_serial>, false>;
     if (is_no_mpg(variant)) return new TopSim<Untraced<Vfinestep_top_motion_nompg>, false>;
     if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
     return new TopSim<Vfinestep_top_traced, true>;

@@ -66,11 +66,14 @@ typedef struct ft_sim ft_sim;
 /* Which Verilation of the top: finestep_top's defaults (the spindle and the logic
  * outputs built), the motion chip every board top builds (without them), or the motion
  * chip without the hand wheel and the jog too (HAS_MPG = 0, as the HX8K and MachXO3
- * boards build it): what the motion tests that turn no wheel and the bench run. A
- * netlist build (FT_NETLIST) has one top, the default's netlist, for all three. */
+ * boards build it): what the motion tests that turn no wheel and the bench run; or the
+ * motion chip with the core's digit-serial step engine (STEP_DIGIT = FT_SERIAL_DIGIT, as
+ * the CPLD boards build it). A netlist build (FT_NETLIST) has one top, the default's
+ * netlist, for all four. */
 #define FT_VARIANT_FULL 0
 #define FT_VARIANT_MOTION 1
 #define FT_VARIANT_MOTION_NO_MPG 2
+#define FT_VARIANT_MOTION_SERIAL 3
 
 /* Build-time parameters of the Verilated top (the same in every variant). */
 uint32_t ft_n_axes(void);
@@ -84,6 +87,7 @@ uint32_t ft_has_mpg(uint32_t variant);
 uint32_t ft_has_spindle(uint32_t variant);
 uint32_t ft_has_outputs(uint32_t variant);
 uint32_t ft_n_gpio(uint32_t variant);
+uint32_t ft_step_digit(uint32_t variant);
 
 /* A top of `variant` built without waveform support (the fast one). */
 ft_sim *ft_new(uint32_t variant);

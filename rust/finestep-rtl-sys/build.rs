@@ -227,6 +227,7 @@ fn main() {
         .define("FT_HAS_MPG", params.has_mpg.to_string().as_str())
         .define("FT_STEP_SHARED", params.step_shared.to_string().as_str())
         .define("FS_SERIAL_DIGIT", SERIAL_CORE_DIGIT.to_string().as_str())
+        .define("FT_SERIAL_DIGIT", SERIAL_TOP_DIGIT.to_string().as_str())
         .define("FT_HAS_SPINDLE", params.has_spindle.to_string().as_str())
         .define("FT_HAS_OUTPUTS", params.has_outputs.to_string().as_str())
         .define("FT_N_GPIO", params.n_gpio.to_string().as_str())
@@ -269,12 +270,15 @@ fn main() {
         // a clock.
         (Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT }, "Vfinestep_core_serial", None),
         (Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT }, "Vfinestep_core_serial_traced", Some(trace_flag)),
-        (Build::Top { motion: false, mpg: true }, "Vfinestep_top", None),
-        (Build::Top { motion: false, mpg: true }, "Vfinestep_top_traced", Some(trace_flag)),
+        (Build::Top { motion: false, mpg: true, digit: 0 }, "Vfinestep_top", None),
+        (Build::Top { motion: false, mpg: true, digit: 0 }, "Vfinestep_top_traced", Some(trace_flag)),
         // The motion chip once, without tracing (a second traced top would add a third
         // to the build): its lockstep mismatches name the pin and the clock, no waveform.
-        (Build::Top { motion: true, mpg: true }, "Vfinestep_top_motion", None),
-        (Build::Top { motion: true, mpg: false }, "Vfinestep_top_motion_nompg", None),
+        (Build::Top { motion: true, mpg: true, digit: 0 }, "Vfinestep_top_motion", None),
+        (Build::Top { motion: true, mpg: false, digit: 0 }, "Vfinestep_top_motion_nompg", None),
+        // The motion chip with the core's digit-serial step engine, as the CPLD boards
+        // build it (STEP_DIGIT = SERIAL_TOP_DIGIT), once without tracing.
+        (Build::Top { motion: true, mpg: true, digit: SERIAL_TOP_DIGIT }, "Vfinestep_top_motion_serial", None),
         // The gantry card's chip: the top with the panel and the gantry pair (a DDA and a
         // shaper per axis), traced (its own lockstep tests, sim/panel_chip_sim.cpp).
         (Build::PanelChip, "Vfinestep_top_panel", Some(trace_flag)),
@@ -420,8 +424,9 @@ enum Build {
     /// step engine (`digit` 0: step_engine; 1, 2, 4, 8: step_serial with that digit).
     Core { gantry: bool, digit: u32 },
     /// `finestep_top`: with its defaults, or without the spindle and the logic outputs
-    /// (`motion`, as every board top); without the hand wheel and the jog (`!mpg`).
-    Top { motion: bool, mpg: bool },
+    /// (`motion`, as every board top); without the hand wheel and the jog (`!mpg`); with
+    /// the core's digit-serial step engine of `digit` bits a clock (0: the step engine).
+    Top { motion: bool, mpg: bool, digit: u32 },
     /// `pbp_interp` alone, with [`PBP_COORD_W`] and [`PBP_DIV_W`].
     PbpInterp,
     /// `keypad_scan` alone, with [`KEYPAD_PRE_W`] and [`KEYPAD_DEB_W`].
@@ -439,6 +444,11 @@ enum Build {
 /// The digit of the Verilated core with the digit-serial step engine
 /// (`Vfinestep_core_serial`: `STEP_DIGIT`, 4 as the CPLD builds); the shim reports it.
 const SERIAL_CORE_DIGIT: u32 = 4;
+
+/// The digit of the Verilated motion chip with the digit-serial step engine
+/// (`Vfinestep_top_motion_serial`: `STEP_DIGIT`, as the CPLD board tops build it); the
+/// shim reports it.
+const SERIAL_TOP_DIGIT: u32 = 4;
 
 /// The parameters the Verilated `pbp_interp` is built with (its defaults); the shim
 /// reports them.
@@ -469,14 +479,18 @@ fn verilate(
 ) -> BTreeMap<String, String> {
     let (top, gantry, motion, mpg) = match build {
         Build::Core { gantry, .. } => ("finestep_core_sim", Some(gantry), None, None),
-        Build::Top { motion, mpg } => ("finestep_top", None, Some(motion), Some(mpg)),
+        Build::Top { motion, mpg, .. } => ("finestep_top", None, Some(motion), Some(mpg)),
         Build::PbpInterp => ("pbp_interp", None, None, None),
         Build::KeypadScan => ("keypad_scan", None, None, None),
         Build::LedMenu { .. } => ("led_menu", None, None, None),
         Build::StepSerial { .. } => ("step_serial", None, None, None),
         Build::PanelChip => ("finestep_top", None, Some(false), Some(true)),
     };
-    let core_digit = if let Build::Core { digit, .. } = build { Some(digit) } else { None };
+    let core_digit = match build {
+        Build::Core { digit, .. } => Some(digit),
+        Build::Top { digit, .. } => Some(digit),
+        _ => None,
+    };
     let _ = std::fs::remove_dir_all(dir);
     std::fs::create_dir_all(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
     let mut command = Command::new(verilator);

@@ -125,6 +125,7 @@ pub fn rtl_top_params_of(variant: TopVariant) -> TopParams {
         n_enc: build.n_enc,
         has_mpg: build.has_mpg,
         step_shared: build.step_shared,
+        step_digit: build.step_digit,
         has_spindle: build.has_spindle,
         has_outputs: build.has_outputs,
         n_gpio: build.n_gpio,
@@ -149,6 +150,12 @@ impl TopLockstep {
     /// motion tests that turn no wheel and the bench run.
     pub fn motion_no_mpg(name: &str) -> TopLockstep {
         Self::of(TopVariant::MotionNoMpg, name)
+    }
+
+    /// The motion chip with the core's digit-serial step engine, as the CPLD board tops
+    /// build it (`STEP_DIGIT` > 0).
+    pub fn motion_serial(name: &str) -> TopLockstep {
+        Self::of(TopVariant::MotionSerial, name)
     }
 
     /// Both sides of `variant` at power-on; drive `rst` first.
@@ -187,6 +194,7 @@ impl TopLockstep {
             TopVariant::Full => "full",
             TopVariant::Motion => "motion",
             TopVariant::MotionNoMpg => "motion-no-mpg",
+            TopVariant::MotionSerial => "motion-serial",
         };
         writeln!(out, "# finestep_top pins of {}, {} clocks; {}", self.name, self.cycle, finestep_rtl_sys::TOP_SOURCE)?;
         writeln!(out, "variant {variant}")?;

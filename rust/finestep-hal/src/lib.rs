@@ -220,7 +220,7 @@ pub enum HalError {
     /// would run it rounded down, and its periods would drift from the servo thread's.
     #[error(
         "servo period {period_ns} ns is {clocks} clocks of the {clock_hz} Hz core, not a multiple of its {slots} \
-         step slots (CAPS.STEP_SLOTS_LOG2): choose a servo period of a multiple of {slots} clocks"
+         step round (CAPS.STEP_ROUND_LOG2): choose a servo period of a multiple of {slots} clocks"
     )]
     PeriodSlots {
         /// The servo thread's period.

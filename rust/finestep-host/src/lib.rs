@@ -101,9 +101,12 @@ pub enum BusError {
         /// The first parameter outside its range.
         error: finestep_interface::ParamError,
     },
-    /// `CAPS.STEP_SLOTS_LOG2` disagrees with the slots a step engine for `CAPS.N_AXES`
-    /// axes has (the link is broken, or this is not a finestep core).
-    #[error("CAPS reads {word:#010x}: {found} step slots (CAPS.STEP_SLOTS_LOG2), but that build has {built}")]
+    /// `CAPS.STEP_ROUND_LOG2` is not a round a step engine for `CAPS.N_AXES` axes has (its
+    /// slots, or its slots times 32 / STEP_DIGIT with the digit-serial engine; the link is
+    /// broken, or this is not a finestep core).
+    #[error(
+        "CAPS reads {word:#010x}: a step round of {found} clocks (CAPS.STEP_ROUND_LOG2), but that build has {built}"
+    )]
     StepSlots {
         /// The CAPS word read.
         word: u32,
@@ -140,8 +143,8 @@ pub enum BusError {
         /// The longest period the core holds, clocks.
         max: u32,
     },
-    /// A period that is not a multiple of the step engine's slots (`CAPS.STEP_SLOTS_LOG2`).
-    #[error("a period of {clocks} clocks is not a multiple of the core's {slots} step slots (CAPS.STEP_SLOTS_LOG2)")]
+    /// A period that is not a multiple of the step engine's round (`CAPS.STEP_ROUND_LOG2`).
+    #[error("a period of {clocks} clocks is not a multiple of the core's step round of {slots} clocks (CAPS.STEP_ROUND_LOG2)")]
     PeriodSlots {
         /// The period asked for, clocks.
         clocks: u32,

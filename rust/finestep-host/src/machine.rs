@@ -26,9 +26,11 @@ pub struct Caps {
     pub n_enc: usize,
     /// The hand wheel and the jog generator are built.
     pub has_mpg: bool,
-    /// `S`: the step engine's slots (`2^CAPS.STEP_SLOTS_LOG2`; 1 with a DDA and a shaper
-    /// per axis). Step edges and drive timings fall on multiples of `S` clocks, and the
-    /// period must be a multiple of `S` (docs/spec/step_engine.md).
+    /// `R`: the clocks between two visits of an axis by the step engine
+    /// (`2^CAPS.STEP_ROUND_LOG2`: its slots `S` with the step engine, `S * 32 / STEP_DIGIT`
+    /// with the digit-serial one; 1 with a DDA and a shaper per axis). Step edges and
+    /// drive timings fall on multiples of `R` clocks, and the period must be a multiple of
+    /// `R` (docs/spec/step_engine.md, docs/spec/step_serial.md).
     pub step_slots: u32,
     /// The spindle block is built (`CAPS.HAS_SPINDLE`).
     pub has_spindle: bool,
@@ -50,6 +52,22 @@ impl Caps {
     /// The largest drive timing the core's counters hold, clocks (`2^TIMING_W - 1`).
     pub fn timing_max(&self) -> u32 {
         ((1u64 << self.timing_w.min(32)) - 1) as u32
+    }
+}
+
+/// The `STEP_DIGIT` of a build with `n_axes` axes and `CAPS.STEP_ROUND_LOG2 =
+/// round_log2`: 0 where the round is 0 (a DDA and a shaper per axis) or the step engine's
+/// slot bits `SL`, the digit of the digit-serial engine where it is `SL + log2(32 /
+/// STEP_DIGIT)`, `None` where it is neither (no build the RTL makes).
+fn serial_digit(n_axes: usize, round_log2: u32) -> Option<u32> {
+    let core = finestep_interface::CoreParams { n_axes, ..finestep_interface::CoreParams::default() };
+    if round_log2 == 0 {
+        return Some(0);
+    }
+    match round_log2.checked_sub(core.step_slot_bits()) {
+        Some(0) => Some(0),
+        Some(visit @ 2..=5) => Some(32 >> visit),
+        _ => None,
     }
 }
 
@@ -109,11 +127,16 @@ impl<B: Bus> Machine<B> {
             clock_hz: clock,
             n_enc: caps::N_ENC.get(caps_word) as usize,
             has_mpg: caps::HAS_MPG.get(caps_word) != 0,
-            step_slots: 1 << caps::STEP_SLOTS_LOG2.get(caps_word),
+            step_slots: 1 << caps::STEP_ROUND_LOG2.get(caps_word),
             has_spindle: caps::HAS_SPINDLE.get(caps_word) != 0,
             has_outputs: caps::HAS_OUTPUTS.get(caps_word) != 0,
             has_panel: caps::HAS_PANEL.get(caps_word) != 0,
             has_gantry: caps::HAS_GANTRY.get(caps_word) != 0,
+        };
+        let Some(step_digit) = serial_digit(caps.n_axes, caps::STEP_ROUND_LOG2.get(caps_word)) else {
+            let engine =
+                finestep_interface::CoreParams { n_axes: caps.n_axes, step_shared: true, ..Default::default() };
+            return Err(BusError::StepSlots { word: caps_word, found: caps.step_slots, built: engine.step_slots() });
         };
         let build = finestep_interface::TopParams {
             n_axes: caps.n_axes,
@@ -124,6 +147,7 @@ impl<B: Bus> Machine<B> {
             n_enc: caps.n_enc,
             has_mpg: caps.has_mpg,
             step_shared: caps.step_slots > 1,
+            step_digit,
             has_spindle: caps.has_spindle,
             has_outputs: caps.has_outputs,
             has_panel: caps.has_panel,
@@ -131,7 +155,8 @@ impl<B: Bus> Machine<B> {
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
-        // The slots follow from N_AXES: any other value is no build the RTL makes.
+        // The round follows from N_AXES and the digit: any other value is no build the RTL
+        // makes.
         let built_slots = build.core_params().step_slots();
         if built_slots != caps.step_slots {
             return Err(BusError::StepSlots { word: caps_word, found: caps.step_slots, built: built_slots });

@@ -234,9 +234,12 @@ pub struct TopParams {
     pub n_enc: usize,
     /// `HAS_MPG`: the hand wheel and the jog generator are built.
     pub has_mpg: bool,
-    /// `STEP_SHARED`: the core's step engine (`CAPS.STEP_SLOTS_LOG2` =
-    /// [`CoreParams::step_slot_bits`] of [`Self::core_params`]).
+    /// `STEP_SHARED`: the core's step engine (`CAPS.STEP_ROUND_LOG2` =
+    /// [`CoreParams::step_round_bits`] of [`Self::core_params`]).
     pub step_shared: bool,
+    /// `STEP_DIGIT`: with `step_shared`, 0 the step engine, 1, 2, 4 or 8 the digit-serial
+    /// step engine with that many bits a clock ([`CoreParams::step_digit`]).
+    pub step_digit: u32,
     /// `HAS_SPINDLE`: the spindle block (PWM or SPI DAC) is built.
     pub has_spindle: bool,
     /// `HAS_OUTPUTS`: the logic outputs and the interlock are built.
@@ -265,6 +268,7 @@ impl Default for TopParams {
             n_enc: finestep_top::N_ENC.default as usize,
             has_mpg: finestep_top::HAS_MPG.default != 0,
             step_shared: finestep_top::STEP_SHARED.default != 0,
+            step_digit: finestep_top::STEP_DIGIT.default,
             has_spindle: finestep_top::HAS_SPINDLE.default != 0,
             has_outputs: finestep_top::HAS_OUTPUTS.default != 0,
             n_gpio: finestep_top::N_GPIO.default as usize,
@@ -288,6 +292,7 @@ impl TopParams {
         finestep_top::N_ENC.check(self.n_enc as u64)?;
         finestep_top::HAS_MPG.check(self.has_mpg)?;
         finestep_top::STEP_SHARED.check(self.step_shared)?;
+        finestep_top::STEP_DIGIT.check(self.step_digit)?;
         finestep_top::HAS_SPINDLE.check(self.has_spindle)?;
         finestep_top::HAS_OUTPUTS.check(self.has_outputs)?;
         finestep_top::N_GPIO.check(self.n_gpio as u64)?;
@@ -310,8 +315,7 @@ impl TopParams {
             timing_width: self.timing_w,
             has_gantry: self.gantry_built(),
             step_shared: self.step_shared,
-            // finestep_top builds the step engine (STEP_DIGIT is a core parameter only).
-            step_digit: 0,
+            step_digit: self.step_digit,
         }
     }
 }

@@ -765,8 +765,8 @@ impl RegisterFile {
                     (c::HAS_SPI, u32::from(p.has_spi)),
                     (c::HAS_PARALLEL, u32::from(p.has_parallel)),
                     (c::HAS_MPG, u32::from(p.has_mpg)),
-                    // log2 S: 0 without the step engine (S = 1).
-                    (c::STEP_SLOTS_LOG2, p.core_params().step_slots().trailing_zeros()),
+                    // log2 R: 0 without a shared step engine (R = 1).
+                    (c::STEP_ROUND_LOG2, p.core_params().step_slots().trailing_zeros()),
                     (c::HAS_SPINDLE, u32::from(p.has_spindle)),
                     (c::HAS_OUTPUTS, u32::from(p.has_outputs)),
                     (c::HAS_PANEL, u32::from(p.has_panel)),

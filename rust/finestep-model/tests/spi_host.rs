@@ -18,6 +18,7 @@ fn params() -> impl Strategy<Value = TopParams> {
         prop_oneof![Just(MAX_CHANNELS), 1..=MAX_CHANNELS],
         prop_oneof![Just(true), any::<bool>()],
         prop_oneof![Just(true), any::<bool>()],
+        prop::sample::select(vec![0u32, 1, 2, 4, 8]),
     );
     (
         N_AXES.min as usize..=N_AXES.max as usize,
@@ -27,20 +28,23 @@ fn params() -> impl Strategy<Value = TopParams> {
         WD_W.min..=WD_W.max,
         feedback,
     )
-        .prop_map(|(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg, step_shared))| {
-            let p = TopParams {
-                n_axes,
-                p_width,
-                timing_w,
-                fifo_depth_log2,
-                wd_w,
-                n_enc,
-                has_mpg,
-                step_shared,
-                ..TopParams::default()
-            };
-            engine_if_valid(p)
-        })
+        .prop_map(
+            |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg, step_shared, step_digit))| {
+                let p = TopParams {
+                    n_axes,
+                    p_width,
+                    timing_w,
+                    fifo_depth_log2,
+                    wd_w,
+                    n_enc,
+                    has_mpg,
+                    step_shared,
+                    step_digit,
+                    ..TopParams::default()
+                };
+                engine_if_valid(p)
+            },
+        )
 }
 
 fn master() -> impl Strategy<Value = SpiMaster> {
@@ -108,7 +112,9 @@ fn register_writes_read_back_as_stored() {
                 (true, 3..=4) => 2,
                 (true, _) => 3,
             };
-            prop_assert_eq!(regs::caps::STEP_SLOTS_LOG2.get(words[2]), slots_log2);
+            // The digit-serial engine's round: the slots times 32 / STEP_DIGIT.
+            let visit_log2 = if p.step_shared && p.step_digit != 0 { 5 - p.step_digit.trailing_zeros() } else { 0 };
+            prop_assert_eq!(regs::caps::STEP_ROUND_LOG2.get(words[2]), slots_log2 + visit_log2);
             Ok(())
         })
         .unwrap();

@@ -10,7 +10,7 @@ use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
     let links = (any::<bool>(), any::<bool>(), 1..=MAX_CHANNELS, any::<bool>(), any::<bool>());
-    let io = (any::<bool>(), any::<bool>(), 0..=8usize);
+    let io = (any::<bool>(), any::<bool>(), 0..=8usize, prop::sample::select(vec![0u32, 1, 2, 4, 8]));
     (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links, io).prop_map(
         |(
             n_axes,
@@ -19,7 +19,7 @@ fn params() -> impl Strategy<Value = TopParams> {
             fifo_depth_log2,
             wd_w,
             (has_spi, has_parallel, n_enc, has_mpg, step_shared),
-            (has_spindle, has_outputs, n_gpio),
+            (has_spindle, has_outputs, n_gpio, step_digit),
         )| {
             let p = TopParams {
                 n_axes,
@@ -33,6 +33,7 @@ fn params() -> impl Strategy<Value = TopParams> {
                 n_enc,
                 has_mpg,
                 step_shared,
+                step_digit,
                 has_spindle,
                 has_outputs,
                 n_gpio,

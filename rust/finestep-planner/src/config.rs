@@ -187,9 +187,11 @@ pub struct CoreLimits {
     pub timing_w: u32,
     /// Step/dir axes (`CAPS.N_AXES`).
     pub n_axes: usize,
-    /// The step engine's slots `S` (`2^CAPS.STEP_SLOTS_LOG2`, 1 without it): the period
-    /// must be a multiple of `S`, and the rated rates are those of timings rounded up to
-    /// multiples of `S` (docs/spec/rated_rate.md).
+    /// The step engine's round `R`, the clocks between two visits of an axis
+    /// (`2^CAPS.STEP_ROUND_LOG2`: the step engine's slots `S`, `S * 32 / STEP_DIGIT` with
+    /// the digit-serial engine, 1 without either): the period must be a multiple of `R`,
+    /// and the rated rates are those of timings rounded up to multiples of `R`
+    /// (docs/spec/rated_rate.md).
     pub step_slots: u32,
 }
 
@@ -621,8 +623,8 @@ impl MachineConfig {
             return Err(fail(
                 "period_ms".into(),
                 format!(
-                    "{} ms is {period_clocks} clocks at {} MHz, not a multiple of the core's {} step slots \
-                     (CAPS.STEP_SLOTS_LOG2)",
+                    "{} ms is {period_clocks} clocks at {} MHz, not a multiple of the core's step round of {} \
+                     clocks (CAPS.STEP_ROUND_LOG2)",
                     self.period_ms,
                     clock_hz / 1e6,
                     core.step_slots

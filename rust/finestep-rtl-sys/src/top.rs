@@ -25,6 +25,10 @@ pub enum TopVariant {
     /// the bench run (the two blocks cost about a third of the chip's simulation time).
     /// Verilated without tracing, as [`TopVariant::Motion`]; a netlist build's default top.
     MotionNoMpg,
+    /// The motion chip with the core's digit-serial step engine (`STEP_DIGIT` > 0, as the
+    /// CPLD board tops build it; [`TopBuild::step_digit`]). Verilated without tracing, as
+    /// [`TopVariant::Motion`]; a netlist build's default top (with the step engine then).
+    MotionSerial,
 }
 
 impl TopVariant {
@@ -33,6 +37,7 @@ impl TopVariant {
             TopVariant::Full => ffi::FT_VARIANT_FULL,
             TopVariant::Motion => ffi::FT_VARIANT_MOTION,
             TopVariant::MotionNoMpg => ffi::FT_VARIANT_MOTION_NO_MPG,
+            TopVariant::MotionSerial => ffi::FT_VARIANT_MOTION_SERIAL,
         }
     }
 }
@@ -54,6 +59,9 @@ pub struct TopBuild {
     pub has_mpg: bool,
     /// The core's step engine is built (`STEP_SHARED`).
     pub step_shared: bool,
+    /// `STEP_DIGIT`: 0 the step engine, else the digit-serial one with that many bits a
+    /// clock.
+    pub step_digit: u32,
     /// The spindle block is built (`HAS_SPINDLE`).
     pub has_spindle: bool,
     /// The logic outputs and the interlock input are built (`HAS_OUTPUTS`).
@@ -80,6 +88,7 @@ pub fn top_build_of(variant: TopVariant) -> TopBuild {
             n_enc: ffi::ft_n_enc() as usize,
             has_mpg: ffi::ft_has_mpg(v) != 0,
             step_shared: ffi::ft_step_shared() != 0,
+            step_digit: ffi::ft_step_digit(v),
             has_spindle: ffi::ft_has_spindle(v) != 0,
             has_outputs: ffi::ft_has_outputs(v) != 0,
             n_gpio: ffi::ft_n_gpio(v) as usize,

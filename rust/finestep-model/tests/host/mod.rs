@@ -418,11 +418,15 @@ impl ParallelMaster {
     }
 }
 
-/// `p` as drawn if its parameters allow the step engine it asks for, else `p` with a DDA
-/// and a shaper per axis (the engine needs `P_WIDTH` above log2 of its slots).
+/// `p` as drawn if its parameters allow the step engine it asks for, else `p` with the
+/// step engine instead of the digit-serial one if they allow that, else `p` with a DDA and
+/// a shaper per axis (the engines need `P_WIDTH` above log2 of their round, the
+/// digit-serial one `TIMING_W` and `P_WIDTH` within its word).
 pub fn engine_if_valid(p: TopParams) -> TopParams {
     if p.validate().is_ok() {
         p
+    } else if (TopParams { step_digit: 0, ..p }).validate().is_ok() {
+        TopParams { step_digit: 0, ..p }
     } else {
         TopParams { step_shared: false, ..p }
     }
