@@ -96,10 +96,13 @@ module finestep_core #(
 
     wire start_ok;
 
+    // The digit-serial engine is the CPLD's: its period timer is shaped for area (the
+    // same behaviour, see period_timer).
     period_timer #(
         .N_AXES(N_AXES),
         .P_WIDTH(P_WIDTH),
-        .SL(SL)
+        .SL(SL),
+        .AREA(SERIAL)
     ) timer (
         .clk(clk),
         .rst(rst),

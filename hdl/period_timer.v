@@ -18,10 +18,19 @@
 // start_ok so that every boundary falls on slot S - 1, and a record is acceptable when
 // every |D| < P / S (one step per visit). SL = 0 is the per-axis engine (start_ok tied 1).
 // Invariants: remaining < p_act; every loaded increment satisfies |inc| < p_act * 2^16.
+//
+// AREA chooses the shape, not the behaviour (the same outputs on every clock): 0 for
+// Fmax (a record check per main lane and one for the alternate lane, each three carry
+// chains against registered bounds; the taken record masked on its way out by one
+// flip-flop); 1 for area, the CPLD's (one check per lane of the offered record, whose
+// lanes outside rec_alt_lane are zero and always pass, each one carry chain against the
+// bound its sign and low half choose; the record zeroed at its load when not taken, by
+// the flip-flops' synchronous reset, so no gate on the way out).
 module period_timer #(
     parameter N_AXES  = 4,
     parameter P_WIDTH = 20,
-    parameter SL      = 0        // log2 of the step engine's slots; 0: per-axis engine
+    parameter SL      = 0,       // log2 of the step engine's slots; 0: per-axis engine
+    parameter AREA    = 0        // 1: shaped for area (see above); 0: for Fmax
 ) (
     // clock, reset
     input  wire                 clk,
@@ -117,19 +126,18 @@ module period_timer #(
                                : ({1'b0, whole_high} >= b_pos);
         end
     endfunction
-    reg main_ok;
-    integer axis;
-    always @* begin
-        main_ok = 1'b1;
-        for (axis = 0; axis < N_AXES; axis = axis + 1)
-            if (lane_fails(rec_inc[32*axis +: 32], bound_pos_reg, bound_neg_reg, bound_neg_zero_reg))
-                main_ok = 1'b0;
-    end
-    // The alternate record: its lanes are rec_alt_inc or zero, and a zero lane always
-    // passes (h = 0 < min(V, 2^16), V >= 1).
-    wire alt_ok = !(|rec_alt_lane) ||
-                  !lane_fails(rec_alt_inc, bound_pos_reg, bound_neg_reg, bound_neg_zero_reg);
-    wire record_ok = rec_alt ? alt_ok : main_ok;
+    // The same check with one carry chain (AREA): the bound chosen by the sign and the
+    // low half first, then h >= bound, negated for a negative d (h < bound).
+    function lane_fails_one_chain;
+        input [31:0] d;
+        input [16:0] b_pos, b_neg, b_neg_zero;
+        reg   [16:0] bound;
+        begin
+            bound = !d[31] ? b_pos :
+                    (d[FS_REC_INC_FRAC_BITS-1:0] == {FS_REC_INC_FRAC_BITS{1'b0}}) ? b_neg_zero : b_neg;
+            lane_fails_one_chain = d[31] ^ ({1'b0, d[FS_REC_INC_FRAC_BITS +: 16]} >= bound);
+        end
+    endfunction
     // The record offered (loaded at a boundary: flip-flop to flip-flop through the select).
     reg [32*N_AXES-1:0] rec_offer;
     integer lane;
@@ -137,6 +145,27 @@ module period_timer #(
         for (lane = 0; lane < N_AXES; lane = lane + 1)
             rec_offer[32*lane +: 32] = rec_alt ? (rec_alt_lane[lane] ? rec_alt_inc : 32'd0) : rec_inc[32*lane +: 32];
     end
+    // AREA 0: the main record's lanes, each against the three bounds.
+    reg main_ok;
+    // AREA 1: the offered record's lanes, each against its one bound.
+    reg offer_ok;
+    integer axis;
+    always @* begin
+        main_ok = 1'b1;
+        offer_ok = 1'b1;
+        for (axis = 0; axis < N_AXES; axis = axis + 1) begin
+            if (AREA == 0 && lane_fails(rec_inc[32*axis +: 32], bound_pos_reg, bound_neg_reg, bound_neg_zero_reg))
+                main_ok = 1'b0;
+            if (AREA != 0 &&
+                    lane_fails_one_chain(rec_offer[32*axis +: 32], bound_pos_reg, bound_neg_reg, bound_neg_zero_reg))
+                offer_ok = 1'b0;
+        end
+    end
+    // The alternate record: its lanes are rec_alt_inc or zero, and a zero lane always
+    // passes (h = 0 < min(V, 2^16), V >= 1).
+    wire alt_ok = (AREA != 0) || !(|rec_alt_lane) ||
+                  !lane_fails(rec_alt_inc, bound_pos_reg, bound_neg_reg, bound_neg_zero_reg);
+    wire record_ok = (AREA != 0) ? offer_ok : (rec_alt ? alt_ok : main_ok);
 
     wire take_record = boundary && rec_valid;
 
@@ -175,7 +204,7 @@ module period_timer #(
             remaining_reg <= p_act_minus_one_reg;
             boundary_reg  <= (p_act_minus_one_reg == {P_WIDTH{1'b0}});
             taken_ok_reg <= record_ok;
-            if (take_record) begin
+            if (take_record && (AREA == 0 || record_ok)) begin
                 inc_reg     <= rec_offer;
                 cur_end_reg <= rec_flags[FS_REC_FLAG_BLOCK_END_BIT];
             end else begin
@@ -204,7 +233,7 @@ module period_timer #(
     assign rec_ready    = boundary;
     assign active       = active_reg;
     assign p_active     = p_act_reg;
-    assign inc          = taken_ok_reg ? inc_reg : {32*N_AXES{1'b0}};
+    assign inc          = (AREA != 0 || taken_ok_reg) ? inc_reg : {32*N_AXES{1'b0}};
     assign block_end    = block_end_reg;
     assign record_error = record_error_reg;
 
