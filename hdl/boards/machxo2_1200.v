@@ -12,7 +12,10 @@ module machxo2_1200 #(
     parameter N_AXES          = 4,
     parameter N_ENC           = 2,
     parameter HAS_MPG         = 1,
-    parameter FIFO_DEPTH_LOG2 = 2
+    parameter FIFO_DEPTH_LOG2 = 2,
+    // The core's digit-serial step engine (step_serial), STEP_DIGIT bits a clock: the
+    // round R = 4 slots * 32 / STEP_DIGIT clocks (docs/spec/step_serial.md)
+    parameter STEP_DIGIT      = 4
 ) (
     // reset
     input  wire              button_n,   // pulled up: low resets
@@ -56,6 +59,7 @@ module machxo2_1200 #(
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
+        .STEP_DIGIT(STEP_DIGIT),
         .FIFO_HEAD_REG(0)   // the FIFO in distributed RAM: one register holds its head
     ) chip (
         .clk(clk), .rst(rst),

@@ -6,13 +6,16 @@
 // no PLL). Reset: power-on and the reset key through board_reset. Pins and timing:
 // constraints/max2_epm1270.qsf and .sdc (Quartus project constraints/max2_epm1270.qpf).
 //
-// This configuration does not fit the 1270 logic elements yet (docs/resources.md gives
-// the figure); the project is written so that it builds as soon as the core does.
+// This configuration does not fit the 1270 logic elements yet (docs/bitstreams.md gives
+// the figures); the project is written so that it builds as soon as the core does.
 module max2_epm1270 #(
     parameter N_AXES          = 4,
     parameter N_ENC           = 2,
     parameter HAS_MPG         = 1,
-    parameter FIFO_DEPTH_LOG2 = 2
+    parameter FIFO_DEPTH_LOG2 = 2,
+    // The core's digit-serial step engine (step_serial), STEP_DIGIT bits a clock: the
+    // round R = 4 slots * 32 / STEP_DIGIT clocks (docs/spec/step_serial.md)
+    parameter STEP_DIGIT      = 4
 ) (
     // clock, reset
     input  wire              clk50,      // 50 MHz oscillator
@@ -55,6 +58,7 @@ module max2_epm1270 #(
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
+        .STEP_DIGIT(STEP_DIGIT),
         .READ_STORE(0),  // no RAM: the read multiplexer costs less than a store in flip-flops
         .FIFO_HEAD_REG(0)   // the FIFO in flip-flops: one register holds its head
     ) chip (
