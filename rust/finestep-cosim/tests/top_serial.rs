@@ -45,7 +45,7 @@ struct Probe {
     inner: TopLockstep,
     cycle: u64,
     outputs: u64,
-    /// Per axis: (cycle pin A rose, +1/-1 from pin B then).
+    /// Per axis: (cycle pin A rose, +1 with pin B high, -1 with it low).
     rises: Vec<Vec<(u64, i32)>>,
     high_since: Vec<Option<u64>>,
     /// Every completed step pulse: (axis, rise cycle, cycles high).
@@ -75,7 +75,7 @@ impl Probe {
             let a = out >> (OUT_PIN_A0 + axis as u32) & 1;
             let a_was = was >> (OUT_PIN_A0 + axis as u32) & 1;
             if a == 1 && a_was == 0 {
-                let dir = if out >> (OUT_PIN_B0 + axis as u32) & 1 == 1 { -1 } else { 1 };
+                let dir = if out >> (OUT_PIN_B0 + axis as u32) & 1 == 1 { 1 } else { -1 };
                 self.rises[axis].push((self.cycle, dir));
                 self.high_since[axis] = Some(self.cycle);
             } else if a == 0 && a_was == 1 {
