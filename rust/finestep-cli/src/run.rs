@@ -124,35 +124,65 @@ pub fn stream_planned<B: Bus>(
                 IoAction::Coolant { .. } | IoAction::Output { .. } if outputs == Outputs::default() => {
                     outputs = chip.outputs()?
                 }
+                IoAction::ProbeArm { .. } if caps.n_enc == 0 => {
+                    bail!("{name}:{line}: the program probes (G38.x), but the chip has no probe input (no encoder bank, CAPS)")
+                }
+                IoAction::WaitInput { .. } => {
+                    bail!("{name}:{line}: M66 waits on an input, but the chip has no general inputs to read")
+                }
+                IoAction::AnalogOutput { .. } => bail!(
+                    "{name}:{line}: M67/M68 set an analog output, but the chip has none (its DAC is the spindle's)"
+                ),
                 _ => {}
             }
         }
-        let events = planned.events.iter().map(|timed| (timed.period, timed.event.action));
-        stream::run_with_events(chip, planned.records.iter().copied(), events, &config, observe, |chip, action| {
-            match action {
-                IoAction::Spindle { rotation, fraction, .. } => chip.set_spindle(
-                    rotation != SpindleRotation::Off,
-                    rotation == SpindleRotation::CounterClockwise,
-                    setup.level_for(fraction),
-                ),
-                IoAction::Output { index, on } => {
-                    let bit = 1u8 << index;
-                    outputs.gpio = if on { outputs.gpio | bit } else { outputs.gpio & !bit };
-                    chip.set_outputs(&outputs)
+        // The probe moves' outcomes, in order: whether the latch saw the probe change.
+        let mut probes: Vec<(usize, bool, bool)> = Vec::new();
+        let events = planned.events.iter().map(|timed| (timed.period, timed.event));
+        let streamed =
+            stream::run_with_events(chip, planned.records.iter().copied(), events, &config, observe, |chip, event| {
+                match event.action {
+                    IoAction::Spindle { rotation, fraction, .. } => chip.set_spindle(
+                        rotation != SpindleRotation::Off,
+                        rotation == SpindleRotation::CounterClockwise,
+                        setup.level_for(fraction),
+                    ),
+                    IoAction::Output { index, on } => {
+                        let bit = 1u8 << index;
+                        outputs.gpio = if on { outputs.gpio | bit } else { outputs.gpio & !bit };
+                        chip.set_outputs(&outputs)
+                    }
+                    IoAction::Coolant { mist, flood } => {
+                        outputs.mist = mist;
+                        outputs.flood = flood;
+                        chip.set_outputs(&outputs)
+                    }
+                    // The latch's event: the probe's signal going active (contact), or, for
+                    // G38.4/G38.5, inactive (armed with the polarity inverted).
+                    IoAction::ProbeArm { on_contact, .. } => chip.arm_probe(on_contact, PROBE_FILTER),
+                    IoAction::ProbeCheck { must_change } => {
+                        let hit = chip.probe_hit()?;
+                        probes.push((event.line, must_change, hit.is_some()));
+                        Ok(())
+                    }
+                    // Refused above.
+                    IoAction::WaitInput { .. } | IoAction::AnalogOutput { .. } => Ok(()),
                 }
-                IoAction::Coolant { mist, flood } => {
-                    outputs.mist = mist;
-                    outputs.flood = flood;
-                    chip.set_outputs(&outputs)
-                }
-            }
-        })?
+            })?;
+        // LinuxCNC stops a G38.2/G38.4 move whose probe did not change with an error.
+        if let Some((line, ..)) = probes.iter().find(|&&(_, must, hit)| must && !hit) {
+            bail!("{name}:{line}: the probe move ended without the probe changing (G38.2/G38.4 need it to)");
+        }
+        streamed
     };
     if streamed.stream.underruns != 0 {
         bail!("{} FIFO underruns", streamed.stream.underruns);
     }
     Ok(streamed)
 }
+
+/// The probe input's filter (`PROBE_CONTROL.FILTER`, samples that must agree) for G38.x.
+const PROBE_FILTER: u8 = 2;
 
 pub fn run(
     file: &Path,

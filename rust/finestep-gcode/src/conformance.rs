@@ -81,6 +81,23 @@ pub enum Event {
         /// The number of control points, the start included (rs274 prints it first).
         points: usize,
     },
+    /// A straight probe move (G38.2-G38.5), compared by its end in X Y Z A B C (rs274
+    /// prints those six) and its feed.
+    Probe {
+        /// End X Y Z A B C U V W.
+        to: [f64; 9],
+        /// mm/min.
+        feed: f64,
+    },
+    /// M67 (synchronised with the motion) or M68 (at once): an analog output set.
+    AnalogOutput {
+        /// The output (E).
+        index: u32,
+        /// The value (Q).
+        value: f64,
+        /// M67.
+        synchronised: bool,
+    },
     /// A dwell.
     Dwell {
         /// Seconds.
@@ -131,6 +148,10 @@ impl fmt::Display for Event {
             }
             Event::Nurbs { to: Some(to), points } => write!(f, "NURBS({points}; {})", p(to)),
             Event::Nurbs { to: None, points } => write!(f, "NURBS({points}; ...)"),
+            Event::Probe { to, feed } => write!(f, "PROBE({}) F{feed:.4}", p(&to[..6])),
+            Event::AnalogOutput { index, value, synchronised } => {
+                write!(f, "ANALOG_OUTPUT({index}, {value:.4}){}", if *synchronised { " with motion" } else { "" })
+            }
             Event::Dwell { seconds } => write!(f, "DWELL({seconds:.4})"),
             Event::ToolChange { tool } => write!(f, "TOOL_CHANGE({tool})"),
             Event::SpindleOrient { angle, direction } => write!(f, "ORIENT_SPINDLE({angle:.4}, {direction})"),
@@ -169,6 +190,12 @@ pub fn events_of(program: &Program) -> Vec<Event> {
                 events.push(Event::Nurbs { to: Some(point(*to)), points: control_points.len() })
             }
             BlockKind::Dwell { seconds } => events.push(Event::Dwell { seconds: *seconds }),
+            BlockKind::Probe { to, feed_mm_per_min, .. } => {
+                events.push(Event::Probe { to: point(*to), feed: *feed_mm_per_min })
+            }
+            BlockKind::AnalogOutput { index, value, synchronised } => {
+                events.push(Event::AnalogOutput { index: *index, value: *value, synchronised: *synchronised })
+            }
             BlockKind::Spindle { rotation, rpm } => {
                 machine.rotation = match rotation {
                     SpindleRotation::Off => 0,
@@ -190,7 +217,9 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             | BlockKind::CutterCompRadius { .. }
             | BlockKind::PathControl(_)
             | BlockKind::Overrides(_)
-            | BlockKind::DigitalOutput { .. } => {}
+            | BlockKind::DigitalOutput { .. }
+            // rs274 prints nothing for M66 (its canon reads no input).
+            | BlockKind::WaitInput { .. } => {}
         }
     }
     events
@@ -411,9 +440,18 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                 let count = args.split(',').next().and_then(|n| n.trim().parse::<usize>().ok());
                 Some(Event::Nurbs { to: None, points: count.ok_or_else(|| at("NURBS_FEED without its count".into()))? })
             }
-            "STRAIGHT_PROBE" | "RIGID_TAP" | "START_SPEED_FEED_SYNCH" | "SPINDLE_RETRACT_TRAVERSE" => {
-                Some(Event::Other(call.to_string()))
+            "STRAIGHT_PROBE" => Some(Event::Probe { to: canon.machine(&nums()?).map_err(at)?, feed: canon.feed_now() }),
+            // SET_MOTION_OUTPUT_VALUE(index,value) for M67, SET_AUX_OUTPUT_VALUE for M68.
+            "SET_MOTION_OUTPUT_VALUE" | "SET_AUX_OUTPUT_VALUE" => {
+                let v = nums()?;
+                let [index, value] = v[..] else { return Err(at("expected an index and a value".into())) };
+                Some(Event::AnalogOutput {
+                    index: index as u32,
+                    value,
+                    synchronised: name == "SET_MOTION_OUTPUT_VALUE",
+                })
             }
+            "RIGID_TAP" | "START_SPEED_FEED_SYNCH" | "SPINDLE_RETRACT_TRAVERSE" => Some(Event::Other(call.to_string())),
             _ => None,
         };
         if let Some(event) = event {
@@ -456,6 +494,13 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
             na == nb && close(a, b, tolerance)
         }
         (Event::Nurbs { points: na, .. }, Event::Nurbs { points: nb, .. }) => na == nb,
+        (Event::Probe { to: a, feed: fa }, Event::Probe { to: b, feed: fb }) => {
+            close(&a[..6], &b[..6], tolerance) && feed_ok(*fa, *fb)
+        }
+        (
+            Event::AnalogOutput { index: ia, value: va, synchronised: sa },
+            Event::AnalogOutput { index: ib, value: vb, synchronised: sb },
+        ) => ia == ib && sa == sb && (va - vb).abs() <= 5e-7 * va.abs().max(1.0),
         (Event::Dwell { seconds: a }, Event::Dwell { seconds: b }) => (a - b).abs() <= 5e-5,
         (Event::ToolChange { tool: a }, Event::ToolChange { tool: b }) => a == b,
         (Event::SpindleOrient { angle: a, direction: da }, Event::SpindleOrient { angle: b, direction: db }) => {
@@ -498,7 +543,9 @@ fn moving(events: &[Event], tolerance: impl Fn(usize) -> f64) -> Vec<(usize, &Ev
                 out.push((i, e));
                 continue;
             }
-            Event::Nurbs { to: None, .. } => {
+            // The interpretation goes on from where the probe stopped, which neither side's
+            // event says.
+            Event::Nurbs { to: None, .. } | Event::Probe { .. } => {
                 at = None;
                 out.push((i, e));
                 continue;

@@ -412,7 +412,7 @@ fn read_number(s: &mut Chars, word: What) -> Result<f64, LineError> {
         return Err(LineError::new(column, format!("bad number for {word}")));
     }
     // `X1e308` written as one word reads as an exponent; `X1 E5`, with a blank between,
-    // is the word E (which the interpreter refuses).
+    // is the word E (M66-M68's analog channel).
     let adjacent = s.i > 0 && s.columns.get(s.i).is_some_and(|&c| c == s.columns[s.i - 1] + 1);
     if adjacent && s.peek() == Some('e') && s.peek_at(1).is_some_and(|c| c.is_ascii_digit() || c == '-' || c == '+') {
         return Err(LineError::new(

@@ -4,7 +4,10 @@
 use crate::error::LineError;
 use crate::lexer::Word;
 use crate::unsupported;
-use crate::{nurbs_knots, BlockKind, CompSide, NurbsPoint, Overrides, PathControl, Plane, Point, SpindleRotation};
+use crate::{
+    nurbs_knots, BlockKind, CompSide, Input, NurbsPoint, Overrides, PathControl, Plane, Point, SpindleRotation,
+    WaitMode, PROBE_BACKOFF_MM,
+};
 
 /// Millimetres per inch.
 const MM_PER_INCH: f64 = 25.4;
@@ -180,6 +183,12 @@ struct CycleWords {
     k: Option<f64>,
 }
 
+/// #5061-#5069: where the last probe move (G38.x) stopped, program frame and units.
+const PARAM_PROBE: usize = 5061;
+/// #5070: whether the last probe move's probe changed (1) or not (0).
+const PARAM_PROBE_TRIPPED: usize = 5070;
+/// #5399: the value M66 read.
+const PARAM_INPUT: usize = 5399;
 /// #5220, the coordinate system in use (1 = G54).
 const PARAM_COORD_SYSTEM: usize = 5220;
 /// #5400, the tool in the spindle.
@@ -206,7 +215,7 @@ fn rotate(x: f64, y: f64, degrees: f64) -> (f64, f64) {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Group {
     NonModal,    // G group 0: G4 G10 G28 G28.1 G30 G30.1 G53 G92 G92.1 G92.2 G92.3
-    Motion,      // G group 1: G0 G1 G2 G3 G5 G5.1 G5.2 G5.3 G73 G80 G81 G82 G83 G85 G86 G87 G89
+    Motion,      // G group 1: G0 G1 G2 G3 G5 G5.1 G5.2 G5.3 G38.2-G38.5 G73 G80 G81 G82 G83 G85 G86 G87 G89
     Plane,       // G group 2: G17 G18 G19
     Distance,    // G group 3: G90 G91
     ArcDistance, // G group 4: G90.1 G91.1
@@ -225,7 +234,7 @@ enum Group {
     Coolant,     // M group 8: M7 M8 M9
     ModalState,  // M group 10: M70 M71 M72 M73
     Override,    // M group 9: M48 M49 M50 M51 M52 M53
-    Io,          // M group 5: M62 M63 M64 M65
+    Io,          // M group 5: M62 M63 M64 M65 M66 M67 M68
 }
 
 const GROUPS: usize = 21;
@@ -237,6 +246,7 @@ fn g_group(code: Code) -> Option<Group> {
     Some(match code {
         40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
         0 | 10 | 20 | 30 | 50 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 860 | 870 | 890 => Group::Motion,
+        382..=385 => Group::Motion,
         430 | 431 | 432 | 490 => Group::ToolLength,
         // G97 (spindle in rpm) is the only spindle mode and always in force.
         930 | 940 | 950 => Group::FeedMode,
@@ -262,7 +272,7 @@ fn m_group(code: u32) -> Option<Group> {
         7..=9 => Group::Coolant,
         70..=73 => Group::ModalState,
         48..=53 => Group::Override,
-        62..=65 => Group::Io,
+        62..=68 => Group::Io,
         _ => return None,
     })
 }
@@ -320,7 +330,7 @@ fn as_u32(value: f64) -> Option<u32> {
 }
 
 /// The parameter letters a block may carry once each (besides G, M and N).
-const PARAMS: &str = "ABCDFHIJKLPQRSTUVWXYZ@^";
+const PARAMS: &str = "ABCDEFHIJKLPQRSTUVWXYZ@^";
 const AXES: [char; N_AXES] = crate::AXIS_LETTERS;
 
 /// The words of one block, sorted by meaning.
@@ -388,7 +398,6 @@ fn sort_words(words: &[Word]) -> Result<Words, LineError> {
                 *slot = Some((value, column));
                 continue;
             }
-            'E' => return Err(LineError::new(column, format!("unsupported: word E ({})", unsupported::WORD_E))),
             l => return Err(LineError::new(column, format!("unknown word {l}"))),
         };
         let (code, group) = coded;
@@ -780,6 +789,13 @@ impl State {
             }
         }
         let dynamic_comp = w.has(Group::Comp, 411) || w.has(Group::Comp, 421);
+        // M62-M68 (in tenths).
+        let io = w.group(Group::Io).map(|(code, _)| code);
+        if let Some((_, column)) = w.param('E') {
+            if !matches!(io, Some(660..=680)) {
+                return Err(LineError::new(column, "E word with no M66, M67 or M68 to use it"));
+            }
+        }
         if let Some((_, column)) = w.param('L') {
             if dynamic_comp {
                 // The orientation of a lathe tool, for G18 only.
@@ -792,8 +808,8 @@ impl State {
                 }
                 return Err(LineError::new(column, format!("{name} with L word, but plane is not G18")));
             }
-            if !(w.has(Group::Motion, G5_2) || g10 || cycle_move) {
-                return Err(LineError::new(column, "L word with no G5.2, G10 or canned cycle to use it"));
+            if !(w.has(Group::Motion, G5_2) || g10 || cycle_move || io == Some(660)) {
+                return Err(LineError::new(column, "L word with no G5.2, G10, canned cycle or M66 to use it"));
             }
         }
         if let Some((_, column)) = w.param('P') {
@@ -806,13 +822,13 @@ impl State {
                 g10,
                 cycle_move && matches!(motion, Some(820 | 860 | 890)),
                 w.group(Group::Override).is_some_and(|(code, _)| code >= 500),
-                w.group(Group::Io).is_some(),
+                matches!(io, Some(620..=660)),
                 orient_words,
             ];
             match users.iter().filter(|&&u| u).count() {
                 0 => return Err(LineError::new(
                     column,
-                    "P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it",
+                    "P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it",
                 )),
                 1 => {}
                 _ => return Err(LineError::new(column, "P word is used by more than one code")),
@@ -829,9 +845,10 @@ impl State {
                 || cubic_move
                 || orient_words
                 || w.has(Group::ToolChange, 610)
+                || matches!(io, Some(660..=680))
                 || cycle_move && matches!(motion, Some(730 | 830)))
             {
-                return Err(LineError::new(column, "Q word with no G5, G64, G73, G83, M19 or M61 to use it"));
+                return Err(LineError::new(column, "Q word with no G5, G64, G73, G83, M19, M61 or M66-M68 to use it"));
             }
         }
         if let Some((_, column)) = w.param('H') {
@@ -950,7 +967,9 @@ impl State {
 
         // Digital outputs (M62/M63 with the next move, M64/M65 at once: finestep sets
         // either at rest where it is written, so both act before the next move).
-        if let Some((code, column)) = w.group(Group::Io) {
+        if let Some((code @ 660..=680, column)) = w.group(Group::Io) {
+            kinds.push(self.input_output(&w, code, column)?);
+        } else if let Some((code, column)) = w.group(Group::Io) {
             let (p, p_column) =
                 w.param('P').ok_or_else(|| LineError::new(column, format!("M{} with no P (the output)", code / 10)))?;
             let index = as_u32(p)
@@ -1181,7 +1200,7 @@ impl State {
                 self.motion = None;
             }
             Some((800, _)) => self.motion = None,
-            Some((code @ (50 | 51), column)) => {
+            Some((code @ (50 | 51 | 382..=385), column)) => {
                 if !moving {
                     return Err(LineError::new(column, format!("{} with no axis words", g_name(code))));
                 }
@@ -1196,6 +1215,8 @@ impl State {
             if moving || full_circle {
                 if CYCLES.contains(&code) {
                     self.canned_cycle(&w, code, column, &mut kinds)?;
+                } else if (382..=385).contains(&code) {
+                    kinds.push(self.probe(&w, code, column)?);
                 } else if code == 51 || code == 50 {
                     kinds.push(self.spline(&w, code, column)?);
                     // Axis words alone do not continue a G5 or G5.1 (as in rs274).
@@ -1552,6 +1573,135 @@ impl State {
         kinds.push(kind);
         self.position = to;
         Ok(())
+    }
+
+    /// G38.2-G38.5 (`code` 382-385): a straight probe move, interpreted as LinuxCNC's
+    /// batch interpreter runs it ([`BlockKind::Probe`]): the interpretation goes on from
+    /// the end backed off by [`PROBE_BACKOFF_MM`] towards the start in X Y Z (A B C at
+    /// the end, U V W where they were, as rs274's canon leaves them), #5061-#5066 hold the
+    /// end in the program frame and units, #5067-#5069 and #5070 (tripped) are 0.
+    fn probe(&mut self, w: &Words, code: Code, column: usize) -> Result<BlockKind, LineError> {
+        let name = g_name(code);
+        // Errors of the mode at the G38.x word (at the first axis word where it is modal).
+        let word = w.group(Group::Motion).map_or(column, |(_, c)| c);
+        if self.comp != CompSide::Off {
+            return Err(LineError::new(word, format!("{name} with cutter radius compensation on (G40 first)")));
+        }
+        if self.inverse_time || self.per_rev {
+            let mode = if self.inverse_time { "inverse-time feed (G93)" } else { "feed per revolution (G95)" };
+            return Err(LineError::new(word, format!("{name} in {mode}: a probe move takes units per minute (G94)")));
+        }
+        let feed_mm_per_min = match self.feed_mm_per_min {
+            Some(f) if f > 0.0 => f,
+            _ => return Err(LineError::new(column_of(w, column), format!("{name} with no feed rate"))),
+        };
+        let from = self.position;
+        let from_program = self.to_program(from);
+        let to_program = self.target(w, from_program)?;
+        let to = self.to_machine(to_program);
+        if to.iter().any(|v| v.abs() > MAX_POSITION) {
+            return Err(LineError::new(column, "position out of range"));
+        }
+        // G38.3 and G38.5 report a failure in #5070 instead of stopping; G38.2 and G38.4
+        // need a move (rs274: `Start point too close to probe point`).
+        let must_change = matches!(code, 382 | 384);
+        if must_change && to_program == from_program {
+            return Err(LineError::new(word, format!("{name} to the point where the probe is: nothing to probe")));
+        }
+        let delta = [from[0] - to[0], from[1] - to[1], from[2] - to[2]];
+        let distance = delta.iter().map(|d| d * d).sum::<f64>().sqrt();
+        let mut resume = to;
+        if distance != 0.0 {
+            for axis in 0..3 {
+                resume[axis] = to[axis] + PROBE_BACKOFF_MM * delta[axis] / distance;
+            }
+        }
+        resume[6..].copy_from_slice(&from[6..]);
+        for axis in 0..6 {
+            self.set_parameter(PARAM_PROBE + axis, self.user_units(axis, to_program[axis]));
+        }
+        for n in PARAM_PROBE + 6..=PARAM_PROBE_TRIPPED {
+            self.set_parameter(n, 0.0);
+        }
+        self.position = resume;
+        Ok(BlockKind::Probe {
+            to: Point::from_array(to),
+            feed_mm_per_min,
+            on_contact: code <= 383,
+            must_change,
+            resume: Point::from_array(resume),
+        })
+    }
+
+    /// M66 (wait on an input, #5399 its value), M67/M68 (an analog output); `code` in
+    /// tenths. Channels are 0 to 63, as for M62-M65.
+    fn input_output(&mut self, w: &Words, code: Code, column: usize) -> Result<BlockKind, LineError> {
+        let name = format!("M{}", code / 10);
+        let channel = |letter: char| match w.param(letter) {
+            None => Ok(None),
+            Some((value, c)) => as_u32(value)
+                .filter(|&i| i < 64)
+                .map(Some)
+                .ok_or_else(|| LineError::new(c, format!("{letter} word of {name} must be an integer 0 to 63"))),
+        };
+        if self.comp != CompSide::Off {
+            return Err(LineError::new(column, format!("{name} with cutter radius compensation on (G40 first)")));
+        }
+        if code != 660 {
+            let index =
+                channel('E')?.ok_or_else(|| LineError::new(column, format!("{name} with no E (the analog output)")))?;
+            let (value, _) =
+                w.param('Q').ok_or_else(|| LineError::new(column, format!("{name} with no Q (the value)")))?;
+            return Ok(BlockKind::AnalogOutput { index, value, synchronised: code == 670 });
+        }
+        let input = match (channel('P')?, channel('E')?) {
+            (Some(_), Some(_)) => {
+                let at = w.param('P').map_or(column, |(_, c)| c).max(w.param('E').map_or(column, |(_, c)| c));
+                return Err(LineError::new(at, "M66 with both P (a digital input) and E (an analog one)"));
+            }
+            (Some(p), None) => Input::Digital(p),
+            (None, Some(e)) => Input::Analog(e),
+            (None, None) => return Err(LineError::new(column, "M66 with no P (a digital input) or E (an analog one)")),
+        };
+        let (mode, l_column) = match w.param('L') {
+            None => (WaitMode::Immediate, column),
+            Some((l, c)) => {
+                let mode = match as_u32(l) {
+                    Some(0) => WaitMode::Immediate,
+                    Some(1) => WaitMode::Rise,
+                    Some(2) => WaitMode::Fall,
+                    Some(3) => WaitMode::High,
+                    Some(4) => WaitMode::Low,
+                    _ => {
+                        return Err(LineError::new(
+                            c,
+                            "M66 L must be 0 (read at once), 1 (rise), 2 (fall), 3 (high) or 4 (low)",
+                        ))
+                    }
+                };
+                (mode, c)
+            }
+        };
+        if mode != WaitMode::Immediate && matches!(input, Input::Analog(_)) {
+            return Err(LineError::new(l_column, "M66 reads an analog input (E) at once only: L0"));
+        }
+        let timeout_s = match (mode, w.param('Q')) {
+            (WaitMode::Immediate, _) => 0.0,
+            (_, Some((q, _))) if q > 0.0 => q,
+            (_, q) => {
+                return Err(LineError::new(
+                    q.map_or(column, |(_, c)| c),
+                    "M66 waiting (L1-L4) needs a timeout Q above 0 seconds",
+                ))
+            }
+        };
+        // rs274 reads no input: a digital read leaves #5399 as 0 or 1, an analog one as
+        // it was (finestep interprets the program before it runs, likewise).
+        if let Input::Digital(_) = input {
+            let value = f64::from(u8::from(self.parameter(PARAM_INPUT) != 0.0));
+            self.set_parameter(PARAM_INPUT, value);
+        }
+        Ok(BlockKind::WaitInput { input, mode, timeout_s })
     }
 
     /// The F of a feed move's block in G93 (1/min): required on every such block, as in

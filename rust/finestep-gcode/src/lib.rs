@@ -47,13 +47,12 @@
 //!   [`Options::subroutine_path`]. At most [`MAX_CALL_DEPTH`] nested calls,
 //!   [`MAX_ITERATIONS`] loop passes and calls in all, and [`MAX_REPEATED_LINES`] lines
 //!   run again by loops and calls (each an error at the line that reaches it).
-//! - G0 G1 G2 G3 G4 G5.1 G5.2 G5.3 G10 L1/L2/L10/L11/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G40
+//! - G0 G1 G2 G3 G4 G5.1 G5.2 G5.3 G10 L1/L2/L10/L11/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G38.2-G38.5 G40
 //!   G41 G42 G43 G43.1 G43.2 G49 G53 G54-G59.3 G61 G64 G73 G80 G81 G82 G83 G85 G86 G89 G90 G91
 //!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G95 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
-//!   M48-M53 M61 M70 M71 M72 M73; F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A B C U V W. What LinuxCNC has
+//!   M48-M53 M61 M62-M68 M70 M71 M72 M73; E F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A B C U V W. What LinuxCNC has
 //!   beyond that is refused as `unsupported: <what> (<why>)` at its word (`unsupported:
-//!   G33 (spindle-synchronised motion ...)`, `unsupported: axis B (...)`); other letters
-//!   as `unknown word E`.
+//!   G33 (spindle-synchronised motion ...)`, `unsupported: M101 (...)`).
 //! - Positions come out in the machine frame: the program's coordinates through the G92
 //!   offset, the XY rotation (G10 L2 R), the G54-G59.3 offset and the tool length
 //!   offset (G43), as LinuxCNC's canonical layer applies them. The offset parameters
@@ -221,6 +220,35 @@ pub fn nurbs_knots(count: usize, order: usize) -> Vec<f64> {
         .collect()
 }
 
+/// How far short of its end a probe move counts as stopped in a program interpreted at
+/// once, mm: LinuxCNC's batch interpreter backs off 0.254 mm (0.01 inch) from the probe
+/// point towards the start, in X Y Z.
+pub const PROBE_BACKOFF_MM: f64 = 0.254;
+
+/// The input M66 reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Input {
+    /// P: digital input 0 to 63.
+    Digital(u32),
+    /// E: analog input 0 to 63.
+    Analog(u32),
+}
+
+/// M66's L: what to wait for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WaitMode {
+    /// L0: read the input at once.
+    Immediate,
+    /// L1: a rising edge.
+    Rise,
+    /// L2: a falling edge.
+    Fall,
+    /// L3: the input high.
+    High,
+    /// L4: the input low.
+    Low,
+}
+
 /// One canonical operation. A source block may give several, in LinuxCNC's order of
 /// execution: tool select, tool change, spindle, coolant, dwell, cutter compensation,
 /// path control, motion, stop.
@@ -358,6 +386,47 @@ pub enum BlockKind {
         index: u32,
         /// On or off.
         on: bool,
+    },
+    /// G38.2-G38.5: a straight probe move to `to` at `feed_mm_per_min`, the probe armed.
+    /// On a machine the move stops where the probe changes (G38.2/G38.3 when it makes
+    /// contact, G38.4/G38.5 when it loses it), #5061-#5069 take the position latched
+    /// there and #5070 says whether it changed; a program interpreted at once cannot know
+    /// that position, so it goes on as LinuxCNC's batch interpreter (`rs274`) does: the
+    /// probe counts as stopped `PROBE_BACKOFF_MM` short of `to` (`resume`), #5061-#5069
+    /// hold `to` and #5070 is 0 (docs/gcode.md, "Probing").
+    Probe {
+        /// The end of the probe move (where it stops if the probe does not change).
+        to: Point,
+        /// mm/min.
+        feed_mm_per_min: f64,
+        /// G38.2/G38.3: stop when the probe makes contact; G38.4/G38.5: when it loses it.
+        on_contact: bool,
+        /// G38.2/G38.4: ending the move without the probe changing is an error.
+        must_change: bool,
+        /// Where the interpretation goes on from: `to` backed off by
+        /// [`PROBE_BACKOFF_MM`] towards the start in X Y Z, as rs274 does.
+        resume: Point,
+    },
+    /// M66: wait for an input (or, `WaitMode::Immediate`, read it at once); the value
+    /// goes to #5399. rs274 reads no input: #5399 keeps its value (a digital one as 0 or
+    /// 1), and finestep does the same.
+    WaitInput {
+        /// P (a digital input) or E (an analog one).
+        input: Input,
+        /// L: what to wait for.
+        mode: WaitMode,
+        /// Q: the longest wait, seconds (0 with `WaitMode::Immediate`).
+        timeout_s: f64,
+    },
+    /// M67 (with the next move) and M68 (at once): analog output `index` set to `value`.
+    AnalogOutput {
+        /// E: the output, 0 to 63.
+        index: u32,
+        /// Q: the value.
+        value: f64,
+        /// M67: synchronised with the motion (LinuxCNC sets it as the next move starts);
+        /// M68: at once.
+        synchronised: bool,
     },
     /// M0: pause until resumed.
     Pause,

@@ -270,7 +270,7 @@ fn every_error_message_with_its_place() {
         ("#<_hal[motion.spindle-speed-out]> = 1", "1:1: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
         ("G0 X[EXISTS[#<_hal[x]>]]", "1:13: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
         // Words.
-        ("G0 X1 Q2", "1:7: Q word with no G5, G64, G73, G83, M19 or M61 to use it"),
+        ("G0 X1 Q2", "1:7: Q word with no G5, G64, G73, G83, M19, M61 or M66-M68 to use it"),
         ("G64 P0.1 Q-1", "1:10: negative naive-CAM tolerance Q"),
         ("F1 G5.1 X1 Y1 I1 J0 B2", "1:21: axis B in a G5.1 spline: only X and Y move"),
         ("G95 F0.1\nG1 X1", "2:1: G1 with zero spindle speed in feed per revolution (G95): S first"),
@@ -279,14 +279,8 @@ fn every_error_message_with_its_place() {
             "1:6: unsupported: exponent in the number of word X (G-code numbers have no exponent: write the digits)",
         ),
         // rs274: 'E word with no G70, G76, M66, M67 or M68 to use it'.
-        (
-            "G0 X1 E5",
-            "1:7: unsupported: word E (LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not implement)",
-        ),
-        (
-            "E5",
-            "1:1: unsupported: word E (LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not implement)",
-        ),
+        ("G0 X1 E5", "1:7: E word with no M66, M67 or M68 to use it"),
+        ("E5", "1:1: E word with no M66, M67 or M68 to use it"),
         ("M3 S100 $0", "1:9: unsupported: $ spindle selection (finestep drives one spindle: leave $ out)"),
         // rs274: 'Parameter is readonly' for #5400-#5413 and #5420-#5428, not #5414-#5419.
         ("#5420 = 7", "1:1: #5420 is read-only"),
@@ -341,7 +335,7 @@ fn every_error_message_with_its_place() {
         ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
         ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
         ("R1", "1:1: R word with no G2, G3, canned cycle, G10 or M19 to use it"),
-        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it"),
+        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
         ("G40 D1", "1:5: D word with no G41, G41.1, G42 or G42.1 to use it"),
@@ -528,10 +522,10 @@ fn nurbs_errors_with_their_place() {
         ("G18 F600\nG5.2 X1 Y1\n", "2:1: G5.2 NURBS is supported in the G17 (XY) plane only"),
         ("F600\nG41 D1\nG5.2 X1 Y1\n", "3:1: G5.2 with cutter compensation on: a NURBS is not offset (G40 first)"),
         ("G5.2 X1 Y1\n", "1:1: G5.2 with no feed rate"),
-        ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10 or canned cycle to use it"),
+        ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10, canned cycle or M66 to use it"),
         (
             "F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n",
-            "4:6: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it",
+            "4:6: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it",
         ),
         // The program ends inside the block: the error points at its G5.2.
         (
@@ -803,7 +797,7 @@ fn override_switches_read_back_as_rs274_reads_them() {
     assert_eq!(err("M48 M53\n"), format!("{FILE}:1:5: M48 and M53 are in the same modal group"));
     assert_eq!(
         err("M48 P1\n"),
-        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M65 to use it")
+        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it")
     );
 }
 
@@ -1309,4 +1303,109 @@ fn the_axes_b_c_u_v_w_move_with_their_units_offsets_and_parameters() {
     assert!((second[7] - 3.0 * inch).abs() < 1e-9, "{second:?}");
     let third = ends[2];
     assert!((third[8] - 2.5 * inch).abs() < 1e-9 && (third[5] + 40.0).abs() < 1e-9, "{third:?}");
+}
+
+/// G38.2-G38.5 as rs274 runs them (its output for this program, `rs274 -g`: the probe
+/// moves' ends and the position after each, 0.254 mm short of the end towards the start
+/// in X Y Z, #5061-#5066 the end, #5070 0; `probe.ngc` in tests/conformance holds more).
+#[test]
+fn straight_probe_as_rs274() {
+    // rs274: STRAIGHT_PROBE(1, 2, -10), then STRAIGHT_FEED(5, 2, -9.746) and, after
+    // G38.3 X10 Y5 from (5, 2), #<_x> 9.782197.
+    let source =
+        "G0 X1 Y2 Z3\nG38.2 Z-10 F100\n#1 = #5063\n#2 = #5070\nG1 X5\nG38.3 X10 Y5 F50\nG1 X[#<_x>] Y[#1] Z[#2]\nM2\n";
+    let kinds = parse(source);
+    let probes: Vec<(Point, f64, bool, bool, Point)> = kinds
+        .iter()
+        .filter_map(|k| match *k {
+            BlockKind::Probe { to, feed_mm_per_min, on_contact, must_change, resume } => {
+                Some((to, feed_mm_per_min, on_contact, must_change, resume))
+            }
+            _ => None,
+        })
+        .collect();
+    assert_eq!(probes.len(), 2);
+    assert_eq!((probes[0].0, probes[0].1, probes[0].2, probes[0].3), (p(1.0, 2.0, -10.0, 0.0), 100.0, true, true));
+    assert!(close(probes[0].4, p(1.0, 2.0, -9.746, 0.0)));
+    assert_eq!((probes[1].1, probes[1].2, probes[1].3), (50.0, true, false));
+    let back = 0.254 / 34f64.sqrt();
+    assert!(close(probes[1].4, p(10.0 - 5.0 * back, 5.0 - 3.0 * back, -9.746, 0.0)));
+    let feeds: Vec<Point> =
+        kinds.iter().filter_map(|k| if let BlockKind::Linear { to, .. } = *k { Some(to) } else { None }).collect();
+    assert!(close(feeds[0], p(5.0, 2.0, -9.746, 0.0)));
+    // #5063 read the end, #5070 0 (rs274's canon reports no trip).
+    assert!(close(feeds[1], p(10.0 - 5.0 * back, -10.0, 0.0, 0.0)));
+    // G38.4/G38.5 stop on losing contact; inches: 0.01 inch back.
+    let kinds = parse("G20 F10\nG38.4 X1\nG38.5 Z-1\nG1 Y1\nM2\n");
+    let resumes: Vec<(bool, bool, Point)> = kinds
+        .iter()
+        .filter_map(|k| match *k {
+            BlockKind::Probe { on_contact, must_change, resume, .. } => Some((on_contact, must_change, resume)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!((resumes[0].0, resumes[0].1, resumes[1].0, resumes[1].1), (false, true, false, false));
+    assert!(close(resumes[0].2, p(25.4 - 0.254, 0.0, 0.0, 0.0)));
+    assert!(close(resumes[1].2, p(25.4 - 0.254, 0.0, -25.4 + 0.254, 0.0)));
+    // rs274's refusals, at their words.
+    assert_eq!(err("F10\nG38.2 Z0\n"), format!("{FILE}:2:1: G38.2 to the point where the probe is: nothing to probe"));
+    assert_eq!(err("G38.2 Z-1\n"), format!("{FILE}:1:1: G38.2 with no feed rate"));
+    assert_eq!(
+        err("F10 G41\nG38.3 Z-1\n"),
+        format!("{FILE}:2:1: G38.3 with cutter radius compensation on (G40 first)")
+    );
+    assert_eq!(
+        err("G93 G38.2 Z-1 F10\n"),
+        format!("{FILE}:1:5: G38.2 in inverse-time feed (G93): a probe move takes units per minute (G94)")
+    );
+    assert_eq!(err("F10 G38.2\n"), format!("{FILE}:1:5: G38.2 with no axis words"));
+    assert_eq!(
+        err("F10 G38.2 Z-1 R2\n"),
+        format!("{FILE}:1:15: R word with no G2, G3, canned cycle, G10 or M19 to use it")
+    );
+    // G38.3 to where it stands is accepted (it reports in #5070), as in rs274.
+    assert!(parse("F10\nG38.3 Z0\nM2\n").iter().any(|k| matches!(k, BlockKind::Probe { .. })));
+}
+
+/// M66 (wait on an input: #5399 as rs274 leaves it), M67/M68 (analog outputs), and
+/// their refusals as rs274 makes them.
+#[test]
+fn inputs_and_analog_outputs_are_events() {
+    let source = "#5399 = 3\nM66 P1 L1 Q5\nG0 X#5399\nM66 E2\nM67 E0 Q2.5\nM68 E63 Q-1.25\nM2\n";
+    let kinds = parse(source);
+    let io: Vec<&BlockKind> =
+        kinds.iter().filter(|k| matches!(k, BlockKind::WaitInput { .. } | BlockKind::AnalogOutput { .. })).collect();
+    assert_eq!(
+        io,
+        [
+            &BlockKind::WaitInput { input: Input::Digital(1), mode: WaitMode::Rise, timeout_s: 5.0 },
+            &BlockKind::WaitInput { input: Input::Analog(2), mode: WaitMode::Immediate, timeout_s: 0.0 },
+            &BlockKind::AnalogOutput { index: 0, value: 2.5, synchronised: true },
+            &BlockKind::AnalogOutput { index: 63, value: -1.25, synchronised: false },
+        ]
+    );
+    // A digital read leaves #5399 as 0 or 1 (rs274's canon reads no input).
+    assert!(kinds.contains(&BlockKind::Rapid { to: p(1.0, 0.0, 0.0, 0.0) }));
+    let cases = [
+        ("M66 P1 E1\n", "1:8: M66 with both P (a digital input) and E (an analog one)"),
+        ("M66\n", "1:1: M66 with no P (a digital input) or E (an analog one)"),
+        ("M66 L1 P1\n", "1:1: M66 waiting (L1-L4) needs a timeout Q above 0 seconds"),
+        ("M66 P1 L3 Q0\n", "1:11: M66 waiting (L1-L4) needs a timeout Q above 0 seconds"),
+        ("M66 E1 L3 Q2\n", "1:8: M66 reads an analog input (E) at once only: L0"),
+        ("M66 P1 L5 Q1\n", "1:8: M66 L must be 0 (read at once), 1 (rise), 2 (fall), 3 (high) or 4 (low)"),
+        ("M66 P64\n", "1:5: P word of M66 must be an integer 0 to 63"),
+        ("M67 Q1\n", "1:1: M67 with no E (the analog output)"),
+        ("M68 E1\n", "1:1: M68 with no Q (the value)"),
+        ("M68 E-1 Q1\n", "1:5: E word of M68 must be an integer 0 to 63"),
+        (
+            "M67 E1 Q1 P2\n",
+            "1:11: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it",
+        ),
+        ("G1 X1 E5 F10\n", "1:7: E word with no M66, M67 or M68 to use it"),
+        ("F10 G41\nM68 E1 Q1\n", "2:1: M68 with cutter radius compensation on (G40 first)"),
+        ("M66 P1 M62 P2\n", "1:8: M66 and M62 are in the same modal group"),
+    ];
+    for (source, message) in cases {
+        assert_eq!(err(source), format!("{FILE}:{message}"), "{source:?}");
+    }
 }

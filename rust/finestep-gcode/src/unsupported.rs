@@ -7,7 +7,6 @@
 /// G-codes LinuxCNC knows and finestep refuses, in tenths (G38.2 is 382), with why.
 pub const G_CODES: &[(&[u32], &str)] = &[
     (&[330, 331, 740, 760, 840], "spindle-synchronised motion needs the spindle feedback finestep does not have yet"),
-    (&[382, 383, 384, 385], "probing needs a probe input, which finestep does not read"),
     (&[700, 710, 711, 712, 720, 721, 722], "lathe roughing cycles are not implemented yet"),
     (&[880], "the tool is left at the bottom for the operator to retract by hand during the stop, and finestep offers no hand moves in a program"),
     (&[960], "constant surface speed changes the spindle speed with X along each move; finestep sets the spindle at rest between moves"),
@@ -17,16 +16,11 @@ pub const G_CODES: &[(&[u32], &str)] = &[
 pub const G_OTHER: &str = "not a G-code finestep implements";
 
 /// M-codes LinuxCNC knows and finestep refuses (first, last), with why.
-pub const M_CODES: &[(u32, u32, &str)] = &[
-    (66, 68, "analog outputs and waiting on inputs are not implemented yet"),
-    (100, 199, "user M-codes run external programs, which finestep does not"),
-];
+pub const M_CODES: &[(u32, u32, &str)] = &[(100, 199, "user M-codes run external programs, which finestep does not")];
 
 /// Any other M number.
 pub const M_OTHER: &str = "not an M-code finestep implements";
 
-/// `unsupported: word E`.
-pub const WORD_E: &str = "LinuxCNC's E goes with G70, G76 and M66-M68, which finestep does not implement";
 /// `unsupported: $ spindle selection`.
 pub const SPINDLE_SELECTION: &str = "finestep drives one spindle: leave $ out";
 /// `unsupported: #<_ini[...]>`.
@@ -54,7 +48,6 @@ pub fn reasons() -> Vec<&'static str> {
     all.extend([
         G_OTHER,
         M_OTHER,
-        WORD_E,
         SPINDLE_SELECTION,
         INI,
         HAL,

@@ -43,9 +43,10 @@ fn random_bytes_never_panic() {
 fn token() -> impl Strategy<Value = String> {
     let fixed = prop::sample::select(vec![
         "G0", "G1", "G2", "G3", "G4", "G17", "G18", "G19", "G20", "G21", "G40", "G41", "G42", "G61", "G64", "G90",
-        "G91", "G90.1", "G91.1", "G5.2", "G5.3", "L", "G33", "M0", "M2", "M3", "M4", "M5", "M6", "M7", "M8", "M9",
-        "M30", "F", "S", "T", "D", "P", "R", "I", "J", "K", "X", "Y", "Z", "A", "N", "Q", "B", "-", "+", ".", " ",
-        "\t", "(", ")", "(c)", ";", "\n", "\r\n", "%", "/", "#", "[", "0", "1", "5", "9", "1e5", "é", "\u{fffd}",
+        "G91", "G90.1", "G91.1", "G5.2", "G5.3", "L", "G33", "G38.2", "M66", "E", "M0", "M2", "M3", "M4", "M5", "M6",
+        "M7", "M8", "M9", "M30", "F", "S", "T", "D", "P", "R", "I", "J", "K", "X", "Y", "Z", "A", "N", "Q", "B", "-",
+        "+", ".", " ", "\t", "(", ")", "(c)", ";", "\n", "\r\n", "%", "/", "#", "[", "0", "1", "5", "9", "1e5", "é",
+        "\u{fffd}",
     ])
     .prop_map(str::to_string);
     let letter = prop::sample::select("GMFSTDPRIJKLXYZAN".chars().collect::<Vec<_>>());
@@ -360,9 +361,17 @@ fn dialect_line() -> impl Strategy<Value = String> {
         "M3 S100",
         "M19",
         "M60",
+        "G38.2",
+        "G38.3",
+        "G38.4",
+        "G38.5",
+        "M66",
+        "M67",
+        "M68",
+        "#5070 = 1",
     ])
     .prop_map(str::to_string);
-    let letter = prop::sample::select("XYZAIJKRPQLFHS".chars().collect::<Vec<_>>());
+    let letter = prop::sample::select("XYZAIJKRPQLFHSE".chars().collect::<Vec<_>>());
     let word = (letter, value).prop_map(|(l, v)| format!("{l}{v}"));
     let block = proptest::collection::vec(prop_oneof![1 => code, 3 => word], 0..6).prop_map(|w| w.join(" "));
     prop_oneof![2 => oword, 2 => assign, 4 => block]

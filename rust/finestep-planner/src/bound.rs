@@ -52,7 +52,8 @@ pub fn time_lower_bound(config: &MachineConfig, program: &Program) -> Result<f64
         let feed = match block.kind {
             BlockKind::Linear { feed_mm_per_min, .. }
             | BlockKind::Arc { feed_mm_per_min, .. }
-            | BlockKind::Nurbs { feed_mm_per_min, .. } => feed_mm_per_min / 60.0,
+            | BlockKind::Nurbs { feed_mm_per_min, .. }
+            | BlockKind::Probe { feed_mm_per_min, .. } => feed_mm_per_min / 60.0,
             BlockKind::Rapid { .. } => f64::INFINITY,
             _ => continue,
         };

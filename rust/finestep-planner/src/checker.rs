@@ -424,6 +424,7 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
     };
     for block in &program.blocks {
         let mut nurbs = None;
+        let mut probe = false;
         let (to, feed, arc) = match block.kind {
             BlockKind::Nurbs { to, ref control_points, order, ref knots, feed_mm_per_min } => {
                 let points = control_points.iter().map(|c| (c.x_mm, c.y_mm, c.weight)).collect();
@@ -432,6 +433,12 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
             }
             BlockKind::Rapid { to } => (to, f64::INFINITY, None),
             BlockKind::Linear { to, feed_mm_per_min } => (to, feed_mm_per_min / 60.0, None),
+            // A probe move: an exact stop before it (the probe armed) and after it.
+            BlockKind::Probe { to, feed_mm_per_min, .. } => {
+                mark_stop(&mut out);
+                probe = true;
+                (to, feed_mm_per_min / 60.0, None)
+            }
             BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
                 let (u, v) = match plane {
                     Plane::Xy => (0, 1),
@@ -451,7 +458,9 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
             | BlockKind::Pause
             | BlockKind::ToolChange { .. }
             | BlockKind::Spindle { .. }
-            | BlockKind::Coolant { .. } => {
+            | BlockKind::Coolant { .. }
+            | BlockKind::WaitInput { .. }
+            | BlockKind::AnalogOutput { .. } => {
                 mark_stop(&mut out);
                 continue;
             }
@@ -488,7 +497,7 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
             feed,
             own_tolerance,
             allowance,
-            stops: tolerance.is_none(),
+            stops: tolerance.is_none() || probe,
             still,
         });
         at = to;

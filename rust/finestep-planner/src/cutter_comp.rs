@@ -636,6 +636,20 @@ impl Compensator<'_> {
                 self.out.push(block.clone());
                 Ok(())
             }
+            // The interpreter refuses a probe move with compensation on; the path goes on
+            // from the probe move's end.
+            BlockKind::Probe { to, feed_mm_per_min, .. } => {
+                if !matches!(self.mode, Mode::Off) {
+                    return Err(CompError {
+                        line: block.line,
+                        reason: "probe move (G38.x) before G40's exit move; move out of compensation first".into(),
+                    });
+                }
+                self.programmed = to;
+                self.last_feed = Some(feed_mm_per_min);
+                self.out.push(block.clone());
+                Ok(())
+            }
             BlockKind::ToolChange { tool } => {
                 if let Mode::Stopping { .. } = self.mode {
                     return Err(CompError {

@@ -134,8 +134,8 @@ pub struct Element {
     pub events: Vec<(u64, IoEvent)>,
 }
 
-/// A spindle or coolant change the program makes at a point of the path (S, M3/M4/M5,
-/// M7/M8/M9), applied at an exact stop.
+/// A machine-I/O action the program takes at a point of the path (S, M3/M4/M5,
+/// M7/M8/M9, M62-M68, the probe of G38.x), applied at an exact stop.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum IoAction {
     /// The spindle after the block.
@@ -160,6 +160,37 @@ pub enum IoAction {
         mist: bool,
         /// M8.
         flood: bool,
+    },
+    /// G38.2-G38.5: arm the probe latch for the probe move that follows this stop (the
+    /// move ends in an exact stop with [`IoAction::ProbeCheck`]).
+    ProbeArm {
+        /// G38.2/G38.3: the event is the probe making contact; G38.4/G38.5: losing it.
+        on_contact: bool,
+        /// G38.2/G38.4: the move must end with the probe changed.
+        must_change: bool,
+    },
+    /// The end of a probe move: read the probe latch (and, for G38.2/G38.4, fail
+    /// without an event).
+    ProbeCheck {
+        /// G38.2/G38.4.
+        must_change: bool,
+    },
+    /// M66: wait for (or read at once) an input.
+    WaitInput {
+        /// The input.
+        input: finestep_gcode::Input,
+        /// What to wait for.
+        mode: finestep_gcode::WaitMode,
+        /// The longest wait, seconds.
+        timeout_s: f64,
+    },
+    /// M67/M68: analog output `index` set to `value` (M67's, synchronised with the next
+    /// move in LinuxCNC, acts at rest before it, as M62/M63 do).
+    AnalogOutput {
+        /// The output.
+        index: u32,
+        /// The value.
+        value: f64,
     },
 }
 

@@ -164,6 +164,19 @@ impl MoveReader {
         }
     }
 
+    /// An exact stop after the last move read (or before the first), with `event` at it
+    /// after that stop's dwell.
+    fn event_at_stop(&mut self, event: IoEvent) {
+        match self.pending.as_mut() {
+            Some(last) => {
+                last.stop_after = true;
+                last.blend = None;
+                last.events.push((last.dwell_periods, event));
+            }
+            None => self.leading_events.push((self.leading_dwell, event)),
+        }
+    }
+
     /// The program has ended: the last move stops, and what the program left on is
     /// turned off after it.
     fn finish(&mut self) {
@@ -204,6 +217,16 @@ impl MoveReader {
             let fail = |reason: String| ProgramError::new(block.line, reason);
             // The program's last line: that of M2 or M30, or of the last block.
             self.last_line = block.line;
+            // G38.x: the probe armed at an exact stop before the move, checked at one after.
+            let probe_check = if let BlockKind::Probe { on_contact, must_change, .. } = block.kind {
+                self.event_at_stop(IoEvent {
+                    line: block.line,
+                    action: IoAction::ProbeArm { on_contact, must_change },
+                });
+                Some(IoEvent { line: block.line, action: IoAction::ProbeCheck { must_change } })
+            } else {
+                None
+            };
             let action = match block.kind {
                 BlockKind::Spindle { rotation, rpm } => {
                     let max = config.spindle_max_rpm;
@@ -219,6 +242,8 @@ impl MoveReader {
                     }
                     Some(IoAction::Output { index, on })
                 }
+                BlockKind::WaitInput { input, mode, timeout_s } => Some(IoAction::WaitInput { input, mode, timeout_s }),
+                BlockKind::AnalogOutput { index, value, .. } => Some(IoAction::AnalogOutput { index, value }),
                 _ => None,
             };
             if let Some(action) = action {
@@ -227,18 +252,10 @@ impl MoveReader {
                         self.left_on.0 = (rotation != finestep_gcode::SpindleRotation::Off).then_some(action)
                     }
                     IoAction::Coolant { mist, flood } => self.left_on.1 = mist || flood,
-                    IoAction::Output { .. } => {}
+                    _ => {}
                 }
                 // An exact stop where the block is: the change takes effect at rest there.
-                let event = IoEvent { line: block.line, action };
-                match self.pending.as_mut() {
-                    Some(last) => {
-                        last.stop_after = true;
-                        last.blend = None;
-                        last.events.push((last.dwell_periods, event));
-                    }
-                    None => self.leading_events.push((self.leading_dwell, event)),
-                }
+                self.event_at_stop(IoEvent { line: block.line, action });
                 continue;
             }
             let mut nurbs: Option<Vec<(f64, f64, f64)>> = None;
@@ -250,6 +267,8 @@ impl MoveReader {
                     (coords(&to), feed_mm_per_min / 60.0, None)
                 }
                 BlockKind::Rapid { to } => (coords(&to), f64::INFINITY, None),
+                // The probe move runs to its end: it is the host that acts on the latch.
+                BlockKind::Probe { to, feed_mm_per_min, .. } => (coords(&to), feed_mm_per_min / 60.0, None),
                 BlockKind::Linear { to, feed_mm_per_min } => (coords(&to), feed_mm_per_min / 60.0, None),
                 BlockKind::Arc { to, centre, plane, clockwise, extra_turns, feed_mm_per_min } => {
                     let axes = match plane {
@@ -301,7 +320,8 @@ impl MoveReader {
             if let BlockKind::Rapid { to }
             | BlockKind::Linear { to, .. }
             | BlockKind::Arc { to, .. }
-            | BlockKind::Nurbs { to, .. } = block.kind
+            | BlockKind::Nurbs { to, .. }
+            | BlockKind::Probe { to, .. } = block.kind
             {
                 if let Some(axis) = to.extra_axis_away() {
                     return Err(fail(format!(
@@ -372,7 +392,10 @@ impl MoveReader {
             if arc.is_none() && curve.is_none() && to == self.at {
                 // Nothing to move on this machine; keeps neighbouring corners blendable. In
                 // G61 the move still ends in an exact stop, here: where the move before ends.
-                if self.blend.is_none() {
+                // A probe move that stays put is checked where it stands.
+                if let Some(check) = probe_check {
+                    self.event_at_stop(check);
+                } else if self.blend.is_none() {
                     self.stop_previous(0, block.line);
                 }
                 continue;
@@ -386,11 +409,11 @@ impl MoveReader {
                 feed,
                 arc,
                 programmed,
-                blend: self.blend,
-                stop_after: self.blend.is_none(),
+                blend: if probe_check.is_some() { None } else { self.blend },
+                stop_after: self.blend.is_none() || probe_check.is_some(),
                 dwell_periods: 0,
                 dwell_line: 0,
-                events: Vec::new(),
+                events: probe_check.into_iter().map(|check| (0, check)).collect(),
             };
             self.at = to;
             if let Some(done) = self.pending.replace(m) {

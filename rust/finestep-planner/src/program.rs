@@ -340,4 +340,48 @@ mod tests {
         let idle = fast.records.iter().filter(|r| r.inc.iter().all(|d| d.to_bits() == 0)).count();
         assert_eq!(idle, 0);
     }
+
+    /// G38.x: the probe armed at an exact stop before the probe move, checked at the
+    /// exact stop after it; the path goes on from the probe move's end (where a machine
+    /// would be had the probe not tripped). M66-M68 are events at exact stops.
+    #[test]
+    fn probe_moves_and_inputs_are_events_at_exact_stops() {
+        use crate::element::IoAction;
+        use finestep_gcode::{Input, WaitMode};
+        let config = MachineConfig::default(); // X at 800, Z at 400 steps/mm, T = 1 ms
+        let text = "G64\nG1 X1 F600\nG38.2 Z-2 F60\nG1 X2 F600\nM66 P1 L3 Q2\nM68 E1 Q2.5\nG1 X3\nM2\n";
+        let program = finestep_gcode::parse_str(text, "probe.ngc").unwrap();
+        let planned = plan_program(&config, &program).unwrap();
+        let events: Vec<(u64, usize, IoAction)> =
+            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+        let at = |n: u64, axis: usize| -> i64 {
+            planned.records[..n as usize].iter().map(|r| i64::from(r.inc[axis].to_bits())).sum()
+        };
+        assert_eq!(events.len(), 4, "{events:?}");
+        assert_eq!((events[0].1, events[0].2), (3, IoAction::ProbeArm { on_contact: true, must_change: true }));
+        assert_eq!((events[1].1, events[1].2), (3, IoAction::ProbeCheck { must_change: true }));
+        assert_eq!(
+            (events[2].1, events[2].2),
+            (5, IoAction::WaitInput { input: Input::Digital(1), mode: WaitMode::High, timeout_s: 2.0 })
+        );
+        assert_eq!((events[3].1, events[3].2), (6, IoAction::AnalogOutput { index: 1, value: 2.5 }));
+        // Armed at rest at X1 Z0, checked at rest at the probe's end Z-2 (not 0.254 mm
+        // short: the machine's stop is where the probe trips, which the host reads).
+        let (arm, check) = (events[0].0, events[1].0);
+        assert_eq!((at(arm, 0), at(arm, 2)), ((800 << 16), 0));
+        assert_eq!((at(check, 0), at(check, 2)), ((800 << 16), -(800 << 16)));
+        for p in [arm, check] {
+            assert!(planned.records[p as usize - 1].flags & 1 != 0);
+        }
+        // The probe move runs at its feed: 60 mm/min is 0.4 Z steps a period.
+        let fastest = planned.records[arm as usize..check as usize]
+            .iter()
+            .map(|r| i64::from(r.inc[2].to_bits()).abs())
+            .max()
+            .unwrap();
+        assert!(fastest <= (4 << 16) / 10 + 1, "{fastest}");
+        // The checker holds the records to the program with the probe move's stops.
+        let report = crate::check_program(&config, &program, &planned.records).unwrap();
+        assert!(report.passed(), "{report:?}");
+    }
 }
