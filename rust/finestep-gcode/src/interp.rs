@@ -1617,8 +1617,8 @@ impl State {
             }
         }
         resume[6..].copy_from_slice(&from[6..]);
-        for axis in 0..6 {
-            self.set_parameter(PARAM_PROBE + axis, self.user_units(axis, to_program[axis]));
+        for (axis, &value) in to_program.iter().enumerate().take(6) {
+            self.set_parameter(PARAM_PROBE + axis, self.user_units(axis, value));
         }
         for n in PARAM_PROBE + 6..=PARAM_PROBE_TRIPPED {
             self.set_parameter(n, 0.0);
