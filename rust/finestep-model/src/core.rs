@@ -273,6 +273,19 @@ impl Core {
         &self.shaper[axis]
     }
 
+    /// The drive pins of `axis` (A, B, enable) in the current cycle, from whichever step
+    /// engine the core has (a function of the state only).
+    pub fn drive_pins(&self, axis: usize) -> (bool, bool, bool) {
+        match &self.serial {
+            Some(serial) => {
+                let o = serial.engine.outputs();
+                let bit = |mask: u8| (mask >> axis) & 1 != 0;
+                (bit(o.pin_a), bit(o.pin_b), bit(o.pin_en))
+            }
+            None => self.shaper[axis].pins(),
+        }
+    }
+
     /// The gantry synchronisation's state.
     pub fn gantry(&self) -> &GantrySync {
         &self.gantry

@@ -587,7 +587,7 @@ impl Top {
     pub fn outputs(&self) -> TopOutputs {
         let mut out = TopOutputs::default();
         for axis in 0..self.params.n_axes {
-            let (a, b, en) = self.core.shaper(axis).pins();
+            let (a, b, en) = self.core.drive_pins(axis);
             out.pin_a |= u8::from(a) << axis;
             out.pin_b |= u8::from(b) << axis;
             out.pin_en |= u8::from(en) << axis;
