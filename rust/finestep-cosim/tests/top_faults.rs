@@ -8,18 +8,19 @@
 //! on every clock by [`Probe`] (a [`PinTarget`] wrapping [`TopLockstep`]), so step
 //! pulses are counted on the pins themselves and compared with `POSITION`.
 
-use finestep_cosim::TopLockstep;
+mod pin_probe;
+
+use finestep_cosim::TopVariant;
 use finestep_host::frame::{self, FrameResult};
-use finestep_host::pins::layout::{OUT_PIN_A0, OUT_PIN_B0, OUT_PIN_EN0};
 use finestep_host::regs::{
-    axis_status, command, control, crc_error_count, estop_filter, frame_error_count, parallel_error_count, position,
-    record_inc, record_push, refused_record_count, start_level, status, underrun_count, watchdog_timeout,
+    axis_status, command, control, crc_error_count, estop_filter, frame_error_count, parallel_error_count, record_inc,
+    record_push, refused_record_count, start_level, status, underrun_count, watchdog_timeout,
 };
 use finestep_host::stream::wait_idle;
-use finestep_host::{AxisSetup, Bus, BusError, Machine, ParallelBus, PinHost, PinTarget, PinTiming, SpiBus};
+use finestep_host::{AxisSetup, Bus, BusError, Machine, PinHost, PinTiming};
 use finestep_model::{DriveTiming, PeriodRecord};
+use pin_probe::{all_rounded, ok, positions, rounded, ParallelMachine, Probe, SpiMachine, N_AXES, RESET_CYCLES};
 
-const N_AXES: usize = 4;
 const FIFO_DEPTH: usize = 256;
 /// Step timing of every axis: L = 3, S = 3, U = 2, H = 2, so I_fwd = 6 and
 /// I_rev = 2 * (3 + max(3, 2 + 2) - 1) = 12 clocks; with the step engine's 4 slots
@@ -30,129 +31,20 @@ const AXIS: AxisSetup =
 /// Largest |increment| the record generator makes, in steps: within the rated rate
 /// (|D| * I_rev <= P) for every period used below (P >= 128).
 const MAX_STEPS: i64 = 8;
-/// Cycles of reset [`PinHost::reset`] is given; `TIMESTAMP` is 0 in the first cycle after.
-const RESET_CYCLES: u64 = 4;
-
-/// Unwraps a bus result, printing a co-simulation mismatch in full.
-fn ok<T>(result: Result<T, BusError>) -> T {
-    result.unwrap_or_else(|e| panic!("{e}"))
+/// The motion chip without the hand wheel (the boards' build), its step pulses `STEP_LEN`
+/// rounded up to whole visits of the step engine (docs/spec/step_engine.md).
+fn chip(name: &str) -> Probe {
+    let params = finestep_cosim::rtl_top_params_of(TopVariant::MotionNoMpg);
+    let slots = u64::from(params.core_params().step_slots());
+    Probe::new(TopVariant::MotionNoMpg, name, STEP_LEN.div_ceil(slots) * slots)
 }
-
-/// [`TopLockstep`] stepped one clock at a time, recording the drive pins of every cycle.
-struct Probe {
-    inner: TopLockstep,
-    /// Cycles run (the same count as `TopLockstep::cycle`).
-    cycle: u64,
-    outputs: u64,
-    /// Per axis: (cycle pin A rose, +1/-1 from pin B in that cycle).
-    rises: Vec<Vec<(u64, i32)>>,
-    /// Per axis: the cycle pin A rose, while it is high.
-    high_since: Vec<Option<u64>>,
-    /// Every completed step pulse: (axis, rise cycle, cycles high).
-    pulses: Vec<(usize, u64, u64)>,
-    /// Every change of the enable pins: (cycle, pin_en mask).
-    enables: Vec<(u64, u32)>,
-}
-
-impl Probe {
-    fn new(name: &str) -> Probe {
-        let inner = TopLockstep::motion_no_mpg(name);
-        let outputs = inner.outputs();
-        Probe {
-            inner,
-            cycle: 0,
-            outputs,
-            rises: vec![Vec::new(); N_AXES],
-            high_since: vec![None; N_AXES],
-            pulses: Vec::new(),
-            enables: vec![(0, enable_mask(outputs))],
-        }
-    }
-
-    fn observe(&mut self, out: u64) {
-        let prev = self.outputs;
-        for axis in 0..N_AXES {
-            let a = out >> (OUT_PIN_A0 + axis as u32) & 1 != 0;
-            let was = prev >> (OUT_PIN_A0 + axis as u32) & 1 != 0;
-            if a && !was {
-                let dir = if out >> (OUT_PIN_B0 + axis as u32) & 1 != 0 { 1 } else { -1 };
-                self.rises[axis].push((self.cycle, dir));
-                self.high_since[axis] = Some(self.cycle);
-            }
-            if !a && was {
-                let rose = self.high_since[axis].take().expect("a fall after a rise");
-                self.pulses.push((axis, rose, self.cycle - rose));
-            }
-        }
-        if enable_mask(out) != enable_mask(prev) {
-            self.enables.push((self.cycle, enable_mask(out)));
-        }
-        self.outputs = out;
-    }
-
-    /// Steps counted on the pins of `axis` (pin A rising edges, signed by pin B) in the
-    /// cycles up to and including `cycle`.
-    fn pin_steps(&self, axis: usize, cycle: u64) -> i32 {
-        self.rises[axis].iter().filter(|&&(c, _)| c <= cycle).map(|&(_, d)| d).sum()
-    }
-
-    fn all_pin_steps(&self) -> Vec<i32> {
-        (0..N_AXES).map(|axis| self.pin_steps(axis, u64::MAX)).collect()
-    }
-
-    fn rise_count(&self) -> usize {
-        self.rises.iter().map(Vec::len).sum()
-    }
-
-    /// Every step pulse so far was high exactly `STEP_LEN` cycles (rounded up to whole
-    /// visits of the step engine, docs/spec/step_engine.md), none is still high.
-    fn assert_pulses_exact(&self) {
-        let slots = u64::from(
-            finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::MotionNoMpg).core_params().step_slots(),
-        );
-        let high = STEP_LEN.div_ceil(slots) * slots;
-        for &(axis, rose, width) in &self.pulses {
-            assert_eq!(width, high, "axis {axis}: the pulse rising in cycle {rose} was high {width} cycles");
-        }
-        assert!(self.high_since.iter().all(Option::is_none), "a step pulse is still high: {:?}", self.high_since);
-    }
-}
-
-fn enable_mask(out: u64) -> u32 {
-    (out >> OUT_PIN_EN0) as u32 & ((1 << N_AXES) - 1)
-}
-
-impl PinTarget for Probe {
-    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
-        for _ in 0..cycles {
-            self.inner.drive(inputs, 1)?;
-            self.cycle += 1;
-            let out = self.inner.outputs();
-            self.observe(out);
-        }
-        Ok(())
-    }
-
-    fn outputs(&self) -> u64 {
-        self.outputs
-    }
-}
-
-type SpiMachine = Machine<SpiBus<PinHost<Probe>>>;
-type ParallelMachine = Machine<ParallelBus<Probe>>;
 
 fn spi_machine(name: &str) -> SpiMachine {
-    let mut host = PinHost::new(Probe::new(name), PinTiming::default());
-    ok(host.reset(RESET_CYCLES));
-    ok(host.idle(4));
-    ok(Machine::connect(SpiBus::new(host, N_AXES)))
+    pin_probe::spi_machine(chip(name))
 }
 
 fn parallel_machine(name: &str) -> ParallelMachine {
-    let mut host = PinHost::new(Probe::new(name), PinTiming::default());
-    ok(host.reset(RESET_CYCLES));
-    ok(host.idle(4));
-    ok(Machine::connect(ParallelBus::new(host, N_AXES)))
+    pin_probe::parallel_machine(chip(name))
 }
 
 fn host(machine: &mut SpiMachine) -> &mut PinHost<Probe> {
@@ -169,15 +61,7 @@ fn parallel_probe(machine: &mut ParallelMachine) -> &Probe {
 
 /// Axis timing, enables, period and start level; clears the power-on E-stop fault.
 fn setup<B: Bus>(machine: &mut Machine<B>, period: u32, start: u16) {
-    for axis in 0..N_AXES {
-        ok(machine.configure_axis(axis, &AXIS));
-    }
-    ok(machine.enable_axes((1 << N_AXES) - 1));
-    ok(machine.set_period(period));
-    ok(machine.set_start_level(start));
-    ok(machine.clear_faults_and_errors());
-    let word = ok(machine.status());
-    assert_eq!(status::HALT.get(word), 0, "status {word:#x}");
+    pin_probe::setup(machine, &AXIS, period, start);
 }
 
 fn read<B: Bus>(machine: &mut Machine<B>, addr: u8) -> u32 {
@@ -208,16 +92,6 @@ fn records(n: usize, seed: u64, block_end: bool) -> Vec<PeriodRecord> {
         .collect()
 }
 
-/// The DDA's position after `records`: the summed increments rounded half up.
-fn rounded(records: &[PeriodRecord], axis: usize) -> i32 {
-    let total: i64 = records.iter().map(|r| i64::from(r.inc[axis].to_bits())).sum();
-    ((total + (1 << 15)) >> 16) as i32
-}
-
-fn all_rounded(records: &[PeriodRecord]) -> Vec<i32> {
-    (0..N_AXES).map(|axis| rounded(records, axis)).collect()
-}
-
 fn push_all<B: Bus>(machine: &mut Machine<B>, records: &[PeriodRecord]) {
     for chunk in records.chunks(frame::MAX_COUNT) {
         ok(machine.bus().push_records(chunk));
@@ -240,21 +114,6 @@ fn wait_status<B: Bus>(machine: &mut Machine<B>, poll: u64, max: u64, done: impl
         ok(machine.bus().wait(poll));
         waited += poll;
     }
-}
-
-/// Every axis's position once the axes are at rest (motion over, or halted): read
-/// twice, equal, and (being at rest) equal to the pins' count. Not
-/// `Machine::positions`, which cannot read a stopped core (LATCH_TIME changes every
-/// clock while not running, so its before/after check never passes).
-fn positions<B: Bus>(machine: &mut Machine<B>) -> Vec<i32> {
-    let read_once = |machine: &mut Machine<B>| {
-        let mut words = vec![0u32; N_AXES];
-        ok(machine.bus().read(position::addr(0), &mut words));
-        words.into_iter().map(|w| w as i32).collect::<Vec<i32>>()
-    };
-    let first = read_once(machine);
-    assert_eq!(read_once(machine), first, "positions still changing");
-    first
 }
 
 /// The FIFO ran dry mid-block: every axis holds, UNDERRUN and one count, the gate stays

@@ -10,14 +10,15 @@
 //! drive timings in whole rounds; finestep_core.md: the DDA's round half up), not from
 //! the model. The drive pins are watched on every clock by [`Probe`].
 
-use finestep_cosim::{rtl_top_params_of, TopLockstep, TopVariant};
-use finestep_host::pins::layout::{OUT_PIN_A0, OUT_PIN_B0, OUT_PIN_EN0};
-use finestep_host::regs::{estop_filter, position, status, underrun_count};
-use finestep_host::stream::wait_idle;
-use finestep_host::{AxisSetup, Bus, BusError, Machine, ParallelBus, PinHost, PinTarget, PinTiming, SpiBus};
-use finestep_model::{DriveTiming, PeriodRecord, RateChecker};
+mod pin_probe;
 
-const N_AXES: usize = 4;
+use finestep_cosim::{rtl_top_params_of, TopVariant};
+use finestep_host::regs::{estop_filter, status, underrun_count};
+use finestep_host::stream::wait_idle;
+use finestep_host::{AxisSetup, Bus, BusError, Machine};
+use finestep_model::{DriveTiming, PeriodRecord, RateChecker};
+use pin_probe::{ok, positions, rounded, ParallelMachine, Probe, N_AXES};
+
 /// Step timing of every axis: L = 3, S = 3, U = 2, H = 2 clocks, each one round of the
 /// serial engine once rounded up (docs/spec/step_serial.md).
 const STEP_LEN: u64 = 3;
@@ -25,11 +26,6 @@ const AXIS: AxisSetup =
     AxisSetup { timing: DriveTiming::new(3, 3, 2, 2), out_mode: finestep_host::OutMode::StepDir, invert: 0 };
 /// Largest |increment| the record generator makes, in steps.
 const MAX_STEPS: i64 = 8;
-const RESET_CYCLES: u64 = 4;
-
-fn ok<T>(result: Result<T, BusError>) -> T {
-    result.unwrap_or_else(|e| panic!("{e}"))
-}
 
 /// R: the clocks between two visits of an axis, from the spec's formula and the build's
 /// parameters (S = 4 slots for 4 axes, 32 / STEP_DIGIT clocks a visit).
@@ -40,97 +36,14 @@ fn round() -> u32 {
     slots * 32 / build.step_digit
 }
 
-/// [`TopLockstep`] stepped one clock at a time, recording the drive pins.
-struct Probe {
-    inner: TopLockstep,
-    cycle: u64,
-    outputs: u64,
-    /// Per axis: (cycle pin A rose, +1 with pin B high, -1 with it low).
-    rises: Vec<Vec<(u64, i32)>>,
-    high_since: Vec<Option<u64>>,
-    /// Every completed step pulse: (axis, rise cycle, cycles high).
-    pulses: Vec<(usize, u64, u64)>,
-    /// Every change of the enable pins: (cycle, mask).
-    enables: Vec<(u64, u32)>,
+/// The serial chip, its step pulses L rounded up to whole rounds.
+fn chip(name: &str) -> Probe {
+    let r = u64::from(round());
+    Probe::new(TopVariant::MotionSerial, name, STEP_LEN.div_ceil(r) * r)
 }
-
-impl Probe {
-    fn new(name: &str) -> Probe {
-        let inner = TopLockstep::motion_serial(name);
-        let outputs = inner.outputs();
-        Probe {
-            inner,
-            cycle: 0,
-            outputs,
-            rises: vec![Vec::new(); N_AXES],
-            high_since: vec![None; N_AXES],
-            pulses: Vec::new(),
-            enables: vec![(0, enable_mask(outputs))],
-        }
-    }
-
-    fn observe(&mut self, out: u64) {
-        let was = self.outputs;
-        for axis in 0..N_AXES {
-            let a = out >> (OUT_PIN_A0 + axis as u32) & 1;
-            let a_was = was >> (OUT_PIN_A0 + axis as u32) & 1;
-            if a == 1 && a_was == 0 {
-                let dir = if out >> (OUT_PIN_B0 + axis as u32) & 1 == 1 { 1 } else { -1 };
-                self.rises[axis].push((self.cycle, dir));
-                self.high_since[axis] = Some(self.cycle);
-            } else if a == 0 && a_was == 1 {
-                let rose = self.high_since[axis].take().expect("a fall after a rise");
-                self.pulses.push((axis, rose, self.cycle - rose));
-            }
-        }
-        if enable_mask(out) != enable_mask(was) {
-            self.enables.push((self.cycle, enable_mask(out)));
-        }
-        self.outputs = out;
-    }
-
-    fn all_pin_steps(&self) -> Vec<i32> {
-        self.rises.iter().map(|r| r.iter().map(|&(_, d)| d).sum()).collect()
-    }
-
-    /// Every pulse was high exactly L rounded up to whole rounds; none is still high.
-    fn assert_pulses_exact(&self) {
-        let r = u64::from(round());
-        let high = STEP_LEN.div_ceil(r) * r;
-        for &(axis, rose, width) in &self.pulses {
-            assert_eq!(width, high, "axis {axis}: the pulse rising in cycle {rose} was high {width} cycles");
-        }
-        assert!(self.high_since.iter().all(Option::is_none), "a step pulse is still high: {:?}", self.high_since);
-    }
-}
-
-fn enable_mask(out: u64) -> u32 {
-    (out >> OUT_PIN_EN0) as u32 & ((1 << N_AXES) - 1)
-}
-
-impl PinTarget for Probe {
-    fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
-        for _ in 0..cycles {
-            self.inner.drive(inputs, 1)?;
-            self.cycle += 1;
-            let out = self.inner.outputs();
-            self.observe(out);
-        }
-        Ok(())
-    }
-
-    fn outputs(&self) -> u64 {
-        self.outputs
-    }
-}
-
-type ParallelMachine = Machine<ParallelBus<Probe>>;
 
 fn parallel_machine(name: &str) -> ParallelMachine {
-    let mut host = PinHost::new(Probe::new(name), PinTiming::default());
-    ok(host.reset(RESET_CYCLES));
-    ok(host.idle(4));
-    ok(Machine::connect(ParallelBus::new(host, N_AXES)))
+    pin_probe::parallel_machine(chip(name))
 }
 
 fn probe(m: &mut ParallelMachine) -> &Probe {
@@ -138,14 +51,7 @@ fn probe(m: &mut ParallelMachine) -> &Probe {
 }
 
 fn setup<B: Bus>(m: &mut Machine<B>, period: u32, start: u16) {
-    for axis in 0..N_AXES {
-        ok(m.configure_axis(axis, &AXIS));
-    }
-    ok(m.enable_axes((1 << N_AXES) - 1));
-    ok(m.set_period(period));
-    ok(m.set_start_level(start));
-    ok(m.clear_faults_and_errors());
-    assert_eq!(status::HALT.get(ok(m.status())), 0);
+    pin_probe::setup(m, &AXIS, period, start);
 }
 
 /// `n` records from a linear congruential generator, |increment| <= MAX_STEPS steps with
@@ -176,27 +82,10 @@ fn records(n: usize, seed: u64, period: u32) -> Vec<PeriodRecord> {
         .collect()
 }
 
-fn rounded(records: &[PeriodRecord], axis: usize) -> i32 {
-    let total: i64 = records.iter().map(|r| i64::from(r.inc[axis].to_bits())).sum();
-    ((total + (1 << 15)) >> 16) as i32
-}
-
 fn push_all<B: Bus>(m: &mut Machine<B>, records: &[PeriodRecord]) {
     for record in records {
         ok(m.bus().push_records(std::slice::from_ref(record)));
     }
-}
-
-/// Positions at rest: read twice, equal.
-fn positions<B: Bus>(m: &mut Machine<B>) -> Vec<i32> {
-    let read_once = |m: &mut Machine<B>| {
-        let mut words = vec![0u32; N_AXES];
-        ok(m.bus().read(position::addr(0), &mut words));
-        words.into_iter().map(|w| w as i32).collect::<Vec<i32>>()
-    };
-    let first = read_once(m);
-    assert_eq!(read_once(m), first, "positions still changing");
-    first
 }
 
 /// The chip reports R (not the step engine's S) and the driver refuses a period off it.
@@ -209,10 +98,7 @@ fn serial_chip_reports_its_round() {
     assert!(matches!(m.set_period(13 * r + 16), Err(BusError::PeriodSlots { .. })));
     ok(m.set_period(13 * r));
     // Over SPI too: the same CAPS.
-    let mut host = PinHost::new(Probe::new("serial_chip_reports_its_round_spi"), PinTiming::default());
-    ok(host.reset(RESET_CYCLES));
-    ok(host.idle(4));
-    let spi = ok(Machine::connect(SpiBus::new(host, N_AXES)));
+    let spi = pin_probe::spi_machine(chip("serial_chip_reports_its_round_spi"));
     assert_eq!(spi.caps().step_slots, r);
 }
 
