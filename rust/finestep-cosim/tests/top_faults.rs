@@ -19,7 +19,9 @@ use finestep_host::regs::{
 use finestep_host::stream::wait_idle;
 use finestep_host::{AxisSetup, Bus, BusError, Machine, PinHost, PinTiming};
 use finestep_model::{DriveTiming, PeriodRecord};
-use pin_probe::{all_rounded, ok, positions, rounded, ParallelMachine, Probe, SpiMachine, N_AXES, RESET_CYCLES};
+use pin_probe::{
+    all_rounded, ok, positions, records, rounded, ParallelMachine, Probe, SpiMachine, N_AXES, RESET_CYCLES,
+};
 
 const FIFO_DEPTH: usize = 256;
 /// Step timing of every axis: L = 3, S = 3, U = 2, H = 2, so I_fwd = 6 and
@@ -28,9 +30,7 @@ const FIFO_DEPTH: usize = 256;
 const STEP_LEN: u64 = 3;
 const AXIS: AxisSetup =
     AxisSetup { timing: DriveTiming::new(3, 3, 2, 2), out_mode: finestep_host::OutMode::StepDir, invert: 0 };
-/// Largest |increment| the record generator makes, in steps: within the rated rate
-/// (|D| * I_rev <= P) for every period used below (P >= 128).
-const MAX_STEPS: i64 = 8;
+
 /// The motion chip without the hand wheel (the boards' build), its step pulses `STEP_LEN`
 /// rounded up to whole visits of the step engine (docs/spec/step_engine.md).
 fn chip(name: &str) -> Probe {
@@ -66,30 +66,6 @@ fn setup<B: Bus>(machine: &mut Machine<B>, period: u32, start: u16) {
 
 fn read<B: Bus>(machine: &mut Machine<B>, addr: u8) -> u32 {
     ok(machine.bus().read_one(addr))
-}
-
-/// `n` records from a small linear congruential generator, every increment within
-/// +-MAX_STEPS steps with a random fraction; `block_end` on the last one if asked.
-fn records(n: usize, seed: u64, block_end: bool) -> Vec<PeriodRecord> {
-    let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    let span = ((2 * MAX_STEPS) << 16) as u64 + 1;
-    (0..n)
-        .map(|k| {
-            let mut raw = [0i32; N_AXES];
-            for (axis, slot) in raw.iter_mut().enumerate() {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let value = ((state >> 20) % span) as i64 - (MAX_STEPS << 16);
-                // Axis 0 only forwards, axis 1 only backwards, 2 and 3 both ways.
-                *slot = match axis {
-                    0 => value.abs(),
-                    1 => -value.abs(),
-                    3 => value / 5,
-                    _ => value,
-                } as i32;
-            }
-            PeriodRecord::from_raw(&raw, u8::from(block_end && k + 1 == n))
-        })
-        .collect()
 }
 
 fn push_all<B: Bus>(machine: &mut Machine<B>, records: &[PeriodRecord]) {

@@ -24,8 +24,6 @@ use pin_probe::{ok, positions, rounded, ParallelMachine, Probe, N_AXES};
 const STEP_LEN: u64 = 3;
 const AXIS: AxisSetup =
     AxisSetup { timing: DriveTiming::new(3, 3, 2, 2), out_mode: finestep_host::OutMode::StepDir, invert: 0 };
-/// Largest |increment| the record generator makes, in steps.
-const MAX_STEPS: i64 = 8;
 
 /// R: the clocks between two visits of an axis, from the spec's formula and the build's
 /// parameters (S = 4 slots for 4 axes, 32 / STEP_DIGIT clocks a visit).
@@ -54,32 +52,16 @@ fn setup<B: Bus>(m: &mut Machine<B>, period: u32, start: u16) {
     pin_probe::setup(m, &AXIS, period, start);
 }
 
-/// `n` records from a linear congruential generator, |increment| <= MAX_STEPS steps with
-/// a random fraction: axis 0 forwards, 1 backwards, 2 and 3 both ways; each checked
-/// against the serial core's rated rate at `period`.
+/// [`pin_probe::records`] with a block end on the last, each checked against the serial
+/// core's rated rate at `period`.
 fn records(n: usize, seed: u64, period: u32) -> Vec<PeriodRecord> {
-    let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-    let span = ((2 * MAX_STEPS) << 16) as u64 + 1;
     let core = rtl_top_params_of(TopVariant::MotionSerial).core_params();
     let mut checker = RateChecker::for_core(&core, period, &[AXIS.timing; N_AXES]);
-    (0..n)
-        .map(|k| {
-            let mut raw = [0i32; N_AXES];
-            for (axis, slot) in raw.iter_mut().enumerate() {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-                let value = ((state >> 20) % span) as i64 - (MAX_STEPS << 16);
-                *slot = match axis {
-                    0 => value.abs(),
-                    1 => -value.abs(),
-                    3 => value / 5,
-                    _ => value,
-                } as i32;
-            }
-            let record = PeriodRecord::from_raw(&raw, u8::from(k + 1 == n));
-            checker.check(&record).unwrap_or_else(|(axis, e)| panic!("record {k}, axis {axis}: {e}"));
-            record
-        })
-        .collect()
+    let records = pin_probe::records(n, seed, true);
+    for (k, record) in records.iter().enumerate() {
+        checker.check(record).unwrap_or_else(|(axis, e)| panic!("record {k}, axis {axis}: {e}"));
+    }
+    records
 }
 
 fn push_all<B: Bus>(m: &mut Machine<B>, records: &[PeriodRecord]) {

@@ -14,6 +14,9 @@ use finestep_model::PeriodRecord;
 
 /// Axes of the chips the tests run.
 pub const N_AXES: usize = 4;
+/// Largest |increment| [`records`] makes, in steps: within the rated rate (|D| * I_rev
+/// <= P) of the tests' axis timing at every period they use (P >= 128 on the step engine).
+pub const MAX_STEPS: i64 = 8;
 /// Cycles of reset [`PinHost::reset`] is given; `TIMESTAMP` is 0 in the first cycle after.
 pub const RESET_CYCLES: u64 = 4;
 
@@ -158,6 +161,30 @@ pub fn setup<B: Bus>(machine: &mut Machine<B>, axis: &AxisSetup, period: u32, st
     ok(machine.clear_faults_and_errors());
     let word = ok(machine.status());
     assert_eq!(status::HALT.get(word), 0, "status {word:#x}");
+}
+
+/// `n` records from a small linear congruential generator, every increment within
+/// +-MAX_STEPS steps with a random fraction; `block_end` on the last one if asked.
+pub fn records(n: usize, seed: u64, block_end: bool) -> Vec<PeriodRecord> {
+    let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    let span = ((2 * MAX_STEPS) << 16) as u64 + 1;
+    (0..n)
+        .map(|k| {
+            let mut raw = [0i32; N_AXES];
+            for (axis, slot) in raw.iter_mut().enumerate() {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                let value = ((state >> 20) % span) as i64 - (MAX_STEPS << 16);
+                // Axis 0 only forwards, axis 1 only backwards, 2 and 3 both ways.
+                *slot = match axis {
+                    0 => value.abs(),
+                    1 => -value.abs(),
+                    3 => value / 5,
+                    _ => value,
+                } as i32;
+            }
+            PeriodRecord::from_raw(&raw, u8::from(block_end && k + 1 == n))
+        })
+        .collect()
 }
 
 /// The DDA's position after `records`: the summed increments rounded half up.
