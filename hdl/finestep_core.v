@@ -82,7 +82,9 @@ module finestep_core #(
     // quantum of the periods (docs/spec/step_serial.md#environment).
     localparam SLOTS_L = (N_AXES <= 2) ? 1 : ((N_AXES <= 4) ? 2 : 3);
     localparam DIGIT_L = (STEP_DIGIT <= 1) ? 0 : ((STEP_DIGIT == 2) ? 1 : ((STEP_DIGIT == 4) ? 2 : 3));
-    localparam SERIAL  = (STEP_SHARED != 0 && STEP_DIGIT != 0) ? 1 : 0;
+    // (a STEP_DIGIT outside 1..8 builds no serial engine: its elaboration check names it
+    // without the engine's widths going negative first)
+    localparam SERIAL  = (STEP_SHARED != 0 && STEP_DIGIT >= 1 && STEP_DIGIT <= 8) ? 1 : 0;
     localparam SL = (STEP_SHARED == 0) ? 0 : ((SERIAL != 0) ? SLOTS_L + 5 - DIGIT_L : SLOTS_L);
     // The checks across parameters (P_WIDTH above log2 of the round; the digit-serial
     // engine's TIMING_W and P_WIDTH limits) are in finestep_core_checks.vh, generated

@@ -293,6 +293,7 @@ fn reads_of_the_visited_channel_stall_it_and_read_the_copies() {
     for offset in 0..8 {
         bench.clock(offset);
         let mut miso = Vec::new();
+        let mut served: Option<u8> = None;
         for (cycle, &(cs_n, sck, mosi)) in wave.pins.iter().enumerate() {
             (bench.pins.spi_cs_n, bench.pins.spi_sck, bench.pins.spi_mosi) = (cs_n, sck, mosi);
             if wave.samples.contains(&cycle) {
@@ -302,9 +303,11 @@ fn reads_of_the_visited_channel_stall_it_and_read_the_copies() {
             let grant = arbitrate(top.spi_frame().request(), top.parallel().request(), false);
             let bank = top.encoders();
             let (slot, slots) = (bank.slot(), bank.slots());
-            let read = grant.filter(|(_, r)| !r.write).map(|(_, r)| r.addr);
-            let stall = read.and_then(|addr| store_channel(addr, bank.n_enc())) == Some(slot);
-            assert_eq!(bank.stall(read), stall);
+            // The bank stalls on the read the bus stage serves: the one granted in the
+            // cycle before (docs/spec/encoder_bank.md).
+            let stall = served.and_then(|addr| store_channel(addr, bank.n_enc())) == Some(slot);
+            assert_eq!(bank.stall(served), stall);
+            served = grant.filter(|(_, r)| !r.write).map(|(_, r)| r.addr);
             bench.clock(1);
             let next = if stall { slot } else { (slot + 1) % slots };
             assert_eq!(bench.top.encoders().slot(), next, "offset {offset} cycle {cycle}");

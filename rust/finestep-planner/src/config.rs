@@ -850,7 +850,10 @@ mod tests {
         let config = MachineConfig::from_toml_str("period_ms = 0.10004\n", "m.toml").unwrap(); // 5 002 clocks
         assert_eq!(config.clone().for_core(two_slots).resolve().unwrap().period_clocks, 5_002);
         let err = config.for_core(four_slots).resolve_in("m.toml").unwrap_err().to_string();
-        assert!(err.contains("5002 clocks") && err.contains("not a multiple of the core's 4 step slots"), "{err}");
+        assert!(
+            err.contains("5002 clocks") && err.contains("not a multiple of the core's step round of 4 clocks"),
+            "{err}"
+        );
     }
 
     #[test]

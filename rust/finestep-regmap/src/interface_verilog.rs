@@ -160,6 +160,18 @@ pub fn generate_checks(module: &ModuleSpec) -> String {
         let _ =
             writeln!(out, "localparam integer {} = {};", derived.verilog_name(), verilog_expr(module, &derived.value));
     }
+    // A constraint is checked only with every parameter in its range, so an
+    // out-of-range parameter is named alone (and a constraint's expression never sees
+    // an out-of-range value).
+    let in_range: Vec<String> = module
+        .parameters
+        .iter()
+        .map(|p| format!("({name} >= {min} && {name} <= {max})", name = p.name, min = p.min.value, max = p.max.value))
+        .collect();
+    if !module.constraints.is_empty() {
+        out.push_str("\n// Every parameter within its range: the constraints below are checked only then.\n");
+        let _ = writeln!(out, "localparam FS_CHECK_IN_RANGE = {};", in_range.join(" && "));
+    }
     out.push_str("\ngenerate\n");
     for parameter in &module.parameters {
         let _ = writeln!(out, "    // {}: {}", parameter.name, parameter.description);
@@ -187,8 +199,8 @@ pub fn generate_checks(module: &ModuleSpec) -> String {
         let _ = writeln!(out, "    // {}", constraint.description);
         let require = verilog_expr(module, &constraint.require);
         let broken = match &constraint.when {
-            Some(when) => format!("({}) && !({require})", verilog_expr(module, when)),
-            None => format!("!({require})"),
+            Some(when) => format!("FS_CHECK_IN_RANGE && ({}) && !({require})", verilog_expr(module, when)),
+            None => format!("FS_CHECK_IN_RANGE && !({require})"),
         };
         let _ = writeln!(
             out,

@@ -89,10 +89,10 @@ fn parameter_ranges_hold_their_default_and_fit_caps() {
         &edited("{ name = \"WD_W\", default = 24", "{ name = \"WD_W\", default = 25"),
         "default 25 is outside min..=max (1..=24)",
     );
-    // CAPS.N_ENC is 4 bits: 16 channels would not fit.
+    // CAPS.N_ENC is 3 bits: 16 channels would not fit.
     assert_problem(
         &edited("max = \"ENC_COUNT.count\"", "max = 16"),
-        "max 16 does not fit its CAPS field CAPS.N_ENC (4 bits)",
+        "max 16 does not fit its CAPS field CAPS.N_ENC (3 bits)",
     );
 }
 
