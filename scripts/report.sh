@@ -41,8 +41,9 @@ yosys_stat ice40_core "synth_ice40" "chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG
 yosys_stat ecp5_core "synth_ecp5"
 yosys_stat ice40_cpld "synth_ice40" "$CPLD"
 yosys_stat xo2_cpld "synth_lattice -family xo2" "$CPLD"
-# The MAX II configuration (no RAM: the FIFO of 2 records in flip-flops) as generic LUT4s.
-MAX2="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 1 -set STEP_DIGIT 4 -set READ_STORE 0 -set FIFO_HEAD_REG 0 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 finestep_top"
+# The MAX II configuration (hdl/boards/max2_epm1270.v: seed 002's set, no hand wheel or
+# jog; no RAM: the FIFO of 2 records in flip-flops) as generic LUT4s.
+MAX2="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 0 -set FIFO_DEPTH_LOG2 1 -set STEP_DIGIT 4 -set READ_STORE 0 -set FIFO_HEAD_REG 0 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 finestep_top"
 yosys_stat lut4_max2 "synth -lut 4" "$MAX2"
 
 # One step channel and one encoder channel out of context, against the peers the silicon
@@ -392,7 +393,7 @@ p(f"| full with a DDA and a shaper per axis (STEP_SHARED 0) | iCE40 HX8K | fits,
 p(f"| CPLD: 4 axes, 2 encoders, MPG + jog, 8080, FIFO 4 | MachXO2-1200 | packs, bitstream, meets its clock (>= 50 MHz with a PLL) | "
   f"{xo2.get('used_TRELLIS_COMB', '?')} of {xo2.get('avail_TRELLIS_COMB', '?')} logic cells packed | "
   f"{yes(xo2.get('used_TRELLIS_COMB') and int(xo2['used_TRELLIS_COMB']) <= int(xo2.get('avail_TRELLIS_COMB', 0)))} |")
-p(f"| CPLD for MAX II: the same with a 2-record FIFO in flip-flops | Yosys `synth -lut 4` | <= 1 270 LUT4 and <= 1 270 FF (20 % spare) | "
+p(f"| CPLD for MAX II (seed 002): 4 axes, 2 encoders, 8080, a 2-record FIFO in flip-flops, the period interrupt, no MPG or jog | Yosys `synth -lut 4` | <= 1 270 LUT4 and <= 1 270 FF (20 % spare) | "
   f"{max2_lut} LUT4, {max2_ff} FF | {yes(max2_lut <= 1270 and max2_ff <= 1270)} |")
 def peer(x, bound):
     return x is not None and x < bound

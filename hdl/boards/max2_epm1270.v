@@ -1,9 +1,12 @@
 `timescale 1ns / 1ps
 `default_nettype none
-// Board top for an Altera MAX II EPM1270T144C5 CPLD in the reduced CPLD configuration:
-// 4 axes, 2 encoder channels, the probe, the hand wheel and jog, the 8080/FSMC bus to
-// the host (no SPI) and a 4-record FIFO, at the board's 50 MHz oscillator (MAX II has
-// no PLL). Reset: power-on and the reset key through board_reset. Pins and timing:
+// Board top for an Altera MAX II EPM1270T144C5 CPLD with seed 002's feature set: the
+// DDA fine interpolation of 4 axes (the digit-serial step engine) from an interpolation
+// buffer of 2 records (a FIFO in flip-flops: MAX II has no RAM), the period interrupt,
+// 2 encoder channels and the probe, the 8080/FSMC bus to the host (no SPI); no hand
+// wheel and no jog (HAS_MPG 0, reported in CAPS.HAS_MPG), at the board's 50 MHz
+// oscillator (MAX II has no PLL). The MachXO2-1200 top keeps the hand wheel and jog.
+// Reset: power-on and the reset key through board_reset. Pins and timing:
 // constraints/max2_epm1270.qsf and .sdc (Quartus project constraints/max2_epm1270.qpf).
 //
 // This configuration does not fit the 1270 logic elements yet (docs/bitstreams.md gives
@@ -11,8 +14,7 @@
 module max2_epm1270 #(
     parameter N_AXES          = 4,
     parameter N_ENC           = 2,
-    parameter HAS_MPG         = 1,
-    parameter FIFO_DEPTH_LOG2 = 2,
+    parameter FIFO_DEPTH_LOG2 = 1,
     // The core's digit-serial step engine (step_serial), STEP_DIGIT bits a clock: the
     // round R = 4 slots * 32 / STEP_DIGIT clocks (docs/spec/step_serial.md)
     parameter STEP_DIGIT      = 4
@@ -30,8 +32,6 @@ module max2_epm1270 #(
     // machine
     input  wire              estop_pin,
     input  wire              probe_pin,
-    input  wire              mpg_a,
-    input  wire              mpg_b,
     input  wire [N_ENC-1:0]  enc_a,
     input  wire [N_ENC-1:0]  enc_b,
     input  wire [N_ENC-1:0]  enc_z,
@@ -57,7 +57,7 @@ module max2_epm1270 #(
 
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
-        .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
+        .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(0), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
         .STEP_DIGIT(STEP_DIGIT),
         .READ_STORE(0),  // no RAM: the read multiplexer costs less than a store in flip-flops
         .FIFO_HEAD_REG(0)   // the FIFO in flip-flops: one register holds its head
@@ -69,7 +69,7 @@ module max2_epm1270 #(
         .bus_ad_in(bus_ad), .bus_ad_out(bus_ad_out), .bus_ad_oe(bus_ad_oe),
         .estop_pin(estop_pin),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
-        .mpg_a(mpg_a), .mpg_b(mpg_b),
+        .mpg_a(1'b0), .mpg_b(1'b0),  // no hand wheel (HAS_MPG 0)
         .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
         // the spindle and the logic outputs are not built in this board (HAS_SPINDLE,
         // HAS_OUTPUTS 0): their pins are constants
