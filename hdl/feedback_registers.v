@@ -279,16 +279,20 @@ module feedback_registers #(
     assign probe_active_high   = probe_active_high_reg;
     assign probe_filter        = probe_filter_reg;
     assign probe_arm           = probe_arm_reg;
-    assign mpg_prescale        = mpg_prescale_reg;
-    assign mpg_filter          = mpg_filter_reg;
+    // Without the hand wheel and the jog (HAS_MPG = 0) their configuration goes nowhere
+    // and reads 0: the outputs are the reset values, so no logic reads the registers and
+    // synthesis keeps no flip-flops for them (a hierarchical build keeps a register that
+    // drives a port).
+    assign mpg_prescale        = MPG ? mpg_prescale_reg : FS_MPG_CONTROL_PRESCALE_RESET;
+    assign mpg_filter          = MPG ? mpg_filter_reg : FS_MPG_CONTROL_FILTER_RESET;
     assign jog_enable          = MPG && jog_enable_reg;
-    assign jog_axis            = jog_axis_reg;
-    assign jog_multiplier      = jog_multiplier_reg;
-    assign jog_follow          = jog_follow_reg;
-    assign jog_scale           = jog_scale_reg;
-    assign jog_vmax            = jog_vmax_reg;
-    assign jog_accel           = jog_accel_reg;
-    assign jog_window          = jog_window_reg;
+    assign jog_axis            = MPG ? jog_axis_reg : FS_JOG_CONTROL_AXIS_RESET;
+    assign jog_multiplier      = MPG ? jog_multiplier_reg : FS_JOG_CONTROL_MULTIPLIER_RESET;
+    assign jog_follow          = MPG ? jog_follow_reg : FS_JOG_CONTROL_FOLLOW_RESET;
+    assign jog_scale           = MPG ? jog_scale_reg : FS_JOG_SCALE_STEPS_RESET;
+    assign jog_vmax            = MPG ? jog_vmax_reg : FS_JOG_VMAX_STEPS_RESET;
+    assign jog_accel           = MPG ? jog_accel_reg : FS_JOG_ACCEL_STEPS_RESET;
+    assign jog_window          = MPG ? jog_window_reg : FS_JOG_WINDOW_STEPS_RESET;
 
 endmodule
 

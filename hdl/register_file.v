@@ -424,6 +424,12 @@ module register_file #(
         status_word[FS_STATUS_JOG_REFUSED_LSB]    = jog_refused;
     end
 
+    // A link's error counters count only its own errors: without the link they stay 0,
+    // so they read as the constant (a hierarchical build keeps no flip-flops for them).
+    wire [COUNT_W-1:0] crc_error_count      = (HAS_SPI != 0) ? crc_error_count_reg : {COUNT_W{1'b0}};
+    wire [COUNT_W-1:0] frame_error_count    = (HAS_SPI != 0) ? frame_error_count_reg : {COUNT_W{1'b0}};
+    wire [COUNT_W-1:0] parallel_error_count = (HAS_PARALLEL != 0) ? parallel_error_count_reg : {COUNT_W{1'b0}};
+
     // The read value of an address, from the state of this cycle. A function called only
     // on a read, so a simulator evaluates this wide mux only when a read is served.
     function [WORD_W-1:0] read_word(input [ADDR_W-1:0] addr);
@@ -458,9 +464,9 @@ module register_file #(
                 FS_LATCH_TIME_ADDR:       read_value = latch_time_reg;
                 FS_PERIOD_COUNT_ADDR:     read_value = period_count_reg;
                 FS_UNDERRUN_COUNT_ADDR:       read_value[COUNT_W-1:0] = underrun_count_reg;
-                FS_CRC_ERROR_COUNT_ADDR:      read_value[COUNT_W-1:0] = crc_error_count_reg;
-                FS_FRAME_ERROR_COUNT_ADDR:    read_value[COUNT_W-1:0] = frame_error_count_reg;
-                FS_PARALLEL_ERROR_COUNT_ADDR: read_value[COUNT_W-1:0] = parallel_error_count_reg;
+                FS_CRC_ERROR_COUNT_ADDR:      read_value[COUNT_W-1:0] = crc_error_count;
+                FS_FRAME_ERROR_COUNT_ADDR:    read_value[COUNT_W-1:0] = frame_error_count;
+                FS_PARALLEL_ERROR_COUNT_ADDR: read_value[COUNT_W-1:0] = parallel_error_count;
                 FS_REFUSED_RECORD_COUNT_ADDR: read_value[COUNT_W-1:0] = refused_count_reg;
                 FS_AXIS_STATUS_ADDR: begin
                     read_value[FS_AXIS_STATUS_RATE_ERROR_LSB +: N_AXES] = rate_error;
@@ -523,7 +529,7 @@ module register_file #(
     wire [INC_W-1:0]  push_ff_word   = record_inc_reg[INC_W*push_axis +: INC_W];
     wire [INC_W-1:0]  push_inc       = STORED ? push_stored[INC_W-1:0] : push_ff_word;
     wire [COUNT_W-1:0] refused_now = (push_refused ? {{(COUNT_W-1){1'b0}}, 1'b1} : {COUNT_W{1'b0}}) +
-                                     (spi_refused ? {{(COUNT_W-8){1'b0}}, spi_refused_count} : {COUNT_W{1'b0}});
+                                     ((HAS_SPI != 0 && spi_refused) ? {{(COUNT_W-8){1'b0}}, spi_refused_count} : {COUNT_W{1'b0}});
 
     // Time and the position latch.
     always @(posedge clk) begin
@@ -741,6 +747,12 @@ module register_file #(
     initial f_past_valid = 1'b0;
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
+    // A link that is not built never requests (finestep_top ties its master's request
+    // low); its error inputs stay free, so the proof covers them doing anything.
+    always @(*) begin
+        if (HAS_SPI == 0) assume (!spi_req);
+        if (HAS_PARALLEL == 0) assume (!par_req);
+    end
     always @(*) begin
         assert (!(grant_spi && grant_par));
         if (grant_spi) assert (spi_req);
@@ -873,6 +885,12 @@ module register_file #(
         assert (irq == $past(|(irq_status & f_irq_mask)));
         if ($past(read && bus_addr == FS_IRQ_MASK_ADDR && !stage_stored && feedback_rdata == 32'd0))
             assert (rdata_reg[IRQ_W-1:0] == $past(f_irq_mask));
+        // Without a link its error counters read 0, whatever its (absent) error inputs do.
+        if (HAS_SPI == 0 && $past(read && feedback_rdata == 32'd0 &&
+                (bus_addr == FS_CRC_ERROR_COUNT_ADDR || bus_addr == FS_FRAME_ERROR_COUNT_ADDR)))
+            assert (rdata_reg == 32'd0);
+        if (HAS_PARALLEL == 0 && $past(read && feedback_rdata == 32'd0 && bus_addr == FS_PARALLEL_ERROR_COUNT_ADDR))
+            assert (rdata_reg == 32'd0);
     end
 `endif
 
