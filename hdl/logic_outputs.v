@@ -192,22 +192,29 @@ module logic_outputs #(
     end
     // Bits above N_GPIO never hold a 1.
     always @(*) if (f_past_valid && N_GPIO == 0) assert (outputs_reg[3] == 1'b0 && safe_reg[3] == 1'b0);
-    // What a read returns, field by field from the register map.
+    // What a read returns, word by word from the register map's fields (a bit no field
+    // names reads 0).
+    wire [31:0] f_outputs_word = ({31'd0, coolant_mist} << FS_OUTPUTS_MIST_LSB) |
+                                 ({31'd0, coolant_flood} << FS_OUTPUTS_FLOOD_LSB) |
+                                 ({31'd0, light} << FS_OUTPUTS_LIGHT_LSB) |
+                                 ((N_GPIO > 0 ? {{(32-GPIO_W){1'b0}}, gpio} : 32'd0) << FS_OUTPUTS_GPIO_LSB) |
+                                 (N_GPIO << FS_OUTPUTS_N_GPIO_LSB);
+    wire [31:0] f_safe_word    = ({31'd0, safe_reg[0]} << FS_OUTPUTS_SAFE_MIST_LSB) |
+                                 ({31'd0, safe_reg[1]} << FS_OUTPUTS_SAFE_FLOOD_LSB) |
+                                 ({31'd0, safe_reg[2]} << FS_OUTPUTS_SAFE_LIGHT_LSB) |
+                                 ((N_GPIO > 0 ? {{(32-GPIO_W){1'b0}}, safe_reg[OUT_W-1:3]} : 32'd0)
+                                  << FS_OUTPUTS_SAFE_GPIO_LSB);
+    wire [31:0] f_interlock_word = ({31'd0, enable_reg} << FS_INTERLOCK_ENABLE_LSB) |
+                                   ({31'd0, active_high_reg} << FS_INTERLOCK_ACTIVE_HIGH_LSB) |
+                                   ({{(32-FILTER_W){1'b0}}, filter_reg} << FS_INTERLOCK_FILTER_LSB) |
+                                   ({31'd0, active} << FS_INTERLOCK_ACTIVE_LSB) |
+                                   ({31'd0, blocked_reg} << FS_INTERLOCK_BLOCKED_LSB) |
+                                   ({{(32-PRESC_W){1'b0}}, prescale_reg} << FS_INTERLOCK_PRESCALE_LSB);
     always @(*) if (f_past_valid && !rst) begin
         if (addr == FS_CAPS_ADDR) assert (rdata == (32'd1 << FS_CAPS_HAS_OUTPUTS_LSB));
-        if (addr == FS_OUTPUTS_ADDR)
-            assert (rdata[FS_OUTPUTS_MIST_LSB] == coolant_mist && rdata[FS_OUTPUTS_FLOOD_LSB] == coolant_flood &&
-                    rdata[FS_OUTPUTS_LIGHT_LSB] == light &&
-                    rdata[FS_OUTPUTS_N_GPIO_LSB +: FS_OUTPUTS_N_GPIO_WIDTH] == N_GPIO);
-        if (addr == FS_OUTPUTS_ADDR && N_GPIO > 0) assert (rdata[FS_OUTPUTS_GPIO_LSB +: GPIO_W] == gpio);
-        if (addr == FS_OUTPUTS_SAFE_ADDR)
-            assert (rdata[FS_OUTPUTS_SAFE_MIST_LSB] == safe_reg[0] && rdata[FS_OUTPUTS_SAFE_FLOOD_LSB] == safe_reg[1] &&
-                    rdata[FS_OUTPUTS_SAFE_LIGHT_LSB] == safe_reg[2]);
-        if (addr == FS_INTERLOCK_ADDR)
-            assert (rdata[FS_INTERLOCK_ENABLE_LSB] == enable_reg && rdata[FS_INTERLOCK_ACTIVE_HIGH_LSB] == active_high_reg &&
-                    rdata[FS_INTERLOCK_FILTER_LSB +: FILTER_W] == filter_reg &&
-                    rdata[FS_INTERLOCK_PRESCALE_LSB +: PRESC_W] == prescale_reg &&
-                    rdata[FS_INTERLOCK_ACTIVE_LSB] == active && rdata[FS_INTERLOCK_BLOCKED_LSB] == blocked_reg);
+        if (addr == FS_OUTPUTS_ADDR) assert (rdata == f_outputs_word);
+        if (addr == FS_OUTPUTS_SAFE_ADDR) assert (rdata == f_safe_word);
+        if (addr == FS_INTERLOCK_ADDR) assert (rdata == f_interlock_word);
         if (addr != FS_CAPS_ADDR && addr != FS_OUTPUTS_ADDR && addr != FS_OUTPUTS_SAFE_ADDR && addr != FS_INTERLOCK_ADDR)
             assert (rdata == 32'd0);
     end

@@ -788,6 +788,12 @@ module register_file #(
         if ($past(overflow_reg) && !$past(clear_errors_reg)) assert (overflow_reg);
         if ($past(clear_counters_reg)) assert (underrun_count_reg == 16'd0 && crc_error_count_reg == 16'd0 &&
                                               refused_count_reg == 16'd0);
+        // Otherwise each error counter counts its own events, one each (wrapping at 16 bits).
+        if (!$past(clear_counters_reg))
+            assert (underrun_count_reg == $past(underrun_count_reg) + {15'd0, $past(underrun_event)} &&
+                    crc_error_count_reg == $past(crc_error_count_reg) + {15'd0, $past(spi_crc_error)} &&
+                    frame_error_count_reg == $past(frame_error_count_reg) + {15'd0, $past(spi_frame_error)} &&
+                    parallel_error_count_reg == $past(parallel_error_count_reg) + {15'd0, $past(par_error)});
         if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
         assert (push_commit == $past(push_stage));
         if ($past(push_go) && !$past(push_last) && !$past(fifo_flush)) assert (push_go);

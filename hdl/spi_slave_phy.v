@@ -107,6 +107,7 @@ module spi_slave_phy (
     assign rx_byte     = rx_byte_reg;
 
 `ifdef FORMAL
+`ifndef F_FRAMES
     // An abstract master at the fastest timing above (but for two half periods one clock
     // longer, below) sends two arbitrary bytes in one
     // frame and reads MISO; the frame layer offers two arbitrary bytes, the second from
@@ -166,6 +167,44 @@ module spi_slave_phy (
         if (f_edge == 6'd32) assert (f_read == f_offered);
     end
     always @(posedge clk) if (f_past_valid) cover (rx_valid && f_received == 2'd1);
+`else
+    // Frames of any length (task frames, the pins free): FRAME_WHOLE is the spec's "the
+    // frame ended on a byte boundary", counted at the pins: the SCK rises between CS's
+    // fall and its rise, both seen through a two-flop synchroniser, a multiple of 8.
+    reg f_past_valid;
+    initial f_past_valid = 1'b0;
+    initial assume (rst);
+    always @(posedge clk) f_past_valid <= 1'b1;
+    reg [1:0] f_cs;
+    reg [2:0] f_sck;
+    reg       f_in;
+    reg [2:0] f_rises;   // mod 8
+    always @(posedge clk) begin
+        f_cs  <= {f_cs[0], spi_cs_n};
+        f_sck <= {f_sck[1:0], spi_sck};
+        if (!f_cs[1] && !f_in) begin
+            f_in    <= 1'b1;
+            f_rises <= 3'd0;
+        end else if (f_cs[1] && f_in) begin
+            f_in <= 1'b0;
+        end else if (f_in && f_sck[1] && !f_sck[2]) begin
+            f_rises <= f_rises + 3'd1;
+        end
+        if (rst) begin
+            f_cs    <= 2'b11;
+            f_sck   <= 3'b000;
+            f_in    <= 1'b0;
+            f_rises <= 3'd0;
+        end
+    end
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        if (frame_end) assert (frame_whole == (f_rises == 3'd0));
+        if (!frame_end) assert (!frame_whole);
+    end
+    // What makes the above inductive: the pin-side view is the slave's own.
+    always @(*) if (f_past_valid && !rst)
+        assert (f_cs == cs_n_sync_reg && f_sck == sck_sync_reg && f_in == selected_reg && f_rises == bit_count_reg);
+`endif
 `endif
 
 endmodule

@@ -239,6 +239,7 @@ module spindle #(
     always @(posedge clk) if (rst) f_reset_seen <= 1'b1;
     always @(*) if (f_past_valid) assert (f_reset_seen);
 
+    wire [31:0] f_level_wide = {{(32-LEVEL_W){1'b0}}, level_reg};
     // The frame as the DAC sees it: the word latched at CS_n's fall, the bits sampled at
     // each rising SCK, their count.
     reg [FRAME_BITS-1:0] f_word, f_bits;
@@ -262,6 +263,10 @@ module spindle #(
         if ($past(halt_rise)) assert (dac_cs_n && !dac_sck && count_reg == {LEVEL_W{1'b0}});
         // A frame started after a halt commands code 0.
         if (!dac_cs_n && f_zero_frame) assert (f_word[DAC_BITS-1:0] == {DAC_BITS{1'b0}});
+        // The word a frame carries (spec): 0x3000 | min(level, 4095), the level of the
+        // clock it starts in.
+        if ($past(!frame_reg && frame_next))
+            assert (f_word == (16'h3000 | (($past(f_level_wide) > 32'd4095) ? 16'd4095 : $past(f_level_wide[15:0]))));
         // The ramp: the level moves only at a period's end (or to 0 on a halt), by at most
         // the step, and never past the target.
         if (!$past(halt) && level_reg != $past(level_reg)) begin

@@ -361,6 +361,16 @@ module step_engine #(
             assert (wrap_up == (f_s >= f_m) && wrap_down == (f_s < 0));
         end
     end
+    // The visited axis's step pins with its INVERT bits undone.
+    reg [SL-1:0] f_ix_prev;
+    reg          f_inv_a_prev, f_inv_b_prev;
+    always @(posedge clk) begin
+        f_ix_prev    <= sh_ix;
+        f_inv_a_prev <= invert[FS_INVERT_WIDTH*sh_ix + FS_INVERT_PIN_A_BIT];
+        f_inv_b_prev <= invert[FS_INVERT_WIDTH*sh_ix + FS_INVERT_PIN_B_BIT];
+    end
+    wire f_pin_a = pin_a[f_ix_prev] ^ f_inv_a_prev;
+    wire f_pin_b = pin_b[f_ix_prev] ^ f_inv_b_prev;
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (slot_reg == $past(slot_reg) + SLOT_ONE);
         // Pins move only at the edge ending their axis's shaper visit; enables every cycle.
@@ -371,6 +381,18 @@ module step_engine #(
             // ... and the step pins take their own axis's INVERT bits.
             if ($past(sh_hot[f])) assert (pin_a[f] == ($past(a_next) ^ $past(invert[FS_INVERT_WIDTH*f + FS_INVERT_PIN_A_BIT])) &&
                                           pin_b[f] == ($past(b_next) ^ $past(invert[FS_INVERT_WIDTH*f + FS_INVERT_PIN_B_BIT])));
+        end
+        // ... and carry the spec's function of the state the visit left (step_shaper's
+        // table): step/dir A = level, B = dir; up/down the level on A moving up, on B
+        // moving down; quadrature the count's Gray code, A = {0,1,1,0}, B = {0,0,1,1}.
+        if ($past(sh_visit)) begin
+            case ($past(mode_cur))
+                FS_OUT_MODE_UP_DOWN: assert (f_pin_a == ($past(level_next) && $past(dir_next)) &&
+                                             f_pin_b == ($past(level_next) && !$past(dir_next)));
+                FS_OUT_MODE_QUADRATURE: assert (f_pin_a == ($past(quad_next) == 2'd1 || $past(quad_next) == 2'd2) &&
+                                                f_pin_b == ($past(quad_next) >= 2'd2));
+                default: assert (f_pin_a == $past(level_next) && f_pin_b == $past(dir_next));
+            endcase
         end
         // A request comes only from a running DDA visit that wrapped.
         assert (req_valid_reg == ($past(dda_visit) && $past(run) && ($past(wrap_up) || $past(wrap_down))));

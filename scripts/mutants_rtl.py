@@ -15,11 +15,12 @@ is then run
     mutation is carried across by (cell type, source span, order among equal ones, port,
     bit); a mutation with no counterpart at the reduced widths is not listed.
 
-Survivors of both are checked for equivalence with Yosys (equiv_make / equiv_simple /
-equiv_induct on the block at the top's parameters, mutant against original).
+Survivors of both are checked for equivalence: the block at the top's parameters, mutant
+against original, `miter -equiv` proven by SymbiYosys's `abc pdr` from reset.
 
-  scripts/mutants_rtl.py gen [--per-block N] [--seed S]   list, write the netlist
+  scripts/mutants_rtl.py gen [--per-block N] [--seed S] [--carry DIR:COMMIT:IDS]   list, write the netlist
   scripts/mutants_rtl.py run [--quick] [--only lockstep|formal] [ID...]
+  scripts/mutants_rtl.py equiv [--timeout S] [ID...]   (the survivors, or these mutants)
   scripts/mutants_rtl.py report
 
 Everything is written under build/mutants-rtl/ (never committed).
@@ -270,11 +271,75 @@ def formal_design(block_sby, task, work):
 
 def inputs_hash(args):
     import hashlib
-    h = hashlib.sha256(f"{args.per_block} {args.seed}".encode())
+    h = hashlib.sha256(f"{args.per_block} {args.seed} {args.carry}".encode())
     for path in sorted((ROOT / "hdl").glob("*.v")) + sorted((ROOT / "sim" / "formal").glob("*.sby")) + [
             ROOT / "hdl" / "interface.toml", ROOT / "hdl" / "registers.toml", Path(__file__)]:
         h.update(path.read_bytes())
     return h.hexdigest()
+
+
+def mutation_key(m, cell_key):
+    """A mutation named without Yosys's cell numbering: the block, the cell's key
+    (cell_keys), the mode, port and bits."""
+    return (base_name(m["module"]), cell_key, m["mode"], m.get("port"), m.get("portbit"), m.get("ctrlbit"))
+
+
+def line_map(path, old, new="HEAD"):
+    """Line n of `path` at commit `old` -> its line at `new` (None: the line changed)."""
+    diff = subprocess.run(["git", "-C", str(ROOT), "diff", "-U0", old, new, "--", path], check=True,
+                          capture_output=True, text=True).stdout
+    hunks = []
+    for h in re.finditer(r"(?m)^@@ -(\d+)(?:,(\d+))? \+(\d+)(?:,(\d+))? @@", diff):
+        a, c = int(h.group(1)), int(h.group(3))
+        b = int(h.group(2)) if h.group(2) is not None else 1
+        e = int(h.group(4)) if h.group(4) is not None else 1
+        hunks.append((a, b, c, e))
+
+    def at(n):
+        off = 0
+        for a, b, c, e in hunks:
+            if b and a <= n < a + b:
+                return None
+            old_next, new_next = (a + b if b else a + 1), (c + e if e else c + 1)
+            if n >= old_next:
+                off = new_next - old_next
+        return n + off
+    return at
+
+
+def carried(args):
+    """(id, mutation key at today's hdl/ or None) of each mutant of an older list
+    (`--carry DIR:COMMIT:IDS`: DIR the older build/mutants-rtl, COMMIT the hdl/ it was
+    drawn at), its source spans moved by git's diff of hdl/ since."""
+    if not args.carry:
+        return []
+    where, commit, ids = args.carry.split(":")
+    old_dir = Path(where)
+    old = {str(m["id"]): m for m in json.loads((old_dir / "mutants.json").read_text())}
+    design = json.loads((old_dir / "sim" / "design.json").read_text())["modules"]
+    maps, keys, out = {}, {}, []
+
+    def move(src):
+        parts = []
+        for part in src.split("|"):
+            f = part.split(":")[0]
+            if f not in maps:
+                maps[f] = line_map(f"hdl/{f}", commit)
+            lines = [int(x) for x in re.findall(r"(?:\.v:|-)(\d+)\.", part)]
+            moved = [maps[f](n) for n in lines]
+            if None in moved:
+                return None
+            it = iter(moved)
+            parts.append(re.sub(r"(\.v:|-)(\d+)\.", lambda x: f"{x.group(1)}{next(it)}.", part))
+        return "|".join(parts)
+    for i in ids.split(","):
+        m = parse_mutation(old[i]["sim"])
+        if m["module"] not in keys:
+            keys[m["module"]] = cell_keys(design[m["module"]])[0]
+        ctype, src, named, order = keys[m["module"]][m["cell"]]
+        src = move(src)
+        out.append((int(i), None if src is None else mutation_key(m, (ctype, src, named, order))))
+    return out
 
 
 def gen(args):
@@ -314,6 +379,7 @@ def gen(args):
     rng = random.Random(args.seed)
     mutants = []
     formal_cache = {}
+    usable_of = {}
     for b in sorted(candidates):
         sby = BLOCKS[b]
         tasks = sby_tasks(ROOT / "sim" / "formal" / f"{sby}.sby")
@@ -352,12 +418,30 @@ def gen(args):
             if tasks and not ftargets:
                 continue
             usable.append((m, ftargets))
+        for m, ftargets in usable:
+            usable_of[mutation_key(m, sim_keys[m["module"]][0][m["cell"]])] = (b, m, ftargets)
         rng.shuffle(usable)
         for m, ftargets in usable[: args.per_block]:
             mutants.append({"block": b, "sby": sby, "sim": mutation_cmd(m, m["module"], m["cell"]),
                             "formal": ftargets, "src": sim_keys[m["module"]][0][m["cell"]][1]})
     for i, mut in enumerate(mutants, 1):
         mut["id"] = i
+    drawn = {mutation_key(parse_mutation(mut["sim"]),
+                          cell_keys(sim[parse_mutation(mut["sim"])["module"]])[0][parse_mutation(mut["sim"])["cell"]]):
+             mut["id"] for mut in mutants}
+    for old_id, key in carried(args):
+        if key is None:
+            print(f"mutants-rtl: carried mutant {old_id}: its source line changed, not carried")
+        elif key in drawn:
+            print(f"mutants-rtl: carried mutant {old_id} is mutant {drawn[key]} of this list")
+        elif key not in usable_of:
+            print(f"mutants-rtl: carried mutant {old_id}: no such mutation of the block now, not carried")
+        else:
+            b, m, ftargets = usable_of[key]
+            mutants.append({"block": b, "sby": BLOCKS[b], "sim": mutation_cmd(m, m["module"], m["cell"]),
+                            "formal": ftargets, "src": key[1][1], "id": len(mutants) + 1, "carried": old_id})
+            drawn[key] = len(mutants)
+            print(f"mutants-rtl: carried mutant {old_id} is mutant {len(mutants)} of this list")
     (OUT / "mutants.json").write_text(json.dumps(mutants, indent=1))
 
     # One netlist of the top with every mutant, each active only at mutsel == id.
@@ -435,7 +519,7 @@ def lockstep(exe, mid, tests):
     return "survived"
 
 
-def formal(mut):
+def formal(mut, timeout=90):
     if not mut["formal"]:
         return "no counterpart in the proofs"
     for task, cmd in sorted(mut["formal"].items()):
@@ -450,7 +534,7 @@ def formal(mut):
         (work / f"{mut['sby']}.sby").write_text(text)
         try:
             env = dict(os.environ, PATH=f"{VENV_BIN}:{os.environ['PATH']}")
-            r = run(SBY + ["-f", f"{mut['sby']}.sby", task], cwd=work, timeout=90, env=env)
+            r = run(SBY + ["-f", f"{mut['sby']}.sby", task], cwd=work, timeout=timeout, env=env)
         except subprocess.TimeoutExpired:
             return f"timeout ({task})"
         if "DONE (PASS" in r.stdout:
@@ -461,15 +545,32 @@ def formal(mut):
     return "survived"
 
 
-def equivalent(mut):
-    """Yosys equivalence of the mutated block against the original at the top's parameters:
-    the block (flattened) before and after the mutation, equiv_make / equiv_simple /
-    equiv_induct; `equivalent` only when every matched signal is proven equal."""
+def equivalent(mut, timeout=300):
+    """Sequential equivalence of the mutated block against the original at the top's
+    parameters, from the state the checks start in: `miter -equiv` of the two (flattened,
+    memories as flip-flops), every flip-flop starting at 0 as Verilator starts it, `rst`
+    held in the first cycle as every harness does, the block's other inputs free on every
+    clock (an `x` constant of the RTL is 0 in both, one value as a simulator picks one);
+    proven for all time by ABC's PDR (as SymbiYosys's `abc pdr`: no induction depth
+    to guess, so a difference reachable only after thousands of clocks is found and an
+    unreachable one is not reported). `equivalent` when PDR proves the miter's output
+    never rises; otherwise the trace is a run of the block's ports on which the two
+    differ (a real gap at the block's ports; whether the chip can drive them so is a
+    separate question)."""
     m = parse_mutation(mut["sim"])
+    # A constant put where the netlist already has that constant changes nothing (mutate
+    # lists such mutations: a reset value's bit that is 0 tied to 0).
+    if m["mode"] in ("const0", "const1"):
+        cells = json.loads((OUT / "sim" / "design.json").read_text())["modules"][m["module"]]["cells"]
+        bit = cells[m["cell"]]["connections"][m["port"]][int(m.get("portbit", 0))]
+        if bit == m["mode"][-1]:
+            return f"equivalent (the bit is the constant {bit} already)"
     # As deep below the project as the netlist's directory (OUT / "sim"): the cells carry
     # the source path as read (wasm_paths), and the listed mutation names them.
     work = OUT / f"equiv-m{mut['id']}"
-    work.mkdir(parents=True, exist_ok=True)
+    if work.exists():
+        shutil.rmtree(work)
+    work.mkdir(parents=True)
     sources = sorted((ROOT / "hdl").glob("*.v"))
     read = f"read_verilog -I{ROOT}/build/gen " + " ".join(str(s) for s in sources)
     module = m["module"]
@@ -492,24 +593,115 @@ rename {module} gold
 design -copy-from gate_design -as gate gate
 memory_map
 opt_clean
-equiv_make gold gate equiv
-hierarchy -top equiv
-equiv_simple -seq 5
-equiv_induct -seq 5
-equiv_status -assert
+miter -equiv -flatten -make_assert gold gate miter
+hierarchy -top miter
+setundef -zero -init
+setundef -zero
+opt_clean
+write_rtlil miter.il
+write_json miter.json
 """
-    (work / "check.ys").write_text(wasm_paths(script, work))
+    (work / "miter.ys").write_text(wasm_paths(script, work))
+    r = run([YOSYS, "-q", "-l", "miter.log", "-s", "miter.ys"], cwd=work)
+    if r.returncode != 0:
+        return "error (equivalence miter): " + " ".join((r.stdout + r.stderr).splitlines()[-2:])
+    ports = json.loads((work / "miter.json").read_text())["modules"]["miter"]["ports"]
+    inputs = [(n, len(p["bits"])) for n, p in ports.items() if p["direction"] == "input"]
+    decl = ",\n".join(f"    input wire [{w - 1}:0] {n}" for n, w in inputs)
+    conn = ",\n".join(f"        .{n}({n})" for n, _ in inputs)
+    clk = "in_clk" if any(n == "in_clk" for n, _ in inputs) else None
+    rst = "in_rst" if any(n == "in_rst" for n, _ in inputs) else None
+    held = ""
+    if clk and rst:
+        held = f"""    reg f_first = 1'b1;
+    always @(posedge {clk}) f_first <= 1'b0;
+    always @* if (f_first) assume({rst});
+"""
+    (work / "wrap.sv").write_text(f"""module equiv_wrap (
+{decl}
+);
+{held}    wire trigger;
+    miter u_miter (
+{conn},
+        .trigger(trigger)
+    );
+endmodule
+""")
+    # SymbiYosys's preparation of a design for ABC (its `abc pdr` flow), in one script;
+    # then ABC's PDR. Debian's yosys-abc runs it: YoWASP has no ABC binary, and
+    # SymbiYosys passes a `pdr -l` that Debian's ABC does not know.
+    (work / "aiger.ys").write_text("""read_rtlil miter.il
+read_verilog -formal wrap.sv
+prep -top equiv_wrap
+hierarchy -smtcheck
+scc -select; simplemap; select -clear
+memory_nordff
+async2sync
+chformal -assume -early
+opt_clean
+formalff -setundef -clk2ff -ff2anyinit -hierarchy
+chformal -live -fair -cover -remove
+opt_clean
+check
+setundef -undriven -anyseq
+opt -fast
+delete */t:$print
+hierarchy -simcheck
+formalff -assume
+flatten
+setundef -undriven -anyseq
+setattr -unset keep
+delete -output
+opt -full
+techmap
+opt -fast
+memory_map -formal
+formalff -clk2ff -ff2anyinit
+simplemap
+dffunmap
+aigmap
+setundef -zero
+opt_clean
+stat
+write_aiger -I -B -zinit -no-startoffset -map miter.aim miter.aig
+""")
+    r = run([YOSYS, "-q", "-l", "aiger.log", "-s", "aiger.ys"], cwd=work)
+    if r.returncode != 0:
+        return "error (equivalence aiger): " + " ".join((r.stdout + r.stderr).splitlines()[-2:])
     try:
-        r = run([YOSYS, "-q", "-l", "check.log", "-s", "check.ys"], cwd=work, timeout=60)
+        r = run(["yosys-abc", "-c", "read_aiger miter.aig; fold; strash; pdr; write_cex -a trace.aiw"], cwd=work,
+                timeout=timeout)
     except subprocess.TimeoutExpired:
-        return "equivalence undecided (timeout)"
-    if r.returncode == 0:
+        return f"equivalence undecided (PDR, {timeout} s)"
+    (work / "pdr.log").write_text(r.stdout + r.stderr)
+    if "Property proved" in r.stdout:
         return "equivalent"
-    log = (work / "check.log").read_text() if (work / "check.log").exists() else ""
-    m2 = ([None] + list(re.finditer(r"Found (\d+) unproven \$equiv cells", log)))[-1]
-    if m2:
-        return f"not proven equivalent ({m2.group(1)} unproven)"
-    return "error (equivalence check)"
+    frame = re.search(r"asserted in frame (\d+)", r.stdout)
+    if frame:
+        (work / "trace.txt").write_text(trace_table(work))
+        return f"not equivalent (PDR: the outputs differ at clock {frame.group(1)})"
+    return "error (equivalence): " + " ".join(r.stdout.splitlines()[-2:])
+
+
+def trace_table(work):
+    """PDR's counterexample as the block's inputs clock by clock (hex), for a reader."""
+    names = {}
+    for line in (work / "miter.aim").read_text().splitlines():
+        t = line.split()
+        if t[0] == "input":
+            names[int(t[1])] = (t[3][3:] if t[3].startswith("in_") else t[3], int(t[2]))
+    frames = [l.split("#")[0].strip() for l in (work / "trace.aiw").read_text().splitlines()[1:]]
+    frames = [f for f in frames if f and set(f) <= set("01x")]
+    signals = sorted({n for n, _ in names.values()})
+    rows = []
+    for k, f in enumerate(frames):
+        vals = {}
+        for i, c in enumerate(f):
+            if i in names:
+                n, b = names[i]
+                vals[n] = vals.get(n, 0) | ((c == "1") << b)
+        rows.append(f"clock {k}: " + " ".join(f"{n}={vals.get(n, 0):x}" for n in signals))
+    return "\n".join(rows) + "\n"
 
 
 def load_results(prefix):
@@ -624,7 +816,8 @@ def report(mutants=None, results=None):
     for m in mutants:
         r = results.get(str(m["id"]))
         if r and not r.get("lockstep", "").startswith("killed") and not r.get("formal", "").startswith("killed"):
-            print(f"survivor {m['id']:3} {m['block']:18} {r.get('equiv', '-'):22} {m['src']}  {m['sim']}")
+            was = f" (carried: {m['carried']} of the older list)" if "carried" in m else ""
+            print(f"survivor {m['id']:3} {m['block']:18} {r.get('equiv', '-'):22} {m['src']}{was}  {m['sim']}")
 
 
 def main():
@@ -633,19 +826,35 @@ def main():
     g = sub.add_parser("gen")
     g.add_argument("--per-block", type=int, default=10)
     g.add_argument("--seed", type=int, default=1)
+    g.add_argument("--carry", help="DIR:COMMIT:ID,ID,...: add these mutants of an older list (DIR its "
+                   "build/mutants-rtl, drawn at COMMIT) where the same mutation exists now")
     r = sub.add_parser("run")
     r.add_argument("--quick", action="store_true")
     r.add_argument("--only", choices=["lockstep", "formal"])
     r.add_argument("ids", nargs="*")
     sub.add_parser("report")
-    sub.add_parser("equiv")
+    e = sub.add_parser("equiv")
+    e.add_argument("--timeout", type=int, default=300, help="seconds of PDR a mutant")
+    e.add_argument("ids", nargs="*", help="these mutants (checked again), whatever the other checks said")
     args = p.parse_args()
     if args.cmd == "gen":
         gen(args)
     elif args.cmd == "run":
         run_all(args)
     elif args.cmd == "equiv":
-        equiv_survivors(json.loads((OUT / "mutants.json").read_text()), "results")
+        mutants = json.loads((OUT / "mutants.json").read_text())
+        if args.ids:
+            path = OUT / "results-equiv.json"
+            done = json.loads(path.read_text()) if path.exists() else {}
+            for mut in mutants:
+                if str(mut["id"]) in args.ids:
+                    start = time.time()
+                    done[str(mut["id"])] = equivalent(mut, args.timeout)
+                    path.write_text(json.dumps(done, indent=1))
+                    print(f"mutant {mut['id']:3} {mut['block']:18} {done[str(mut['id'])]} "
+                          f"({time.time() - start:.0f} s)", flush=True)
+        else:
+            equiv_survivors(mutants, "results")
         report()
     else:
         report()

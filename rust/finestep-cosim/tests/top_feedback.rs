@@ -364,27 +364,37 @@ fn counters_reach_their_far_ends() {
         assert_eq!(i64::from(state.detents), (phase + 2).div_euclid(4), "{state:?}");
         assert_eq!((state.illegal, state.illegal_count), (false, 0), "{state:?}");
     }
-    // Illegal transitions on both, (A, B) between 00 and 11 (the wheel rests at phase 0):
-    // the wheel's and the encoder channel 2's, each state held a sample and a filter length.
+    // Illegal transitions on all, (A, B) between 00 and 11 (the wheel rests at phase 0):
+    // the wheel's and every encoder channel's (each channel's 16-bit counter is its own
+    // slice of the bank's flip-flops: a fault in channel 1's slice survived a run on
+    // channel 2 alone), each state held a sample and a filter length.
     machine.set_encoder_prescale(0).unwrap();
-    machine.configure_encoder(2, &EncoderSetup { filter: 1, ..EncoderSetup::default() }).unwrap();
+    for channel in 0..4 {
+        machine.configure_encoder(channel, &EncoderSetup { filter: 1, ..EncoderSetup::default() }).unwrap();
+    }
     machine.bus().wait(40).unwrap();
     let hold = slots() + 1;
     for k in 0..ILLEGAL {
         let both = if k % 2 == 0 { 1u64 } else { 0 };
-        let pins = both << IN_MPG_A | both << IN_MPG_B | both << (IN_ENC_A0 + 2) | both << (IN_ENC_B0 + 2);
+        let pins = (0..4).fold(both << IN_MPG_A | both << IN_MPG_B, |pins, c| {
+            pins | both << (IN_ENC_A0 + c) | both << (IN_ENC_B0 + c)
+        });
         drive(&mut machine, pins, hold);
     }
     drive(&mut machine, 0, 40);
     let state = machine.hand_wheel().unwrap();
     assert_eq!((state.illegal, state.illegal_count), (true, 0xFFFF), "{state:?}");
     assert_eq!(i64::from(state.edges), phase, "illegal transitions count nothing: {state:?}");
-    assert_eq!(machine.encoder_errors(2).unwrap(), (true, 0xFFFF));
-    assert_eq!(machine.feedback().unwrap().counts[2], 0);
+    for channel in 0..4 {
+        assert_eq!(machine.encoder_errors(channel).unwrap(), (true, 0xFFFF), "channel {channel}");
+    }
+    assert_eq!(machine.feedback().unwrap().counts, vec![0; 4], "illegal transitions count nothing");
     machine.clear_counters().unwrap();
     machine.bus().wait(20).unwrap();
     assert_eq!(machine.hand_wheel().unwrap().illegal_count, 0);
-    assert_eq!(machine.encoder_errors(2).unwrap().1, 0);
+    for channel in 0..4 {
+        assert_eq!(machine.encoder_errors(channel).unwrap().1, 0, "channel {channel}");
+    }
 }
 
 /// The index of a rotary encoder latches and then clears the count, one-shot each.

@@ -229,4 +229,23 @@ fn interlock_holds_the_start() {
     assert_eq!(ok(m.interlock()), (false, true), "BLOCKED is sticky");
     ok(m.command(command::CLEAR_ERRORS.set(0, 1)));
     assert_eq!(ok(m.interlock()), (false, false));
+    // The interlock rising under an open gate neither closes it nor reports a blocked
+    // start (BLOCKED is for a gate it holds shut): a mutant that pulsed start_blocked
+    // whenever the threshold was reached survived every other check.
+    // Stopped, periods of 4 000 clocks and 8 records queued, then run: the host's reads
+    // (hundreds of clocks each over SPI) leave more than the threshold queued while the
+    // interlock rises.
+    ok(m.set_control(false, false, true));
+    ok(m.set_period(4000));
+    let records: Vec<PeriodRecord> = (0..8).map(|_| PeriodRecord::from_raw(&[1 << 16, 0, 0, 0], 0)).collect();
+    ok(m.bus().push_records(&records));
+    ok(m.set_control(true, false, true));
+    ok(m.bus().wait(300));
+    assert_eq!(status::STREAMING.get(ok(m.status())), 1, "the gate opened");
+    m.bus().link_mut().set_interlock_pin(true);
+    ok(m.bus().wait(60));
+    let word = ok(m.status());
+    assert_eq!(status::STREAMING.get(word), 1, "an open gate stays open: {word:#x}");
+    assert_eq!(ok(m.interlock()), (true, false), "no blocked start under an open gate");
+    assert!(ok(m.fifo()).0 >= 2, "the threshold still reached while the interlock was active");
 }
