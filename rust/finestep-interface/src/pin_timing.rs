@@ -320,7 +320,7 @@ mod tests {
         let mut level = (false, false);
         let mut e = edges.iter().peekable();
         for c in 0..end {
-            if let Some(&&(_, s, d)) = e.next_if(|x| x.0 == c) {
+            if let Some(&(_, s, d)) = e.next_if(|x| x.0 == c) {
                 level = (s, d);
             }
             pins.push(level);
