@@ -353,7 +353,8 @@ mod tests {
 
     #[test]
     fn each_short_interval_is_a_violation_of_its_rule() {
-        let cases: [(&[(u64, bool, bool)], Rule, u64); 5] = [
+        type Edges = &'static [(u64, bool, bool)];
+        let cases: [(Edges, Rule, u64); 5] = [
             (&[(10, true, false), (13, false, false)], Rule::StepLen, 3),
             (&[(10, true, false), (14, false, false), (16, true, false), (20, false, false)], Rule::StepSpace, 2),
             (&[(10, false, true), (14, true, true), (18, false, true)], Rule::DirSetup, 4),
