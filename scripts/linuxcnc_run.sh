@@ -130,10 +130,14 @@ fi
 if [ -n "${FINESTEP_ESTOP_AFTER:-}" ]; then
     # LinuxCNC's E-stop pressed mid-program (linuxcnc/headless.py): checked up to the
     # stop, then no step after it and none beyond the command.
-    target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --config "$config" --expect-stop
+    target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --config "$config" --expect-stop \
+        --socket "$work/chip.sock"
     exit 0
 fi
-target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --config "$config"
+# The open-loop check, then the step timing sim-chip measured at the chip's pins every
+# clock (finestep-linuxcnc check --socket asks it; a violation fails the run).
+target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" --config "$config" \
+    --socket "$work/chip.sock"
 if [ -n "${FINESTEP_WHEEL:-}" ]; then
     grep "^headless: hand wheel" "$work/linuxcnc.log" | sed 's/^headless: /  /'
     exit 0

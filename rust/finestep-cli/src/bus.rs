@@ -17,7 +17,7 @@ use std::path::PathBuf;
 use std::str::FromStr;
 
 use anyhow::{bail, Context};
-use finestep_cosim::{rtl_top_params, ModelPins, PlantLoop, TopLockstep};
+use finestep_cosim::{rtl_top_params, ModelPins, PinMonitor, PlantLoop, TopLockstep};
 use finestep_host::spi::check_sck;
 use finestep_host::{Machine, PinHost, PinTarget, PinTiming, SpiBus, SpiTransfer};
 use finestep_model::top::Top;
@@ -155,6 +155,18 @@ pub fn sim_link(lockstep: bool, name: &str, plant: Option<Plant>) -> anyhow::Res
         (true, Some(plant)) => pin_link(PlantLoop::new(TopLockstep::new(name), plant)),
         (false, None) => pin_link(ModelPins(Top::new(rtl_top_params()))),
         (false, Some(plant)) => pin_link(PlantLoop::new(ModelPins(Top::new(rtl_top_params())), plant)),
+    }
+}
+
+/// [`sim_link`] with the step pins' drive timing measured every clock ([`PinMonitor`]:
+/// the Verilated RTL's pins in lockstep, the per-clock model's alone), reported by the
+/// link's [`SpiTransfer::pin_timing`].
+pub fn measured_sim_link(lockstep: bool, name: &str, plant: Option<Plant>) -> anyhow::Result<Link> {
+    match (lockstep, plant) {
+        (true, None) => pin_link(PinMonitor::new(TopLockstep::new(name))),
+        (true, Some(plant)) => pin_link(PlantLoop::new(PinMonitor::new(TopLockstep::new(name)), plant)),
+        (false, None) => pin_link(PinMonitor::new(ModelPins(Top::new(rtl_top_params())))),
+        (false, Some(plant)) => pin_link(PlantLoop::new(PinMonitor::new(ModelPins(Top::new(rtl_top_params()))), plant)),
     }
 }
 

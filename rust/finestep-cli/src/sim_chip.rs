@@ -2,7 +2,9 @@
 //! level of the SPI link (the framing of [`finestep_host::sim_link`]), so that a host
 //! tool on `--bus sim:SOCKET` runs the code it runs on spidev. The chip is reset once at
 //! start and keeps its state across connections, as a board does; its time advances
-//! only by the clients' frames and waits.
+//! only by the clients' frames and waits. It measures the step pins' drive timing every
+//! clock it simulates ([`crate::bus::measured_sim_link`]) and answers the link's
+//! pin-timing request with the figures so far.
 
 use std::os::unix::fs::FileTypeExt;
 use std::os::unix::net::UnixListener;
@@ -98,6 +100,10 @@ impl<L: SpiTransfer> SpiTransfer for ReadRewrite<L> {
     fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
         self.link.turn_wheel(edges)
     }
+
+    fn pin_timing(&mut self) -> Result<Option<finestep_host::PinTimingReport>, BusError> {
+        self.link.pin_timing()
+    }
 }
 
 fn wrong_identity(addr: u8, word: u32) -> u32 {
@@ -137,7 +143,7 @@ pub fn run(socket: &Path, target: Target, machine: Machine, faults: &[Fault], on
         Machine::None if dead_encoder => Some(crate::bus::loopback_plant(params.n_axes, dead_encoder)?),
         Machine::None => None,
     };
-    let mut link = crate::bus::sim_link(target == Target::Lockstep, "sim-chip", plant)?;
+    let mut link = crate::bus::measured_sim_link(target == Target::Lockstep, "sim-chip", plant)?;
     for fault in faults {
         link = match fault {
             Fault::WrongIdentity => Box::new(ReadRewrite { link, rewrite: wrong_identity }),

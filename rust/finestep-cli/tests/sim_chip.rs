@@ -67,6 +67,20 @@ fn a_client_on_the_socket_gets_exactly_what_the_in_process_bus_gets() {
     assert_eq!(remote_report.stream.records, 200);
     assert!(remote_report.end.steps.iter().any(|&s| s != 0), "{remote_report:?}");
     assert_eq!(remote.bus().last_status(), local.bus().last_status());
+    // The server measured the Verilated pins every clock: every pulse within the timing
+    // the driver wrote (L 3, S 3, U 2, H 2), one rise a step.
+    let pins = remote.bus().link_mut().pin_timing().unwrap().expect("sim-chip measures its pins");
+    assert_eq!(pins.violations(), 0, "{pins:?}");
+    assert_eq!(pins.axes.len(), 4);
+    for (axis, a) in pins.axes.iter().enumerate() {
+        let f = &a.figures;
+        assert!(a.step_dir, "axis {axis}");
+        assert_eq!(f.timing, DriveTiming::new(3, 3, 2, 2), "axis {axis}");
+        assert!(f.steps > 0, "axis {axis}: {f:?}");
+        assert!(f.high_min >= Some(3) && f.low_min >= Some(3), "axis {axis}: {f:?}");
+        assert!(f.setup_min >= Some(2) && f.hold_min >= Some(2), "axis {axis}: reverses: {f:?}");
+    }
+    assert!(pins.clocks > 200 * 5_000, "{pins:?}");
 }
 
 #[test]

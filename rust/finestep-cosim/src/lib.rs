@@ -20,6 +20,7 @@
 pub mod gantry_pair;
 mod mismatch;
 pub mod panel_chip;
+pub mod pin_monitor;
 pub mod plant_loop;
 pub mod top_lockstep;
 
@@ -33,6 +34,7 @@ pub use finestep_rtl_sys::{TopVariant, TraceDepth};
 pub use gantry_pair::GantryPair;
 pub use mismatch::{describe_difference, Mismatch, WaveformError};
 pub use panel_chip::{panel_chip_params, GantryPlant, PanelChipLockstep, PanelChipMismatch};
+pub use pin_monitor::{ChipConfig, PinMonitor};
 pub use plant_loop::PlantLoop;
 pub use top_lockstep::{rtl_top_params, rtl_top_params_of, ModelPins, RtlPins, TopLockstep, TopMismatch};
 

@@ -92,4 +92,8 @@ impl<T: PinTarget> PinTarget for PlantLoop<T> {
     fn outputs(&self) -> u64 {
         self.target.outputs()
     }
+
+    fn pin_timing(&self) -> Option<finestep_interface::pin_timing::PinTimingReport> {
+        self.target.pin_timing()
+    }
 }

@@ -352,6 +352,18 @@ impl PinTarget for ModelPins {
         Ok(())
     }
 
+    fn drive_to_change(&mut self, inputs: u64, cycles: u64) -> Result<u64, BusError> {
+        let inputs = TopInputs::unpack(inputs);
+        let before = self.0.outputs().pack();
+        for ran in 1..=cycles {
+            self.0.step(&inputs);
+            if self.0.outputs().pack() != before {
+                return Ok(ran);
+            }
+        }
+        Ok(cycles)
+    }
+
     fn outputs(&self) -> u64 {
         self.0.outputs().pack()
     }

@@ -41,6 +41,7 @@ pub use parallel::ParallelBus;
 pub use pins::{PinHost, PinTarget, PinTiming};
 pub use spi::{SpiBus, SpiTransfer};
 
+pub use finestep_interface::pin_timing::PinTimingReport;
 pub use finestep_interface::{DriveTiming, Increment, OutMode, PeriodRecord};
 
 /// Why a bus operation failed. Nothing is applied by a failed write.

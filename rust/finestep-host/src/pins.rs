@@ -3,6 +3,8 @@
 //! master on it with the host timing of docs/spec/spi_frame.md and
 //! docs/spec/parallel_bus_slave.md, cycle by cycle.
 
+use finestep_interface::pin_timing::PinTimingReport;
+
 use crate::spi::SpiTransfer;
 use crate::BusError;
 
@@ -93,6 +95,10 @@ pub trait PinTarget {
     fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError>;
     /// The packed outputs in the current cycle.
     fn outputs(&self) -> u64;
+    /// What the target measured at its step pins, when it measures them.
+    fn pin_timing(&self) -> Option<PinTimingReport> {
+        None
+    }
     /// Runs up to `cycles` clock edges with `inputs` held, stopping right after the first
     /// edge that changes the outputs; returns the edges run. A closed loop (a drive and
     /// its encoder) uses it to see every output change on its cycle.
@@ -362,5 +368,9 @@ impl<T: PinTarget> SpiTransfer for PinHost<T> {
     fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
         self.start_wheel_turn(edges);
         Ok(true)
+    }
+
+    fn pin_timing(&mut self) -> Result<Option<PinTimingReport>, BusError> {
+        Ok(self.target.pin_timing())
     }
 }

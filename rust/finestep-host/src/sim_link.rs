@@ -10,6 +10,7 @@
 //! | wait | `b'W'`, `8: u32`, `clocks: u64` core clocks to let pass |
 //! | E-stop | `b'E'`, `1: u32`, the level to drive on the E-stop input (0 or 1) |
 //! | hand wheel | `b'M'`, `8: u32`, `edges: i64` quadrature edges to turn the wheel by while clocks pass |
+//! | pin timing | `b'P'`, `0: u32`: what the chip measured at its step pins ([`PinTimingReport::to_bytes`]) |
 //!
 //! | reply | bytes |
 //! | --- | --- |
@@ -31,6 +32,8 @@ use std::io::{ErrorKind, Read, Write};
 use std::os::unix::net::UnixStream;
 use std::path::{Path, PathBuf};
 
+use finestep_interface::pin_timing::PinTimingReport;
+
 use crate::spi::SpiTransfer;
 use crate::BusError;
 
@@ -42,6 +45,8 @@ pub const OP_WAIT: u8 = b'W';
 pub const OP_ESTOP: u8 = b'E';
 /// Request op: turn the hand wheel.
 pub const OP_WHEEL: u8 = b'M';
+/// Request op: the step pins' timing measured so far.
+pub const OP_PIN_TIMING: u8 = b'P';
 /// Reply status: done.
 pub const REPLY_DONE: u8 = 0;
 /// Reply status: failed, the payload is the message.
@@ -162,6 +167,16 @@ impl SpiTransfer for SimSocket {
     fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
         Ok(self.request(OP_WHEEL, &edges.to_le_bytes())? == [1])
     }
+
+    /// The server's measurement; a server that does not measure answers with a message
+    /// (an error here).
+    fn pin_timing(&mut self) -> Result<Option<PinTimingReport>, BusError> {
+        let bytes = self.request(OP_PIN_TIMING, &[])?;
+        match PinTimingReport::from_bytes(&bytes) {
+            Some(report) => Ok(Some(report)),
+            None => Err(SimLinkError::Protocol(format!("a pin-timing report of {} bytes", bytes.len())).into()),
+        }
+    }
 }
 
 /// Serves `link` to one client on `stream` until the client closes it: each transfer
@@ -187,6 +202,11 @@ pub fn serve<S: Read + Write, L: SpiTransfer + ?Sized>(stream: &mut S, link: &mu
                     .map(|driven| vec![u8::from(driven)])
                     .map_err(|e| e.to_string()),
                 Err(_) => Err(format!("a wheel turn of {} bytes, not 8", payload.len())),
+            },
+            OP_PIN_TIMING => match link.pin_timing() {
+                Ok(Some(report)) => Ok(report.to_bytes()),
+                Ok(None) => Err("this simulated chip does not measure its step pins".to_string()),
+                Err(e) => Err(e.to_string()),
             },
             other => Err(format!("unknown op {other:#04x}")),
         };

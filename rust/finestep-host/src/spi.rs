@@ -1,5 +1,6 @@
 //! [`Bus`] over SPI frames.
 
+use finestep_interface::pin_timing::PinTimingReport;
 use finestep_interface::PeriodRecord;
 
 use crate::frame::{self, FrameResult};
@@ -41,6 +42,11 @@ pub trait SpiTransfer {
         let _ = edges;
         Ok(false)
     }
+    /// What a simulated chip measured at its step pins so far; `Ok(None)` when the link
+    /// does not measure them (a board, a chip simulated without the measurement).
+    fn pin_timing(&mut self) -> Result<Option<PinTimingReport>, BusError> {
+        Ok(None)
+    }
 }
 
 impl<T: SpiTransfer + ?Sized> SpiTransfer for Box<T> {
@@ -58,6 +64,10 @@ impl<T: SpiTransfer + ?Sized> SpiTransfer for Box<T> {
 
     fn turn_wheel(&mut self, edges: i64) -> Result<bool, BusError> {
         (**self).turn_wheel(edges)
+    }
+
+    fn pin_timing(&mut self) -> Result<Option<PinTimingReport>, BusError> {
+        (**self).pin_timing()
     }
 }
 

@@ -52,6 +52,7 @@ mod build_params;
 mod field;
 pub mod frame;
 mod info;
+pub mod pin_timing;
 pub mod rate;
 mod record;
 mod timing;

@@ -1,11 +1,13 @@
 //! `finestep-linuxcnc`: finestep under LinuxCNC from the same machine configuration
 //! (TOML) that `finestep run` reads. `config` writes the INI and HAL of a mill on the
-//! `finestep` HAL component; `check` runs the open-loop check over a recorded run
+//! `finestep` HAL component; `check` runs the open-loop check over a recorded run (with
+//! `--socket`, also the step timing the simulated chip measured at its pins)
 //! (`scripts/linuxcnc_run.sh` does both around a headless LinuxCNC; docs/linuxcnc.md).
 
 mod closed_loop;
 mod config;
 mod joints;
+mod pin_timing;
 mod watchdog;
 
 use std::path::PathBuf;
@@ -78,6 +80,10 @@ enum Command {
         /// The run was stopped (LinuxCNC's E-stop): fail unless the recording shows it.
         #[arg(long)]
         expect_stop: bool,
+        /// The socket of the run's `finestep sim-chip`: also print the step timing it
+        /// measured at the chip's pins, and fail on a violation of the drive timing.
+        #[arg(long)]
+        socket: Option<String>,
     },
     /// After LinuxCNC was killed: watch the simulated chip (reads only) for twice the
     /// watchdog timeout; fails unless the watchdog trips within it and no step follows
@@ -107,8 +113,10 @@ fn main() -> anyhow::Result<()> {
                 .collect();
             closed_loop::ferror(&samples, joints, &names, &scales)
         }
-        Command::Check { samples, joints, period_ns, config, expect_stop } => {
-            config::check(&samples, joints, period_ns, config.as_deref(), expect_stop)
+        Command::Check { samples, joints, period_ns, config, expect_stop, socket } => {
+            let open_loop = config::check(&samples, joints, period_ns, config.as_deref(), expect_stop);
+            let pins = socket.as_deref().map_or(Ok(()), pin_timing::run);
+            open_loop.and(pins)
         }
         Command::Watchdog { socket, timeout_ns } => watchdog::run(&socket, timeout_ns),
     }

@@ -9,6 +9,7 @@
 
 mod common;
 
+use finestep_interface::pin_timing::StepDirMonitor;
 use finestep_model::limits::{forward_interval_in, max_increment_in, reversal_interval_in, reversal_wait_in};
 use finestep_model::{
     AxisConfig, Core, CoreInputs, CoreOutputs, CoreParams, DriveTiming, Increment, PeriodRecord, RateChecker, MAX_AXES,
@@ -243,39 +244,17 @@ fn first_pin_mismatch(trace: &Trace, drive: &Drive, axis: usize) -> Option<Strin
 
 /// The step/dir timing at the pins in multiples of `S`: high exactly `S ceil(L/S)`, low
 /// at least `S ceil(Sp/S)`, `dir` changing only while low, at least `S ceil(H/S)` after
-/// a fall, a rise at least `S ceil(U/S)` after a `dir` change. The first violation.
+/// a fall, a rise at least `S ceil(U/S)` after a `dir` change (the one pin-timing check,
+/// [`StepDirMonitor`], against the timing in whole visits). The first violation.
 fn first_timing_violation(p: &[(bool, bool)], from: usize, t: &DriveTiming, s: u64) -> Option<String> {
-    let q = |x: u32| (s * visits(x, s)) as usize;
-    let (l, sp, u, h) = (q(t.step_len), q(t.step_space), q(t.dir_setup), q(t.dir_hold));
-    let (mut rise, mut fall, mut turn) = (None::<usize>, None::<usize>, None::<usize>);
-    for c in from + 1..p.len() {
-        let ((a0, b0), (a1, b1)) = (p[c - 1], p[c]);
-        if b1 != b0 {
-            if a0 || a1 {
-                return Some(format!("cycle {c}: dir changes next to a high step level"));
-            }
-            if let Some(f) = fall.filter(|&f| c - f < h) {
-                return Some(format!("cycle {c}: dir changes {} cycles after the fall at {f}, want >= {h}", c - f));
-            }
-            turn = Some(c);
-        }
-        if a1 && !a0 {
-            if let Some(f) = fall.filter(|&f| c - f < sp) {
-                return Some(format!("cycle {c}: rise after {} low cycles, want >= {sp}", c - f));
-            }
-            if let Some(d) = turn.filter(|&d| c - d < u) {
-                return Some(format!("cycle {c}: rise {} cycles after the dir change, want >= {u}", c - d));
-            }
-            rise = Some(c);
-        }
-        if !a1 && a0 {
-            if let Some(r) = rise.filter(|&r| c - r != l) {
-                return Some(format!("cycle {c}: high for {} cycles, want exactly {l}", c - r));
-            }
-            fall = Some(c);
-        }
+    let q = |x: u32| (s * visits(x, s)) as u32;
+    let quantised = DriveTiming::new(q(t.step_len), q(t.step_space), q(t.dir_setup), q(t.dir_hold));
+    let f = StepDirMonitor::measure(&p[from.min(p.len())..], from as u64, quantised);
+    if let Some(v) = f.first {
+        return Some(v.to_string());
     }
-    None
+    let l = u64::from(quantised.step_len);
+    f.high_max.filter(|&high| high != l).map(|high| format!("a pulse high for {high} cycles, want exactly {l}"))
 }
 
 /// Property (b) in the engine's form: at every DDA visit `m` of `axis`,

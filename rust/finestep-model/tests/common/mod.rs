@@ -6,6 +6,7 @@
 
 #![allow(dead_code)]
 
+use finestep_interface::pin_timing::StepDirMonitor;
 use finestep_model::{AxisConfig, Core, CoreInputs, CoreOutputs, CoreParams, DriveTiming, PeriodRecord, MAX_AXES};
 use num_bigint::BigInt;
 use num_rational::BigRational;
@@ -244,48 +245,13 @@ impl Run {
 }
 
 /// The shaper's timing guarantees read from step/dir pins (A step, B dir), for timing
-/// `t`. Returns the first violation.
+/// `t`, by the one pin-timing check ([`StepDirMonitor`]), and each pulse high for exactly
+/// `L`. Returns the first violation.
 pub fn first_timing_violation(pins: &[(bool, bool)], t: &DriveTiming) -> Option<String> {
-    let l = t.step_len.max(1) as usize;
-    let s = t.step_space.max(1) as usize;
-    let u = t.dir_setup.max(1) as usize;
-    let h = t.dir_hold.max(1) as usize;
-    let mut rise: Option<usize> = None;
-    let mut fall: Option<usize> = None;
-    let mut turn: Option<usize> = None;
-    for c in 1..pins.len() {
-        let ((a0, b0), (a1, b1)) = (pins[c - 1], pins[c]);
-        if b1 != b0 {
-            if a0 || a1 {
-                return Some(format!("cycle {c}: dir changes next to a high step level"));
-            }
-            if let Some(f) = fall {
-                if c - f < h {
-                    return Some(format!("cycle {c}: dir changes {} cycles after the fall at {f}, H = {h}", c - f));
-                }
-            }
-            turn = Some(c);
-        }
-        if a1 && !a0 {
-            if let Some(f) = fall {
-                if c - f < s {
-                    return Some(format!("cycle {c}: rise after {} low cycles, S = {s}", c - f));
-                }
-            }
-            if let Some(d) = turn {
-                if c - d < u {
-                    return Some(format!("cycle {c}: rise {} cycles after the dir change, U = {u}", c - d));
-                }
-            }
-            rise = Some(c);
-        }
-        if !a1 && a0 {
-            let r = rise.expect("a fall follows a rise");
-            if c - r != l {
-                return Some(format!("cycle {c}: high for {} cycles, L = {l}", c - r));
-            }
-            fall = Some(c);
-        }
+    let f = StepDirMonitor::measure(pins, 0, *t);
+    if let Some(v) = f.first {
+        return Some(v.to_string());
     }
-    None
+    let l = u64::from(t.step_len.max(1));
+    f.high_max.filter(|&high| high != l).map(|high| format!("a pulse high for {high} cycles, L = {l} exactly"))
 }
