@@ -21,7 +21,8 @@
 //! ```
 //! use finestep_interface::{pin_timing::StepDirMonitor, DriveTiming};
 //! let mut m = StepDirMonitor::new(DriveTiming::new(2, 2, 1, 1));
-//! for (cycle, step) in [(10, true), (11, false)] {
+//! // The first observation only sets the levels: the rise at 10 is an edge from 9's.
+//! for (cycle, step) in [(9, false), (10, true), (11, false)] {
 //!     m.observe(cycle, step, false);
 //! }
 //! assert_eq!(m.figures().violations, 1); // high for 1 clock, L = 2
