@@ -24,9 +24,9 @@ module colorlight_5a75b #(
     parameter HAS_GANTRY      = 0,
     // The PLL (below): parameters so that `scripts/bitstream.sh ecp5 --variant NAME -set ...`
     // can place and route another clock without editing this file.
-    parameter CLOCK_HZ        = 80000000,
-    parameter CLKI_DIV        = 5,
-    parameter CLKFB_DIV       = 16,
+    parameter CLOCK_HZ        = 75000000,
+    parameter CLKI_DIV        = 1,
+    parameter CLKFB_DIV       = 3,
     parameter CLKOP_DIV       = 8
 ) (
     // clock, reset
@@ -57,15 +57,16 @@ module colorlight_5a75b #(
     output wire [5:0]        panel_dig      // active high
 );
 
-    // 25 MHz * CLKFB_DIV / CLKI_DIV; VCO = CLOCK_HZ * CLKOP_DIV = 640 MHz (400-800 MHz),
-    // phase detector 25 / 5 = 5 MHz. 80 MHz: the clock this build meets on every seed
-    // `make report` sweeps, placed and routed with that constraint (docs/bitstreams.md);
-    // 1 ms is 80 000 clocks, a whole number of the step engine's 4-clock slots. Raised as
+    // 25 MHz * CLKFB_DIV / CLKI_DIV; VCO = CLOCK_HZ * CLKOP_DIV = 600 MHz (400-800 MHz),
+    // phase detector 25 / 1 = 25 MHz. 75 MHz: the clock this build meets on every seed
+    // `make report` sweeps, placed and routed with that constraint (docs/bitstreams.md;
+    // 80 MHz until seed 4 reached only 78.14 at 8bd39d1); 1 ms is 75 000 clocks, a whole
+    // number of the step engine's 4-clock slots. Raised as
     // the datapath gets faster, never shipped above it.
 
     wire clk, pll_locked, rst;
 
-    (* FREQUENCY_PIN_CLKI = "25", FREQUENCY_PIN_CLKOP = "80" *)
+    (* FREQUENCY_PIN_CLKI = "25", FREQUENCY_PIN_CLKOP = "75" *)
     EHXPLLL #(
         .PLLRST_ENA("DISABLED"), .INTFB_WAKE("DISABLED"), .STDBY_ENABLE("DISABLED"),
         .DPHASE_SOURCE("DISABLED"), .OUTDIVIDER_MUXA("DIVA"), .OUTDIVIDER_MUXB("DIVB"),
