@@ -11,53 +11,45 @@ use finestep_host::pins::layout::{OUT_PIN_A0, OUT_PIN_B0};
 use finestep_host::{BusError, PinTarget};
 use finestep_interface::pin_timing::{AxisPinTiming, PinTimingReport, StepDirMonitor};
 use finestep_interface::{invert, out_mode};
-use finestep_model::AxisConfig;
+use finestep_model::{AxisConfig, Top};
 
 use crate::{ModelPins, PlantLoop, TopLockstep};
 
-/// A simulated chip whose configuration can be read as its registers hold it.
+/// A simulated chip whose configuration can be read as its registers hold it: the
+/// model's view of the chip (with the lockstep pair, equal to the RTL's: every register
+/// read is compared).
 pub trait ChipConfig {
+    /// The model chip whose registers and build parameters are read.
+    fn model_chip(&self) -> &Top;
     /// Axes the chip has.
-    fn n_axes(&self) -> usize;
+    fn n_axes(&self) -> usize {
+        self.model_chip().params().n_axes
+    }
     /// The core clock, Hz.
-    fn clock_hz(&self) -> u32;
+    fn clock_hz(&self) -> u32 {
+        self.model_chip().params().clock_hz
+    }
     /// The settings of `axis` (timing, output mode, inversion) as the registers hold them.
-    fn axis_config(&self, axis: usize) -> AxisConfig;
+    fn axis_config(&self, axis: usize) -> AxisConfig {
+        self.model_chip().registers().axis_config(axis)
+    }
 }
 
 impl ChipConfig for ModelPins {
-    fn n_axes(&self) -> usize {
-        self.0.params().n_axes
-    }
-    fn clock_hz(&self) -> u32 {
-        self.0.params().clock_hz
-    }
-    fn axis_config(&self, axis: usize) -> AxisConfig {
-        self.0.registers().axis_config(axis)
+    fn model_chip(&self) -> &Top {
+        &self.0
     }
 }
 
 impl ChipConfig for TopLockstep {
-    fn n_axes(&self) -> usize {
-        self.model().params().n_axes
-    }
-    fn clock_hz(&self) -> u32 {
-        self.model().params().clock_hz
-    }
-    fn axis_config(&self, axis: usize) -> AxisConfig {
-        self.model().registers().axis_config(axis)
+    fn model_chip(&self) -> &Top {
+        self.model()
     }
 }
 
 impl<T: PinTarget + ChipConfig> ChipConfig for PlantLoop<T> {
-    fn n_axes(&self) -> usize {
-        self.target().n_axes()
-    }
-    fn clock_hz(&self) -> u32 {
-        self.target().clock_hz()
-    }
-    fn axis_config(&self, axis: usize) -> AxisConfig {
-        self.target().axis_config(axis)
+    fn model_chip(&self) -> &Top {
+        self.target().model_chip()
     }
 }
 
@@ -178,13 +170,7 @@ impl<T: PinTarget + ChipConfig> PinTarget for PinMonitor<T> {
 }
 
 impl<T: PinTarget + ChipConfig> ChipConfig for PinMonitor<T> {
-    fn n_axes(&self) -> usize {
-        self.target.n_axes()
-    }
-    fn clock_hz(&self) -> u32 {
-        self.target.clock_hz()
-    }
-    fn axis_config(&self, axis: usize) -> AxisConfig {
-        self.target.axis_config(axis)
+    fn model_chip(&self) -> &Top {
+        self.target.model_chip()
     }
 }
