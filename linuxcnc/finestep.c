@@ -10,8 +10,9 @@
  *
  * Pins and parameters (NN per CAPS.N_AXES / CAPS.N_ENC, as the chip reports them):
  *   finestep.0.stepgen.NN.{position-cmd (in), position-fb, velocity-fb, counts, limited (out), enable (in)}
- *     params position-scale, maxvel, step_type, steplen, stepspace, dirsetup, dirhold
- *   finestep.0.encoder.NN.{count, position, velocity (out), reset (in)}; params scale, counter-mode, filter
+ *     params position-scale, maxvel, maxaccel, step_type, steplen, stepspace, dirsetup, dirhold
+ *   finestep.0.encoder.NN.{count, position, velocity (out), reset (in), index-enable (io)};
+ *     params scale, counter-mode, filter
  *   finestep.0.enable (in: iocontrol.0.user-enable-out), finestep.0.estop-ok (out: iocontrol.0.emc-enable-in:
  *   enable, with the chip's E-stop input released and the watchdog bit clear),
  *   finestep.0.running, finestep.0.error (out), finestep.0.watchdog.has_bit (io), param
@@ -42,14 +43,14 @@ struct stepgen {
     hal_s32_t *counts;
     hal_u32_t *limited;
     hal_bit_t *enable;
-    hal_float_t position_scale, maxvel;
+    hal_float_t position_scale, maxvel, maxaccel;
     hal_u32_t step_type, steplen, stepspace, dirsetup, dirhold;
 };
 
 struct encoder {
     hal_s32_t *count;
     hal_float_t *position, *velocity;
-    hal_bit_t *reset;
+    hal_bit_t *reset, *index_enable;
     hal_float_t scale;
     hal_bit_t counter_mode, filter;
 };
@@ -95,7 +96,7 @@ static void read_fn(void *arg, long period)
 
     for (i = 0; i < f->n_enc; i++) {
         struct encoder *e = &f->encoders[i];
-        rc |= fs_hal_set_encoder(f->driver, i, e->scale, *e->reset, e->counter_mode, e->filter);
+        rc |= fs_hal_set_encoder(f->driver, i, e->scale, *e->reset, e->counter_mode, e->filter, *e->index_enable);
     }
     rc |= fs_hal_read(f->driver, period);
     for (i = 0; i < f->n_axes; i++) {
@@ -114,10 +115,14 @@ static void read_fn(void *arg, long period)
         struct encoder *e = &f->encoders[i];
         int32_t count;
         double pos, vel;
-        if (fs_hal_encoder(f->driver, i, &count, &pos, &vel) == 0) {
+        int index_enable;
+        if (fs_hal_encoder(f->driver, i, &count, &pos, &vel, &index_enable) == 0) {
             *e->count = count;
             *e->position = pos;
             *e->velocity = vel;
+            /* hostmot2's handshake: LinuxCNC sets it to home to the index, the driver
+               clears it in the read that finds the index (count 0 there). */
+            *e->index_enable = index_enable;
         }
     }
     {
@@ -146,7 +151,7 @@ static void write_fn(void *arg, long period)
 
     for (i = 0; i < f->n_axes; i++) {
         struct stepgen *s = &f->stepgens[i];
-        rc |= fs_hal_set_stepgen(f->driver, i, *s->position_cmd, s->position_scale, s->maxvel, *s->enable,
+        rc |= fs_hal_set_stepgen(f->driver, i, *s->position_cmd, s->position_scale, s->maxvel, s->maxaccel, *s->enable,
                                  s->steplen, s->stepspace, s->dirsetup, s->dirhold, s->step_type);
     }
     if (f->paced && *f->wheel_edges != f->wheel_turned) {
@@ -168,6 +173,7 @@ static int export_stepgen(struct stepgen *s, int i)
     r |= hal_pin_bit_newf(HAL_IN, &s->enable, comp_id, NAME ".stepgen.%02d.enable", i);
     r |= hal_param_float_newf(HAL_RW, &s->position_scale, comp_id, NAME ".stepgen.%02d.position-scale", i);
     r |= hal_param_float_newf(HAL_RW, &s->maxvel, comp_id, NAME ".stepgen.%02d.maxvel", i);
+    r |= hal_param_float_newf(HAL_RW, &s->maxaccel, comp_id, NAME ".stepgen.%02d.maxaccel", i);
     r |= hal_param_u32_newf(HAL_RW, &s->step_type, comp_id, NAME ".stepgen.%02d.step_type", i);
     r |= hal_param_u32_newf(HAL_RW, &s->steplen, comp_id, NAME ".stepgen.%02d.steplen", i);
     r |= hal_param_u32_newf(HAL_RW, &s->stepspace, comp_id, NAME ".stepgen.%02d.stepspace", i);
@@ -175,6 +181,7 @@ static int export_stepgen(struct stepgen *s, int i)
     r |= hal_param_u32_newf(HAL_RW, &s->dirhold, comp_id, NAME ".stepgen.%02d.dirhold", i);
     s->position_scale = 1.0;
     s->maxvel = 0.0;
+    s->maxaccel = 0.0;
     s->step_type = 0;
     s->steplen = 2000;
     s->stepspace = 2000;
@@ -190,6 +197,7 @@ static int export_encoder(struct encoder *e, int i)
     r |= hal_pin_float_newf(HAL_OUT, &e->position, comp_id, NAME ".encoder.%02d.position", i);
     r |= hal_pin_float_newf(HAL_OUT, &e->velocity, comp_id, NAME ".encoder.%02d.velocity", i);
     r |= hal_pin_bit_newf(HAL_IN, &e->reset, comp_id, NAME ".encoder.%02d.reset", i);
+    r |= hal_pin_bit_newf(HAL_IO, &e->index_enable, comp_id, NAME ".encoder.%02d.index-enable", i);
     r |= hal_param_float_newf(HAL_RW, &e->scale, comp_id, NAME ".encoder.%02d.scale", i);
     r |= hal_param_bit_newf(HAL_RW, &e->counter_mode, comp_id, NAME ".encoder.%02d.counter-mode", i);
     r |= hal_param_bit_newf(HAL_RW, &e->filter, comp_id, NAME ".encoder.%02d.filter", i);

@@ -126,6 +126,7 @@ pub unsafe extern "C" fn fs_hal_set_stepgen(
     position_cmd: f64,
     position_scale: f64,
     maxvel: f64,
+    maxaccel: f64,
     enable: c_int,
     steplen_ns: u32,
     stepspace_ns: u32,
@@ -137,6 +138,7 @@ pub unsafe extern "C" fn fs_hal_set_stepgen(
         position_cmd,
         position_scale,
         maxvel,
+        maxaccel,
         enable: enable != 0,
         timing_ns: [steplen_ns, stepspace_ns, dirsetup_ns, dirhold_ns],
         step_type,
@@ -156,8 +158,15 @@ pub unsafe extern "C" fn fs_hal_set_encoder(
     reset: c_int,
     counter_mode: c_int,
     filter: c_int,
+    index_enable: c_int,
 ) -> c_int {
-    let cmd = EncoderCommand { scale, reset: reset != 0, counter_mode: counter_mode != 0, filter: filter != 0 };
+    let cmd = EncoderCommand {
+        scale,
+        reset: reset != 0,
+        counter_mode: counter_mode != 0,
+        filter: filter != 0,
+        index_enable: index_enable != 0,
+    };
     guarded(handle, |h| h.driver.set_encoder(channel as usize, cmd).map_err(|e| e.to_string()))
 }
 
@@ -229,6 +238,7 @@ pub unsafe extern "C" fn fs_hal_encoder(
     count: *mut i32,
     position: *mut f64,
     velocity: *mut f64,
+    index_enable: *mut c_int,
 ) -> c_int {
     guarded(handle, |h| {
         let fb = h.driver.encoder_feedback(channel as usize).ok_or_else(|| format!("no encoder {channel}"))?;
@@ -242,6 +252,9 @@ pub unsafe extern "C" fn fs_hal_encoder(
             }
             if let Some(p) = velocity.as_mut() {
                 *p = fb.velocity;
+            }
+            if let Some(p) = index_enable.as_mut() {
+                *p = fb.index_enable.into();
             }
         }
         Ok(())

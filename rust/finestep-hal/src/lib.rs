@@ -276,6 +276,10 @@ pub struct StepgenCommand {
     pub position_scale: f64,
     /// `maxvel`, machine units per second; 0: the rated step rate of the drive timing.
     pub maxvel: f64,
+    /// `maxaccel`, machine units per second squared; 0: no limit (LinuxCNC's planner
+    /// keeps the joint's). A command that would need more (a jump) is approached at it,
+    /// braking in time not to pass the command, the rest carried ([`StepgenFeedback::limited`]).
+    pub maxaccel: f64,
     /// `enable`.
     pub enable: bool,
     /// `steplen`, `stepspace`, `dirsetup`, `dirhold` in ns.
@@ -292,6 +296,7 @@ impl Default for StepgenCommand {
             position_cmd: 0.0,
             position_scale: 1.0,
             maxvel: 0.0,
+            maxaccel: 0.0,
             enable: false,
             timing_ns: [2000, 2000, 5000, 5000],
             step_type: 0,
@@ -310,11 +315,15 @@ pub struct EncoderCommand {
     pub counter_mode: bool,
     /// `filter`: true 15 samples, false 3.
     pub filter: bool,
+    /// `index-enable` as LinuxCNC leaves it: true asks for `count` to be zeroed at the
+    /// next index pulse (homing to an index); the driver clears it when the index came
+    /// ([`EncoderFeedback::index_enable`]), as hostmot2's encoder does.
+    pub index_enable: bool,
 }
 
 impl Default for EncoderCommand {
     fn default() -> Self {
-        EncoderCommand { scale: 1.0, reset: false, counter_mode: false, filter: true }
+        EncoderCommand { scale: 1.0, reset: false, counter_mode: false, filter: true, index_enable: false }
     }
 }
 
@@ -327,7 +336,7 @@ pub struct StepgenFeedback {
     pub position_fb: f64,
     /// `velocity-fb`: machine units per second over the last period.
     pub velocity_fb: f64,
-    /// Periods whose increment was clamped to the rated rate or `maxvel`.
+    /// Periods whose increment was clamped to the rated rate, `maxvel` or `maxaccel`.
     pub limited: u32,
 }
 
@@ -340,6 +349,9 @@ pub struct EncoderFeedback {
     pub position: f64,
     /// `velocity`: machine units per second over the last period.
     pub velocity: f64,
+    /// `index-enable` after the read: what the command asked, false once the index came
+    /// (`count` is then 0 at the index pulse).
+    pub index_enable: bool,
 }
 
 /// The chip's state for the HAL component's status pins.
@@ -364,6 +376,8 @@ struct AxisState {
     last_raw: i32,
     velocity: f64,
     limited: u32,
+    /// The last increment sent, I16F16 steps a period (`maxaccel`'s reference).
+    last_inc: i64,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -373,6 +387,10 @@ struct EncoderState {
     last_raw: i32,
     velocity: f64,
     applied: Option<(bool, bool)>,
+    /// The chip's index latch is armed for `index-enable` (ENC_CONTROL.ARM_INDEX_LATCH).
+    index_armed: bool,
+    /// `index-enable` as the last read leaves it.
+    index_enable: bool,
 }
 
 /// The commanded position `units * scale` in I16F16 steps, rounded half up (the
@@ -397,6 +415,44 @@ pub fn quantised_steps(fixed: i64) -> i64 {
 
 /// hostmot2's `step_type` 0, 1, 2 are the chip's OUT_MODE values (step/dir, up/down,
 /// quadrature); hostmot2's table modes have no counterpart.
+/// The increment toward `want` (I16F16 steps still to go) after `last` (the last
+/// period's increment) under an acceleration of `accel` I16F16 steps a period squared
+/// (at least 1 LSB) and the rate limit `max`: as close to `want` as the change from `last`
+/// allows, and no faster than one from which a stop at `accel` stays within the distance
+/// left (the increments v, v - a, v - 2a, ... down to 0 add up to at most |want|), so the
+/// command is approached without passing it.
+pub fn accel_limited(want: i64, last: i64, accel: f64, max: i64) -> i64 {
+    let accel = accel.max(1.0);
+    let left = want.unsigned_abs() as f64;
+    // v + (v - a) + ... + (v - m a) with m = floor(v / a): increasing in v.
+    let stop = |v: f64| {
+        let m = (v / accel).floor();
+        (m + 1.0) * v - accel * m * (m + 1.0) / 2.0
+    };
+    let (mut fits, mut over) = (0.0, left + 1.0);
+    while over - fits > 1.0 {
+        let mid = ((fits + over) / 2.0).floor();
+        if stop(mid) <= left {
+            fits = mid;
+        } else {
+            over = mid;
+        }
+    }
+    let toward = want.signum() as f64 * fits;
+    let (lo, hi) = ((last as f64 - accel).ceil(), (last as f64 + accel).floor());
+    (toward.clamp(lo, hi) as i64).clamp(-max, max)
+}
+
+/// The chip's setting of an encoder channel for LinuxCNC's `counter-mode` and `filter`
+/// (the index active high).
+fn encoder_setup(cmd: &EncoderCommand) -> EncoderSetup {
+    EncoderSetup {
+        mode: if cmd.counter_mode { CountMode::StepDir } else { CountMode::X4 },
+        z_active_high: true,
+        filter: if cmd.filter { 15 } else { 3 },
+    }
+}
+
 fn out_mode(step_type: u32) -> Option<OutMode> {
     OutMode::ALL.into_iter().find(|mode| u32::from(mode.bits()) == step_type)
 }
@@ -565,6 +621,7 @@ impl Driver {
             }
             channel.velocity = if dt > 0.0 { delta as f64 / dt } else { 0.0 };
         }
+        self.index_enables()?;
         if self.machine.caps().has_mpg {
             let wheel = self.machine.hand_wheel().map_err(self.bus_err())?;
             self.wheel = (wheel.edges, wheel.detents);
@@ -587,16 +644,47 @@ impl Driver {
         self.machine.bus().link_mut().turn_wheel(edges).map_err(self.bus_err())
     }
 
+    /// `index-enable` of every channel, after the read's snapshot: a channel asked for
+    /// arms the chip's index latch (the next index pulse latches the count and sets
+    /// INDEX_SEEN); at a later read that finds INDEX_SEEN, `count` is re-zeroed at the
+    /// latched count and `index-enable` cleared. The chip's count itself is never
+    /// cleared (ARM_INDEX_CLEAR is not used), so the unwrapped count, the velocity and a
+    /// `reset` stay continuous. A request withdrawn before the index disarms nothing on
+    /// the chip: its latch is re-armed (INDEX_SEEN cleared) by the next request.
+    fn index_enables(&mut self) -> Result<(), HalError> {
+        for channel in 0..self.encoders.len() {
+            let cmd = self.encoder_cmds[channel];
+            let state = self.encoders[channel];
+            if !cmd.index_enable {
+                self.encoders[channel].index_armed = false;
+                self.encoders[channel].index_enable = false;
+                continue;
+            }
+            if !state.index_armed {
+                let setup = encoder_setup(&cmd);
+                self.machine.arm_index(channel, &setup, true, false).map_err(self.bus_err())?;
+                self.encoders[channel].index_armed = true;
+                self.encoders[channel].index_enable = true;
+                continue;
+            }
+            if let Some(latched) = self.machine.index_latch(channel).map_err(self.bus_err())? {
+                let state = &mut self.encoders[channel];
+                // The latched count, unwrapped by its distance from the snapshot's count
+                // (negative when the index came after the snapshot's latch).
+                state.zero = state.counts - i64::from(state.last_raw.wrapping_sub(latched));
+                state.index_armed = false;
+                state.index_enable = false;
+            }
+        }
+        Ok(())
+    }
+
     fn apply_encoder_setup(&mut self) -> Result<(), HalError> {
         for channel in 0..self.encoders.len() {
             let cmd = self.encoder_cmds[channel];
             let want = (cmd.counter_mode, cmd.filter);
             if self.encoders[channel].applied != Some(want) {
-                let setup = EncoderSetup {
-                    mode: if cmd.counter_mode { CountMode::StepDir } else { CountMode::X4 },
-                    z_active_high: true,
-                    filter: if cmd.filter { 15 } else { 3 },
-                };
+                let setup = encoder_setup(&cmd);
                 self.machine.configure_encoder(channel, &setup).map_err(self.bus_err())?;
                 self.encoders[channel].applied = Some(want);
             }
@@ -623,7 +711,12 @@ impl Driver {
         let scale = self.encoder_cmds[channel].scale;
         let scale = if scale != 0.0 { scale } else { 1.0 };
         let count = state.counts - state.zero;
-        Some(EncoderFeedback { count: count as i32, position: count as f64 / scale, velocity: state.velocity / scale })
+        Some(EncoderFeedback {
+            count: count as i32,
+            position: count as f64 / scale,
+            velocity: state.velocity / scale,
+            index_enable: state.index_enable,
+        })
     }
 
     /// The status pins.
@@ -744,6 +837,7 @@ impl Driver {
         for (axis, &steps) in self.axes.iter_mut().zip(&positions.steps) {
             // Resynchronise on the chip (after a fault it dropped its pending steps).
             axis.sent = i64::from(steps) << 16;
+            axis.last_inc = 0;
         }
         let mask = self.stepgens.iter().enumerate().fold(0u32, |m, (i, s)| m | (u32::from(s.enable) << i));
         m.enable_axes(mask).map_err(err)?;
@@ -818,6 +912,10 @@ impl Driver {
                 max = max.min(by_maxvel.max(0.0) as i64);
             }
             let mut d = want.clamp(-max, max);
+            if cmd.maxaccel > 0.0 {
+                let per_period = cmd.maxaccel * cmd.position_scale.abs() * period_s * period_s * 65536.0;
+                d = accel_limited(want, state.last_inc, per_period, max);
+            }
             if d != want {
                 state.limited = state.limited.wrapping_add(1);
             } else {
@@ -827,6 +925,7 @@ impl Driver {
                 d = settled_increment(state.sent, d, self.period_clocks, latency, slots, max);
             }
             record.inc[axis] = Increment::from_bits(d as i32);
+            state.last_inc = d;
         }
         // The clamp above keeps every increment within the rated maximum; the check is
         // the rate module's own, so a record the core would flag never goes out.

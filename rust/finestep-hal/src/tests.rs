@@ -2,19 +2,57 @@
 //! driver's SPI master): the same SPI frames a board or `finestep sim-chip` gets.
 
 use super::*;
+use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0, IN_ENC_Z0};
 use finestep_host::{PinHost, PinTarget, PinTiming};
 use finestep_model::top::{Top, TopInputs, TopParams};
+use std::cell::Cell;
+use std::rc::Rc;
+
+/// Clocks between two edges of the test's encoder.
+const EDGE_CLOCKS: u64 = 2_000;
+
+/// Encoder channel 0 turned by a test while clocks pass: one quadrature edge every
+/// [`EDGE_CLOCKS`] while edges are pending (the sign is the direction), the index pulse
+/// (Z high) in the middle of the stretch at `index_at`, either way through it.
+#[derive(Clone, Copy, Debug, Default)]
+struct Turning {
+    position: i64,
+    pending: i64,
+    clock: u64,
+    index_at: i64,
+}
 
 /// The reference model at its pins (finestep-cosim's `ModelPins`, without the crate's
-/// Verilated half).
-struct ModelPins(Top);
+/// Verilated half), encoder channel 0 turned as the shared [`Turning`] says.
+struct ModelPins(Top, Rc<Cell<Turning>>);
 
 impl PinTarget for ModelPins {
     fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
-        let inputs = TopInputs::unpack(inputs);
+        let mut turning = self.1.get();
+        let idle = TopInputs::unpack(inputs);
         for _ in 0..cycles {
-            self.0.step(&inputs);
+            if turning.pending == 0 {
+                self.0.step(&idle);
+                continue;
+            }
+            turning.clock += 1;
+            if turning.clock == EDGE_CLOCKS {
+                let step = turning.pending.signum();
+                turning.clock = 0;
+                turning.position += step;
+                turning.pending -= step;
+            }
+            let (a, b) =
+                [(false, false), (true, false), (true, true), (false, true)][turning.position.rem_euclid(4) as usize];
+            let z =
+                turning.position == turning.index_at && (EDGE_CLOCKS / 4..3 * EDGE_CLOCKS / 4).contains(&turning.clock);
+            let pins = inputs & !(1 << IN_ENC_A0 | 1 << IN_ENC_B0 | 1 << IN_ENC_Z0)
+                | u64::from(a) << IN_ENC_A0
+                | u64::from(b) << IN_ENC_B0
+                | u64::from(z) << IN_ENC_Z0;
+            self.0.step(&TopInputs::unpack(pins));
         }
+        self.1.set(turning);
         Ok(())
     }
 
@@ -27,7 +65,12 @@ impl PinTarget for ModelPins {
 const PERIOD_NS: i64 = 200_000;
 
 fn driver() -> Driver {
-    let mut host = PinHost::new(ModelPins(Top::new(TopParams::default())), PinTiming::default());
+    driver_turning(Rc::default())
+}
+
+/// A driver on a model chip whose encoder channel 0 `turning` turns.
+fn driver_turning(turning: Rc<Cell<Turning>>) -> Driver {
+    let mut host = PinHost::new(ModelPins(Top::new(TopParams::default()), turning), PinTiming::default());
     host.reset(4).unwrap();
     host.idle(8).unwrap();
     Driver::connect(Box::new(host), true, "model").unwrap()
@@ -232,4 +275,120 @@ fn the_settled_increment_keeps_the_step_and_moves_only_a_late_crossing() {
     assert_eq!(settled_increment(32768, 200 * 65536 + 1, p, latency, slots, max), 200 * 65536 + 1);
     // Nor past the largest increment allowed.
     assert_eq!(settled_increment(32768, d, p, latency, slots, d), d);
+}
+
+/// `index-enable` as LinuxCNC's homing and the C component use it: the pin is passed in
+/// before each read and set from the read after it. A request withdrawn before the index
+/// changes nothing; one left standing zeroes `count` at the index pulse, either way
+/// through it, and clears the pin in the read that finds it.
+#[test]
+fn index_enable_zeroes_the_count_at_the_index_and_clears_itself() {
+    let turning = Rc::new(Cell::new(Turning { index_at: 250, ..Turning::default() }));
+    let mut driver = driver_turning(turning.clone());
+    let mut pin = false;
+    fn period(driver: &mut Driver, pin: &mut bool) -> EncoderFeedback {
+        driver.link_mut().wait(10_000).unwrap();
+        driver.set_encoder(0, EncoderCommand { index_enable: *pin, ..EncoderCommand::default() }).unwrap();
+        driver.read(PERIOD_NS).unwrap();
+        let fb = driver.encoder_feedback(0).unwrap();
+        *pin = fb.index_enable;
+        fb
+    }
+    // One period (the request armed there), then the turn, then two periods for the
+    // filter and the latch.
+    let turn = |driver: &mut Driver, pin: &mut bool, edges: i64| {
+        period(driver, pin);
+        turning.set(Turning { pending: edges, ..turning.get() });
+        while turning.get().pending != 0 {
+            period(driver, pin);
+        }
+        period(driver, pin);
+        period(driver, pin);
+    };
+    period(&mut driver, &mut pin);
+    turn(&mut driver, &mut pin, 100);
+    let count = period(&mut driver, &mut pin).count;
+    assert_eq!(count.abs(), 100, "{count}");
+    let sign = count.signum();
+    // Requested, then withdrawn before the index: the count runs on through it.
+    pin = true;
+    assert!(period(&mut driver, &mut pin).index_enable);
+    pin = false;
+    turn(&mut driver, &mut pin, 200);
+    let fb = period(&mut driver, &mut pin);
+    assert_eq!((fb.count, fb.index_enable), (300 * sign, false));
+    // Left standing, turning down through the index: 0 there, the pin cleared.
+    pin = true;
+    assert!(period(&mut driver, &mut pin).index_enable);
+    turn(&mut driver, &mut pin, -100);
+    let fb = period(&mut driver, &mut pin);
+    assert_eq!((fb.count, fb.index_enable), (-50 * sign, false));
+    assert_eq!(fb.position, f64::from(-50 * sign));
+    // And up through it again, asked once more.
+    pin = true;
+    turn(&mut driver, &mut pin, 80);
+    let fb = period(&mut driver, &mut pin);
+    assert_eq!((fb.count, fb.index_enable), (30 * sign, false));
+}
+
+/// `maxaccel` against exact arithmetic: from rest to a jump's target and back, the
+/// increments change by at most the acceleration each period, never pass the command,
+/// and land on it exactly (in I16F16, the driver's own unit).
+#[test]
+fn accel_limited_approaches_without_passing_and_lands_exactly() {
+    for &(target, accel, max) in &[
+        (400i64 << 16, 3.0 * 65536.0, 50i64 << 16),
+        (-(123_457i64), 1000.0, 1 << 30),
+        (7 << 16, 0.375 * 65536.0, 1 << 30),
+        (1, 1.0, 1 << 30),
+        (10_000_000, 24_576.0, 20 << 16),
+    ] {
+        let (mut sent, mut last, mut periods) = (0i64, 0i64, 0);
+        while sent != target || last != 0 {
+            let d = accel_limited(target - sent, last, accel, max);
+            assert!(((d - last) as f64).abs() <= accel, "{target}: {last} -> {d} over {accel}");
+            assert!(d.abs() <= max);
+            sent += d;
+            assert!(sent.signum() * target.signum() >= 0 && sent.abs() <= target.abs(), "{target}: passed at {sent}");
+            last = d;
+            periods += 1;
+            assert!(periods < 100_000, "{target}: never landed ({sent})");
+        }
+    }
+    // Moving the wrong way at speed: the acceleration wins, then the command is reached.
+    let (mut sent, mut last) = (0i64, -(20i64 << 16));
+    for _ in 0..1000 {
+        let d = accel_limited((5 << 16) - sent, last, 65536.0, 1 << 30);
+        assert!((d - last).abs() <= 65536);
+        sent += d;
+        last = d;
+    }
+    assert_eq!((sent, last), (5 << 16, 0));
+}
+
+/// `maxaccel` on the chip: a jump of the command is followed within the acceleration
+/// (the step count's second difference, with one step of quantisation either side), the
+/// rest carried, and landed exactly; 0 leaves the rated-rate clamp alone.
+#[test]
+fn a_jump_is_approached_at_maxaccel_and_landed() {
+    let mut driver = driver();
+    let n = driver.n_axes();
+    let mut cmds = vec![stepgen(0.0, 1.0); n];
+    cycle(&mut driver, true, &cmds);
+    // 2 steps a period squared at 0.2 ms periods: 2 / (2e-4)^2 steps/s^2.
+    cmds[0] = StepgenCommand { maxaccel: 2.0 / (2e-4 * 2e-4), ..stepgen(300.0, 1.0) };
+    let mut counts = Vec::new();
+    for _ in 0..60 {
+        counts.push(cycle(&mut driver, true, &cmds)[0]);
+    }
+    assert_eq!(*counts.last().unwrap(), 300);
+    assert!(counts.windows(2).all(|w| w[1] >= w[0] && w[1] <= 300), "{counts:?}");
+    for w in counts.windows(3) {
+        let second = (w[2] - 2 * w[1] + w[0]).abs();
+        assert!(second <= 2 + 2, "{counts:?}");
+    }
+    // About sqrt(4 * 300 / 2) = 24.5 periods to land: the limit did act.
+    let moving = counts.iter().filter(|&&c| c > 0 && c < 300).count();
+    assert!(moving >= 20, "{moving}: {counts:?}");
+    assert!(driver.stepgen_feedback(0).unwrap().limited > 0);
 }

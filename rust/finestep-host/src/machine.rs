@@ -297,7 +297,11 @@ impl<B: Bus> Machine<B> {
     /// with the LATCH_TIME they belong to: LATCH_TIME is read before and after, and the
     /// read is retried if the latch moved in between. A stopped core latches every clock:
     /// then two equal reads with the core still stopped describe its state, with the
-    /// later LATCH_TIME. Gives up after `attempts`, naming `what`.
+    /// later LATCH_TIME. Stopped, something outside the core can keep the registers
+    /// changing between any two reads (an encoder turned by hand, a hand-wheel jog): on
+    /// the last attempt the later read is taken as it is, each frame's registers from
+    /// the clock that frame latched (over SPI one frame holds the latch; nothing is lost:
+    /// counts and positions are totals). Running, gives up after `attempts`, naming `what`.
     pub(crate) fn read_latched<T: PartialEq>(
         &mut self,
         attempts: usize,
@@ -306,7 +310,7 @@ impl<B: Bus> Machine<B> {
     ) -> Result<(T, u32), BusError> {
         let running =
             |bus: &mut B| -> Result<bool, BusError> { Ok(status::RUNNING.get(bus.read_one(status::ADDR)?) != 0) };
-        for _ in 0..attempts {
+        for attempt in 1..=attempts {
             let before = self.bus.read_one(latch_time::ADDR)?;
             let first = read(&mut self.bus)?;
             let after = self.bus.read_one(latch_time::ADDR)?;
@@ -316,7 +320,7 @@ impl<B: Bus> Machine<B> {
             if !running(&mut self.bus)? {
                 let again = read(&mut self.bus)?;
                 let latest = self.bus.read_one(latch_time::ADDR)?;
-                if again == first && !running(&mut self.bus)? {
+                if (again == first || attempt == attempts) && !running(&mut self.bus)? {
                     return Ok((again, latest));
                 }
             }
