@@ -156,13 +156,13 @@ struct Sim final : fs_sim {
     }
 
     // The input registers take the inputs set since the last load (clock low). `load`
-    // falls in an evaluation of its own, so that the next load is a rising edge again
-    // (Verilator compares with the value at the previous evaluation).
+    // falls in an evaluation of its own (or, untraced, as load_fall sets it), so that the
+    // next load is a rising edge again (Verilator compares with the value at the previous
+    // evaluation).
     void load() {
         top->load = 1;
         top->eval();
-        top->load = 0;
-        top->eval();
+        finestep::load_fall<TRACED>(*top);
     }
 
     // Cycle c is drawn from time 2c (its rising edge) to 2c+2; its inputs, settled with

@@ -24,6 +24,7 @@
 #include "Vfinestep_top___024root.h"
 #include "Vfinestep_top_motion___024root.h"
 #include "Vfinestep_top_motion_nompg___024root.h"
+#include "Vfinestep_top_motion_serial___024root.h"
 #endif
 #include "finestep_top_pins.h"
 #include "verilated_trace.h"
@@ -55,7 +56,8 @@ struct TopSim final : ft_sim {
         if (TRACED) context->traceEverOn(true);
         top.reset(new Model(context.get()));
         top->clk = 0;
-        apply(idle_inputs());
+        finestep::apply_top_inputs(*top, idle_inputs());
+        top->eval();
         outputs = read_outputs();
     }
 
@@ -69,9 +71,11 @@ struct TopSim final : ft_sim {
                (1ULL << FT_IN_BUS_RD_N) | (1ULL << FT_IN_BUS_WR_N);
     }
 
+    // The new inputs, settled with the clock low (the outputs are read only after edges:
+    // where the next edge's eval() settles them first, it alone does).
     void apply(uint64_t in) {
         finestep::apply_top_inputs(*top, in);
-        top->eval();  // settle on the new inputs, clock low
+        if (!finestep::edge_settles_inputs<TRACED>()) top->eval();
     }
 
     uint64_t read_outputs() const { return finestep::read_top_outputs(*top); }

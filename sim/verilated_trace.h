@@ -61,9 +61,11 @@ void clock_cycle(Model &model, std::unique_ptr<TraceFile> &trace, uint64_t &cycl
 // time) only the value Verilator compares `clk` with at the next eval() is set low, as an
 // eval() with `clk` low would leave it. FS_CLK_PREV names that member of the model's root
 // (`__Vtrigrprev__TOP__clk` in Verilator 5.006); rust/finestep-rtl-sys's build defines it
-// only when every such model declares it and has no input-dependent (`ico`) region, and
-// never for a netlist; otherwise, and on a traced model (its trace records the fall), the
-// fall is an eval().
+// only when every such model declares it and its generated code shows that an eval()
+// lowering `clk` evaluates nothing (every trigger a rising edge of `clk` or `load`, read
+// nowhere else; an input-dependent `ico` region computes again what it computed at the
+// last eval()), and never for a netlist; otherwise, and on a traced model (its trace
+// records the fall), the fall is an eval().
 template <bool TRACED, typename Model>
 inline void clock_fall(Model &model) {
     model.clk = 0;
@@ -74,6 +76,35 @@ inline void clock_fall(Model &model) {
     }
 #endif
     model.eval();
+}
+
+// The fall of the core shim's `load`, as clock_fall's of `clk` (FS_LOAD_PREV: the member
+// of every untraced core's root that holds `load` at the last eval(), defined by the
+// build under clock_fall's conditions).
+template <bool TRACED, typename Model>
+inline void load_fall(Model &model) {
+    model.load = 0;
+#ifdef FS_LOAD_PREV
+    if constexpr (!TRACED) {
+        model.rootp->FS_LOAD_PREV = 0;
+        return;
+    }
+#endif
+    model.eval();
+}
+
+// Whether an untraced model's rising-edge eval() settles inputs set since the last
+// eval() before it evaluates the edge (its input-dependent region runs first), so that
+// the shims need not evaluate new inputs with the clock low: under FS_CLK_PREV's
+// conditions (the inputs are read by no trigger but `clk`'s and `load`'s rising edges). A
+// traced model evaluates them (its waveform shows them settled before the edge).
+template <bool TRACED>
+constexpr bool edge_settles_inputs() {
+#ifdef FS_CLK_PREV
+    return !TRACED;
+#else
+    return false;
+#endif
 }
 
 }  // namespace finestep

@@ -305,9 +305,12 @@ fn main() {
             .retain(|(_, prefix, _)| *prefix != "Vfinestep_top_traced" && !prefix.starts_with("Vfinestep_top_motion"));
     }
     let mut files = Vec::new();
-    // The member each untraced core and top keeps `clk`'s last evaluated value in, when
-    // all have one and no input-dependent region (sim/verilated_trace.h's clock_fall).
+    // The member each untraced core and top keeps `clk`'s last evaluated value in, and
+    // each untraced core `load`'s, when all have the same one and an eval() that only
+    // lowers the input evaluates nothing (sim/verilated_trace.h's clock_fall and
+    // load_fall).
     let mut clk_prev = Some(None::<String>);
+    let mut load_prev = Some(None::<String>);
     for (build_of, prefix, trace) in models {
         let dir = mdir.join(prefix);
         let mut model_sources = sources.clone();
@@ -317,12 +320,16 @@ fn main() {
         let top_netlist = if let Build::Top { .. } = build_of { netlist.as_ref() } else { None };
         let classes = verilate(&verilator, &model_sources, &gen, &params, build_of, prefix, trace, top_netlist, &dir);
         if trace.is_none() && matches!(build_of, Build::Core { .. } | Build::Top { .. }) {
-            let member = if netlist.is_some() { None } else { clk_prev_member(&dir, prefix) };
-            clk_prev = match (clk_prev, member) {
-                (Some(None), Some(m)) => Some(Some(m)),
-                (Some(Some(seen)), Some(m)) if seen == m => Some(Some(m)),
+            let members = if netlist.is_some() { None } else { edge_prev_members(&dir, prefix) };
+            let same = |prev: Option<Option<String>>, member: Option<&String>| match (prev, member) {
+                (Some(None), Some(m)) => Some(Some(m.clone())),
+                (Some(Some(seen)), Some(m)) if seen == *m => Some(Some(seen)),
                 _ => None,
             };
+            clk_prev = same(clk_prev, members.as_ref().and_then(|m| m.get("clk")));
+            if let Build::Core { .. } = build_of {
+                load_prev = same(load_prev, members.as_ref().and_then(|m| m.get("load")));
+            }
         }
         let list = |name: &str| -> Vec<String> {
             classes.get(name).map(|v| v.split_whitespace().map(String::from).collect()).unwrap_or_default()
@@ -346,6 +353,9 @@ fn main() {
     }
     if let Some(Some(member)) = &clk_prev {
         build.define("FS_CLK_PREV", member.as_str());
+        if let Some(Some(member)) = &load_prev {
+            build.define("FS_LOAD_PREV", member.as_str());
+        }
     }
     // Current Verilator's FST writer (include/fstcpp) compresses with the system lz4.
     let globals_need_lz4 = root.join("include/fstcpp").is_dir();
@@ -594,30 +604,94 @@ fn verilate(
     parse_make_vars(&dir.join(format!("{prefix}_classes.mk")))
 }
 
-/// The member of the Verilated `prefix`'s root class that holds the value of `clk` at the
-/// last evaluation (Verilator 5.006: `__Vtrigrprev__TOP__clk`; later 5.x:
-/// `__Vtrigprevexpr___TOP__clk__0`), or `None` when there is not exactly one such member
-/// or the model has an input-dependent region (`_eval_ico`: logic an eval() with the clock
-/// low would evaluate): the shims' clock_fall then evaluates the fall.
-fn clk_prev_member(dir: &Path, prefix: &str) -> Option<String> {
+/// The members of the Verilated `prefix`'s root class that hold the values of its edge
+/// inputs (`clk`, and the core shim's `load` where it has one) at the last evaluation
+/// (Verilator 5.006: `__Vtrigrprev__TOP__clk`; later 5.x: `__Vtrigprevexpr___TOP__clk__0`),
+/// by input, when an eval() that only lowers one of them evaluates nothing; `None`
+/// otherwise (the shims' clock_fall then evaluates the fall).
+///
+/// An eval() runs the input-dependent region (`ico`: logic reading a top-level input),
+/// then the active region for the triggers that fired. When every trigger is the rising
+/// edge of `clk` or `load` and neither is read anywhere else (no logic on their level or
+/// falling edge), lowering one fires no trigger, and the `ico` region, if the model has
+/// one, computes again what it computed at the last evaluation: its logic reads inputs
+/// that did not change and state that the last evaluation's active region left settled
+/// (Verilator replicates logic that reads both inputs and state into that region), so
+/// the eval() changes nothing but the member. Checked on the generated code: every
+/// assignment of `__VactTriggered` is `input & ~member` for one of the two, and the two
+/// inputs appear only there, in the member's update, the port-width check and the
+/// constructor; a format these checks do not know gives `None`.
+fn edge_prev_members(dir: &Path, prefix: &str) -> Option<BTreeMap<&'static str, String>> {
     let header = std::fs::read_to_string(dir.join(format!("{prefix}___024root.h"))).ok()?;
-    let members: Vec<&str> = header
-        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
-        .filter(|word| *word == "__Vtrigrprev__TOP__clk" || word.starts_with("__Vtrigprevexpr___TOP__clk__"))
-        .collect();
-    if members.len() != 1 {
-        return None;
+    let words: Vec<&str> = header.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).collect();
+    let mut members = BTreeMap::new();
+    for input in ["clk", "load"] {
+        let old = format!("__Vtrigrprev__TOP__{input}");
+        let new = format!("__Vtrigprevexpr___TOP__{input}__");
+        let mut found: Vec<&str> = words.iter().copied().filter(|w| *w == old || w.starts_with(&new)).collect();
+        found.dedup();
+        match found.len() {
+            0 => {}
+            1 => {
+                members.insert(input, found[0].to_string());
+            }
+            _ => return None,
+        }
     }
+    members.get("clk")?;
+    let mut texts = Vec::new();
     for entry in std::fs::read_dir(dir).ok()? {
         let path = entry.ok()?.path();
         if path.extension().is_some_and(|ext| ext == "cpp") {
-            let text = std::fs::read_to_string(&path).ok()?;
-            if text.contains("_eval_ico") || text.contains("_ico_sequent") {
+            texts.push(std::fs::read_to_string(&path).ok()?);
+        }
+    }
+    // Every trigger of the active region: the rising edge of an input with a member.
+    let rising: Vec<String> = members
+        .iter()
+        .map(|(input, member)| format!("((IData)(vlSelf->{input})&(~(IData)(vlSelf->{member})))"))
+        .collect();
+    let mut triggers = 0;
+    for text in &texts {
+        let mut rest = text.as_str();
+        while let Some(at) = rest.find("__VactTriggered.at(") {
+            rest = &rest[at..];
+            let end = rest.find(';')?;
+            let statement: String = rest[..end].chars().filter(|c| !c.is_whitespace()).collect();
+            rest = &rest["__VactTriggered.at(".len()..];
+            let Some((index, rhs)) = statement["__VactTriggered.at(".len()..].split_once(")=") else { continue };
+            if !index.trim_end_matches('U').chars().all(|c| c.is_ascii_digit()) || rhs.starts_with('=') {
+                continue;
+            }
+            if !rising.iter().any(|r| *r == rhs) {
                 return None;
+            }
+            triggers += 1;
+        }
+    }
+    if triggers == 0 {
+        return None;
+    }
+    // The inputs are read nowhere else.
+    for text in &texts {
+        for line in text.lines() {
+            let line = line.trim();
+            for (input, member) in &members {
+                let token = format!("vlSelf->{input}");
+                let reads = line.match_indices(&token).any(|(i, _)| {
+                    !line[i + token.len()..].starts_with(|c: char| c.is_ascii_alphanumeric() || c == '_')
+                });
+                let known = line.contains("__VactTriggered.at(")
+                    || line == format!("vlSelf->{member} = {token};")
+                    || line.contains(&format!("VL_UNLIKELY(({token} & "))
+                    || line.starts_with(&format!("{token} = "));
+                if reads && !known {
+                    return None;
+                }
             }
         }
     }
-    Some(members[0].to_string())
+    Some(members)
 }
 
 /// `verilator --getenv VERILATOR_ROOT`.
