@@ -250,6 +250,7 @@ impl<'p> Periods<'p> {
         }
         let rising = v1 > v0;
         let mut speeds = vec![v0, v1];
+        let mut nurbs_only = matches!(self.path.element(i).shape, Shape::Nurbs { .. });
         // Elements i..i + speeds.len() - 1 so far; extend while the junction after the
         // last is smooth and the speeds keep going the same way.
         while speeds.len() <= MAX_RUN_ELEMENTS {
@@ -259,15 +260,16 @@ impl<'p> Periods<'p> {
             }
             // A run of NURBS sub-pieces alone plans the look-ahead on as far as it goes;
             // one with lines or blends ends at the last junction committed, so that the
-            // elements kept stay within the window's.
-            let nurbs_only = (i..=last).all(|k| matches!(self.path.element(k).shape, Shape::Nurbs { .. }));
-            if !nurbs_only && self.speeds.committed() < last + 2 {
+            // elements kept stay within the window's, and at MAX_BLEND_RUN_ELEMENTS
+            // (on short segments every element tries a run).
+            if !nurbs_only && (self.speeds.committed() < last + 2 || speeds.len() > MAX_BLEND_RUN_ELEMENTS) {
                 break;
             }
             self.path.reach(last + 2)?;
             if self.path.known() <= last + 1 || !runs_on(&self.path.element(last + 1).shape) {
                 break;
             }
+            nurbs_only &= matches!(self.path.element(last + 1).shape, Shape::Nurbs { .. });
             let v = self.speeds.speed_in(&self.config, &mut self.path, last + 2)?;
             let previous = speeds[speeds.len() - 1];
             if v == previous || (v > previous) != rising {
@@ -413,6 +415,9 @@ impl<'p> Periods<'p> {
         Some(self.emit(grid, flags, line))
     }
 }
+
+/// The most elements of a run that holds a line or a blend ([`Periods::try_run`]).
+pub const MAX_BLEND_RUN_ELEMENTS: usize = 16;
 
 /// The shapes a run of speed change may cross ([`Periods::try_run`]): NURBS
 /// sub-pieces, lines and the clothoid blends between lines (curvature continuous at

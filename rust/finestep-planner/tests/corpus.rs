@@ -491,7 +491,7 @@ fn a_staircase_of_single_steps_is_held_to_the_window_and_keeps_the_limits() {
 /// S-curve on short segments (the CAM program above, 3 000 moves): the clothoid blends
 /// and the runs of one speed change across lines and blends keep the machining time
 /// within 1.75 times the lower bound (1.63 measured; the bench's 20 000 segments of the
-/// same spiral went from 2.12 with circular blends and a profile per element to 1.64),
+/// same spiral went from 2.12 with circular blends and a profile per element to 1.65),
 /// the checker passing.
 #[test]
 fn s_curve_short_segments_stay_near_the_time_bound() {
