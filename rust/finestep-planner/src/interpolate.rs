@@ -21,9 +21,7 @@
 //! mode, where the junction speeds of consecutive smooth sub-pieces rise (or fall) all
 //! the way, they take one profile over the run ([`crate::velocity::run_profiles`]),
 //! each sub-piece its part of it, so the acceleration is not brought to zero at every
-//! sub-piece's end; lines and the clothoid blends between them join such runs too
-//! (on short segments the blends' caps differ from one to the next, and per-element
-//! profiles spent the time bringing the acceleration to zero at every junction).
+//! sub-piece's end.
 
 use finestep_interface::rate::RateChecker;
 use finestep_interface::{Increment, PeriodRecord};
@@ -238,19 +236,18 @@ impl<'p> Periods<'p> {
         Ok(profile)
     }
 
-    /// S-curve: plans the elements ([`runs_on`]) from `i` on whose junction speeds rise (or
+    /// S-curve: plans the NURBS sub-pieces from `i` on whose junction speeds rise (or
     /// fall) all the way as one run ([`run_profiles`]), so that the acceleration is
     /// carried across their junctions; the longest such run (at most
     /// [`MAX_RUN_ELEMENTS`]) where that is possible and faster, else halves of it.
     /// Whether a run was planned (its profiles in `self.run` from `i`).
     fn try_run(&mut self, i: usize, v0: f64, v1: f64) -> Result<bool, ProgramError> {
-        let smooth = |e: &Element| runs_on(&e.shape) && !e.stop_after && !e.jump_after;
+        let smooth = |e: &Element| matches!(e.shape, Shape::Nurbs { .. }) && !e.stop_after && !e.jump_after;
         if v0 == v1 || !smooth(self.path.element(i)) {
             return Ok(false);
         }
         let rising = v1 > v0;
         let mut speeds = vec![v0, v1];
-        let mut nurbs_only = matches!(self.path.element(i).shape, Shape::Nurbs { .. });
         // Elements i..i + speeds.len() - 1 so far; extend while the junction after the
         // last is smooth and the speeds keep going the same way.
         while speeds.len() <= MAX_RUN_ELEMENTS {
@@ -258,18 +255,10 @@ impl<'p> Periods<'p> {
             if !smooth(self.path.element(last)) {
                 break;
             }
-            // A run of NURBS sub-pieces alone plans the look-ahead on as far as it goes;
-            // one with lines or blends ends at the last junction committed, so that the
-            // elements kept stay within the window's, and at MAX_BLEND_RUN_ELEMENTS
-            // (on short segments every element tries a run).
-            if !nurbs_only && (self.speeds.committed() < last + 2 || speeds.len() > MAX_BLEND_RUN_ELEMENTS) {
-                break;
-            }
             self.path.reach(last + 2)?;
-            if self.path.known() <= last + 1 || !runs_on(&self.path.element(last + 1).shape) {
+            if self.path.known() <= last + 1 || !matches!(self.path.element(last + 1).shape, Shape::Nurbs { .. }) {
                 break;
             }
-            nurbs_only &= matches!(self.path.element(last + 1).shape, Shape::Nurbs { .. });
             let v = self.speeds.speed_in(&self.config, &mut self.path, last + 2)?;
             let previous = speeds[speeds.len() - 1];
             if v == previous || (v > previous) != rising {
@@ -414,17 +403,6 @@ impl<'p> Periods<'p> {
         let grid = self.grid(point);
         Some(self.emit(grid, flags, line))
     }
-}
-
-/// The most elements of a run that holds a line or a blend ([`Periods::try_run`]).
-pub const MAX_BLEND_RUN_ELEMENTS: usize = 16;
-
-/// The shapes a run of speed change may cross ([`Periods::try_run`]): NURBS
-/// sub-pieces, lines and the clothoid blends between lines (curvature continuous at
-/// their junctions where no jump is flagged); not arcs, whose junctions with lines
-/// jump in curvature.
-fn runs_on(shape: &Shape) -> bool {
-    matches!(shape, Shape::Nurbs { .. } | Shape::Line { .. } | Shape::Clothoid { .. })
 }
 
 /// The profile limits and speed cap of `e` where its speed stays at or below `top`, from

@@ -15,8 +15,7 @@
 //!    passes over a window of at least `lookahead_moves` moves.
 //! 4. [`velocity`]: per element a trapezoid or S-curve profile, acceleration and
 //!    deceleration halves planned separately (seed 002); in S-curve mode a run of NURBS
-//!    sub-pieces, lines and clothoid blends (no jump at their junctions) whose junction
-//!    speeds rise or fall all the way as one speed change
+//!    sub-pieces whose junction speeds rise or fall all the way as one speed change
 //!    over the run ([`velocity::run_profiles`]), the acceleration carried across them.
 //! 5. [`interpolate`]: seed 000's time-division interpolation, a period straddling
 //!    elements where the path flows on, positions quantised to the Q16.16 grid from their
@@ -69,8 +68,7 @@
 //!   jump, in S-curve mode also a curvature jump such as a line entering an arc).
 //!   Each element keeps one tangential acceleration and jerk over its length (set
 //!   at its speed cap), and an S-curve brings the acceleration to zero at every element's
-//!   end (except inside a run of NURBS sub-pieces, lines and clothoid blends whose
-//!   speeds rise or fall all the way,
+//!   end (except inside a run of NURBS sub-pieces whose speeds rise or fall all the way,
 //!   planned as one change under the run's smallest limits, [`velocity::run_profiles`]),
 //!   so the limits are reached where the path allows, not followed everywhere.
 //! - [`bound`] gives an independent lower bound on the machining time, for figures.
@@ -78,7 +76,7 @@
 //!   the junction speed comes from the tangent jump read over one period: full speed
 //!   where they are tangent, nearly a stop where they are not.
 //! - S-curve profiles bring the acceleration back to zero at every element junction
-//!   (runs aside, above). Line-line corners are blended by clothoid pairs, whose
+//!   (NURBS runs aside, above). Line-line corners are blended by clothoid pairs, whose
 //!   curvature meets the lines' 0, so no curvature jumps there; their speed is capped by
 //!   their own turning jerk `|k'| v^3` (`k' = phi / L^2`, L each clothoid's length;
 //!   the blend reaches at most half of the shorter line): on short segments still well below the feed

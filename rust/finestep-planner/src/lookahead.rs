@@ -307,12 +307,6 @@ impl WindowedSpeeds {
         self.window
     }
 
-    /// The last junction whose speed is committed: junctions up to it are known
-    /// without planning another window.
-    pub fn committed(&self) -> usize {
-        self.fixed
-    }
-
     /// The speed at junction `i` (`0..=elements.len()`) of a whole path, planning
     /// further windows as needed.
     pub fn speed(&mut self, config: &Resolved, elements: &[Element], i: usize) -> f64 {

@@ -11,7 +11,7 @@
 //!
 //! A run of elements whose junction speeds rise (or fall) all the way may instead be
 //! planned as one speed change over their whole length ([`run_profiles`]; the
-//! interpolation does so on NURBS sub-pieces, lines and clothoid blends in S-curve mode), so that the
+//! interpolation does so on NURBS sub-pieces in S-curve mode), so that the
 //! acceleration is carried across the junctions inside the run.
 
 use crate::config::ProfileKind;

@@ -489,10 +489,9 @@ fn a_staircase_of_single_steps_is_held_to_the_window_and_keeps_the_limits() {
 }
 
 /// S-curve on short segments (the CAM program above, 3 000 moves): the clothoid blends
-/// and the runs of one speed change across lines and blends keep the machining time
-/// within 1.75 times the lower bound (1.63 measured; the bench's 20 000 segments of the
-/// same spiral went from 2.12 with circular blends and a profile per element to 1.65),
-/// the checker passing.
+/// keep the machining time within 1.8 times the lower bound (1.70 measured; the bench's 20 000
+/// segments of the same spiral went from 2.12 with circular blends to 1.71), the checker
+/// passing.
 #[test]
 fn s_curve_short_segments_stay_near_the_time_bound() {
     let program = parse("cam.ngc", &cam_program(3000));
@@ -503,5 +502,5 @@ fn s_curve_short_segments_stay_near_the_time_bound() {
     let bound = finestep_planner::time_lower_bound(&config, &program).unwrap();
     eprintln!("{time:.3} s against {bound:.3} s: {:.3}", time / bound);
     assert!(report.passed());
-    assert!(time >= bound && time <= 1.75 * bound, "{time} s against {bound} s");
+    assert!(time >= bound && time <= 1.8 * bound, "{time} s against {bound} s");
 }
