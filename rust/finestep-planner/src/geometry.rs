@@ -1,5 +1,6 @@
 //! The path as the planner follows it: programmed lines and arcs, vertices rounded to
-//! whole steps, and (in G64) line-line corners replaced by blend arcs. A NURBS
+//! whole steps, and (in G64) line-line corners replaced by blend arcs (S-curve: pairs of
+//! clothoids). A NURBS
 //! (G5.2/G5.3) becomes [`Shape::Nurbs`] sub-pieces of the curve itself, its first and
 //! last control points on whole steps, with limits from its curvature
 //! ([`crate::nurbs`]); it is not blended with its neighbours.
@@ -17,6 +18,19 @@
 //! programmed corner. Corners involving programmed arcs, reversals, and corners in G61
 //! are not blended; their speed comes from the junction criterion in
 //! [`crate::lookahead`].
+//!
+//! With the S-curve profile the blend is continuous in curvature instead: two mirrored
+//! clothoids ([`Shape::Clothoid`], curvature rising linearly from the line's 0 to a peak
+//! at the bisector and back), whose meeting point on the bisector is at most P from C
+//! and which leave the lines at most half of either line from C. A circle's curvature
+//! jumps from 0 to 1/R where it meets its lines, and the jerk limit read over the
+//! periods around that jump (`|dk| v^2 / T`) capped the speed at every blend; the
+//! clothoids' curvature changes at `k' = phi / L^2` (L each clothoid's length), whose
+//! jerk `k' v^3` the element's own caps keep (its turning takes
+//! [`BLEND_TURNING_JERK_SHARE`] of each axis's jerk), so its junctions with the lines
+//! flow at the speed both allow. For the same P the clothoids reach further along the
+//! lines than the circle (about 1.5 times for small angles) and peak at a higher
+//! curvature (about 4/3 of the circle's).
 
 use std::borrow::Cow;
 use std::collections::VecDeque;
@@ -27,8 +41,9 @@ use finestep_gcode::{Block, BlockKind, CompSide, PathControl, Plane, Point, Prog
 
 use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
 pub use crate::element::{
-    full_caps, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, GEOMETRIC_ACCEL_SHARE, JUMP_REACH_PERIODS,
-    JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
+    full_caps, full_caps_turning, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, BLEND_TURNING_JERK_SHARE,
+    GEOMETRIC_ACCEL_SHARE, JUMP_REACH_PERIODS, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
+    TURNING_JERK_SHARE,
 };
 use crate::element::{jump_jerk_share, short_length, tangential_jerk_share, IoAction, IoEvent};
 use crate::error::ProgramError;
@@ -429,11 +444,28 @@ fn axis_weights(shape: &Shape, length: f64) -> Vec4 {
     match *shape {
         Shape::Line { dir } => dir.map(f64::abs),
         Shape::Nurbs { .. } => [1.0, 1.0, 0.0, 0.0], // sub-pieces get their limits in `nurbs`
+        // The tangent cos(theta) d1 + sin(theta) n1 for theta from 0 to the turn.
+        Shape::Clothoid { d1, n1, half, sharpness, .. } => {
+            let turn = sharpness * half * half;
+            [0, 1, 2, 3].map(|a| largest_on_turn(d1[a], n1[a], turn).min(1.0))
+        }
         Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
             let planar = (r0.max(r1) * sweep.abs() / length).min(1.0);
             let radial = (r1 - r0).abs() / length;
             [0, 1, 2, 3].map(|a| ((planar + radial) * e1[a].hypot(e2[a]) + (rise[a] / length).abs()).min(1.0))
         }
+    }
+}
+
+/// The largest `|a cos(theta) + b sin(theta)|` for theta in `0..=turn` (turn <= pi):
+/// at an end, or `hypot(a, b)` where the stationary angle `atan2(b, a)` (mod pi) lies
+/// within the turn.
+fn largest_on_turn(a: f64, b: f64, turn: f64) -> f64 {
+    let ends = a.abs().max((a * turn.cos() + b * turn.sin()).abs());
+    if b.atan2(a).rem_euclid(std::f64::consts::PI) <= turn {
+        ends.max(a.hypot(b))
+    } else {
+        ends
     }
 }
 
@@ -522,10 +554,56 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
             2.0 * ARC_JERK_SHARE
         };
     }
+    if let Shape::Clothoid { d1, n1, half, sharpness, .. } = element.shape {
+        // As an arc of the peak curvature whose curvature also changes: the turning
+        // terms (k^2 + |k'|) v^3 and 3 k v a_t within ARC_JERK_SHARE each.
+        let (k, dk) = (sharpness * half, sharpness);
+        let turn = sharpness * half * half;
+        let scurve = config.profile == ProfileKind::SCurve;
+        let delta = config.chord_tolerance_mm.min(1.0 / k);
+        let chord = 2.0 * (2.0 * delta / k - delta * delta).sqrt();
+        v_cap = v_cap.min(chord / config.period_s);
+        let normal = [0, 1, 2, 3].map(|a| largest_on_turn(n1[a], -d1[a], turn));
+        for (axis, &h) in normal.iter().enumerate() {
+            let limits = &config.axes[axis];
+            if h < 1e-12 || !limits.present {
+                continue;
+            }
+            v_cap = v_cap.min((GEOMETRIC_ACCEL_SHARE * limits.max_acceleration / (k * h)).sqrt());
+            if scurve {
+                v_cap = v_cap.min((ARC_JERK_SHARE * limits.max_jerk / ((k * k + dk) * h)).cbrt());
+            }
+        }
+        let mut turning = 0.0f64;
+        if scurve {
+            for (axis, &h) in normal.iter().enumerate() {
+                let limits = &config.axes[axis];
+                if h >= 1e-12 && limits.present {
+                    accel = accel.min(ARC_JERK_SHARE * limits.max_jerk / (3.0 * k * v_cap * h));
+                }
+            }
+            for (axis, &h) in normal.iter().enumerate() {
+                let limits = &config.axes[axis];
+                if h >= 1e-12 && limits.present {
+                    let w = weights[axis].max(h);
+                    let reads = (k * k + dk) * v_cap.powi(3) * w + 3.0 * k * v_cap * accel * h;
+                    turning = turning.max(reads / limits.max_jerk);
+                }
+            }
+        }
+        element.turning_jerk_share = if scurve { turning.min(2.0 * ARC_JERK_SHARE) } else { 2.0 * ARC_JERK_SHARE };
+    }
     element.shared = Caps { v_cap, accel, jerk };
     // The limits shared by what the element needs (`crate::element`).
     let mut v_limit = feed;
-    let (mut k, mut normal) = (0.0, [0.0; 4]);
+    let (mut k, mut dk, mut normal) = (0.0, 0.0, [0.0; 4]);
+    if let Shape::Clothoid { d1, n1, half, sharpness, .. } = element.shape {
+        (k, dk) = (sharpness * half, sharpness);
+        let turn = sharpness * half * half;
+        let delta = config.chord_tolerance_mm.min(1.0 / k);
+        v_limit = v_limit.min(2.0 * (2.0 * delta / k - delta * delta).sqrt() / config.period_s);
+        normal = [0, 1, 2, 3].map(|a| largest_on_turn(n1[a], -d1[a], turn));
+    }
     if let Shape::Arc { e1, e2, .. } = element.shape {
         let (planar, r) = element.planar_fraction_and_radius();
         k = planar * planar / r;
@@ -546,7 +624,10 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
             jerk: axis.max_jerk,
         }
     });
-    let full = full_caps(&axes, v_limit, k, 0.0, config.profile == ProfileKind::SCurve);
+    // A blend between lines turns more than it speeds up: its turning takes the larger share.
+    let turning_share =
+        if matches!(element.shape, Shape::Clothoid { .. }) { BLEND_TURNING_JERK_SHARE } else { TURNING_JERK_SHARE };
+    let full = full_caps_turning(&axes, v_limit, k, dk, config.profile == ProfileKind::SCurve, turning_share);
     element.v_cap = full.v_cap;
     element.accel = full.accel;
     element.jerk = full.jerk;
@@ -647,6 +728,38 @@ fn blend_arc(corner: Vec4, d1: Vec4, d2: Vec4, tolerance: f64, room: f64) -> Opt
     let centre = add_scaled(a, radius, n);
     let shape = Shape::Arc { centre, e1: scale(-1.0, n), e2: d1, r0: radius, r1: radius, sweep: phi, rise: [0.0; 4] };
     Some((a, b, shape, radius * phi))
+}
+
+/// The blend continuous in curvature for the corner between lines `d1` then `d2` at
+/// `corner` (S-curve mode): two mirrored clothoids ([`Shape::Clothoid`]) turning by
+/// the corner's angle phi, each of length `L`. Their meeting point lies on the corner's
+/// bisector at `h = Y / cos(phi/2)` from the corner, and they leave the lines
+/// `t = X + Y tan(phi/2)` before and after it, where `(X, Y)` is the end of one
+/// clothoid in its own frame (both linear in `L` for a given phi); `L` is the largest
+/// with `h <= tolerance` (every point of the blend is then within the tolerance of the
+/// programmed corner) and `t <= room`. `None` as for [`blend_arc`].
+fn clothoid_blend(corner: Vec4, d1: Vec4, d2: Vec4, tolerance: f64, room: f64) -> Option<(Vec4, Vec4, Shape, f64)> {
+    let cos_phi = dot(d1, d2).clamp(-1.0, 1.0);
+    let phi = cos_phi.acos();
+    if !(1e-6..=std::f64::consts::PI - 1e-3).contains(&phi) {
+        return None;
+    }
+    let half_angle = 0.5 * phi;
+    // The clothoid of unit length turning by phi/2: sharpness phi.
+    let (x1, y1) = crate::element::clothoid_xy(1.0, phi);
+    let half = (tolerance * half_angle.cos() / y1).min(room / (x1 + y1 * half_angle.tan()));
+    let t = half * (x1 + y1 * half_angle.tan());
+    if !(half > 1e-9 && t > 1e-9 && t <= room * (1.0 + 1e-12)) {
+        return None;
+    }
+    let across1 = add_scaled(d2, -cos_phi, d1);
+    let across2 = add_scaled(scale(-1.0, d1), cos_phi, d2);
+    let n1 = scale(1.0 / norm(across1), across1);
+    let n2 = scale(1.0 / norm(across2), across2);
+    let a = add_scaled(corner, -t, d1);
+    let b = add_scaled(corner, t, d2);
+    let shape = Shape::Clothoid { d1, n1, d2, n2, half, sharpness: phi / (half * half) };
+    Some((a, b, shape, 2.0 * half))
 }
 
 /// The path of a program.
@@ -839,8 +952,11 @@ impl<'p> PathStream<'p> {
                 let d2 = sub(n.end, n.start);
                 let (l1, l2) = (norm(d1), norm(d2));
                 let room = 0.5 * l1.min(l2);
+                // S-curve: blends continuous in curvature, so the jerk limit does not cap
+                // the speed at a curvature jump where each blend meets its lines.
+                let blend = if config.profile == ProfileKind::SCurve { clothoid_blend } else { blend_arc };
                 if let Some((a, b, shape, length)) =
-                    blend_arc(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
+                    blend(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
                 {
                     self.pending_blend = Some(limited(config, shape, a, b, length, n.line, m.feed.min(n.feed)));
                     end_here = a;
@@ -1056,6 +1172,137 @@ mod tests {
         elements.last().expect("elements").end
     }
 
+    /// The clothoid pair's Fresnel series against Simpson's rule on its definition, up
+    /// to the largest half turn a blend has (pi/2 at the middle).
+    #[test]
+    fn the_clothoid_series_matches_its_integrals() {
+        for &(s, sharpness) in &[(1.0, 1e-6), (0.3, 0.7), (1.0, 3.1), (2.0, 0.78), (0.05, 400.0)] {
+            let (x, y) = crate::element::clothoid_xy(s, sharpness);
+            let n = 20_000;
+            let h = s / f64::from(n);
+            let (mut sx, mut sy) = (0.0, 0.0);
+            for i in 0..=n {
+                let sigma = f64::from(i) * h;
+                let theta = 0.5 * sharpness * sigma * sigma;
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                sx += w * theta.cos();
+                sy += w * theta.sin();
+            }
+            let (sx, sy) = (sx * h / 3.0, sy * h / 3.0);
+            assert!((x - sx).abs() < 1e-12 && (y - sy).abs() < 1e-12, "{s} {sharpness}: {x} {y} against {sx} {sy}");
+        }
+    }
+
+    /// A clothoid blend on corners of every angle in a tilted 3-D plane: it starts and
+    /// ends on the lines, along them, with no curvature there (finite differences); the
+    /// two clothoids meet at the middle in position and tangent; the curvature peaks at
+    /// `sharpness * half` there; no point is farther than the tolerance from the corner
+    /// and the turn is the corner's; it leaves the lines within the room.
+    #[test]
+    fn a_clothoid_blend_is_tangent_and_flat_at_its_ends_and_within_the_tolerance() {
+        use crate::vec4::{add_scaled, dot, norm, scale, sub};
+        let tilt = |v: [f64; 3]| -> [f64; 4] {
+            // A fixed rotation about the axis (1, 1, 1): the corner's plane is not XY.
+            let (c, s) = (0.8f64, 0.6f64);
+            let k = [1.0 / 3f64.sqrt(); 3];
+            let kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+            let cross = [k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]];
+            let r: [f64; 3] = std::array::from_fn(|i| v[i] * c + cross[i] * s + k[i] * kv * (1.0 - c));
+            [r[0], r[1], r[2], 0.0]
+        };
+        let corner = [3.0, -2.0, 1.0, 0.0];
+        for &phi in &[1e-4f64, 0.01, 0.3, 1.0, 1.5, 2.5, 3.1] {
+            for &(tolerance, room) in &[(0.01, 5.0), (0.01, 0.05), (2.0, 0.7)] {
+                let d1 = tilt([1.0, 0.0, 0.0]);
+                let d2 = tilt([phi.cos(), phi.sin(), 0.0]);
+                let Some((a, b, shape, length)) = super::clothoid_blend(corner, d1, d2, tolerance, room) else {
+                    panic!("{phi}: no blend");
+                };
+                let super::Shape::Clothoid { half, sharpness, .. } = shape else { panic!("{shape:?}") };
+                let e =
+                    super::limited(&MachineConfig::default().resolve().unwrap(), shape.clone(), a, b, length, 1, 50.0);
+                let t = norm(sub(corner, a));
+                assert!(t <= room * (1.0 + 1e-12) && (norm(sub(b, corner)) - t).abs() < 1e-12, "{phi}: {t}");
+                assert!(norm(sub(e.position(0.0), a)) < 1e-12 && norm(sub(e.position(length), b)) < 1e-12);
+                // Tangent and curvature at the ends, and the middle, from positions.
+                let h = 1e-3 * length;
+                // Rounding of positions (about 4e-16 of them) read by a second difference.
+                let noise = 1e-14 / (h * h);
+                let at = |s: f64| e.position(s);
+                let tangent = |s0: f64, s1: f64| scale(1.0 / (s1 - s0), sub(at(s1), at(s0)));
+                assert!(norm(sub(tangent(0.0, h), d1)) < 1e-3 && norm(sub(tangent(length - h, length), d2)) < 1e-3);
+                let second =
+                    |s: f64| scale(1.0 / (h * h), add_scaled(add_scaled(at(s - h), -2.0, at(s)), 1.0, at(s + h)));
+                assert!(norm(second(h)) <= 2.0 * sharpness * h + noise, "{phi}: {:?}", second(h));
+                assert!(norm(second(length - h)) <= 2.0 * sharpness * h + noise);
+                let peak = norm(second(half));
+                assert!((peak - sharpness * half).abs() <= 1e-3 * sharpness * half + noise, "{phi}: {peak}");
+                let before = tangent(half - h, half);
+                let after = tangent(half, half + h);
+                assert!(norm(sub(before, after)) < 2.0 * sharpness * half * h + 1e-9);
+                assert!((sharpness * half * half - phi).abs() < 1e-9 * phi.max(1.0));
+                let mut farthest = 0.0f64;
+                for i in 0..=1000 {
+                    let p = at(length * f64::from(i) / 1000.0);
+                    // Distance to the programmed path: the ray into the corner, the ray out.
+                    let off = sub(p, corner);
+                    let to_ray = |d: [f64; 4], sign: f64| {
+                        let along = sign * dot(off, d);
+                        if along > 0.0 {
+                            norm(add_scaled(off, -sign * along, d))
+                        } else {
+                            norm(off)
+                        }
+                    };
+                    farthest = farthest.max(to_ray(d1, -1.0).min(to_ray(d2, 1.0)));
+                    // In the corner's plane.
+                    let normal = {
+                        let (u, v) = (d1, d2);
+                        [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0], 0.0]
+                    };
+                    assert!(dot(off, normal).abs() < 1e-9, "{phi}: off the plane");
+                }
+                let middle = norm(sub(at(half), corner));
+                assert!(middle <= tolerance * (1.0 + 1e-9), "{phi}: {middle}");
+                assert!(farthest <= tolerance * (1.0 + 1e-9), "{phi}: {farthest}");
+            }
+        }
+    }
+
+    /// S-curve: on the short segments of a CAM program with a Z staircase every
+    /// line-line corner is a clothoid blend, and no junction jumps (the circles of
+    /// trapezoid mode jump in curvature at nearly every one in S-curve terms), so every
+    /// junction flows at the speed of the elements around it.
+    #[test]
+    fn s_curve_blends_short_segments_without_a_curvature_jump() {
+        let mut text = String::from("G21 G90 G17 G64 P0.01\nF3000\n");
+        for i in 0..300 {
+            let t = f64::from(i) * 0.01;
+            let r = 20.0 + 5.0 * (7.0 * t).sin();
+            text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * f64::from(i)));
+        }
+        text.push_str("M2\n");
+        let program = finestep_gcode::parse_str(&text, "cam.ngc").unwrap();
+        let config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
+        let path = super::elements(&config, &program).unwrap().elements;
+        let blends = path.iter().filter(|e| matches!(e.shape, super::Shape::Clothoid { .. })).count();
+        assert!(blends >= 290, "{blends} clothoid blends");
+        assert!(path.iter().all(|e| !matches!(e.shape, super::Shape::Arc { .. })));
+        let jumps = path.windows(2).filter(|w| crate::lookahead::junction_jumps(&config, &w[0], &w[1])).count();
+        assert_eq!(jumps, 0);
+        // The same corners blended by circles jump in S-curve terms.
+        let trapezoid = MachineConfig::default().resolve().unwrap();
+        let circles = super::elements(&trapezoid, &program).unwrap().elements;
+        let jumps = circles.windows(2).filter(|w| crate::lookahead::junction_jumps(&config, &w[0], &w[1])).count();
+        assert!(jumps > 290, "{jumps}");
+    }
+
     /// On short blended segments with a Z staircase (the bench's CAM program, whose Z
     /// blends turn over at every short line), the jerk read from four period boundaries
     /// at steady speed across a blend, a short line and a blend stays within the
@@ -1071,8 +1318,12 @@ mod tests {
         }
         text.push_str("M2\n");
         let program = finestep_gcode::parse_str(&text, "cam.ngc").unwrap();
+        // Blended by circles, as in trapezoid mode: S-curve blends line-line corners by
+        // clothoids, which meet their lines without a curvature jump; the pair rule reads
+        // the line between two jumps (as between programmed arcs), here those of circles.
+        let circles = MachineConfig { profile: ProfileKind::Trapezoid, ..MachineConfig::default() }.resolve().unwrap();
         let config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
-        let path = super::elements(&config, &program).unwrap().elements;
+        let path = super::elements(&circles, &program).unwrap().elements;
         let (mut pairs, mut closest) = (0, 0.0f64);
         for w in path.windows(3) {
             let Some(pair) = pair_jerk_cap(&config, &w[0], &w[1], &w[2]) else { continue };

@@ -6,7 +6,8 @@
 //! 1. [`config`]: the machine (axes, steps per unit, velocity, acceleration and jerk
 //!    limits, T, the FPGA clock, drive timing, tolerances) from a TOML file or defaults.
 //! 2. [`geometry`]: programmed lines and arcs with vertices on whole steps; in G64 each
-//!    line-line corner becomes a blend arc within the path tolerance P; per-axis limits
+//!    line-line corner becomes a blend arc within the path tolerance P (in S-curve mode
+//!    a pair of clothoids, continuous in curvature); per-axis limits
 //!    projected onto each element's direction give its speed, acceleration and jerk caps.
 //!    A NURBS (G5.2/G5.3) becomes sub-pieces of the true curve with their own caps from
 //!    its curvature ([`nurbs`]).
@@ -64,8 +65,8 @@
 //!   curve up to 90 % of the acceleration for turning and the rest along the path. The
 //!   shares are fixed (50 % of the acceleration along the path, 45 % turning, the jerk
 //!   in [`element`]) only beside a junction that jumps (a corner taken with a tangent
-//!   jump, in S-curve mode also a curvature jump such as a line entering an arc or a
-//!   blend). Each element keeps one tangential acceleration and jerk over its length (set
+//!   jump, in S-curve mode also a curvature jump such as a line entering an arc).
+//!   Each element keeps one tangential acceleration and jerk over its length (set
 //!   at its speed cap), and an S-curve brings the acceleration to zero at every element's
 //!   end (except inside a run of NURBS sub-pieces whose speeds rise or fall all the way,
 //!   planned as one change under the run's smallest limits, [`velocity::run_profiles`]),
@@ -75,8 +76,13 @@
 //!   the junction speed comes from the tangent jump read over one period: full speed
 //!   where they are tangent, nearly a stop where they are not.
 //! - S-curve profiles bring the acceleration back to zero at every element junction
-//!   (NURBS runs aside, above), and the jerk limit is also kept where the curvature jumps (a line entering an arc
-//!   or a blend): about `sqrt(0.25 J T R)` there, slow at the default jerk
+//!   (NURBS runs aside, above). Line-line corners are blended by clothoid pairs, whose
+//!   curvature meets the lines' 0, so no curvature jumps there; their speed is capped by
+//!   their own turning jerk `|k'| v^3` (`k' = phi / L^2`, L each clothoid's length;
+//!   the blend reaches at most half of the shorter line): on short segments still well below the feed
+//!   (the turning at every vertex, step rounding and a Z staircase included, is taken
+//!   within the two segments around it). The jerk limit is also kept where the
+//!   curvature jumps (a line entering an arc): about `sqrt(0.25 J T R)` there, slow at the default jerk
 //!   (up to `sqrt(0.7 J T R)` where the elements around take less of the jerk
 //!   for speeding up, [`element::jump_jerk_share`]). Around a
 //!   line shorter than three periods' travel (short segments) the two jumps are read
