@@ -5,7 +5,7 @@ LinuxCNC starts it as `headless.py -ini FILE`. It records the servo thread with
 halsampler (when FINESTEP_SAMPLES names a file), resets the E-stop, turns the machine
 on, homes every joint, opens FINESTEP_PROGRAM in auto mode, runs it, polls until the
 interpreter is idle and motion has stopped, and writes "ok" or the first error to
-FINESTEP_RESULT. With FINESTEP_ESTOP_AFTER (seconds), it presses LinuxCNC's E-stop that
+FINESTEP_RESULT (also when LinuxCNC's task process exits under it). With FINESTEP_ESTOP_AFTER (seconds), it presses LinuxCNC's E-stop that
 long after the start instead of waiting for the end. With FINESTEP_WHEEL=AXIS:DETENTS,...
 (e.g. `Y:100,-40`) it runs no program: it selects the axis through halui and turns the
 simulated hand wheel by each count of detents in turn (the `finestep.0.sim.wheel-edges`
@@ -45,6 +45,32 @@ class Failed(Exception):
     pass
 
 
+def alive(pid):
+    """Whether process `pid` runs (exists and is no zombie)."""
+    try:
+        with open("/proc/%d/stat" % pid) as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def run_process(comm, marker):
+    """The pid of this run's process named `comm` (its environment holds `marker`), or None."""
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open("/proc/%s/comm" % entry) as f:
+                if f.read().strip() != comm:
+                    continue
+            with open("/proc/%s/environ" % entry, "rb") as f:
+                if marker.encode() in f.read().split(b"\0"):
+                    return int(entry)
+        except OSError:
+            continue
+    return None
+
+
 def main():
     program = os.environ["FINESTEP_PROGRAM"]
     result_path = os.environ["FINESTEP_RESULT"]
@@ -56,8 +82,15 @@ def main():
     if samples:
         sampler = subprocess.Popen(["halsampler", "-t"], stdout=open(samples, "w"))
     messages = []
+    # LinuxCNC's task (milltask) has been seen to vanish mid-program with no message
+    # (docs/linuxcnc.md): its status then stays as it was and the end never comes. Once
+    # it is up, its pid is watched and its exit fails the run at once.
+    task = []
 
     def poll():
+        if task and not alive(task[0]):
+            raise Failed("LinuxCNC's task (milltask, pid %d) exited; its status froze at line %d" % (
+                task[0], stat.motion_line))
         stat.poll()
         while True:
             error = errors.poll()
@@ -83,6 +116,9 @@ def main():
     ini = sys.argv[sys.argv.index("-ini") + 1] if "-ini" in sys.argv else None
     try:
         wait_for(lambda: stat.task_state != 0, "LinuxCNC to come up")
+        pid = run_process("milltask", "FINESTEP_RESULT=" + result_path)
+        if pid:
+            task.append(pid)
         postgui = ini and ini_value(ini, "HAL", "POSTGUI_HALFILE")
         if postgui:
             halcmd("-i", ini, "-f", os.path.join(os.path.dirname(ini), postgui))

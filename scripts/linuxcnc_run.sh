@@ -74,6 +74,9 @@ run_process() {
 # Seconds the display waits for the program's end: LinuxCNC's task has been seen to keep
 # a stale motion status after the chip finished (docs/linuxcnc.md), which would hang.
 timeout=${FINESTEP_TIMEOUT:-900}
+# A LinuxCNC process that crashes leaves its core in the run's folder (milltask has been
+# seen to vanish mid-program: docs/linuxcnc.md).
+ulimit -c unlimited 2>/dev/null || true
 start=$(date +%s.%N)
 status=0
 if [ -z "${FINESTEP_KILL_AFTER:-}" ]; then
@@ -120,6 +123,13 @@ if [ "$result" != "ok" ]; then
     grep -iE "error|finestep" "$work/linuxcnc.log" | grep -v "terminated with an error" | head -20 || true
     # Exit status 2: LinuxCNC's own interpreter refused the program (not finestep's doing).
     grep -q "interp_error" "$work/linuxcnc.log" && exit 2
+    # The recording up to the failure is still checked (a partial run's figures), as
+    # the step timing the chip measured; the run fails either way.
+    if [ "$loop" = open ] && [ -s "$work/samples.txt" ]; then
+        echo "$name: the recording up to the failure:"
+        target/release/finestep-linuxcnc check "$work/samples.txt" --joints "$joints" --period-ns "$period_ns" \
+            --config "$config" --socket "$work/chip.sock" || true
+    fi
     exit 1
 fi
 if [ "$loop" != open ]; then
