@@ -351,12 +351,19 @@ fn main() {
     for (name, value) in &defines {
         build.define(name, value.as_str());
     }
+    let mut skipped = "none";
     if let Some(Some(member)) = &clk_prev {
         build.define("FS_CLK_PREV", member.as_str());
+        skipped = "clk";
         if let Some(Some(member)) = &load_prev {
             build.define("FS_LOAD_PREV", member.as_str());
+            skipped = "clk load";
         }
     }
+    // Which falls the untraced shims skip, and the Verilator whose code decided it
+    // (finestep_rtl_sys::EDGE_SKIP, VERILATOR_VERSION): a test sees the skip switch off.
+    println!("cargo:rustc-env=FINESTEP_EDGE_SKIP={skipped}");
+    println!("cargo:rustc-env=FINESTEP_VERILATOR_VERSION={}", verilator_version(&verilator));
     // Current Verilator's FST writer (include/fstcpp) compresses with the system lz4.
     let globals_need_lz4 = root.join("include/fstcpp").is_dir();
     files.extend(globals.into_iter().map(|stem| root.join("include").join(format!("{stem}.cpp"))));
@@ -692,6 +699,17 @@ fn edge_prev_members(dir: &Path, prefix: &str) -> Option<BTreeMap<&'static str, 
         }
     }
     Some(members)
+}
+
+/// The version `verilator --version` names (e.g. `5.006`), or `unknown`.
+fn verilator_version(verilator: &str) -> String {
+    Command::new(verilator)
+        .arg("--version")
+        .output()
+        .ok()
+        .and_then(|out| String::from_utf8(out.stdout).ok())
+        .and_then(|text| text.split_whitespace().nth(1).map(str::to_string))
+        .unwrap_or_else(|| "unknown".to_string())
 }
 
 /// `verilator --getenv VERILATOR_ROOT`.
