@@ -32,6 +32,7 @@ module finestep_top #(
     parameter STEP_DIGIT      = 0,   // with STEP_SHARED: 0 step_engine; 1, 2, 4, 8 step_serial
     parameter READ_STORE      = 1,
     parameter FIFO_HEAD_REG   = 1,
+    parameter NO_RAM          = 0,   // 1: no RAM on the part (stores in flip-flops)
     parameter HAS_SPINDLE     = 1,
     parameter HAS_OUTPUTS     = 1,
     parameter N_GPIO          = 4,
@@ -259,7 +260,9 @@ module finestep_top #(
         end
 
         if (HAS_PARALLEL != 0) begin : parallel
-            parallel_bus_slave slave (
+            // Without SPI the slave is the register bus's only master: the read word stays
+            // on rdata until its next read.
+            parallel_bus_slave #(.RDATA_HELD(HAS_SPI == 0 ? 1 : 0)) slave (
                 .clk(clk), .rst(rst),
                 .bus_cs_n(bus_cs_n), .bus_adv_n(bus_adv_n), .bus_rd_n(bus_rd_n), .bus_wr_n(bus_wr_n),
                 .bus_ad_in(bus_ad_in), .bus_ad_out(bus_ad_out), .bus_ad_oe(bus_ad_oe),
@@ -436,7 +439,8 @@ module finestep_top #(
     );
 
     encoder_bank #(
-        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH), .RAM_BLOCK(RAM_BLOCK)
+        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH), .RAM_BLOCK(RAM_BLOCK),
+        .COPY_FF(NO_RAM)
     ) encoders (
         .clk(clk), .rst(rst),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),

@@ -11,7 +11,11 @@
 // Latency: read data is driven 7 clocks after RD falls at the pins (5 when the high half
 // comes from the latch); a write reaches the register bus 4 clocks after WR rises (and
 // takes effect one clock after its grant, from the register file's bus stage).
-module parallel_bus_slave (
+module parallel_bus_slave #(
+    // 1: bus_rdata holds the last word this slave read until its next read (it is the
+    // register bus's only master): the latched high half is read there, no copy of it
+    parameter RDATA_HELD = 0
+) (
     // clock, reset
     input  wire        clk,
     input  wire        rst,
@@ -47,7 +51,7 @@ module parallel_bus_slave (
     reg [15:0] lo_data_reg;       // low half written, waiting for its high half
     reg [6:0]  lo_reg_reg;
     reg        lo_valid_reg;
-    reg [15:0] hi_data_reg;       // high half latched by a low-half read
+    reg [15:0] hi_data_reg;       // high half latched by a low-half read (RDATA_HELD 0)
     reg [6:0]  hi_reg_reg;
     reg        hi_valid_reg;
     reg [15:0] ad_out_reg;
@@ -69,6 +73,10 @@ module parallel_bus_slave (
     wire [6:0] reg_addr = addr_reg[7:1];
     wire       half_hi  = addr_reg[0];
     wire lo_matches = lo_valid_reg && (lo_reg_reg == reg_addr);
+    // The latched high half: its copy, or with RDATA_HELD the read word itself, which
+    // stays on bus_rdata until this slave's next read is served (and until then the high
+    // half is only ever read from the latch, which that read's data replaces).
+    wire [15:0] hi_data = (RDATA_HELD != 0) ? bus_rdata[31:16] : hi_data_reg;
     wire hi_matches = hi_valid_reg && (hi_reg_reg == reg_addr);
 
     wire torn_write = write_end && !busy && half_hi && !lo_matches;
@@ -119,7 +127,7 @@ module parallel_bus_slave (
         end else if (read_start && !busy) begin
             lo_valid_reg <= 1'b0;
             if (half_hi && hi_matches) begin
-                ad_out_reg   <= hi_data_reg;
+                ad_out_reg   <= hi_data;
                 ad_oe_reg    <= 1'b1;
                 hi_valid_reg <= 1'b0;
             end else begin
@@ -175,6 +183,11 @@ module parallel_bus_slave (
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
     always @(*) assume (!bus_grant || bus_req);
+    // RDATA_HELD: the register bus changes its read word only at the edge ending the cycle
+    // that serves this slave's read (wait_serve_reg), as the register file does when this
+    // slave is its only master.
+    always @(posedge clk) if (f_past_valid && RDATA_HELD != 0 && !$past(wait_serve_reg))
+        assume (bus_rdata == $past(bus_rdata));
 
     // The word most recently read by a low-half read, as the register bus returned it.
     reg [31:0] f_low_read_word;
@@ -192,7 +205,10 @@ module parallel_bus_slave (
         if (ad_oe_reg) assert ($past(rd_low));
         assert (!(req_reg && wait_data_reg) && !(req_reg && wait_serve_reg) && !(wait_serve_reg && wait_data_reg));
         if (wait_data_reg) assert ($past(wait_serve_reg));
-        if (hi_valid_reg) assert (hi_data_reg == f_low_read_word[31:16] && hi_reg_reg == f_low_read_reg);
+        // (With RDATA_HELD a read's word is on bus_rdata in its wait_data cycle, before the
+        // latch's flags take it; no read is started in that cycle: busy.)
+        if (hi_valid_reg) assert ((hi_data == f_low_read_word[31:16] || (RDATA_HELD != 0 && wait_data_reg)) &&
+                                  hi_reg_reg == f_low_read_reg);
         if ($rose(ad_oe_reg) && $past(read_start && half_hi && hi_matches && !busy))
             assert (bus_ad_out == f_low_read_word[31:16]);
         // A register request stays up, unchanged, until it is granted (the register bus's
@@ -200,6 +216,10 @@ module parallel_bus_slave (
         if ($past(bus_req && !bus_grant))
             assert (bus_req && bus_we == $past(bus_we) && bus_addr == $past(bus_addr) &&
                     (!bus_we || bus_wdata == $past(bus_wdata)));
+        // ... and through the cycle after its grant, which the register file's bus stage
+        // serves (with no other master it reads the request there instead of a copy).
+        if ($past(bus_grant))
+            assert (bus_we == $past(bus_we) && bus_addr == $past(bus_addr) && bus_wdata == $past(bus_wdata));
         cover (req_reg && we_reg);
         cover ($rose(ad_oe_reg) && $past(hi_matches));
     end
