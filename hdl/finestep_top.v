@@ -386,7 +386,8 @@ module finestep_top #(
         .HAS_GANTRY(GANTRY_BUILT ? 1 : 0),
         .STEP_SHARED(STEP_SHARED),
         .RAM_BLOCK(RAM_BLOCK),
-        .STEP_DIGIT(STEP_DIGIT)
+        .STEP_DIGIT(STEP_DIGIT),
+        .HAS_ALT(HAS_MPG != 0 ? 1 : 0)   // the jog's record, only with the hand wheel
     ) core (
         .clk(clk), .rst(rst),
         .run(core_run), .period_clocks(period_clocks), .clear_errors(clear_errors), .halt(halt),

@@ -229,8 +229,12 @@ module register_file #(
     endfunction
     wire        spi_held  = bus_hold && push_touch(spi_we, spi_addr);
     wire        par_held  = bus_hold && push_touch(par_we, par_addr);
-    wire        grant_spi = spi_req && !spi_held;
-    wire        grant_par = par_req && !par_held && !grant_spi;
+    // A link that is not built never requests (the top ties its request low; said here
+    // too, so that a hierarchical build keeps no arbiter or request multiplexer for it).
+    wire        spi_req_on = (HAS_SPI != 0) && spi_req;
+    wire        par_req_on = (HAS_PARALLEL != 0) && par_req;
+    wire        grant_spi = spi_req_on && !spi_held;
+    wire        grant_par = par_req_on && !par_held && !grant_spi;
     wire        granted   = grant_spi || grant_par;
     wire [ADDR_W-1:0] granted_addr = grant_spi ? spi_addr : par_addr;
     wire [WORD_W-1:0] granted_wdata = grant_spi ? spi_wdata : par_wdata;
