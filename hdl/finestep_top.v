@@ -261,8 +261,8 @@ module finestep_top #(
 
         if (HAS_PARALLEL != 0) begin : parallel
             // Without SPI the slave is the register bus's only master: the read word stays
-            // on rdata until its next read.
-            parallel_bus_slave #(.RDATA_HELD(HAS_SPI == 0 ? 1 : 0)) slave (
+            // on rdata until its next read, and its request is served from its registers.
+            parallel_bus_slave #(.SOLE_MASTER(HAS_SPI == 0 ? 1 : 0)) slave (
                 .clk(clk), .rst(rst),
                 .bus_cs_n(bus_cs_n), .bus_adv_n(bus_adv_n), .bus_rd_n(bus_rd_n), .bus_wr_n(bus_wr_n),
                 .bus_ad_in(bus_ad_in), .bus_ad_out(bus_ad_out), .bus_ad_oe(bus_ad_oe),
