@@ -387,7 +387,10 @@ module finestep_top #(
         .STEP_SHARED(STEP_SHARED),
         .RAM_BLOCK(RAM_BLOCK),
         .STEP_DIGIT(STEP_DIGIT),
-        .HAS_ALT(HAS_MPG != 0 ? 1 : 0)   // the jog's record, only with the hand wheel
+        // The jog's record only with the hand wheel; said to the core only in the
+        // digit-serial (CPLD) builds, whose estimate is hierarchical: a flattened build
+        // sees the tie-off anyway, and on the HX8K (no wheel) ABC mapped it 3 cells larger.
+        .HAS_ALT((HAS_MPG != 0 || STEP_DIGIT == 0) ? 1 : 0)
     ) core (
         .clk(clk), .rst(rst),
         .run(core_run), .period_clocks(period_clocks), .clear_errors(clear_errors), .halt(halt),
