@@ -24,7 +24,9 @@ module encoder_bank #(
     parameter N_ENC    = 4,
     parameter N_AXES   = 4,
     parameter FILTER_W = 4,
-    parameter RAM_BLOCK = 0      // 1: the stores in block RAM (store_ram)
+    parameter RAM_BLOCK = 0,     // 1: the stores in block RAM (store_ram)
+    parameter COPY_FF   = 0      // 1: the stores in flip-flops (no RAM): the live state read in its
+                                 // visit, the copies through one shared read register
 ) (
     // clock, reset
     input  wire                         clk,
@@ -167,9 +169,21 @@ module encoder_bank #(
     // ---- The store: live state, read the clock before the visit -------------------------
     wire [LIVE_W-1:0] live_rd;
     wire [LIVE_W-1:0] live_wr;
-    store_ram #(.WIDTH(LIVE_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) live_store (
-        .clk(clk), .wr_en(visit), .wr_addr(ch), .wr_data(live_wr), .rd_en(1'b1), .rd_addr(slot_next), .rd_data(live_rd)
-    );
+    generate
+        if (COPY_FF == 0) begin : live_ram
+            store_ram #(.WIDTH(LIVE_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) live_store (
+                .clk(clk), .wr_en(visit), .wr_addr(ch), .wr_data(live_wr), .rd_en(1'b1), .rd_addr(slot_next), .rd_data(live_rd)
+            );
+        end else begin : live_ff
+            // In flip-flops (COPY_FF) the visited word is read in the visit itself: the edge
+            // before it wrote the previous slot's channel, never this one (slot_next differs
+            // from slot_reg but at a stall, which writes nothing), so this is the word the
+            // registered read took at that edge, without its register.
+            reg [LIVE_W-1:0] live_mem [0:S-1];
+            always @(posedge clk) if (visit) live_mem[ch] <= live_wr;
+            assign live_rd = live_mem[slot_reg];
+        end
+    endgenerate
     // Until its first sample a channel's live state is 0 (reset), whatever the RAM holds.
     wire [LIVE_W-1:0] live = v_primed ? live_rd : {LIVE_W{1'b0}};
     wire [31:0]         v_count = live[31:0];
@@ -217,18 +231,50 @@ module encoder_bank #(
     wire copy_index = visit && index_event && latch_armed_reg[ch_i];
 
     wire [31:0] count_rd, edge_rd, index_rd, probe_rd;
-    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) count_store (
-        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(count_rd)
-    );
-    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) edge_store (
-        .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_edge), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(edge_rd)
-    );
-    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) index_store (
-        .clk(clk), .wr_en(copy_index), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(index_rd)
-    );
-    store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) probe_store (
-        .clk(clk), .wr_en(copy_probe), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(probe_rd)
-    );
+    generate
+        if (COPY_FF == 0) begin : copy_stores
+            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) count_store (
+                .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(count_rd)
+            );
+            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) edge_store (
+                .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_edge), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(edge_rd)
+            );
+            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) index_store (
+                .clk(clk), .wr_en(copy_index), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(index_rd)
+            );
+            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) probe_store (
+                .clk(clk), .wr_en(copy_probe), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(probe_rd)
+            );
+        end else begin : copy_ff
+            // A part without RAM (COPY_FF): the four arrays are flip-flops, and a read takes
+            // the addressed word of the addressed array into one register at the edge
+            // ending its serving cycle (where each store_ram would take its own), so the
+            // shown word is the same from one register instead of four. The stall keeps
+            // the word read from being written at that edge, as for the stores.
+            reg [31:0] count_mem [0:S-1];
+            reg [31:0] edge_mem  [0:S-1];
+            reg [31:0] index_mem [0:S-1];
+            reg [31:0] probe_mem [0:S-1];
+            reg [31:0] copy_rd_reg;
+            always @(posedge clk) begin
+                if (copy_latch) begin
+                    count_mem[ch] <= v_count;
+                    edge_mem[ch]  <= v_edge;
+                end
+                if (copy_index) index_mem[ch] <= v_count;
+                if (copy_probe) probe_mem[ch] <= v_count;
+                if (rd_copy)
+                    copy_rd_reg <= (rd_kind == KIND_COUNT) ? count_mem[rd_ch] :
+                                   (rd_kind == KIND_INDEX) ? index_mem[rd_ch] :
+                                   (rd_kind == KIND_PROBE) ? probe_mem[rd_ch] : edge_mem[rd_ch];
+            end
+            // served_kind_reg picks among the four below: all four are the one register.
+            assign count_rd = copy_rd_reg;
+            assign edge_rd  = copy_rd_reg;
+            assign index_rd = copy_rd_reg;
+            assign probe_rd = copy_rd_reg;
+        end
+    endgenerate
     // What the last served read shows, from the cycle after its serving cycle until the
     // next served read: the addressed copy, 0 before its first write (and 0 after a read
     // of anything else).

@@ -18,7 +18,8 @@ module finestep_core #(
     parameter HAS_GANTRY = 1,    // 0: no gantry block (its outputs read 0, every axis its own)
     parameter STEP_SHARED = 0,   // 1: one step engine visits the axes (no gantry block then)
     parameter RAM_BLOCK  = 0,    // 1: the step engine's stores in block RAM
-    parameter STEP_DIGIT = 0     // with STEP_SHARED: 0 step_engine; 1, 2, 4, 8 step_serial
+    parameter STEP_DIGIT = 0,    // with STEP_SHARED: 0 step_engine; 1, 2, 4, 8 step_serial
+    parameter HAS_ALT    = 1     // 0: no alternate record (no jog): rec_alt is taken as 0
 ) (
     // clock, reset
     input  wire                       clk,
@@ -104,7 +105,8 @@ module finestep_core #(
         .N_AXES(N_AXES),
         .P_WIDTH(P_WIDTH),
         .SL(SL),
-        .AREA(SERIAL)
+        .AREA(SERIAL),
+        .HAS_ALT(HAS_ALT)
     ) timer (
         .clk(clk),
         .rst(rst),

@@ -32,6 +32,7 @@ module finestep_top #(
     parameter STEP_DIGIT      = 0,   // with STEP_SHARED: 0 step_engine; 1, 2, 4, 8 step_serial
     parameter READ_STORE      = 1,
     parameter FIFO_HEAD_REG   = 1,
+    parameter NO_RAM          = 0,   // 1: no RAM on the part (stores in flip-flops)
     parameter HAS_SPINDLE     = 1,
     parameter HAS_OUTPUTS     = 1,
     parameter N_GPIO          = 4,
@@ -259,7 +260,9 @@ module finestep_top #(
         end
 
         if (HAS_PARALLEL != 0) begin : parallel
-            parallel_bus_slave slave (
+            // Without SPI the slave is the register bus's only master: the read word stays
+            // on rdata until its next read, and its request is served from its registers.
+            parallel_bus_slave #(.SOLE_MASTER(HAS_SPI == 0 ? 1 : 0)) slave (
                 .clk(clk), .rst(rst),
                 .bus_cs_n(bus_cs_n), .bus_adv_n(bus_adv_n), .bus_rd_n(bus_rd_n), .bus_wr_n(bus_wr_n),
                 .bus_ad_in(bus_ad_in), .bus_ad_out(bus_ad_out), .bus_ad_oe(bus_ad_oe),
@@ -383,7 +386,11 @@ module finestep_top #(
         .HAS_GANTRY(GANTRY_BUILT ? 1 : 0),
         .STEP_SHARED(STEP_SHARED),
         .RAM_BLOCK(RAM_BLOCK),
-        .STEP_DIGIT(STEP_DIGIT)
+        .STEP_DIGIT(STEP_DIGIT),
+        // The jog's record only with the hand wheel; said to the core only in the
+        // digit-serial (CPLD) builds, whose estimate is hierarchical: a flattened build
+        // sees the tie-off anyway, and on the HX8K (no wheel) ABC mapped it 3 cells larger.
+        .HAS_ALT((HAS_MPG != 0 || STEP_DIGIT == 0) ? 1 : 0)
     ) core (
         .clk(clk), .rst(rst),
         .run(core_run), .period_clocks(period_clocks), .clear_errors(clear_errors), .halt(halt),
@@ -436,7 +443,8 @@ module finestep_top #(
     );
 
     encoder_bank #(
-        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH), .RAM_BLOCK(RAM_BLOCK)
+        .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH), .RAM_BLOCK(RAM_BLOCK),
+        .COPY_FF(NO_RAM)
     ) encoders (
         .clk(clk), .rst(rst),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),

@@ -11,7 +11,13 @@
 // Latency: read data is driven 7 clocks after RD falls at the pins (5 when the high half
 // comes from the latch); a write reaches the register bus 4 clocks after WR rises (and
 // takes effect one clock after its grant, from the register file's bus stage).
-module parallel_bus_slave (
+module parallel_bus_slave #(
+    // 1: the register bus's only master (no SPI; the CPLD builds): bus_rdata holds the
+    // last word this slave read until its next read, so the latched high half is read
+    // there (no copy of it), and a write's low half is sent from its own register (held
+    // from the request through the cycle after the grant: busy), not copied
+    parameter SOLE_MASTER = 0
+) (
     // clock, reset
     input  wire        clk,
     input  wire        rst,
@@ -47,7 +53,7 @@ module parallel_bus_slave (
     reg [15:0] lo_data_reg;       // low half written, waiting for its high half
     reg [6:0]  lo_reg_reg;
     reg        lo_valid_reg;
-    reg [15:0] hi_data_reg;       // high half latched by a low-half read
+    reg [15:0] hi_data_reg;       // high half latched by a low-half read (SOLE_MASTER 0)
     reg [6:0]  hi_reg_reg;
     reg        hi_valid_reg;
     reg [15:0] ad_out_reg;
@@ -69,6 +75,10 @@ module parallel_bus_slave (
     wire [6:0] reg_addr = addr_reg[7:1];
     wire       half_hi  = addr_reg[0];
     wire lo_matches = lo_valid_reg && (lo_reg_reg == reg_addr);
+    // The latched high half: its copy, or with SOLE_MASTER the read word itself, which
+    // stays on bus_rdata until this slave's next read is served (and until then the high
+    // half is only ever read from the latch, which that read's data replaces).
+    wire [15:0] hi_data = (SOLE_MASTER != 0) ? bus_rdata[31:16] : hi_data_reg;
     wire hi_matches = hi_valid_reg && (hi_reg_reg == reg_addr);
 
     wire torn_write = write_end && !busy && half_hi && !lo_matches;
@@ -119,7 +129,7 @@ module parallel_bus_slave (
         end else if (read_start && !busy) begin
             lo_valid_reg <= 1'b0;
             if (half_hi && hi_matches) begin
-                ad_out_reg   <= hi_data_reg;
+                ad_out_reg   <= hi_data;
                 ad_oe_reg    <= 1'b1;
                 hi_valid_reg <= 1'b0;
             end else begin
@@ -162,7 +172,7 @@ module parallel_bus_slave (
     assign bus_req    = req_reg;
     assign bus_we     = we_reg;
     assign bus_addr   = req_addr_reg;
-    assign bus_wdata  = req_wdata_reg;
+    assign bus_wdata  = (SOLE_MASTER != 0) ? {req_wdata_reg[31:16], lo_data_reg} : req_wdata_reg;
     assign error      = torn_write || overrun;
 
 `ifdef FORMAL
@@ -175,6 +185,11 @@ module parallel_bus_slave (
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
     always @(*) assume (!bus_grant || bus_req);
+    // SOLE_MASTER: the register bus changes its read word only at the edge ending the cycle
+    // that serves this slave's read (wait_serve_reg), as the register file does when this
+    // slave is its only master.
+    always @(posedge clk) if (f_past_valid && SOLE_MASTER != 0 && !$past(wait_serve_reg))
+        assume (bus_rdata == $past(bus_rdata));
 
     // The word most recently read by a low-half read, as the register bus returned it.
     reg [31:0] f_low_read_word;
@@ -187,12 +202,15 @@ module parallel_bus_slave (
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if (req_reg && we_reg && !$past(req_reg)) begin
             assert ($past(write_end && half_hi && lo_matches && !busy));
-            assert (req_wdata_reg == {$past(wdata_reg), $past(lo_data_reg)} && req_addr_reg == $past(reg_addr));
+            assert (bus_wdata == {$past(wdata_reg), $past(lo_data_reg)} && req_addr_reg == $past(reg_addr));
         end
         if (ad_oe_reg) assert ($past(rd_low));
         assert (!(req_reg && wait_data_reg) && !(req_reg && wait_serve_reg) && !(wait_serve_reg && wait_data_reg));
         if (wait_data_reg) assert ($past(wait_serve_reg));
-        if (hi_valid_reg) assert (hi_data_reg == f_low_read_word[31:16] && hi_reg_reg == f_low_read_reg);
+        // (With SOLE_MASTER a read's word is on bus_rdata in its wait_data cycle, before the
+        // latch's flags take it; no read is started in that cycle: busy.)
+        if (hi_valid_reg) assert ((hi_data == f_low_read_word[31:16] || (SOLE_MASTER != 0 && wait_data_reg)) &&
+                                  hi_reg_reg == f_low_read_reg);
         if ($rose(ad_oe_reg) && $past(read_start && half_hi && hi_matches && !busy))
             assert (bus_ad_out == f_low_read_word[31:16]);
         // A register request stays up, unchanged, until it is granted (the register bus's
@@ -200,6 +218,10 @@ module parallel_bus_slave (
         if ($past(bus_req && !bus_grant))
             assert (bus_req && bus_we == $past(bus_we) && bus_addr == $past(bus_addr) &&
                     (!bus_we || bus_wdata == $past(bus_wdata)));
+        // ... and through the cycle after its grant, which the register file's bus stage
+        // serves (with no other master it reads the request there instead of a copy).
+        if ($past(bus_grant))
+            assert (bus_we == $past(bus_we) && bus_addr == $past(bus_addr) && bus_wdata == $past(bus_wdata));
         cover (req_reg && we_reg);
         cover ($rose(ad_oe_reg) && $past(hi_matches));
     end

@@ -30,7 +30,8 @@ module period_timer #(
     parameter N_AXES  = 4,
     parameter P_WIDTH = 20,
     parameter SL      = 0,       // log2 of the step engine's slots; 0: per-axis engine
-    parameter AREA    = 0        // 1: shaped for area (see above); 0: for Fmax
+    parameter AREA    = 0,       // 1: shaped for area (see above); 0: for Fmax
+    parameter HAS_ALT = 1        // 0: no alternate record (a build without the jog): rec_alt is 0
 ) (
     // clock, reset
     input  wire                 clk,
@@ -138,12 +139,15 @@ module period_timer #(
             lane_fails_one_chain = d[31] ^ ({1'b0, d[FS_REC_INC_FRAC_BITS +: 16]} >= bound);
         end
     endfunction
+    // The alternate record's select: a constant 0 without it (HAS_ALT 0: in a hierarchical
+    // build the parent's tie-off would not reach in here, leaving the select's logic).
+    wire alt = (HAS_ALT != 0) && rec_alt;
     // The record offered (loaded at a boundary: flip-flop to flip-flop through the select).
     reg [32*N_AXES-1:0] rec_offer;
     integer lane;
     always @* begin
         for (lane = 0; lane < N_AXES; lane = lane + 1)
-            rec_offer[32*lane +: 32] = rec_alt ? (rec_alt_lane[lane] ? rec_alt_inc : 32'd0) : rec_inc[32*lane +: 32];
+            rec_offer[32*lane +: 32] = alt ? (rec_alt_lane[lane] ? rec_alt_inc : 32'd0) : rec_inc[32*lane +: 32];
     end
     // AREA 0: the main record's lanes, each against the three bounds.
     reg main_ok;
@@ -165,7 +169,7 @@ module period_timer #(
     // passes (h = 0 < min(V, 2^16), V >= 1).
     wire alt_ok = (AREA != 0) || !(|rec_alt_lane) ||
                   !lane_fails(rec_alt_inc, bound_pos_reg, bound_neg_reg, bound_neg_zero_reg);
-    wire record_ok = (AREA != 0) ? offer_ok : (rec_alt ? alt_ok : main_ok);
+    wire record_ok = (AREA != 0) ? offer_ok : (alt ? alt_ok : main_ok);
 
     wire take_record = boundary && rec_valid;
 

@@ -40,7 +40,8 @@ module position_fifo #(
     parameter WIDTH      = 136,
     parameter DEPTH_LOG2 = 8,
     parameter LANE_W     = 32,
-    parameter HEAD_REG   = 1,     // 1: the out stage a fabric register; 0: the RAM's read register
+    parameter HEAD_REG   = 1,     // 1: the out stage a fabric register; 0: the RAM's read register;
+                                  // 2: no out stage register: the store read at the slot it left (flip-flops)
     parameter LANES      = (WIDTH + LANE_W - 1) / LANE_W   // derived
 ) (
     // clock, reset
@@ -145,15 +146,26 @@ module position_fifo #(
     // stage, read (enabled) on an internal pop from the head slot: the same contents at
     // the same edges, without a second copy of the record.
     generate
-        if (HEAD_REG != 0) begin : fabric_head
+        if (HEAD_REG == 1) begin : fabric_head
             always @(posedge clk) begin
                 ram_q_reg <= mem[head_addr];
                 if (pop_int) out_data_reg <= ram_q_reg;
             end
-        end else begin : ram_head
+        end else if (HEAD_REG == 0) begin : ram_head
             always @(posedge clk) begin
                 if (pop_int) out_data_reg <= mem[rd_ptr_reg];
             end
+`ifdef FORMAL
+            always @(*) ram_q_reg = mem[rd_ptr_reg];   // for the properties' sake
+`endif
+        end else begin : store_head
+            // The out stage's record is still in the slot it was loaded from, rd_ptr - 1:
+            // that slot is written again only when the stage pointer reaches it, i.e.
+            // with DEPTH - 1 records behind the out stage, which is full (no write). So
+            // a store in flip-flops is read there, through a multiplexer, instead of
+            // holding a second copy (the properties prove the two equal).
+            wire [DEPTH_LOG2-1:0] head_slot = rd_ptr_reg - {{(DEPTH_LOG2-1){1'b0}}, 1'b1};
+            always @(*) out_data_reg = mem[head_slot];
 `ifdef FORMAL
             always @(*) ram_q_reg = mem[rd_ptr_reg];   // for the properties' sake
 `endif

@@ -60,7 +60,8 @@ module max2_epm1270 #(
         .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(0), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
         .STEP_DIGIT(STEP_DIGIT),
         .READ_STORE(0),  // no RAM: the read multiplexer costs less than a store in flip-flops
-        .FIFO_HEAD_REG(0)   // the FIFO in flip-flops: one register holds its head
+        .FIFO_HEAD_REG(2),  // the FIFO in flip-flops: its head read from its slot, no head register
+        .NO_RAM(1)          // the encoder bank's copies in flip-flops behind one read register
     ) chip (
         .clk(clk50), .rst(rst),
         .spi_cs_n(1'b1), .spi_sck(1'b0), .spi_mosi(1'b0),

@@ -277,7 +277,8 @@ fn main() {
         (Build::Top { motion: true, mpg: true, digit: 0 }, "Vfinestep_top_motion", None),
         (Build::Top { motion: true, mpg: false, digit: 0 }, "Vfinestep_top_motion_nompg", None),
         // The motion chip with the core's digit-serial step engine, as the CPLD boards
-        // build it (STEP_DIGIT = SERIAL_TOP_DIGIT), once without tracing.
+        // build it (STEP_DIGIT = SERIAL_TOP_DIGIT, and the MAX II's storage), once without
+        // tracing.
         (Build::Top { motion: true, mpg: true, digit: SERIAL_TOP_DIGIT }, "Vfinestep_top_motion_serial", None),
         // The gantry card's chip: the top with the panel and the gantry pair (a DDA and a
         // shaper per axis), traced (its own lockstep tests, sim/panel_chip_sim.cpp).
@@ -601,6 +602,15 @@ fn verilate(
             format!("-GSTEP_SHARED={shared}")
         }))
         .args(matches!(build, Build::PanelChip).then_some(["-GHAS_PANEL=1", "-GHAS_GANTRY=1"]).into_iter().flatten())
+        // The digit-serial chip with the MAX II's storage (a part without RAM: the read
+        // multiplexer, the FIFO's head read from its slot, the encoder copies behind one
+        // register; no effect on behaviour), so the lockstep runs those shapes too.
+        .args(
+            matches!(build, Build::Top { digit, .. } if digit != 0)
+                .then_some(["-GREAD_STORE=0", "-GFIFO_HEAD_REG=2", "-GNO_RAM=1"])
+                .into_iter()
+                .flatten(),
+        )
         .args(motion.map(|m| format!("-GHAS_SPINDLE={}", if m { 0 } else { params.has_spindle })))
         .args(motion.map(|m| format!("-GHAS_OUTPUTS={}", if m { 0 } else { params.has_outputs })))
         .args(motion.map(|m| format!("-GN_GPIO={}", if m { 0 } else { params.n_gpio })))

@@ -18,7 +18,7 @@ use proptest::test_runner::TestCaseError;
 
 mod plant_chip;
 
-use plant_chip::{connect, plant_of, turn, Chip, PERIOD};
+use plant_chip::{connect, connect_serial, plant_of, turn, Chip, PERIOD};
 
 /// Streams `records` and waits until the drives are at rest.
 fn run_records(machine: &mut Chip, records: Vec<PeriodRecord>, settle: u64) {
@@ -430,6 +430,18 @@ fn index_latches_and_clears() {
 /// A probe touch latches every channel, every axis and the time on one clock.
 #[test]
 fn probe_latches_everything_on_one_clock() {
+    probe_latches_everything(connect, "probe_latches_everything_on_one_clock");
+}
+
+/// The same on the digit-serial chip with the MAX II's storage (the encoder bank's copies
+/// behind one read register, its live state read in the visit, the FIFO's head read from
+/// its slot, the read multiplexer): counts, latches and positions read in lockstep.
+#[test]
+fn probe_latches_everything_on_the_serial_chip() {
+    probe_latches_everything(connect_serial, "probe_latches_everything_on_the_serial_chip");
+}
+
+fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str) {
     let plant_config = PlantConfig {
         drives: vec![lagging(300); 2],
         channels: vec![
@@ -444,7 +456,7 @@ fn probe_latches_everything_on_one_clock() {
         }),
         hand_wheel: None,
     };
-    let mut machine = connect("probe_latches_everything_on_one_clock", Plant::new(plant_config, 9).unwrap());
+    let mut machine = connect(name, Plant::new(plant_config, 9).unwrap());
     machine.arm_probe(false, 2).unwrap();
     run_records(&mut machine, moves(&vec![(1 << 15, 1 << 16); 100]), 20_000);
     let hit = machine.probe_hit().unwrap().expect("the probe touched at Z = 50 steps");

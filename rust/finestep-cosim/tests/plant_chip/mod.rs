@@ -12,9 +12,22 @@ pub type Chip = Machine<SpiBus<PinHost<PlantLoop<TopLockstep>>>>;
 
 pub const PERIOD: u32 = 2000;
 
+/// The period of the digit-serial chip: a multiple of its round R = 32.
+pub const PERIOD_SERIAL: u32 = 2048;
+
 /// A connected machine named `name` (its waveform and logs) with `plant` on the pins.
 pub fn connect(name: &str, plant: Plant) -> Chip {
-    let mut host = PinHost::new(PlantLoop::new(TopLockstep::motion(name), plant), PinTiming::default());
+    connect_to(TopLockstep::motion(name), plant, PERIOD)
+}
+
+/// The same with the digit-serial chip (`TopLockstep::motion_serial`: the CPLD's step
+/// engine and the MAX II's storage shapes), period `PERIOD_SERIAL`.
+pub fn connect_serial(name: &str, plant: Plant) -> Chip {
+    connect_to(TopLockstep::motion_serial(name), plant, PERIOD_SERIAL)
+}
+
+fn connect_to(chip: TopLockstep, plant: Plant, period: u32) -> Chip {
+    let mut host = PinHost::new(PlantLoop::new(chip, plant), PinTiming::default());
     host.reset(4).unwrap();
     host.idle(8).unwrap();
     let mut machine = Machine::connect(SpiBus::new(host, 4)).unwrap();
@@ -23,7 +36,7 @@ pub fn connect(name: &str, plant: Plant) -> Chip {
         machine.configure_axis(i, &axis).unwrap();
     }
     machine.enable_axes(0xF).unwrap();
-    machine.set_period(PERIOD).unwrap();
+    machine.set_period(period).unwrap();
     machine.set_start_level(4).unwrap();
     machine.clear_faults_and_errors().unwrap();
     machine
