@@ -11,6 +11,11 @@ out=build/conformance
 rm -rf "$out"
 mkdir -p "$out/rs274"
 table=tests/conformance/tool.tbl
+# rs274's tool table lives in a file mapped at $HOME/.tool.mmap, which every LinuxCNC
+# process sharing a HOME truncates and rewrites at start: a running LinuxCNC's task then
+# dies of SIGBUS (docs/linuxcnc.md). These runs get a HOME of their own.
+export HOME="$PWD/$out/home"
+mkdir -p "$HOME"
 manifest="$out/manifest.tsv"
 : > "$manifest"
 i=0

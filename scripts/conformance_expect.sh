@@ -6,6 +6,10 @@ set -euo pipefail
 cd "$(dirname "$0")/../tests/conformance"
 ../../scripts/linuxcnc.sh --install
 files=("$@")
+# A HOME of its own for rs274's $HOME/.tool.mmap (scripts/conformance.sh says why).
+HOME=$(mktemp -d)
+export HOME
+trap 'rm -rf "$HOME"' EXIT
 [ ${#files[@]} -eq 0 ] && files=(*.ngc)
 for f in "${files[@]}"; do
     f=$(basename "$f")

@@ -74,20 +74,22 @@ run_process() {
 # Seconds the display waits for the program's end: LinuxCNC's task has been seen to keep
 # a stale motion status after the chip finished (docs/linuxcnc.md), which would hang.
 timeout=${FINESTEP_TIMEOUT:-900}
-# A LinuxCNC process that crashes leaves its core in the run's folder (milltask has been
-# seen to vanish mid-program: docs/linuxcnc.md).
+# A LinuxCNC process that crashes leaves its core in the run's folder. HOME is the run's
+# folder too: LinuxCNC's tool table is a file mapped at $HOME/.tool.mmap that every
+# LinuxCNC process (another run's, or rs274 in a conformance run) truncates and rewrites
+# when it starts, killing a running task with SIGBUS (docs/linuxcnc.md).
 ulimit -c unlimited 2>/dev/null || true
 start=$(date +%s.%N)
 status=0
 if [ -z "${FINESTEP_KILL_AFTER:-}" ]; then
-    env RTAPI_UID="$(id -u "$rt_user")" RTAPI_FIFO_PATH="$work/rtapi_fifo" RUNTESTS=1 FINESTEP_TIMEOUT="$timeout" \
+    env HOME="$work" RTAPI_UID="$(id -u "$rt_user")" RTAPI_FIFO_PATH="$work/rtapi_fifo" RUNTESTS=1 FINESTEP_TIMEOUT="$timeout" \
         FINESTEP_PROGRAM="$program" FINESTEP_SAMPLES="$work/samples.txt" FINESTEP_RESULT="$work/result.txt" \
         linuxcnc "$work/finestep.ini" > "$work/linuxcnc.log" 2>&1 || status=$?
 else
     # LinuxCNC killed mid-program: once the driver has run FINESTEP_KILL_AFTER servo
     # periods, SIGKILL to this run's rtapi_app (the realtime process that holds the
     # chip's socket); then the chip is watched, and the rest of LinuxCNC sent home.
-    env RTAPI_UID="$(id -u "$rt_user")" RTAPI_FIFO_PATH="$work/rtapi_fifo" RUNTESTS=1 FINESTEP_TIMEOUT="$timeout" \
+    env HOME="$work" RTAPI_UID="$(id -u "$rt_user")" RTAPI_FIFO_PATH="$work/rtapi_fifo" RUNTESTS=1 FINESTEP_TIMEOUT="$timeout" \
         FINESTEP_PROGRAM="$program" FINESTEP_SAMPLES="$work/samples.txt" FINESTEP_RESULT="$work/result.txt" \
         linuxcnc "$work/finestep.ini" > "$work/linuxcnc.log" 2>&1 &
     linuxcnc_pid=$!

@@ -199,8 +199,10 @@ def main():
         program = expr_program(rng) if kind == "expr" else oword_program(rng)
         with open(path, "w") as f:
             f.write(program)
+        # A HOME of its own for rs274's $HOME/.tool.mmap (scripts/conformance.sh says why).
         theirs = subprocess.run(
-            ["timeout", "10", "rs274", "-g", path], capture_output=True, text=True, stdin=subprocess.DEVNULL
+            ["timeout", "10", "rs274", "-g", path], capture_output=True, text=True, stdin=subprocess.DEVNULL,
+            env=dict(os.environ, HOME=out),
         )
         ours = subprocess.run(["timeout", "10", finestep, "gcode-canon", path], capture_output=True, text=True)
         if theirs.returncode or ours.returncode:
