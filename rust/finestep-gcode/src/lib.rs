@@ -72,6 +72,7 @@
 pub mod conformance;
 mod error;
 mod expr;
+mod g7x;
 mod interp;
 mod lexer;
 mod persistent;
