@@ -29,6 +29,17 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 /// Positions closer than this are the same (program units), as in LinuxCNC's cycle code.
 const TOLERANCE: f64 = 1e-6;
 
+/// A cycle makes at most this many moves (a depth of cut or a pass count far too
+/// small for the profile is refused rather than run for ever).
+pub(crate) const MAX_MOVES: usize = 1_000_000;
+
+fn check_size(out: &[Move]) -> Result<()> {
+    if out.len() > MAX_MOVES {
+        return fail(format!("the cycle makes more than {MAX_MOVES} moves (I or P too small for the profile?)"));
+    }
+    Ok(())
+}
+
 /// A point of the XZ plane: `z` along the spindle (the real part), `x` across it.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct Pt {
@@ -174,11 +185,20 @@ pub(crate) fn cycle_moves(cycle: &LatheCycle, segments: Vec<Segment>) -> Result<
     let sub = (cycle.code % 10) as u8;
     let shift = Pt::new(cycle.w, cycle.u);
     let profile = Profile::new(segments);
-    match cycle.code / 10 {
+    let moves = match cycle.code / 10 {
         70 => profile.g70(start, cycle.d, cycle.e, cycle.p),
         71 => profile.g71(false, sub, start, shift, cycle.d, cycle.i, cycle.r),
         _ => profile.g71(true, sub, start, shift, cycle.d, cycle.i, cycle.r),
+    }?;
+    let finite = |p: Pt| p.z.is_finite() && p.x.is_finite();
+    let all_finite = moves.iter().all(|m| match *m {
+        Move::Rapid(p) | Move::Feed(p) => finite(p),
+        Move::Arc { centre, end, .. } => finite(centre) && finite(end),
+    });
+    if !all_finite {
+        return fail("the profile's geometry degenerates (an arc whose R is shorter than half its chord?)");
     }
+    Ok(moves)
 }
 
 /// A cycle that cannot be made of its profile; the message is LinuxCNC's.
@@ -780,6 +800,7 @@ impl Profile {
             for s in &path.segments[1..] {
                 s.draw(&mut out);
             }
+            check_size(&out)?;
             pass -= 1;
         }
         Ok(out.into_iter().map(|m| self.unflip(m)).collect())
@@ -840,6 +861,7 @@ impl Profile {
             if guard > 10_000_000 {
                 return fail("the roughing cycle does not end");
             }
+            check_size(out)?;
             while x - TOLERANCE > location.x {
                 x -= self.delta;
             }
@@ -909,5 +931,66 @@ impl Profile {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cycle(code: u32, d: f64, i: f64) -> LatheCycle {
+        LatheCycle {
+            code,
+            column: 1,
+            q: (1.0, 1),
+            start: Pt::new(2.0, 12.0),
+            d,
+            e: 0.0,
+            i,
+            p: 2.0,
+            r: 0.3,
+            u: 0.0,
+            w: 0.0,
+        }
+    }
+
+    #[test]
+    fn a_straight_profile_is_finished_and_roughed_where_rs274_puts_it() {
+        // G70 at D 0 follows the profile itself: rapid to the start, to the first
+        // point, then feed along it.
+        let corners = [Pt::new(2.0, 12.0), Pt::new(0.0, 2.0), Pt::new(-5.0, 4.0), Pt::new(-8.0, 6.0)];
+        let segments: Vec<Segment> = corners.windows(2).map(|w| Segment::straight(w[0], w[1])).collect();
+        let mut c = cycle(700, 0.0, 1.0);
+        c.p = 1.0;
+        let moves = cycle_moves(&c, segments.clone()).unwrap();
+        assert_eq!(
+            moves,
+            [
+                Move::Rapid(Pt::new(2.0, 12.0)),
+                Move::Rapid(Pt::new(0.0, 2.0)),
+                Move::Feed(Pt::new(-5.0, 4.0)),
+                Move::Feed(Pt::new(-8.0, 6.0))
+            ]
+        );
+        // G71 cuts its layers at X 12, 11, ... 3 (rs274 -g on the same profile), each fed
+        // along Z to the profile (or to the closing line at its end, Z -8) and left by
+        // the 45-degree retract R.
+        let moves = cycle_moves(&cycle(710, 0.0, 1.0), segments).unwrap();
+        assert_eq!(moves[0], Move::Rapid(Pt::new(2.0, 12.0)));
+        let layers: Vec<(f64, f64)> = moves
+            .windows(2)
+            .filter_map(|w| match (w[0], w[1]) {
+                (Move::Feed(a), Move::Rapid(b)) if (b.x - a.x - 0.3).abs() < 1e-9 => Some((a.x, a.z)),
+                _ => None,
+            })
+            .collect();
+        let expected = [(12.0, -8.0), (11.0, -8.0), (10.0, -8.0), (9.0, -8.0), (8.0, -8.0), (7.0, -8.0), (6.0, -8.0)];
+        assert_eq!(layers[..7], expected);
+        assert_eq!(layers.len(), 10);
+        for ((x, z), (ex, ez)) in layers[7..].iter().zip([(5.0, -6.5), (4.0, -5.0), (3.0, -2.5)]) {
+            assert!((x - ex).abs() < 1e-9 && (z - ez).abs() < 1e-9, "layer at X {x} ends at Z {z}");
+        }
+        // Then along the profile and its closing line back to the start's X.
+        assert_eq!(moves[moves.len() - 1], Move::Feed(Pt::new(-8.0, 12.0)));
     }
 }
