@@ -63,6 +63,9 @@ impl Pt {
     fn scale(self, f: f64) -> Pt {
         Pt::new(self.z * f, self.x * f)
     }
+    fn div_real(self, f: f64) -> Pt {
+        Pt::new(self.z / f, self.x / f)
+    }
     /// Multiplied by i (a quarter turn counter-clockwise).
     fn times_i(self) -> Pt {
         Pt::new(-self.x, self.z)
@@ -94,12 +97,23 @@ impl Mul for Pt {
         Pt::new(self.z * o.z - self.x * o.x, self.z * o.x + self.x * o.z)
     }
 }
-/// The complex quotient.
+/// The complex quotient, by Smith's algorithm as the C library LinuxCNC is built with
+/// computes it (libgcc's `__divdc3`): the cycle tests the sign of a quotient's
+/// imaginary part that is zero but for rounding (which way to offset a profile whose
+/// lead-in runs along its first segment), so the rounding must be the same.
 impl Div for Pt {
     type Output = Pt;
     fn div(self, o: Pt) -> Pt {
-        let n = o.norm();
-        Pt::new((self.z * o.z + self.x * o.x) / n, (self.x * o.z - self.z * o.x) / n)
+        let (a, b, c, d) = (self.z, self.x, o.z, o.x);
+        if c.abs() < d.abs() {
+            let ratio = c / d;
+            let denom = c * ratio + d;
+            Pt::new((a * ratio + b) / denom, (b * ratio - a) / denom)
+        } else {
+            let ratio = d / c;
+            let denom = d * ratio + c;
+            Pt::new((b * ratio + a) / denom, (b - a * ratio) / denom)
+        }
     }
 }
 
@@ -286,7 +300,7 @@ impl Segment {
     fn offset(&mut self, distance: f64) {
         match self.shape {
             Shape::Straight => {
-                let d = ((self.start - self.end).scale(distance / (self.start - self.end).abs())).times_i();
+                let d = ((self.start - self.end) * Pt::new(0.0, distance)).div_real((self.start - self.end).abs());
                 self.start = self.start + d;
                 self.end = self.end + d;
             }
@@ -517,7 +531,7 @@ impl Segment {
 fn intersect(p: &mut Segment, n: &mut Segment) -> Result<()> {
     match (p.shape, n.shape) {
         (Shape::Straight, Shape::Straight) => {
-            let rot = (n.start - n.end).conj().scale(1.0 / (n.start - n.end).abs());
+            let rot = (n.start - n.end).conj().div_real((n.start - n.end).abs());
             let ps = (p.start - n.end) * rot;
             let pe = (p.end - n.end) * rot;
             if (ps - pe).x == 0.0 {
@@ -551,7 +565,7 @@ fn intersect(p: &mut Segment, n: &mut Segment) -> Result<()> {
             let cos_b = (c * c + a * a - b * b) / 2.0 / a / c;
             let cos_b2 = (cos_b * cos_b).min(1.0);
             let rot = Pt::new(cos_b, (1.0 - cos_b2).sqrt());
-            let is = (rot * (pc - nc)).scale(a / c) + nc;
+            let is = (rot * (pc - nc)).div_real(c).scale(a) + nc;
             p.end = is;
             n.start = is;
         }
@@ -563,7 +577,7 @@ fn intersect(p: &mut Segment, n: &mut Segment) -> Result<()> {
 /// `on_circle`, of the two crossings the nearer to `near` (the line's frame is at
 /// `origin`, on it).
 fn line_circle(from: Pt, to: Pt, origin: Pt, on_circle: Pt, centre: Pt, near: Pt) -> Pt {
-    let rot = (from - to).conj().scale(1.0 / (from - to).abs());
+    let rot = (from - to).conj().div_real((from - to).abs());
     let pe = (on_circle - origin) * rot;
     let pc = (centre - origin) * rot;
     let b = (pc - pe).norm() - pc.x * pc.x;
