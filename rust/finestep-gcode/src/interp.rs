@@ -1295,15 +1295,27 @@ impl State {
                 return Err(LineError::new(c, format!("{name}: I must be greater than zero")));
             }
         }
-        self.move_to(w, 0, column, false, kinds)?;
+        // As in LinuxCNC, the move to the start takes X and Z as absolute even in G91,
+        // while the cycle starts at them added to where the block began.
+        let before = self.to_program(self.position);
+        let incremental = self.incremental;
+        self.incremental = false;
+        let moved = self.move_to(w, 0, column, false, kinds);
+        self.incremental = incremental;
+        moved?;
         self.motion = Some(0);
         let here = self.to_program(self.position);
+        let mut start = Pt::new(self.user_units(2, here[2]), self.user_units(0, here[0]));
+        if incremental {
+            let word = |letter: char| w.param(letter).map_or(0.0, |(v, _)| v);
+            start = Pt::new(self.user_units(2, before[2]) + word('Z'), self.user_units(0, before[0]) + word('X'));
+        }
         let value = |word: Option<(f64, usize)>, default: f64| word.map_or(default, |(v, _)| v);
         Ok(LatheCycle {
             code,
             column,
             q,
-            start: Pt::new(self.user_units(2, here[2]), self.user_units(0, here[0])),
+            start,
             d: value(d, 0.0),
             e: value(e, 0.0),
             i: value(i, 1.0),
