@@ -2,6 +2,7 @@
 //! canonical blocks with positions resolved to absolute millimetres.
 
 use crate::error::LineError;
+use crate::g7x::{LatheCycle, Move, ProfileReader, Pt, Segment};
 use crate::lexer::Word;
 use crate::unsupported;
 use crate::{
@@ -245,7 +246,8 @@ const CYCLES: [Code; 8] = [730, 810, 820, 830, 850, 860, 870, 890];
 fn g_group(code: Code) -> Option<Group> {
     Some(match code {
         40 | 100 | 280 | 281 | 300 | 301 | 530 | 920 | 921 | 922 | 923 => Group::NonModal,
-        0 | 10 | 20 | 30 | 50 | 51 | G5_2 | G5_3 | 800 | 730 | 810 | 820 | 830 | 850 | 860 | 870 | 890 => Group::Motion,
+        0 | 10 | 20 | 30 | 50 | 51 | G5_2 | G5_3 | 800 | 700 | 710 | 711 | 712 | 720 | 721 | 722 | 730 | 810 | 820
+        | 830 | 850 | 860 | 870 | 890 => Group::Motion,
         382..=385 => Group::Motion,
         430 | 431 | 432 | 490 => Group::ToolLength,
         // G97 (spindle in rpm) is the only spindle mode and always in force.
@@ -322,6 +324,11 @@ fn g_name(code: Code) -> String {
         (whole, 0) => format!("G{whole}"),
         (whole, tenth) => format!("G{whole}.{tenth}"),
     }
+}
+
+/// The squared length of a chord.
+fn chord_norm(p: Pt) -> f64 {
+    p.z * p.z + p.x * p.x
 }
 
 /// A non-negative integral value as u32.
@@ -435,6 +442,8 @@ pub(crate) struct Executed {
     /// M70-M73: what the block does with the saved modal state (for the caller, which
     /// keeps one per call level).
     pub modal: Option<ModalOp>,
+    /// G70-G72: the cycle whose profile (the Q subroutine) the caller reads next.
+    pub lathe: Option<LatheCycle>,
 }
 
 /// M70 (save), M71 (forget), M72 (restore), M73 (save, restored when the subroutine
@@ -724,6 +733,12 @@ impl State {
         }
         if self.nurbs.is_some() && !w.has(Group::Motion, G5_3) {
             return self.nurbs_point_line(words, &w);
+        }
+        // G70-G72 take D E I P Q R U W as words of their own (out of the block here).
+        let mut lathe_words = None;
+        if let Some((code @ (700 | 710 | 711 | 712 | 720 | 721 | 722), column)) = w.group(Group::Motion) {
+            let taken = ['D', 'E', 'I', 'P', 'Q', 'R', 'U', 'W'].map(|l| w.params[letter_index(l)].take());
+            lathe_words = Some((code, column, taken));
         }
         let mut kinds = Vec::new();
 
@@ -1209,7 +1224,10 @@ impl State {
             Some((code, _)) => self.motion = Some(code),
             None => {}
         }
-        if let Some((code @ (280 | 300), _)) = w.group(Group::NonModal) {
+        let mut lathe = None;
+        if let Some((code, column, taken)) = lathe_words {
+            lathe = Some(self.lathe_cycle(&w, code, column, taken, &mut kinds)?);
+        } else if let Some((code @ (280 | 300), _)) = w.group(Group::NonModal) {
             self.home_move(&w, if code == 280 { 0 } else { 1 }, first_axis.is_some(), &mut kinds)?;
         } else if let (Some(code), Some(column), None) = (self.motion, first_axis.or(motion_column), &self.nurbs) {
             if moving || full_circle {
@@ -1248,7 +1266,201 @@ impl State {
             720 => ModalOp::Restore,
             _ => ModalOp::SaveUntilReturn,
         });
-        Ok(Executed { n: w.n, kinds, end, modal })
+        Ok(Executed { n: w.n, kinds, end, modal, lathe })
+    }
+
+    /// G70-G72 (`code`, at `column`): checks the block as LinuxCNC does, makes the move
+    /// to the start point (G0 to X Z), and gives the cycle back to the caller, which
+    /// reads its profile from the Q subroutine.
+    fn lathe_cycle(
+        &mut self,
+        w: &Words,
+        code: Code,
+        column: usize,
+        taken: [Option<(f64, usize)>; 8],
+        kinds: &mut Vec<BlockKind>,
+    ) -> Result<LatheCycle, LineError> {
+        let [d, e, i, p, q, r, u, ww] = taken;
+        let name = g_name(code);
+        let q =
+            q.ok_or_else(|| LineError::new(column, format!("{name} requires a Q word (the profile's subroutine)")))?;
+        if self.comp != CompSide::Off && code != 700 {
+            return Err(LineError::new(column, format!("{name} cannot be used with cutter compensation enabled")));
+        }
+        if self.plane != Plane::Zx {
+            return Err(LineError::new(column, format!("{name} can only be used in XZ plane (G18)")));
+        }
+        if let Some((value, c)) = i {
+            if value <= 0.0 {
+                return Err(LineError::new(c, format!("{name}: I must be greater than zero")));
+            }
+        }
+        // As in LinuxCNC, the move to the start takes X and Z as absolute even in G91,
+        // while the cycle starts at them added to where the block began.
+        let before = self.to_program(self.position);
+        let incremental = self.incremental;
+        self.incremental = false;
+        let moved = self.move_to(w, 0, column, false, kinds);
+        self.incremental = incremental;
+        moved?;
+        self.motion = Some(0);
+        let here = self.to_program(self.position);
+        let mut start = Pt::new(self.user_units(2, here[2]), self.user_units(0, here[0]));
+        if incremental {
+            let word = |letter: char| w.param(letter).map_or(0.0, |(v, _)| v);
+            start = Pt::new(self.user_units(2, before[2]) + word('Z'), self.user_units(0, before[0]) + word('X'));
+        }
+        let value = |word: Option<(f64, usize)>, default: f64| word.map_or(default, |(v, _)| v);
+        Ok(LatheCycle {
+            code,
+            column,
+            q,
+            start,
+            d: value(d, 0.0),
+            e: value(e, 0.0),
+            i: value(i, 1.0),
+            p: value(p, 1.0),
+            r: value(r, 0.5),
+            u: value(u, 0.0),
+            w: value(ww, 0.0),
+        })
+    }
+
+    /// One line of a lathe cycle's profile: its motion words (G0-G3, X Z or U W, I K or
+    /// R, A or C for a corner) added to `reader` instead of moving; LinuxCNC reads nothing
+    /// else there. The position (`#<_x>`, `#<_z>`) follows the profile.
+    pub(crate) fn profile_line(&mut self, words: &[Word], reader: &mut ProfileReader) -> Result<(), LineError> {
+        let w = sort_words(words)?;
+        let start = reader.at;
+        let mut end = if self.incremental { Pt::default() } else { start };
+        let radius = |v: f64| if self.diameter_mode { v / 2.0 } else { v };
+        for (relative, axis) in [('U', 'X'), ('W', 'Z')] {
+            match (w.param(relative), w.param(axis)) {
+                (Some((_, c)), _) if self.incremental => {
+                    return Err(LineError::new(
+                        c,
+                        format!("G7x error: Cannot use {relative} in incremental mode (G91)"),
+                    ))
+                }
+                (Some(_), Some((_, c))) => {
+                    return Err(LineError::new(
+                        c,
+                        format!("G7x error: Cannot use {relative} and {axis} in the same block"),
+                    ))
+                }
+                (Some((v, _)), None) if axis == 'X' => end.x += radius(v),
+                (Some((v, _)), None) => end.z += v,
+                (None, Some((v, _))) if axis == 'X' => end.x = radius(v),
+                (None, Some((v, _))) => end.z = v,
+                (None, None) => {}
+            }
+        }
+        if self.incremental {
+            end = end + start;
+        }
+        if let Some((code, _)) = w.group(Group::Motion) {
+            reader.motion = code;
+        }
+        if end == start {
+            return Ok(());
+        }
+        let column = w.group(Group::Motion).map(|(_, c)| c).or(w.param('X').map(|(_, c)| c)).unwrap_or(1);
+        match reader.motion {
+            0 | 10 => reader.segments.push(Segment::straight(start, end)),
+            code @ (20 | 30) => {
+                let ccw = code == 30;
+                let centre = if let Some((r, c)) = w.param('R') {
+                    if w.param('I').is_some() || w.param('K').is_some() {
+                        return Err(LineError::new(c, "G7X error: both R and I or K flag used for arc"));
+                    }
+                    let chord = end - start;
+                    let f = ((r * r - chord_norm(chord) / 4.0) / chord_norm(chord)).sqrt();
+                    let d = Pt::new(-chord.x * f, chord.z * f);
+                    let mid = Pt::new((start.z + end.z) / 2.0, (start.x + end.x) / 2.0);
+                    if ccw {
+                        mid + d
+                    } else {
+                        mid - d
+                    }
+                } else {
+                    let (i, k) = (w.param('I'), w.param('K'));
+                    if i.is_none() && k.is_none() {
+                        return Err(LineError::new(column, "G7X error: either I or K must be present for arc"));
+                    }
+                    let c = Pt::new(k.map_or(0.0, |v| v.0), i.map_or(0.0, |v| v.0));
+                    if self.arc_incremental {
+                        c + start
+                    } else {
+                        c
+                    }
+                };
+                reader.segments.push(Segment::arc(ccw, start, centre, end));
+            }
+            _ => {}
+        }
+        if matches!(reader.motion, 0 | 10 | 20 | 30) {
+            match (w.param('A'), w.param('C')) {
+                (Some(_), Some((_, c))) => {
+                    return Err(LineError::new(c, "G7X error: Both A and C parameters on a corner"));
+                }
+                (Some((a, _)), None) => reader.segments.push(Segment::fillet(a, end)),
+                (None, Some((c, _))) => reader.segments.push(Segment::chamfer(c, end)),
+                (None, None) => {}
+            }
+        }
+        reader.at = end;
+        let mut p = self.to_program(self.position);
+        p[0] = self.length_mm(end.x);
+        p[2] = self.length_mm(end.z);
+        self.position = self.to_machine(p);
+        Ok(())
+    }
+
+    /// Puts the program's position (X, Z) back where a lathe cycle's profile started.
+    pub(crate) fn profile_done(&mut self, at: Pt) {
+        let mut p = self.to_program(self.position);
+        p[0] = self.length_mm(at.x);
+        p[2] = self.length_mm(at.z);
+        self.position = self.to_machine(p);
+    }
+
+    /// The moves of a lathe cycle (program frame and units, X a radius) as blocks: each
+    /// a G0, G1, G2 or G3 in absolute distance and centre modes, as LinuxCNC makes them.
+    pub(crate) fn lathe_moves(&mut self, moves: &[Move], column: usize) -> Result<Vec<BlockKind>, LineError> {
+        let saved = (self.incremental, self.arc_incremental);
+        (self.incremental, self.arc_incremental) = (false, false);
+        let mut kinds = Vec::new();
+        let result = (|| {
+            for m in moves {
+                let word = |letter: char, value: f64| Word { letter, value, column };
+                let diameter = |x: f64| if self.diameter_mode { 2.0 * x } else { x };
+                let words = match *m {
+                    Move::Rapid(p) | Move::Feed(p) => {
+                        let g = if matches!(m, Move::Rapid(_)) { 0.0 } else { 1.0 };
+                        vec![word('G', g), word('X', diameter(p.x)), word('Z', p.z)]
+                    }
+                    Move::Arc { ccw, centre, end } => {
+                        // An arc that ends where it starts is left out (LinuxCNC's test).
+                        let here = self.to_program(self.position);
+                        let (x, z) = (self.user_units(0, here[0]), self.user_units(2, here[2]));
+                        if (z - end.z).abs() < 1e-4 && (x - end.x).abs() < 1e-4 {
+                            continue;
+                        }
+                        vec![
+                            word('G', if ccw { 3.0 } else { 2.0 }),
+                            word('X', diameter(end.x)),
+                            word('Z', end.z),
+                            word('I', centre.x),
+                            word('K', centre.z),
+                        ]
+                    }
+                };
+                kinds.extend(self.execute(&words)?.kinds);
+            }
+            Ok(())
+        })();
+        (self.incremental, self.arc_incremental) = saved;
+        result.map(|()| kinds)
     }
 
     /// A line inside an open NURBS block: `X- Y- <P->` adds a control point; nothing
@@ -1284,7 +1496,7 @@ impl State {
                 }
             }
         }
-        Ok(Executed { n: w.n, kinds: Vec::new(), end: false, modal: None })
+        Ok(Executed { n: w.n, kinds: Vec::new(), end: false, modal: None, lathe: None })
     }
 
     /// A control point's X and Y in mm: absolute, or in G91 relative to the start of the

@@ -48,7 +48,7 @@
 //!   [`MAX_ITERATIONS`] loop passes and calls in all, and [`MAX_REPEATED_LINES`] lines
 //!   run again by loops and calls (each an error at the line that reaches it).
 //! - G0 G1 G2 G3 G4 G5.1 G5.2 G5.3 G10 L1/L2/L10/L11/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G38.2-G38.5 G40
-//!   G41 G42 G43 G43.1 G43.2 G49 G53 G54-G59.3 G61 G64 G73 G80 G81 G82 G83 G85 G86 G89 G90 G91
+//!   G41 G42 G43 G43.1 G43.2 G49 G53 G54-G59.3 G61 G64 G70 G71 G71.1 G71.2 G72 G72.1 G72.2 G73 G80 G81 G82 G83 G85 G86 G89 G90 G91
 //!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G95 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
 //!   M48-M53 M61 M62-M68 M70 M71 M72 M73; E F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A B C U V W. What LinuxCNC has
 //!   beyond that is refused as `unsupported: <what> (<why>)` at its word (`unsupported:
@@ -62,6 +62,9 @@
 //!   after M73) restores units, plane, distance modes, feed, speed, spindle, coolant,
 //!   path control and retract mode.
 //! - NURBS blocks (G5.2 ... G5.3, G17 only): see [`BlockKind::Nurbs`].
+//! - Lathe cycles G70-G72 (G18 only): the Q subroutine's motion is read as the profile
+//!   (not run) and the cycle's moves come out as rapid, linear and arc blocks of the
+//!   cycle's line, as LinuxCNC 2.9 makes them (docs/gcode.md, "Lathe cycles").
 //! - Execution order in a block is LinuxCNC's: F, S, T, M6 (which stops the spindle),
 //!   M3-M5, M7-M9, G4, G17-G19, G20/G21, G40-G42, G61/G64, G90/G91, motion, M0/M2/M30.
 //! - Start state: G17 G21 G90 G91.1 G40 G49 G54 G64 G80 G94 G99, no motion mode, at the origin, no feed
@@ -72,6 +75,7 @@
 pub mod conformance;
 mod error;
 mod expr;
+mod g7x;
 mod interp;
 mod lexer;
 mod persistent;

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::LineError;
 use crate::expr::{parameter_index, Params};
+use crate::g7x::{cycle_moves, LatheCycle, ProfileReader};
 use crate::interp::{Modal, ModalOp, State};
 use crate::lexer::{lex_into, lex_line_into, Line, OKind, OWord, Target, Word};
 use crate::persistent::{required_parameters, Parameters};
@@ -468,6 +469,19 @@ impl Params for Scope<'_> {
     }
 }
 
+/// A lathe cycle whose profile is being read from its Q subroutine.
+struct LatheRead {
+    cycle: LatheCycle,
+    reader: ProfileReader,
+    /// The number of frames when the cycle's line ran: the profile is read until the
+    /// subroutine returns to it.
+    frames: usize,
+    /// Where the cycle's line is: source, line, N word.
+    source: usize,
+    line: usize,
+    n: Option<u32>,
+}
+
 /// A part program executed as its blocks are asked for ([`crate::BlockStream`]).
 pub(crate) struct Runner<'t> {
     sources: Vec<Source<'t>>,
@@ -484,6 +498,8 @@ pub(crate) struct Runner<'t> {
     folder: Option<PathBuf>,
     /// The program has ended (or failed).
     finished: bool,
+    /// G70-G72: the profile being read, if any.
+    lathe: Option<LatheRead>,
     /// Scratch space reused from line to line.
     text: String,
     line: Line,
@@ -537,6 +553,7 @@ impl<'t> Runner<'t> {
             options: options.clone(),
             folder: folder.map(Path::to_path_buf),
             finished: false,
+            lathe: None,
             text: String::new(),
             line: Line::default(),
             words: Vec::new(),
@@ -701,9 +718,33 @@ impl<'t> Runner<'t> {
             None => self.block(lexed.map(|i| (s, i))),
         };
         match step {
-            Ok(go_on) => Ok(go_on),
+            Ok(go_on) => {
+                if self.lathe.as_ref().is_some_and(|l| l.frames == self.frames.len()) {
+                    self.finish_lathe()?;
+                }
+                Ok(go_on)
+            }
             Err(e) => Err(located(&self.sources[s], pc.line, e)),
         }
+    }
+
+    /// The Q subroutine of a lathe cycle has returned: the cycle's moves from its
+    /// profile, as blocks of the cycle's line.
+    fn finish_lathe(&mut self) -> Result<(), GcodeError> {
+        let l = self.lathe.take().expect("a lathe cycle");
+        let at_cycle = |column: usize, message: String| GcodeError::Parse {
+            file: self.sources[l.source].name.clone(),
+            line: l.line,
+            column,
+            message,
+        };
+        self.state.profile_done(l.cycle.start);
+        self.state.line = l.line;
+        let moves = cycle_moves(&l.cycle, l.reader.segments)
+            .map_err(|e| at_cycle(l.cycle.column, format!("G7X error: {}", e.0)))?;
+        let kinds = self.state.lathe_moves(&moves, l.cycle.column).map_err(|e| at_cycle(e.column, e.message))?;
+        self.blocks.extend(kinds.into_iter().map(|kind| Block { line: l.line, n: l.n, kind }));
+        Ok(())
     }
 
     fn scope(&self) -> Scope<'_> {
@@ -791,6 +832,11 @@ impl<'t> Runner<'t> {
             self.words = words;
             return Ok(true);
         }
+        if let Some(lathe) = &mut self.lathe {
+            let read = self.state.profile_line(&words, &mut lathe.reader);
+            self.words = words;
+            return read.map(|()| true);
+        }
         let executed = self.state.execute(&words);
         self.words = words;
         let executed = executed?;
@@ -811,6 +857,17 @@ impl<'t> Runner<'t> {
                     self.blocks.extend(kinds.into_iter().map(|kind| Block { line, n: executed.n, kind }));
                 }
             }
+        }
+        if let Some(cycle) = executed.lathe {
+            // The profile: the Q subroutine, called, its motion read instead of run.
+            let (q, column) = cycle.q;
+            let o =
+                OWord { label: format!("{}", q.round() as i64).into(), kind: OKind::Call, column, args: Vec::new() };
+            let frames = self.frames.len();
+            let source = self.frames.last().expect("frame").source;
+            self.call(&o, &[])?;
+            let reader = ProfileReader::new(cycle.start);
+            self.lathe = Some(LatheRead { cycle, reader, frames, source, line, n: executed.n });
         }
         Ok(!executed.end)
     }

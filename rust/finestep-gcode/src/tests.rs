@@ -1409,3 +1409,61 @@ fn inputs_and_analog_outputs_are_events() {
         assert_eq!(err(source), format!("{FILE}:{message}"), "{source:?}");
     }
 }
+
+/// A lathe profile (O1) of `body` for the cycle line `cycle`, in G18.
+fn lathe(body: &str, cycle: &str) -> String {
+    format!("G18 F100\nO1 SUB\n{body}\nO1 ENDSUB\n{cycle}\nM2\n")
+}
+
+#[test]
+fn lathe_cycle_errors_are_rs274s_at_their_word() {
+    let profile = "G1 X2 Z0\nG1 X4 Z-5";
+    assert_eq!(err(&lathe(profile, "G70 X8 Z2")), "t.ngc:6:1: G70 requires a Q word (the profile's subroutine)");
+    assert_eq!(
+        err(&lathe(profile, "G41 D1\nG71 Q1 X8 Z2")),
+        "t.ngc:7:1: G71 cannot be used with cutter compensation enabled"
+    );
+    assert_eq!(err(&lathe(profile, "G17 G72.1 Q1 X8 Z2")), "t.ngc:6:5: G72.1 can only be used in XZ plane (G18)");
+    assert_eq!(err(&lathe(profile, "G71.2 Q1 X8 Z2 I0")), "t.ngc:6:16: G71.2: I must be greater than zero");
+    assert_eq!(err(&lathe("G1 X2 Z0\nG1 X4 Z-5\nG1 X3 Z-3", "G70 Q1 X8 Z2")), "t.ngc:7:1: G7X error: Not monotonic");
+    assert_eq!(
+        err(&lathe(profile, "G70 Q2 X8 Z2")),
+        "t.ngc:6:5: subroutine o2 is not defined here nor in a file of the subroutine path"
+    );
+    assert_eq!(
+        err(&lathe("G2 X2 Z0 R3 I1", "G70 Q1 X8 Z2")),
+        "t.ngc:3:10: G7X error: both R and I or K flag used for arc"
+    );
+    assert_eq!(err(&lathe("G2 X2 Z0", "G70 Q1 X8 Z2")), "t.ngc:3:1: G7X error: either I or K must be present for arc");
+    assert_eq!(
+        err(&lathe("G1 X2 Z0 A1 C1", "G70 Q1 X8 Z2")),
+        "t.ngc:3:13: G7X error: Both A and C parameters on a corner"
+    );
+    assert_eq!(err(&lathe("G1 X2 U1", "G70 Q1 X8 Z2")), "t.ngc:3:4: G7x error: Cannot use U and X in the same block");
+    assert_eq!(
+        err(&format!("G91\n{}", lathe("G1 W-1", "G70 Q1 X8 Z2"))),
+        "t.ngc:4:4: G7x error: Cannot use W in incremental mode (G91)"
+    );
+}
+
+#[test]
+fn a_lathe_profile_is_read_not_run() {
+    // The profile's lines make no moves and run no other words (M3, F, the M2 too):
+    // LinuxCNC reads only their motion; the cycle then makes its own moves.
+    let kinds = parse(&lathe("M3 S100 F5\nG1 X2 Z0\nG1 X4 Z-5\nM2", "G70 Q1 X8 Z2"));
+    let moves: Vec<_> = kinds
+        .iter()
+        .filter_map(|k| match *k {
+            BlockKind::Rapid { to } => Some(('R', to.x_mm, to.z_mm)),
+            BlockKind::Linear { to, feed_mm_per_min } => {
+                assert_eq!(feed_mm_per_min, 100.0);
+                Some(('F', to.x_mm, to.z_mm))
+            }
+            _ => None,
+        })
+        .collect();
+    // The move to the start point, then one pass at D 0: a rapid to the start, to the
+    // profile's first point, and the profile fed.
+    assert_eq!(moves, [('R', 8.0, 2.0), ('R', 8.0, 2.0), ('R', 2.0, 0.0), ('F', 4.0, -5.0)]);
+    assert!(!kinds.iter().any(|k| matches!(k, BlockKind::Spindle { .. })));
+}

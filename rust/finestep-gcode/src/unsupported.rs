@@ -7,7 +7,6 @@
 /// G-codes LinuxCNC knows and finestep refuses, in tenths (G38.2 is 382), with why.
 pub const G_CODES: &[(&[u32], &str)] = &[
     (&[330, 331, 740, 760, 840], "spindle-synchronised motion needs the spindle feedback finestep does not have yet"),
-    (&[700, 710, 711, 712, 720, 721, 722], "lathe roughing cycles are not implemented yet"),
     (&[880], "the tool is left at the bottom for the operator to retract by hand during the stop, and finestep offers no hand moves in a program"),
     (&[960], "constant surface speed changes the spindle speed with X along each move; finestep sets the spindle at rest between moves"),
 ];

@@ -485,3 +485,43 @@ fn parameter_files_never_panic_and_round_trip() {
         })
         .unwrap();
 }
+
+/// One line of a random lathe profile: a move (G0-G3, X Z or U W, I K or R, a corner A
+/// or C), a loop around it, or a word the profile does not read.
+fn profile_line() -> impl Strategy<Value = String> {
+    let v = || -20.0..20.0f64;
+    prop_oneof![
+        (0..4u8, v(), v()).prop_map(|(g, x, z)| format!("G{g} X{x:.3} Z{z:.3}")),
+        (v(), v(), v(), v()).prop_map(|(x, z, i, k)| format!("G2 X{x:.3} Z{z:.3} I{i:.3} K{k:.3}")),
+        (v(), v(), v(), v()).prop_map(|(x, z, i, k)| format!("G3 X{x:.3} Z{z:.3} I{i:.3} K{k:.3}")),
+        (v(), v(), v()).prop_map(|(x, z, r)| format!("G2 X{x:.3} Z{z:.3} R{r:.3}")),
+        (v(), v()).prop_map(|(u, w)| format!("G1 U{u:.3} W{w:.3}")),
+        (v(), v(), 0.0..2.0f64).prop_map(|(x, z, a)| format!("G1 X{x:.3} Z{z:.3} A{a:.3}")),
+        (v(), v(), 0.0..2.0f64).prop_map(|(x, z, c)| format!("G1 X{x:.3} Z{z:.3} C{c:.3}")),
+        (1..4u8, v()).prop_map(|(n, w)| format!("o9 repeat [{n}]\nG1 W{w:.3}\no9 endrepeat")),
+        Just("M3 S100".to_string()),
+    ]
+}
+
+/// Random profiles under every lathe cycle: an error inside the input or finite moves,
+/// never a panic or a hang.
+#[test]
+fn lathe_cycles_never_panic_or_hang() {
+    let mut runner = finestep_testkit::runner("lathe_cycles_never_panic_or_hang", 1000);
+    let cycle =
+        prop_oneof![Just("G70"), Just("G71"), Just("G71.1"), Just("G71.2"), Just("G72"), Just("G72.1"), Just("G72.2")];
+    let words = (-20.0..20.0f64, -20.0..20.0f64, 0.0..2.0f64, 0.05..3.0f64, 1..4u8, any::<bool>());
+    runner
+        .run(
+            &(proptest::collection::vec(profile_line(), 1..8), cycle, words),
+            |(lines, cycle, (x, z, d, i, p, diameter))| {
+                let mode = if diameter { "G7" } else { "G8" };
+                let source = format!(
+                    "G18 {mode} F100\no1 sub\n{}\no1 endsub\n{cycle} Q1 X{x:.3} Z{z:.3} D{d:.3} I{i:.3} P{p} R0.3\nM2\n",
+                    lines.join("\n")
+                );
+                check_location(&source, &parse_str(&source, "fuzz.ngc"))
+            },
+        )
+        .unwrap();
+}
