@@ -7,14 +7,17 @@
 // written once. The caller keeps |d| < M and 0 <= acc < M, so at most one wrap happens
 // and the result stays in [0, M).
 //
-// acc + d, acc + d - M and acc + d + M are formed side by side (each a three-input sum:
-// one carry chain), then a choice: no carry chain waits for another.
+// The caller hands in acc - M and acc + M beside acc (step_engine forms them a clock
+// ahead, from registers; dda_axis beside the sum): acc + d, (acc - M) + d and
+// (acc + M) + d are then three two-input sums side by side, one carry chain each, and a
+// choice; no carry chain waits for another.
 module dda_step #(
     parameter M_W = 20                  // bits of m (the modulus's integer part)
 ) (
     input  wire [M_W+15:0] acc,         // the accumulator, in [0, M)
+    input  wire [M_W+17:0] acc_minus_m, // acc - M (two's complement), M = m * 2^16
+    input  wire [M_W+17:0] acc_plus_m,  // acc + M
     input  wire [31:0]     inc,         // d, Q16.16 two's complement
-    input  wire [M_W-1:0]  m,           // M = m * 2^16
     output wire [M_W+15:0] acc_next,    // s wrapped into [0, M)
     output wire            wrap_up,     // s >= M: a +1 request
     output wire            wrap_down,   // s < 0: a -1 request
@@ -25,7 +28,6 @@ module dda_step #(
     localparam ACC_W     = M_W + FRAC_BITS;
     localparam SUM_W     = ACC_W + 2;   // sign + one carry bit
 
-    wire signed [SUM_W-1:0] modulus = {2'b00, m, {FRAC_BITS{1'b0}}};
     // The increment sign-extended (or, for the narrow proofs, truncated: |d| < M always
     // fits) to the sum's width.
     wire [SUM_W-1:0] inc_resized;
@@ -41,8 +43,8 @@ module dda_step #(
     endgenerate
     wire signed [SUM_W-1:0] acc_wide  = $signed({2'b00, acc});
     wire signed [SUM_W-1:0] sum_kept  = acc_wide + $signed(inc_resized);
-    wire signed [SUM_W-1:0] sum_minus = acc_wide + $signed(inc_resized) - modulus;
-    wire signed [SUM_W-1:0] sum_plus  = acc_wide + $signed(inc_resized) + modulus;
+    wire signed [SUM_W-1:0] sum_minus = $signed(acc_minus_m) + $signed(inc_resized);
+    wire signed [SUM_W-1:0] sum_plus  = $signed(acc_plus_m) + $signed(inc_resized);
     assign wrap_up   = !sum_minus[SUM_W-1];
     assign wrap_down = sum_kept[SUM_W-1];
     wire signed [SUM_W-1:0] sum_wrapped = wrap_up ? sum_minus : (wrap_down ? sum_plus : sum_kept);
