@@ -217,6 +217,9 @@ module step_engine #(
     wire [TIMING_W-1:0]      dcnt    = sh_cur[PEND_W+2+TIMING_W +: TIMING_W];
     wire [1:0]               quad    = sh_cur[PEND_W+2+2*TIMING_W +: 2];
 
+    wire [1:0]          mode_cur  = out_mode[FS_OUT_MODE_WIDTH*sh_ix +: FS_OUT_MODE_WIDTH];
+    wire [2:0]          inv_cur   = invert[FS_INVERT_WIDTH*sh_ix +: FS_INVERT_WIDTH];
+
     // Elapsed clocks of the counted visits: cnt * S, dcnt * S (exact).
     wire [CMP_W-1:0] cnt_clocks  = {cnt, {SL{1'b0}}};
     wire [CMP_W-1:0] dcnt_clocks = {dcnt, {SL{1'b0}}};
@@ -255,22 +258,24 @@ module step_engine #(
     wire [1:0]          quad_next  = rise ? quad + {!dir, 1'b1} : quad;
     assign              sh_next    = {quad_next, dcnt_next, cnt_next, dir_next, level_next, pending_next};
 
-    // Pin functions of the state the visit leaves (step_shaper's table), each mode's;
-    // every axis takes its own mode's and INVERT bits (flip-flops: no select by the slot
-    // after the visit's decision).
-    function pin_fn;
-        input [1:0] mode;
-        input       step_dir_value;    // FS_OUT_MODE_STEP_DIR (and any other code)
-        input       up_down_value;     // FS_OUT_MODE_UP_DOWN
-        input       quadrature_value;  // FS_OUT_MODE_QUADRATURE
-        begin
-            case (mode)
-                FS_OUT_MODE_UP_DOWN:    pin_fn = up_down_value;
-                FS_OUT_MODE_QUADRATURE: pin_fn = quadrature_value;
-                default:                pin_fn = step_dir_value;
-            endcase
-        end
-    endfunction
+    // Pin functions of the state the visit leaves.
+    reg a_next, b_next;
+    always @* begin
+        case (mode_cur)
+            FS_OUT_MODE_UP_DOWN: begin
+                a_next = level_next && dir_next;
+                b_next = level_next && !dir_next;
+            end
+            FS_OUT_MODE_QUADRATURE: begin
+                a_next = quad_next[0] ^ quad_next[1];
+                b_next = quad_next[1];
+            end
+            default: begin
+                a_next = level_next;
+                b_next = dir_next;
+            end
+        endcase
+    end
 
     // ---- Per-axis flip-flops: positions, flags, pins -------------------------------
     reg [32*N_AXES-1:0] position_reg;
@@ -292,12 +297,8 @@ module step_engine #(
             if (sh_hot[a] && (clamp_high || clamp_low)) step_lost_reg[a] <= 1'b1;
             else if (clear_errors) step_lost_reg[a] <= 1'b0;
             if (sh_hot[a]) begin
-                pin_a_reg[a] <= pin_fn(out_mode[FS_OUT_MODE_WIDTH*a +: FS_OUT_MODE_WIDTH], level_next,
-                                       level_next && dir_next, quad_next[0] ^ quad_next[1]) ^
-                                invert[FS_INVERT_WIDTH*a + FS_INVERT_PIN_A_BIT];
-                pin_b_reg[a] <= pin_fn(out_mode[FS_OUT_MODE_WIDTH*a +: FS_OUT_MODE_WIDTH], dir_next,
-                                       level_next && !dir_next, quad_next[1]) ^
-                                invert[FS_INVERT_WIDTH*a + FS_INVERT_PIN_B_BIT];
+                pin_a_reg[a] <= a_next ^ inv_cur[FS_INVERT_PIN_A_BIT];
+                pin_b_reg[a] <= b_next ^ inv_cur[FS_INVERT_PIN_B_BIT];
                 sh_init_reg[a] <= 1'b1;
                 if (rise) position_reg[32*a +: 32] <= position_reg[32*a +: 32] + {{31{!dir}}, 1'b1};
             end
@@ -338,9 +339,6 @@ module step_engine #(
     always @(posedge clk) f_past_valid <= 1'b1;
     wire [31:0] position_cur = position_reg[32*sh_ix +: 32];
     wire [SL-1:0] dda_ix = dda_visit ? dda_axis : {SL{1'b0}};
-    wire [1:0] mode_cur = out_mode[FS_OUT_MODE_WIDTH*sh_ix +: FS_OUT_MODE_WIDTH];
-    wire a_next = pin_fn(mode_cur, level_next, level_next && dir_next, quad_next[0] ^ quad_next[1]);
-    wire b_next = pin_fn(mode_cur, dir_next, level_next && !dir_next, quad_next[1]);
     wire [TIMING_W-1:0] len_cur   = step_len[TIMING_W*sh_ix +: TIMING_W];
     wire [TIMING_W-1:0] space_cur = step_space[TIMING_W*sh_ix +: TIMING_W];
     wire [TIMING_W-1:0] setup_cur = dir_setup[TIMING_W*sh_ix +: TIMING_W];
