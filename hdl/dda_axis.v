@@ -45,10 +45,8 @@ module dda_axis #(
     wire             wrap_up, wrap_down;
     wire [SUM_W-1:0] sum;               // acc + d, for the formal section
     wire             unused_sum = &{1'b0, sum};
-    wire [SUM_W-1:0] modulus = {2'b00, p_active, {FRAC_BITS{1'b0}}};
     dda_step #(.M_W(P_WIDTH)) update (
-        .acc(acc_reg), .acc_minus_m({2'b00, acc_reg} - modulus), .acc_plus_m({2'b00, acc_reg} + modulus),
-        .inc(inc),
+        .acc(acc_reg), .acc_minus_m({SUM_W{1'b0}}), .acc_plus_m({SUM_W{1'b0}}), .m(p_active), .inc(inc),
         .acc_next(acc_wrapped), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(sum)
     );
 

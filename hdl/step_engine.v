@@ -185,8 +185,9 @@ module step_engine #(
     // One update (dda_step): acc + d against M = V * 2^16.
     wire             wrap_up, wrap_down;
     wire [SUM_W-1:0] unused_sum;
-    dda_step #(.M_W(V_W)) update (
-        .acc(acc_cur), .acc_minus_m(acc_minus_reg), .acc_plus_m(acc_plus_reg), .inc(inc_cur),
+    dda_step #(.M_W(V_W), .AHEAD(1)) update (
+        .acc(acc_cur), .acc_minus_m(acc_minus_reg), .acc_plus_m(acc_plus_reg), .m(p_active[P_WIDTH-1:SL]),
+        .inc(inc_cur),
         .acc_next(acc_next), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(unused_sum)
     );
 
