@@ -16,13 +16,12 @@
 // section proves it). Positions, sticky flags and pins stay in flip-flops per axis: the
 // registers and the probe read every axis's position in any cycle.
 //
-// Timing (no visible effect): everything a visit starts from is prepared a cycle ahead in
-// registers: the DDA's increment (the increments change only at the edge after a period
-// boundary, slot S - 1; the slot-0 visit, right after that edge, takes inc[0] itself), its
-// start b with b - M and b + M (three two-input sums, no carry chain behind another), the
-// shaper's state. The shaper's timings may change in any cycle, so they are not chosen
-// ahead: the counters are compared with every axis's timings side by side and the
-// visited axis's four results chosen after the compares.
+// Timing (no visible effect): what a visit starts from is prepared a cycle ahead in
+// registers: the DDA's start b with b - M and b + M (three two-input sums beside each
+// other, no carry chain behind another), the shaper's state. The increments and the
+// shaper's timings are this cycle's (a timing may change in any cycle): the counters
+// are compared with every axis's timings side by side and the visited axis's four
+// results chosen after the compares.
 //
 // Latency: a DDA visit in cycle n gives the shaper's decision in n+1 and the pin edge and
 // position in n+2.
@@ -84,6 +83,7 @@ module step_engine #(
     wire sh_visit  = ({{(32-SL){1'b0}}, sh_axis} < N_AXES);
     // The axis whose configuration and flip-flops a visit reads: 0 in an idle slot (whose
     // results are never used), so no select runs past the per-axis vectors.
+    wire [SL-1:0] dda_ix = dda_visit ? dda_axis : {SL{1'b0}};
     wire [SL-1:0] sh_ix  = sh_visit ? sh_axis : {SL{1'b0}};
     // The visited axes one-hot (none in an idle slot).
     wire [N_AXES-1:0] dda_hot;
@@ -173,15 +173,7 @@ module step_engine #(
         ran_reg       <= !rst && run;
     end
     wire [ACC_W-1:0] acc_cur = acc_cur_reg;
-    // The visit's increment, inc[a] of this cycle, without a select by the slot in front
-    // of the sum: the next visit's lane is loaded into inc_pre_reg a cycle ahead. The
-    // increments change only at the edge ending a period boundary (slot == S - 1: the
-    // period timer aligns every boundary to it), or while the DDAs do not run; so the
-    // preloaded lane is this cycle's in every running visit but the one in slot 0, the
-    // visit of axis 0 right after a boundary, which takes inc[0] itself.
-    reg  [31:0]      inc_pre_reg;
-    reg              dda_first_reg;                  // slot_reg == 0, as a flip-flop
-    wire [31:0]      inc_cur = dda_first_reg ? inc[31:0] : inc_pre_reg;
+    wire [31:0]      inc_cur = inc[32*dda_ix +: 32];
     // One update (dda_step): acc + d against M = V * 2^16.
     wire             wrap_up, wrap_down;
     wire [SUM_W-1:0] unused_sum;
@@ -194,11 +186,6 @@ module step_engine #(
     // The visit's request, taken by the shaper visit of the same axis in the next cycle.
     reg req_valid_reg;
     reg req_negative_reg;
-    always @(posedge clk) begin
-        inc_pre_reg   <= inc[32*dda_ix_after +: 32];
-        dda_first_reg <= rst || (slot_next == {SL{1'b0}});
-    end
-
     always @(posedge clk) begin
         req_valid_reg    <= !rst && dda_visit && run && ran_reg && (wrap_up || wrap_down);
         req_negative_reg <= !rst && wrap_down;
@@ -339,7 +326,6 @@ module step_engine #(
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
     wire [31:0] position_cur = position_reg[32*sh_ix +: 32];
-    wire [SL-1:0] dda_ix = dda_visit ? dda_axis : {SL{1'b0}};
     wire [TIMING_W-1:0] len_cur   = step_len[TIMING_W*sh_ix +: TIMING_W];
     wire [TIMING_W-1:0] space_cur = step_space[TIMING_W*sh_ix +: TIMING_W];
     wire [TIMING_W-1:0] setup_cur = dir_setup[TIMING_W*sh_ix +: TIMING_W];
@@ -353,9 +339,6 @@ module step_engine #(
         // The first running cycle (after a stop or a reset) is the period timer's first, a
         // boundary: every increment is zero in it.
         if (run && !ran_reg) assume (inc == {32*N_AXES{1'b0}});
-        // The increments change only at the edge after a boundary (slot S - 1) while
-        // running (the period timer's alignment; at a start they are zero on both sides).
-        if (run && slot_reg != {SL{1'b0}}) assume ($stable(inc));
     end
     wire [V_W-1:0] f_visits = p_active[P_WIDTH-1:SL];
     always @(*) begin
@@ -435,9 +418,6 @@ module step_engine #(
         end
         if (dda_visit && run && !ran_reg) assert (!dda_live_reg[dda_ix] && inc_cur == 32'd0);
         assert ((dda_live_reg & ~f_live) == {N_AXES{1'b0}});
-        // ... with this cycle's increment of the axis.
-        assert (dda_first_reg == (slot_reg == {SL{1'b0}}));
-        if (dda_visit && run) assert (inc_cur == inc[32*dda_ix +: 32]);
         if (sh_visit) assert (sh_cur == f_sh[sh_ix]);
         if (sh_visit) begin
             assert (rise == f_rise && fall == f_fall && dir_change == f_dir_change);
