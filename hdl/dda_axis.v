@@ -46,7 +46,7 @@ module dda_axis #(
     wire [SUM_W-1:0] sum;               // acc + d, for the formal section
     wire             unused_sum = &{1'b0, sum};
     dda_step #(.M_W(P_WIDTH)) update (
-        .acc(acc_reg), .inc(inc), .m(p_active),
+        .acc(acc_reg), .acc_minus_m({SUM_W{1'b0}}), .acc_plus_m({SUM_W{1'b0}}), .m(p_active), .inc(inc),
         .acc_next(acc_wrapped), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(sum)
     );
 

@@ -7,14 +7,19 @@
 // written once. The caller keeps |d| < M and 0 <= acc < M, so at most one wrap happens
 // and the result stays in [0, M).
 //
-// acc + d, acc + d - M and acc + d + M are formed side by side (each a three-input sum:
-// one carry chain), then a choice: no carry chain waits for another.
+// acc + d, acc + d - M and acc + d + M are formed side by side, then a choice: with
+// AHEAD = 0 (dda_axis) from acc, d and m (each a three-input sum); with AHEAD = 1
+// (step_engine, which forms acc - M and acc + M a clock ahead, in registers) as
+// acc + d, (acc - M) + d and (acc + M) + d, three two-input sums, one carry chain each.
 module dda_step #(
-    parameter M_W = 20                  // bits of m (the modulus's integer part)
+    parameter M_W   = 20,               // bits of m (the modulus's integer part)
+    parameter AHEAD = 0                 // 1: acc - M and acc + M come in; 0: from m
 ) (
     input  wire [M_W+15:0] acc,         // the accumulator, in [0, M)
+    input  wire [M_W+17:0] acc_minus_m, // AHEAD = 1: acc - M (two's complement)
+    input  wire [M_W+17:0] acc_plus_m,  // AHEAD = 1: acc + M
+    input  wire [M_W-1:0]  m,           // AHEAD = 0: M = m * 2^16
     input  wire [31:0]     inc,         // d, Q16.16 two's complement
-    input  wire [M_W-1:0]  m,           // M = m * 2^16
     output wire [M_W+15:0] acc_next,    // s wrapped into [0, M)
     output wire            wrap_up,     // s >= M: a +1 request
     output wire            wrap_down,   // s < 0: a -1 request
@@ -25,7 +30,6 @@ module dda_step #(
     localparam ACC_W     = M_W + FRAC_BITS;
     localparam SUM_W     = ACC_W + 2;   // sign + one carry bit
 
-    wire signed [SUM_W-1:0] modulus = {2'b00, m, {FRAC_BITS{1'b0}}};
     // The increment sign-extended (or, for the narrow proofs, truncated: |d| < M always
     // fits) to the sum's width.
     wire [SUM_W-1:0] inc_resized;
@@ -41,8 +45,20 @@ module dda_step #(
     endgenerate
     wire signed [SUM_W-1:0] acc_wide  = $signed({2'b00, acc});
     wire signed [SUM_W-1:0] sum_kept  = acc_wide + $signed(inc_resized);
-    wire signed [SUM_W-1:0] sum_minus = acc_wide + $signed(inc_resized) - modulus;
-    wire signed [SUM_W-1:0] sum_plus  = acc_wide + $signed(inc_resized) + modulus;
+    wire signed [SUM_W-1:0] sum_minus;
+    wire signed [SUM_W-1:0] sum_plus;
+    generate
+        if (AHEAD != 0) begin : ahead
+            assign sum_minus = $signed(acc_minus_m) + $signed(inc_resized);
+            assign sum_plus  = $signed(acc_plus_m) + $signed(inc_resized);
+            wire [M_W-1:0] unused_m = m;
+        end else begin : here
+            wire signed [SUM_W-1:0] modulus = {2'b00, m, {FRAC_BITS{1'b0}}};
+            assign sum_minus = acc_wide + $signed(inc_resized) - modulus;
+            assign sum_plus  = acc_wide + $signed(inc_resized) + modulus;
+            wire [2*SUM_W-1:0] unused_ahead = {acc_minus_m, acc_plus_m};
+        end
+    endgenerate
     assign wrap_up   = !sum_minus[SUM_W-1];
     assign wrap_down = sum_kept[SUM_W-1];
     wire signed [SUM_W-1:0] sum_wrapped = wrap_up ? sum_minus : (wrap_down ? sum_plus : sum_kept);

@@ -301,6 +301,9 @@ module period_timer #(
         end
         if ($past(run) && !$past(boundary)) assert (inc == $past(inc) && cur_end == $past(cur_end));
         if (!$past(run)) assert (inc == {32*N_AXES{1'b0}} && !cur_end);
+        // The DDAs' first running cycle (run && active rose) has zero increments (the step
+        // engine prepares its visits a cycle ahead and relies on it).
+        if (!$past(run && active_reg) && run && active_reg) assert (inc == {32*N_AXES{1'b0}});
         if ($past(take_record && run) && !$past(record_ok)) assert (record_error_reg);
         if (!$past(record_error_reg) && !($past(take_record && run) && !$past(record_ok))) assert (!record_error_reg);
         if ($past(record_error_reg) && !$past(clear_errors)) assert (record_error_reg);

@@ -9,11 +9,19 @@
 // shaper's counters count visits and compare cnt * S against the timings in clocks.
 //
 // Each axis's DDA accumulator and shaper state live in a store (store_ram: block RAM on
-// the iCE40 with RAM_BLOCK = 1, distributed RAM or flip-flops elsewhere), read the cycle
-// before the visit (address = the next cycle's axis) and written at the visit; a store
-// never reads and writes one word on one clock (the schedule moves one slot a cycle; the
-// formal section proves it). Positions, sticky flags and pins stay in flip-flops per
-// axis: the registers and the probe read every axis's position in any cycle.
+// the iCE40 with RAM_BLOCK = 1, distributed RAM or flip-flops elsewhere), read two
+// cycles before the visit and written at the visit (with S = 2, where that read would
+// meet the write of the axis's previous visit, a register of that visit's result stands
+// in for the store); a store never reads and writes one word on one clock (the formal
+// section proves it). Positions, sticky flags and pins stay in flip-flops per axis: the
+// registers and the probe read every axis's position in any cycle.
+//
+// Timing (no visible effect): what a visit starts from is prepared a cycle ahead in
+// registers: the DDA's start b with b - M and b + M (three two-input sums beside each
+// other, no carry chain behind another), the shaper's state. The increments and the
+// shaper's timings are this cycle's (a timing may change in any cycle): the counters
+// are compared with every axis's timings side by side and the visited axis's four
+// results chosen after the compares.
 //
 // Latency: a DDA visit in cycle n gives the shaper's decision in n+1 and the pin edge and
 // position in n+2.
@@ -99,49 +107,97 @@ module step_engine #(
     // reset). Otherwise a visit starts from M/2, or from the shaper's reset values.
     reg [N_AXES-1:0] dda_live_reg;
     reg [N_AXES-1:0] sh_init_reg;
-    // The visited axes' flags, dda_live_reg[dda_ix] and sh_init_reg[sh_ix], as flip-flops
-    // loaded the cycle before from the flags' next values (the next cycle's axes are known
-    // from the slot), so no select by the slot sits in front of a visit's arithmetic.
-    reg              dda_live_cur_reg;
-    reg              sh_init_cur_reg;
-    wire [SL-1:0] dda_axis_after = slot_next;        // the next cycle's visits
+    // The next cycle's visits (the axes are known from the slot) and their flags as this
+    // cycle leaves them: a visit's start is chosen a cycle ahead, so no select by the slot
+    // sits in front of its arithmetic.
+    wire [SL-1:0] dda_axis_after = slot_next;
     wire [SL-1:0] sh_axis_after  = slot_reg;
     wire [SL-1:0] dda_ix_after = ({{(32-SL){1'b0}}, dda_axis_after} < N_AXES) ? dda_axis_after : {SL{1'b0}};
     wire [SL-1:0] sh_ix_after  = ({{(32-SL){1'b0}}, sh_axis_after} < N_AXES) ? sh_axis_after : {SL{1'b0}};
+    wire dda_live_after = run && dda_live_reg[dda_ix_after];
+    wire sh_init_after  = sh_init_reg[sh_ix_after];
+
+    // ---- Stores, read two cycles ahead -------------------------------------------------
+    // A store is read in the cycle two before the visit (address: the axis visited two
+    // cycles later), and the word, with the visit's start (M/2, the reset values) chosen
+    // in, is loaded into the visit's registers in the cycle before. With S = 2 the word is
+    // the one the axis's previous visit leaves at that same edge: it is taken from that
+    // visit's result, registered, and no store is built.
+    wire [ACC_W-1:0] acc_next;   // the DDA visit's result (used after a running visit)
+    wire [SH_W-1:0]  sh_next;    // the shaper visit's result
+    wire [ACC_W-1:0] acc_src;    // the word of the next cycle's DDA visit
+    wire [SH_W-1:0]  sh_src;     // ... and of its shaper visit
+    generate
+        if (S == 2) begin : last_visit
+            reg [ACC_W-1:0] acc_last_reg;
+            reg [SH_W-1:0]  sh_last_reg;
+            always @(posedge clk) begin
+                acc_last_reg <= acc_next;
+                sh_last_reg  <= sh_next;
+            end
+            assign acc_src = acc_last_reg;
+            assign sh_src  = sh_last_reg;
+        end else begin : stores
+            store_ram #(.WIDTH(ACC_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) dda_store (
+                .clk(clk), .wr_en(dda_visit), .wr_addr(dda_axis), .wr_data(acc_next),
+                .rd_en(1'b1), .rd_addr(slot_next + SLOT_ONE), .rd_data(acc_src)
+            );
+            store_ram #(.WIDTH(SH_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) shaper_store (
+                .clk(clk), .wr_en(sh_visit), .wr_addr(sh_axis), .wr_data(sh_next),
+                .rd_en(1'b1), .rd_addr(slot_next), .rd_data(sh_src)
+            );
+        end
+    endgenerate
 
     // ---- DDA visit -------------------------------------------------------------------
     // M = V * 2^16 with V = p_active / S, and M/2, where the first running visit starts.
     wire [SL-1:0] unused_p_low = p_active[SL-1:0];
-    wire [ACC_W-1:0]        half_modulus = {1'b0, p_active[P_WIDTH-1:SL], {(FRAC_BITS-1){1'b0}}};
-    wire [ACC_W-1:0] acc_rd;
-    wire [ACC_W-1:0] acc_cur = dda_live_cur_reg ? acc_rd : half_modulus;
+    wire [SUM_W-1:0] modulus      = {2'b00, p_active[P_WIDTH-1:SL], {FRAC_BITS{1'b0}}};
+    wire [ACC_W-1:0] half_modulus = {1'b0, p_active[P_WIDTH-1:SL], {(FRAC_BITS-1){1'b0}}};
+    // The next visit's start b (acc[a] if live[a], else M/2) and b - M, b + M, loaded a
+    // cycle ahead, so the visit's sums are two-input ones (dda_step). M is the next
+    // cycle's: p_active changes only while the DDAs stop, so it is when the DDAs ran in
+    // this cycle, which every live start needs. A visit in the first running cycle (run
+    // rose: the period timer's first cycle, a boundary, whose increments are all zero)
+    // has s = M/2 + 0 = M/2 of its own M, no request: it makes none here and leaves
+    // live[a] clear, so the axis's next visit starts from M/2 again, as the spec's would.
+    wire [ACC_W-1:0] acc_start = dda_live_after ? acc_src : half_modulus;
+    reg  [ACC_W-1:0] acc_cur_reg;
+    reg  [SUM_W-1:0] acc_minus_reg;
+    reg  [SUM_W-1:0] acc_plus_reg;
+    reg              ran_reg;                        // run in the previous cycle
+    always @(posedge clk) begin
+        acc_cur_reg   <= acc_start;
+        acc_minus_reg <= {2'b00, acc_start} - modulus;
+        acc_plus_reg  <= {2'b00, acc_start} + modulus;
+        ran_reg       <= !rst && run;
+    end
+    wire [ACC_W-1:0] acc_cur = acc_cur_reg;
     wire [31:0]      inc_cur = inc[32*dda_ix +: 32];
     // One update (dda_step): acc + d against M = V * 2^16.
-    wire [ACC_W-1:0] acc_next;   // used only after a running visit
     wire             wrap_up, wrap_down;
     wire [SUM_W-1:0] unused_sum;
-    dda_step #(.M_W(V_W)) update (
-        .acc(acc_cur), .inc(inc_cur), .m(p_active[P_WIDTH-1:SL]),
+    dda_step #(.M_W(V_W), .AHEAD(1)) update (
+        .acc(acc_cur), .acc_minus_m(acc_minus_reg), .acc_plus_m(acc_plus_reg), .m(p_active[P_WIDTH-1:SL]),
+        .inc(inc_cur),
         .acc_next(acc_next), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(unused_sum)
-    );
-
-    store_ram #(.WIDTH(ACC_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) dda_store (
-        .clk(clk), .wr_en(dda_visit), .wr_addr(dda_axis), .wr_data(acc_next),
-        .rd_en(1'b1), .rd_addr(slot_next), .rd_data(acc_rd)
     );
 
     // The visit's request, taken by the shaper visit of the same axis in the next cycle.
     reg req_valid_reg;
     reg req_negative_reg;
     always @(posedge clk) begin
-        req_valid_reg    <= !rst && dda_visit && run && (wrap_up || wrap_down);
+        req_valid_reg    <= !rst && dda_visit && run && ran_reg && (wrap_up || wrap_down);
         req_negative_reg <= !rst && wrap_down;
     end
 
     // ---- Shaper visit ----------------------------------------------------------------
-    wire [SH_W-1:0] sh_rd;
+    // The visited axis's state, loaded a cycle ahead (the reset values until its first
+    // visit).
     wire [SH_W-1:0] sh_reset = {2'd0, COUNT_MAX, COUNT_MAX, 1'b1, 1'b0, {PEND_W{1'b0}}};
-    wire [SH_W-1:0] sh_cur = sh_init_cur_reg ? sh_rd : sh_reset;
+    reg  [SH_W-1:0] sh_cur_reg;
+    always @(posedge clk) sh_cur_reg <= (sh_init_after && !rst) ? sh_src : sh_reset;
+    wire [SH_W-1:0] sh_cur = sh_cur_reg;
     wire signed [PEND_W-1:0] pending = sh_cur[PEND_W-1:0];
     wire                     level   = sh_cur[PEND_W];
     wire                     dir     = sh_cur[PEND_W+1];
@@ -149,16 +205,25 @@ module step_engine #(
     wire [TIMING_W-1:0]      dcnt    = sh_cur[PEND_W+2+TIMING_W +: TIMING_W];
     wire [1:0]               quad    = sh_cur[PEND_W+2+2*TIMING_W +: 2];
 
-    wire [TIMING_W-1:0] len_cur   = step_len[TIMING_W*sh_ix +: TIMING_W];
-    wire [TIMING_W-1:0] space_cur = step_space[TIMING_W*sh_ix +: TIMING_W];
-    wire [TIMING_W-1:0] setup_cur = dir_setup[TIMING_W*sh_ix +: TIMING_W];
-    wire [TIMING_W-1:0] hold_cur  = dir_hold[TIMING_W*sh_ix +: TIMING_W];
     wire [1:0]          mode_cur  = out_mode[FS_OUT_MODE_WIDTH*sh_ix +: FS_OUT_MODE_WIDTH];
     wire [2:0]          inv_cur   = invert[FS_INVERT_WIDTH*sh_ix +: FS_INVERT_WIDTH];
 
     // Elapsed clocks of the counted visits: cnt * S, dcnt * S (exact).
     wire [CMP_W-1:0] cnt_clocks  = {cnt, {SL{1'b0}}};
     wire [CMP_W-1:0] dcnt_clocks = {dcnt, {SL{1'b0}}};
+    // The counters against every axis's timings of this cycle, side by side, then the
+    // visited axis's results chosen: the compares start at flip-flops (the counters, the
+    // timings), and the slot selects four bits after them, not 4 * TIMING_W before.
+    wire [N_AXES-1:0] len_ok, space_ok, setup_ok, hold_ok;
+    genvar c;
+    generate
+        for (c = 0; c < N_AXES; c = c + 1) begin : compares
+            assign len_ok[c]   = cnt_clocks >= {{SL{1'b0}}, step_len[TIMING_W*c +: TIMING_W]};
+            assign space_ok[c] = cnt_clocks >= {{SL{1'b0}}, step_space[TIMING_W*c +: TIMING_W]};
+            assign setup_ok[c] = dcnt_clocks >= {{SL{1'b0}}, dir_setup[TIMING_W*c +: TIMING_W]};
+            assign hold_ok[c]  = cnt_clocks >= {{SL{1'b0}}, dir_hold[TIMING_W*c +: TIMING_W]};
+        end
+    endgenerate
 
     // The visit's decisions and next pending count (shaper_step).
     wire rise, fall, dir_change, clamp_high, clamp_low, behind;
@@ -166,8 +231,8 @@ module step_engine #(
     shaper_step decide (
         .pending(pending), .level(level), .dir(dir),
         .req_valid(req_valid_reg), .req_negative(req_negative_reg), .halt(halt),
-        .len_reached(cnt_clocks >= {{SL{1'b0}}, len_cur}), .space_reached(cnt_clocks >= {{SL{1'b0}}, space_cur}),
-        .setup_reached(dcnt_clocks >= {{SL{1'b0}}, setup_cur}), .hold_reached(cnt_clocks >= {{SL{1'b0}}, hold_cur}),
+        .len_reached(len_ok[sh_ix]), .space_reached(space_ok[sh_ix]),
+        .setup_reached(setup_ok[sh_ix]), .hold_reached(hold_ok[sh_ix]),
         .rise(rise), .fall(fall), .dir_change(dir_change), .pending_next(pending_next),
         .clamp_high(clamp_high), .clamp_low(clamp_low), .behind(behind)
     );
@@ -179,12 +244,7 @@ module step_engine #(
     wire [TIMING_W-1:0] dcnt_next  = dir_change ? COUNT_ONE :
                                      ((dcnt != COUNT_MAX) ? dcnt + COUNT_ONE : dcnt);
     wire [1:0]          quad_next  = rise ? quad + {!dir, 1'b1} : quad;
-    wire [SH_W-1:0]     sh_next    = {quad_next, dcnt_next, cnt_next, dir_next, level_next, pending_next};
-
-    store_ram #(.WIDTH(SH_W), .DEPTH(S), .ADDR_W(SL), .BLOCK(RAM_BLOCK)) shaper_store (
-        .clk(clk), .wr_en(sh_visit), .wr_addr(sh_axis), .wr_data(sh_next),
-        .rd_en(1'b1), .rd_addr(slot_reg), .rd_data(sh_rd)
-    );
+    assign              sh_next    = {quad_next, dcnt_next, cnt_next, dir_next, level_next, pending_next};
 
     // Pin functions of the state the visit leaves.
     reg a_next, b_next;
@@ -231,10 +291,8 @@ module step_engine #(
                 if (rise) position_reg[32*a +: 32] <= position_reg[32*a +: 32] + {{31{!dir}}, 1'b1};
             end
             if (!run) dda_live_reg[a] <= 1'b0;
-            else if (dda_hot[a]) dda_live_reg[a] <= 1'b1;
+            else if (dda_hot[a] && ran_reg) dda_live_reg[a] <= 1'b1;
         end
-        dda_live_cur_reg <= run && (dda_live_reg[dda_ix_after] || dda_hot[dda_ix_after]);
-        sh_init_cur_reg  <= sh_init_reg[sh_ix_after] || sh_hot[sh_ix_after];
         if (rst) begin
             position_reg   <= {32*N_AXES{1'b0}};
             rate_error_reg <= {N_AXES{1'b0}};
@@ -244,8 +302,6 @@ module step_engine #(
             pin_en_reg     <= {N_AXES{1'b0}};
             dda_live_reg   <= {N_AXES{1'b0}};
             sh_init_reg    <= {N_AXES{1'b0}};
-            dda_live_cur_reg <= 1'b0;
-            sh_init_cur_reg  <= 1'b0;
         end
     end
 
@@ -270,12 +326,19 @@ module step_engine #(
     initial assume (rst);
     always @(posedge clk) f_past_valid <= 1'b1;
     wire [31:0] position_cur = position_reg[32*sh_ix +: 32];
+    wire [TIMING_W-1:0] len_cur   = step_len[TIMING_W*sh_ix +: TIMING_W];
+    wire [TIMING_W-1:0] space_cur = step_space[TIMING_W*sh_ix +: TIMING_W];
+    wire [TIMING_W-1:0] setup_cur = dir_setup[TIMING_W*sh_ix +: TIMING_W];
+    wire [TIMING_W-1:0] hold_cur  = dir_hold[TIMING_W*sh_ix +: TIMING_W];
     // Configuration is constant during the proof; the period timer's environment: p_active
     // is a whole number of visits while running and every increment is below one step per
     // visit (the record check).
     always @(posedge clk) if (f_past_valid) begin
         assume ($stable(step_len) && $stable(step_space) && $stable(dir_setup) && $stable(dir_hold));
         if (run && $past(run)) assume ($stable(p_active));
+        // The first running cycle (after a stop or a reset) is the period timer's first, a
+        // boundary: every increment is zero in it.
+        if (run && !ran_reg) assume (inc == {32*N_AXES{1'b0}});
     end
     wire [V_W-1:0] f_visits = p_active[P_WIDTH-1:SL];
     always @(*) begin
@@ -292,7 +355,8 @@ module step_engine #(
     wire signed [PEND_W:0] f_request = req_valid_reg ? (req_negative_reg ? -9'sd1 : 9'sd1) : 9'sd0;
     always @(posedge clk) begin
         for (f = 0; f < N_AXES; f = f + 1) begin
-            if (dda_hot[f]) f_acc[f] <= acc_next;
+            // The spec's accumulator: M/2 + 0 after the first running cycle's visit.
+            if (dda_hot[f]) f_acc[f] <= (run && !ran_reg) ? half_modulus : acc_next;
             if (!run) f_live[f] <= 1'b0;
             else if (dda_hot[f]) f_live[f] <= 1'b1;
             if (sh_hot[f]) begin
@@ -338,13 +402,22 @@ module step_engine #(
 
     always @(*) if (f_past_valid && !rst) begin
         // No read-during-write on either store.
-        if (dda_visit) assert (slot_next != dda_axis);
-        if (sh_visit) assert (slot_reg != sh_axis);
+        // No read-during-write on either store (read two cycles ahead; with S = 2 there
+        // are no stores).
+        if (S > 2 && dda_visit) assert (slot_next + SLOT_ONE != dda_axis);
+        if (S > 2 && sh_visit) assert (slot_next != sh_axis);
         assert (start_ok == (slot_reg == S - 2));
         assert (sh_axis_reg == slot_reg - SLOT_ONE);
-        assert (dda_live_cur_reg == dda_live_reg[dda_ix] && sh_init_cur_reg == sh_init_reg[sh_ix]);
-        // Each visit starts from what the axis's last visit left.
-        if (dda_visit && run) assert (acc_cur == (f_live[dda_ix] ? f_acc[dda_ix] : half_modulus));
+        // Each visit starts from what the axis's last visit left (the visit in the first
+        // running cycle aside: its increment is zero and it only keeps live[a] clear, so
+        // the axis's next visit starts from M/2 as the spec's would, from s = M/2 + 0),
+        // with b - M and b + M beside it.
+        if (dda_visit && run && ran_reg) begin
+            assert (acc_cur == (f_live[dda_ix] ? f_acc[dda_ix] : half_modulus));
+            assert (acc_minus_reg == {2'b00, acc_cur} - modulus && acc_plus_reg == {2'b00, acc_cur} + modulus);
+        end
+        if (dda_visit && run && !ran_reg) assert (!dda_live_reg[dda_ix] && inc_cur == 32'd0);
+        assert ((dda_live_reg & ~f_live) == {N_AXES{1'b0}});
         if (sh_visit) assert (sh_cur == f_sh[sh_ix]);
         if (sh_visit) begin
             assert (rise == f_rise && fall == f_fall && dir_change == f_dir_change);
@@ -355,7 +428,7 @@ module step_engine #(
             // Steps are conserved: what was issued plus what waits is what was asked.
             if (!f_clamped[sh_ix]) assert (position_cur + {{24{pending[PEND_W-1]}}, pending} == f_net[sh_ix]);
         end
-        if (dda_visit && run) begin
+        if (dda_visit && run && ran_reg) begin
             assert ({2'b00, acc_cur} < {2'b00, f_visits, {FRAC_BITS{1'b0}}});
             assume (f_s - $signed({4'b0000, acc_cur}) < f_m && $signed({4'b0000, acc_cur}) - f_s < f_m);
             assert (wrap_up == (f_s >= f_m) && wrap_down == (f_s < 0));
@@ -373,6 +446,7 @@ module step_engine #(
     wire f_pin_b = pin_b[f_ix_prev] ^ f_inv_b_prev;
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (slot_reg == $past(slot_reg) + SLOT_ONE);
+        assert (ran_reg == $past(run));
         // Pins move only at the edge ending their axis's shaper visit; enables every cycle.
         for (f = 0; f < N_AXES; f = f + 1) begin
             if (!$past(sh_hot[f])) assert (pin_a[f] == $past(pin_a[f]) && pin_b[f] == $past(pin_b[f]) &&
@@ -395,7 +469,7 @@ module step_engine #(
             endcase
         end
         // A request comes only from a running DDA visit that wrapped.
-        assert (req_valid_reg == ($past(dda_visit) && $past(run) && ($past(wrap_up) || $past(wrap_down))));
+        assert (req_valid_reg == ($past(dda_visit) && $past(run) && $past(ran_reg) && ($past(wrap_up) || $past(wrap_down))));
         cover (req_valid_reg && !req_negative_reg);
         cover ($past(rise) && $past(sh_axis) == N_AXES - 1);
         cover ($past(dir_change));
