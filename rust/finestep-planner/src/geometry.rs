@@ -1275,12 +1275,9 @@ mod tests {
         }
     }
 
-    /// S-curve: on the short segments of a CAM program with a Z staircase every
-    /// line-line corner is a clothoid blend, and no junction jumps (the circles of
-    /// trapezoid mode jump in curvature at nearly every one in S-curve terms), so every
-    /// junction flows at the speed of the elements around it.
-    #[test]
-    fn s_curve_blends_short_segments_without_a_curvature_jump() {
+    /// 300 short lines on a wavy spiral with a Z staircase (the bench's CAM program's
+    /// shape), G64 P0.01.
+    fn wavy_staircase() -> finestep_gcode::Program {
         let mut text = String::from("G21 G90 G17 G64 P0.01\nF3000\n");
         for i in 0..300 {
             let t = f64::from(i) * 0.01;
@@ -1288,7 +1285,16 @@ mod tests {
             text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * f64::from(i)));
         }
         text.push_str("M2\n");
-        let program = finestep_gcode::parse_str(&text, "cam.ngc").unwrap();
+        finestep_gcode::parse_str(&text, "cam.ngc").unwrap()
+    }
+
+    /// S-curve: on the short segments of a CAM program with a Z staircase every
+    /// line-line corner is a clothoid blend, and no junction jumps (the circles of
+    /// trapezoid mode jump in curvature at nearly every one in S-curve terms), so every
+    /// junction flows at the speed of the elements around it.
+    #[test]
+    fn s_curve_blends_short_segments_without_a_curvature_jump() {
+        let program = wavy_staircase();
         let config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
         let path = super::elements(&config, &program).unwrap().elements;
         let blends = path.iter().filter(|e| matches!(e.shape, super::Shape::Clothoid { .. })).count();
@@ -1310,14 +1316,7 @@ mod tests {
     /// comes close to it (the bound is not loose).
     #[test]
     fn the_pair_cap_bounds_the_jerk_read_across_a_short_line() {
-        let mut text = String::from("G21 G90 G17 G64 P0.01\nF3000\n");
-        for i in 0..300 {
-            let t = f64::from(i) * 0.01;
-            let r = 20.0 + 5.0 * (7.0 * t).sin();
-            text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * f64::from(i)));
-        }
-        text.push_str("M2\n");
-        let program = finestep_gcode::parse_str(&text, "cam.ngc").unwrap();
+        let program = wavy_staircase();
         // Blended by circles, as in trapezoid mode: S-curve blends line-line corners by
         // clothoids, which meet their lines without a curvature jump; the pair rule reads
         // the line between two jumps (as between programmed arcs), here those of circles.
