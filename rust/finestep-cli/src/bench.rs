@@ -81,17 +81,8 @@ pub(crate) fn report(machine: &Resolved, what: &str, cycles: u64, seconds: f64) 
     );
 }
 
-/// A CAM-like program of `moves` short G1 segments along a wavy spiral, blended (G64).
-pub fn cam_program(moves: usize) -> String {
-    let mut text = String::with_capacity(moves * 32);
-    text.push_str("G21 G90 G17 G64 P0.01\nF3000\n");
-    for i in 0..moves {
-        let t = i as f64 * 0.01;
-        let r = 20.0 + 5.0 * (7.0 * t).sin();
-        text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * i as f64 % 5.0));
-    }
-    text
-}
+/// The bench's CAM program ([`finestep_planner::figures::cam_program`]).
+pub use finestep_planner::figures::cam_program;
 
 /// A parameter- and expression-heavy program: a `while` loop of `moves` passes, each a
 /// G1 whose coordinates are expressions of a counter (a spiral), and the number of lines
@@ -320,84 +311,15 @@ fn test_programs() -> anyhow::Result<Vec<(String, finestep_gcode::Program)>> {
         .collect()
 }
 
-/// Seed 002's machine: 200 mm/s, 300 mm/s^2, 3 000 mm/s^3 on X and Y, 1 um chord
-/// tolerance (as the planner's star test, `finestep-planner/tests/star.rs`).
-fn seed_002(profile: finestep_planner::ProfileKind) -> MachineConfig {
-    let mut config = MachineConfig { profile, chord_tolerance_mm: 0.001, ..MachineConfig::default() };
-    for (name, axis) in config.axes.iter_mut() {
-        if name == "X" || name == "Y" {
-            (axis.max_velocity, axis.max_acceleration, axis.max_jerk) = (200.0, 300.0, 3000.0);
-        }
-    }
-    config
-}
-
-/// How much of the limits the plans use: peak acceleration and jerk on seed 002's star
-/// as fractions of the limits, and machining time over the independent lower bound
-/// ([`finestep_planner::bound`]) on every program of `tests/programs/`, per profile.
+/// How much of the limits the plans use, per profile ([`finestep_planner::figures`]):
+/// seed 002's star peaks over the limits, machining time over the independent lower
+/// bound on every program of `tests/programs/` and on 20 000 short segments.
 fn limit_figures() -> anyhow::Result<()> {
-    use finestep_planner::{check_program, plan_program, time_lower_bound, ProfileKind};
     let programs = test_programs()?;
-    let fail = |name: &str, e: finestep_planner::ProgramError| anyhow::anyhow!("{name}:{}: {}", e.line, e.reason);
-    for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
-        if let Some((name, star)) = programs.iter().find(|(n, _)| n == "star.ngc") {
-            let config = seed_002(profile);
-            let planned = plan_program(&config, star).map_err(|e| fail(name, e))?;
-            let report = check_program(&config, star, &planned.records)?;
-            anyhow::ensure!(report.passed(), "star.ngc ({profile:?}): {:?}", report.violations);
-            let [x, y] = [0, 1].map(|a| report.axis_max[a]);
-            println!(
-                "  {:<44} a X {:.3} Y {:.3} path {:.3}   j X {:.3} Y {:.3} path {:.3}   ({:.3} s)",
-                format!("star, seed 002, peak / limit ({profile:?})"),
-                x[1] / 300.0,
-                y[1] / 300.0,
-                report.path_max[1] / 300.0,
-                x[2] / 3000.0,
-                y[2] / 3000.0,
-                report.path_max[2] / 3000.0,
-                planned.records.len() as f64 * report.period_s
-            );
+    for profile in [finestep_planner::ProfileKind::Trapezoid, finestep_planner::ProfileKind::SCurve] {
+        for line in finestep_planner::figures::limit_figures(&programs, profile)? {
+            println!("  {line}");
         }
-        let (mut time, mut bound, mut worst) = (0.0, 0.0, (0.0f64, String::new()));
-        for (name, program) in &programs {
-            let config = MachineConfig { profile, ..MachineConfig::default() };
-            let planned = plan_program(&config, program).map_err(|e| fail(name, e))?;
-            let moving = planned.records.iter().filter(|r| r.inc.iter().any(|i| i.to_bits() != 0)).count();
-            let t = moving as f64 * config.period_ms * 1e-3;
-            let b = time_lower_bound(&config, program).map_err(|e| fail(name, e))?;
-            if t / b > worst.0 {
-                worst = (t / b, name.clone());
-            }
-            time += t;
-            bound += b;
-        }
-        println!(
-            "  {:<44} {:>7.3}   (worst {:.3} on {}; {:.2} s of motion against {:.2} s)",
-            format!("time / lower bound, tests/programs ({profile:?})"),
-            time / bound,
-            worst.0,
-            worst.1,
-            time,
-            bound
-        );
-        // Short segments: the first 20 000 moves of the CAM program above.
-        let cam = finestep_gcode::parse_str(&(cam_program(20_000) + "M2\n"), "cam.ngc")?;
-        let config = MachineConfig { profile, ..MachineConfig::default() };
-        let stream = finestep_planner::plan_stream(&config, &cam).map_err(|e| fail("cam.ngc", e))?;
-        let mut moving = 0u64;
-        for period in stream.periods {
-            let (record, _) = period.map_err(|e| fail("cam.ngc", e))?;
-            moving += u64::from(record.inc.iter().any(|i| i.to_bits() != 0));
-        }
-        let t = moving as f64 * config.period_ms * 1e-3;
-        let b = time_lower_bound(&config, &cam).map_err(|e| fail("cam.ngc", e))?;
-        println!(
-            "  {:<44} {:>7.3}   ({:.2} s of motion against {:.2} s)",
-            format!("time / lower bound, 20 000 short G1 ({profile:?})"),
-            t / b,
-            t,
-            b
-        );
     }
     Ok(())
 }

@@ -105,6 +105,7 @@ pub mod config;
 pub mod cutter_comp;
 pub mod element;
 pub mod error;
+pub mod figures;
 pub mod geometry;
 pub mod interpolate;
 pub mod lookahead;

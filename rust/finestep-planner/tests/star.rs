@@ -5,21 +5,10 @@
 
 mod common;
 
+use finestep_planner::figures::seed_002;
 use finestep_planner::{CheckReport, MachineConfig, ProfileKind};
 
 use common::{plan_and_check, read, PROFILES};
-
-/// Seed 002's limits on X and Y, 1 um chord (contour) tolerance, the default period.
-fn seed_002(profile: ProfileKind) -> MachineConfig {
-    let mut config = MachineConfig { profile, chord_tolerance_mm: 0.001, ..MachineConfig::default() };
-    for name in ["X", "Y"] {
-        let axis = config.axes.iter_mut().find(|(n, _)| *n == name).map(|(_, a)| a).expect("axis");
-        axis.max_velocity = 200.0;
-        axis.max_acceleration = 300.0;
-        axis.max_jerk = 3000.0;
-    }
-    config
-}
 
 /// Peak acceleration and jerk over X and Y as fractions of their limits (jerk: of the
 /// configured jerk limit also for the trapezoid, where it is only reported).
