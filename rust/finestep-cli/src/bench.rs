@@ -294,28 +294,11 @@ fn nurbs_figures() -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The committed test programs (`tests/programs/`).
-fn test_programs() -> anyhow::Result<Vec<(String, finestep_gcode::Program)>> {
-    let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"));
-    let mut names: Vec<String> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
-        .filter(|n| n.ends_with(".ngc"))
-        .collect();
-    names.sort();
-    names
-        .into_iter()
-        .map(|name| {
-            let program = finestep_gcode::parse_file(dir.join(&name))?;
-            Ok((name, program))
-        })
-        .collect()
-}
-
 /// How much of the limits the plans use, per profile ([`finestep_planner::figures`]):
 /// seed 002's star peaks over the limits, machining time over the independent lower
 /// bound on every program of `tests/programs/` and on 20 000 short segments.
 fn limit_figures() -> anyhow::Result<()> {
-    let programs = test_programs()?;
+    let programs = finestep_planner::figures::test_programs()?;
     for profile in [finestep_planner::ProfileKind::Trapezoid, finestep_planner::ProfileKind::SCurve] {
         for line in finestep_planner::figures::limit_figures(&programs, profile)? {
             println!("  {line}");

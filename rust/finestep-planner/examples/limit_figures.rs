@@ -6,22 +6,12 @@
 
 use std::time::Instant;
 
-use finestep_planner::figures::{cam_program, limit_figures};
+use finestep_planner::figures::{cam_program, limit_figures, test_programs};
 use finestep_planner::{plan_stream, MachineConfig, ProfileKind};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let throughput = !std::env::args().any(|a| a == "--no-throughput");
-    let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"));
-    let mut names: Vec<String> = std::fs::read_dir(dir)?
-        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
-        .filter(|n| n.ends_with(".ngc"))
-        .collect();
-    names.sort();
-    let mut programs = Vec::new();
-    for name in names {
-        let program = finestep_gcode::parse_file(dir.join(&name))?;
-        programs.push((name, program));
-    }
+    let programs = test_programs()?;
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
         for line in limit_figures(&programs, profile)? {
             println!("{line}");

@@ -39,8 +39,8 @@ pub enum FigureError {
         /// How many.
         violations: usize,
     },
-    /// The CAM program did not parse.
-    #[error("cam.ngc: {0}")]
+    /// A program could not be read or parsed (the message names it).
+    #[error("{0}")]
     Parse(String),
 }
 
@@ -71,6 +71,24 @@ pub fn cam_program(moves: usize) -> String {
         text.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", r * t.cos(), r * t.sin(), -0.001 * i as f64 % 5.0));
     }
     text
+}
+
+/// The committed test programs (`tests/programs/` of this repository), by file name.
+pub fn test_programs() -> Result<Vec<(String, Program)>, FigureError> {
+    let dir = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/programs"));
+    let entries = std::fs::read_dir(dir).map_err(|e| FigureError::Parse(format!("{}: {e}", dir.display())))?;
+    let mut names: Vec<String> = entries
+        .filter_map(|e| e.ok().map(|e| e.file_name().to_string_lossy().to_string()))
+        .filter(|n| n.ends_with(".ngc"))
+        .collect();
+    names.sort();
+    names
+        .into_iter()
+        .map(|name| {
+            let program = finestep_gcode::parse_file(dir.join(&name)).map_err(|e| FigureError::Parse(e.to_string()))?;
+            Ok((name, program))
+        })
+        .collect()
 }
 
 /// Machining time (the periods that move) of `program` planned on `config`, in seconds.
@@ -138,7 +156,7 @@ pub fn limit_figures(programs: &[(String, Program)], profile: ProfileKind) -> Re
         bound
     ));
     let cam = finestep_gcode::parse_str(&(cam_program(20_000) + "M2\n"), "cam.ngc")
-        .map_err(|e| FigureError::Parse(e.to_string()))?;
+        .map_err(|e| FigureError::Parse(format!("cam.ngc: {e}")))?;
     let config = MachineConfig { profile, ..MachineConfig::default() };
     let mut records = Vec::new();
     for period in plan_stream(&config, &cam).map_err(program_error("cam.ngc"))?.periods {
