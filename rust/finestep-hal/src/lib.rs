@@ -387,10 +387,9 @@ struct EncoderState {
     last_raw: i32,
     velocity: f64,
     applied: Option<(bool, bool)>,
-    /// The chip's index latch is armed for `index-enable` (ENC_CONTROL.ARM_INDEX_LATCH).
+    /// The chip's index latch is armed for `index-enable` (ENC_CONTROL.ARM_INDEX_LATCH):
+    /// also `index-enable` as the last read leaves it.
     index_armed: bool,
-    /// `index-enable` as the last read leaves it.
-    index_enable: bool,
 }
 
 /// The commanded position `units * scale` in I16F16 steps, rounded half up (the
@@ -654,17 +653,14 @@ impl Driver {
     fn index_enables(&mut self) -> Result<(), HalError> {
         for channel in 0..self.encoders.len() {
             let cmd = self.encoder_cmds[channel];
-            let state = self.encoders[channel];
             if !cmd.index_enable {
                 self.encoders[channel].index_armed = false;
-                self.encoders[channel].index_enable = false;
                 continue;
             }
-            if !state.index_armed {
+            if !self.encoders[channel].index_armed {
                 let setup = encoder_setup(&cmd);
                 self.machine.arm_index(channel, &setup, true, false).map_err(self.bus_err())?;
                 self.encoders[channel].index_armed = true;
-                self.encoders[channel].index_enable = true;
                 continue;
             }
             if let Some(latched) = self.machine.index_latch(channel).map_err(self.bus_err())? {
@@ -673,7 +669,6 @@ impl Driver {
                 // (negative when the index came after the snapshot's latch).
                 state.zero = state.counts - i64::from(state.last_raw.wrapping_sub(latched));
                 state.index_armed = false;
-                state.index_enable = false;
             }
         }
         Ok(())
@@ -715,7 +710,7 @@ impl Driver {
             count: count as i32,
             position: count as f64 / scale,
             velocity: state.velocity / scale,
-            index_enable: state.index_enable,
+            index_enable: state.index_armed,
         })
     }
 
