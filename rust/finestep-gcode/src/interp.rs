@@ -813,17 +813,14 @@ impl State {
         }
         if let Some((_, column)) = w.param('L') {
             if dynamic_comp {
-                // The orientation of a lathe tool, for G18 only.
-                let name = w.group(Group::Comp).map_or(String::new(), |(code, _)| g_name(code));
-                if self.plane == Plane::Zx || w.has(Group::Plane, 180) {
-                    return Err(LineError::new(
-                        column,
-                        format!("unsupported: {name} L ({})", unsupported::LATHE_ORIENTATION),
-                    ));
+                // The orientation of a lathe tool, for G18 only (read with the
+                // compensation below).
+                let g18 = w.group(Group::Plane).map_or(self.plane == Plane::Zx, |(code, _)| code == 180);
+                if !g18 {
+                    let name = w.group(Group::Comp).map_or(String::new(), |(code, _)| g_name(code));
+                    return Err(LineError::new(column, format!("{name} with L word, but plane is not G18")));
                 }
-                return Err(LineError::new(column, format!("{name} with L word, but plane is not G18")));
-            }
-            if !(w.has(Group::Motion, G5_2) || g10 || cycle_move || io == Some(660)) {
+            } else if !(w.has(Group::Motion, G5_2) || g10 || cycle_move || io == Some(660)) {
                 return Err(LineError::new(column, "L word with no G5.2, G10, canned cycle or M66 to use it"));
             }
         }
@@ -1047,9 +1044,16 @@ impl State {
                 if d < 0.0 {
                     side = if side == CompSide::Left { CompSide::Right } else { CompSide::Left };
                 }
+                // L: the lathe tool's orientation (G18 only, checked above).
+                let orientation = match w.param('L') {
+                    None => 0,
+                    Some((l, l_column)) => as_u32(l).ok_or_else(|| {
+                        LineError::new(l_column, "L (the lathe tool's orientation) must be a non-negative integer")
+                    })?,
+                };
                 self.comp = side;
                 let radius_mm = self.length_mm(d.abs()) / 2.0;
-                kinds.push(BlockKind::CutterCompRadius { side, radius_mm, plane: self.plane });
+                kinds.push(BlockKind::CutterCompRadius { side, radius_mm, plane: self.plane, orientation });
             } else {
                 let tool = match w.param('D') {
                     Some((d, d_column)) => Some(

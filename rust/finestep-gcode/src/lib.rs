@@ -368,6 +368,12 @@ pub enum BlockKind {
         radius_mm: f64,
         /// The plane compensated in, as for [`BlockKind::CutterComp`].
         plane: Plane,
+        /// `L`, a lathe tool's orientation (G18 only; 0 without `L`): LinuxCNC's numbering
+        /// 0-9, where 1-8 name the quadrant or side of the tool's nose the imaginary tool
+        /// tip lies on and 0 and 9 (as any other number) mean the nose's centre. The
+        /// compensated path, of the nose's centre, is shifted by the radius in X and/or Z
+        /// to the imaginary tip (LinuxCNC's `latheorigin_x`/`_z`).
+        orientation: u32,
     },
     /// M19 with R or P: orient the spindle to `angle_deg` (LinuxCNC's `ORIENT_SPINDLE`);
     /// the spindle counts as stopped after it. (A bare M19 stops the spindle in the

@@ -418,7 +418,7 @@ fn compensation_in_the_xy_and_xz_planes() {
         [
             BlockKind::CutterComp { side: CompSide::Right, tool: Some(2), plane: Plane::Zx },
             BlockKind::CutterComp { side: CompSide::Off, tool: None, plane: Plane::Zx },
-            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 0.5, plane: Plane::Zx },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 0.5, plane: Plane::Zx, orientation: 0 },
             BlockKind::CutterComp { side: CompSide::Off, tool: None, plane: Plane::Zx },
         ]
     );
@@ -1098,15 +1098,33 @@ fn dynamic_compensation_carries_the_radius() {
     assert_eq!(
         comps,
         vec![
-            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 6.35, plane: Plane::Xy },
-            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 12.7, plane: Plane::Xy },
-            BlockKind::CutterCompRadius { side: CompSide::Right, radius_mm: 1.5, plane: Plane::Xy },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 6.35, plane: Plane::Xy, orientation: 0 },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 12.7, plane: Plane::Xy, orientation: 0 },
+            BlockKind::CutterCompRadius { side: CompSide::Right, radius_mm: 1.5, plane: Plane::Xy, orientation: 0 },
         ]
     );
     assert_eq!(err("G41.1 D1 L3\n"), format!("{FILE}:1:10: G41.1 with L word, but plane is not G18"));
     assert_eq!(err("G42.1 G1 X1 F1\n"), format!("{FILE}:1:1: G42.1 with no D word"));
     assert_eq!(err("G41.1 D1\nG42.1 D1\n"), format!("{FILE}:2:1: cutter compensation is already on (G40 first)"));
     assert_eq!(err("G19\nG41.1 D1\n"), format!("{FILE}:2:1: Cutter radius compensation allowed only in XY, XZ planes"));
+    // L, a lathe tool's orientation, in G18 (given in the block or before it).
+    let comps: Vec<BlockKind> = parse("G18 G42.1 D0.3 L2\nG40\nG21 G41.1 D-2 L9\nG40\nG17\nG18 G41.1 D1 L0\nG40\n")
+        .into_iter()
+        .filter(|k| matches!(k, BlockKind::CutterCompRadius { .. }))
+        .collect();
+    assert_eq!(
+        comps,
+        vec![
+            BlockKind::CutterCompRadius { side: CompSide::Right, radius_mm: 0.15, plane: Plane::Zx, orientation: 2 },
+            BlockKind::CutterCompRadius { side: CompSide::Right, radius_mm: 1.0, plane: Plane::Zx, orientation: 9 },
+            BlockKind::CutterCompRadius { side: CompSide::Left, radius_mm: 0.5, plane: Plane::Zx, orientation: 0 },
+        ]
+    );
+    assert_eq!(err("G18\nG17 G41.1 D1 L3\n"), format!("{FILE}:2:14: G41.1 with L word, but plane is not G18"));
+    assert_eq!(
+        err("G18 G41.1 D1 L2.5\n"),
+        format!("{FILE}:1:14: L (the lathe tool's orientation) must be a non-negative integer")
+    );
 }
 
 /// M19 with R or P is an orientation event (the spindle stopped after it), a bare M19

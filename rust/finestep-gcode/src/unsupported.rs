@@ -28,9 +28,6 @@ pub const INI: &str = "finestep reads no LinuxCNC INI file; give the value in th
 pub const HAL: &str = "finestep reads no HAL pins";
 /// `unsupported: exponent in the number of ...`.
 pub const EXPONENT: &str = "G-code numbers have no exponent: write the digits";
-/// `unsupported: G41.1 L` (G42.1) in G18.
-pub const LATHE_ORIENTATION: &str =
-    "compensation by a lathe tool's orientation is not implemented yet: leave L out for a round tool";
 /// `unsupported: G87 in G18/G19`.
 pub const CYCLE_PLANE: &str = "back boring is implemented in G17 only";
 /// `unsupported: G5.1 in G93`, G5.2.
@@ -51,7 +48,6 @@ pub fn reasons() -> Vec<&'static str> {
         INI,
         HAL,
         EXPONENT,
-        LATHE_ORIENTATION,
         CYCLE_PLANE,
         G10_L,
         INVERSE_TIME_SPLINE,

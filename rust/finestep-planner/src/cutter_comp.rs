@@ -262,6 +262,7 @@ impl<'a> Pass<'a> {
             spindle_tool: 0,
             last_feed: None,
             mode: Mode::Off,
+            tip: V2 { x: 0.0, y: 0.0 },
         };
         Pass { pass, frame: Plane::Xy }
     }
@@ -604,6 +605,9 @@ struct Compensator<'a> {
     /// The last programmed feed, mm/min, for corner arcs next to rapids.
     last_feed: Option<f64>,
     mode: Mode,
+    /// From the tool nose's centre to the imaginary tool tip of a lathe tool (G41.1/G42.1
+    /// L in G18), in the frame: added to every compensated point the pass emits.
+    tip: V2,
 }
 
 /// Where a corner between two offset moves is resolved.
@@ -621,8 +625,12 @@ impl Compensator<'_> {
 
     fn block(&mut self, block: &Block) -> Result<(), CompError> {
         match block.kind {
-            BlockKind::CutterComp { side, tool, .. } => self.comp_change(block, side, tool, None),
-            BlockKind::CutterCompRadius { side, radius_mm, .. } => self.comp_change(block, side, None, Some(radius_mm)),
+            BlockKind::CutterComp { side, tool, .. } => self.comp_change(block, side, tool, None, 0),
+            BlockKind::CutterCompRadius { side, radius_mm, plane, orientation } => {
+                // Only in G18: the interpreter refuses L in another plane.
+                let orientation = if plane == Plane::Zx { orientation } else { 0 };
+                self.comp_change(block, side, None, Some(radius_mm), orientation)
+            }
             BlockKind::Rapid { .. } | BlockKind::Linear { .. } | BlockKind::Arc { .. } => self.motion(block),
             BlockKind::Nurbs { to, feed_mm_per_min, .. } => {
                 if self.comp_on() {
@@ -684,13 +692,14 @@ impl Compensator<'_> {
     }
 
     /// G40, G41/G42 (the radius of tool `tool`, or of the tool in the spindle) or
-    /// G41.1/G42.1 (`given_radius`).
+    /// G41.1/G42.1 (`given_radius`, a lathe tool's `orientation` in G18).
     fn comp_change(
         &mut self,
         block: &Block,
         side: CompSide,
         tool: Option<u32>,
         given_radius: Option<f64>,
+        orientation: u32,
     ) -> Result<(), CompError> {
         let fail = |reason: String| CompError { line: block.line, reason };
         let side = match side {
@@ -730,6 +739,7 @@ impl Compensator<'_> {
                 radius
             }
         };
+        self.tip = lathe_tip(orientation, radius);
         self.mode = Mode::Starting { side, radius };
         Ok(())
     }
@@ -841,7 +851,7 @@ impl Compensator<'_> {
         feed_before: Option<f64>,
     ) -> Result<Pending, CompError> {
         let join = join(&mut current, &mut next, side, radius)?;
-        let at = current.element.end;
+        let at = current.element.end.add(self.tip);
         self.emit(&current);
         for block in current.deferred.drain(..) {
             self.out.push(place_in_xy(block, at));
@@ -858,7 +868,8 @@ impl Compensator<'_> {
                 }
             };
             let z_a = next.start;
-            let point = |p: V2| Point { x_mm: p.x, y_mm: p.y, ..z_a };
+            let tip = self.tip;
+            let point = |p: V2| Point { x_mm: p.x + tip.x, y_mm: p.y + tip.y, ..z_a };
             let kind = if to.sub(from).norm() < SHORT_ARC_CHORD_MM {
                 BlockKind::Linear { to: point(to), feed_mm_per_min: feed }
             } else {
@@ -879,7 +890,9 @@ impl Compensator<'_> {
     /// Emits a compensated move from wherever the tool is to its (final) end.
     fn emit(&mut self, pending: &Pending) {
         let element = &pending.element;
-        let to = Point { x_mm: element.end.x, y_mm: element.end.y, ..pending.end };
+        let tip = self.tip;
+        let end = element.end.add(tip);
+        let to = Point { x_mm: end.x, y_mm: end.y, ..pending.end };
         let kind = match (element.shape, pending.travel) {
             // The tool stays at the centre: a move of length zero.
             (Shape::Arc { .. }, Travel::Feed(feed)) if element.is_pivot() => {
@@ -902,6 +915,7 @@ impl Compensator<'_> {
                     let to_angle = element.end.sub(centre).angle();
                     let base = swept_angle(from_angle, to_angle, ccw, 0);
                     let extra = ((sweep - base) / TAU).round().max(0.0);
+                    let centre = centre.add(tip);
                     BlockKind::Arc {
                         to,
                         centre: Point { x_mm: centre.x, y_mm: centre.y, ..pending.start },
@@ -921,7 +935,7 @@ impl Compensator<'_> {
         if let Mode::On { current, .. } | Mode::Stopping { current, .. } = std::mem::replace(&mut self.mode, Mode::Off)
         {
             let mut current = *current;
-            let at = current.element.end;
+            let at = current.element.end.add(self.tip);
             self.emit(&current);
             for block in current.deferred.drain(..) {
                 self.out.push(place_in_xy(block, at));
@@ -940,6 +954,26 @@ fn place_in_xy(mut block: Block, at: V2) -> Block {
         _ => {}
     }
     block
+}
+
+/// From the centre of a lathe tool's nose of `radius` to its imaginary tool tip, for
+/// LinuxCNC's tool `orientation` (1-8; 0, 9 and any other number: the centre itself),
+/// in G18's frame (x is Z, y is X): X less the radius for 1, 2, 6, more for 3, 4, 8; Z
+/// less for 2, 3, 7, more for 1, 4, 5 (`latheorigin_x`/`_z` in LinuxCNC's
+/// interp_queue.cc). Compensation steers the nose's centre along the offset path, and the
+/// machine's position is the imaginary tip's.
+fn lathe_tip(orientation: u32, radius: f64) -> V2 {
+    let x = match orientation {
+        1 | 2 | 6 => -radius,
+        3 | 4 | 8 => radius,
+        _ => 0.0,
+    };
+    let z = match orientation {
+        2 | 3 | 7 => -radius,
+        1 | 4 | 5 => radius,
+        _ => 0.0,
+    };
+    V2 { x: z, y: x }
 }
 
 /// The offset of a programmed line or arc from `from` (before any corner is cut back).

@@ -1277,3 +1277,51 @@ fn a_concave_arc_as_small_as_the_tool_is_a_pivot_as_in_rs274() {
     let err = compensate(&parse("G21 F100\nG0 X0 Y-10\nG41 D1\nG1 X0 Y0\nG3 X-2 Y2 R2\nG1 X-4\nM2\n"), &tool(2.0));
     assert!(err.unwrap_err().to_string().contains("can only pivot at its centre"));
 }
+
+/// The programs of tests/conformance/compensated/ (cutter compensation; the quick slice's
+/// own test in finestep-gcode compares uncompensated paths) compensated with LinuxCNC's
+/// entry and exit and the radii of tool.tbl (its D column, a diameter in inches), against
+/// the output of `rs274 -g -t tool.tbl` committed beside each (scripts/conformance_expect.sh
+/// writes it): lathe_orientation.ngc, G41.1/G42.1 L0-L9 in G18, where the path is shifted
+/// from the nose's centre to the imaginary tool tip.
+#[test]
+fn compensated_programs_agree_with_rs274() {
+    use finestep_gcode::conformance::{compare, events_of, rs274_events};
+    use finestep_gcode::Options;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/conformance");
+    let table = std::fs::read_to_string(dir.join("tool.tbl")).unwrap();
+    // rs274 without an INI file reads the tool table in inches.
+    let options =
+        Options { tools: Options::read_tool_table(&table, 25.4).unwrap(), machine_unit_mm: 25.4, ..Options::default() };
+    let mut radii = ToolTable::new().with_entry_exit(EntryExit::LinuxCnc);
+    for line in table.lines() {
+        let word = |letter: char| {
+            line.split(';').next().unwrap().split_whitespace().find_map(|w| w.strip_prefix(letter)?.parse::<f64>().ok())
+        };
+        if let (Some(tool), Some(diameter)) = (word('T'), word('D')) {
+            radii.set_radius_mm(tool as u32, diameter * 25.4 / 2.0);
+        }
+    }
+    let mut programs: Vec<_> = std::fs::read_dir(dir.join("compensated"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ngc"))
+        .collect();
+    programs.sort();
+    assert!(!programs.is_empty());
+    let mut failures = Vec::new();
+    for program in &programs {
+        let theirs = std::fs::read_to_string(program.with_extension("rs274")).unwrap();
+        let theirs = rs274_events(&theirs).unwrap();
+        let ours = finestep_gcode::parse_file_with(program, &options).unwrap_or_else(|e| panic!("{e}"));
+        match compensate(&ours, &radii) {
+            Ok(ours) => {
+                if let Some(diff) = compare(&events_of(&ours), &theirs) {
+                    failures.push(format!("{}: {diff}", program.display()));
+                }
+            }
+            Err(e) => failures.push(format!("{}: {e}", program.display())),
+        }
+    }
+    assert!(failures.is_empty(), "{} of {} disagree:\n{}", failures.len(), programs.len(), failures.join("\n"));
+}
