@@ -12,7 +12,8 @@
 //! parameter_file = "sim.var"    # LinuxCNC's parameter file: read before a program, the
 //!                               # persistent parameters written back at its end (none)
 //! cutter_comp_entry = "tangent" # G41/G42 entry and G40 exit moves: "tangent" lines, or
-//!                               # "linuxcnc" (LinuxCNC's, which can cut into the part)
+//!                               # "linuxcnc" (LinuxCNC's, which can cut into the part;
+//!                               # with its nearly tangent corners and corners at rapid)
 //!
 //! [drive]                       # step/dir timing of every axis, ns
 //! step_len_ns = 2000
@@ -167,7 +168,7 @@ pub struct MachineConfig {
     /// from the configuration file's folder. The planner does not read it.
     pub parameter_file: Option<std::path::PathBuf>,
     /// How cutter compensation lays out the entry move after G41/G42 and the exit move
-    /// after G40 ([`crate::cutter_comp::EntryExit`]).
+    /// after G40, and with `linuxcnc` its corners ([`crate::cutter_comp::EntryExit`]).
     pub cutter_comp_entry: crate::cutter_comp::EntryExit,
     /// The core the configuration is resolved against (not read from the file; see
     /// [`MachineConfig::for_core`]): the default build's unless set.

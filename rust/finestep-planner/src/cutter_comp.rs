@@ -57,7 +57,16 @@
 //!   tool does not fit there. A corner that turns back exactly (180 degrees) is taken
 //!   as outside. An inserted corner arc belongs to the move after the corner (its line
 //!   and, for a feed move, its feed; after a rapid, the feed of the move before or the
-//!   last programmed feed).
+//!   last programmed feed). With [`EntryExit::LinuxCnc`] the corners are LinuxCNC's: one
+//!   turning by at most [`LINUXCNC_TANGENT_RAD`] (0.05 rad, either way) is left as it is
+//!   (no arc, no cut-back: the next move runs from the last offset end to its own, a
+//!   step of at most 0.05 of the radius off its offset), and the corner before a rapid
+//!   is a rapid straight to the corner arc's end.
+//! - **Lathe tools.** G41.1/G42.1 with L in G18 give a lathe tool's orientation
+//!   (LinuxCNC's 1-8): the offset path is that of the nose's centre, and every
+//!   compensated point is moved by the nose radius in X and/or Z to the imaginary tool
+//!   tip, the point the machine's position refers to (as LinuxCNC's interpreter does
+//!   when it hands the compensated moves on). The exit move ends on its programmed point.
 //! - **Entry.** After G41/G42 the first move in XY (the entry move) must be a straight
 //!   line longer than the tool radius. With [`EntryExit::Tangent`] (the default) it runs
 //!   from the current (uncompensated) point along the tangent to the circle of the tool
@@ -116,6 +125,11 @@ pub const SHORT_ARC_CHORD_MM: f64 = 1e-6;
 /// ill-conditioned (its place along the moves is known to about 1e-8 of the radius).
 pub const EXTENSION_TOLERANCE_MM: f64 = 1e-4;
 
+/// With [`EntryExit::LinuxCnc`], corners turning by at most this (radians, either way)
+/// count as tangent, as LinuxCNC's `TOLERANCE_CONCAVE_CORNER` makes them: no corner
+/// arc, no cut-back (the next move runs from the last offset end to its own).
+pub const LINUXCNC_TANGENT_RAD: f64 = 0.05;
+
 /// A move shorter than this in XY is a move of Z or A alone, in mm.
 const PLANAR_ZERO_MM: f64 = 1e-12;
 
@@ -132,7 +146,10 @@ pub enum EntryExit {
     #[serde(rename = "tangent")]
     Tangent,
     /// LinuxCNC 2.9's: the entry ends on the normal of the programmed entry line, the
-    /// exit leaves straight from the last offset point.
+    /// exit leaves straight from the last offset point; and LinuxCNC's corners: a
+    /// corner turning by at most [`LINUXCNC_TANGENT_RAD`] either way is neither rounded
+    /// nor cut back (each move ends at its own offset end), and the corner before a
+    /// rapid is a rapid straight to the corner arc's end.
     #[serde(rename = "linuxcnc")]
     LinuxCnc,
 }
@@ -850,7 +867,8 @@ impl Compensator<'_> {
         radius: f64,
         feed_before: Option<f64>,
     ) -> Result<Pending, CompError> {
-        let join = join(&mut current, &mut next, side, radius)?;
+        let linuxcnc = self.tools.entry_exit == EntryExit::LinuxCnc;
+        let join = join(&mut current, &mut next, side, radius, linuxcnc)?;
         let at = current.element.end.add(self.tip);
         self.emit(&current);
         for block in current.deferred.drain(..) {
@@ -870,7 +888,10 @@ impl Compensator<'_> {
             let z_a = next.start;
             let tip = self.tip;
             let point = |p: V2| Point { x_mm: p.x + tip.x, y_mm: p.y + tip.y, ..z_a };
-            let kind = if to.sub(from).norm() < SHORT_ARC_CHORD_MM {
+            let kind = if linuxcnc && next.travel == Travel::Rapid {
+                // LinuxCNC rounds no corner at rapid: it goes straight to the arc's end.
+                BlockKind::Rapid { to: point(to) }
+            } else if to.sub(from).norm() < SHORT_ARC_CHORD_MM {
                 BlockKind::Linear { to: point(to), feed_mm_per_min: feed }
             } else {
                 BlockKind::Arc {
@@ -1069,8 +1090,10 @@ fn exit_element(from: V2, to: V2, side: f64, radius: f64) -> Result<Element, Off
 }
 
 /// Resolves the corner at `a.corner` between `a`'s end and `b`'s start: meet, cut both
-/// back to their intersection, or leave them and insert an arc.
-fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64) -> Result<Join, CompError> {
+/// back to their intersection, or leave them and insert an arc; with `linuxcnc`
+/// ([`EntryExit::LinuxCnc`]) a corner within [`LINUXCNC_TANGENT_RAD`] of tangent is left
+/// as it is.
+fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64, linuxcnc: bool) -> Result<Join, CompError> {
     let corner = a.corner;
     let (a_end, b_start) = (a.element.end, b.element.start);
     if a_end.sub(b_start).norm() <= JOIN_TOLERANCE_MM {
@@ -1094,6 +1117,10 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64) -> Result<Join
     let ta = a.element.tangent_at(a_end);
     let tb = b.element.tangent_at(b_start);
     let turn = ta.cross(tb);
+    if linuxcnc && turn.atan2(ta.dot(tb)).abs() <= LINUXCNC_TANGENT_RAD {
+        // LinuxCNC's nearly tangent corner: each move keeps its offset end.
+        return Ok(Join::Meet);
+    }
     let reversal = ta.dot(tb) < 0.0 && turn.abs() <= REVERSAL_SINE;
     if side * turn < 0.0 || reversal {
         return Ok(Join::Arc { from: a_end, to: b_start });
