@@ -61,7 +61,11 @@
 //!   turning by at most [`LINUXCNC_TANGENT_RAD`] (0.05 rad, either way) is left as it is
 //!   (no arc, no cut-back: the next move runs from the last offset end to its own, a
 //!   step of at most 0.05 of the radius off its offset), and the corner before a rapid
-//!   is a rapid straight to the corner arc's end.
+//!   is a rapid straight to the corner arc's end. At an inside corner before an arc the
+//!   arc's offset circle is that of its end's radius (the radius at its start may differ
+//!   by the front end's arc tolerance), and after a line the line ends where LinuxCNC's
+//!   formula puts it on that circle (`linuxcnc_line_to_arc`), off the line's offset by
+//!   as much as the two radii differ.
 //! - **Lathe tools.** G41.1/G42.1 with L in G18 give a lathe tool's orientation
 //!   (LinuxCNC's 1-8): the offset path is that of the nose's centre, and every
 //!   compensated point is moved by the nose radius in X and/or Z to the imaginary tool
@@ -148,8 +152,9 @@ pub enum EntryExit {
     /// LinuxCNC 2.9's: the entry ends on the normal of the programmed entry line, the
     /// exit leaves straight from the last offset point; and LinuxCNC's corners: a
     /// corner turning by at most [`LINUXCNC_TANGENT_RAD`] either way is neither rounded
-    /// nor cut back (each move ends at its own offset end), and the corner before a
-    /// rapid is a rapid straight to the corner arc's end.
+    /// nor cut back (each move ends at its own offset end), the corner before a rapid is
+    /// a rapid straight to the corner arc's end, and an arc's inside corner is resolved
+    /// on the circle of its end's radius, after a line by LinuxCNC's formula.
     #[serde(rename = "linuxcnc")]
     LinuxCnc,
 }
@@ -1129,7 +1134,17 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64, linuxcnc: bool
         line,
         reason: format!("tool radius {} mm is too large here: {what}", mm(radius)),
     };
-    let candidates = intersections(&a.element, &b.element, corner, side, radius);
+    let candidates = match (linuxcnc, a.element.shape, b.element.shape) {
+        (true, Shape::Line { dir, .. }, Shape::Arc { centre, ccw, .. }) => {
+            linuxcnc_line_to_arc(corner, dir, centre, ccw, b.element.radius_end, side, radius).into_iter().collect()
+        }
+        // LinuxCNC's arc after an arc: the second arc's offset circle has its end's radius.
+        (true, Shape::Arc { .. }, Shape::Arc { .. }) => {
+            let b_circle = Element { radius_start: b.element.radius_end, ..b.element };
+            intersections(&a.element, &b_circle, corner, side, radius)
+        }
+        _ => intersections(&a.element, &b.element, corner, side, radius),
+    };
     let meet = candidates
         .into_iter()
         .filter(|p| p.x.is_finite() && p.y.is_finite())
@@ -1171,6 +1186,51 @@ fn join(a: &mut Pending, b: &mut Pending, side: f64, radius: f64, linuxcnc: bool
     b.element.start = meet;
     b.element.start_param = new_start.min(b.element.end_param);
     Ok(Join::Meet)
+}
+
+/// Where LinuxCNC 2.9's interpreter ends a line at the inside corner before an arc
+/// (`convert_arc_comp2`, line to arc): on the arc's offset circle (radius `offset_end`, the
+/// offset radius at the arc's end) at the angle its formula gives from the line's
+/// direction `dir`, the programmed `corner` and the arc's radius at its end. Where the
+/// arc's radius at its start differs from its end's (by up to the front end's arc
+/// tolerance) the point lies that much off the line's offset; otherwise it is their
+/// crossing. `side` +1 for G41, -1 for G42; `radius` the tool's.
+fn linuxcnc_line_to_arc(
+    corner: V2,
+    dir: V2,
+    centre: V2,
+    ccw: bool,
+    offset_end: f64,
+    side: f64,
+    radius: f64,
+) -> Option<V2> {
+    use std::f64::consts::FRAC_PI_2;
+    // The tool inside the arc (G41 and G3, G42 and G2): the offset circle is smaller.
+    let inside = (side > 0.0) == ccw;
+    let arc_radius = if inside { offset_end + radius } else { offset_end - radius };
+    let theta = dir.angle();
+    let delta = centre.sub(corner).angle();
+    let alpha = if ccw { delta - FRAC_PI_2 } else { delta + FRAC_PI_2 };
+    let beta = if side > 0.0 { theta - alpha } else { alpha - theta };
+    let beta = if beta > 1.5 * PI {
+        beta - TAU
+    } else if beta < -FRAC_PI_2 {
+        beta + TAU
+    } else {
+        beta
+    };
+    let along = arc_radius * (beta - FRAC_PI_2).sin();
+    let (distance, angle) = if inside {
+        let l = (along + radius) / offset_end;
+        let turn = l.asin();
+        (offset_end, if ccw { theta + turn } else { theta - turn })
+    } else {
+        let l = (along - radius) / offset_end;
+        let turn = l.asin();
+        (offset_end, if ccw { theta + PI - turn } else { theta + PI + turn })
+    };
+    let point = centre.add(V2 { x: angle.cos(), y: angle.sin() }.scale(distance));
+    (point.x.is_finite() && point.y.is_finite()).then_some(point)
 }
 
 /// Where the lines and circles of two offset moves cross, near the corner.
