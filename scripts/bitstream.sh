@@ -64,7 +64,7 @@ case $target in
         pnr_args=(--25k --package CABGA256 --speed 6 --lpf constraints/colorlight_5a75b_v8.lpf)
         pnr_out=(--textcfg) ; pnr_ext=config
         pack=yowasp-ecppack ; bit_ext=bit
-        target_mhz=75 ;;        # the PLL in hdl/boards/colorlight_5a75b.v
+        target_mhz=87.5 ;;      # the PLL in hdl/boards/colorlight_5a75b.v
     ice40-hx8k)
         default_seed=2
         top=ice40_hx8k_breakout
