@@ -25,8 +25,10 @@ module encoder_bank #(
     parameter N_AXES   = 4,
     parameter FILTER_W = 4,
     parameter RAM_BLOCK = 0,     // 1: the stores in block RAM (store_ram)
-    parameter COPY_FF   = 0      // 1: the stores in flip-flops (no RAM): the live state read in its
+    parameter COPY_FF   = 0,     // 1: the stores in flip-flops (no RAM): the live state read in its
                                  // visit, the copies through one shared read register
+    parameter PROBE_COPY = 1     // 0: no probe snapshot of TIMESTAMP and the positions here (the
+                                 // register file's latch takes it: finestep_top's ONE_SNAPSHOT)
 ) (
     // clock, reset
     input  wire                         clk,
@@ -74,6 +76,7 @@ module encoder_bank #(
     output wire                         probe_armed,
     output wire                         probe_seen,
     output wire                         probe_active,
+    output wire                         probe_event_now,   // the probe event of this clock
     output wire [31:0]                  probe_time,
     output wire [32*N_AXES-1:0]         probe_position
 );
@@ -392,10 +395,6 @@ module encoder_bank #(
     always @(posedge clk) begin
         probe_live_reg        <= probe_primed;
         probe_active_prev_reg <= active;
-        if (probe_event) begin
-            probe_time_reg     <= timestamp;
-            probe_position_reg <= position;
-        end
         // An arm written in the cycle of an event wins.
         if (probe_arm) begin
             probe_armed_reg <= 1'b1;
@@ -409,10 +408,30 @@ module encoder_bank #(
             probe_active_prev_reg <= 1'b0;
             probe_armed_reg       <= 1'b0;
             probe_seen_reg        <= 1'b0;
-            probe_time_reg        <= 32'd0;
-            probe_position_reg    <= {32*N_AXES{1'b0}};
         end
     end
+
+    // The probe's snapshot (TIMESTAMP and every position of the event's clock), unless the
+    // register file's position latch takes it (PROBE_COPY 0: the outputs are 0).
+    generate
+        if (PROBE_COPY != 0) begin : probe_copy
+            always @(posedge clk) begin
+                if (rst) begin
+                    probe_time_reg     <= 32'd0;
+                    probe_position_reg <= {32*N_AXES{1'b0}};
+                end else if (probe_event) begin
+                    probe_time_reg     <= timestamp;
+                    probe_position_reg <= position;
+                end
+            end
+        end else begin : no_probe_copy
+            wire unused_position = &{1'b0, position};
+            always @(*) begin
+                probe_time_reg     = 32'd0;
+                probe_position_reg = {32*N_AXES{1'b0}};
+            end
+        end
+    endgenerate
 
     genvar g;
     generate
@@ -437,6 +456,7 @@ module encoder_bank #(
     assign probe_armed       = probe_armed_reg;
     assign probe_seen        = probe_seen_reg;
     assign probe_active      = active;
+    assign probe_event_now   = probe_event;
     assign probe_time        = probe_time_reg;
     assign probe_position    = probe_position_reg;
 
@@ -500,7 +520,8 @@ module encoder_bank #(
         if ($past(latch_now) && !($past(visit) && $past(ch_i) == 0)) assert (latch_pending_reg[0]);
         if ($past(probe_event)) assert (!probe_armed_reg || $past(probe_arm));
         // The probe's time and positions are those of the event's cycle, held until the next.
-        if ($past(probe_event)) assert (probe_time == $past(timestamp) && probe_position == $past(position));
+        if (PROBE_COPY == 0) assert (probe_time == 32'd0 && probe_position == {32*N_AXES{1'b0}});
+        else if ($past(probe_event)) assert (probe_time == $past(timestamp) && probe_position == $past(position));
         else assert (probe_time == $past(probe_time) && probe_position == $past(probe_position));
         cover ($past(copy_latch) && $past(v_count) != 32'd0);
         cover ($past(stall));

@@ -9,7 +9,8 @@
 module feedback_registers #(
     parameter N_ENC   = 4,
     parameter N_AXES  = 4,
-    parameter HAS_MPG = 1
+    parameter HAS_MPG = 1,
+    parameter ONE_SNAPSHOT = 0   // 1: PROBE_TIME and PROBE_POSITION are answered by register_file
 ) (
     // clock, reset
     input  wire                  clk,
@@ -199,7 +200,7 @@ module feedback_registers #(
                 rdata[FS_PROBE_STATUS_SEEN_LSB]   = probe_seen;
                 rdata[FS_PROBE_STATUS_ACTIVE_LSB] = probe_active;
             end
-            FS_PROBE_TIME_ADDR: rdata = probe_time;
+            FS_PROBE_TIME_ADDR: rdata = ONE_SNAPSHOT != 0 ? 32'd0 : probe_time;
             default: ;
         endcase
         if (MPG) begin
@@ -261,7 +262,7 @@ module feedback_registers #(
         // ENC_COUNT, ENC_INDEX_LATCH, ENC_PROBE_LATCH, ENC_EDGE_TIME: the encoder bank's
         // store answers them, after the register file's read register (late_rdata).
         for (r = 0; r < N_AXES; r = r + 1) begin
-            rdata = rdata
+            if (ONE_SNAPSHOT == 0) rdata = rdata
                 | ({32{{25'd0, addr} == {25'd0, FS_PROBE_POSITION_ADDR} + r * FS_PROBE_POSITION_STRIDE}} &
                    probe_position[32*r +: 32]);
         end

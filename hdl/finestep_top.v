@@ -33,6 +33,8 @@ module finestep_top #(
     parameter READ_STORE      = 1,
     parameter FIFO_HEAD_REG   = 1,
     parameter NO_RAM          = 0,   // 1: no RAM on the part (stores in flip-flops)
+    parameter ONE_SNAPSHOT    = 0,   // 1: the probe's snapshot is the position latch (POSITION, LATCH_TIME)
+    parameter INC_WRITE_ONLY  = 0,   // 1: RECORD_INC reads 0 (needs READ_STORE 0)
     parameter HAS_SPINDLE     = 1,
     parameter HAS_OUTPUTS     = 1,
     parameter N_GPIO          = 4,
@@ -189,7 +191,7 @@ module finestep_top #(
     wire [16*N_ENC-1:0]   enc_illegal_count;
     wire [N_ENC-1:0]      enc_illegal, enc_index_seen, enc_latch_armed, enc_clear_armed;
     wire [N_ENC-1:0]      enc_a_level, enc_b_level, enc_z_level;
-    wire                  probe_armed, probe_seen, probe_active;
+    wire                  probe_armed, probe_seen, probe_active, probe_event;
     wire [31:0]           probe_time;
     wire [32*N_AXES-1:0]  probe_position;
     wire [31:0]           mpg_count, mpg_detents;
@@ -286,7 +288,7 @@ module finestep_top #(
         .N_AXES(N_AXES), .P_WIDTH(P_WIDTH), .TIMING_W(TIMING_W), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
         .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK),
-        .STEP_ROUND_LOG2(STEP_ROUND_LOG2)
+        .STEP_ROUND_LOG2(STEP_ROUND_LOG2), .ONE_SNAPSHOT(ONE_SNAPSHOT), .INC_WRITE_ONLY(INC_WRITE_ONLY)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),
@@ -306,7 +308,8 @@ module finestep_top #(
         .underrun(underrun), .underrun_event(underrun_event), .record_error(record_error),
         .rate_error(rate_error), .step_lost(step_lost), .boundary(boundary), .block_end(block_end),
         .position(position), .fifo_level(fifo_level), .fifo_staged(fifo_staged), .fifo_full(fifo_full),
-        .latch_hold(latch_hold), .spi_crc_error(spi_crc_error), .spi_frame_error(spi_frame_error),
+        .latch_hold(latch_hold), .probe_event(probe_event), .probe_seen(probe_seen),
+        .spi_crc_error(spi_crc_error), .spi_frame_error(spi_frame_error),
         .spi_refused(spi_refused), .spi_refused_count(spi_refused_count),
         .spi_fifo_in_use(spi_fifo_busy || (|spi_wr_lane) || spi_wr_commit || spi_wr_abort),
         .spi_fifo_commit(spi_wr_commit), .par_error(par_error),
@@ -416,7 +419,7 @@ module finestep_top #(
     assign fifo_pop = fifo_pop_request && !jog_engaged;
 
     feedback_registers #(
-        .N_ENC(N_ENC), .N_AXES(N_AXES), .HAS_MPG(HAS_MPG)
+        .N_ENC(N_ENC), .N_AXES(N_AXES), .HAS_MPG(HAS_MPG), .ONE_SNAPSHOT(ONE_SNAPSHOT)
     ) feedback_regs (
         .clk(clk), .rst(rst),
         .write(bus_write), .addr(bus_address), .wdata(bus_write_data), .rdata(feedback_rdata),
@@ -444,7 +447,7 @@ module finestep_top #(
 
     encoder_bank #(
         .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH), .RAM_BLOCK(RAM_BLOCK),
-        .COPY_FF(NO_RAM)
+        .COPY_FF(NO_RAM), .PROBE_COPY(ONE_SNAPSHOT == 0 ? 1 : 0)
     ) encoders (
         .clk(clk), .rst(rst),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
@@ -460,7 +463,7 @@ module finestep_top #(
         .index_latch_armed(enc_latch_armed), .index_clear_armed(enc_clear_armed),
         .a_level(enc_a_level), .b_level(enc_b_level), .z_level(enc_z_level),
         .probe_armed(probe_armed), .probe_seen(probe_seen), .probe_active(probe_active),
-        .probe_time(probe_time), .probe_position(probe_position)
+        .probe_event_now(probe_event), .probe_time(probe_time), .probe_position(probe_position)
     );
 
     generate

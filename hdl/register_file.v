@@ -28,7 +28,10 @@ module register_file #(
     parameter HAS_MPG         = 1,
     parameter READ_STORE      = 1,    // 1: the per-axis arrays read back from a store (RAM)
     parameter RAM_BLOCK       = 0,    // 1: that store in block RAM
-    parameter STEP_ROUND_LOG2 = 0     // CAPS.STEP_ROUND_LOG2: log2 of the step engine's round (0: none)
+    parameter STEP_ROUND_LOG2 = 0,    // CAPS.STEP_ROUND_LOG2: log2 of the step engine's round (0: none)
+    parameter ONE_SNAPSHOT    = 0,    // 1: the position latch is the probe's snapshot too (PROBE_POSITION,
+                                      // PROBE_TIME read POSITION, LATCH_TIME)
+    parameter INC_WRITE_ONLY  = 0     // 1: RECORD_INC reads 0 (with READ_STORE 0: no multiplexer inputs)
 ) (
     // clock, reset
     input  wire                         clk,
@@ -95,6 +98,9 @@ module register_file #(
     input  wire                         fifo_full,
     // SPI frame layer events and FIFO port use
     input  wire                         latch_hold,
+    // the probe (ONE_SNAPSHOT): its event in this clock, PROBE_STATUS.SEEN
+    input  wire                         probe_event,
+    input  wire                         probe_seen,
     input  wire                         spi_crc_error,
     input  wire                         spi_frame_error,
     input  wire                         spi_refused,
@@ -471,6 +477,7 @@ module register_file #(
                 FS_IRQ_MASK_ADDR:         read_value[IRQ_W-1:0] = irq_mask_reg;
                 FS_TIMESTAMP_ADDR:        read_value = timestamp_reg;
                 FS_LATCH_TIME_ADDR:       read_value = latch_time_reg;
+                FS_PROBE_TIME_ADDR:       if (ONE_SNAPSHOT != 0) read_value = latch_time_reg;
                 FS_PERIOD_COUNT_ADDR:     read_value = period_count_reg;
                 FS_UNDERRUN_COUNT_ADDR:       read_value[COUNT_W-1:0] = underrun_count_reg;
                 FS_CRC_ERROR_COUNT_ADDR:      read_value[COUNT_W-1:0] = crc_error_count;
@@ -500,13 +507,17 @@ module register_file #(
                 mode_word[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_B_BIT];
                 mode_word[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_EN_BIT];
                 read_value = read_value
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE}} &
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE ||
+                           (ONE_SNAPSHOT != 0 &&
+                            {{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_PROBE_POSITION_ADDR} + index * FS_PROBE_POSITION_STRIDE)}} &
                        position_latch_reg[POS_W*index +: POS_W]);
                 // Without the readback store the per-axis arrays from their flip-flops.
                 if (!STORED) read_value = read_value
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word)
+                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word);
+                // RECORD_INC, unless write-only (INC_WRITE_ONLY: it reads 0).
+                if (!STORED && INC_WRITE_ONLY == 0) read_value = read_value
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE}} &
                        record_inc_reg[INC_W*index +: INC_W]);
             end
@@ -540,7 +551,10 @@ module register_file #(
     wire [COUNT_W-1:0] refused_now = (push_refused ? {{(COUNT_W-1){1'b0}}, 1'b1} : {COUNT_W{1'b0}}) +
                                      ((HAS_SPI != 0 && spi_refused) ? {{(COUNT_W-8){1'b0}}, spi_refused_count} : {COUNT_W{1'b0}});
 
-    // Time and the position latch.
+    // Time and the position latch. With ONE_SNAPSHOT it is the probe's snapshot too: a
+    // probe event takes it (whatever latch_hold says), and while PROBE_STATUS.SEEN the
+    // period latch leaves it alone (the encoder bank's copies still follow latch_now).
+    wire snapshot_now = ONE_SNAPSHOT != 0 ? (probe_event || (latch_now && !probe_seen)) : latch_now;
     always @(posedge clk) begin
         if (rst) begin
             timestamp_reg      <= {WORD_W{1'b0}};
@@ -550,7 +564,7 @@ module register_file #(
         end else begin
             timestamp_reg <= timestamp_reg + 1'b1;
             if (boundary) period_count_reg <= period_count_reg + 1'b1;
-            if (latch_now) begin
+            if (snapshot_now) begin
                 position_latch_reg <= position;
                 latch_time_reg     <= timestamp_reg;
             end
@@ -846,7 +860,9 @@ module register_file #(
                 f_ff_word[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*f_axis + FS_INVERT_PIN_B_BIT];
                 f_ff_word[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*f_axis + FS_INVERT_PIN_EN_BIT];
             end
-            if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + f_axis * FS_RECORD_INC_STRIDE)
+            // RECORD_INC reads as written, or 0 when write-only (INC_WRITE_ONLY).
+            if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + f_axis * FS_RECORD_INC_STRIDE &&
+                INC_WRITE_ONLY == 0)
                 f_ff_word[INC_W-1:0] = record_inc_reg[INC_W*f_axis +: INC_W];
         end
     end
@@ -910,6 +926,19 @@ module register_file #(
             assert (rdata_reg == 32'd0);
         if (HAS_PARALLEL == 0 && $past(read && feedback_rdata == 32'd0 && bus_addr == FS_PARALLEL_ERROR_COUNT_ADDR))
             assert (rdata_reg == 32'd0);
+        // The position latch (spec): the core's positions and TIMESTAMP of the cycle of a
+        // period latch (latch_now) or, with ONE_SNAPSHOT, of a probe event, the period
+        // latch left alone while SEEN; else held. With ONE_SNAPSHOT, PROBE_POSITION and
+        // PROBE_TIME read it, from the register file's own flip-flops.
+        if (ONE_SNAPSHOT != 0 ? $past(probe_event || (latch_now && !probe_seen)) : $past(latch_now))
+            assert (position_latch_reg == $past(position) && latch_time_reg == $past(timestamp_reg));
+        else
+            assert (position_latch_reg == $past(position_latch_reg) && latch_time_reg == $past(latch_time_reg));
+        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && feedback_rdata == 32'd0 &&
+                {{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_PROBE_POSITION_ADDR}))
+            assert (rdata_reg == $past(position_latch_reg[POS_W-1:0]));
+        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && feedback_rdata == 32'd0 && bus_addr == FS_PROBE_TIME_ADDR))
+            assert (rdata_reg == $past(latch_time_reg));
     end
 `endif
 

@@ -604,10 +604,18 @@ fn verilate(
         .args(matches!(build, Build::PanelChip).then_some(["-GHAS_PANEL=1", "-GHAS_GANTRY=1"]).into_iter().flatten())
         // The digit-serial chip with the MAX II's storage (a part without RAM: the read
         // multiplexer, the FIFO's head read from its slot, the encoder copies behind one
-        // register; no effect on behaviour), so the lockstep runs those shapes too.
+        // register; no effect on behaviour), its one position snapshot (ONE_SNAPSHOT) and
+        // its write-only RECORD_INC (INC_WRITE_ONLY; the shim's ft_one_snapshot and
+        // ft_inc_write_only tell the model), so the lockstep runs those shapes too.
         .args(
             matches!(build, Build::Top { digit, .. } if digit != 0)
-                .then_some(["-GREAD_STORE=0", "-GFIFO_HEAD_REG=2", "-GNO_RAM=1"])
+                .then_some([
+                    "-GREAD_STORE=0",
+                    "-GFIFO_HEAD_REG=2",
+                    "-GNO_RAM=1",
+                    "-GONE_SNAPSHOT=1",
+                    "-GINC_WRITE_ONLY=1",
+                ])
                 .into_iter()
                 .flatten(),
         )

@@ -5,7 +5,9 @@
 //! outside the filter's specification are flagged, never silent.
 
 use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0, IN_MPG_A, IN_MPG_B};
-use finestep_host::regs::{control, fifo_level, jog_control, jog_velocity, period_count, probe_status, status};
+use finestep_host::regs::{
+    control, fifo_level, jog_control, jog_velocity, latch_time, period_count, position, probe_status, status,
+};
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
 use finestep_model::{Increment, PeriodRecord};
@@ -430,18 +432,23 @@ fn index_latches_and_clears() {
 /// A probe touch latches every channel, every axis and the time on one clock.
 #[test]
 fn probe_latches_everything_on_one_clock() {
-    probe_latches_everything(connect, "probe_latches_everything_on_one_clock");
+    probe_latches_everything(connect, "probe_latches_everything_on_one_clock", false);
 }
 
 /// The same on the digit-serial chip with the MAX II's storage (the encoder bank's copies
 /// behind one read register, its live state read in the visit, the FIFO's head read from
-/// its slot, the read multiplexer): counts, latches and positions read in lockstep.
+/// its slot, the read multiplexer) and its one position snapshot (`ONE_SNAPSHOT`):
+/// counts, latches and positions read in lockstep.
 #[test]
 fn probe_latches_everything_on_the_serial_chip() {
-    probe_latches_everything(connect_serial, "probe_latches_everything_on_the_serial_chip");
+    let one_snapshot = finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::MotionSerial).one_snapshot;
+    assert!(one_snapshot, "the serial chip is built with the MAX II's ONE_SNAPSHOT");
+    probe_latches_everything(connect_serial, "probe_latches_everything_on_the_serial_chip", one_snapshot);
 }
 
-fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str) {
+/// With `one_snapshot` (docs/spec/register_file.md#one-snapshot) `POSITION` and
+/// `LATCH_TIME` hold the probe's snapshot until the next arm; else the period latch's.
+fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_snapshot: bool) {
     let plant_config = PlantConfig {
         drives: vec![lagging(300); 2],
         channels: vec![
@@ -467,6 +474,20 @@ fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str) {
     assert!(hit.steps[1] >= 50 && hit.steps[1] <= 55, "{hit:?}");
     // One event per arming.
     assert_eq!(probe_status::ARMED.get(machine.bus().read_one(probe_status::ADDR).unwrap()), 0);
+    // The move ended at X 50, Z 100 steps, well after the event.
+    let mut steps = vec![0u32; 2];
+    machine.bus().read(position::addr(0), &mut steps).unwrap();
+    let latched = machine.bus().read_one(latch_time::ADDR).unwrap();
+    let hit_steps: Vec<u32> = hit.steps[..2].iter().map(|&s| s as u32).collect();
+    if one_snapshot {
+        assert_eq!((&steps, latched), (&hit_steps, hit.time), "POSITION holds the probe's snapshot while SEEN");
+        // The next arm gives the snapshot back to the period latch: taken at the next
+        // boundary (RUN stays set, the FIFO empty), within a period.
+        machine.arm_probe(false, 2).unwrap();
+        machine.bus().wait(2 * u64::from(PERIOD.max(plant_chip::PERIOD_SERIAL))).unwrap();
+        machine.bus().read(position::addr(0), &mut steps).unwrap();
+    }
+    assert_eq!(steps, vec![50, 100], "POSITION from the period latch");
 }
 
 fn wheel_plant(bounce: u64) -> Plant {

@@ -240,6 +240,13 @@ pub struct TopParams {
     /// `STEP_DIGIT`: with `step_shared`, 0 the step engine, 1, 2, 4 or 8 the digit-serial
     /// step engine with that many bits a clock ([`CoreParams::step_digit`]).
     pub step_digit: u32,
+    /// `ONE_SNAPSHOT`: one position snapshot for the period latch and the probe: a probe
+    /// event latches `POSITION` and `LATCH_TIME`, which hold it while `PROBE_STATUS.SEEN`;
+    /// `PROBE_POSITION` and `PROBE_TIME` read them (docs/spec/register_file.md#one-snapshot).
+    pub one_snapshot: bool,
+    /// `INC_WRITE_ONLY`: `RECORD_INC` is write-only (reads 0); needs `READ_STORE` 0, which
+    /// the model does not carry (no effect on behaviour).
+    pub inc_write_only: bool,
     /// `HAS_SPINDLE`: the spindle block (PWM or SPI DAC) is built.
     pub has_spindle: bool,
     /// `HAS_OUTPUTS`: the logic outputs and the interlock are built.
@@ -269,6 +276,8 @@ impl Default for TopParams {
             has_mpg: finestep_top::HAS_MPG.default != 0,
             step_shared: finestep_top::STEP_SHARED.default != 0,
             step_digit: finestep_top::STEP_DIGIT.default,
+            one_snapshot: finestep_top::ONE_SNAPSHOT.default != 0,
+            inc_write_only: finestep_top::INC_WRITE_ONLY.default != 0,
             has_spindle: finestep_top::HAS_SPINDLE.default != 0,
             has_outputs: finestep_top::HAS_OUTPUTS.default != 0,
             n_gpio: finestep_top::N_GPIO.default as usize,
@@ -293,6 +302,8 @@ impl TopParams {
         finestep_top::HAS_MPG.check(self.has_mpg)?;
         finestep_top::STEP_SHARED.check(self.step_shared)?;
         finestep_top::STEP_DIGIT.check(self.step_digit)?;
+        finestep_top::ONE_SNAPSHOT.check(self.one_snapshot)?;
+        finestep_top::INC_WRITE_ONLY.check(self.inc_write_only)?;
         finestep_top::HAS_SPINDLE.check(self.has_spindle)?;
         finestep_top::HAS_OUTPUTS.check(self.has_outputs)?;
         finestep_top::N_GPIO.check(self.n_gpio as u64)?;

@@ -308,6 +308,11 @@ impl EncoderBank {
         self.probe_live && self.probe_active(probe) && !self.probe_active_p && self.probe_armed
     }
 
+    /// `PROBE_STATUS.SEEN`: an event since the last arm.
+    pub fn probe_seen(&self) -> bool {
+        self.probe_seen
+    }
+
     /// The register view with these settings (polarities decide `Z` and `ACTIVE`).
     pub fn status(&self, channels: &[ChannelConfig; MAX_CHANNELS], probe: &ProbeConfig) -> EncoderBankStatus {
         let mut status = EncoderBankStatus {

@@ -176,6 +176,12 @@ pub struct RegisterFileInputs {
     pub positions: [u32; MAX_AXES],
     /// The SPI frame layer's `latch_hold`.
     pub latch_hold: bool,
+    /// The probe's event in this cycle (the encoder bank's): with `ONE_SNAPSHOT` it takes
+    /// the position latch.
+    pub probe_event: bool,
+    /// `PROBE_STATUS.SEEN` before this edge: with `ONE_SNAPSHOT` the period latch leaves
+    /// the position latch alone while it is set.
+    pub probe_seen: bool,
     /// The SPI frame layer's error events.
     pub spi: SpiFrameEvents,
     /// A parallel error.
@@ -744,7 +750,11 @@ impl RegisterFile {
         let addr = addr & (ADDRESSES - 1) as u8;
         let p = &self.params;
         let n = p.n_axes;
-        let stored = self.rw[usize::from(addr)];
+        // RECORD_INC is written as any rw register (the push takes it) but, write-only
+        // (INC_WRITE_ONLY), reads 0.
+        let write_only =
+            p.inc_write_only && element_index(addr, regs::record_inc::ADDR, regs::record_inc::STRIDE, n).is_some();
+        let stored = if write_only { 0 } else { self.rw[usize::from(addr)] };
         let axes_mask = |mask: u8| u32::from(mask) & ((1u32 << n) - 1);
         let hardware = match addr {
             regs::id::ADDR => regs::id::MAGIC.set(0, regs::id::MAGIC_VALUE),
@@ -858,7 +868,9 @@ impl RegisterFile {
                     (s::ACTIVE, enc.probe_active.into()),
                 ])
             }
-            regs::probe_time::ADDR => regs::probe_time::CLOCKS.set(0, enc.probe_time),
+            regs::probe_time::ADDR => {
+                regs::probe_time::CLOCKS.set(0, if p.one_snapshot { self.latch_time } else { enc.probe_time })
+            }
             regs::mpg_count::ADDR => regs::mpg_count::EDGES.set(0, wheel.count),
             regs::mpg_detents::ADDR => regs::mpg_detents::DETENTS.set(0, wheel.detents as u32),
             regs::jog_status::ADDR => {
@@ -898,7 +910,8 @@ impl RegisterFile {
                 } else if let Some(axis) =
                     element_index(addr, regs::probe_position::ADDR, regs::probe_position::STRIDE, p.n_axes)
                 {
-                    regs::probe_position::STEPS.set(0, enc.probe_positions[axis])
+                    let steps = if p.one_snapshot { self.positions[axis] } else { enc.probe_positions[axis] };
+                    regs::probe_position::STEPS.set(0, steps)
                 } else {
                     0
                 }
@@ -986,7 +999,9 @@ impl RegisterFile {
             self.rw[usize::from(regs::outputs::ADDR)] = safe_before;
         }
 
-        if position_latch(hw.core_run, inp.rec_ready, inp.latch_hold) {
+        let latch = position_latch(hw.core_run, inp.rec_ready, inp.latch_hold);
+        let snapshot = if self.params.one_snapshot { inp.probe_event || (latch && !inp.probe_seen) } else { latch };
+        if snapshot {
             self.positions = inp.positions;
             self.latch_time = self.timestamp;
         }

@@ -802,6 +802,8 @@ impl Top {
 
         // The feedback blocks.
         let timestamp = self.registers.timestamp();
+        let probe_config = self.registers.probe_config();
+        let (probe_event, probe_seen) = (self.encoders.probe_event(&probe_config), self.encoders.probe_seen());
         let clear_errors = self.registers.clear_errors();
         let clear_counters = self.registers.clear_counters();
         self.encoders.step(&EncoderBankInputs {
@@ -811,7 +813,7 @@ impl Top {
             probe_pin: inputs.probe_pin,
             prescale: self.registers.enc_prescale(),
             channels: self.registers.encoder_configs(),
-            probe: self.registers.probe_config(),
+            probe: probe_config,
             clear_errors,
             clear_counters,
             timestamp,
@@ -859,6 +861,8 @@ impl Top {
             block_end: core_out.block_end(),
             positions: core_out.positions,
             latch_hold,
+            probe_event,
+            probe_seen,
             spi: spi_events,
             parallel_error,
             underrun,

@@ -325,3 +325,58 @@ fn reads_of_the_visited_channel_stall_it_and_read_the_copies() {
     }
     assert!(stalls > 0, "no read met its channel's slot");
 }
+
+/// `ONE_SNAPSHOT` (docs/spec/register_file.md#one-snapshot): one position snapshot for
+/// the period latch and the probe. Stopped, the period latch takes it every clock and the
+/// probe's registers read it; the probe's event takes it, and it holds the event's time
+/// and positions while `SEEN` (the period latch leaves it alone) until the next arm.
+#[test]
+fn one_snapshot_holds_the_probe_event_until_the_next_arm() {
+    use regs::{latch_time as lt, probe_control as pc, probe_status as ps, probe_time as pt, timestamp as ts};
+    let bus = ParallelMaster::default();
+    let mut bench = Bench::new(TopParams { one_snapshot: true, ..TopParams::default() });
+    bench.bring_up(&bus);
+    let n_axes = bench.top.params().n_axes;
+    let follows_the_period_latch = |bench: &Bench| {
+        // Stopped: latched at every edge, from the TIMESTAMP before it.
+        let latched = bench.reg(ts::ADDR).wrapping_sub(1);
+        assert_eq!(get(bench, lt::ADDR, lt::CLOCKS), latched);
+        assert_eq!(get(bench, pt::ADDR, pt::CLOCKS), latched, "PROBE_TIME reads LATCH_TIME");
+    };
+    let positions_shared = |bench: &Bench| {
+        for axis in 0..n_axes {
+            let position = bench.reg(regs::position::addr(axis));
+            assert_eq!(bench.reg(regs::probe_position::addr(axis)), position, "PROBE_POSITION[{axis}]");
+        }
+    };
+    follows_the_period_latch(&bench);
+    positions_shared(&bench);
+
+    bus.write32(&mut bench, pc::ADDR, pc::ARM.set(pc::reset_word(), 1));
+    bench.clock(2);
+    assert_eq!(bench.reg(ps::ADDR), ps::ARMED.mask());
+    follows_the_period_latch(&bench);
+    let t = bench.since_reset;
+    let slots = bench.top.encoders().slots() as u64;
+    let slot_at_raw = (bench.top.encoders().slot() as u64 + 2) % slots;
+    bench.pins.probe_pin = true;
+    bench.clock(10);
+    // The event's clock as in the probe test above (the encoder bank's spec).
+    let event = (t + 2 + (slots - slot_at_raw) % slots + 1) as u32;
+    assert_eq!(bench.reg(ps::ADDR), ps::SEEN.mask() | ps::ACTIVE.mask());
+    // Held while SEEN, however many period latches (every clock while stopped) pass.
+    for _ in 0..3 {
+        assert_eq!(get(&bench, lt::ADDR, lt::CLOCKS), event);
+        assert_eq!(get(&bench, pt::ADDR, pt::CLOCKS), event);
+        positions_shared(&bench);
+        bench.clock(100);
+    }
+    assert!(bench.reg(ts::ADDR) > event + 300);
+
+    // The next arm clears SEEN and the period latch takes the snapshot again.
+    bus.write32(&mut bench, pc::ADDR, pc::ARM.set(pc::reset_word(), 1));
+    bench.clock(2);
+    assert_eq!(bench.reg(ps::ADDR), ps::ARMED.mask() | ps::ACTIVE.mask());
+    follows_the_period_latch(&bench);
+    positions_shared(&bench);
+}

@@ -233,3 +233,27 @@ fn spi_and_parallel_at_once_both_get_their_accesses() {
         })
         .unwrap();
 }
+
+/// `INC_WRITE_ONLY` (docs/spec/register_file.md#write-only-record_inc): `RECORD_INC` reads
+/// 0 over the bus, and `RECORD_PUSH` still queues what was written; without it the words
+/// read back as written.
+#[test]
+fn write_only_record_inc_reads_zero_and_still_pushes() {
+    let bus = ParallelMaster::default();
+    let incs: [i32; 4] = [0x0001_8000, -0x0001_0000, 0x0000_4000, -3];
+    for write_only in [false, true] {
+        let mut bench = Bench::new(TopParams { inc_write_only: write_only, ..TopParams::default() });
+        bench.bring_up(&bus);
+        for (axis, &inc) in incs.iter().enumerate() {
+            bus.write32(&mut bench, regs::record_inc::addr(axis), inc as u32);
+        }
+        for (axis, &inc) in incs.iter().enumerate() {
+            let read = bus.read32(&mut bench, regs::record_inc::addr(axis));
+            assert_eq!(read, if write_only { 0 } else { inc as u32 }, "RECORD_INC[{axis}], write-only {write_only}");
+        }
+        bus.write32(&mut bench, regs::record_push::ADDR, regs::record_push::FLAGS.set(0, 1));
+        bench.clock(10);
+        let queued: Vec<_> = bench.top.fifo().records().copied().collect();
+        assert_eq!(queued, vec![finestep_model::PeriodRecord::from_raw(&incs, 1)], "write-only {write_only}");
+    }
+}

@@ -10,7 +10,14 @@ use proptest::prelude::*;
 
 fn params() -> impl Strategy<Value = TopParams> {
     let links = (any::<bool>(), any::<bool>(), 1..=MAX_CHANNELS, any::<bool>(), any::<bool>());
-    let io = (any::<bool>(), any::<bool>(), 0..=8usize, prop::sample::select(vec![0u32, 1, 2, 4, 8]));
+    let io = (
+        any::<bool>(),
+        any::<bool>(),
+        0..=8usize,
+        prop::sample::select(vec![0u32, 1, 2, 4, 8]),
+        any::<bool>(),
+        any::<bool>(),
+    );
     (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links, io).prop_map(
         |(
             n_axes,
@@ -19,7 +26,7 @@ fn params() -> impl Strategy<Value = TopParams> {
             fifo_depth_log2,
             wd_w,
             (has_spi, has_parallel, n_enc, has_mpg, step_shared),
-            (has_spindle, has_outputs, n_gpio, step_digit),
+            (has_spindle, has_outputs, n_gpio, step_digit, one_snapshot, inc_write_only),
         )| {
             let p = TopParams {
                 n_axes,
@@ -34,6 +41,8 @@ fn params() -> impl Strategy<Value = TopParams> {
                 has_mpg,
                 step_shared,
                 step_digit,
+                one_snapshot,
+                inc_write_only,
                 has_spindle,
                 has_outputs,
                 n_gpio,

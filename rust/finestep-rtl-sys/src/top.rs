@@ -62,6 +62,10 @@ pub struct TopBuild {
     /// `STEP_DIGIT`: 0 the step engine, else the digit-serial one with that many bits a
     /// clock.
     pub step_digit: u32,
+    /// `ONE_SNAPSHOT`: the probe's snapshot is the position latch.
+    pub one_snapshot: bool,
+    /// `INC_WRITE_ONLY`: `RECORD_INC` reads 0.
+    pub inc_write_only: bool,
     /// The spindle block is built (`HAS_SPINDLE`).
     pub has_spindle: bool,
     /// The logic outputs and the interlock input are built (`HAS_OUTPUTS`).
@@ -89,6 +93,8 @@ pub fn top_build_of(variant: TopVariant) -> TopBuild {
             has_mpg: ffi::ft_has_mpg(v) != 0,
             step_shared: ffi::ft_step_shared() != 0,
             step_digit: ffi::ft_step_digit(v),
+            one_snapshot: ffi::ft_one_snapshot(v) != 0,
+            inc_write_only: ffi::ft_inc_write_only(v) != 0,
             has_spindle: ffi::ft_has_spindle(v) != 0,
             has_outputs: ffi::ft_has_outputs(v) != 0,
             n_gpio: ffi::ft_n_gpio(v) as usize,
