@@ -828,6 +828,10 @@ pub struct PathStream<'p> {
     ready: VecDeque<Element>,
     done: bool,
     end: Arc<OnceLock<Vec4>>,
+    /// Short lines read for the smoother ([`crate::smooth`]), not yet made.
+    run: Vec<Move>,
+    /// Runs of short lines are smoothed (S-curve).
+    smoothing: bool,
 }
 
 /// Canonical blocks as the path reads them, one at a time; an error ends them.
@@ -873,6 +877,8 @@ impl<'p> PathStream<'p> {
             ready: VecDeque::new(),
             done,
             end,
+            run: Vec::new(),
+            smoothing: config.profile == ProfileKind::SCurve,
         })
     }
 
@@ -897,11 +903,22 @@ impl<'p> PathStream<'p> {
         self.sharing.peak
     }
 
-    /// Reads one move and makes the elements of the move before it.
+    /// Reads one move and makes the elements of the move before it (or keeps it for a
+    /// run of short lines to smooth, made once the run ends).
     fn advance(&mut self) -> Result<(), ProgramError> {
         let next = self.reader.next_move(&self.config, &mut self.blocks)?;
         if let Some(m) = self.current.take() {
-            self.make(&m, next.as_ref())?;
+            if self.smoothing && smoothable(&m) {
+                let goes_on = !m.stop_after
+                    && self.run.len() + 1 < crate::smooth::MAX_RUN_MOVES
+                    && next.as_ref().is_some_and(|n| smoothable(n) && continues(&m, n));
+                self.run.push(m);
+                if !goes_on {
+                    self.flush_run(next.as_ref())?;
+                }
+            } else {
+                self.make(&m, next.as_ref())?;
+            }
         }
         self.current = next;
         if self.current.is_none() {
@@ -917,6 +934,82 @@ impl<'p> PathStream<'p> {
             let _ = self.end.set(self.reader.end);
         }
         Ok(())
+    }
+
+    /// The run of short lines kept ([`PathStream::run`]), `following` the move after
+    /// it: one smoothed curve ([`crate::smooth`]) when the run is long enough and the
+    /// fit stays within P, else line by line. Where the path turns a corner into
+    /// `following` (or it is no line), the run's last line is made as a line, so that
+    /// its corner is blended as before and the curve ends tangent to it.
+    fn flush_run(&mut self, following: Option<&Move>) -> Result<(), ProgramError> {
+        let run = std::mem::take(&mut self.run);
+        let Some(last) = run.last() else { return Ok(()) };
+        let flows = following.is_some_and(|n| smoothable(n) && continues(last, n));
+        let curved = if flows || last.stop_after { run.len() } else { run.len() - 1 };
+        let mut made_to = 0;
+        if curved >= crate::smooth::MIN_RUN_MOVES {
+            let after = if curved < run.len() { Some(&run[curved]) } else { following.filter(|_| flows) };
+            if let Some(pieces) = self.smoothed(&run[..curved], after)? {
+                if let Some(b) = self.pending_blend.take() {
+                    self.made.push_back(b);
+                }
+                self.made.extend(pieces);
+                self.start = run[curved - 1].end;
+                while self.made.len() > 1 {
+                    let e = self.made.pop_front().expect("an element");
+                    self.sharing.push(&self.config, e, &mut self.ready);
+                }
+                made_to = curved;
+            }
+        }
+        for i in made_to..run.len() {
+            self.make(&run[i], run.get(i + 1).or(following))?;
+        }
+        Ok(())
+    }
+
+    /// The elements of the curve smoothing `run` from where the path is
+    /// ([`PathStream::start`]), ending along `after` (the line the path flows on into)
+    /// or along its last line; `None` when the fit is not within the tolerance.
+    fn smoothed(&self, run: &[Move], after: Option<&Move>) -> Result<Option<Vec<Element>>, ProgramError> {
+        let first = &run[0];
+        let last = &run[run.len() - 1];
+        let tolerance = first.blend.unwrap_or(0.0);
+        let unit = |m: &Move| {
+            let d = sub(m.end, m.start);
+            scale(1.0 / norm(d), d)
+        };
+        let mut points = Vec::with_capacity(run.len() + 1);
+        points.push(self.start);
+        points.extend(run.iter().map(|m| m.end));
+        points.dedup_by(|b, a| norm(sub(*b, *a)) < 1e-9);
+        let (d0, d1) = (unit(first), unit(after.unwrap_or(last)));
+        let Some(curve) = crate::smooth::fit(&points, d0, d1, tolerance) else { return Ok(None) };
+        let curve = Arc::new(curve);
+        let Ok(mut pieces) = nurbs_pieces::pieces(&self.config, Arc::clone(&curve), first.feed, first.line) else {
+            return Ok(None);
+        };
+        // Each piece takes the line of the move its start lies on (by chord length).
+        let mut s = 0.0;
+        let ends: Vec<f64> = std::iter::once(self.start)
+            .chain(run.iter().map(|m| m.end))
+            .collect::<Vec<_>>()
+            .windows(2)
+            .map(|w| {
+                s += norm(sub(w[1], w[0]));
+                s
+            })
+            .collect();
+        for piece in pieces.iter_mut() {
+            if let Shape::Nurbs { u0, .. } = piece.shape {
+                let i = ends.partition_point(|&e| e <= u0).min(run.len() - 1);
+                piece.line = run[i].line;
+            }
+        }
+        let end = pieces.last_mut().expect("a curve has a piece");
+        end.block_end = true;
+        take_after(end, last);
+        Ok(Some(pieces))
     }
 
     /// The elements of move `m`, `next` the move after it (a line blends into a line).
@@ -978,6 +1071,30 @@ impl<'p> PathStream<'p> {
         }
         Ok(())
     }
+}
+
+/// A move the smoother may take into a run: a fed line in G64 (not A), no longer than
+/// [`crate::smooth::MAX_SEGMENT_TOLERANCES`] times its tolerance, with nothing at its end
+/// but perhaps an exact stop.
+fn smoothable(m: &Move) -> bool {
+    let Some(tolerance) = m.blend else { return false };
+    let length = norm(sub(m.end, m.start));
+    m.arc.is_none()
+        && m.nurbs.is_none()
+        && m.feed.is_finite()
+        && m.start[3] == m.end[3]
+        && m.dwell_periods == 0
+        && m.events.is_empty()
+        && length > 0.0
+        && length <= crate::smooth::MAX_SEGMENT_TOLERANCES * tolerance
+}
+
+/// `n` continues the run after `m`: the same feed and tolerance, and a turn of at most
+/// [`crate::smooth::MAX_TURN`] between them.
+fn continues(m: &Move, n: &Move) -> bool {
+    let (a, b) = (sub(m.end, m.start), sub(n.end, n.start));
+    let cos = dot(a, b) / (norm(a) * norm(b));
+    !m.stop_after && m.feed == n.feed && m.blend == n.blend && cos >= crate::smooth::MAX_TURN.cos()
 }
 
 impl Iterator for PathStream<'_> {

@@ -112,6 +112,7 @@ pub mod lookahead;
 pub mod nurbs;
 pub mod nurbs_pieces;
 pub mod program;
+pub mod smooth;
 pub mod vec4;
 pub mod velocity;
 
