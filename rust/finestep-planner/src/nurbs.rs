@@ -198,8 +198,7 @@ impl NurbsCurve {
         {
             return Err(NurbsError::Weight { x, y, weight: w });
         }
-        let homogeneous: Vec<H> =
-            points.iter().map(|&(x, y, w)| [w * x, w * y, w * base[2], w * base[3], w]).collect();
+        let homogeneous: Vec<H> = points.iter().map(|&(x, y, w)| [w * x, w * y, w * base[2], w * base[3], w]).collect();
         let ends = [0, points.len() - 1].map(|i| [points[i].0, points[i].1, base[2], base[3]]);
         Ok(NurbsCurve::from_homogeneous(homogeneous, degree, knots, base, ends, true))
     }
@@ -224,7 +223,14 @@ impl NurbsCurve {
         Ok(NurbsCurve::from_homogeneous(homogeneous, degree, knots, points[0], ends, false))
     }
 
-    fn from_homogeneous(points: Vec<H>, degree: usize, knots: &[f64], base: Vec4, ends: [Vec4; 2], planar: bool) -> NurbsCurve {
+    fn from_homogeneous(
+        points: Vec<H>,
+        degree: usize,
+        knots: &[f64],
+        base: Vec4,
+        ends: [Vec4; 2],
+        planar: bool,
+    ) -> NurbsCurve {
         let d1 = hodograph(&points, knots, degree);
         let d2 = if degree >= 1 { hodograph(&d1, &knots[1..knots.len() - 1], degree - 1) } else { Vec::new() };
         NurbsCurve { degree, knots: knots.to_vec(), points, d1, d2, base, ends, planar }

@@ -255,9 +255,9 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 if !plane_axes.contains(&c) {
                     return 0.0;
                 }
-                let through = window.windows(2).any(|w| {
-                    plane_axes.iter().filter(|&&d| d != c).all(|&d| w[0].tangent[d] * w[1].tangent[d] <= 0.0)
-                });
+                let through = window
+                    .windows(2)
+                    .any(|w| plane_axes.iter().filter(|&&d| d != c).all(|&d| w[0].tangent[d] * w[1].tangent[d] <= 0.0));
                 if through {
                     1.0
                 } else {

@@ -253,11 +253,11 @@ mod tests {
             }
             full[i][i] = 3.0 + i as f64 * 0.1;
         }
-        let band: Vec<[f64; 4]> = (0..n).map(|i| std::array::from_fn(|d| if i >= d { full[i][i - d] } else { 0.0 })).collect();
+        let band: Vec<[f64; 4]> =
+            (0..n).map(|i| std::array::from_fn(|d| if i >= d { full[i][i - d] } else { 0.0 })).collect();
         let x: Vec<Vec4> = (0..n).map(|i| [i as f64, 1.0 - i as f64, 0.5, -2.0 * i as f64]).collect();
-        let mut b: Vec<Vec4> = (0..n)
-            .map(|i| std::array::from_fn(|c| (0..n).map(|j| full[i][j] * x[j][c]).sum()))
-            .collect();
+        let mut b: Vec<Vec4> =
+            (0..n).map(|i| std::array::from_fn(|c| (0..n).map(|j| full[i][j] * x[j][c]).sum())).collect();
         band_solve(band, &mut b).unwrap();
         for i in 0..n {
             for c in 0..4 {
