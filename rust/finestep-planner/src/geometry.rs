@@ -832,6 +832,9 @@ pub struct PathStream<'p> {
     run: Vec<Move>,
     /// Runs of short lines are smoothed (S-curve).
     smoothing: bool,
+    /// Where the last smoothed curve ended, flowing on into the next run, its unit
+    /// tangent and curvature vector there: the next curve starts with them.
+    joint: Option<(Vec4, Vec4, Vec4)>,
 }
 
 /// Canonical blocks as the path reads them, one at a time; an error ends them.
@@ -879,6 +882,7 @@ impl<'p> PathStream<'p> {
             end,
             run: Vec::new(),
             smoothing: config.profile == ProfileKind::SCurve,
+            joint: None,
         })
     }
 
@@ -948,8 +952,16 @@ impl<'p> PathStream<'p> {
         let curved = if flows || last.stop_after { run.len() } else { run.len() - 1 };
         let mut made_to = 0;
         if curved >= crate::smooth::MIN_RUN_MOVES {
-            let after = if curved < run.len() { Some(&run[curved]) } else { following.filter(|_| flows) };
-            if let Some(pieces) = self.smoothed(&run[..curved], after)? {
+            // The curve ends along the line made after it, or where the next run takes
+            // over, along the bisector of the two lines there (the tangent a smooth path
+            // through the vertex has), or along its last line at a stop.
+            let d1 = match following {
+                _ if curved < run.len() => unit(&run[curved]),
+                Some(n) if flows => unit_sum(unit(last), unit(n)),
+                _ => unit(last),
+            };
+            if let Some((pieces, joint)) = self.smoothed(&run[..curved], d1)? {
+                self.joint = (curved == run.len() && flows).then_some(joint);
                 if let Some(b) = self.pending_blend.take() {
                     self.made.push_back(b);
                 }
@@ -969,22 +981,24 @@ impl<'p> PathStream<'p> {
     }
 
     /// The elements of the curve smoothing `run` from where the path is
-    /// ([`PathStream::start`]), ending along `after` (the line the path flows on into)
-    /// or along its last line; `None` when the fit is not within the tolerance.
-    fn smoothed(&self, run: &[Move], after: Option<&Move>) -> Result<Option<Vec<Element>>, ProgramError> {
+    /// ([`PathStream::start`]: along the run's first line, or as the curve before
+    /// ended), ending along `d1`, and its end, tangent and curvature vector; `None` when
+    /// the fit is not within the tolerance.
+    #[allow(clippy::type_complexity)]
+    fn smoothed(&self, run: &[Move], d1: Vec4) -> Result<Option<(Vec<Element>, (Vec4, Vec4, Vec4))>, ProgramError> {
         let first = &run[0];
         let last = &run[run.len() - 1];
         let tolerance = first.blend.unwrap_or(0.0);
-        let unit = |m: &Move| {
-            let d = sub(m.end, m.start);
-            scale(1.0 / norm(d), d)
-        };
         let mut points = Vec::with_capacity(run.len() + 1);
         points.push(self.start);
         points.extend(run.iter().map(|m| m.end));
         points.dedup_by(|b, a| norm(sub(*b, *a)) < 1e-9);
-        let (d0, d1) = (unit(first), unit(after.unwrap_or(last)));
-        let Some(curve) = crate::smooth::fit(&points, d0, d1, tolerance) else { return Ok(None) };
+        let joint = self.joint.filter(|(p, _, _)| *p == self.start && self.pending_blend.is_none());
+        let (d0, k0) = match joint {
+            Some((_, d, k)) => (d, Some(k)),
+            None => (unit(first), None),
+        };
+        let Some(curve) = crate::smooth::fit(&points, d0, k0, d1, tolerance) else { return Ok(None) };
         let curve = Arc::new(curve);
         let Ok(mut pieces) = nurbs_pieces::pieces(&self.config, Arc::clone(&curve), first.feed, first.line) else {
             return Ok(None);
@@ -1009,11 +1023,13 @@ impl<'p> PathStream<'p> {
         let end = pieces.last_mut().expect("a curve has a piece");
         end.block_end = true;
         take_after(end, last);
-        Ok(Some(pieces))
+        let joint = (end.end, d1, end.curvature(true));
+        Ok(Some((pieces, joint)))
     }
 
     /// The elements of move `m`, `next` the move after it (a line blends into a line).
     fn make(&mut self, m: &Move, next: Option<&Move>) -> Result<(), ProgramError> {
+        self.joint = None;
         let config = &self.config;
         let out = &mut self.made;
         if let Some(b) = self.pending_blend.take() {
@@ -1071,6 +1087,18 @@ impl<'p> PathStream<'p> {
         }
         Ok(())
     }
+}
+
+/// The unit direction of a line move.
+fn unit(m: &Move) -> Vec4 {
+    let d = sub(m.end, m.start);
+    scale(1.0 / norm(d), d)
+}
+
+/// The unit bisector of the unit directions `a` and `b`.
+fn unit_sum(a: Vec4, b: Vec4) -> Vec4 {
+    let d = add_scaled(a, 1.0, b);
+    scale(1.0 / norm(d), d)
 }
 
 /// A move the smoother may take into a run: a fed line in G64 (not A), no longer than

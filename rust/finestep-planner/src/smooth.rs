@@ -40,9 +40,11 @@ pub const SAMPLES_PER_SEGMENT: usize = 8;
 /// Weight of the fairing term (control points' second differences) against the data.
 pub const FAIRING: f64 = 1e-2;
 /// The most moves in one run (a longer stretch is several runs, tangent where they meet).
-pub const MAX_RUN_MOVES: usize = 256;
+pub const MAX_RUN_MOVES: usize = 48;
 /// The fewest moves a run must have to be smoothed.
 pub const MIN_RUN_MOVES: usize = 4;
+/// The most times the knot spans where the curve deviates are halved.
+pub const MAX_REFINEMENTS: usize = 6;
 /// A segment longer than this many times P is not smoothed (a long line stays a line).
 pub const MAX_SEGMENT_TOLERANCES: f64 = 100.0;
 /// The largest turn at a vertex inside a run, radians (20 degrees): a sharper vertex is
@@ -70,9 +72,10 @@ fn basis(knots: &[f64], i: usize, u: f64) -> [f64; 4] {
     n
 }
 
-/// The span of `u` among `spans` uniform spans of `h` (index into the clamped knots).
-fn span_of(u: f64, h: f64, spans: usize) -> usize {
-    3 + ((u / h).floor().max(0.0) as usize).min(spans - 1)
+/// The span of `u` in the clamped cubic `knots` (`knots[i] <= u < knots[i + 1]`, the
+/// last span for the end of the domain).
+fn span_of(knots: &[f64], u: f64) -> usize {
+    knots.partition_point(|&k| k <= u).saturating_sub(1).clamp(3, knots.len() - 5)
 }
 
 /// Cholesky of a symmetric positive definite band matrix of half-bandwidth 3 (row `i`
@@ -124,22 +127,31 @@ fn to_segment(p: Vec4, a: Vec4, b: Vec4) -> f64 {
 
 /// The curve of `spans` spans through `points` (chord-length parameters `s`), leaving
 /// along `d0` and ending along `d1` (module docs), or `None` if the system is singular.
-fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, d1: Vec4, spans: usize) -> Option<NurbsCurve> {
+fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, k0: Option<Vec4>, d1: Vec4, inner: &[f64]) -> Option<NurbsCurve> {
     let total = *s.last()?;
-    let h = total / spans as f64;
+    let spans = inner.len() + 1;
     let count = spans + 3;
     let mut knots = vec![0.0; 4];
-    knots.extend((1..spans).map(|j| j as f64 * h));
+    knots.extend_from_slice(inner);
     knots.extend([total; 4]);
+    let (h_first, h_last) = (knots[4], total - knots[count - 1]);
     let (first, last) = (points[0], points[points.len() - 1]);
     let mut q = vec![[0.0; 4]; count];
     q[0] = first;
-    q[1] = add_scaled(first, h / 3.0, d0);
-    q[count - 2] = add_scaled(last, -h / 3.0, d1);
+    q[1] = add_scaled(first, h_first / 3.0, d0);
+    q[count - 2] = add_scaled(last, -h_last / 3.0, d1);
     q[count - 1] = last;
-    let free = spans - 1; // Q_2 .. Q_S
+    // The curvature at the start given: C''(0) = 2 / h_1 (3 (Q_2 - Q_1) / u_5 - d_0) = k_0.
+    let first_free = match k0 {
+        Some(k) if spans >= 2 => {
+            q[2] = add_scaled(q[1], knots[5] / 3.0, add_scaled(d0, 0.5 * h_first, k));
+            3
+        }
+        _ => 2,
+    };
+    let free = (count - 2).saturating_sub(first_free);
     if free > 0 {
-        let fixed = |j: usize| j < 2 || j >= count - 2;
+        let fixed = |j: usize| j < first_free || j >= count - 2;
         let mut m = vec![[0.0; 4]; free];
         let mut rhs = vec![[0.0; 4]; free];
         let mut add_row = |coef: &[(usize, f64)], target: Vec4, weight: f64| {
@@ -150,7 +162,7 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, d1: Vec4, spans: usize) -> Op
                 }
             }
             for &(j, c) in coef.iter().filter(|(j, _)| !fixed(*j)) {
-                let a = j - 2;
+                let a = j - first_free;
                 rhs[a] = add_scaled(rhs[a], weight * c, r);
                 for &(k, ck) in coef.iter().filter(|(k, _)| !fixed(*k) && *k <= j) {
                     m[a][j - k] += weight * c * ck;
@@ -167,7 +179,7 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, d1: Vec4, spans: usize) -> Op
         };
         for k in 0..2 * points.len() - 1 {
             let (p, u) = data(k);
-            let i = span_of(u, h, spans);
+            let i = span_of(&knots, u);
             let n = basis(&knots, i, u.min(total));
             let coef: Vec<(usize, f64)> = (0..4).map(|r| (i - 3 + r, n[r])).collect();
             add_row(&coef, p, 1.0);
@@ -176,18 +188,19 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, d1: Vec4, spans: usize) -> Op
             add_row(&[(j - 1, 1.0), (j, -2.0), (j + 1, 1.0)], [0.0; 4], FAIRING);
         }
         band_solve(m, &mut rhs)?;
-        q[2..2 + free].copy_from_slice(&rhs);
+        q[first_free..first_free + free].copy_from_slice(&rhs);
     }
     NurbsCurve::spatial(&q, 3, &knots).ok()
 }
 
-/// The largest distance of `curve` from the polyline `points` (chord-length
-/// parameters `s`), over [`SAMPLES_PER_SEGMENT`] samples a segment.
-fn deviation(curve: &NurbsCurve, points: &[Vec4], s: &[f64]) -> f64 {
+/// The parameters of the samples of `curve` farther than `limit` from the polyline
+/// `points` (chord-length parameters `s`), over [`SAMPLES_PER_SEGMENT`] samples a
+/// segment.
+fn deviating(curve: &NurbsCurve, points: &[Vec4], s: &[f64], limit: f64) -> Vec<f64> {
     let segments = points.len() - 1;
     let total = s[segments];
     let samples = SAMPLES_PER_SEGMENT * segments;
-    let mut worst = 0.0f64;
+    let mut out = Vec::new();
     let mut j = 0;
     for k in 1..samples {
         let u = total * k as f64 / samples as f64;
@@ -198,15 +211,18 @@ fn deviation(curve: &NurbsCurve, points: &[Vec4], s: &[f64]) -> f64 {
         let near = (j.saturating_sub(2)..=(j + 2).min(segments - 1))
             .map(|i| to_segment(p, points[i], points[i + 1]))
             .fold(f64::INFINITY, f64::min);
-        worst = worst.max(near);
+        if !(near <= limit) {
+            out.push(u);
+        }
     }
-    worst
+    out
 }
 
 /// The curve smoothing the polyline `points` (at least three), leaving along the unit
-/// `d0` and ending along the unit `d1`, within `DEVIATION_SHARE * tolerance` of it
+/// `d0` (with the curvature vector `k0` where given: the curve before it ends so) and
+/// ending along the unit `d1`, within `DEVIATION_SHARE * tolerance` of it
 /// (module docs); `None` when no fit stays within it.
-pub fn fit(points: &[Vec4], d0: Vec4, d1: Vec4, tolerance: f64) -> Option<NurbsCurve> {
+pub fn fit(points: &[Vec4], d0: Vec4, k0: Option<Vec4>, d1: Vec4, tolerance: f64) -> Option<NurbsCurve> {
     if points.len() < 3 {
         return None;
     }
@@ -220,18 +236,43 @@ pub fn fit(points: &[Vec4], d0: Vec4, d1: Vec4, tolerance: f64) -> Option<NurbsC
         s.push(s.last().copied().unwrap_or(0.0) + l);
     }
     let segments = points.len() - 1;
-    let mut spans = segments.div_ceil(SEGMENTS_PER_SPAN).max(1);
-    loop {
-        if let Some(curve) = fit_spans(points, &s, d0, d1, spans) {
-            if deviation(&curve, points, &s) <= DEVIATION_SHARE * tolerance {
-                return Some(curve);
+    let total = s[segments];
+    let shortest = s.windows(2).map(|w| w[1] - w[0]).fold(f64::INFINITY, f64::min);
+    let least = if k0.is_some() { 2 } else { 1 };
+    let spans = segments.div_ceil(SEGMENTS_PER_SPAN).max(least);
+    let mut inner: Vec<f64> = (1..spans).map(|j| total * j as f64 / spans as f64).collect();
+    for _ in 0..MAX_REFINEMENTS {
+        let curve = fit_spans(points, &s, d0, k0, d1, &inner)?;
+        let bad = deviating(&curve, points, &s, DEVIATION_SHARE * tolerance);
+        if bad.is_empty() {
+            return Some(curve);
+        }
+        // Halve every span holding a sample too far (and its neighbours).
+        let mut knots = vec![0.0];
+        knots.extend_from_slice(&inner);
+        knots.push(total);
+        let mut split = vec![false; knots.len() - 1];
+        for u in bad {
+            let i = knots.partition_point(|&k| k <= u).saturating_sub(1).min(split.len() - 1);
+            for j in i.saturating_sub(1)..=(i + 1).min(split.len() - 1) {
+                split[j] = true;
             }
         }
-        if spans >= segments {
+        let mut refined = Vec::with_capacity(2 * inner.len() + 2);
+        for (j, w) in knots.windows(2).enumerate() {
+            if j > 0 {
+                refined.push(w[0]);
+            }
+            if split[j] && w[1] - w[0] > 0.5 * shortest {
+                refined.push(0.5 * (w[0] + w[1]));
+            }
+        }
+        if refined.len() == inner.len() {
             return None;
         }
-        spans = (2 * spans).min(segments);
+        inner = refined;
     }
+    None
 }
 
 #[cfg(test)]
@@ -271,7 +312,7 @@ mod tests {
         let knots = [0.0, 0.0, 0.0, 0.0, 1.0, 2.0, 3.0, 3.0, 3.0, 3.0];
         for k in 0..30 {
             let u = 3.0 * k as f64 / 30.0;
-            let n = basis(&knots, span_of(u, 1.0, 3), u);
+            let n = basis(&knots, span_of(&knots, u), u);
             assert!((n.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         }
     }
