@@ -31,6 +31,24 @@
 //! flow at the speed both allow. For the same P the clothoids reach further along the
 //! lines than the circle (about 1.5 times for small angles) and peak at a higher
 //! curvature (about 4/3 of the circle's).
+//!
+//! # Smoothing short segments (S-curve)
+//!
+//! A blend has at most half of either line, so on short segments (CAM output) every
+//! vertex turns within the two segments around it and the clothoids' turning jerk caps
+//! the speed there. With [`Resolved::smooth_short_segments`] (the S-curve profile) a run
+//! of fed lines in G64, each at most [`crate::smooth::MAX_SEGMENT_TOLERANCES`] times P
+//! long, turning at most [`crate::smooth::MAX_TURN`] at every vertex, with the same
+//! feed and P and nothing between them (no dwell, I/O or stop), becomes one cubic
+//! B-spline within P of the lines ([`crate::smooth::fit`]), as NURBS sub-pieces
+//! ([`crate::nurbs_pieces`]). The curve leaves along the run's first line (a corner
+//! blend before it ends tangent to it); where the run flows on into the next run it
+//! ends along the bisector of the vertex there, and the next curve starts with the same
+//! tangent and curvature; where it turns a corner the run's last line stays a line and
+//! the corner is blended as before. Runs hold at most [`crate::smooth::MAX_RUN_MOVES`]
+//! moves and at least [`crate::smooth::MIN_RUN_MOVES`]; a run whose fit is not within
+//! P is made line by line. The curve's pieces take the lines of the moves they start on;
+//! only the last carries the block end.
 
 use std::borrow::Cow;
 use std::collections::VecDeque;
@@ -830,7 +848,7 @@ pub struct PathStream<'p> {
     end: Arc<OnceLock<Vec4>>,
     /// Short lines read for the smoother ([`crate::smooth`]), not yet made.
     run: Vec<Move>,
-    /// Runs of short lines are smoothed (S-curve).
+    /// Runs of short lines are smoothed ([`Resolved::smooth_short_segments`]).
     smoothing: bool,
     /// Where the last smoothed curve ended, flowing on into the next run, its unit
     /// tangent and curvature vector there: the next curve starts with them.
@@ -881,7 +899,7 @@ impl<'p> PathStream<'p> {
             done,
             end,
             run: Vec::new(),
-            smoothing: config.profile == ProfileKind::SCurve,
+            smoothing: config.smooth_short_segments,
             joint: None,
         })
     }
@@ -1000,7 +1018,8 @@ impl<'p> PathStream<'p> {
         };
         let Some(curve) = crate::smooth::fit(&points, d0, k0, d1, tolerance) else { return Ok(None) };
         let curve = Arc::new(curve);
-        let Ok(mut pieces) = nurbs_pieces::pieces(&self.config, Arc::clone(&curve), first.feed, first.line) else {
+        let per_span = crate::smooth::SAMPLES_PER_SPAN;
+        let Ok(mut pieces) = nurbs_pieces::pieces_sampled(&self.config, curve, first.feed, first.line, per_span) else {
             return Ok(None);
         };
         // Each piece takes the line of the move its start lies on (by chord length).
@@ -1433,14 +1452,16 @@ mod tests {
         finestep_gcode::parse_str(&text, "cam.ngc").unwrap()
     }
 
-    /// S-curve: on the short segments of a CAM program with a Z staircase every
-    /// line-line corner is a clothoid blend, and no junction jumps (the circles of
+    /// S-curve without the smoother: on the short segments of a CAM program with a Z
+    /// staircase every line-line corner is a clothoid blend, and no junction jumps (the circles of
     /// trapezoid mode jump in curvature at nearly every one in S-curve terms), so every
     /// junction flows at the speed of the elements around it.
     #[test]
     fn s_curve_blends_short_segments_without_a_curvature_jump() {
         let program = wavy_staircase();
-        let config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
+        // Corner by corner, the smoother off (with it the runs become one curve).
+        let mut config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
+        config.smooth_short_segments = false;
         let path = super::elements(&config, &program).unwrap().elements;
         let blends = path.iter().filter(|e| matches!(e.shape, super::Shape::Clothoid { .. })).count();
         assert!(blends >= 290, "{blends} clothoid blends");

@@ -82,7 +82,18 @@ fn hodograph(points: &[H], knots: &[f64], p: usize) -> Vec<H> {
 /// De Boor's algorithm: the B-spline of degree `p` with control points `points` on
 /// `knots` at `u` in the knot span `i` (`knots[i] <= u < knots[i + 1]`, p <= i).
 fn de_boor(points: &[H], knots: &[f64], p: usize, i: usize, u: f64) -> H {
-    let mut d = [[0.0; 5]; 24];
+    // Cubics and below (the smoother's curves, most G5.2 curves) on a small stack array.
+    if p <= 3 {
+        de_boor_in::<4>(points, knots, p, i, u)
+    } else {
+        de_boor_in::<24>(points, knots, p, i, u)
+    }
+}
+
+/// [`de_boor`] with room for degree `N - 1`.
+#[inline(always)]
+fn de_boor_in<const N: usize>(points: &[H], knots: &[f64], p: usize, i: usize, u: f64) -> H {
+    let mut d = [[0.0; 5]; N];
     for j in 0..=p {
         d[j] = points[j + i - p];
     }
@@ -131,7 +142,7 @@ impl Derivatives {
         let ff: f64 = f.iter().map(|c| c * c).sum();
         let ss: f64 = s.iter().map(|c| c * c).sum();
         let fs: f64 = f.iter().zip(s).map(|(a, b)| a * b).sum();
-        (ff * ss - fs * fs).max(0.0).sqrt() / ff.powf(1.5)
+        (ff * ss - fs * fs).max(0.0).sqrt() / (ff * ff.sqrt())
     }
 }
 

@@ -56,22 +56,16 @@ fn cusp_error(d: &Derivatives) -> NurbsError {
 /// then bisected wherever the tangent turns by more than [`MAX_SAMPLE_TURN`] between
 /// neighbours, so that no sharp bend hides between samples. A turn of more than a
 /// right angle that bisection cannot resolve is a cusp: refused.
-fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, NurbsError> {
+fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64, per_span: usize) -> Result<Vec<f64>, NurbsError> {
     let tangent = |u: f64| {
         let d = curve.derivatives_on(u, ua);
         let speed = d.speed();
         (d.first.map(|c| c / speed), d)
     };
     let mut out = vec![ua];
-    let mut stack: Vec<(f64, f64, u32)> = (0..SAMPLES_PER_SPAN)
+    let mut stack: Vec<(f64, f64, u32)> = (0..per_span)
         .rev()
-        .map(|j| {
-            (
-                ua + (ub - ua) * j as f64 / SAMPLES_PER_SPAN as f64,
-                ua + (ub - ua) * (j + 1) as f64 / SAMPLES_PER_SPAN as f64,
-                0,
-            )
-        })
+        .map(|j| (ua + (ub - ua) * j as f64 / per_span as f64, ua + (ub - ua) * (j + 1) as f64 / per_span as f64, 0))
         .collect();
     while let Some((a, b, depth)) = stack.pop() {
         let (ta, da) = tangent(a);
@@ -131,18 +125,34 @@ struct Sample {
 /// docs), for the block on `line` at `feed` units/s; `Err` when the curve cannot be
 /// followed (a cusp: the parametric speed vanishes).
 pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize) -> Result<Vec<Element>, NurbsError> {
+    pieces_sampled(config, curve, feed, line, SAMPLES_PER_SPAN)
+}
+
+/// [`pieces`] with `per_span` uniform samples a knot span before bisection (the
+/// smoother's cubic spans, a millimetre or two long, take fewer:
+/// [`crate::smooth::SAMPLES_PER_SPAN`]).
+pub fn pieces_sampled(
+    config: &Resolved,
+    curve: Arc<NurbsCurve>,
+    feed: f64,
+    line: usize,
+    per_span: usize,
+) -> Result<Vec<Element>, NurbsError> {
     let scurve = config.profile == ProfileKind::SCurve;
     // The axes the curve moves: X and Y for a G5.2 curve, those whose control points
     // differ for the smoother's.
     let plane_axes: Vec<usize> = (0..4).filter(|&a| curve.moves(a)).collect();
     let mut out = Vec::new();
     let (start_u, end_u) = curve.domain();
-    let size = {
+    let size = if curve.planar() {
         let (a, b) = (curve.point(start_u), curve.point(end_u));
         norm(sub(b, a)).max(curve.arc_length_composite(start_u, end_u, 8)).max(1e-9)
+    } else {
+        // The smoother's curves are parameterised by the chord length of their polyline.
+        (end_u - start_u).max(1e-9)
     };
     for (ua, ub) in curve.spans() {
-        let params = sample_parameters(&curve, ua, ub)?;
+        let params = sample_parameters(&curve, ua, ub, per_span)?;
         let m = params.len() - 1;
         let mut samples: Vec<Sample> = Vec::with_capacity(m + 1);
         for &u in &params {

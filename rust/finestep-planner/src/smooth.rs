@@ -30,13 +30,17 @@
 use crate::nurbs::NurbsCurve;
 use crate::vec4::{add_scaled, dot, norm, scale, sub, Vec4};
 
+/// Uniform samples of the speed limit per knot span of a smoothed curve (before the
+/// bisection of [`crate::nurbs_pieces`]; a G5.2 curve takes
+/// [`crate::nurbs_pieces::SAMPLES_PER_SPAN`]).
+pub const SAMPLES_PER_SPAN: usize = 8;
 /// Segments of the run per knot span where the fit starts.
 pub const SEGMENTS_PER_SPAN: usize = 6;
 /// Largest distance of the curve from the polyline, as a share of the tolerance P
 /// (the rest covers the samples' spacing).
 pub const DEVIATION_SHARE: f64 = 0.8;
 /// Curve samples per segment for the deviation.
-pub const SAMPLES_PER_SEGMENT: usize = 8;
+pub const SAMPLES_PER_SEGMENT: usize = 4;
 /// Weight of the fairing term (control points' second differences) against the data.
 pub const FAIRING: f64 = 1e-2;
 /// The most moves in one run (a longer stretch is several runs, tangent where they meet).
@@ -90,7 +94,7 @@ fn band_solve(mut m: Vec<[f64; 4]>, rhs: &mut [Vec4]) -> Option<()> {
                 sum -= m[i][i - k] * m[j][j - k];
             }
             if d == 0 {
-                if !(sum > 0.0) {
+                if sum.is_nan() || sum <= 0.0 {
                     return None;
                 }
                 m[i][0] = sum.sqrt();
@@ -170,7 +174,7 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, k0: Option<Vec4>, d1: Vec4, i
             }
         };
         let data = |k: usize| -> (Vec4, f64) {
-            if k % 2 == 0 {
+            if k.is_multiple_of(2) {
                 (points[k / 2], s[k / 2])
             } else {
                 let (a, b) = (points[k / 2], points[k / 2 + 1]);
@@ -211,7 +215,7 @@ fn deviating(curve: &NurbsCurve, points: &[Vec4], s: &[f64], limit: f64) -> Vec<
         let near = (j.saturating_sub(2)..=(j + 2).min(segments - 1))
             .map(|i| to_segment(p, points[i], points[i + 1]))
             .fold(f64::INFINITY, f64::min);
-        if !(near <= limit) {
+        if near.is_nan() || near > limit {
             out.push(u);
         }
     }
@@ -230,7 +234,7 @@ pub fn fit(points: &[Vec4], d0: Vec4, k0: Option<Vec4>, d1: Vec4, tolerance: f64
     s.push(0.0);
     for w in points.windows(2) {
         let l = norm(sub(w[1], w[0]));
-        if !(l > 0.0) {
+        if l.is_nan() || l <= 0.0 {
             return None;
         }
         s.push(s.last().copied().unwrap_or(0.0) + l);
