@@ -355,8 +355,26 @@ impl NurbsCurve {
     }
 
     /// |C'(u)| on the span holding `start`.
+    /// (The first derivative alone, as [`NurbsCurve::derivatives_on`] computes it: the
+    /// quadratures of the arc length need nothing else. A B-spline of the smoother,
+    /// whose weights are all 1, needs only its hodograph.)
     fn speed(&self, u: f64, start: f64) -> f64 {
-        self.derivatives_on(u, start).speed()
+        let p = self.degree;
+        if p == 0 {
+            return 0.0;
+        }
+        let i = self.span(start);
+        let inner = &self.knots[1..self.knots.len() - 1];
+        let a1 = de_boor(&self.d1, inner, p - 1, i - 1, u);
+        if self.planar {
+            let a = de_boor(&self.points, &self.knots, p, i, u);
+            let w = a[4];
+            let first = [0, 1].map(|c| (a1[c] - a1[4] * (a[c] / w)) / w);
+            first[0].hypot(first[1])
+        } else {
+            // Weights 1: C' is the hodograph itself.
+            (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt()
+        }
     }
 
     /// Arc length from `a` to `b` (within one span) by 5-point Gauss-Legendre quadrature,

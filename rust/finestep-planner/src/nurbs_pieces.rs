@@ -200,14 +200,15 @@ pub fn pieces_sampled(
         }
         // The curvature inside each interval too, at the three points the tangent bound
         // below evaluates: a peak between samples lowers the interval's cap.
-        let inner_k: Vec<f64> = (0..m)
+        // The derivatives at the three inner points of every interval, read for both.
+        let inner_d: Vec<[Derivatives; 3]> = (0..m)
             .map(|j| {
                 let (a, b) = (samples[j].u, samples[j + 1].u);
-                (1..4)
-                    .map(|i| curve.derivatives_on(a + (b - a) * i as f64 / 4.0, ua).curvature().abs())
-                    .fold(0.0, f64::max)
+                std::array::from_fn(|i| curve.derivatives_on(a + (b - a) * (i + 1) as f64 / 4.0, ua))
             })
             .collect();
+        let inner_k: Vec<f64> =
+            inner_d.iter().map(|d| d.iter().map(|d| d.curvature().abs()).fold(0.0, f64::max)).collect();
         let inner_cap: Vec<f64> = (0..m).map(|j| cap_of(inner_k[j], dk[j].max(dk[j + 1]))).collect();
         // Per interval and axis, the largest tangent component: parabolas through the
         // values at five points of the interval, at their vertices where those are inside
@@ -215,11 +216,10 @@ pub fn pieces_sampled(
         // millionth high.
         let tangent_max: Vec<Vec4> = (0..m)
             .map(|j| {
-                let (a, b) = (samples[j].u, samples[j + 1].u);
                 let mut f = [samples[j].tangent; 5];
                 f[4] = samples[j + 1].tangent;
                 for (i, slot) in f.iter_mut().enumerate().take(4).skip(1) {
-                    let d = curve.derivatives_on(a + (b - a) * i as f64 / 4.0, ua);
+                    let d = &inner_d[j][i - 1];
                     let speed = d.speed();
                     *slot = d.first.map(|c| c / speed);
                 }
