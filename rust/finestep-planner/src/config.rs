@@ -529,6 +529,10 @@ pub struct Resolved {
     pub chord_tolerance_mm: f64,
     /// Look-ahead in moves.
     pub lookahead_moves: usize,
+    /// Runs of short G1 segments in G64 are smoothed into one curve within P
+    /// ([`crate::smooth`]): on with the S-curve profile, whose jerk limit caps the speed
+    /// at every blend squeezed between two short segments.
+    pub smooth_short_segments: bool,
     /// S at full spindle level, rev/min.
     pub spindle_max_rpm: f64,
     /// The gantry pair, when `[gantry]` enables it.
@@ -755,6 +759,7 @@ impl MachineConfig {
             path_tolerance_mm: self.path_tolerance_mm,
             chord_tolerance_mm: self.chord_tolerance_mm,
             lookahead_moves: self.lookahead_moves,
+            smooth_short_segments: self.profile == ProfileKind::SCurve,
             spindle_max_rpm: self.spindle.max_rpm,
             gantry,
             notes,

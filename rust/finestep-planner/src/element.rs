@@ -281,7 +281,7 @@ impl Element {
             Shape::Nurbs { ref curve, u0, u1 } => {
                 let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
                 let speed = d.speed();
-                [d.first[0] / speed, d.first[1] / speed, 0.0, 0.0]
+                d.first.map(|c| c / speed)
             }
             Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
                 let f: f64 = if at_end { 1.0 } else { 0.0 };
@@ -305,10 +305,9 @@ impl Element {
                 // (C'' - (C''.T) T) / |C'|^2
                 let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
                 let speed = d.speed();
-                let t = [d.first[0] / speed, d.first[1] / speed];
-                let along = d.second[0] * t[0] + d.second[1] * t[1];
-                let k = [0, 1].map(|c| (d.second[c] - along * t[c]) / (speed * speed));
-                [k[0], k[1], 0.0, 0.0]
+                let t = d.first.map(|c| c / speed);
+                let along: f64 = d.second.iter().zip(&t).map(|(a, b)| a * b).sum();
+                std::array::from_fn(|c| (d.second[c] - along * t[c]) / (speed * speed))
             }
             Shape::Arc { e1, e2, sweep, .. } => {
                 let (planar, r) = self.planar_fraction_and_radius();
@@ -359,11 +358,12 @@ pub fn clothoid_xy(s: f64, sharpness: f64) -> (f64, f64) {
     (s * x, s * y)
 }
 
-/// The inputs of [`full_caps`] an element's caps came from (on two axes, X and Y).
+/// The inputs of [`full_caps`] an element's caps came from (X, Y, Z, A; an axis the
+/// element does not move has `w` and `n` 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Needs {
     /// The axes as the element sees them.
-    pub axes: [AxisShare; 2],
+    pub axes: [AxisShare; 4],
     /// Largest curvature, 1/units.
     pub k: f64,
     /// Largest |dk/ds|, 1/units^2.

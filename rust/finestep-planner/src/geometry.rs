@@ -31,6 +31,24 @@
 //! flow at the speed both allow. For the same P the clothoids reach further along the
 //! lines than the circle (about 1.5 times for small angles) and peak at a higher
 //! curvature (about 4/3 of the circle's).
+//!
+//! # Smoothing short segments (S-curve)
+//!
+//! A blend has at most half of either line, so on short segments (CAM output) every
+//! vertex turns within the two segments around it and the clothoids' turning jerk caps
+//! the speed there. With [`Resolved::smooth_short_segments`] (the S-curve profile) a run
+//! of fed lines in G64, each at most [`crate::smooth::MAX_SEGMENT_TOLERANCES`] times P
+//! long, turning at most [`crate::smooth::MAX_TURN`] at every vertex, with the same
+//! feed and P and nothing between them (no dwell, I/O or stop), becomes one cubic
+//! B-spline within P of the lines ([`crate::smooth::fit`]), as NURBS sub-pieces
+//! ([`crate::nurbs_pieces`]). The curve leaves along the run's first line (a corner
+//! blend before it ends tangent to it); where the run flows on into the next run it
+//! ends along the bisector of the vertex there, and the next curve starts with the same
+//! tangent and curvature; where it turns a corner the run's last line stays a line and
+//! the corner is blended as before. Runs hold at most [`crate::smooth::MAX_RUN_MOVES`]
+//! moves and at least [`crate::smooth::MIN_RUN_MOVES`]; a run whose fit is not within
+//! P is made line by line. The curve's pieces take the lines of the moves they start on;
+//! only the last carries the block end.
 
 use std::borrow::Cow;
 use std::collections::VecDeque;
@@ -828,6 +846,13 @@ pub struct PathStream<'p> {
     ready: VecDeque<Element>,
     done: bool,
     end: Arc<OnceLock<Vec4>>,
+    /// Short lines read for the smoother ([`crate::smooth`]), not yet made.
+    run: Vec<Move>,
+    /// Runs of short lines are smoothed ([`Resolved::smooth_short_segments`]).
+    smoothing: bool,
+    /// Where the last smoothed curve ended, flowing on into the next run, its unit
+    /// tangent and curvature vector there: the next curve starts with them.
+    joint: Option<(Vec4, Vec4, Vec4)>,
 }
 
 /// Canonical blocks as the path reads them, one at a time; an error ends them.
@@ -873,6 +898,9 @@ impl<'p> PathStream<'p> {
             ready: VecDeque::new(),
             done,
             end,
+            run: Vec::new(),
+            smoothing: config.smooth_short_segments,
+            joint: None,
         })
     }
 
@@ -897,11 +925,22 @@ impl<'p> PathStream<'p> {
         self.sharing.peak
     }
 
-    /// Reads one move and makes the elements of the move before it.
+    /// Reads one move and makes the elements of the move before it (or keeps it for a
+    /// run of short lines to smooth, made once the run ends).
     fn advance(&mut self) -> Result<(), ProgramError> {
         let next = self.reader.next_move(&self.config, &mut self.blocks)?;
         if let Some(m) = self.current.take() {
-            self.make(&m, next.as_ref())?;
+            if self.smoothing && smoothable(&m) {
+                let goes_on = !m.stop_after
+                    && self.run.len() + 1 < crate::smooth::MAX_RUN_MOVES
+                    && next.as_ref().is_some_and(|n| smoothable(n) && continues(&m, n));
+                self.run.push(m);
+                if !goes_on {
+                    self.flush_run(next.as_ref())?;
+                }
+            } else {
+                self.make(&m, next.as_ref())?;
+            }
         }
         self.current = next;
         if self.current.is_none() {
@@ -919,8 +958,97 @@ impl<'p> PathStream<'p> {
         Ok(())
     }
 
+    /// The run of short lines kept ([`PathStream::run`]), `following` the move after
+    /// it: one smoothed curve ([`crate::smooth`]) when the run is long enough and the
+    /// fit stays within P, else line by line. Where the path turns a corner into
+    /// `following` (or it is no line), the run's last line is made as a line, so that
+    /// its corner is blended as before and the curve ends tangent to it.
+    fn flush_run(&mut self, following: Option<&Move>) -> Result<(), ProgramError> {
+        let run = std::mem::take(&mut self.run);
+        let Some(last) = run.last() else { return Ok(()) };
+        let flows = following.is_some_and(|n| smoothable(n) && continues(last, n));
+        let curved = if flows || last.stop_after { run.len() } else { run.len() - 1 };
+        let mut made_to = 0;
+        if curved >= crate::smooth::MIN_RUN_MOVES {
+            // The curve ends along the line made after it, or where the next run takes
+            // over, along the bisector of the two lines there (the tangent a smooth path
+            // through the vertex has), or along its last line at a stop.
+            let d1 = match following {
+                _ if curved < run.len() => unit(&run[curved]),
+                Some(n) if flows => unit_sum(unit(last), unit(n)),
+                _ => unit(last),
+            };
+            if let Some((pieces, joint)) = self.smoothed(&run[..curved], d1)? {
+                self.joint = (curved == run.len() && flows).then_some(joint);
+                if let Some(b) = self.pending_blend.take() {
+                    self.made.push_back(b);
+                }
+                self.made.extend(pieces);
+                self.start = run[curved - 1].end;
+                while self.made.len() > 1 {
+                    let e = self.made.pop_front().expect("an element");
+                    self.sharing.push(&self.config, e, &mut self.ready);
+                }
+                made_to = curved;
+            }
+        }
+        for i in made_to..run.len() {
+            self.make(&run[i], run.get(i + 1).or(following))?;
+        }
+        Ok(())
+    }
+
+    /// The elements of the curve smoothing `run` from where the path is
+    /// ([`PathStream::start`]: along the run's first line, or as the curve before
+    /// ended), ending along `d1`, and its end, tangent and curvature vector; `None` when
+    /// the fit is not within the tolerance.
+    #[allow(clippy::type_complexity)]
+    fn smoothed(&self, run: &[Move], d1: Vec4) -> Result<Option<(Vec<Element>, (Vec4, Vec4, Vec4))>, ProgramError> {
+        let first = &run[0];
+        let last = &run[run.len() - 1];
+        let tolerance = first.blend.unwrap_or(0.0);
+        let mut points = Vec::with_capacity(run.len() + 1);
+        points.push(self.start);
+        points.extend(run.iter().map(|m| m.end));
+        points.dedup_by(|b, a| norm(sub(*b, *a)) < 1e-9);
+        let joint = self.joint.filter(|(p, _, _)| *p == self.start && self.pending_blend.is_none());
+        let (d0, k0) = match joint {
+            Some((_, d, k)) => (d, Some(k)),
+            None => (unit(first), None),
+        };
+        let Some(curve) = crate::smooth::fit(&points, d0, k0, d1, tolerance) else { return Ok(None) };
+        let curve = Arc::new(curve);
+        let per_span = crate::smooth::SAMPLES_PER_SPAN;
+        let Ok(mut pieces) = nurbs_pieces::pieces_sampled(&self.config, curve, first.feed, first.line, per_span) else {
+            return Ok(None);
+        };
+        // Each piece takes the line of the move its start lies on (by chord length).
+        let mut s = 0.0;
+        let ends: Vec<f64> = std::iter::once(self.start)
+            .chain(run.iter().map(|m| m.end))
+            .collect::<Vec<_>>()
+            .windows(2)
+            .map(|w| {
+                s += norm(sub(w[1], w[0]));
+                s
+            })
+            .collect();
+        for piece in pieces.iter_mut() {
+            if let Shape::Nurbs { u0, .. } = piece.shape {
+                let i = ends.partition_point(|&e| e <= u0).min(run.len() - 1);
+                piece.line = run[i].line;
+            }
+        }
+        let end = pieces.last_mut().expect("a curve has a piece");
+        end.block_end = true;
+        take_after(end, last);
+        let joint = (end.end, d1, end.curvature(true));
+        Ok(Some((pieces, joint)))
+    }
+
     /// The elements of move `m`, `next` the move after it (a line blends into a line).
     fn make(&mut self, m: &Move, next: Option<&Move>) -> Result<(), ProgramError> {
+        self.joint = None;
         let config = &self.config;
         let out = &mut self.made;
         if let Some(b) = self.pending_blend.take() {
@@ -978,6 +1106,42 @@ impl<'p> PathStream<'p> {
         }
         Ok(())
     }
+}
+
+/// The unit direction of a line move.
+fn unit(m: &Move) -> Vec4 {
+    let d = sub(m.end, m.start);
+    scale(1.0 / norm(d), d)
+}
+
+/// The unit bisector of the unit directions `a` and `b`.
+fn unit_sum(a: Vec4, b: Vec4) -> Vec4 {
+    let d = add_scaled(a, 1.0, b);
+    scale(1.0 / norm(d), d)
+}
+
+/// A move the smoother may take into a run: a fed line in G64 (not A), no longer than
+/// [`crate::smooth::MAX_SEGMENT_TOLERANCES`] times its tolerance, with nothing at its end
+/// but perhaps an exact stop.
+fn smoothable(m: &Move) -> bool {
+    let Some(tolerance) = m.blend else { return false };
+    let length = norm(sub(m.end, m.start));
+    m.arc.is_none()
+        && m.nurbs.is_none()
+        && m.feed.is_finite()
+        && m.start[3] == m.end[3]
+        && m.dwell_periods == 0
+        && m.events.is_empty()
+        && length > 0.0
+        && length <= crate::smooth::MAX_SEGMENT_TOLERANCES * tolerance
+}
+
+/// `n` continues the run after `m`: the same feed and tolerance, and a turn of at most
+/// [`crate::smooth::MAX_TURN`] between them.
+fn continues(m: &Move, n: &Move) -> bool {
+    let (a, b) = (sub(m.end, m.start), sub(n.end, n.start));
+    let cos = dot(a, b) / (norm(a) * norm(b));
+    !m.stop_after && m.feed == n.feed && m.blend == n.blend && cos >= crate::smooth::MAX_TURN.cos()
 }
 
 impl Iterator for PathStream<'_> {
@@ -1288,14 +1452,16 @@ mod tests {
         finestep_gcode::parse_str(&text, "cam.ngc").unwrap()
     }
 
-    /// S-curve: on the short segments of a CAM program with a Z staircase every
-    /// line-line corner is a clothoid blend, and no junction jumps (the circles of
+    /// S-curve without the smoother: on the short segments of a CAM program with a Z
+    /// staircase every line-line corner is a clothoid blend, and no junction jumps (the circles of
     /// trapezoid mode jump in curvature at nearly every one in S-curve terms), so every
     /// junction flows at the speed of the elements around it.
     #[test]
     fn s_curve_blends_short_segments_without_a_curvature_jump() {
         let program = wavy_staircase();
-        let config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
+        // Corner by corner, the smoother off (with it the runs become one curve).
+        let mut config = MachineConfig { profile: ProfileKind::SCurve, ..MachineConfig::default() }.resolve().unwrap();
+        config.smooth_short_segments = false;
         let path = super::elements(&config, &program).unwrap().elements;
         let blends = path.iter().filter(|e| matches!(e.shape, super::Shape::Clothoid { .. })).count();
         assert!(blends >= 290, "{blends} clothoid blends");

@@ -7,7 +7,9 @@
 //!    limits, T, the FPGA clock, drive timing, tolerances) from a TOML file or defaults.
 //! 2. [`geometry`]: programmed lines and arcs with vertices on whole steps; in G64 each
 //!    line-line corner becomes a blend arc within the path tolerance P (in S-curve mode
-//!    a pair of clothoids, continuous in curvature); per-axis limits
+//!    a pair of clothoids, continuous in curvature), and in S-curve mode a run of short
+//!    nearly collinear lines is first smoothed into one cubic B-spline within P
+//!    ([`smooth`]); per-axis limits
 //!    projected onto each element's direction give its speed, acceleration and jerk caps.
 //!    A NURBS (G5.2/G5.3) becomes sub-pieces of the true curve with their own caps from
 //!    its curvature ([`nurbs`]).
@@ -28,7 +30,9 @@
 //! the look-ahead window reaches it, the look-ahead runs a window at a time as the
 //! records are read, elements the interpolation has left and records are not kept, so a
 //! move or program of any duration or length plans in the same memory (no period cap,
-//! at most a window of `4 * lookahead_moves` elements and two more). [`plan_stream`]
+//! at most a window of `4 * lookahead_moves` elements and two more, and in S-curve mode
+//! up to [`velocity::MAX_RUN_ELEMENTS`] more where a run of curve pieces planned as one
+//! speed change reaches past the window). [`plan_stream`]
 //! borrows a parsed program ([`finestep_gcode::Program`], held whole, and copied whole
 //! where cutter compensation is on); [`plan_blocks`] reads the program as the window
 //! reaches it from the parser's stream ([`finestep_gcode::stream_file`]: the file read
@@ -81,7 +85,9 @@
 //!   their own turning jerk `|k'| v^3` (`k' = phi / L^2`, L each clothoid's length;
 //!   the blend reaches at most half of the shorter line): on short segments still well below the feed
 //!   (the turning at every vertex, step rounding and a Z staircase included, is taken
-//!   within the two segments around it). The jerk limit is also kept where the
+//!   within the two segments around it), so in S-curve mode runs of short segments are
+//!   smoothed across many segments instead ([`smooth`]); their speed is then capped by
+//!   the curve's own curvature and its change, as on a NURBS. The jerk limit is also kept where the
 //!   curvature jumps (a line entering an arc): about `sqrt(0.25 J T R)` there, slow at the default jerk
 //!   (up to `sqrt(0.7 J T R)` where the elements around take less of the jerk
 //!   for speeding up, [`element::jump_jerk_share`]). Around a
@@ -112,6 +118,7 @@ pub mod lookahead;
 pub mod nurbs;
 pub mod nurbs_pieces;
 pub mod program;
+pub mod smooth;
 pub mod vec4;
 pub mod velocity;
 

@@ -43,9 +43,11 @@ const GAUSS: [(f64, f64); 5] = [
 /// [`NurbsCurve::arc_length`] halves the interval.
 pub const QUADRATURE_SPEED_SPREAD: f64 = 0.05;
 
-type H = [f64; 3];
+/// Homogeneous coordinates `(w x, w y, w z, w a, w)`.
+type H = [f64; 5];
 
-/// A NURBS curve in the XY plane; the other axes stay at `base`.
+/// A NURBS curve over the four axes: a G5.2/G5.3 curve in the XY plane (Z and A at
+/// `base`), or a curve of the path smoother ([`crate::smooth`]) over all four.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NurbsCurve {
     degree: usize,
@@ -57,7 +59,9 @@ pub struct NurbsCurve {
     d2: Vec<H>,
     base: Vec4,
     /// The first and last control points, which the clamped curve passes exactly.
-    ends: [[f64; 2]; 2],
+    ends: [Vec4; 2],
+    /// The curve stays in the XY plane (Z and A at `base`).
+    planar: bool,
 }
 
 /// Control points of the derivative of a B-spline of degree `p` on `knots`: degree
@@ -70,7 +74,7 @@ fn hodograph(points: &[H], knots: &[f64], p: usize) -> Vec<H> {
         .map(|i| {
             let span = knots[i + p + 1] - knots[i + 1];
             let k = if span > 0.0 { p as f64 / span } else { 0.0 };
-            [0, 1, 2].map(|c| k * (points[i + 1][c] - points[i][c]))
+            std::array::from_fn(|c| k * (points[i + 1][c] - points[i][c]))
         })
         .collect()
 }
@@ -78,7 +82,18 @@ fn hodograph(points: &[H], knots: &[f64], p: usize) -> Vec<H> {
 /// De Boor's algorithm: the B-spline of degree `p` with control points `points` on
 /// `knots` at `u` in the knot span `i` (`knots[i] <= u < knots[i + 1]`, p <= i).
 fn de_boor(points: &[H], knots: &[f64], p: usize, i: usize, u: f64) -> H {
-    let mut d = [[0.0; 3]; 24];
+    // Cubics and below (the smoother's curves, most G5.2 curves) on a small stack array.
+    if p <= 3 {
+        de_boor_in::<4>(points, knots, p, i, u)
+    } else {
+        de_boor_in::<24>(points, knots, p, i, u)
+    }
+}
+
+/// [`de_boor`] with room for degree `N - 1`.
+#[inline(always)]
+fn de_boor_in<const N: usize>(points: &[H], knots: &[f64], p: usize, i: usize, u: f64) -> H {
+    let mut d = [[0.0; 5]; N];
     for j in 0..=p {
         d[j] = points[j + i - p];
     }
@@ -88,32 +103,46 @@ fn de_boor(points: &[H], knots: &[f64], p: usize, i: usize, u: f64) -> H {
             let hi = knots[j + 1 + i - r];
             let alpha = if hi > lo { (u - lo) / (hi - lo) } else { 0.0 };
             let (before, this) = (d[j - 1], d[j]);
-            d[j] = [0, 1, 2].map(|c| (1.0 - alpha) * before[c] + alpha * this[c]);
+            d[j] = std::array::from_fn(|c| (1.0 - alpha) * before[c] + alpha * this[c]);
         }
     }
     d[p]
 }
 
-/// A point and its first two derivatives with respect to the parameter, in XY.
+/// A point and its first two derivatives with respect to the parameter, over the four
+/// axes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Derivatives {
     /// C(u).
-    pub point: [f64; 2],
+    pub point: Vec4,
     /// C'(u).
-    pub first: [f64; 2],
+    pub first: Vec4,
     /// C''(u).
-    pub second: [f64; 2],
+    pub second: Vec4,
 }
 
 impl Derivatives {
     /// |C'(u)|.
     pub fn speed(&self) -> f64 {
-        self.first[0].hypot(self.first[1])
+        let f = &self.first;
+        if f[2] == 0.0 && f[3] == 0.0 {
+            f[0].hypot(f[1])
+        } else {
+            f.iter().map(|c| c * c).sum::<f64>().sqrt()
+        }
     }
-    /// Signed curvature `(C' x C'') / |C'|^3`.
+    /// Curvature `|C' x C''| / |C'|^3` (in XY signed: `(C' x C'')_z / |C'|^3`, positive
+    /// turning left; over more axes its magnitude, from `|C'|^2 |C''|^2 - (C'.C'')^2`).
     pub fn curvature(&self) -> f64 {
-        let cross = self.first[0] * self.second[1] - self.first[1] * self.second[0];
-        cross / self.speed().powi(3)
+        let (f, s) = (&self.first, &self.second);
+        if f[2] == 0.0 && f[3] == 0.0 && s[2] == 0.0 && s[3] == 0.0 {
+            let cross = f[0] * s[1] - f[1] * s[0];
+            return cross / self.speed().powi(3);
+        }
+        let ff: f64 = f.iter().map(|c| c * c).sum();
+        let ss: f64 = s.iter().map(|c| c * c).sum();
+        let fs: f64 = f.iter().zip(s).map(|(a, b)| a * b).sum();
+        (ff * ss - fs * fs).max(0.0).sqrt() / (ff * ff.sqrt())
     }
 }
 
@@ -180,11 +209,57 @@ impl NurbsCurve {
         {
             return Err(NurbsError::Weight { x, y, weight: w });
         }
-        let homogeneous: Vec<H> = points.iter().map(|&(x, y, w)| [w * x, w * y, w]).collect();
-        let d1 = hodograph(&homogeneous, knots, degree);
+        let homogeneous: Vec<H> = points.iter().map(|&(x, y, w)| [w * x, w * y, w * base[2], w * base[3], w]).collect();
+        let ends = [0, points.len() - 1].map(|i| [points[i].0, points[i].1, base[2], base[3]]);
+        Ok(NurbsCurve::from_homogeneous(homogeneous, degree, knots, base, ends, true))
+    }
+
+    /// The (non-rational) B-spline of degree `degree` on `knots` (clamped) with control
+    /// points `points` over all four axes: the path smoother's curve.
+    pub fn spatial(points: &[Vec4], degree: usize, knots: &[f64]) -> Result<NurbsCurve, NurbsError> {
+        if degree + 1 > points.len() || knots.len() != points.len() + degree + 1 || degree >= 23 {
+            return Err(NurbsError::Shape { order: degree + 1, points: points.len(), knots: knots.len() });
+        }
+        if knots.iter().any(|k| !k.is_finite())
+            || knots.windows(2).any(|w| w[0] > w[1])
+            || knots[degree] >= knots[points.len()]
+        {
+            return Err(NurbsError::Knots);
+        }
+        if let Some(p) = points.iter().find(|p| p.iter().any(|c| !c.is_finite())) {
+            return Err(NurbsError::Weight { x: p[0], y: p[1], weight: 1.0 });
+        }
+        let homogeneous: Vec<H> = points.iter().map(|p| [p[0], p[1], p[2], p[3], 1.0]).collect();
+        let ends = [points[0], points[points.len() - 1]];
+        Ok(NurbsCurve::from_homogeneous(homogeneous, degree, knots, points[0], ends, false))
+    }
+
+    fn from_homogeneous(
+        points: Vec<H>,
+        degree: usize,
+        knots: &[f64],
+        base: Vec4,
+        ends: [Vec4; 2],
+        planar: bool,
+    ) -> NurbsCurve {
+        let d1 = hodograph(&points, knots, degree);
         let d2 = if degree >= 1 { hodograph(&d1, &knots[1..knots.len() - 1], degree - 1) } else { Vec::new() };
-        let ends = [0, points.len() - 1].map(|i| [points[i].0, points[i].1]);
-        Ok(NurbsCurve { degree, knots: knots.to_vec(), points: homogeneous, d1, d2, base, ends })
+        NurbsCurve { degree, knots: knots.to_vec(), points, d1, d2, base, ends, planar }
+    }
+
+    /// The curve stays in the XY plane (a G5.2/G5.3 curve), Z and A fixed.
+    pub fn planar(&self) -> bool {
+        self.planar
+    }
+
+    /// The curve moves axis `a` (X, Y, Z, A): X and Y on a planar curve, else an axis
+    /// whose control points differ.
+    pub fn moves(&self, a: usize) -> bool {
+        if self.planar {
+            a < 2
+        } else {
+            self.points.iter().any(|p| p[a] != self.points[0][a])
+        }
     }
 
     /// The parameter range.
@@ -242,12 +317,23 @@ impl NurbsCurve {
         let i = self.span(start);
         let a = de_boor(&self.points, &self.knots, p, i, u);
         let inner = &self.knots[1..self.knots.len() - 1];
-        let a1 = if p >= 1 { de_boor(&self.d1, inner, p - 1, i - 1, u) } else { [0.0; 3] };
-        let a2 = if p >= 2 { de_boor(&self.d2, &inner[1..inner.len() - 1], p - 2, i - 2, u) } else { [0.0; 3] };
-        let w = a[2];
-        let point = [a[0] / w, a[1] / w];
-        let first = [0, 1].map(|c| (a1[c] - a1[2] * point[c]) / w);
-        let second = [0, 1].map(|c| (a2[c] - 2.0 * a1[2] * first[c] - a2[2] * point[c]) / w);
+        let a1 = if p >= 1 { de_boor(&self.d1, inner, p - 1, i - 1, u) } else { [0.0; 5] };
+        let a2 = if p >= 2 { de_boor(&self.d2, &inner[1..inner.len() - 1], p - 2, i - 2, u) } else { [0.0; 5] };
+        let w = a[4];
+        let point: Vec4 = std::array::from_fn(|c| a[c] / w);
+        if self.planar {
+            // Z and A stay put: their derivatives are exactly 0.
+            let first = [(a1[0] - a1[4] * point[0]) / w, (a1[1] - a1[4] * point[1]) / w, 0.0, 0.0];
+            let second = [
+                (a2[0] - 2.0 * a1[4] * first[0] - a2[4] * point[0]) / w,
+                (a2[1] - 2.0 * a1[4] * first[1] - a2[4] * point[1]) / w,
+                0.0,
+                0.0,
+            ];
+            return Derivatives { point: [point[0], point[1], self.base[2], self.base[3]], first, second };
+        }
+        let first: Vec4 = std::array::from_fn(|c| (a1[c] - a1[4] * point[c]) / w);
+        let second: Vec4 = std::array::from_fn(|c| (a2[c] - 2.0 * a1[4] * first[c] - a2[4] * point[c]) / w);
         Derivatives { point, first, second }
     }
 
@@ -255,23 +341,40 @@ impl NurbsCurve {
     /// of the domain).
     pub fn point(&self, u: f64) -> Vec4 {
         let (first, last) = self.domain();
-        let mut q = self.base;
-        let xy = if u <= first {
-            self.ends[0]
-        } else if u >= last {
-            self.ends[1]
-        } else {
-            let a = de_boor(&self.points, &self.knots, self.degree, self.span(u), u);
-            [a[0] / a[2], a[1] / a[2]]
-        };
-        q[0] = xy[0];
-        q[1] = xy[1];
-        q
+        if u <= first {
+            return self.ends[0];
+        }
+        if u >= last {
+            return self.ends[1];
+        }
+        let a = de_boor(&self.points, &self.knots, self.degree, self.span(u), u);
+        if self.planar {
+            return [a[0] / a[4], a[1] / a[4], self.base[2], self.base[3]];
+        }
+        std::array::from_fn(|c| a[c] / a[4])
     }
 
     /// |C'(u)| on the span holding `start`.
+    /// (The first derivative alone, as [`NurbsCurve::derivatives_on`] computes it: the
+    /// quadratures of the arc length need nothing else. A B-spline of the smoother,
+    /// whose weights are all 1, needs only its hodograph.)
     fn speed(&self, u: f64, start: f64) -> f64 {
-        self.derivatives_on(u, start).speed()
+        let p = self.degree;
+        if p == 0 {
+            return 0.0;
+        }
+        let i = self.span(start);
+        let inner = &self.knots[1..self.knots.len() - 1];
+        let a1 = de_boor(&self.d1, inner, p - 1, i - 1, u);
+        if self.planar {
+            let a = de_boor(&self.points, &self.knots, p, i, u);
+            let w = a[4];
+            let first = [0, 1].map(|c| (a1[c] - a1[4] * (a[c] / w)) / w);
+            first[0].hypot(first[1])
+        } else {
+            // Weights 1: C' is the hodograph itself.
+            (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt()
+        }
     }
 
     /// Arc length from `a` to `b` (within one span) by 5-point Gauss-Legendre quadrature,
@@ -362,9 +465,9 @@ impl NurbsCursor {
             return self.u;
         }
         let d = curve.derivatives_on(self.u, self.u0);
-        let sp2 = d.first[0] * d.first[0] + d.first[1] * d.first[1];
+        let sp2: f64 = d.first.iter().map(|c| c * c).sum();
         let sp = sp2.sqrt();
-        let along = d.first[0] * d.second[0] + d.first[1] * d.second[1];
+        let along: f64 = d.first.iter().zip(&d.second).map(|(a, b)| a * b).sum();
         // Second-order Taylor expansion of u(s): du/ds = 1/|C'|, d2u/ds2 = -(C'.C'')/|C'|^4.
         let mut u = self.u + ds / sp - ds * ds * along / (2.0 * sp2 * sp2);
         if !(u > self.u && u.is_finite()) {

@@ -34,6 +34,7 @@ use crate::element::{
     GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE,
 };
 use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
+use crate::vec4::{norm, sub, Vec4};
 
 /// Samples of the speed limit per knot span.
 pub const SAMPLES_PER_SPAN: usize = 64;
@@ -55,27 +56,21 @@ fn cusp_error(d: &Derivatives) -> NurbsError {
 /// then bisected wherever the tangent turns by more than [`MAX_SAMPLE_TURN`] between
 /// neighbours, so that no sharp bend hides between samples. A turn of more than a
 /// right angle that bisection cannot resolve is a cusp: refused.
-fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, NurbsError> {
+fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64, per_span: usize) -> Result<Vec<f64>, NurbsError> {
     let tangent = |u: f64| {
         let d = curve.derivatives_on(u, ua);
         let speed = d.speed();
-        ([d.first[0] / speed, d.first[1] / speed], d)
+        (d.first.map(|c| c / speed), d)
     };
     let mut out = vec![ua];
-    let mut stack: Vec<(f64, f64, u32)> = (0..SAMPLES_PER_SPAN)
+    let mut stack: Vec<(f64, f64, u32)> = (0..per_span)
         .rev()
-        .map(|j| {
-            (
-                ua + (ub - ua) * j as f64 / SAMPLES_PER_SPAN as f64,
-                ua + (ub - ua) * (j + 1) as f64 / SAMPLES_PER_SPAN as f64,
-                0,
-            )
-        })
+        .map(|j| (ua + (ub - ua) * j as f64 / per_span as f64, ua + (ub - ua) * (j + 1) as f64 / per_span as f64, 0))
         .collect();
     while let Some((a, b, depth)) = stack.pop() {
         let (ta, da) = tangent(a);
         let (tb, db) = tangent(b);
-        let cos = (ta[0] * tb[0] + ta[1] * tb[1]).clamp(-1.0, 1.0);
+        let cos = ta.iter().zip(&tb).map(|(a, b)| a * b).sum::<f64>().clamp(-1.0, 1.0);
         if cos.is_nan() {
             return Err(cusp_error(&db));
         }
@@ -84,7 +79,11 @@ fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64) -> Result<Vec<f64>, N
         // MAX_SAMPLE_CURVATURE_CHANGE, where the bend there is more than a thousandth of
         // a radian, so that no peak of the normal acceleration hides between samples.
         let (ka, kb) = (da.curvature().abs(), db.curvature().abs());
-        let chord = (db.point[0] - da.point[0]).hypot(db.point[1] - da.point[1]);
+        let chord = if curve.planar() {
+            (db.point[0] - da.point[0]).hypot(db.point[1] - da.point[1])
+        } else {
+            norm(sub(db.point, da.point))
+        };
         let steep = (ka - kb).abs() > MAX_SAMPLE_CURVATURE_CHANGE * ka.max(kb) && ka.max(kb) * chord > 1e-3;
         if steep && depth < 48 && b - a > 1e-13 * (ub - ua) {
             let mid = 0.5 * (a + b);
@@ -116,8 +115,8 @@ struct Sample {
     u: f64,
     /// Curvature magnitude, 1/units.
     k: f64,
-    /// Unit tangent (X, Y).
-    tangent: [f64; 2],
+    /// Unit tangent.
+    tangent: Vec4,
     /// Speed cap from curvature, units/s.
     cap: f64,
 }
@@ -126,16 +125,34 @@ struct Sample {
 /// docs), for the block on `line` at `feed` units/s; `Err` when the curve cannot be
 /// followed (a cusp: the parametric speed vanishes).
 pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize) -> Result<Vec<Element>, NurbsError> {
+    pieces_sampled(config, curve, feed, line, SAMPLES_PER_SPAN)
+}
+
+/// [`pieces`] with `per_span` uniform samples a knot span before bisection (the
+/// smoother's cubic spans, a millimetre or two long, take fewer:
+/// [`crate::smooth::SAMPLES_PER_SPAN`]).
+pub fn pieces_sampled(
+    config: &Resolved,
+    curve: Arc<NurbsCurve>,
+    feed: f64,
+    line: usize,
+    per_span: usize,
+) -> Result<Vec<Element>, NurbsError> {
     let scurve = config.profile == ProfileKind::SCurve;
-    let plane_axes = [0usize, 1];
+    // The axes the curve moves: X and Y for a G5.2 curve, those whose control points
+    // differ for the smoother's.
+    let plane_axes: Vec<usize> = (0..4).filter(|&a| curve.moves(a)).collect();
     let mut out = Vec::new();
     let (start_u, end_u) = curve.domain();
-    let size = {
+    let size = if curve.planar() {
         let (a, b) = (curve.point(start_u), curve.point(end_u));
-        (b[0] - a[0]).hypot(b[1] - a[1]).max(curve.arc_length_composite(start_u, end_u, 8)).max(1e-9)
+        norm(sub(b, a)).max(curve.arc_length_composite(start_u, end_u, 8)).max(1e-9)
+    } else {
+        // The smoother's curves are parameterised by the chord length of their polyline.
+        (end_u - start_u).max(1e-9)
     };
     for (ua, ub) in curve.spans() {
-        let params = sample_parameters(&curve, ua, ub)?;
+        let params = sample_parameters(&curve, ua, ub, per_span)?;
         let m = params.len() - 1;
         let mut samples: Vec<Sample> = Vec::with_capacity(m + 1);
         for &u in &params {
@@ -145,7 +162,7 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 return Err(cusp_error(&d));
             }
             let k = d.curvature().abs();
-            samples.push(Sample { u, k, tangent: [d.first[0] / speed, d.first[1] / speed], cap: f64::INFINITY });
+            samples.push(Sample { u, k, tangent: d.first.map(|c| c / speed), cap: f64::INFINITY });
         }
         // |dk/ds| by differences between samples.
         let ds: Vec<f64> = (0..m).map(|j| curve.arc_length_composite(samples[j].u, samples[j + 1].u, 2)).collect();
@@ -183,30 +200,30 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
         }
         // The curvature inside each interval too, at the three points the tangent bound
         // below evaluates: a peak between samples lowers the interval's cap.
-        let inner_k: Vec<f64> = (0..m)
+        // The derivatives at the three inner points of every interval, read for both.
+        let inner_d: Vec<[Derivatives; 3]> = (0..m)
             .map(|j| {
                 let (a, b) = (samples[j].u, samples[j + 1].u);
-                (1..4)
-                    .map(|i| curve.derivatives_on(a + (b - a) * i as f64 / 4.0, ua).curvature().abs())
-                    .fold(0.0, f64::max)
+                std::array::from_fn(|i| curve.derivatives_on(a + (b - a) * (i + 1) as f64 / 4.0, ua))
             })
             .collect();
+        let inner_k: Vec<f64> =
+            inner_d.iter().map(|d| d.iter().map(|d| d.curvature().abs()).fold(0.0, f64::max)).collect();
         let inner_cap: Vec<f64> = (0..m).map(|j| cap_of(inner_k[j], dk[j].max(dk[j + 1]))).collect();
         // Per interval and axis, the largest tangent component: parabolas through the
         // values at five points of the interval, at their vertices where those are inside
         // (an inflection between samples lets the tangent swing past both ends), kept a
         // millionth high.
-        let tangent_max: Vec<[f64; 2]> = (0..m)
+        let tangent_max: Vec<Vec4> = (0..m)
             .map(|j| {
-                let (a, b) = (samples[j].u, samples[j + 1].u);
                 let mut f = [samples[j].tangent; 5];
                 f[4] = samples[j + 1].tangent;
                 for (i, slot) in f.iter_mut().enumerate().take(4).skip(1) {
-                    let d = curve.derivatives_on(a + (b - a) * i as f64 / 4.0, ua);
+                    let d = &inner_d[j][i - 1];
                     let speed = d.speed();
-                    *slot = [d.first[0] / speed, d.first[1] / speed];
+                    *slot = d.first.map(|c| c / speed);
                 }
-                [0, 1].map(|c| {
+                std::array::from_fn(|c| {
                     let mut top = f.iter().map(|t| t[c].abs()).fold(0.0, f64::max);
                     for k in [0, 2] {
                         let (f0, fm, f1) = (f[k][c], f[k + 1][c], f[k + 2][c]);
@@ -244,8 +261,13 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
             // Per axis the largest tangent component over the window; 1 where the
             // tangent passes through the axis's direction between two samples.
             let intervals = &tangent_max[j.saturating_sub(1)..(end + 1).min(m)];
-            let weights = [0, 1].map(|c| {
-                let through = window.windows(2).any(|w| w[0].tangent[1 - c] * w[1].tangent[1 - c] <= 0.0);
+            let weights: Vec4 = std::array::from_fn(|c| {
+                if !plane_axes.contains(&c) {
+                    return 0.0;
+                }
+                let through = window
+                    .windows(2)
+                    .any(|w| plane_axes.iter().filter(|&&d| d != c).all(|&d| w[0].tangent[d] * w[1].tangent[d] <= 0.0));
                 if through {
                     1.0
                 } else {
@@ -258,9 +280,9 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
             let mut v_cap = feed.min(lo);
             let mut accel = f64::INFINITY;
             let mut jerk = f64::INFINITY;
-            for (c, &a) in plane_axes.iter().enumerate() {
+            for &a in &plane_axes {
                 let limits = &config.axes[a];
-                let w = weights[c];
+                let w = weights[a];
                 if limits.present && w > 1e-12 {
                     v_cap = v_cap.min(limits.max_velocity / w);
                     accel = accel.min(TANGENTIAL_ACCEL_SHARE * limits.max_acceleration / w);
@@ -304,12 +326,23 @@ pub fn pieces(config: &Resolved, curve: Arc<NurbsCurve>, feed: f64, line: usize)
                 let delta = config.chord_tolerance_mm.min(rho);
                 v_limit = v_limit.min(2.0 / config.period_s * (2.0 * rho * delta - delta * delta).max(0.0).sqrt());
             }
-            let axes: [AxisShare; 2] = std::array::from_fn(|c| {
-                let axis = &config.axes[plane_axes[c]];
+            // The normal's largest component: in the plane the tangent's other one; over
+            // more axes at most 1.
+            let normal: Vec4 = std::array::from_fn(|c| {
+                if !plane_axes.contains(&c) {
+                    0.0
+                } else if curve.planar() {
+                    weights[1 - c]
+                } else {
+                    1.0
+                }
+            });
+            let axes: [AxisShare; 4] = std::array::from_fn(|c| {
+                let axis = &config.axes[c];
                 let present = if axis.present { 1.0 } else { 0.0 };
                 AxisShare {
                     w: present * weights[c],
-                    n: present * weights[1 - c],
+                    n: present * normal[c],
                     velocity: axis.max_velocity,
                     accel: axis.max_acceleration,
                     jerk: axis.max_jerk,

@@ -386,13 +386,14 @@ fn a_ten_hour_move_streams_to_its_exact_end() {
 /// The stream gives the records `plan_program` collects, and the windowed look-ahead,
 /// releasing junctions as it goes, the speeds it gives when nothing is released
 /// (`junction_speeds`), with a window far shorter than the program (the CAM program at a
-/// look-ahead of 50 moves), never stopping on the way.
+/// look-ahead of 50 moves; with S-curve 6 000 of its lines, which the smoother makes
+/// about 2 000 curve pieces), never stopping on the way.
 #[test]
 fn the_stream_and_its_windows_agree_with_the_whole_plan() {
     use finestep_planner::config::ProfileKind::{SCurve, Trapezoid};
     use finestep_planner::lookahead::{junction_speeds, WindowedSpeeds};
-    let program = parse("cam.ngc", &cam_program(3000));
     for profile in [Trapezoid, SCurve] {
+        let program = parse("cam.ngc", &cam_program(if profile == SCurve { 6000 } else { 3000 }));
         let config = MachineConfig { profile, lookahead_moves: 50, ..MachineConfig::default() };
         let planned = plan_program(&config, &program).unwrap();
         let streamed: Vec<_> =
@@ -409,7 +410,7 @@ fn the_stream_and_its_windows_agree_with_the_whole_plan() {
         assert!(whole[1..whole.len() - 1].iter().all(|&v| v > 0.0));
         // The path read from the program as the window reaches it gives the records of
         // the whole path, and no more than the window's elements (and the two
-        // junctions around it) are kept at once.
+        // junctions around it, and a run's reach) are kept at once.
         let whole_path = finestep_planner::interpolate::Periods::new(resolved, path.elements.clone(), 0);
         let from_whole: Vec<_> = whole_path.map(|p| p.unwrap().0).collect();
         assert_eq!(from_whole, streamed);
@@ -423,7 +424,10 @@ fn the_stream_and_its_windows_agree_with_the_whole_plan() {
         let (kept, window) = (stream.periods.peak_elements_kept(), stream.periods.window());
         assert_eq!(stream.periods.elements_read(), path.elements.len());
         assert!(path.elements.len() > 10 * window, "{} elements, window {window}", path.elements.len());
-        assert!(kept <= window + 2, "{kept} elements kept, window {window}");
+        // A run of curve pieces planned as one speed change (S-curve) may reach past the
+        // window by up to MAX_RUN_ELEMENTS.
+        let reach = if profile == SCurve { finestep_planner::velocity::MAX_RUN_ELEMENTS } else { 0 };
+        assert!(kept <= window + 2 + reach, "{kept} elements kept, window {window}");
     }
 }
 
