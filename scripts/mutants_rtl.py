@@ -91,6 +91,7 @@ LOCKSTEP_TESTS = [
     "jog_edges::configuration_written_in_a_burst_of_detents",
     "jog_edges::distance_beyond_two_to_the_forty",
     "jog_edges::tiny_acceleration_lands_exactly",
+    "jog_edges::large_acceleration_brakes_below_the_limit",
 ]
 QUICK = 6  # mutants in the quick slice (make test)
 QUICK_TESTS = 6  # of LOCKSTEP_TESTS, the cheapest, in the quick slice
