@@ -218,6 +218,14 @@ module logic_outputs #(
         if (addr != FS_CAPS_ADDR && addr != FS_OUTPUTS_ADDR && addr != FS_OUTPUTS_SAFE_ADDR && addr != FS_INTERLOCK_ADDR)
             assert (rdata == 32'd0);
     end
+    // Out of reset INTERLOCK reads the register map's reset values in its writable fields
+    // (a reset value's bit of PRESCALE tied to 0, mutant 82 of the list at dd15ecb, kept
+    // every property above: they follow the register, not what reset puts in it).
+    always @(posedge clk) if (f_past_valid && $past(rst) && !rst && addr == FS_INTERLOCK_ADDR)
+        assert (rdata[FS_INTERLOCK_ENABLE_LSB] == FS_INTERLOCK_ENABLE_RESET &&
+                rdata[FS_INTERLOCK_ACTIVE_HIGH_LSB] == FS_INTERLOCK_ACTIVE_HIGH_RESET &&
+                rdata[FS_INTERLOCK_FILTER_LSB +: FILTER_W] == FS_INTERLOCK_FILTER_RESET &&
+                rdata[FS_INTERLOCK_PRESCALE_LSB +: PRESC_W] == FS_INTERLOCK_PRESCALE_RESET);
     // inhibit only while enabled and the filtered input is active.
     always @(*) if (inhibit) assert (enable_reg && primed && level == active_high_reg);
 `endif

@@ -199,10 +199,19 @@ module parallel_bus_slave #(
         f_low_read_reg  <= req_addr_reg;
     end
 
+    // The data of the last low-half write, as the spec's `wdata` (the pins through the
+    // synchroniser) held it at that write's strobe end: the low half a register write
+    // carries is this, not the slave's own copy of it (a slip in `lo_data` kept the
+    // property above it, which compares with that copy).
+    reg [15:0] f_lo_word;
+    always @(posedge clk) if (write_end && !busy && !half_hi) f_lo_word <= wdata_reg;
+    always @(*) if (f_past_valid && lo_valid_reg) assert (lo_data_reg == f_lo_word);
+
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if (req_reg && we_reg && !$past(req_reg)) begin
             assert ($past(write_end && half_hi && lo_matches && !busy));
             assert (bus_wdata == {$past(wdata_reg), $past(lo_data_reg)} && req_addr_reg == $past(reg_addr));
+            assert (bus_wdata == {$past(wdata_reg), $past(f_lo_word)});
         end
         if (ad_oe_reg) assert ($past(rd_low));
         assert (!(req_reg && wait_data_reg) && !(req_reg && wait_serve_reg) && !(wait_serve_reg && wait_data_reg));

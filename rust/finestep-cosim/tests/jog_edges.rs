@@ -5,7 +5,8 @@
 //! on consecutive clocks; JOG_SCALE, JOG_CONTROL.MULTIPLIER and JOG_WINDOW written in the
 //! middle of a burst of detents; halt and disengage mid-move; and the velocity
 //! computation's extremes: |target - cmd| >= 2^40 (JOG_SCALE near 2^31 at x100, several
-//! detents followed), JOG_ACCEL near 2^31 with a small JOG_VMAX, and JOG_VMAX = 0.
+//! detents followed), JOG_ACCEL near 2^31 with a small JOG_VMAX, a large JOG_ACCEL braking
+//! below JOG_VMAX, and JOG_VMAX = 0.
 
 use finestep_host::regs::{jog_control, jog_scale, jog_vmax, jog_window};
 use finestep_host::{Bus, JogMultiplier, JogSetup, JogState};
@@ -218,6 +219,32 @@ fn huge_acceleration_small_velocity_limit() {
         let jog = poll(&mut machine, 4 * u64::from(PERIOD), 257);
         assert!(!jog.engaged, "{jog:?}");
     }
+}
+
+/// JOG_ACCEL 8.5 steps a period each period (bit 19 of the field set) under a JOG_VMAX of
+/// 24: the speed rises to the limit and brakes on the root sqrt(2 A |e|) - A, below the
+/// limit, from 60 steps away; the axis lands exactly, both ways, in lockstep. (The other
+/// edge tests brake under a limit only with accelerations below bit 19, or hold a limit
+/// below the acceleration, where the root never decides the speed.)
+#[test]
+fn large_acceleration_brakes_below_the_limit() {
+    let mut machine = connect("large_acceleration_brakes_below_the_limit", wheel_plant(None));
+    machine.configure_hand_wheel(1, 1).unwrap();
+    let setup = JogSetup {
+        vmax: Increment::from_num(24),
+        accel: Increment::from_bits(0x8_8000),
+        ..setup(JogMultiplier::X10, true, 1 << 16, 0)
+    };
+    machine.configure_jog(&setup).unwrap();
+    machine.enable_jog(&setup, true).unwrap();
+    turn(&mut machine, 6, 20);
+    let jog = poll(&mut machine, 12 * u64::from(PERIOD), 257);
+    assert_eq!((jog.remaining, jog.velocity), (0, Increment::ZERO), "{jog:?}");
+    assert_eq!(machine.positions().unwrap().steps[0], 60);
+    turn(&mut machine, -4, 20);
+    let jog = poll(&mut machine, 12 * u64::from(PERIOD), 257);
+    assert_eq!((jog.remaining, jog.velocity), (0, Increment::ZERO), "{jog:?}");
+    assert_eq!(machine.positions().unwrap().steps[0], 20);
 }
 
 /// JOG_VMAX = 0 (written directly: the driver refuses it): the detents move the target,
