@@ -581,7 +581,9 @@ def equivalent(mut, timeout=300):
     # bit 8 flipped while bit 15 is 0): Yosys's equiv_make matches the two by name and
     # equiv_simple proves each match from its combinational cone, the state free. Fast;
     # what it leaves goes to PDR below.
-    comb = f"""{read}
+    # The block as it is (gold) and mutated (gate), flattened, side by side: both
+    # checks below start from it.
+    pair = f"""{read}
 hierarchy -top finestep_top
 prep -top finestep_top
 {mut['sim']}
@@ -600,7 +602,8 @@ rename {module} gold
 design -copy-from gate_design -as gate gate
 memory_map
 opt_clean
-async2sync
+"""
+    comb = f"""{pair}async2sync
 equiv_make gold gate equiv
 hierarchy -top equiv
 equiv_simple
@@ -609,26 +612,7 @@ equiv_status -assert
     (work / "comb.ys").write_text(wasm_paths(comb, work))
     if run([YOSYS, "-q", "-l", "comb.log", "-s", "comb.ys"], cwd=work).returncode == 0:
         return "equivalent (combinational)"
-    script = f"""{read}
-hierarchy -top finestep_top
-prep -top finestep_top
-{mut['sim']}
-hierarchy -top {module}
-flatten
-opt_clean
-rename {module} gate
-design -stash gate_design
-{read}
-hierarchy -top finestep_top
-prep -top finestep_top
-hierarchy -top {module}
-flatten
-opt_clean
-rename {module} gold
-design -copy-from gate_design -as gate gate
-memory_map
-opt_clean
-miter -equiv -flatten -make_assert gold gate miter
+    script = f"""{pair}miter -equiv -flatten -make_assert gold gate miter
 hierarchy -top miter
 setundef -zero -init
 setundef -zero

@@ -190,20 +190,24 @@ pub enum NurbsError {
     NoLength,
 }
 
+/// The curve's shape: `points + degree + 1` finite, non-decreasing knots (clamped, a
+/// span of nonzero length) and a degree below 23.
+fn check_shape(points: usize, degree: usize, knots: &[f64]) -> Result<(), NurbsError> {
+    if degree + 1 > points || knots.len() != points + degree + 1 || degree >= 23 {
+        return Err(NurbsError::Shape { order: degree + 1, points, knots: knots.len() });
+    }
+    if knots.iter().any(|k| !k.is_finite()) || knots.windows(2).any(|w| w[0] > w[1]) || knots[degree] >= knots[points] {
+        return Err(NurbsError::Knots);
+    }
+    Ok(())
+}
+
 impl NurbsCurve {
     /// The curve of control points `(x, y, weight)`, degree `degree` on `knots`
     /// (`points.len() + degree + 1` of them, non-decreasing, clamped), the other axes at
     /// `base`.
     pub fn new(points: &[(f64, f64, f64)], degree: usize, knots: &[f64], base: Vec4) -> Result<NurbsCurve, NurbsError> {
-        if degree + 1 > points.len() || knots.len() != points.len() + degree + 1 || degree >= 23 {
-            return Err(NurbsError::Shape { order: degree + 1, points: points.len(), knots: knots.len() });
-        }
-        if knots.iter().any(|k| !k.is_finite())
-            || knots.windows(2).any(|w| w[0] > w[1])
-            || knots[degree] >= knots[points.len()]
-        {
-            return Err(NurbsError::Knots);
-        }
+        check_shape(points.len(), degree, knots)?;
         if let Some(&(x, y, w)) =
             points.iter().find(|(x, y, w)| !(x.is_finite() && y.is_finite() && *w > 0.0 && w.is_finite()))
         {
@@ -217,15 +221,7 @@ impl NurbsCurve {
     /// The (non-rational) B-spline of degree `degree` on `knots` (clamped) with control
     /// points `points` over all four axes: the path smoother's curve.
     pub fn spatial(points: &[Vec4], degree: usize, knots: &[f64]) -> Result<NurbsCurve, NurbsError> {
-        if degree + 1 > points.len() || knots.len() != points.len() + degree + 1 || degree >= 23 {
-            return Err(NurbsError::Shape { order: degree + 1, points: points.len(), knots: knots.len() });
-        }
-        if knots.iter().any(|k| !k.is_finite())
-            || knots.windows(2).any(|w| w[0] > w[1])
-            || knots[degree] >= knots[points.len()]
-        {
-            return Err(NurbsError::Knots);
-        }
+        check_shape(points.len(), degree, knots)?;
         if let Some(p) = points.iter().find(|p| p.iter().any(|c| !c.is_finite())) {
             return Err(NurbsError::Weight { x: p[0], y: p[1], weight: 1.0 });
         }
