@@ -185,7 +185,7 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, k0: Option<Vec4>, d1: Vec4, i
             let (p, u) = data(k);
             let i = span_of(&knots, u);
             let n = basis(&knots, i, u.min(total));
-            let coef: Vec<(usize, f64)> = (0..4).map(|r| (i - 3 + r, n[r])).collect();
+            let coef: [(usize, f64); 4] = std::array::from_fn(|r| (i - 3 + r, n[r]));
             add_row(&coef, p, 1.0);
         }
         for j in 1..count - 1 {
