@@ -402,8 +402,14 @@ impl NurbsCurve {
         Some([6.0 * c3[0], 6.0 * c3[1], 6.0 * c3[2], 6.0 * c3[3]])
     }
 
-    /// [`NurbsCurve::derivatives_on`] on knot span `i` ([`NurbsCurve::span`]).
-    fn derivatives_in(&self, u: f64, i: usize) -> Derivatives {
+    /// The knot span index of `u` (the last span for the end of the domain), for
+    /// [`NurbsCurve::derivatives_in`].
+    pub(crate) fn span_index(&self, u: f64) -> usize {
+        self.span(u)
+    }
+
+    /// [`NurbsCurve::derivatives_on`] on knot span `i` ([`NurbsCurve::span_index`]).
+    pub(crate) fn derivatives_in(&self, u: f64, i: usize) -> Derivatives {
         let (a, a1, a2) = self.homogeneous_on(i, u);
         let w = a[4];
         let point: Vec4 = std::array::from_fn(|c| a[c] / w);
