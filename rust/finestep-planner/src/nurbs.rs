@@ -466,6 +466,14 @@ impl NurbsCurve {
         if self.degree == 0 {
             return 0.0;
         }
+        if !self.planar {
+            if let Some([_, c1, c2, c3]) = self.power.get(i - self.degree) {
+                // Weights 1: C' is the derivative of the span's polynomial, no point needed.
+                let t = u - self.knots[i];
+                let a1: Vec4 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+                return (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt();
+            }
+        }
         let (a, a1) = self.homogeneous_first_on(i, u);
         if self.planar {
             let w = a[4];
