@@ -9,6 +9,9 @@
 //! its first and second derivatives by de Boor on the derivative curves (the hodographs,
 //! B-splines of degree p - 1 and p - 2 whose control points are precomputed), then
 //! projects: `C = A / w`, `C' = (A' - w' C) / w`, `C'' = (A'' - 2 w' C' - w'' C) / w`.
+//! A curve of degree 3 or below (the smoother's, most G5.2 curves) keeps each knot
+//! span's homogeneous polynomial in power-basis form, taken once from de Boor at the
+//! span's start, and evaluates it and its derivatives by Horner's scheme instead.
 //!
 //! # Direct interpolation
 //!
@@ -16,7 +19,9 @@
 //! end of each period. [`NurbsCursor`] advances the parameter from the previous period's
 //! `(u, s)` by the second-order Taylor expansion of u(s),
 //!
-//! `u' = u + ds / |C'| - ds^2 (C' . C'') / (2 |C'|^4)`, with `ds = s_target - s`,
+//! `u' = u + ds / |C'| - ds^2 (C' . C'') / (2 |C'|^4)`, with `ds = s_target - s`
+//! (to the third order on the smoother's cubic B-splines, whose C''' is constant on a
+//! span: [`NurbsCursor::advance`]),
 //!
 //! and corrects the prediction by Newton steps on the arc length actually covered,
 //! measured by 5-point Gauss-Legendre quadrature of `|C'|` from u to u', until it is
@@ -57,6 +62,12 @@ pub struct NurbsCurve {
     /// Control points of the first and second derivative (hodograph) curves.
     d1: Vec<H>,
     d2: Vec<H>,
+    /// Degree 3 and below: per knot span `i` (index `i - degree`) the homogeneous
+    /// curve in power-basis form in `t = u - knots[i]`, `A(u) = c0 + c1 t + c2 t^2 +
+    /// c3 t^3` (its Taylor coefficients at the span's start, from de Boor on the curve
+    /// and its hodographs), so that a point or derivative costs one Horner scheme
+    /// instead of three de Boor triangles; empty above degree 3.
+    power: Vec<[H; 4]>,
     base: Vec4,
     /// The first and last control points, which the clamped curve passes exactly.
     ends: [Vec4; 2],
@@ -240,7 +251,72 @@ impl NurbsCurve {
     ) -> NurbsCurve {
         let d1 = hodograph(&points, knots, degree);
         let d2 = if degree >= 1 { hodograph(&d1, &knots[1..knots.len() - 1], degree - 1) } else { Vec::new() };
-        NurbsCurve { degree, knots: knots.to_vec(), points, d1, d2, base, ends, planar }
+        let mut curve =
+            NurbsCurve { degree, knots: knots.to_vec(), points, d1, d2, power: Vec::new(), base, ends, planar };
+        if degree <= 3 {
+            curve.power = curve.power_form();
+        }
+        curve
+    }
+
+    /// The power-basis coefficients of every knot span (degree 3 and below; see
+    /// [`NurbsCurve::power`]): `c_k = A^(k)(knots[i]) / k!`, the derivatives one-sided
+    /// within span `i` by de Boor in that span; the third derivative, constant over a
+    /// cubic's span, from the third hodograph.
+    fn power_form(&self) -> Vec<[H; 4]> {
+        let p = self.degree;
+        let knots = &self.knots;
+        let inner = &knots[1..knots.len() - 1];
+        let d3 = if p >= 3 { hodograph(&self.d2, &inner[1..inner.len() - 1], p - 2) } else { Vec::new() };
+        (p..self.points.len())
+            .map(|i| {
+                let u = knots[i];
+                let c0 = de_boor(&self.points, knots, p, i, u);
+                let c1 = if p >= 1 { de_boor(&self.d1, inner, p - 1, i - 1, u) } else { [0.0; 5] };
+                let c2 = if p >= 2 {
+                    de_boor(&self.d2, &inner[1..inner.len() - 1], p - 2, i - 2, u).map(|c| 0.5 * c)
+                } else {
+                    [0.0; 5]
+                };
+                let c3 = if p >= 3 { d3[i - 3].map(|c| c / 6.0) } else { [0.0; 5] };
+                [c0, c1, c2, c3]
+            })
+            .collect()
+    }
+
+    /// The homogeneous curve and its first two derivatives at `u` on knot span `i`
+    /// (one-sided there): the power-basis form where there is one, else de Boor.
+    #[inline]
+    fn homogeneous_on(&self, i: usize, u: f64) -> (H, H, H) {
+        let p = self.degree;
+        if let Some([c0, c1, c2, c3]) = self.power.get(i - p) {
+            let t = u - self.knots[i];
+            let a = std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])));
+            let a1 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+            let a2 = std::array::from_fn(|c| 2.0 * c2[c] + t * 6.0 * c3[c]);
+            return (a, a1, a2);
+        }
+        let a = de_boor(&self.points, &self.knots, p, i, u);
+        let inner = &self.knots[1..self.knots.len() - 1];
+        let a1 = if p >= 1 { de_boor(&self.d1, inner, p - 1, i - 1, u) } else { [0.0; 5] };
+        let a2 = if p >= 2 { de_boor(&self.d2, &inner[1..inner.len() - 1], p - 2, i - 2, u) } else { [0.0; 5] };
+        (a, a1, a2)
+    }
+
+    /// The homogeneous curve and its first derivative at `u` on knot span `i`.
+    #[inline]
+    fn homogeneous_first_on(&self, i: usize, u: f64) -> (H, H) {
+        let p = self.degree;
+        if let Some([c0, c1, c2, c3]) = self.power.get(i - p) {
+            let t = u - self.knots[i];
+            let a = std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])));
+            let a1 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+            return (a, a1);
+        }
+        let a = de_boor(&self.points, &self.knots, p, i, u);
+        let inner = &self.knots[1..self.knots.len() - 1];
+        let a1 = if p >= 1 { de_boor(&self.d1, inner, p - 1, i - 1, u) } else { [0.0; 5] };
+        (a, a1)
     }
 
     /// The curve stays in the XY plane (a G5.2/G5.3 curve), Z and A fixed.
@@ -309,12 +385,28 @@ impl NurbsCurve {
     /// end of a span its one-sided derivatives (where the curve is only C0 or C1 at
     /// the knot, they differ from the next span's).
     pub fn derivatives_on(&self, u: f64, start: f64) -> Derivatives {
-        let p = self.degree;
-        let i = self.span(start);
-        let a = de_boor(&self.points, &self.knots, p, i, u);
-        let inner = &self.knots[1..self.knots.len() - 1];
-        let a1 = if p >= 1 { de_boor(&self.d1, inner, p - 1, i - 1, u) } else { [0.0; 5] };
-        let a2 = if p >= 2 { de_boor(&self.d2, &inner[1..inner.len() - 1], p - 2, i - 2, u) } else { [0.0; 5] };
+        self.derivatives_in(u, self.span(start))
+    }
+
+    /// C''' on knot span `i` where it is that span's constant: a B-spline of the
+    /// smoother (weights 1) of degree 3 or below in power-basis form; `None` otherwise.
+    fn third_in(&self, i: usize) -> Option<Vec4> {
+        if self.planar {
+            return None;
+        }
+        let c3 = self.power.get(i - self.degree)?[3];
+        Some([6.0 * c3[0], 6.0 * c3[1], 6.0 * c3[2], 6.0 * c3[3]])
+    }
+
+    /// The knot span index of `u` (the last span for the end of the domain), for
+    /// [`NurbsCurve::derivatives_in`].
+    pub(crate) fn span_index(&self, u: f64) -> usize {
+        self.span(u)
+    }
+
+    /// [`NurbsCurve::derivatives_on`] on knot span `i` ([`NurbsCurve::span_index`]).
+    pub(crate) fn derivatives_in(&self, u: f64, i: usize) -> Derivatives {
+        let (a, a1, a2) = self.homogeneous_on(i, u);
         let w = a[4];
         let point: Vec4 = std::array::from_fn(|c| a[c] / w);
         if self.planar {
@@ -343,7 +435,14 @@ impl NurbsCurve {
         if u >= last {
             return self.ends[1];
         }
-        let a = de_boor(&self.points, &self.knots, self.degree, self.span(u), u);
+        let i = self.span(u);
+        let a = match self.power.get(i - self.degree) {
+            Some([c0, c1, c2, c3]) => {
+                let t = u - self.knots[i];
+                std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])))
+            }
+            None => de_boor(&self.points, &self.knots, self.degree, i, u),
+        };
         if self.planar {
             return [a[0] / a[4], a[1] / a[4], self.base[2], self.base[3]];
         }
@@ -355,15 +454,24 @@ impl NurbsCurve {
     /// quadratures of the arc length need nothing else. A B-spline of the smoother,
     /// whose weights are all 1, needs only its hodograph.)
     fn speed(&self, u: f64, start: f64) -> f64 {
-        let p = self.degree;
-        if p == 0 {
+        self.speed_on(u, self.span(start))
+    }
+
+    /// |C'(u)| on knot span `i`.
+    fn speed_on(&self, u: f64, i: usize) -> f64 {
+        if self.degree == 0 {
             return 0.0;
         }
-        let i = self.span(start);
-        let inner = &self.knots[1..self.knots.len() - 1];
-        let a1 = de_boor(&self.d1, inner, p - 1, i - 1, u);
+        if !self.planar {
+            if let Some([_, c1, c2, c3]) = self.power.get(i - self.degree) {
+                // Weights 1: C' is the derivative of the span's polynomial, no point needed.
+                let t = u - self.knots[i];
+                let a1: Vec4 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+                return (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt();
+            }
+        }
+        let (a, a1) = self.homogeneous_first_on(i, u);
         if self.planar {
-            let a = de_boor(&self.points, &self.knots, p, i, u);
             let w = a[4];
             let first = [0, 1].map(|c| (a1[c] - a1[4] * (a[c] / w)) / w);
             first[0].hypot(first[1])
@@ -381,12 +489,17 @@ impl NurbsCurve {
     /// where one 5-point rule was off by several per cent. Intervals whose spread times
     /// length is below a thousandth of [`ARC_TOLERANCE`] are not halved.
     pub fn arc_length(&self, a: f64, b: f64) -> f64 {
-        self.arc_length_from(a, b, a, 0)
+        self.arc_length_from(a, b, self.span(a), 0)
     }
 
-    fn arc_length_from(&self, a: f64, b: f64, start: f64, depth: u32) -> f64 {
+    /// [`NurbsCurve::arc_length`] on knot span `i`.
+    fn arc_length_in(&self, a: f64, b: f64, i: usize) -> f64 {
+        self.arc_length_from(a, b, i, 0)
+    }
+
+    fn arc_length_from(&self, a: f64, b: f64, span: usize, depth: u32) -> f64 {
         let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
-        let speeds = GAUSS.map(|(x, _)| self.speed(mid + half * x, start));
+        let speeds = GAUSS.map(|(x, _)| self.speed_on(mid + half * x, span));
         let (lo, hi) = speeds.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         // Halving stops where the spread can no longer matter (it bounds what the rule
         // can miss, times the interval): near a cusp |C'| runs to zero and the intervals
@@ -394,7 +507,7 @@ impl NurbsCurve {
         let matters = (hi - lo) * 2.0 * half.abs() > 1e-3 * ARC_TOLERANCE;
         if depth < 60 && matters && hi > lo * (1.0 + QUADRATURE_SPEED_SPREAD) && half.abs() > 1e-15 * mid.abs().max(1.0)
         {
-            return self.arc_length_from(a, mid, start, depth + 1) + self.arc_length_from(mid, b, start, depth + 1);
+            return self.arc_length_from(a, mid, span, depth + 1) + self.arc_length_from(mid, b, span, depth + 1);
         }
         GAUSS.iter().zip(speeds).map(|(&(_, w), v)| w * v).sum::<f64>() * half
     }
@@ -445,12 +558,15 @@ pub struct NurbsCursor {
     pub u: f64,
     /// Arc length covered from the sub-piece's start to `u`.
     pub s: f64,
+    /// The knot span the sub-piece lies in, once found (a sub-piece never crosses a
+    /// knot: [`crate::nurbs_pieces`]).
+    span: Option<usize>,
 }
 
 impl NurbsCursor {
     /// At the start `u0` of element `element`.
     pub fn new(element: usize, u0: f64) -> NurbsCursor {
-        NurbsCursor { element, u0, u: u0, s: 0.0 }
+        NurbsCursor { element, u0, u: u0, s: 0.0, span: None }
     }
 
     /// Steps the parameter so that the arc length from the sub-piece's start reaches
@@ -460,12 +576,24 @@ impl NurbsCursor {
         if ds <= ARC_TOLERANCE {
             return self.u;
         }
-        let d = curve.derivatives_on(self.u, self.u0);
+        let span = *self.span.get_or_insert_with(|| curve.span(self.u0));
+        let d = curve.derivatives_in(self.u, span);
         let sp2: f64 = d.first.iter().map(|c| c * c).sum();
         let sp = sp2.sqrt();
         let along: f64 = d.first.iter().zip(&d.second).map(|(a, b)| a * b).sum();
         // Second-order Taylor expansion of u(s): du/ds = 1/|C'|, d2u/ds2 = -(C'.C'')/|C'|^4.
         let mut u = self.u + ds / sp - ds * ds * along / (2.0 * sp2 * sp2);
+        if let Some(third) = curve.third_in(span) {
+            // The third-order term where C''' is known (the smoother's cubics), which
+            // leaves the corrector nothing to do on most periods: with sigma = |C'|,
+            // sigma' = C'.C'' / sigma, sigma'' = (|C''|^2 + C'.C''' - sigma'^2) / sigma,
+            // d3u/ds3 = (3 sigma'^2 - sigma sigma'') / sigma^5.
+            let sigma1 = along / sp;
+            let second2: f64 = d.second.iter().map(|c| c * c).sum();
+            let jerk: f64 = d.first.iter().zip(&third).map(|(a, b)| a * b).sum();
+            let sigma2 = (second2 + jerk - sigma1 * sigma1) / sp;
+            u += ds * ds * ds * (3.0 * sigma1 * sigma1 - sp * sigma2) / (6.0 * sp2 * sp2 * sp);
+        }
         if !(u > self.u && u.is_finite()) {
             u = self.u + ds / sp;
         }
@@ -477,7 +605,7 @@ impl NurbsCursor {
         // |C'| swings by orders of magnitude within the step (weights 10^5 apart on a
         // line), Newton leaves the bracket and bisection takes over: up to 200 steps.
         let (mut lo, mut hi) = (self.u, u1);
-        let mut covered = curve.arc_length(self.u, u);
+        let mut covered = curve.arc_length_in(self.u, u, span);
         for _ in 0..200 {
             let err = ds - covered;
             if err.abs() <= ARC_TOLERANCE {
@@ -491,9 +619,9 @@ impl NurbsCursor {
             } else {
                 hi = u;
             }
-            let step = u + err / curve.speed(u, self.u0).max(1e-300);
+            let step = u + err / curve.speed_on(u, span).max(1e-300);
             u = if step > lo && step < hi { step } else { 0.5 * (lo + hi) };
-            covered = curve.arc_length(self.u, u);
+            covered = curve.arc_length_in(self.u, u, span);
         }
         self.u = u;
         self.s += covered;

@@ -56,13 +56,28 @@ fn cusp_error(d: &Derivatives) -> NurbsError {
 /// then bisected wherever the tangent turns by more than [`MAX_SAMPLE_TURN`] between
 /// neighbours, so that no sharp bend hides between samples. A turn of more than a
 /// right angle that bisection cannot resolve is a cusp: refused.
-fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64, per_span: usize) -> Result<Vec<f64>, NurbsError> {
-    let tangent = |u: f64| {
-        let d = curve.derivatives_on(u, ua);
+/// With each parameter the derivatives there (evaluated once: an interval's end is the
+/// next one's start, a bisected interval's start the first half's).
+fn sample_parameters(
+    curve: &NurbsCurve,
+    ua: f64,
+    ub: f64,
+    per_span: usize,
+) -> Result<Vec<(f64, Derivatives)>, NurbsError> {
+    let span = curve.span_index(ua);
+    // The last two evaluations, by parameter.
+    let mut memo: [(f64, Vec4, Derivatives); 2] = [(f64::NAN, [0.0; 4], curve.derivatives_in(ua, span)); 2];
+    let mut tangent = |u: f64| {
+        if let Some(&(_, t, d)) = memo.iter().find(|m| m.0 == u) {
+            return (t, d);
+        }
+        let d = curve.derivatives_in(u, span);
         let speed = d.speed();
-        (d.first.map(|c| c / speed), d)
+        let t = d.first.map(|c| c / speed);
+        memo = [memo[1], (u, t, d)];
+        (t, d)
     };
-    let mut out = vec![ua];
+    let mut out = vec![(ua, tangent(ua).1)];
     let mut stack: Vec<(f64, f64, u32)> = (0..per_span)
         .rev()
         .map(|j| (ua + (ub - ua) * j as f64 / per_span as f64, ua + (ub - ua) * (j + 1) as f64 / per_span as f64, 0))
@@ -102,7 +117,7 @@ fn sample_parameters(curve: &NurbsCurve, ua: f64, ub: f64, per_span: usize) -> R
                 return Err(cusp_error(&db));
             }
         }
-        out.push(b);
+        out.push((b, db));
         if out.len() > 1 << 16 {
             return Err(NurbsError::TooSharp);
         }
@@ -152,11 +167,11 @@ pub fn pieces_sampled(
         (end_u - start_u).max(1e-9)
     };
     for (ua, ub) in curve.spans() {
+        let span = curve.span_index(ua);
         let params = sample_parameters(&curve, ua, ub, per_span)?;
         let m = params.len() - 1;
         let mut samples: Vec<Sample> = Vec::with_capacity(m + 1);
-        for &u in &params {
-            let d = curve.derivatives_on(u, ua);
+        for &(u, d) in &params {
             let speed = d.speed();
             if speed.is_nan() || speed <= 1e-9 * size / (ub - ua).max(1e-300) || !speed.is_finite() {
                 return Err(cusp_error(&d));
@@ -204,7 +219,7 @@ pub fn pieces_sampled(
         let inner_d: Vec<[Derivatives; 3]> = (0..m)
             .map(|j| {
                 let (a, b) = (samples[j].u, samples[j + 1].u);
-                std::array::from_fn(|i| curve.derivatives_on(a + (b - a) * (i + 1) as f64 / 4.0, ua))
+                std::array::from_fn(|i| curve.derivatives_in(a + (b - a) * (i + 1) as f64 / 4.0, span))
             })
             .collect();
         let inner_k: Vec<f64> =

@@ -121,12 +121,14 @@ fn band_solve(mut m: Vec<[f64; 4]>, rhs: &mut [Vec4]) -> Option<()> {
     Some(())
 }
 
-/// Distance from `p` to the segment `a`-`b`.
-fn to_segment(p: Vec4, a: Vec4, b: Vec4) -> f64 {
+/// Squared distance from `p` to the segment `a`-`b` (the nearest of several is found on
+/// the squares, and one square root taken: the same as the least of the distances).
+fn to_segment_squared(p: Vec4, a: Vec4, b: Vec4) -> f64 {
     let d = sub(b, a);
     let dd = dot(d, d);
     let f = if dd > 0.0 { (dot(sub(p, a), d) / dd).clamp(0.0, 1.0) } else { 0.0 };
-    norm(sub(p, add_scaled(a, f, d)))
+    let off = sub(p, add_scaled(a, f, d));
+    dot(off, off)
 }
 
 /// The curve of `spans` spans through `points` (chord-length parameters `s`), leaving
@@ -185,7 +187,7 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, k0: Option<Vec4>, d1: Vec4, i
             let (p, u) = data(k);
             let i = span_of(&knots, u);
             let n = basis(&knots, i, u.min(total));
-            let coef: Vec<(usize, f64)> = (0..4).map(|r| (i - 3 + r, n[r])).collect();
+            let coef: [(usize, f64); 4] = std::array::from_fn(|r| (i - 3 + r, n[r]));
             add_row(&coef, p, 1.0);
         }
         for j in 1..count - 1 {
@@ -213,8 +215,9 @@ fn deviating(curve: &NurbsCurve, points: &[Vec4], s: &[f64], limit: f64) -> Vec<
         }
         let p = curve.point(u);
         let near = (j.saturating_sub(2)..=(j + 2).min(segments - 1))
-            .map(|i| to_segment(p, points[i], points[i + 1]))
-            .fold(f64::INFINITY, f64::min);
+            .map(|i| to_segment_squared(p, points[i], points[i + 1]))
+            .fold(f64::INFINITY, f64::min)
+            .sqrt();
         if near.is_nan() || near > limit {
             out.push(u);
         }
