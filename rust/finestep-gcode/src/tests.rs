@@ -1091,10 +1091,11 @@ fn lathe_diameter_mode_agrees_with_rs274() {
 /// side); L is refused outside G18, D is required, as rs274 does.
 #[test]
 fn dynamic_compensation_carries_the_radius() {
-    let comps: Vec<BlockKind> = parse("G20 G41.1 D0.5\nG40\nG42.1 D-1\nG40\nG21 G42.1 D3\nG40\n")
-        .into_iter()
-        .filter(|k| matches!(k, BlockKind::CutterCompRadius { .. }))
-        .collect();
+    // The compensation blocks of a program.
+    let radius_blocks = |source: &str| -> Vec<BlockKind> {
+        parse(source).into_iter().filter(|k| matches!(k, BlockKind::CutterCompRadius { .. })).collect()
+    };
+    let comps = radius_blocks("G20 G41.1 D0.5\nG40\nG42.1 D-1\nG40\nG21 G42.1 D3\nG40\n");
     assert_eq!(
         comps,
         vec![
@@ -1108,10 +1109,7 @@ fn dynamic_compensation_carries_the_radius() {
     assert_eq!(err("G41.1 D1\nG42.1 D1\n"), format!("{FILE}:2:1: cutter compensation is already on (G40 first)"));
     assert_eq!(err("G19\nG41.1 D1\n"), format!("{FILE}:2:1: Cutter radius compensation allowed only in XY, XZ planes"));
     // L, a lathe tool's orientation, in G18 (given in the block or before it).
-    let comps: Vec<BlockKind> = parse("G18 G42.1 D0.3 L2\nG40\nG21 G41.1 D-2 L9\nG40\nG17\nG18 G41.1 D1 L0\nG40\n")
-        .into_iter()
-        .filter(|k| matches!(k, BlockKind::CutterCompRadius { .. }))
-        .collect();
+    let comps = radius_blocks("G18 G42.1 D0.3 L2\nG40\nG21 G41.1 D-2 L9\nG40\nG17\nG18 G41.1 D1 L0\nG40\n");
     assert_eq!(
         comps,
         vec![
