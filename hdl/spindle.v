@@ -293,6 +293,31 @@ module spindle #(
         cover ($past(halt) && $past(spindle_en, 2));
         cover (level_reg != $past(level_reg) && !$past(halt) && $past(ramp_reg) != {LEVEL_W{1'b0}});
     end
+    // SPINDLE_PERIOD, SPINDLE_LEVEL and SPINDLE_RAMP read back, at the read port, the
+    // value last written to their own address (the map's reset value before any write):
+    // a write elsewhere leaves them (mutant 199 of the list at dd15ecb: a LEVEL bit
+    // flipped by writes to the other spindle registers).
+    reg [LEVEL_W-1:0] f_period, f_command, f_ramp;
+    always @(posedge clk) begin
+        if (rst) begin
+            f_period  <= FS_SPINDLE_PERIOD_CLOCKS_RESET[LEVEL_W-1:0];
+            f_command <= FS_SPINDLE_LEVEL_LEVEL_RESET[LEVEL_W-1:0];
+            f_ramp    <= FS_SPINDLE_RAMP_STEP_RESET[LEVEL_W-1:0];
+        end else if (write) begin
+            if (addr == FS_SPINDLE_PERIOD_ADDR) f_period  <= wdata[FS_SPINDLE_PERIOD_CLOCKS_LSB +: LEVEL_W];
+            if (addr == FS_SPINDLE_LEVEL_ADDR)  f_command <= wdata[FS_SPINDLE_LEVEL_LEVEL_LSB +: LEVEL_W];
+            if (addr == FS_SPINDLE_RAMP_ADDR)   f_ramp    <= wdata[FS_SPINDLE_RAMP_STEP_LSB +: LEVEL_W];
+        end
+    end
+    always @(*) if (f_reset_seen) begin
+        if (addr == FS_SPINDLE_PERIOD_ADDR) assert (rdata[FS_SPINDLE_PERIOD_CLOCKS_LSB +: LEVEL_W] == f_period);
+        if (addr == FS_SPINDLE_LEVEL_ADDR)  assert (rdata[FS_SPINDLE_LEVEL_LEVEL_LSB +: LEVEL_W] == f_command);
+        if (addr == FS_SPINDLE_RAMP_ADDR)   assert (rdata[FS_SPINDLE_RAMP_STEP_LSB +: LEVEL_W] == f_ramp);
+`ifndef F_PINS_ONLY
+        // The induction's link (the read above is a function of these).
+        assert (period_reg == f_period && command_reg == f_command && ramp_reg == f_ramp);
+`endif
+    end
     // The PWM pin is high exactly for the first `level` counts of a period (PWM mode).
     always @(*) if (f_reset_seen && !halt_prev_reg) assert (spindle_pwm == (!dac_reg && count_reg < level_reg));
     always @(*) if (f_reset_seen && frame_reg) assert (tick_reg <= LAST_TICK[5:0] && sck_reg == tick_reg[0]);
