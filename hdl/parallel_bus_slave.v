@@ -214,6 +214,12 @@ module parallel_bus_slave #(
             assert (bus_wdata == {$past(wdata_reg), $past(f_lo_word)});
         end
         if (ad_oe_reg) assert ($past(rd_low));
+        // The write word changes only with the write request that carries it (the low
+        // half of a sole master's is its held low half, above): between requests it holds
+        // (mutant 107 of the list at dd15ecb cleared a bit of it at a low-half write).
+        if (bus_wdata[31:16] != $past(bus_wdata[31:16]) ||
+            (SOLE_MASTER == 0 && bus_wdata[15:0] != $past(bus_wdata[15:0])))
+            assert (req_reg && we_reg && !$past(req_reg));
         assert (!(req_reg && wait_data_reg) && !(req_reg && wait_serve_reg) && !(wait_serve_reg && wait_data_reg));
         if (wait_data_reg) assert ($past(wait_serve_reg));
         // (With SOLE_MASTER a read's word is on bus_rdata in its wait_data cycle, before the
