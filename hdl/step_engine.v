@@ -422,6 +422,11 @@ module step_engine #(
         if (sh_visit) begin
             assert (rise == f_rise && fall == f_fall && dir_change == f_dir_change);
             assert (pending_next == f_pending_next);
+            // dcnt counts the visits since the axis's last DIR change (COUNT_MAX at reset:
+            // none yet, the setup met): it only grows, to COUNT_MAX and no further, until
+            // the next change (mutant 201 of the list at dd15ecb: its bound's bit 1 flipped
+            // wraps the reset's COUNT_MAX to 0, holding the first step back by DIR_SETUP).
+            if (!dir_change) assert (dcnt_next == ((dcnt == COUNT_MAX) ? COUNT_MAX : dcnt + COUNT_ONE));
             assert (behind == (!halt && (f_e > 9'sd1 || f_e < -9'sd1)));
             assert ((clamp_high || clamp_low) == (!halt && (f_left > 9'sd127 || f_left < -9'sd127)));
             assert (pending <= 8'sd127 && pending >= -8'sd127);
