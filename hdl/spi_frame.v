@@ -374,10 +374,137 @@ module spi_frame #(
         if (bus_req_reg && bus_we_reg && !$past(bus_req_reg))
             assert ($past(crc_checked && crc_good && is_write));
         if ($past(fifo_busy_reg) && !fifo_busy_reg) assert (wr_commit_reg || wr_abort_reg);
+        // A register request waits unchanged for its grant: requests are made only at a
+        // byte, so in a clock without one the request, its address and its data hold.
+        if ($past(bus_req && !bus_grant && !rx_valid))
+            assert (bus_req && bus_we == $past(bus_we) && bus_addr == $past(bus_addr) && bus_wdata == $past(bus_wdata));
         if (fifo_busy_reg) assert (is_fifo && (phase_reg == PHASE_DATA || phase_reg == PHASE_CRC_HI || phase_reg == PHASE_CRC_LO));
         cover (wr_commit_reg && f_count == 8'd2);
         cover (bus_req_reg && bus_we_reg);
     end
+
+`ifdef F_PORTS
+    // The frame at the block's ports, from docs/spec/spi_frame.md alone (no internal
+    // state of the layer is read): the bytes handled since the frame's start, the header
+    // they carry and the spec's CRC over them say what every byte out is (status, zeros,
+    // the read words most significant byte first, the read CRC, the result code), which
+    // register reads and writes are requested, what a FIFO record's lanes carry, and when
+    // each event is counted.
+    wire f_byte = rx_valid && !frame_end && !frame_start && !(fifo_flush && fifo_busy);
+    wire f_flush_now = fifo_flush && fifo_busy && !frame_end && !frame_start;
+    reg  [15:0] f_n;          // bytes handled since the frame's start (saturating)
+    reg  [7:0]  f_cmd;        // the header
+    reg  [6:0]  f_addr;
+    reg  [7:0]  f_cnt;
+    reg         f_room;       // FIFO: count <= FREE at the count byte
+    reg         f_flushed;    // a flush of the FIFO took the frame
+    reg  [15:0] f_crc;        // 0xFFFF at the start, then every byte of the frame's CRC
+    reg  [31:0] f_word;       // the last four data bytes received
+    reg  [31:0] f_next;       // the register bus's answer to the last read granted
+    reg  [31:0] f_txw;        // the word being sent
+    reg         f_rgrant, f_rserve;
+    wire f_read  = (f_cmd == FS_SPI_CMD_READ);
+    wire f_write = (f_cmd == FS_SPI_CMD_WRITE);
+    wire f_fifo  = (f_cmd == FS_SPI_CMD_FIFO);
+    // The header as the spec accepts it (after the count byte), and the data bytes after it.
+    wire f_ok = (f_read && f_cnt != 8'd0) || (f_write && f_cnt == 8'd1) || (f_fifo && f_cnt != 8'd0 && f_room);
+    wire [15:0] f_body = f_read ? {6'd0, f_cnt, 2'b00} : (f_write ? 16'd4 : f_cnt * REC_BYTES);
+    // The byte the CRC takes: a read frame's data bytes are the bytes sent.
+    wire f_crc_on = f_n < 16'd3 || (f_ok && !f_flushed && (f_read ? f_n < 16'd3 + f_body : f_n < 16'd5 + f_body));
+    wire [7:0]  f_crc_byte = (f_read && f_n >= 16'd3) ? tx_byte : rx_byte;
+    wire [15:0] f_crc_next;
+    crc16_byte f_crc_step (.crc_in(f_crc), .data(f_crc_byte), .crc_out(f_crc_next));
+    wire f_count_now = f_byte && f_n == 16'd2;
+    always @(posedge clk) begin
+        f_rgrant <= bus_grant && !bus_we;
+        f_rserve <= f_rgrant;
+        if (f_rserve) f_next <= bus_rdata;
+        if (frame_end || frame_start || rst) begin
+            f_n       <= 16'd0;
+            f_flushed <= 1'b0;
+            if (rst || frame_start) f_crc <= FS_SPI_CRC_INITIAL;
+        end else if (f_flush_now) begin
+            f_flushed <= 1'b1;
+        end else if (f_byte) begin
+            if (f_n != 16'hFFFF) f_n <= f_n + 16'd1;
+            if (f_crc_on) f_crc <= f_crc_next;
+            if (f_n == 16'd0) f_cmd <= rx_byte;
+            if (f_n == 16'd1) f_addr <= rx_byte[6:0];
+            if (f_n == 16'd2) begin
+                f_cnt  <= rx_byte;
+                f_room <= ({8'd0, rx_byte} <= {{(16-LEVEL_W){1'b0}}, fifo_free});
+                f_txw  <= f_next;
+            end
+            if (f_ok && !f_read && f_n >= 16'd3 && f_n < 16'd3 + f_body) f_word <= {f_word[23:0], rx_byte};
+            if (f_ok && f_read && f_n >= 16'd3 && f_n[1:0] == 2'd2 && f_n + 16'd1 < 16'd3 + f_body) f_txw <= f_next;
+        end
+        if (rst) begin
+            f_rgrant <= 1'b0;
+            f_rserve <= 1'b0;
+            f_cmd    <= 8'h00;
+            f_next   <= 32'd0;    // a read served too late for the host's timing sends this
+            f_txw    <= 32'd0;
+        end
+    end
+    // The byte out after f_n bytes of the frame.
+    reg [7:0] f_tx;
+    always @(*) begin
+        if (f_flushed)                          f_tx = FS_SPI_RESULT_FIFO_FLUSHED;
+        else if (f_n == 16'd0)                  f_tx = status_byte;
+        else if (f_n < 16'd3)                   f_tx = 8'h00;
+        else if (f_fifo && f_cnt != 8'd0 && !f_room) f_tx = FS_SPI_RESULT_FIFO_REFUSED;
+        else if (!f_ok)                         f_tx = FS_SPI_RESULT_BAD_COMMAND;
+        else if (f_read) begin
+            if (f_n < 16'd3 + f_body)
+                case (f_n[1:0])
+                    2'd3:    f_tx = f_txw[31:24];   // byte 4j of the data: n = 3 + 4j
+                    2'd0:    f_tx = f_txw[23:16];
+                    2'd1:    f_tx = f_txw[15:8];
+                    default: f_tx = f_txw[7:0];
+                endcase
+            else if (f_n == 16'd3 + f_body)     f_tx = f_crc[15:8];
+            else if (f_n == 16'd4 + f_body)     f_tx = f_crc[7:0];
+            else                                f_tx = 8'h00;
+        end
+        else if (f_n < 16'd5 + f_body)          f_tx = 8'h00;
+        else                                    f_tx = (f_crc == 16'h0000) ? FS_SPI_RESULT_ACK : FS_SPI_RESULT_CRC_MISMATCH;
+    end
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        // A lemma for the solver, no port: the layer's CRC is the spec's (two CRC chains
+        // over the same free bytes are beyond the SAT solver at this depth unless it is
+        // told they agree a byte at a time).
+        assert (crc_reg == f_crc);
+        assert (tx_byte == f_tx);
+        assert (latch_hold == (f_read && f_n != 16'd0));
+        assert (fifo_busy == (f_fifo && f_ok && !f_flushed && f_n >= 16'd3 && f_n < 16'd5 + f_body));
+        // The register read made after byte f_n of a read frame: `addr` after the address
+        // byte, then addr + 1, addr + 2, ... after the count byte and each word but the last.
+        if ($past(f_byte) && f_read && (f_n == 16'd2 || (f_ok && f_n >= 16'd3 && f_n[1:0] == 2'd3 && f_n < 16'd3 + f_body)))
+            assert (bus_req && !bus_we && bus_addr == ((f_n == 16'd2) ? f_addr : f_addr + 7'd1 + f_n[8:2]));
+        if ($past(f_byte) && f_write && f_ok && f_n == 16'd9 && f_crc == 16'h0000)
+            assert (bus_req && bus_we && bus_addr == f_addr && bus_wdata == f_word);
+        // A record's lane k carries the record's bytes 4k .. 4k + 3, the flags lane its last.
+        if (fifo_wr_lane[N_AXES]) assert (fifo_wr_data[32*N_AXES +: FS_REC_FLAGS_WIDTH] == f_word[FS_REC_FLAGS_WIDTH-1:0]);
+    end
+    genvar f_k;
+    generate
+        for (f_k = 0; f_k < N_AXES; f_k = f_k + 1) begin : f_lane_data
+            always @(posedge clk) if (f_past_valid && !$past(rst) && !rst && fifo_wr_lane[f_k])
+                assert (fifo_wr_data[32*f_k +: 32] == f_word);
+        end
+    endgenerate
+    // The events, in the cycle deciding them.
+    always @(*) if (f_past_valid && !rst) begin
+        assert (refused == (f_count_now && f_fifo && rx_byte != 8'd0 &&
+                            {8'd0, rx_byte} > {{(16-LEVEL_W){1'b0}}, fifo_free}));
+        if (refused) assert (refused_count == rx_byte);
+        assert (crc_error == (f_byte && !f_flushed && f_ok && !f_read && f_n == 16'd4 + f_body && f_crc_next != 16'h0000));
+        assert (frame_error == (f_flush_now ||
+            (f_count_now && !((f_read && rx_byte != 8'd0) || (f_write && rx_byte == 8'd1) || (f_fifo && rx_byte != 8'd0))) ||
+            (frame_end && (f_n == 16'd1 || f_n == 16'd2 || (f_n == 16'd0 && !frame_whole) ||
+                           (!f_read && f_ok && !f_flushed && f_n >= 16'd3 && f_n < 16'd5 + f_body)))));
+    end
+`endif
 `endif
 
 endmodule
