@@ -14,7 +14,11 @@ setup:
 demo: setup
 	$(CARGO) run --release -q -p finestep-cli -- demo
 
-test: setup lint cargo-test wheel-check formal mutants-quick mutants-rtl-quick netlist-quick icarus-quick linuxcnc-quick flows
+TEST_STAGES = lint cargo-test wheel-check formal mutants-quick mutants-rtl-quick netlist-quick icarus-quick linuxcnc-quick flows
+
+# The stages in this order, stopping at the first that fails; the minutes of each at the end.
+test: setup
+	@MAKE="$(MAKE)" ./scripts/test_stages.sh $(TEST_STAGES)
 	@echo "make test: all passed"
 
 # Before a commit: fmt, clippy, Verilator lint and the unit tests (a few minutes warm).
