@@ -142,9 +142,13 @@ module register_file #(
     localparam COUNT_W    = FS_UNDERRUN_COUNT_COUNT_WIDTH;       // every error counter
     localparam LEVEL_W    = FS_FIFO_LEVEL_LEVEL_WIDTH;
     localparam IRQ_W = FS_IRQ_MASK_MASK_WIDTH;
+    // VERSION: the map's version and, in bits CAPS has no room for, the register
+    // behaviours a build changes to save logic (default: none)
     localparam [31:0] VERSION_WORD = (FS_MAP_VERSION_MAJOR << FS_VERSION_MAJOR_LSB) |
                                      (FS_MAP_VERSION_MINOR << FS_VERSION_MINOR_LSB) |
-                                     (FS_MAP_VERSION_PATCH << FS_VERSION_PATCH_LSB);
+                                     (FS_MAP_VERSION_PATCH << FS_VERSION_PATCH_LSB) |
+                                     ((ONE_SNAPSHOT != 0 ? 1 : 0) << FS_VERSION_ONE_SNAPSHOT_LSB) |
+                                     ((INC_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_INC_WRITE_ONLY_LSB);
     localparam [31:0] CAPS_WORD = (N_AXES << FS_CAPS_N_AXES_LSB) |
                                   (N_ENC << FS_CAPS_N_ENC_LSB) |
                                   ((HAS_MPG != 0 ? 1 : 0) << FS_CAPS_HAS_MPG_LSB) |

@@ -762,7 +762,10 @@ impl RegisterFile {
                 use regs::version as v;
                 let word = v::MAJOR.set(0, regs::MAP_VERSION_MAJOR);
                 let word = v::MINOR.set(word, regs::MAP_VERSION_MINOR);
-                v::PATCH.set(word, regs::MAP_VERSION_PATCH)
+                let word = v::PATCH.set(word, regs::MAP_VERSION_PATCH);
+                // The capabilities CAPS has no room for.
+                let word = v::ONE_SNAPSHOT.set(word, u32::from(p.one_snapshot));
+                v::INC_WRITE_ONLY.set(word, u32::from(p.inc_write_only))
             }
             regs::caps::ADDR => {
                 use regs::caps as c;
