@@ -48,6 +48,10 @@ pub struct Caps {
     /// `RECORD_INC` is write-only, reads 0 (`VERSION.INC_WRITE_ONLY`). This driver never
     /// reads it back in any build: it writes the increments and pushes.
     pub inc_write_only: bool,
+    /// `AXIS_TIMING_A/B` and `AXIS_MODE` are write-only, read 0
+    /// (`VERSION.AXIS_WRITE_ONLY`). This driver never reads them back in any build: it
+    /// keeps the timings it wrote.
+    pub axis_write_only: bool,
 }
 
 impl Caps {
@@ -143,6 +147,7 @@ impl<B: Bus> Machine<B> {
             // The capabilities CAPS has no room for (0 on a core of map 1.0: the defaults).
             one_snapshot: version::ONE_SNAPSHOT.get(version_word) != 0,
             inc_write_only: version::INC_WRITE_ONLY.get(version_word) != 0,
+            axis_write_only: version::AXIS_WRITE_ONLY.get(version_word) != 0,
         };
         let Some(step_digit) = serial_digit(caps.n_axes, caps::STEP_ROUND_LOG2.get(caps_word)) else {
             let engine =
@@ -165,6 +170,7 @@ impl<B: Bus> Machine<B> {
             has_gantry: caps.has_gantry,
             one_snapshot: caps.one_snapshot,
             inc_write_only: caps.inc_write_only,
+            axis_write_only: caps.axis_write_only,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
@@ -467,20 +473,25 @@ mod tests {
         assert!(!m.bus_ref().reads.contains(&probe_status::ADDR), "{:?}", m.bus_ref().reads);
     }
 
-    /// INC_WRITE_ONLY from VERSION (a build without the readback store): accepted, and
-    /// the driver's calls never read RECORD_INC back.
+    /// INC_WRITE_ONLY and AXIS_WRITE_ONLY from VERSION (a build without the readback
+    /// store): accepted, and the driver's calls never read RECORD_INC, AXIS_TIMING_A/B or
+    /// AXIS_MODE back.
     #[test]
-    fn inc_write_only_is_never_read_back() {
-        let both = version::INC_WRITE_ONLY.set(version::ONE_SNAPSHOT.set(0, 1), 1);
-        let mut m = snapshot_core(both, false);
-        assert!(m.caps().inc_write_only && m.caps().one_snapshot);
+    fn write_only_registers_are_never_read_back() {
+        let all = version::INC_WRITE_ONLY.set(version::ONE_SNAPSHOT.set(0, 1), 1);
+        let mut m = snapshot_core(version::AXIS_WRITE_ONLY.set(all, 1), false);
+        assert!(m.caps().inc_write_only && m.caps().one_snapshot && m.caps().axis_write_only);
         m.configure_axis(1, &AxisSetup::default()).unwrap();
         m.set_period(1000).unwrap();
         m.positions().unwrap();
         m.feedback().unwrap();
         m.set_control(true, false, true).unwrap();
         let inc = crate::regs::record_inc::ADDR..crate::regs::record_inc::addr(2);
-        assert!(!m.bus_ref().reads.iter().any(|a| inc.contains(a)), "{:?}", m.bus_ref().reads);
+        // The axis block: AXIS_TIMING_A/B and AXIS_MODE of every axis (stride 4).
+        let block = crate::regs::axis_timing_a::ADDR..crate::regs::axis_timing_a::ADDR + 32;
+        let axis = |a: &u8| block.contains(a) && (a - block.start) % 4 < 3;
+        assert!(!m.bus_ref().reads.iter().any(|a| inc.contains(a) || axis(a)), "{:?}", m.bus_ref().reads);
+        assert!(m.bus_ref().writes.iter().any(|(a, _)| axis(a)), "the axis was configured");
     }
 
     /// A register file that answers the identity of a core with 3 axes, P_WIDTH 16 and
