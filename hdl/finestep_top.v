@@ -35,6 +35,7 @@ module finestep_top #(
     parameter NO_RAM          = 0,   // 1: no RAM on the part (stores in flip-flops)
     parameter ONE_SNAPSHOT    = 0,   // 1: the probe's snapshot is the position latch (POSITION, LATCH_TIME)
     parameter INC_WRITE_ONLY  = 0,   // 1: RECORD_INC reads 0 (needs READ_STORE 0)
+    parameter AXIS_WRITE_ONLY = 0,   // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (needs READ_STORE 0)
     parameter HAS_SPINDLE     = 1,
     parameter HAS_OUTPUTS     = 1,
     parameter N_GPIO          = 4,
@@ -288,7 +289,8 @@ module finestep_top #(
         .N_AXES(N_AXES), .P_WIDTH(P_WIDTH), .TIMING_W(TIMING_W), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
         .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK),
-        .STEP_ROUND_LOG2(STEP_ROUND_LOG2), .ONE_SNAPSHOT(ONE_SNAPSHOT), .INC_WRITE_ONLY(INC_WRITE_ONLY)
+        .STEP_ROUND_LOG2(STEP_ROUND_LOG2), .ONE_SNAPSHOT(ONE_SNAPSHOT), .INC_WRITE_ONLY(INC_WRITE_ONLY),
+        .AXIS_WRITE_ONLY(AXIS_WRITE_ONLY)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),

@@ -31,7 +31,8 @@ module register_file #(
     parameter STEP_ROUND_LOG2 = 0,    // CAPS.STEP_ROUND_LOG2: log2 of the step engine's round (0: none)
     parameter ONE_SNAPSHOT    = 0,    // 1: the position latch is the probe's snapshot too (PROBE_POSITION,
                                       // PROBE_TIME read POSITION, LATCH_TIME)
-    parameter INC_WRITE_ONLY  = 0     // 1: RECORD_INC reads 0 (with READ_STORE 0: no multiplexer inputs)
+    parameter INC_WRITE_ONLY  = 0,    // 1: RECORD_INC reads 0 (with READ_STORE 0: no multiplexer inputs)
+    parameter AXIS_WRITE_ONLY = 0     // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (the same, with READ_STORE 0)
 ) (
     // clock, reset
     input  wire                         clk,
@@ -142,9 +143,14 @@ module register_file #(
     localparam COUNT_W    = FS_UNDERRUN_COUNT_COUNT_WIDTH;       // every error counter
     localparam LEVEL_W    = FS_FIFO_LEVEL_LEVEL_WIDTH;
     localparam IRQ_W = FS_IRQ_MASK_MASK_WIDTH;
+    // VERSION: the map's version and, in bits CAPS has no room for, the register
+    // behaviours a build changes to save logic (default: none)
     localparam [31:0] VERSION_WORD = (FS_MAP_VERSION_MAJOR << FS_VERSION_MAJOR_LSB) |
                                      (FS_MAP_VERSION_MINOR << FS_VERSION_MINOR_LSB) |
-                                     (FS_MAP_VERSION_PATCH << FS_VERSION_PATCH_LSB);
+                                     (FS_MAP_VERSION_PATCH << FS_VERSION_PATCH_LSB) |
+                                     ((ONE_SNAPSHOT != 0 ? 1 : 0) << FS_VERSION_ONE_SNAPSHOT_LSB) |
+                                     ((INC_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_INC_WRITE_ONLY_LSB) |
+                                     ((AXIS_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_AXIS_WRITE_ONLY_LSB);
     localparam [31:0] CAPS_WORD = (N_AXES << FS_CAPS_N_AXES_LSB) |
                                   (N_ENC << FS_CAPS_N_ENC_LSB) |
                                   ((HAS_MPG != 0 ? 1 : 0) << FS_CAPS_HAS_MPG_LSB) |
@@ -511,8 +517,9 @@ module register_file #(
                            (ONE_SNAPSHOT != 0 &&
                             {{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_PROBE_POSITION_ADDR} + index * FS_PROBE_POSITION_STRIDE)}} &
                        position_latch_reg[POS_W*index +: POS_W]);
-                // Without the readback store the per-axis arrays from their flip-flops.
-                if (!STORED) read_value = read_value
+                // Without the readback store the per-axis arrays from their flip-flops,
+                // unless write-only (AXIS_WRITE_ONLY: they read 0).
+                if (!STORED && AXIS_WRITE_ONLY == 0) read_value = read_value
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
                     | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word);
@@ -845,7 +852,7 @@ module register_file #(
     integer f_axis;
     always @(*) begin
         f_ff_word = {WORD_W{1'b0}};
-        for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) begin
+        for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) if (AXIS_WRITE_ONLY == 0) begin
             if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + f_axis * FS_AXIS_TIMING_A_STRIDE) begin
                 f_ff_word[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*f_axis +: TIMING_W];
                 f_ff_word[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W] = step_space_reg[TIMING_W*f_axis +: TIMING_W];

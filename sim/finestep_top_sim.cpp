@@ -151,10 +151,11 @@ uint32_t ft_has_spindle(uint32_t variant) { return is_motion(variant) ? 0 : FT_H
 uint32_t ft_has_outputs(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_OUTPUTS; }
 uint32_t ft_n_gpio(uint32_t variant) { return is_motion(variant) ? 0 : FT_N_GPIO; }
 uint32_t ft_step_digit(uint32_t variant) { return is_serial(variant) ? FT_SERIAL_DIGIT : 0; }
-// The serial variant is Verilated with the MAX II's ONE_SNAPSHOT = 1 and INC_WRITE_ONLY = 1
-// (build.rs).
+// The serial variant is Verilated with the MAX II's ONE_SNAPSHOT = 1, INC_WRITE_ONLY = 1 and
+// AXIS_WRITE_ONLY = 1 (build.rs).
 uint32_t ft_one_snapshot(uint32_t variant) { return is_serial(variant) ? 1 : 0; }
 uint32_t ft_inc_write_only(uint32_t variant) { return is_serial(variant) ? 1 : 0; }
+uint32_t ft_axis_write_only(uint32_t variant) { return is_serial(variant) ? 1 : 0; }
 
 #ifndef FT_NETLIST
 ft_sim *ft_new(uint32_t variant) {

@@ -605,8 +605,9 @@ fn verilate(
         // The digit-serial chip with the MAX II's storage (a part without RAM: the read
         // multiplexer, the FIFO's head read from its slot, the encoder copies behind one
         // register; no effect on behaviour), its one position snapshot (ONE_SNAPSHOT) and
-        // its write-only RECORD_INC (INC_WRITE_ONLY; the shim's ft_one_snapshot and
-        // ft_inc_write_only tell the model), so the lockstep runs those shapes too.
+        // its write-only RECORD_INC and per-axis registers (INC_WRITE_ONLY,
+        // AXIS_WRITE_ONLY; the shim's ft_one_snapshot, ft_inc_write_only and
+        // ft_axis_write_only tell the model), so the lockstep runs those shapes too.
         .args(
             matches!(build, Build::Top { digit, .. } if digit != 0)
                 .then_some([
@@ -615,6 +616,7 @@ fn verilate(
                     "-GNO_RAM=1",
                     "-GONE_SNAPSHOT=1",
                     "-GINC_WRITE_ONLY=1",
+                    "-GAXIS_WRITE_ONLY=1",
                 ])
                 .into_iter()
                 .flatten(),

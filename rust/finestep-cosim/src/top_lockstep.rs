@@ -128,6 +128,7 @@ pub fn rtl_top_params_of(variant: TopVariant) -> TopParams {
         step_digit: build.step_digit,
         one_snapshot: build.one_snapshot,
         inc_write_only: build.inc_write_only,
+        axis_write_only: build.axis_write_only,
         has_spindle: build.has_spindle,
         has_outputs: build.has_outputs,
         n_gpio: build.n_gpio,

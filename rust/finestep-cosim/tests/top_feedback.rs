@@ -9,7 +9,7 @@ use finestep_host::regs::{
     control, fifo_level, jog_control, jog_velocity, latch_time, period_count, position, probe_status, status,
 };
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
-use finestep_host::{Bus, CountMode, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
+use finestep_host::{Bus, BusError, CountMode, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
 use finestep_model::{Increment, PeriodRecord};
 use finestep_plant::{
     Bounce, ChannelConfig, CountsPerStep, DriveConfig, EncoderConfig, Faults, Glitches, HandWheelConfig, Mechanics,
@@ -479,15 +479,27 @@ fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_sn
     machine.bus().read(position::addr(0), &mut steps).unwrap();
     let latched = machine.bus().read_one(latch_time::ADDR).unwrap();
     let hit_steps: Vec<u32> = hit.steps[..2].iter().map(|&s| s as u32).collect();
+    assert_eq!(machine.caps().one_snapshot, one_snapshot, "VERSION.ONE_SNAPSHOT as built");
+    let wait = 2 * u64::from(PERIOD.max(plant_chip::PERIOD_SERIAL));
     if one_snapshot {
         assert_eq!((&steps, latched), (&hit_steps, hit.time), "POSITION holds the probe's snapshot while SEEN");
-        // The next arm gives the snapshot back to the period latch: taken at the next
-        // boundary (RUN stays set, the FIFO empty), within a period.
-        machine.arm_probe(false, 2).unwrap();
-        machine.bus().wait(2 * u64::from(PERIOD.max(plant_chip::PERIOD_SERIAL))).unwrap();
+        // The driver knows: the positions are refused, the feedback marked as the probe's.
+        assert!(matches!(machine.positions(), Err(BusError::ProbeHoldsPositions)));
+        let held = machine.feedback().unwrap();
+        assert!(held.probe_held && held.steps == hit.steps[..2], "{held:?}");
+        // Released (an arm with the configuration as it is), the snapshot goes back to
+        // the period latch: taken at the next boundary (RUN stays set, the FIFO empty),
+        // within a period; the probe armed again.
+        machine.release_probe_snapshot().unwrap();
+        let probe = machine.bus().read_one(probe_status::ADDR).unwrap();
+        assert_eq!((probe_status::ARMED.get(probe), probe_status::SEEN.get(probe)), (1, 0), "{probe:#x}");
+        machine.bus().wait(wait).unwrap();
         machine.bus().read(position::addr(0), &mut steps).unwrap();
     }
     assert_eq!(steps, vec![50, 100], "POSITION from the period latch");
+    let live = machine.feedback().unwrap();
+    assert!(!live.probe_held && live.steps == [50, 100], "{live:?}");
+    assert_eq!(machine.positions().unwrap().steps, [50, 100]);
 }
 
 fn wheel_plant(bounce: u64) -> Plant {

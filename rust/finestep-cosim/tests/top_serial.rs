@@ -13,7 +13,9 @@
 mod pin_probe;
 
 use finestep_cosim::{rtl_top_params_of, TopVariant};
-use finestep_host::regs::{estop_filter, status, underrun_count};
+use finestep_host::regs::{
+    axis_mode, axis_timing_a, axis_timing_b, estop_filter, record_inc, status, underrun_count, version,
+};
 use finestep_host::stream::wait_idle;
 use finestep_host::{AxisSetup, Bus, BusError, Machine};
 use finestep_model::{DriveTiming, PeriodRecord, RateChecker};
@@ -82,6 +84,40 @@ fn serial_chip_reports_its_round() {
     // Over SPI too: the same CAPS.
     let spi = pin_probe::spi_machine(chip("serial_chip_reports_its_round_spi"));
     assert_eq!(spi.caps().step_slots, r);
+}
+
+/// The chip reports the MAX II's register shapes in VERSION's capability bits (CAPS is
+/// full): ONE_SNAPSHOT and INC_WRITE_ONLY, read through the driver in lockstep with the
+/// model; and its RECORD_INC reads 0 after a write (docs/spec/register_file.md), while the
+/// default chip reports neither.
+#[test]
+fn serial_chip_reports_its_register_shapes() {
+    let build = rtl_top_params_of(TopVariant::MotionSerial);
+    assert!(
+        build.one_snapshot && build.inc_write_only && build.axis_write_only,
+        "the serial chip has the MAX II's shapes: {build:?}"
+    );
+    let mut m = parallel_machine("serial_chip_reports_its_register_shapes");
+    let caps = m.caps();
+    assert!(caps.one_snapshot && caps.inc_write_only && caps.axis_write_only, "{caps:?}");
+    let word = ok(m.bus().read_one(version::ADDR));
+    assert_eq!((version::MAJOR.get(word), version::MINOR.get(word), version::PATCH.get(word)), (1, 1, 0));
+    let bits = [version::ONE_SNAPSHOT, version::INC_WRITE_ONLY, version::AXIS_WRITE_ONLY].map(|f| f.get(word));
+    assert_eq!(bits, [1, 1, 1], "{word:#x}");
+    ok(m.bus().write(record_inc::addr(1), 0x1234_5678));
+    assert_eq!(ok(m.bus().read_one(record_inc::addr(1))), 0, "RECORD_INC is write-only");
+    // The axis registers too; the core still takes what was written (the rated-rate
+    // and pulse checks of the other tests run on the timings written).
+    ok(m.configure_axis(2, &AXIS));
+    for addr in [axis_timing_a::addr(2), axis_timing_b::addr(2), axis_mode::addr(2)] {
+        assert_eq!(ok(m.bus().read_one(addr)), 0, "{addr:#x} is write-only");
+    }
+    // No probe event yet: the positions are the period latch's.
+    assert!(!ok(m.probe_holds_positions()));
+    let spi =
+        pin_probe::spi_machine(Probe::new(TopVariant::Motion, "serial_chip_reports_its_register_shapes_default", 1));
+    let caps = spi.caps();
+    assert!(!caps.one_snapshot && !caps.inc_write_only && !caps.axis_write_only, "{caps:?}");
 }
 
 /// A move over the 8080 bus ends exactly on every axis's rounded sum, every step on the

@@ -476,6 +476,12 @@ pub struct Driver {
     watchdog_bit: bool,
     read_once: bool,
     records: u64,
+    /// Reads that found POSITION holding a probe snapshot (ONE_SNAPSHOT).
+    held_reads: u64,
+    /// Such reads since the last live one.
+    held_since_live: u32,
+    /// A live step position was read (the unwrapping's base).
+    steps_once: bool,
     /// The hand wheel's count (edges) and detents at the last read (0 without one).
     wheel: (i32, i32),
 }
@@ -535,6 +541,9 @@ impl Driver {
             watchdog_bit: false,
             read_once: false,
             records: 0,
+            held_reads: 0,
+            held_since_live: 0,
+            steps_once: false,
             wheel: (0, 0),
         })
     }
@@ -569,6 +578,12 @@ impl Driver {
         self.records
     }
 
+    /// Reads that found `POSITION` holding a probe snapshot (a `VERSION.ONE_SNAPSHOT`
+    /// chip) and held the step feedback instead ([`Driver::read`]).
+    pub fn held_reads(&self) -> u64 {
+        self.held_reads
+    }
+
     fn bus_err(&self) -> impl Fn(BusError) -> HalError + '_ {
         move |source| HalError::Bus { target: self.target.clone(), source }
     }
@@ -592,19 +607,37 @@ impl Driver {
 
     /// One coherent latched read of every step position and encoder count (the
     /// `finestep.0.read` function), with `period_ns` the servo period.
+    ///
+    /// On a chip with one position snapshot (`VERSION.ONE_SNAPSHOT`, the MAX II) whose
+    /// probe has latched (`PROBE_STATUS.SEEN`), `POSITION` is the probe event's, not live:
+    /// this read then leaves the step feedback as the last live read gave it (position
+    /// and velocity held, [`Driver::held_reads`] counts it) and releases the snapshot
+    /// (`PROBE_CONTROL.ARM`), so that the next period boundary's latch is live again; the
+    /// next live read takes the steps of the whole time since the last live one (the
+    /// positions are totals: nothing is lost) and its velocity over that time. The
+    /// encoder counts are live either way (the period latch copies them while `SEEN`).
     pub fn read(&mut self, period_ns: i64) -> Result<(), HalError> {
         self.apply_encoder_setup()?;
         let snapshot = self.machine.feedback().map_err(self.bus_err())?;
         let dt = period_ns as f64 * 1e-9;
-        for (axis, &raw) in self.axes.iter_mut().zip(&snapshot.steps) {
-            let delta = if self.read_once { i64::from(raw.wrapping_sub(axis.last_raw)) } else { 0 };
-            if !self.read_once {
-                axis.steps = i64::from(raw);
-            } else {
-                axis.steps += delta;
+        if snapshot.probe_held {
+            self.machine.release_probe_snapshot().map_err(self.bus_err())?;
+            self.held_reads += 1;
+            self.held_since_live += 1;
+        } else {
+            let elapsed = dt * (1 + self.held_since_live) as f64;
+            self.held_since_live = 0;
+            for (axis, &raw) in self.axes.iter_mut().zip(&snapshot.steps) {
+                let delta = if self.steps_once { i64::from(raw.wrapping_sub(axis.last_raw)) } else { 0 };
+                if !self.steps_once {
+                    axis.steps = i64::from(raw);
+                } else {
+                    axis.steps += delta;
+                }
+                axis.last_raw = raw;
+                axis.velocity = if elapsed > 0.0 { delta as f64 / elapsed } else { 0.0 };
             }
-            axis.last_raw = raw;
-            axis.velocity = if dt > 0.0 { delta as f64 / dt } else { 0.0 };
+            self.steps_once = true;
         }
         for ((channel, &raw), cmd) in self.encoders.iter_mut().zip(&snapshot.counts).zip(&self.encoder_cmds) {
             let delta = if self.read_once { i64::from(raw.wrapping_sub(channel.last_raw)) } else { 0 };
@@ -828,6 +861,11 @@ impl Driver {
         let wd_clocks = wd_clocks.clamp(1, u64::from(watchdog_timeout::CLOCKS.max())) as u32;
         m.bus().write(watchdog_timeout::ADDR, watchdog_timeout::CLOCKS.set(0, wd_clocks)).map_err(err)?;
         m.clear_faults_and_errors().map_err(err)?;
+        // A probe snapshot held in POSITION (ONE_SNAPSHOT) goes back to the latch first,
+        // which follows every clock while stopped: the resynchronisation reads live steps.
+        if m.probe_holds_positions().map_err(err)? {
+            m.release_probe_snapshot().map_err(err)?;
+        }
         let positions = m.positions().map_err(err)?;
         for (axis, &steps) in self.axes.iter_mut().zip(&positions.steps) {
             // Resynchronise on the chip (after a fault it dropped its pending steps).

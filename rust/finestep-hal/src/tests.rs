@@ -2,7 +2,8 @@
 //! driver's SPI master): the same SPI frames a board or `finestep sim-chip` gets.
 
 use super::*;
-use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0, IN_ENC_Z0};
+use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0, IN_ENC_Z0, IN_PROBE};
+use finestep_host::regs::probe_status;
 use finestep_host::{PinHost, PinTarget, PinTiming};
 use finestep_model::top::{Top, TopInputs, TopParams};
 use std::cell::Cell;
@@ -20,6 +21,8 @@ struct Turning {
     pending: i64,
     clock: u64,
     index_at: i64,
+    /// The probe pin high (PROBE_CONTROL.ACTIVE_HIGH's reset polarity: touching).
+    probe: bool,
 }
 
 /// The reference model at its pins (finestep-cosim's `ModelPins`, without the crate's
@@ -29,6 +32,7 @@ struct ModelPins(Top, Rc<Cell<Turning>>);
 impl PinTarget for ModelPins {
     fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
         let mut turning = self.1.get();
+        let inputs = inputs & !(1 << IN_PROBE) | u64::from(turning.probe) << IN_PROBE;
         let idle = TopInputs::unpack(inputs);
         for _ in 0..cycles {
             if turning.pending == 0 {
@@ -70,7 +74,12 @@ fn driver() -> Driver {
 
 /// A driver on a model chip whose encoder channel 0 `turning` turns.
 fn driver_turning(turning: Rc<Cell<Turning>>) -> Driver {
-    let mut host = PinHost::new(ModelPins(Top::new(TopParams::default()), turning), PinTiming::default());
+    driver_on(TopParams::default(), turning)
+}
+
+/// A driver on a model chip built with `params`.
+fn driver_on(params: TopParams, turning: Rc<Cell<Turning>>) -> Driver {
+    let mut host = PinHost::new(ModelPins(Top::new(params), turning), PinTiming::default());
     host.reset(4).unwrap();
     host.idle(8).unwrap();
     Driver::connect(Box::new(host), true, "model").unwrap()
@@ -118,6 +127,61 @@ fn every_period_lands_the_commanded_position_in_steps() {
     }
     let status = driver.machine.status().unwrap();
     assert_eq!(status::RATE_ERROR.get(status) | status::UNDERRUN.get(status) | status::HALT.get(status), 0);
+}
+
+/// A chip with one position snapshot (ONE_SNAPSHOT, the MAX II's): a probe event holds
+/// POSITION at the event until the probe is armed again. The driver sees it in VERSION,
+/// holds the step feedback on a read that finds the probe's snapshot (it does not take it
+/// as the position), releases the snapshot, and lands every other period on the command
+/// exactly, as on the default chip; the step feedback never jumps back. A servo period
+/// of 1 ms: the probe's frames (the arm, the release, PROBE_STATUS read every period on
+/// such a chip) do not fit the 0.2 ms of the other tests at the pins' SPI rate.
+#[test]
+fn a_probe_snapshot_is_not_taken_as_the_position() {
+    const PERIOD_NS: i64 = 1_000_000;
+    let cycle = |driver: &mut Driver, cmds: &[StepgenCommand]| -> Vec<i32> {
+        driver.read(PERIOD_NS).unwrap();
+        let counts = (0..driver.n_axes()).map(|a| driver.stepgen_feedback(a).unwrap().counts).collect();
+        driver.write(PERIOD_NS, true, 0, cmds).unwrap();
+        counts
+    };
+    let params = TopParams { one_snapshot: true, inc_write_only: true, ..TopParams::default() };
+    let turning: Rc<Cell<Turning>> = Rc::default();
+    let mut driver = driver_on(params, turning.clone());
+    let caps = driver.machine.caps();
+    assert!(caps.one_snapshot && caps.inc_write_only, "{caps:?}");
+    let scale = 800.0;
+    let n = driver.n_axes();
+    let mut history: Vec<f64> = Vec::new();
+    let mut last = 0;
+    let mut held = 0;
+    for k in 0..300 {
+        if k == 100 {
+            driver.machine.arm_probe(true, 1).unwrap();
+        }
+        // The probe touches for 20 periods, then lets go.
+        let mut pins = turning.get();
+        pins.probe = (150..170).contains(&k);
+        turning.set(pins);
+        let t = k as f64 * PERIOD_NS as f64 * 1e-9;
+        let position = 0.5 * (1.0 - (t * 8.0).cos());
+        let cmds: Vec<StepgenCommand> = (0..n).map(|_| stepgen(position, scale)).collect();
+        let before = driver.held_reads();
+        let counts = cycle(&mut driver, &cmds);
+        if driver.held_reads() > before {
+            assert!((150..172).contains(&k), "period {k}: held without a probe event");
+            assert_eq!(counts[0], last, "period {k}: the feedback held");
+            held += 1;
+        } else if k > FEEDBACK_LAG_PERIODS {
+            let expected = quantised_steps(command_fixed(history[k - FEEDBACK_LAG_PERIODS], scale).unwrap());
+            assert_eq!(i64::from(counts[0]), expected, "period {k}");
+        }
+        last = counts[0];
+        history.push(position);
+    }
+    assert!(held >= 1, "the probe's snapshot was seen");
+    let probe = driver.machine.bus().read_one(probe_status::ADDR).unwrap();
+    assert_eq!(probe_status::SEEN.get(probe), 0, "released: {probe:#x}");
 }
 
 #[test]

@@ -46,6 +46,11 @@ pub struct FeedbackSnapshot {
     pub edge_times: Vec<u32>,
     /// `TIMESTAMP` of the latch.
     pub latch_time: u32,
+    /// `steps` and `latch_time` are the probe event's snapshot, not the period latch's: a
+    /// core with [`crate::Caps::one_snapshot`] whose probe has latched
+    /// ([`Machine::probe_holds_positions`]); the counts and edge times are the period
+    /// latch's still (docs/spec/register_file.md#one-snapshot).
+    pub probe_held: bool,
 }
 
 /// What a probe event latched.
@@ -220,11 +225,15 @@ impl<B: Bus> Machine<B> {
             bus.read(enc_edge_time::addr(0), &mut edge_times)?;
             Ok((steps, counts, edge_times))
         })?;
+        // Read after the positions: SEEN stays set until the host arms the probe, so a 0
+        // here says they were the period latch's.
+        let probe_held = self.probe_holds_positions()?;
         Ok(FeedbackSnapshot {
             steps: steps.into_iter().map(|w| w as i32).collect(),
             counts: counts.into_iter().map(|w| w as i32).collect(),
             edge_times,
             latch_time,
+            probe_held,
         })
     }
 

@@ -170,6 +170,11 @@ pub enum BusError {
         /// Records a frame carries at most.
         max: usize,
     },
+    /// `POSITION` holds the probe event's snapshot, not the period latch's (a core with
+    /// `VERSION.ONE_SNAPSHOT` and `PROBE_STATUS.SEEN`): `Machine::release_probe_snapshot`
+    /// hands it back to the latch.
+    #[error("POSITION holds the probe's snapshot (ONE_SNAPSHOT, PROBE_STATUS.SEEN): arm the probe to resume the period latch")]
+    ProbeHoldsPositions,
     /// The position latch moved during every attempt at a coherent read.
     #[error("the latch kept moving during {attempts} attempts to read the {what}")]
     LatchMoving {

@@ -4,7 +4,7 @@
 use crate::machine_io::SpindleSetup;
 use crate::regs::{
     axis_enable, axis_mode, caps, clock_hz, command, control, fifo_level, id, latch_time, period_clocks, position,
-    start_level, status, version,
+    probe_control, probe_status, start_level, status, version,
 };
 use crate::{Bus, BusError};
 use finestep_interface::{invert, DriveTiming, OutMode};
@@ -40,6 +40,18 @@ pub struct Caps {
     pub has_panel: bool,
     /// The gantry pair is built (`CAPS.HAS_GANTRY`).
     pub has_gantry: bool,
+    /// One position snapshot for the period latch and the probe (`VERSION.ONE_SNAPSHOT`,
+    /// docs/spec/register_file.md#one-snapshot): while `PROBE_STATUS.SEEN`, `POSITION`
+    /// and `LATCH_TIME` hold the probe's snapshot, not the period's. [`Machine::positions`]
+    /// and [`Machine::feedback`] then say so ([`Machine::probe_holds_positions`]).
+    pub one_snapshot: bool,
+    /// `RECORD_INC` is write-only, reads 0 (`VERSION.INC_WRITE_ONLY`). This driver never
+    /// reads it back in any build: it writes the increments and pushes.
+    pub inc_write_only: bool,
+    /// `AXIS_TIMING_A/B` and `AXIS_MODE` are write-only, read 0
+    /// (`VERSION.AXIS_WRITE_ONLY`). This driver never reads them back in any build: it
+    /// keeps the timings it wrote.
+    pub axis_write_only: bool,
 }
 
 impl Caps {
@@ -132,6 +144,10 @@ impl<B: Bus> Machine<B> {
             has_outputs: caps::HAS_OUTPUTS.get(caps_word) != 0,
             has_panel: caps::HAS_PANEL.get(caps_word) != 0,
             has_gantry: caps::HAS_GANTRY.get(caps_word) != 0,
+            // The capabilities CAPS has no room for (0 on a core of map 1.0: the defaults).
+            one_snapshot: version::ONE_SNAPSHOT.get(version_word) != 0,
+            inc_write_only: version::INC_WRITE_ONLY.get(version_word) != 0,
+            axis_write_only: version::AXIS_WRITE_ONLY.get(version_word) != 0,
         };
         let Some(step_digit) = serial_digit(caps.n_axes, caps::STEP_ROUND_LOG2.get(caps_word)) else {
             let engine =
@@ -152,6 +168,9 @@ impl<B: Bus> Machine<B> {
             has_outputs: caps.has_outputs,
             has_panel: caps.has_panel,
             has_gantry: caps.has_gantry,
+            one_snapshot: caps.one_snapshot,
+            inc_write_only: caps.inc_write_only,
+            axis_write_only: caps.axis_write_only,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
@@ -283,6 +302,11 @@ impl<B: Bus> Machine<B> {
     /// not running, the latch follows the pulse train every clock: the positions are
     /// returned once two reads agree and the core is still stopped, with the later
     /// LATCH_TIME.
+    ///
+    /// On a core with [`Caps::one_snapshot`] whose probe has latched (`PROBE_STATUS.SEEN`)
+    /// the positions are the probe event's, not live: refused with
+    /// [`BusError::ProbeHoldsPositions`] ([`Machine::release_probe_snapshot`] resumes the
+    /// period latch).
     pub fn positions(&mut self) -> Result<Positions, BusError> {
         let n = self.caps.n_axes;
         let (steps, latch_time) = self.read_latched(8, "positions", |bus| {
@@ -290,7 +314,38 @@ impl<B: Bus> Machine<B> {
             bus.read(position::addr(0), &mut words)?;
             Ok(words.into_iter().map(|w| w as i32).collect::<Vec<i32>>())
         })?;
+        if self.probe_holds_positions()? {
+            return Err(BusError::ProbeHoldsPositions);
+        }
         Ok(Positions { steps, latch_time })
+    }
+
+    /// Whether `POSITION` and `LATCH_TIME` hold the probe event's snapshot instead of the
+    /// period latch's: a [`Caps::one_snapshot`] core with `PROBE_STATUS.SEEN`
+    /// (docs/spec/register_file.md#one-snapshot). Always `false` on other cores (no
+    /// read). `SEEN` stays set until the host arms the probe, so a `false` read after the
+    /// positions were read says they were the period latch's.
+    pub fn probe_holds_positions(&mut self) -> Result<bool, BusError> {
+        if !self.caps.one_snapshot {
+            return Ok(false);
+        }
+        Ok(probe_status::SEEN.get(self.bus.read_one(probe_status::ADDR)?) != 0)
+    }
+
+    /// On a [`Caps::one_snapshot`] core, hands `POSITION` and `LATCH_TIME` back to the
+    /// period latch after a probe event (the probe's snapshot read or not wanted): writes
+    /// `PROBE_CONTROL.ARM` with the polarity and filter as they are, which clears `SEEN`;
+    /// the latch takes the positions again from the clock after (at the next period
+    /// boundary while running). The probe stays armed: its next event holds the positions
+    /// again. Nothing on other cores.
+    pub fn release_probe_snapshot(&mut self) -> Result<(), BusError> {
+        if !self.caps.one_snapshot {
+            return Ok(());
+        }
+        let word = self.bus.read_one(probe_control::ADDR)?;
+        let keep = probe_control::ACTIVE_HIGH.set(0, probe_control::ACTIVE_HIGH.get(word));
+        let keep = probe_control::FILTER.set(keep, probe_control::FILTER.get(word));
+        self.bus.write(probe_control::ADDR, probe_control::ARM.set(keep, 1))
     }
 
     /// Reads registers that the position latch takes on one clock (`read`), coherently,
@@ -333,6 +388,111 @@ impl<B: Bus> Machine<B> {
 mod tests {
     use super::*;
     use crate::PeriodRecord;
+
+    /// A core of map 1.1 whose VERSION reports `version_bits` (ONE_SNAPSHOT,
+    /// INC_WRITE_ONLY), its probe's SEEN as `seen` (cleared by a write of ARM, as the
+    /// register file does), POSITION[i] = 100 + i; it records every read address and
+    /// every write.
+    struct Snapshot {
+        version_bits: u32,
+        seen: bool,
+        probe_control: u32,
+        reads: Vec<u8>,
+        writes: Vec<(u8, u32)>,
+    }
+
+    impl Bus for Snapshot {
+        fn read(&mut self, addr: u8, out: &mut [u32]) -> Result<(), BusError> {
+            for (i, word) in out.iter_mut().enumerate() {
+                let at = addr + i as u8;
+                self.reads.push(at);
+                let caps_word = caps::TIMING_W.set(caps::P_WIDTH.set(caps::N_AXES.set(0, 2), 16), 8);
+                let caps_word = caps::N_ENC.set(caps::FIFO_DEPTH_LOG2.set(caps_word, 1), 1);
+                let version_word = version::MINOR.set(version::MAJOR.set(0, crate::regs::MAP_VERSION_MAJOR), 1);
+                *word = match at {
+                    id::ADDR => id::MAGIC_VALUE,
+                    version::ADDR => version_word | self.version_bits,
+                    caps::ADDR => caps_word,
+                    clock_hz::ADDR => 50_000_000,
+                    probe_status::ADDR => probe_status::SEEN.set(0, u32::from(self.seen)),
+                    probe_control::ADDR => self.probe_control,
+                    a if (position::addr(0)..position::addr(2)).contains(&a) => 100 + u32::from(a - position::addr(0)),
+                    _ => 0,
+                };
+            }
+            Ok(())
+        }
+        fn write(&mut self, addr: u8, value: u32) -> Result<(), BusError> {
+            if addr == probe_control::ADDR && probe_control::ARM.get(value) != 0 {
+                self.seen = false;
+            }
+            self.writes.push((addr, value));
+            Ok(())
+        }
+        fn push_records(&mut self, _: &[PeriodRecord]) -> Result<(), BusError> {
+            Ok(())
+        }
+        fn wait(&mut self, _: u64) -> Result<(), BusError> {
+            Ok(())
+        }
+    }
+
+    fn snapshot_core(version_bits: u32, seen: bool) -> Machine<Snapshot> {
+        let probe_control = probe_control::FILTER.set(probe_control::ACTIVE_HIGH.set(0, 0), 5);
+        let bus = Snapshot { version_bits, seen, probe_control, reads: Vec::new(), writes: Vec::new() };
+        Machine::connect(bus).unwrap()
+    }
+
+    /// ONE_SNAPSHOT from VERSION: while the probe's SEEN is set the positions are refused
+    /// and the feedback marked as the probe's; a release arms the probe with its polarity
+    /// and filter kept, and the positions are the latch's again.
+    #[test]
+    fn one_snapshot_positions_are_not_live_while_the_probe_holds_them() {
+        let mut m = snapshot_core(version::ONE_SNAPSHOT.set(0, 1), true);
+        assert!(m.caps().one_snapshot && !m.caps().inc_write_only, "{:?}", m.caps());
+        assert!(matches!(m.positions(), Err(BusError::ProbeHoldsPositions)));
+        let held = m.feedback().unwrap();
+        assert!(held.probe_held && held.steps == [100, 101], "{held:?}");
+        m.release_probe_snapshot().unwrap();
+        let arm = probe_control::ARM.set(probe_control::FILTER.set(0, 5), 1);
+        assert_eq!(m.bus_ref().writes, [(probe_control::ADDR, arm)], "ARM, polarity (low) and filter (5) kept");
+        assert_eq!(m.positions().unwrap().steps, [100, 101]);
+        assert!(!m.feedback().unwrap().probe_held);
+    }
+
+    /// Without ONE_SNAPSHOT (a map 1.0 core reads 0 there) SEEN says nothing about
+    /// POSITION: never read for it, and a release writes nothing.
+    #[test]
+    fn without_one_snapshot_the_probe_never_holds_the_positions() {
+        let mut m = snapshot_core(0, true);
+        assert!(!m.caps().one_snapshot && !m.caps().inc_write_only);
+        assert_eq!(m.positions().unwrap().steps, [100, 101]);
+        assert!(!m.feedback().unwrap().probe_held);
+        m.release_probe_snapshot().unwrap();
+        assert!(m.bus_ref().writes.is_empty());
+        assert!(!m.bus_ref().reads.contains(&probe_status::ADDR), "{:?}", m.bus_ref().reads);
+    }
+
+    /// INC_WRITE_ONLY and AXIS_WRITE_ONLY from VERSION (a build without the readback
+    /// store): accepted, and the driver's calls never read RECORD_INC, AXIS_TIMING_A/B or
+    /// AXIS_MODE back.
+    #[test]
+    fn write_only_registers_are_never_read_back() {
+        let all = version::INC_WRITE_ONLY.set(version::ONE_SNAPSHOT.set(0, 1), 1);
+        let mut m = snapshot_core(version::AXIS_WRITE_ONLY.set(all, 1), false);
+        assert!(m.caps().inc_write_only && m.caps().one_snapshot && m.caps().axis_write_only);
+        m.configure_axis(1, &AxisSetup::default()).unwrap();
+        m.set_period(1000).unwrap();
+        m.positions().unwrap();
+        m.feedback().unwrap();
+        m.set_control(true, false, true).unwrap();
+        let inc = crate::regs::record_inc::ADDR..crate::regs::record_inc::addr(2);
+        // The axis block: AXIS_TIMING_A/B and AXIS_MODE of every axis (stride 4).
+        let block = crate::regs::axis_timing_a::ADDR..crate::regs::axis_timing_a::ADDR + 32;
+        let axis = |a: &u8| block.contains(a) && (a - block.start) % 4 < 3;
+        assert!(!m.bus_ref().reads.iter().any(|a| inc.contains(a) || axis(a)), "{:?}", m.bus_ref().reads);
+        assert!(m.bus_ref().writes.iter().any(|(a, _)| axis(a)), "the axis was configured");
+    }
 
     /// A register file that answers the identity of a core with 3 axes, P_WIDTH 16 and
     /// TIMING_W 8, and records every write.

@@ -247,6 +247,9 @@ pub struct TopParams {
     /// `INC_WRITE_ONLY`: `RECORD_INC` is write-only (reads 0); needs `READ_STORE` 0, which
     /// the model does not carry (no effect on behaviour).
     pub inc_write_only: bool,
+    /// `AXIS_WRITE_ONLY`: `AXIS_TIMING_A/B` and `AXIS_MODE` are write-only (read 0);
+    /// needs `READ_STORE` 0, as `inc_write_only`.
+    pub axis_write_only: bool,
     /// `HAS_SPINDLE`: the spindle block (PWM or SPI DAC) is built.
     pub has_spindle: bool,
     /// `HAS_OUTPUTS`: the logic outputs and the interlock are built.
@@ -278,6 +281,7 @@ impl Default for TopParams {
             step_digit: finestep_top::STEP_DIGIT.default,
             one_snapshot: finestep_top::ONE_SNAPSHOT.default != 0,
             inc_write_only: finestep_top::INC_WRITE_ONLY.default != 0,
+            axis_write_only: finestep_top::AXIS_WRITE_ONLY.default != 0,
             has_spindle: finestep_top::HAS_SPINDLE.default != 0,
             has_outputs: finestep_top::HAS_OUTPUTS.default != 0,
             n_gpio: finestep_top::N_GPIO.default as usize,
@@ -304,6 +308,7 @@ impl TopParams {
         finestep_top::STEP_DIGIT.check(self.step_digit)?;
         finestep_top::ONE_SNAPSHOT.check(self.one_snapshot)?;
         finestep_top::INC_WRITE_ONLY.check(self.inc_write_only)?;
+        finestep_top::AXIS_WRITE_ONLY.check(self.axis_write_only)?;
         finestep_top::HAS_SPINDLE.check(self.has_spindle)?;
         finestep_top::HAS_OUTPUTS.check(self.has_outputs)?;
         finestep_top::N_GPIO.check(self.n_gpio as u64)?;

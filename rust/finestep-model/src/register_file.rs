@@ -754,6 +754,15 @@ impl RegisterFile {
         // (INC_WRITE_ONLY), reads 0.
         let write_only =
             p.inc_write_only && element_index(addr, regs::record_inc::ADDR, regs::record_inc::STRIDE, n).is_some();
+        // So are the per-axis timing and mode registers (AXIS_WRITE_ONLY).
+        let axis_block = [
+            (regs::axis_timing_a::ADDR, regs::axis_timing_a::STRIDE),
+            (regs::axis_timing_b::ADDR, regs::axis_timing_b::STRIDE),
+            (regs::axis_mode::ADDR, regs::axis_mode::STRIDE),
+        ];
+        let write_only = write_only
+            || p.axis_write_only
+                && axis_block.iter().any(|&(base, stride)| element_index(addr, base, stride, n).is_some());
         let stored = if write_only { 0 } else { self.rw[usize::from(addr)] };
         let axes_mask = |mask: u8| u32::from(mask) & ((1u32 << n) - 1);
         let hardware = match addr {
@@ -762,7 +771,11 @@ impl RegisterFile {
                 use regs::version as v;
                 let word = v::MAJOR.set(0, regs::MAP_VERSION_MAJOR);
                 let word = v::MINOR.set(word, regs::MAP_VERSION_MINOR);
-                v::PATCH.set(word, regs::MAP_VERSION_PATCH)
+                let word = v::PATCH.set(word, regs::MAP_VERSION_PATCH);
+                // The capabilities CAPS has no room for.
+                let word = v::ONE_SNAPSHOT.set(word, u32::from(p.one_snapshot));
+                let word = v::INC_WRITE_ONLY.set(word, u32::from(p.inc_write_only));
+                v::AXIS_WRITE_ONLY.set(word, u32::from(p.axis_write_only))
             }
             regs::caps::ADDR => {
                 use regs::caps as c;

@@ -257,3 +257,34 @@ fn write_only_record_inc_reads_zero_and_still_pushes() {
         assert_eq!(queued, vec![finestep_model::PeriodRecord::from_raw(&incs, 1)], "write-only {write_only}");
     }
 }
+
+/// `AXIS_WRITE_ONLY` (docs/spec/register_file.md#write-only-axis-registers):
+/// `AXIS_TIMING_A/B` and `AXIS_MODE` read 0 over the bus, and the core still takes what
+/// was written; without it they read back as written.
+#[test]
+fn write_only_axis_registers_read_zero_and_still_configure() {
+    let bus = ParallelMaster::default();
+    let timing_a = regs::axis_timing_a::STEP_SPACE.set(regs::axis_timing_a::STEP_LEN.set(0, 7), 9);
+    let timing_b = regs::axis_timing_b::DIR_HOLD.set(regs::axis_timing_b::DIR_SETUP.set(0, 5), 6);
+    let mode = regs::axis_mode::INVERT_B.set(regs::axis_mode::OUT_MODE.set(0, 1), 1);
+    for write_only in [false, true] {
+        let mut bench = Bench::new(TopParams { axis_write_only: write_only, ..TopParams::default() });
+        bench.bring_up(&bus);
+        let words = [
+            (regs::axis_timing_a::addr(2), timing_a),
+            (regs::axis_timing_b::addr(2), timing_b),
+            (regs::axis_mode::addr(2), mode),
+        ];
+        for &(addr, word) in &words {
+            bus.write32(&mut bench, addr, word);
+        }
+        for &(addr, word) in &words {
+            let read = bus.read32(&mut bench, addr);
+            assert_eq!(read, if write_only { 0 } else { word }, "{addr:#x}, write-only {write_only}");
+        }
+        let config = bench.top.registers().axis_config(2);
+        let written = finestep_model::DriveTiming::new(7, 9, 5, 6);
+        assert_eq!(config.timing, written, "the core takes the timing written, write-only {write_only}");
+        assert_eq!((config.mode, config.invert), (1, finestep_interface::invert::PIN_B), "write-only {write_only}");
+    }
+}

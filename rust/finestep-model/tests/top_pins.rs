@@ -17,6 +17,7 @@ fn params() -> impl Strategy<Value = TopParams> {
         prop::sample::select(vec![0u32, 1, 2, 4, 8]),
         any::<bool>(),
         any::<bool>(),
+        any::<bool>(),
     );
     (1..=MAX_AXES, 1..=24u32, 1..=16u32, 1..=6u32, 1..=24u32, links, io).prop_map(
         |(
@@ -26,7 +27,7 @@ fn params() -> impl Strategy<Value = TopParams> {
             fifo_depth_log2,
             wd_w,
             (has_spi, has_parallel, n_enc, has_mpg, step_shared),
-            (has_spindle, has_outputs, n_gpio, step_digit, one_snapshot, inc_write_only),
+            (has_spindle, has_outputs, n_gpio, step_digit, one_snapshot, inc_write_only, axis_write_only),
         )| {
             let p = TopParams {
                 n_axes,
@@ -43,6 +44,7 @@ fn params() -> impl Strategy<Value = TopParams> {
                 step_digit,
                 one_snapshot,
                 inc_write_only,
+                axis_write_only,
                 has_spindle,
                 has_outputs,
                 n_gpio,
