@@ -762,6 +762,7 @@ impl RegisterFile {
                 use regs::version as v;
                 let word = v::MAJOR.set(0, regs::MAP_VERSION_MAJOR);
                 let word = v::MINOR.set(word, regs::MAP_VERSION_MINOR);
+                let word = v::HAS_PBP.set(word, u32::from(p.has_pbp));
                 v::PATCH.set(word, regs::MAP_VERSION_PATCH)
             }
             regs::caps::ADDR => {
