@@ -7,7 +7,10 @@
 // axes; a DDA per axis spreads each increment over the period; a step shaper per axis
 // turns the step requests into drive-timed step/dir, up/down or quadrature pins. The
 // gantry block may give one axis (the slave) the requests of another (the master),
-// corrected from two encoder channels (see gantry_sync).
+// corrected from two encoder channels (see gantry_sync). With HAS_PBP a record with the
+// flag PBP is a line or an arc for the point-by-point comparison interpolator, whose
+// requests drive the pair it names while the period timer runs idle periods (see
+// docs/spec/pbp_interp.md#in-the-core).
 //
 // Latency from an increment taking effect to the first pin edge: 3 clocks.
 // Every output is a flip-flop or a function of flip-flops only.
@@ -19,7 +22,8 @@ module finestep_core #(
     parameter STEP_SHARED = 0,   // 1: one step engine visits the axes (no gantry block then)
     parameter RAM_BLOCK  = 0,    // 1: the step engine's stores in block RAM
     parameter STEP_DIGIT = 0,    // with STEP_SHARED: 0 step_engine; 1, 2, 4, 8 step_serial
-    parameter HAS_ALT    = 1     // 0: no alternate record (no jog): rec_alt is taken as 0
+    parameter HAS_ALT    = 1,    // 0: no alternate record (no jog): rec_alt is taken as 0
+    parameter HAS_PBP    = 0     // 1: pbp_interp runs the records with the flag PBP
 ) (
     // clock, reset
     input  wire                       clk,
@@ -99,6 +103,18 @@ module finestep_core #(
 
     wire start_ok;
 
+    // The point-by-point comparison interpolator's side of the record port
+    // (docs/spec/pbp_interp.md#in-the-core): what the period timer is offered, and the
+    // block's requests on each axis (none without HAS_PBP).
+    wire                 timer_rec_valid;
+    wire                 timer_rec_ready;
+    wire [32*N_AXES-1:0] timer_rec_inc;
+    wire [7:0]           timer_rec_flags;
+    wire                 timer_record_error;
+    wire                 timer_block_end;
+    wire [N_AXES-1:0]    pbp_req_valid;
+    wire [N_AXES-1:0]    pbp_req_negative;
+
     // The digit-serial engine is the CPLD's: its period timer is shaped for area (the
     // same behaviour, see period_timer).
     period_timer #(
@@ -114,19 +130,106 @@ module finestep_core #(
         .start_ok(start_ok),
         .period_clocks(period_clocks),
         .clear_errors(clear_errors),
-        .rec_valid(rec_valid),
-        .rec_ready(rec_ready),
-        .rec_inc(rec_inc),
-        .rec_flags(rec_flags),
+        .rec_valid(timer_rec_valid),
+        .rec_ready(timer_rec_ready),
+        .rec_inc(timer_rec_inc),
+        .rec_flags(timer_rec_flags),
         .rec_alt(rec_alt),
         .rec_alt_lane(rec_alt_lane),
         .rec_alt_inc(rec_alt_inc),
         .active(timer_active),
         .p_active(p_active),
         .inc(inc),
-        .block_end(block_end),
-        .record_error(record_error)
+        .block_end(timer_block_end),
+        .record_error(timer_record_error)
     );
+
+    generate
+        if (HAS_PBP != 0) begin : with_pbp
+            // A pbp record's lanes: lane 0 {ARC, CW, PAIR, x}, lane 1 y, lane 2 the arc's
+            // decision count, lane 3 TICK_DIV (hdl/interface.toml, PBP_RECORD).
+            localparam COORD_W = 24;
+            localparam DIV_W   = 16;
+            localparam TOP     = 24;    // lane 0's top byte holds the PBP_RECORD bits
+            wire alt_offered = (HAS_ALT != 0) && rec_alt;
+            wire offered_pbp = rec_flags[FS_REC_FLAG_PBP_BIT] && !alt_offered;
+            wire busy;
+            wire done;
+            // The timer is offered nothing while a pbp record runs (its boundaries run idle
+            // periods), and a pbp record as an idle period without BLOCK_END (the block's
+            // done gives it), so the FIFO advances at the boundary that starts it.
+            assign timer_rec_valid = rec_valid && !busy;
+            assign rec_ready       = timer_rec_ready && !busy;
+            assign timer_rec_inc   = offered_pbp ? {32*N_AXES{1'b0}} : rec_inc;
+            assign timer_rec_flags = offered_pbp ? (rec_flags & ~(8'd1 << FS_REC_FLAG_BLOCK_END_BIT)) : rec_flags;
+            wire [1:0] pair = rec_inc[TOP + FS_PBP_RECORD_PAIR_0_BIT +: 2];
+            wire pair_ok = ({1'b0, pair, 1'b1} < N_AXES);
+            // Taken with the timer's record (a boundary while running); one on a pair not
+            // built is refused (record_error) and runs as the idle period it is.
+            wire take = run && timer_rec_ready && rec_valid && !busy && offered_pbp;
+            reg [1:0]       pair_reg;
+            reg [DIV_W-1:0] tick_reg;
+            reg             end_reg;
+            reg             refused_reg;
+            always @(posedge clk) begin
+                if (take) begin
+                    pair_reg <= pair;
+                    tick_reg <= rec_inc[96 +: DIV_W];
+                    end_reg  <= rec_flags[FS_REC_FLAG_BLOCK_END_BIT];
+                end
+                if (take && !pair_ok)
+                    refused_reg <= 1'b1;
+                else if (clear_errors)
+                    refused_reg <= 1'b0;
+                if (rst) begin
+                    pair_reg    <= 2'd0;
+                    end_reg     <= 1'b0;
+                    refused_reg <= 1'b0;
+                end
+            end
+            wire [1:0] req_valid2, req_negative2;
+            wire       ready_unused;
+            // A stop (run low) aborts the record as a halt does.
+            pbp_interp #(
+                .COORD_W(COORD_W),
+                .DIV_W(DIV_W)
+            ) interp (
+                .clk(clk),
+                .rst(rst),
+                .halt(halt || !run),
+                .tick_div(tick_reg),
+                .rec_valid(take && pair_ok),
+                .rec_ready(ready_unused),
+                .rec_arc(rec_inc[TOP + FS_PBP_RECORD_ARC_BIT]),
+                .rec_cw(rec_inc[TOP + FS_PBP_RECORD_CW_BIT]),
+                .rec_x(rec_inc[0 +: COORD_W]),
+                .rec_y(rec_inc[32 +: COORD_W]),
+                .rec_steps(rec_inc[64 +: COORD_W + 3]),
+                .req_valid(req_valid2),
+                .req_negative(req_negative2),
+                .busy(busy),
+                .done(done)
+            );
+            genvar k;
+            for (k = 0; k < N_AXES; k = k + 1) begin : lane
+                wire on_pair = ({30'd0, pair_reg} == k / 2);
+                assign pbp_req_valid[k]    = on_pair && req_valid2[k % 2];
+                assign pbp_req_negative[k] = req_negative2[k % 2];
+            end
+            assign block_end    = timer_block_end || (done && end_reg);
+            assign record_error = timer_record_error || refused_reg;
+            wire unused_pbp = &{1'b0, ready_unused};
+        end else begin : without_pbp
+            assign timer_rec_valid  = rec_valid;
+            assign rec_ready        = timer_rec_ready;
+            assign timer_rec_inc    = rec_inc;
+            assign timer_rec_flags  = rec_flags;
+            assign pbp_req_valid    = {N_AXES{1'b0}};
+            assign pbp_req_negative = {N_AXES{1'b0}};
+            assign block_end        = timer_block_end;
+            assign record_error     = timer_record_error;
+        end
+    endgenerate
 
     wire [N_AXES-1:0] dda_req_valid;
     wire [N_AXES-1:0] dda_req_negative;
@@ -222,7 +325,8 @@ module finestep_core #(
             wire unused_slave = &{1'b0, slave_req_valid, slave_req_negative, slave_axis};
             assign dda_req_valid    = {N_AXES{1'b0}};
             assign dda_req_negative = {N_AXES{1'b0}};
-            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, RAM_BLOCK[0]};
+            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, RAM_BLOCK[0], pbp_req_valid,
+                                    pbp_req_negative};
         end else if (STEP_SHARED != 0) begin : shared
             step_engine #(
                 .N_AXES(N_AXES),
@@ -244,14 +348,17 @@ module finestep_core #(
             wire unused_slave = &{1'b0, slave_req_valid, slave_req_negative, slave_axis};
             assign dda_req_valid    = {N_AXES{1'b0}};
             assign dda_req_negative = {N_AXES{1'b0}};
-            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative};
+            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, pbp_req_valid, pbp_req_negative};
         end else begin : per_axis
             assign start_ok = 1'b1;
             for (i = 0; i < N_AXES; i = i + 1) begin : axis
                 // The gantry's slave takes the gantry's request, every other axis its DDA's.
+                // A request of the pbp block (only while its record runs, when the DDAs
+                // are idle) goes to its pair's axes.
                 wire is_slave     = gantry_engaged && (slave_axis == i);
-                wire req_valid    = is_slave ? slave_req_valid : dda_req_valid[i];
-                wire req_negative = is_slave ? slave_req_negative : dda_req_negative[i];
+                wire req_valid    = pbp_req_valid[i] || (is_slave ? slave_req_valid : dda_req_valid[i]);
+                wire req_negative = pbp_req_valid[i] ? pbp_req_negative[i] :
+                                    (is_slave ? slave_req_negative : dda_req_negative[i]);
 
                 dda_axis #(
                     .P_WIDTH(P_WIDTH)

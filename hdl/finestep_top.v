@@ -40,7 +40,8 @@ module finestep_top #(
     parameter HAS_OUTPUTS     = 1,
     parameter N_GPIO          = 4,
     parameter HAS_PANEL       = 0,
-    parameter HAS_GANTRY      = 0
+    parameter HAS_GANTRY      = 0,
+    parameter HAS_PBP         = 0    // 1: the core's point-by-point interpolator (VERSION.HAS_PBP)
 ) (
     // clock, reset
     input  wire              clk,
@@ -205,6 +206,9 @@ module finestep_top #(
     // Spindle and logic outputs
     localparam GPIO_W = (N_GPIO > 0) ? N_GPIO : 1;
     wire [31:0]           spindle_rdata, outputs_rdata, panel_rdata, gantry_rdata;
+    // VERSION.HAS_PBP: the core's point-by-point interpolator (records with the flag PBP).
+    wire [31:0]           pbp_rdata = (HAS_PBP != 0 && bus_address == FS_VERSION_ADDR) ?
+                                      (32'd1 << FS_VERSION_HAS_PBP_LSB) : 32'd0;
     wire                  interlock_inhibit, start_blocked;
 
     // The halt's rising edge empties the FIFO: its records belong to the motion that
@@ -297,7 +301,7 @@ module finestep_top #(
         .par_req(par_req), .par_we(par_we), .par_addr(par_addr), .par_wdata(par_wdata), .par_grant(par_grant),
         .rdata(rdata),
         .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
-        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata), .bus_read(bus_read), .late_rdata(enc_copy_rdata),
+        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata | pbp_rdata), .bus_read(bus_read), .late_rdata(enc_copy_rdata),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
@@ -395,7 +399,8 @@ module finestep_top #(
         // The jog's record only with the hand wheel; said to the core only in the
         // digit-serial (CPLD) builds, whose estimate is hierarchical: a flattened build
         // sees the tie-off anyway, and on the HX8K (no wheel) ABC mapped it 3 cells larger.
-        .HAS_ALT((HAS_MPG != 0 || STEP_DIGIT == 0) ? 1 : 0)
+        .HAS_ALT((HAS_MPG != 0 || STEP_DIGIT == 0) ? 1 : 0),
+        .HAS_PBP(HAS_PBP)
     ) core (
         .clk(clk), .rst(rst),
         .run(core_run), .period_clocks(period_clocks), .clear_errors(clear_errors), .halt(halt),

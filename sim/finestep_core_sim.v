@@ -14,7 +14,8 @@ module finestep_core_sim #(
     parameter TIMING_W   = 12,
     parameter HAS_GANTRY = 1,
     parameter STEP_SHARED = 0,
-    parameter STEP_DIGIT = 0
+    parameter STEP_DIGIT = 0,
+    parameter HAS_PBP    = 0
 ) (
     input  wire                       load,
     input  wire                       clk,
@@ -119,7 +120,8 @@ module finestep_core_sim #(
         .TIMING_W(TIMING_W),
         .HAS_GANTRY(HAS_GANTRY),
         .STEP_SHARED(STEP_SHARED),
-        .STEP_DIGIT(STEP_DIGIT)
+        .STEP_DIGIT(STEP_DIGIT),
+        .HAS_PBP(HAS_PBP)
     ) core (
         .clk(clk),
         .rst(rst_q),

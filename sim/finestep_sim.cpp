@@ -1,6 +1,7 @@
 // C ABI shim around the Verilated finestep_core (see finestep_sim.h).
 //
-// Six Verilations of the same RTL are linked: the core without the gantry block
+// Seven Verilations of the same RTL are linked (the seventh, Vfinestep_core_pbp, the core
+// with the point-by-point interpolator, traced only): the core without the gantry block
 // (HAS_GANTRY = 0, what every test that does not exercise the gantry runs), with it, and
 // with the digit-serial step engine (STEP_DIGIT 4, the CPLD's), each without tracing (fast) and with it (Vfinestep_core*_traced); tracing support costs
 // about a third of the speed even when no waveform is open. Each is Verilated from
@@ -15,6 +16,7 @@
 #include "Vfinestep_core.h"
 #include "Vfinestep_core_gantry.h"
 #include "Vfinestep_core_gantry_traced.h"
+#include "Vfinestep_core_pbp.h"
 #include "Vfinestep_core_serial.h"
 #include "Vfinestep_core_serial_traced.h"
 #include "Vfinestep_core_traced.h"
@@ -289,11 +291,14 @@ int fs_trace_is_fst(void) { return VM_TRACE_FST ? 1 : 0; }
 uint32_t fs_serial_digit(void) { return FS_SERIAL_DIGIT; }
 
 fs_sim *fs_new(int variant) {
+    // The core with the point-by-point interpolator is Verilated traced only.
+    if (variant == 3) return new Sim<Vfinestep_core_pbp, true>;
     if (variant == 1) return new Sim<Untraced<Vfinestep_core_gantry>, false>;
     if (variant == 2) return new Sim<Untraced<Vfinestep_core_serial>, false>;
     return new Sim<Untraced<Vfinestep_core>, false>;
 }
 fs_sim *fs_new_traced(int variant) {
+    if (variant == 3) return new Sim<Vfinestep_core_pbp, true>;
     if (variant == 1) return new Sim<Vfinestep_core_gantry_traced, true>;
     if (variant == 2) return new Sim<Vfinestep_core_serial_traced, true>;
     return new Sim<Vfinestep_core_traced, true>;

@@ -87,6 +87,12 @@ impl Harness {
         Harness::for_params(name, path, finestep_rtl_sys::gantry_params())
     }
 
+    /// Both sides fresh out of reset, with the point-by-point comparison interpolator
+    /// ([`finestep_rtl_sys::core_pbp_params`]; the RTL side is the traced Verilation).
+    pub fn with_pbp(name: &str, path: ModelPath) -> Harness {
+        Harness::for_params(name, path, finestep_rtl_sys::core_pbp_params())
+    }
+
     fn for_params(name: &str, path: ModelPath, params: finestep_model::CoreParams) -> Harness {
         let rtl = Rtl::for_params(&params, false);
         let model = Core::new(params);

@@ -93,6 +93,10 @@ pub struct CoreParams {
     /// 4 or 8 for the digit-serial step engine (`step_serial`, docs/spec/step_serial.md)
     /// with that many bits a clock ([`finestep_core::STEP_DIGIT`]).
     pub step_digit: u32,
+    /// `HAS_PBP`: the point-by-point comparison interpolator runs the records with the
+    /// flag PBP on the axis pair they name ([`finestep_core::HAS_PBP`],
+    /// docs/spec/pbp_interp.md#in-the-core); needs 4 axes and `STEP_SHARED = 0`.
+    pub has_pbp: bool,
 }
 
 impl Default for CoreParams {
@@ -105,6 +109,7 @@ impl Default for CoreParams {
             has_gantry: finestep_core::HAS_GANTRY.default != 0,
             step_shared: finestep_core::STEP_SHARED.default != 0,
             step_digit: finestep_core::STEP_DIGIT.default,
+            has_pbp: finestep_core::HAS_PBP.default != 0,
         }
     }
 }
@@ -122,6 +127,11 @@ impl CoreParams {
         finestep_core::HAS_GANTRY.check(self.has_gantry)?;
         finestep_core::STEP_SHARED.check(self.step_shared)?;
         finestep_core::STEP_DIGIT.check(self.step_digit)?;
+        finestep_core::HAS_PBP.check(self.has_pbp)?;
+        if self.has_pbp && (self.n_axes < 4 || self.step_shared) {
+            let because = "HAS_PBP needs N_AXES >= 4 and STEP_SHARED = 0";
+            return Err(finestep_core::HAS_PBP.narrowed(1, 0, 0, because));
+        }
         if !matches!(self.step_digit, 0 | 1 | 2 | 4 | 8) {
             let because = "STEP_DIGIT is 0, 1, 2, 4 or 8";
             return Err(finestep_core::STEP_DIGIT.narrowed(self.step_digit.into(), 0, 8, because));
@@ -261,6 +271,9 @@ pub struct TopParams {
     /// `HAS_GANTRY`: the gantry pair is built where the core has a DDA and a shaper per
     /// axis ([`Self::gantry_built`]).
     pub has_gantry: bool,
+    /// `HAS_PBP`: the core's point-by-point comparison interpolator
+    /// ([`CoreParams::has_pbp`]; `VERSION.HAS_PBP`).
+    pub has_pbp: bool,
 }
 
 impl Default for TopParams {
@@ -287,6 +300,7 @@ impl Default for TopParams {
             n_gpio: finestep_top::N_GPIO.default as usize,
             has_panel: finestep_top::HAS_PANEL.default != 0,
             has_gantry: finestep_top::HAS_GANTRY.default != 0,
+            has_pbp: finestep_top::HAS_PBP.default != 0,
         }
     }
 }
@@ -314,6 +328,7 @@ impl TopParams {
         finestep_top::N_GPIO.check(self.n_gpio as u64)?;
         finestep_top::HAS_PANEL.check(self.has_panel)?;
         finestep_top::HAS_GANTRY.check(self.has_gantry)?;
+        finestep_top::HAS_PBP.check(self.has_pbp)?;
         self.core_params().validate()
     }
 
@@ -332,6 +347,7 @@ impl TopParams {
             has_gantry: self.gantry_built(),
             step_shared: self.step_shared,
             step_digit: self.step_digit,
+            has_pbp: self.has_pbp,
         }
     }
 }
@@ -354,6 +370,7 @@ mod tests {
             has_gantry: true,
             step_shared: false,
             step_digit: 0,
+            has_pbp: false,
         };
         assert_eq!(wide.period_mask(), u32::MAX);
         assert!(wide.validate().is_ok());

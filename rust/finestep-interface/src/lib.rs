@@ -52,6 +52,7 @@ mod build_params;
 mod field;
 pub mod frame;
 mod info;
+pub mod pbp;
 pub mod pin_timing;
 pub mod rate;
 mod record;
@@ -60,6 +61,7 @@ mod timing;
 pub use build_params::{CoreParams, ParamError, ParamRange, TopParams};
 pub use field::Field;
 pub use info::{ArrayInfo, FieldInfo, RegisterInfo};
+pub use pbp::PbpLanes;
 pub use record::{raw_acceptable, Increment, PeriodRecord};
 pub use timing::{TimingError, TimingField};
 

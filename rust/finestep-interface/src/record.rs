@@ -1,7 +1,8 @@
 //! The period record: every axis's increment for one period, and the flags
 //! (docs/interface.md, "Period record").
 
-use crate::{flags, record_layout, MAX_AXES};
+use crate::pbp::PbpLanes;
+use crate::{flags, pbp_record, record_layout, MAX_AXES};
 
 /// An axis increment: signed steps per period in two's complement Q16.16.
 pub type Increment = fixed::types::I16F16;
@@ -46,6 +47,25 @@ impl PeriodRecord {
     /// step per clock).
     pub fn acceptable(&self, n_axes: usize, p_act: u32) -> bool {
         self.inc[..n_axes.min(MAX_AXES)].iter().all(|inc| raw_acceptable(inc.to_bits(), p_act))
+    }
+
+    /// A record with the flag PBP (docs/spec/pbp_interp.md#in-the-core): `pbp` on axis
+    /// pair `pair` (axes `2 * pair`, `2 * pair + 1`), one decision every `tick_div + 1`
+    /// clocks, with `flags` besides PBP. Lanes (hdl/interface.toml, `PBP_RECORD`): lane 0
+    /// `{ARC, CW, PAIR}` in its top byte over `x` (24 bits), lane 1 `y` (24 bits), lane 2
+    /// the arc's decisions (27 bits), lane 3 `tick_div` (16 bits); values are cut to those
+    /// widths (the caller keeps them in range: [`PbpLanes::fits`]).
+    pub fn pbp(pbp: &PbpLanes, flags: u8) -> Self {
+        let top = (if pbp.arc { pbp_record::ARC } else { 0 })
+            | (if pbp.cw { pbp_record::CW } else { 0 })
+            | ((pbp.pair & 0b11) << pbp_record::PAIR_0_BIT);
+        let raw = [
+            ((u32::from(top) << PbpLanes::TOP) | (pbp.x as u32 & PbpLanes::COORD_MASK)) as i32,
+            (pbp.y as u32 & PbpLanes::COORD_MASK) as i32,
+            (pbp.steps & u64::from(PbpLanes::COUNT_MASK)) as i32,
+            i32::from(pbp.tick_div),
+        ];
+        PeriodRecord::from_raw(&raw, flags | flags::PBP)
     }
 
     /// Bytes of one record in an SPI FIFO frame for a core of `n_axes` axes.

@@ -13,7 +13,9 @@
 use crate::config::{AxisSettings, CoreInputs, CoreParams, ParamError};
 use crate::dda_axis::{DdaAxis, ONE_STEP};
 use crate::gantry_sync::{GantryContext, GantrySync};
+use crate::pbp_interp::{PbpInputs, PbpInterp, PbpParams, PbpRecord};
 use crate::period_timer::{PeriodTimer, TimerInputs};
+use crate::record::PeriodRecord;
 use crate::step_engine::{EngineInputs, StepEngine};
 use crate::step_serial::{SerialInputs, SerialParams, StepSerial};
 use crate::step_shaper::StepShaper;
@@ -155,7 +157,55 @@ pub struct Core {
     pub(crate) engine: Option<StepEngine>,
     /// The digit-serial step engine when built with `step_digit` > 0.
     pub(crate) serial: Option<SerialCore>,
+    /// The point-by-point comparison interpolator when built with `has_pbp`.
+    pub(crate) pbp: Option<PbpCore>,
     pub(crate) cycle: u64,
+}
+
+/// The point-by-point comparison interpolator in the core
+/// (docs/spec/pbp_interp.md#in-the-core): the block and the registers that hold a pbp
+/// record's pair, decision divider and `BLOCK_END` while it runs, and the sticky refusal
+/// of a record on a pair that is not built.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct PbpCore {
+    interp: PbpInterp,
+    pair: usize,
+    tick_div: u32,
+    block_end: bool,
+    refused: bool,
+}
+
+/// A pbp record's lanes (hdl/interface.toml, `PBP_RECORD`): lane 0 `{ARC, CW, PAIR, x}`
+/// with the bits in its top byte, lane 1 `y`, lane 2 the arc's decisions, lane 3 the
+/// decision divider.
+mod pbp_lanes {
+    /// Lane 0's bits above the X coordinate start here.
+    pub const TOP: u32 = 24;
+    /// `TICK_DIV`'s bits in lane 3 (`DIV_W`).
+    pub const DIV_W: u32 = 16;
+}
+
+impl PbpCore {
+    fn new() -> PbpCore {
+        PbpCore { interp: PbpInterp::new(PbpParams::default()), pair: 0, tick_div: 0, block_end: false, refused: false }
+    }
+
+    /// Whether a record runs (the period timer is offered none meanwhile).
+    fn busy(&self) -> bool {
+        self.interp.outputs().busy
+    }
+
+    /// The block's request on axis `i` in this cycle (+1, -1 or 0): its X and Y are the
+    /// pair's axes `2 * pair` and `2 * pair + 1`.
+    fn request(&self, i: usize) -> i8 {
+        let out = self.interp.outputs();
+        let k = i % 2;
+        match (i / 2 == self.pair, out.req_valid[k], out.req_negative[k]) {
+            (true, true, true) => -1,
+            (true, true, false) => 1,
+            _ => 0,
+        }
+    }
 }
 
 /// The digit-serial step engine in the core (docs/spec/step_serial.md#in-the-core): the
@@ -228,6 +278,7 @@ impl Core {
             gantry: GantrySync::default(),
             engine: (params.step_shared && !params.step_serial()).then(|| StepEngine::new(params.step_slot_bits())),
             serial: params.step_serial().then(|| SerialCore::new(&params)),
+            pbp: params.has_pbp.then(PbpCore::new),
             cycle: 0,
         })
     }
@@ -315,13 +366,69 @@ impl Core {
                 | u64::from(sh.step_lost) << pins::step_lost(i);
             out.positions[i] = sh.position;
         }
-        out.pins |= u64::from(self.timer.rec_ready()) << pins::REC_READY
-            | u64::from(self.timer.record_error) << pins::RECORD_ERROR
-            | u64::from(self.timer.block_end) << pins::BLOCK_END;
+        // With the pbp block: no record is taken while its record runs; its refusals are
+        // record errors, and its done ends a block as the timer's boundary does.
+        let (refused, pbp_end) =
+            self.pbp.as_ref().map_or((false, false), |p| (p.refused, p.interp.outputs().done && p.block_end));
+        out.pins |= u64::from(self.rec_ready()) << pins::REC_READY
+            | u64::from(self.timer.record_error || refused) << pins::RECORD_ERROR
+            | u64::from(self.timer.block_end || pbp_end) << pins::BLOCK_END;
         out.gantry_error = self.gantry.error;
         out.gantry_corrections = self.gantry.corrections;
         out.gantry_flags = self.gantry.flags();
         out
+    }
+
+    /// `rec_ready`: the period timer's, held low while a pbp record runs.
+    pub fn rec_ready(&self) -> bool {
+        self.timer.rec_ready() && !self.pbp.as_ref().is_some_and(PbpCore::busy)
+    }
+
+    /// The pbp block's edge (with the values of this cycle: the timer's boundary, the
+    /// block's busy) and the record the period timer is offered: none while a pbp record
+    /// runs; a pbp record as an idle period without `BLOCK_END`.
+    fn pbp_edge(&mut self, inputs: &CoreInputs) -> (bool, PeriodRecord) {
+        let n = self.params.n_axes;
+        let timer_ready = self.timer.rec_ready();
+        let Some(p) = self.pbp.as_mut() else { return (inputs.rec_valid, inputs.record) };
+        use finestep_interface::{flags, pbp_record};
+        let busy = p.busy();
+        let record = &inputs.record;
+        let offered = record.flags & flags::PBP != 0;
+        let lane = |k: usize| record.inc[k].to_bits() as u32;
+        let top = lane(0) >> pbp_lanes::TOP;
+        let pair = ((top >> pbp_record::PAIR_0_BIT) & 0b11) as usize;
+        let pair_ok = 2 * pair + 1 < n;
+        let take = inputs.run && timer_ready && inputs.rec_valid && !busy && offered;
+        // The lanes as they reach the block's ports (it keeps COORD_W and COUNT_W bits).
+        let rec = PbpRecord {
+            arc: top & u32::from(pbp_record::ARC) != 0,
+            cw: top & u32::from(pbp_record::CW) != 0,
+            x: i64::from(lane(0)),
+            y: i64::from(lane(1)),
+            steps: u64::from(lane(2)),
+        };
+        p.interp.step(&PbpInputs {
+            halt: inputs.halt || !inputs.run,
+            tick_div: p.tick_div,
+            rec_valid: take && pair_ok,
+            rec,
+        });
+        if take {
+            p.pair = pair;
+            p.tick_div = lane(3) & ((1 << pbp_lanes::DIV_W) - 1);
+            p.block_end = record.block_end();
+        }
+        if take && !pair_ok {
+            p.refused = true;
+        } else if inputs.clear_errors {
+            p.refused = false;
+        }
+        if offered {
+            (inputs.rec_valid && !busy, PeriodRecord::from_raw(&[], record.flags & !flags::BLOCK_END))
+        } else {
+            (inputs.rec_valid && !busy, *record)
+        }
     }
 
     /// The masked and decoded form of `inputs`.
@@ -362,10 +469,20 @@ impl Core {
         let n = self.params.n_axes;
         let m = i64::from(self.timer.p_act) * ONE_STEP;
         let mut changed = false;
+        // With the pbp block its outputs change too: compared as a whole.
+        let before = self.pbp.is_some().then(|| self.outputs());
         // The DDA requests of this cycle, and the gantry's choice among them.
         let mut reqs = [0i8; MAX_AXES];
         for (r, dda) in reqs.iter_mut().zip(&self.dda[..n]) {
             *r = dda.req;
+        }
+        // The pbp block's requests, which take the pair's shapers while its record runs
+        // (the DDAs are idle then).
+        let mut pbp_reqs = [0i8; MAX_AXES];
+        if let Some(p) = &self.pbp {
+            for (i, r) in pbp_reqs.iter_mut().enumerate().take(n) {
+                *r = p.request(i);
+            }
         }
         let gantry = self.gantry;
         let increments = self.timer.inc;
@@ -374,7 +491,10 @@ impl Core {
         let running = inputs.run && self.timer.active;
         if self.params.gantry_built() {
             for (i, ((shaper, dda), &d)) in axes {
-                let r = gantry.shaper_request(i, &reqs, &increments, &inputs.gantry);
+                let r = match pbp_reqs[i] {
+                    0 => gantry.shaper_request(i, &reqs, &increments, &inputs.gantry),
+                    r => r,
+                };
                 changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
                 dda.step(running, period, d, m);
             }
@@ -391,11 +511,13 @@ impl Core {
         } else {
             // No gantry block: every axis its own DDA's request; the gantry stays in reset.
             for (i, ((shaper, dda), &d)) in axes {
-                changed |= shaper.step(reqs[i], &axis(i), self.counter_max, inputs.clear_errors);
+                let r = if pbp_reqs[i] != 0 { pbp_reqs[i] } else { reqs[i] };
+                changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
                 dda.step(running, period, d, m);
             }
         }
-        changed | self.timer_edge(inputs, period, 0, 0)
+        changed |= self.timer_edge(inputs, period, 0, 0);
+        before.map_or(changed, |before| self.outputs() != before)
     }
 
     /// One rising edge of a core with the step engine (`engine` is its schedule in this
@@ -468,12 +590,13 @@ impl Core {
     #[inline(always)]
     fn timer_edge(&mut self, inputs: &CoreInputs, period: u32, slot_bits: u32, slot: u32) -> bool {
         let timer_before = self.timer.output_bits();
+        let (rec_valid, record) = self.pbp_edge(inputs);
         self.timer.step(&TimerInputs {
             run: inputs.run,
             period,
             clear_errors: inputs.clear_errors,
-            rec_valid: inputs.rec_valid,
-            record: &inputs.record,
+            rec_valid,
+            record: &record,
             n_axes: self.params.n_axes,
             slot_bits,
             slot,
@@ -486,7 +609,7 @@ impl Core {
     /// whether the offered record was consumed at this edge.
     #[inline]
     pub(crate) fn chunk_edge(&mut self, set: &Settings, inputs: &CoreInputs, events: &mut Vec<Event>) -> bool {
-        let consumed = self.timer.rec_ready() && inputs.rec_valid;
+        let consumed = self.rec_ready() && inputs.rec_valid;
         // The edge reports exactly whether the outputs differ from before it.
         if self.step_with(set, inputs) {
             events.push(Event { cycle: self.cycle, outputs: self.outputs() });

@@ -45,10 +45,10 @@ impl Core {
         let set = self.settings(inputs);
         let mut ran = 0;
         while ran < max_cycles {
-            // The digit-serial engine has no skip rule yet: its cycles run one by one
-            // (exact, as fast as the per-clock path).
+            // The digit-serial engine and the pbp block have no skip rule yet: their
+            // cycles run one by one (exact, as fast as the per-clock path).
             let quiet = match self.engine {
-                _ if self.serial.is_some() => 0,
+                _ if self.serial.is_some() || self.pbp.is_some() => 0,
                 Some(engine) => self.engine_quiet_cycles(&engine, &set, inputs),
                 None => self.quiet_cycles(&set, inputs),
             }

@@ -775,6 +775,7 @@ impl RegisterFile {
                 // The capabilities CAPS has no room for.
                 let word = v::ONE_SNAPSHOT.set(word, u32::from(p.one_snapshot));
                 let word = v::INC_WRITE_ONLY.set(word, u32::from(p.inc_write_only));
+                let word = v::HAS_PBP.set(word, u32::from(p.has_pbp));
                 v::AXIS_WRITE_ONLY.set(word, u32::from(p.axis_write_only))
             }
             regs::caps::ADDR => {

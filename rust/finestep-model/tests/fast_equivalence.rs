@@ -178,7 +178,15 @@ fn case() -> impl Strategy<Value = Case> {
         prop_oneof![3 => Just(0u32), 1 => Just(1u32), 1 => Just(2u32), 1 => Just(4u32), 1 => Just(8u32)],
     )
         .prop_map(|(n_axes, p_width, timing_width, has_gantry, step_shared, step_digit)| {
-            let params = CoreParams { n_axes, p_width, timing_width, has_gantry, step_shared: false, step_digit: 0 };
+            let params = CoreParams {
+                n_axes,
+                p_width,
+                timing_width,
+                has_gantry,
+                step_shared: false,
+                step_digit: 0,
+                has_pbp: false,
+            };
             if step_shared && step_digit != 0 {
                 // The digit-serial engine (its constraints: log2 R < TIMING_W <= 16,
                 // log2 R < P_WIDTH <= log2 R + 15).

@@ -15,16 +15,8 @@ use finestep_model::pbp_interp::{
 };
 use proptest::prelude::*;
 
-/// `|sqrt(r2) - sqrt(big_r2)| <= 1`, exactly: `r <= R + 1` and `r >= R - 1` squared.
-fn within_one_of_circle(r2: i128, big_r2: i128) -> bool {
-    // r <= R + 1  <=>  r2 - R2 - 1 <= 2R  <=>  d <= 0 or d^2 <= 4 R2.
-    let d = r2 - big_r2 - 1;
-    let outer = d <= 0 || d * d <= 4 * big_r2;
-    // r >= R - 1  <=>  R2 + 1 - r2 <= 2R  <=>  e <= 0 or e^2 <= 4 R2.
-    let e = big_r2 + 1 - r2;
-    let inner = e <= 0 || e * e <= 4 * big_r2;
-    outer && inner
-}
+mod geometry;
+use geometry::within_one_of_circle;
 
 /// `|F| <= 2R + 1`: `F <= 1` or `(F - 1)^2 <= 4 R2`, and the same for `-F`.
 fn f_within_bound(f: i128, big_r2: i128) -> bool {

@@ -46,7 +46,15 @@ fn timing(l: u32, s: u32, u: u32, h: u32) -> DriveTiming {
 }
 
 fn params(n: usize, timing_width: u32) -> CoreParams {
-    CoreParams { n_axes: n, p_width: 20, timing_width, has_gantry: false, step_shared: true, step_digit: 0 }
+    CoreParams {
+        n_axes: n,
+        p_width: 20,
+        timing_width,
+        has_gantry: false,
+        step_shared: true,
+        step_digit: 0,
+        has_pbp: false,
+    }
 }
 
 fn raw(x: Increment) -> i64 {

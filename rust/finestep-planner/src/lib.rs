@@ -117,6 +117,7 @@ pub mod interpolate;
 pub mod lookahead;
 pub mod nurbs;
 pub mod nurbs_pieces;
+pub mod pbp;
 pub mod program;
 pub mod smooth;
 pub mod vec4;

@@ -73,6 +73,7 @@ pub fn params() -> CoreParams {
             has_gantry: false,
             step_shared: true,
             step_digit: 0,
+            has_pbp: false,
         }
     }
 }
@@ -88,6 +89,14 @@ pub fn gantry_params() -> CoreParams {
 pub fn serial_params() -> CoreParams {
     // SAFETY: pure function returning a build-time constant.
     CoreParams { step_digit: unsafe { ffi::fs_serial_digit() }, ..params() }
+}
+
+/// The parameters of the Verilated core [`Rtl::for_params`] makes with the point-by-point
+/// comparison interpolator (docs/spec/pbp_interp.md#in-the-core): [`params`] with
+/// `HAS_PBP`, a DDA and a shaper per axis and no gantry block. It is Verilated with
+/// waveform support only.
+pub fn core_pbp_params() -> CoreParams {
+    CoreParams { has_pbp: true, step_shared: false, ..params() }
 }
 
 /// Whether waveforms are written as FST (feature `fst`) rather than VCD.
@@ -157,8 +166,8 @@ impl Rtl {
         Self::build(1, false)
     }
 
-    /// The core built as `params` say ([`params`], [`gantry_params`] or
-    /// [`serial_params`]), able to write waveforms when `traced`.
+    /// The core built as `params` say ([`params`], [`gantry_params`],
+    /// [`serial_params`] or [`core_pbp_params`]), able to write waveforms when `traced`.
     ///
     /// # Panics
     /// If `params` are none of them.
@@ -169,6 +178,8 @@ impl Rtl {
             1
         } else if *params == serial_params() {
             2
+        } else if *params == core_pbp_params() {
+            3
         } else {
             panic!("no Verilated core was built with these parameters")
         };

@@ -1,0 +1,218 @@
+//! The core with the point-by-point comparison interpolator (`HAS_PBP`,
+//! docs/spec/pbp_interp.md#in-the-core): the Verilated core against the model, every
+//! output (pins, positions, `rec_ready`, `record_error`, `block_end`) on every clock, over
+//! streams that mix DDA records with pbp lines and arcs on both axis pairs: every
+//! quadrant, CW and CCW, arcs crossing quadrants and whole turns, random decision
+//! dividers and `BLOCK_END`s; a halt (E-stop) in the middle of a pbp record and the
+//! motion after it; a record on a pair the core does not have. The end positions are
+//! checked against the records' displacements (a line's end point, an arc's end minus its
+//! start), exact. A failure prints the seed (rerun with FINESTEP_SEED) and the first
+//! cycle, signal, expected and actual value.
+
+use finestep_cosim::{Harness, ModelPath};
+use finestep_interface::{flags, PbpLanes};
+use finestep_model::pbp_interp::{arc_steps, ArcPath};
+use finestep_model::{AxisConfig, CoreInputs, DriveTiming, Increment, PeriodRecord, MAX_AXES};
+
+const PERIOD: u32 = 40;
+const AXES: usize = 4;
+
+/// xorshift64*: the stream's choices, from the printed seed.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    /// Uniform in `lo..=hi`.
+    fn range(&mut self, lo: i64, hi: i64) -> i64 {
+        lo + (self.next() % (hi - lo + 1) as u64) as i64
+    }
+    fn coin(&mut self) -> bool {
+        self.next() & 1 == 1
+    }
+}
+
+/// One record of a stream and the displacement it commands on each axis.
+struct Move {
+    record: PeriodRecord,
+    delta: [i64; AXES],
+}
+
+fn inputs() -> CoreInputs {
+    // L + max(S, H + U) = 4 clocks: a decision every 4 or more clocks keeps the timing.
+    let axis = AxisConfig { timing: DriveTiming::new(2, 2, 1, 1), enable: true, ..AxisConfig::default() };
+    CoreInputs { run: false, period_clocks: PERIOD, axes: [axis; MAX_AXES], ..CoreInputs::default() }
+}
+
+/// A line to `(xe, ye)` on `pair`.
+fn line(pair: u8, xe: i64, ye: i64, tick_div: u16, flags: u8) -> Move {
+    let lanes = PbpLanes { pair, x: xe as i32, y: ye as i32, tick_div, ..PbpLanes::default() };
+    assert!(lanes.fits());
+    let mut delta = [0; AXES];
+    delta[2 * usize::from(pair)] = xe;
+    delta[2 * usize::from(pair) + 1] = ye;
+    Move { record: PeriodRecord::pbp(&lanes, flags), delta }
+}
+
+/// An arc from `start` (relative to its centre) over `k` decisions of its path, on `pair`.
+fn arc(pair: u8, start: (i64, i64), cw: bool, k: usize, tick_div: u16, flags: u8) -> Move {
+    let end = ArcPath::new(start.0, start.1, cw).nth(k - 1).expect("an arc's path is endless").1;
+    let steps = arc_steps(start, end, cw).expect("the end is on the path");
+    let lanes = PbpLanes { arc: true, cw, pair, x: start.0 as i32, y: start.1 as i32, steps, tick_div };
+    assert!(lanes.fits());
+    let mut delta = [0; AXES];
+    delta[2 * usize::from(pair)] = end.0 - start.0;
+    delta[2 * usize::from(pair) + 1] = end.1 - start.1;
+    Move { record: PeriodRecord::pbp(&lanes, flags), delta }
+}
+
+/// A DDA record of whole steps per period (exactly that many steps in the period).
+fn dda(steps: [i64; AXES], flags: u8) -> Move {
+    let raw: Vec<i32> = steps.iter().map(|&s| (s as i32) << 16).collect();
+    Move { record: PeriodRecord::from_raw(&raw, flags), delta: steps }
+}
+
+/// Lines and arcs in every quadrant, both directions, on both pairs, between DDA records.
+fn fixed_moves() -> Vec<Move> {
+    let mut moves = Vec::new();
+    for (q, &(sx, sy)) in [(1, 1), (-1, 1), (-1, -1), (1, -1)].iter().enumerate() {
+        let pair = (q % 2) as u8;
+        moves.push(line(pair, 9 * sx, 4 * sy, 3, 0));
+        moves.push(dda([sx, -sy, 2 * sy, 0], 0));
+        for cw in [false, true] {
+            // A quarter and more from inside the quadrant: crosses an axis.
+            moves.push(arc(pair, (5 * sx, 3 * sy), cw, 14, 4, 0));
+        }
+        moves.push(line(pair, 0, 7 * sy, 5, flags::BLOCK_END));
+        moves.push(line(1 - pair, 6 * sx, 0, 5, 0));
+    }
+    // Whole turns both ways, and an arc from an axis point.
+    moves.push(arc(0, (4, 0), false, arc_steps((4, 0), (4, 0), false).unwrap() as usize, 3, 0));
+    moves.push(arc(1, (0, -6), true, arc_steps((0, -6), (0, -6), true).unwrap() as usize, 3, flags::BLOCK_END));
+    moves
+}
+
+fn random_moves(rng: &mut Rng, count: usize) -> Vec<Move> {
+    let mut moves = Vec::new();
+    while moves.len() < count {
+        let pair = rng.range(0, 1) as u8;
+        let tick = rng.range(3, 9) as u16;
+        let end = if rng.range(0, 4) == 0 { flags::BLOCK_END } else { 0 };
+        match rng.range(0, 2) {
+            0 => {
+                let steps = [0; AXES].map(|_: i64| rng.range(-4, 4));
+                moves.push(dda(steps, end));
+            }
+            1 => moves.push(line(pair, rng.range(-40, 40), rng.range(-40, 40), tick, end)),
+            _ => {
+                let start = (rng.range(-15, 15), rng.range(-15, 15));
+                if start.0 * start.0 + start.1 * start.1 < 2 {
+                    continue;
+                }
+                let cw = rng.coin();
+                let full = arc_steps(start, start, cw).unwrap() as i64;
+                let k = rng.range(1, full) as usize;
+                moves.push(arc(pair, start, cw, k, tick, end));
+            }
+        }
+    }
+    moves
+}
+
+fn positions(h: &Harness) -> [i64; AXES] {
+    let out = h.outputs();
+    std::array::from_fn(|i| i64::from(out.position(i)))
+}
+
+/// Feeds `moves` and waits until they have run; returns the positions.
+fn stream(h: &mut Harness, inp: &mut CoreInputs, moves: &[Move], seed: u64) -> [i64; AXES] {
+    for m in moves {
+        h.feed(inp, [m.record]).unwrap_or_else(|e| panic!("FINESTEP_SEED={seed:#x}: {e}"));
+    }
+    // An idle record is taken only after the last pbp record's done; then its period.
+    h.feed(inp, [PeriodRecord::default()]).unwrap_or_else(|e| panic!("FINESTEP_SEED={seed:#x}: {e}"));
+    h.idle(inp, u64::from(3 * PERIOD)).unwrap_or_else(|e| panic!("FINESTEP_SEED={seed:#x}: {e}"));
+    positions(h)
+}
+
+fn sum(moves: &[Move]) -> [i64; AXES] {
+    let mut total = [0; AXES];
+    for m in moves {
+        for (t, d) in total.iter_mut().zip(m.delta) {
+            *t += d;
+        }
+    }
+    total
+}
+
+#[test]
+fn pbp_and_dda_records_in_lockstep_and_exact() {
+    let seed = finestep_testkit::seed("core_pbp_stream");
+    eprintln!("core_pbp_stream: FINESTEP_SEED={seed:#x} (rerun with this to reproduce)");
+    let mut rng = Rng(seed | 1);
+    let mut moves = fixed_moves();
+    moves.extend(random_moves(&mut rng, finestep_testkit::cases(60) as usize));
+    for path in [ModelPath::PerClock, ModelPath::Fast] {
+        let mut h = Harness::with_pbp("core_pbp_stream", path);
+        let mut inp = inputs();
+        h.idle(&inp, 4).unwrap();
+        inp.run = true;
+        let end = stream(&mut h, &mut inp, &moves, seed);
+        assert_eq!(end, sum(&moves), "{path:?} FINESTEP_SEED={seed:#x}: end positions");
+        assert!(!h.outputs().record_error());
+    }
+}
+
+#[test]
+fn a_halt_stops_a_pbp_record_and_the_motion_after_it_is_exact() {
+    for path in [ModelPath::PerClock, ModelPath::Fast] {
+        let mut h = Harness::with_pbp("core_pbp_halt", path);
+        let mut inp = inputs();
+        h.idle(&inp, 4).unwrap();
+        inp.run = true;
+        // A long line on pair 1, halted in its middle (E-stop: the top raises halt, then
+        // drops run and empties the FIFO).
+        let long = line(1, 150, -70, 5, 0);
+        h.feed(&mut inp, [long.record]).unwrap();
+        h.idle(&inp, 400).unwrap();
+        let before = positions(&h);
+        assert!(before[2] > 0 && before[2] < 150, "{path:?}: the line is under way: {before:?}");
+        inp.halt = true;
+        h.idle(&inp, 3).unwrap();
+        let halted = positions(&h);
+        h.idle(&inp, 300).unwrap();
+        assert_eq!(positions(&h), halted, "{path:?}: no step after the halt");
+        inp.run = false;
+        h.idle(&inp, 10).unwrap();
+        inp.halt = false;
+        h.idle(&inp, 10).unwrap();
+        assert!(h.outputs().rec_ready() || !inp.run, "{path:?}");
+        // The motion after it: from where the halt left the axes.
+        inp.run = true;
+        let after = [line(1, -9, 12, 4, 0), dda([1, -2, 0, 3], 0), arc(0, (6, -2), true, 20, 4, flags::BLOCK_END)];
+        let end = stream(&mut h, &mut inp, &after, 0);
+        let mut expect = halted;
+        for (e, d) in expect.iter_mut().zip(sum(&after)) {
+            *e += d;
+        }
+        assert_eq!(end, expect, "{path:?}");
+        // A record on pair 2 (axes 4 and 5, not built): refused, an idle period.
+        let refused = line(1, 5, 5, 4, 0);
+        let mut record = refused.record;
+        record.inc[0] = Increment::from_bits(record.inc[0].to_bits() | (2 << (PbpLanes::TOP + 4)));
+        let end = {
+            h.feed(&mut inp, [record]).unwrap();
+            h.idle(&inp, u64::from(3 * PERIOD)).unwrap();
+            positions(&h)
+        };
+        assert_eq!(end, expect, "{path:?}: the refused record moved nothing");
+        assert!(h.outputs().record_error(), "{path:?}: refused");
+        inp.clear_errors = true;
+        h.idle(&inp, 2).unwrap();
+        assert!(!h.outputs().record_error(), "{path:?}: cleared");
+    }
+}
