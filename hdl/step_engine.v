@@ -17,8 +17,10 @@
 // registers and the probe read every axis's position in any cycle.
 //
 // Timing (no visible effect): what a visit starts from is prepared a cycle ahead in
-// registers: the DDA's start b with b - M and b + M (three two-input sums beside each
-// other, no carry chain behind another), the shaper's state. The increments and the
+// registers: the DDA's start b, with SUM_AHEAD (the default without block RAM) b - M and
+// b + M beside it (three two-input sums at the visit, beside each other, no carry chain
+// behind another; without it, on the iCE40's RAM_BLOCK builds, b + d - M and b + d + M
+// are formed at the visit from b + d), the shaper's state. The increments and the
 // shaper's timings are this cycle's (a timing may change in any cycle): with CMP_EACH
 // (the default without block RAM) the counters are compared with every axis's timings
 // side by side and the visited axis's four results chosen after the compares; without it
@@ -36,7 +38,11 @@ module step_engine #(
     // axis's timings chosen, then one compare each (N_AXES - 1 fewer compares of
     // CMP_W bits: on the iCE40, where a compare's carry chain takes logic cells of its
     // own, the full core did not fit at speed with them). Same results either way.
-    parameter CMP_EACH  = (RAM_BLOCK == 0) ? 1 : 0
+    parameter CMP_EACH  = (RAM_BLOCK == 0) ? 1 : 0,
+    // 1: the DDA's b - M and b + M formed a cycle ahead, in registers (two more carry
+    // chains and their flip-flops, fast: the ECP5); 0: formed at the visit (dda_step
+    // AHEAD 0: fewer logic cells, the iCE40). Same results either way.
+    parameter SUM_AHEAD = (RAM_BLOCK == 0) ? 1 : 0
 ) (
     // clock, reset
     input  wire                       clk,
@@ -170,13 +176,9 @@ module step_engine #(
     // live[a] clear, so the axis's next visit starts from M/2 again, as the spec's would.
     wire [ACC_W-1:0] acc_start = dda_live_after ? acc_src : half_modulus;
     reg  [ACC_W-1:0] acc_cur_reg;
-    reg  [SUM_W-1:0] acc_minus_reg;
-    reg  [SUM_W-1:0] acc_plus_reg;
     reg              ran_reg;                        // run in the previous cycle
     always @(posedge clk) begin
         acc_cur_reg   <= acc_start;
-        acc_minus_reg <= {2'b00, acc_start} - modulus;
-        acc_plus_reg  <= {2'b00, acc_start} + modulus;
         ran_reg       <= !rst && run;
     end
     wire [ACC_W-1:0] acc_cur = acc_cur_reg;
@@ -184,8 +186,26 @@ module step_engine #(
     // One update (dda_step): acc + d against M = V * 2^16.
     wire             wrap_up, wrap_down;
     wire [SUM_W-1:0] unused_sum;
-    dda_step #(.M_W(V_W), .AHEAD(1)) update (
-        .acc(acc_cur), .acc_minus_m(acc_minus_reg), .acc_plus_m(acc_plus_reg), .m(p_active[P_WIDTH-1:SL]),
+    wire [SUM_W-1:0] acc_minus_m;                    // b - M and b + M (SUM_AHEAD), else 0
+    wire [SUM_W-1:0] acc_plus_m;
+    generate
+        if (SUM_AHEAD != 0) begin : sums_ahead
+            reg [SUM_W-1:0] acc_minus_reg;
+            reg [SUM_W-1:0] acc_plus_reg;
+            always @(posedge clk) begin
+                acc_minus_reg <= {2'b00, acc_start} - modulus;
+                acc_plus_reg  <= {2'b00, acc_start} + modulus;
+            end
+            assign acc_minus_m = acc_minus_reg;
+            assign acc_plus_m  = acc_plus_reg;
+        end else begin : sums_here
+            assign acc_minus_m = {SUM_W{1'b0}};
+            assign acc_plus_m  = {SUM_W{1'b0}};
+            wire unused_modulus = &{1'b0, modulus};   // dda_step forms M from m
+        end
+    endgenerate
+    dda_step #(.M_W(V_W), .AHEAD(SUM_AHEAD != 0 ? 1 : 0)) update (
+        .acc(acc_cur), .acc_minus_m(acc_minus_m), .acc_plus_m(acc_plus_m), .m(p_active[P_WIDTH-1:SL]),
         .inc(inc_cur),
         .acc_next(acc_next), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(unused_sum)
     );
@@ -434,7 +454,7 @@ module step_engine #(
         // with b - M and b + M beside it.
         if (dda_visit && run && ran_reg) begin
             assert (acc_cur == (f_live[dda_ix] ? f_acc[dda_ix] : half_modulus));
-            assert (acc_minus_reg == {2'b00, acc_cur} - modulus && acc_plus_reg == {2'b00, acc_cur} + modulus);
+            if (SUM_AHEAD != 0) assert (acc_minus_m == {2'b00, acc_cur} - modulus && acc_plus_m == {2'b00, acc_cur} + modulus);
         end
         if (dda_visit && run && !ran_reg) assert (!dda_live_reg[dda_ix] && inc_cur == 32'd0);
         assert ((dda_live_reg & ~f_live) == {N_AXES{1'b0}});
