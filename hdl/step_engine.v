@@ -17,11 +17,14 @@
 // registers and the probe read every axis's position in any cycle.
 //
 // Timing (no visible effect): what a visit starts from is prepared a cycle ahead in
-// registers: the DDA's start b with b - M and b + M (three two-input sums beside each
-// other, no carry chain behind another), the shaper's state. The increments and the
-// shaper's timings are this cycle's (a timing may change in any cycle): the counters
-// are compared with every axis's timings side by side and the visited axis's four
-// results chosen after the compares.
+// registers: the DDA's start b, with SUM_AHEAD (the default without block RAM) b - M and
+// b + M beside it (three two-input sums at the visit, beside each other, no carry chain
+// behind another; without it, on the iCE40's RAM_BLOCK builds, b + d - M and b + d + M
+// are formed at the visit from b + d), the shaper's state. The increments and the
+// shaper's timings are this cycle's (a timing may change in any cycle): with CMP_EACH
+// (the default without block RAM) the counters are compared with every axis's timings
+// side by side and the visited axis's four results chosen after the compares; without it
+// (the iCE40's RAM_BLOCK builds) the visited axis's timings are chosen, then compared.
 //
 // Latency: a DDA visit in cycle n gives the shaper's decision in n+1 and the pin edge and
 // position in n+2.
@@ -29,7 +32,17 @@ module step_engine #(
     parameter N_AXES    = 4,
     parameter P_WIDTH   = 20,
     parameter TIMING_W  = 12,
-    parameter RAM_BLOCK = 0
+    parameter RAM_BLOCK = 0,
+    // 1: the shaper's counters compared with every axis's timings side by side, the
+    // visited axis's results chosen after the compares (fast: the ECP5); 0: the visited
+    // axis's timings chosen, then one compare each (N_AXES - 1 fewer compares of
+    // CMP_W bits: on the iCE40, where a compare's carry chain takes logic cells of its
+    // own, the full core did not fit at speed with them). Same results either way.
+    parameter CMP_EACH  = (RAM_BLOCK == 0) ? 1 : 0,
+    // 1: the DDA's b - M and b + M formed a cycle ahead, in registers (two more carry
+    // chains and their flip-flops, fast: the ECP5); 0: formed at the visit (dda_step
+    // AHEAD 0: fewer logic cells, the iCE40). Same results either way.
+    parameter SUM_AHEAD = (RAM_BLOCK == 0) ? 1 : 0
 ) (
     // clock, reset
     input  wire                       clk,
@@ -163,13 +176,9 @@ module step_engine #(
     // live[a] clear, so the axis's next visit starts from M/2 again, as the spec's would.
     wire [ACC_W-1:0] acc_start = dda_live_after ? acc_src : half_modulus;
     reg  [ACC_W-1:0] acc_cur_reg;
-    reg  [SUM_W-1:0] acc_minus_reg;
-    reg  [SUM_W-1:0] acc_plus_reg;
     reg              ran_reg;                        // run in the previous cycle
     always @(posedge clk) begin
         acc_cur_reg   <= acc_start;
-        acc_minus_reg <= {2'b00, acc_start} - modulus;
-        acc_plus_reg  <= {2'b00, acc_start} + modulus;
         ran_reg       <= !rst && run;
     end
     wire [ACC_W-1:0] acc_cur = acc_cur_reg;
@@ -177,8 +186,26 @@ module step_engine #(
     // One update (dda_step): acc + d against M = V * 2^16.
     wire             wrap_up, wrap_down;
     wire [SUM_W-1:0] unused_sum;
-    dda_step #(.M_W(V_W), .AHEAD(1)) update (
-        .acc(acc_cur), .acc_minus_m(acc_minus_reg), .acc_plus_m(acc_plus_reg), .m(p_active[P_WIDTH-1:SL]),
+    wire [SUM_W-1:0] acc_minus_m;                    // b - M and b + M (SUM_AHEAD), else 0
+    wire [SUM_W-1:0] acc_plus_m;
+    generate
+        if (SUM_AHEAD != 0) begin : sums_ahead
+            reg [SUM_W-1:0] acc_minus_reg;
+            reg [SUM_W-1:0] acc_plus_reg;
+            always @(posedge clk) begin
+                acc_minus_reg <= {2'b00, acc_start} - modulus;
+                acc_plus_reg  <= {2'b00, acc_start} + modulus;
+            end
+            assign acc_minus_m = acc_minus_reg;
+            assign acc_plus_m  = acc_plus_reg;
+        end else begin : sums_here
+            assign acc_minus_m = {SUM_W{1'b0}};
+            assign acc_plus_m  = {SUM_W{1'b0}};
+            wire unused_modulus = &{1'b0, modulus};   // dda_step forms M from m
+        end
+    endgenerate
+    dda_step #(.M_W(V_W), .AHEAD(SUM_AHEAD != 0 ? 1 : 0)) update (
+        .acc(acc_cur), .acc_minus_m(acc_minus_m), .acc_plus_m(acc_plus_m), .m(p_active[P_WIDTH-1:SL]),
         .inc(inc_cur),
         .acc_next(acc_next), .wrap_up(wrap_up), .wrap_down(wrap_down), .sum(unused_sum)
     );
@@ -211,17 +238,30 @@ module step_engine #(
     // Elapsed clocks of the counted visits: cnt * S, dcnt * S (exact).
     wire [CMP_W-1:0] cnt_clocks  = {cnt, {SL{1'b0}}};
     wire [CMP_W-1:0] dcnt_clocks = {dcnt, {SL{1'b0}}};
-    // The counters against every axis's timings of this cycle, side by side, then the
-    // visited axis's results chosen: the compares start at flip-flops (the counters, the
-    // timings), and the slot selects four bits after them, not 4 * TIMING_W before.
-    wire [N_AXES-1:0] len_ok, space_ok, setup_ok, hold_ok;
+    // The counters against the visited axis's timings of this cycle (a timing may change
+    // in any cycle), with CMP_EACH: every axis's compared side by side, then the visited
+    // axis's results chosen: the compares start at flip-flops (the counters, the timings),
+    // and the slot selects four bits after them, not 4 * TIMING_W before.
+    wire len_reached, space_reached, setup_reached, hold_reached;
     genvar c;
     generate
-        for (c = 0; c < N_AXES; c = c + 1) begin : compares
-            assign len_ok[c]   = cnt_clocks >= {{SL{1'b0}}, step_len[TIMING_W*c +: TIMING_W]};
-            assign space_ok[c] = cnt_clocks >= {{SL{1'b0}}, step_space[TIMING_W*c +: TIMING_W]};
-            assign setup_ok[c] = dcnt_clocks >= {{SL{1'b0}}, dir_setup[TIMING_W*c +: TIMING_W]};
-            assign hold_ok[c]  = cnt_clocks >= {{SL{1'b0}}, dir_hold[TIMING_W*c +: TIMING_W]};
+        if (CMP_EACH != 0) begin : compare_each
+            wire [N_AXES-1:0] len_ok, space_ok, setup_ok, hold_ok;
+            for (c = 0; c < N_AXES; c = c + 1) begin : compares
+                assign len_ok[c]   = cnt_clocks >= {{SL{1'b0}}, step_len[TIMING_W*c +: TIMING_W]};
+                assign space_ok[c] = cnt_clocks >= {{SL{1'b0}}, step_space[TIMING_W*c +: TIMING_W]};
+                assign setup_ok[c] = dcnt_clocks >= {{SL{1'b0}}, dir_setup[TIMING_W*c +: TIMING_W]};
+                assign hold_ok[c]  = cnt_clocks >= {{SL{1'b0}}, dir_hold[TIMING_W*c +: TIMING_W]};
+            end
+            assign len_reached   = len_ok[sh_ix];
+            assign space_reached = space_ok[sh_ix];
+            assign setup_reached = setup_ok[sh_ix];
+            assign hold_reached  = hold_ok[sh_ix];
+        end else begin : compare_one
+            assign len_reached   = cnt_clocks >= {{SL{1'b0}}, step_len[TIMING_W*sh_ix +: TIMING_W]};
+            assign space_reached = cnt_clocks >= {{SL{1'b0}}, step_space[TIMING_W*sh_ix +: TIMING_W]};
+            assign setup_reached = dcnt_clocks >= {{SL{1'b0}}, dir_setup[TIMING_W*sh_ix +: TIMING_W]};
+            assign hold_reached  = cnt_clocks >= {{SL{1'b0}}, dir_hold[TIMING_W*sh_ix +: TIMING_W]};
         end
     endgenerate
 
@@ -231,8 +271,8 @@ module step_engine #(
     shaper_step decide (
         .pending(pending), .level(level), .dir(dir),
         .req_valid(req_valid_reg), .req_negative(req_negative_reg), .halt(halt),
-        .len_reached(len_ok[sh_ix]), .space_reached(space_ok[sh_ix]),
-        .setup_reached(setup_ok[sh_ix]), .hold_reached(hold_ok[sh_ix]),
+        .len_reached(len_reached), .space_reached(space_reached),
+        .setup_reached(setup_reached), .hold_reached(hold_reached),
         .rise(rise), .fall(fall), .dir_change(dir_change), .pending_next(pending_next),
         .clamp_high(clamp_high), .clamp_low(clamp_low), .behind(behind)
     );
@@ -414,7 +454,7 @@ module step_engine #(
         // with b - M and b + M beside it.
         if (dda_visit && run && ran_reg) begin
             assert (acc_cur == (f_live[dda_ix] ? f_acc[dda_ix] : half_modulus));
-            assert (acc_minus_reg == {2'b00, acc_cur} - modulus && acc_plus_reg == {2'b00, acc_cur} + modulus);
+            if (SUM_AHEAD != 0) assert (acc_minus_m == {2'b00, acc_cur} - modulus && acc_plus_m == {2'b00, acc_cur} + modulus);
         end
         if (dda_visit && run && !ran_reg) assert (!dda_live_reg[dda_ix] && inc_cur == 32'd0);
         assert ((dda_live_reg & ~f_live) == {N_AXES{1'b0}});
