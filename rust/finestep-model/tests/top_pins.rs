@@ -49,6 +49,7 @@ fn params() -> impl Strategy<Value = TopParams> {
                 has_outputs,
                 n_gpio,
                 has_panel: false,
+                has_pbp: false,
                 has_gantry: false,
             };
             host::engine_if_valid(p)
