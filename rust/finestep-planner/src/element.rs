@@ -138,7 +138,7 @@ pub struct Element {
     /// What the element's caps were derived from where it takes the limits by what the
     /// path needs (a NURBS sub-piece away from jumps): its caps may be derived again
     /// for a lower speed cap ([`Needs::caps_at`]); `None` elsewhere.
-    pub needs: Option<Needs>,
+    pub needs: Option<Box<Needs>>,
     /// The junction after this element jumps ([`crate::lookahead::junction_jumps`],
     /// decided on the path's caps before the fixed shares are taken).
     pub jump_after: bool,
@@ -473,17 +473,22 @@ pub fn full_caps_turning(axes: &[AxisShare], v_limit: f64, k: f64, dk: f64, scur
         TURNING_ACCEL_JERK_SHARE
     };
     let mut v_cap = v_limit;
+    // The least over the axes of the squares and cubes of their caps from the normal
+    // acceleration and from turning: the roots are monotone, so one root of each least
+    // is the least of the axes' caps.
+    let (mut squared, mut cubed) = (f64::INFINITY, f64::INFINITY);
     for axis in axes.iter().filter(|a| a.w.max(a.n) > 1e-12) {
         if axis.w > 1e-12 {
             v_cap = v_cap.min(axis.velocity / axis.w);
         }
         if curved && axis.n > 1e-12 {
-            v_cap = v_cap.min((f * axis.accel / (k * axis.n)).sqrt());
+            squared = squared.min(f * axis.accel / (k * axis.n));
         }
         if scurve && turning > 1e-12 {
-            v_cap = v_cap.min((turning_share * axis.jerk / (turning * axis.w.max(axis.n))).cbrt());
+            cubed = cubed.min(turning_share * axis.jerk / (turning * axis.w.max(axis.n)));
         }
     }
+    v_cap = v_cap.min(squared.sqrt()).min(cubed.cbrt());
     let mut accel = f64::INFINITY;
     for axis in axes {
         if axis.w > 1e-12 {
