@@ -30,8 +30,9 @@ use std::sync::Arc;
 
 use crate::config::{ProfileKind, Resolved};
 use crate::element::{
-    full_caps, short_length, tangential_jerk_share, AxisShare, Caps, Element, Needs, Shape, ARC_JERK_SHARE,
-    GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE,
+    full_caps_turning, short_length, tangential_jerk_share, AxisShare, Caps, Element, Needs, Shape, ARC_JERK_SHARE,
+    GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, NORMAL_SHARE_MIN, SMOOTH_NORMAL_SHARE_MIN, TANGENTIAL_ACCEL_SHARE,
+    TURNING_JERK_SHARE,
 };
 use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
 use crate::vec4::{norm, sub, Vec4};
@@ -194,6 +195,9 @@ pub fn pieces_sampled(
         }
         cap
     };
+    // The smallest normal share: the rule that lowers it where the curvature changes
+    // only on a G5.2 curve (`SMOOTH_NORMAL_SHARE_MIN`).
+    let normal_min = if curve.planar() { NORMAL_SHARE_MIN } else { SMOOTH_NORMAL_SHARE_MIN };
     // Room for every span's samples, kept from span to span.
     let (mut params, mut stack, mut samples) = (Vec::new(), Vec::new(), Vec::<Sample>::new());
     let (mut ds, mut dk, mut inner_d, mut inner_k) =
@@ -376,7 +380,8 @@ pub fn pieces_sampled(
                     jerk: axis.max_jerk,
                 }
             });
-            let Caps { v_cap, accel, jerk } = full_caps(&axes, v_limit, k_top, dk_top, scurve);
+            let Caps { v_cap, accel, jerk } =
+                full_caps_turning(&axes, v_limit, k_top, dk_top, scurve, TURNING_JERK_SHARE, normal_min);
             let start = curve.point(u0);
             let end_point = curve.point(u1);
             out.push(Element {
@@ -389,7 +394,7 @@ pub fn pieces_sampled(
                 accel,
                 jerk,
                 shared,
-                needs: Some(Box::new(Needs { axes, k: k_top, dk: dk_top, scurve })),
+                needs: Some(Box::new(Needs { axes, k: k_top, dk: dk_top, scurve, normal_min })),
                 tangential_jerk_share: tangential_share,
                 turning_jerk_share: turning_share,
                 junction_jerk_share: JUNCTION_JERK_SHARE,
