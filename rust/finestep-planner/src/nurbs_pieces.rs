@@ -31,8 +31,8 @@ use std::sync::Arc;
 use crate::config::{ProfileKind, Resolved};
 use crate::element::{
     full_caps_turning, short_length, tangential_jerk_share, AxisShare, Caps, Element, Needs, Shape, ARC_JERK_SHARE,
-    GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, NORMAL_SHARE_MIN, SMOOTH_NORMAL_SHARE_MIN, TANGENTIAL_ACCEL_SHARE,
-    TURNING_JERK_SHARE,
+    GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, NORMAL_SHARE_MIN, SMOOTH_NORMAL_SHARE_MIN, SMOOTH_TURNING_JERK_SHARE,
+    TANGENTIAL_ACCEL_SHARE, TURNING_JERK_SHARE,
 };
 use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
 use crate::vec4::{norm, sub, Vec4};
@@ -197,7 +197,13 @@ pub fn pieces_sampled(
     };
     // The smallest normal share: the rule that lowers it where the curvature changes
     // only on a G5.2 curve (`SMOOTH_NORMAL_SHARE_MIN`).
-    let normal_min = if curve.planar() { NORMAL_SHARE_MIN } else { SMOOTH_NORMAL_SHARE_MIN };
+    // The smallest normal share and the turning's share of the jerk at the speed cap
+    // (`SMOOTH_NORMAL_SHARE_MIN`, `SMOOTH_TURNING_JERK_SHARE` on the smoother's curves).
+    let (normal_min, turning_jerk_share) = if curve.planar() {
+        (NORMAL_SHARE_MIN, TURNING_JERK_SHARE)
+    } else {
+        (SMOOTH_NORMAL_SHARE_MIN, SMOOTH_TURNING_JERK_SHARE)
+    };
     // Room for every span's samples, kept from span to span.
     let (mut params, mut stack, mut samples) = (Vec::new(), Vec::new(), Vec::<Sample>::new());
     let (mut ds, mut dk, mut inner_d, mut inner_k) =
@@ -381,7 +387,7 @@ pub fn pieces_sampled(
                 }
             });
             let Caps { v_cap, accel, jerk } =
-                full_caps_turning(&axes, v_limit, k_top, dk_top, scurve, TURNING_JERK_SHARE, normal_min);
+                full_caps_turning(&axes, v_limit, k_top, dk_top, scurve, turning_jerk_share, normal_min);
             let start = curve.point(u0);
             let end_point = curve.point(u1);
             out.push(Element {
@@ -394,7 +400,14 @@ pub fn pieces_sampled(
                 accel,
                 jerk,
                 shared,
-                needs: Some(Box::new(Needs { axes, k: k_top, dk: dk_top, scurve, normal_min })),
+                needs: Some(Box::new(Needs {
+                    axes,
+                    k: k_top,
+                    dk: dk_top,
+                    scurve,
+                    normal_min,
+                    turning_share: turning_jerk_share,
+                })),
                 tangential_jerk_share: tangential_share,
                 turning_jerk_share: turning_share,
                 junction_jerk_share: JUNCTION_JERK_SHARE,
