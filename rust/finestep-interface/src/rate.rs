@@ -220,6 +220,9 @@ pub struct RateChecker {
     /// `S`: the clocks between two visits of an axis (1: a DDA and a shaper per axis).
     slots: u32,
     timings: Vec<DriveTiming>,
+    /// Per axis `I_fwd` and `I_rev` in clocks ([`forward_interval_in`],
+    /// [`reversal_interval_in`] of its timing), computed once.
+    intervals: [(u64, u64); MAX_AXES],
     axes: [Direction; MAX_AXES],
 }
 
@@ -237,10 +240,16 @@ impl RateChecker {
     /// 1; [`CoreParams::step_slots`]), with `period_clocks` the period it runs (a
     /// multiple of `slots`, [`CoreParams::effective_period`]).
     pub fn with_slots(period_clocks: u32, timings: &[DriveTiming], slots: u32) -> Self {
+        let timings: Vec<DriveTiming> = timings.iter().take(MAX_AXES).copied().collect();
+        let mut intervals = [(0, 0); MAX_AXES];
+        for (interval, t) in intervals.iter_mut().zip(&timings) {
+            *interval = (forward_interval_in(t, slots), reversal_interval_in(t, slots));
+        }
         RateChecker {
             period_clocks,
             slots: slots.max(1),
-            timings: timings.iter().take(MAX_AXES).copied().collect(),
+            timings,
+            intervals,
             axes: [Direction { last: 1, travel: REVERSAL_TRAVEL }; MAX_AXES],
         }
     }
@@ -259,9 +268,18 @@ impl RateChecker {
     /// Checks `record` (axis by axis, the first failure reported). On success the
     /// directions are updated; a refused record changes nothing.
     pub fn check(&mut self, record: &PeriodRecord) -> Result<(), (usize, RateError)> {
+        let p = u64::from(self.period_clocks.max(1)) << 16;
         for (axis, t) in self.timings.iter().enumerate() {
             let settled = self.axes[axis].settled_sign();
-            check_increment_in(t, self.period_clocks, settled, record.inc[axis], self.slots).map_err(|e| (axis, e))?;
+            // The conditions of `check_increment_in` on the intervals computed once; it
+            // states the error where one holds.
+            let d = record.inc[axis];
+            let magnitude = u64::from(d.to_bits().unsigned_abs());
+            let (forward, reversal) = self.intervals[axis];
+            let reversing = magnitude != 0 && sign(d) != settled;
+            if magnitude * forward > p || reversing && magnitude * reversal > p {
+                check_increment_in(t, self.period_clocks, settled, d, self.slots).map_err(|e| (axis, e))?;
+            }
         }
         for (dir, d) in self.axes.iter_mut().zip(&record.inc).take(self.timings.len()) {
             dir.apply(*d);
@@ -392,6 +410,44 @@ mod tests {
         assert!(matches!(e, RateError::Forward { interval: 2, .. }), "{e}");
         assert!(check_increment(&t, 2, -1, d).is_ok());
         assert!(check_increment(&t, 0, 0, Increment::ZERO).is_ok());
+    }
+
+    #[test]
+    fn the_checker_decides_as_check_increment_in() {
+        // Records of random increments around the limits, on several timings and slot
+        // counts: the checker's verdict (on its intervals computed once) is that of
+        // `check_increment_in` with the axis's settled sign, error included.
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        for slots in [1, 2, 4] {
+            let timings = [timing(1, 1, 1, 1), timing(3, 2, 5, 1), timing(8, 8, 2, 9), timing(1, 6, 1, 2)];
+            let period = 64 * slots;
+            let mut checker = RateChecker::with_slots(period, &timings, slots);
+            let mut refused = 0;
+            for _ in 0..4000 {
+                let mut record = PeriodRecord::default();
+                for (axis, inc) in record.inc.iter_mut().enumerate().take(timings.len()) {
+                    let most = max_increment_in(&timings[axis], period, false, slots).to_bits();
+                    let raw = (next() % (2 * most as u64 + 64)) as i32 - most - 32;
+                    *inc = Increment::from_bits(if next() % 4 == 0 { 0 } else { raw });
+                }
+                let expected = (0..timings.len()).find_map(|axis| {
+                    let settled = checker.settled_sign(axis);
+                    check_increment_in(&timings[axis], period, settled, record.inc[axis], slots)
+                        .err()
+                        .map(|e| (axis, e))
+                });
+                let got = checker.check(&record);
+                assert_eq!(got.err(), expected, "slots {slots}: {record:?}");
+                refused += usize::from(expected.is_some());
+            }
+            assert!(refused > 100 && refused < 3900, "slots {slots}: {refused} refused");
+        }
     }
 
     #[test]

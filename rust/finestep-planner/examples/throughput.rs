@@ -1,6 +1,7 @@
 //! Plan + interpolate throughput of `finestep bench --host-only` on 100 000 short G1
 //! segments (the bench's CAM program), best of three, per profile, without the CLI's
-//! simulation crates: `cargo run --release -p finestep-planner --example throughput`.
+//! simulation crates: `cargo run --release -p finestep-planner --example throughput
+//! [-- trapezoid | s-curve]` (one profile alone, for a profiler).
 
 use std::time::Instant;
 
@@ -15,7 +16,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     text.push_str("M2\n");
     let cam = finestep_gcode::parse_str(&text, "cam.ngc")?;
+    let only = std::env::args().nth(1);
     for profile in [ProfileKind::Trapezoid, ProfileKind::SCurve] {
+        let name = if profile == ProfileKind::SCurve { "s-curve" } else { "trapezoid" };
+        if only.as_deref().is_some_and(|o| o != name) {
+            continue;
+        }
         let config = MachineConfig { profile, ..MachineConfig::default() };
         let mut best = f64::INFINITY;
         for _ in 0..3 {

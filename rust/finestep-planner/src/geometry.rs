@@ -60,8 +60,8 @@ use finestep_gcode::{Block, BlockKind, CompSide, PathControl, Plane, Point, Prog
 use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
 pub use crate::element::{
     full_caps, full_caps_turning, AxisShare, Caps, Element, Shape, ARC_JERK_SHARE, BLEND_TURNING_JERK_SHARE,
-    GEOMETRIC_ACCEL_SHARE, JUMP_REACH_PERIODS, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE, TANGENTIAL_JERK_SHARE,
-    TURNING_JERK_SHARE,
+    GEOMETRIC_ACCEL_SHARE, JUMP_REACH_PERIODS, JUNCTION_JERK_SHARE, NORMAL_SHARE_MIN, TANGENTIAL_ACCEL_SHARE,
+    TANGENTIAL_JERK_SHARE, TURNING_JERK_SHARE,
 };
 use crate::element::{jump_jerk_share, short_length, tangential_jerk_share, IoAction, IoEvent};
 use crate::error::ProgramError;
@@ -645,7 +645,15 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
     // A blend between lines turns more than it speeds up: its turning takes the larger share.
     let turning_share =
         if matches!(element.shape, Shape::Clothoid { .. }) { BLEND_TURNING_JERK_SHARE } else { TURNING_JERK_SHARE };
-    let full = full_caps_turning(&axes, v_limit, k, dk, config.profile == ProfileKind::SCurve, turning_share);
+    let full = full_caps_turning(
+        &axes,
+        v_limit,
+        k,
+        dk,
+        config.profile == ProfileKind::SCurve,
+        turning_share,
+        NORMAL_SHARE_MIN,
+    );
     element.v_cap = full.v_cap;
     element.accel = full.accel;
     element.jerk = full.jerk;

@@ -409,7 +409,7 @@ impl<'p> Periods<'p> {
 /// what its caps were derived from ([`crate::element::Needs::caps_at`]); `None` where
 /// they cannot be derived again or `top` is not below its cap.
 fn needs_limits(config: &Resolved, e: &Element, top: f64) -> Option<(Limits, f64)> {
-    let needs = e.needs?;
+    let needs = e.needs.as_deref()?;
     if !(top > 0.0 && top < e.v_cap * (1.0 - 1e-9)) {
         return None;
     }

@@ -25,8 +25,11 @@
 //!
 //! and corrects the prediction by Newton steps on the arc length actually covered,
 //! measured by 5-point Gauss-Legendre quadrature of `|C'|` from u to u', until it is
-//! within [`ARC_TOLERANCE`] of ds. The covered length (not the target) is carried to the
-//! next period, so what is left over is made up there: the feed error never accumulates.
+//! within [`ARC_TOLERANCE`] of ds (on the smoother's cubics a Newton step whose
+//! remainder, bounded by the span's largest |C''|, is below a thousandth of the
+//! tolerance is not measured again). The covered length (not the target) is carried to
+//! the next period, so what is left over is made up there: the feed error never
+//! accumulates.
 //! The position is the curve at u', exactly (then quantised to the Q16.16 grid like
 //! every other point); the first and last control points are on whole steps, so a
 //! NURBS ending at an exact stop ends exactly there.
@@ -68,6 +71,11 @@ pub struct NurbsCurve {
     /// and its hodographs), so that a point or derivative costs one Horner scheme
     /// instead of three de Boor triangles; empty above degree 3.
     power: Vec<[H; 4]>,
+    /// A B-spline of the smoother (weights 1) in power-basis form: per knot span the
+    /// largest |C''| over it (C'' is linear in the parameter on a cubic's span, so the
+    /// larger of its norms at the span's ends), for [`NurbsCursor::advance`]; empty
+    /// otherwise.
+    second_max: Vec<f64>,
     base: Vec4,
     /// The first and last control points, which the clamped curve passes exactly.
     ends: [Vec4; 2],
@@ -251,10 +259,32 @@ impl NurbsCurve {
     ) -> NurbsCurve {
         let d1 = hodograph(&points, knots, degree);
         let d2 = if degree >= 1 { hodograph(&d1, &knots[1..knots.len() - 1], degree - 1) } else { Vec::new() };
-        let mut curve =
-            NurbsCurve { degree, knots: knots.to_vec(), points, d1, d2, power: Vec::new(), base, ends, planar };
+        let mut curve = NurbsCurve {
+            degree,
+            knots: knots.to_vec(),
+            points,
+            d1,
+            d2,
+            power: Vec::new(),
+            second_max: Vec::new(),
+            base,
+            ends,
+            planar,
+        };
         if degree <= 3 {
             curve.power = curve.power_form();
+            if !planar {
+                curve.second_max = curve
+                    .power
+                    .iter()
+                    .enumerate()
+                    .map(|(k, [_, _, c2, c3])| {
+                        let h = curve.knots[k + degree + 1] - curve.knots[k + degree];
+                        let at = |t: f64| (0..4).map(|c| (2.0 * c2[c] + 6.0 * t * c3[c]).powi(2)).sum::<f64>().sqrt();
+                        at(0.0).max(at(h)) * (1.0 + 1e-9)
+                    })
+                    .collect();
+            }
         }
         curve
     }
@@ -512,10 +542,18 @@ impl NurbsCurve {
         GAUSS.iter().zip(speeds).map(|(&(_, w), v)| w * v).sum::<f64>() * half
     }
 
-    /// Arc length from `a` to `b` (within one span), composite quadrature over `parts`.
+    /// Arc length from `a` to `b`, composite quadrature over `parts` (each within one
+    /// span, the span of its start).
     pub fn arc_length_composite(&self, a: f64, b: f64, parts: usize) -> f64 {
         let h = (b - a) / parts as f64;
         (0..parts).map(|k| self.arc_length(a + k as f64 * h, a + (k + 1) as f64 * h)).sum()
+    }
+
+    /// [`NurbsCurve::arc_length_composite`] on knot span `i` (holding `a .. b`,
+    /// [`NurbsCurve::span_index`]).
+    pub(crate) fn arc_length_composite_in(&self, a: f64, b: f64, parts: usize, i: usize) -> f64 {
+        let h = (b - a) / parts as f64;
+        (0..parts).map(|k| self.arc_length_in(a + k as f64 * h, a + (k + 1) as f64 * h, i)).sum()
     }
 }
 
@@ -606,6 +644,12 @@ impl NurbsCursor {
         // line), Newton leaves the bracket and bisection takes over: up to 200 steps.
         let (mut lo, mut hi) = (self.u, u1);
         let mut covered = curve.arc_length_in(self.u, u, span);
+        // The largest |C''| over the span where it is known (the smoother's cubics):
+        // after a Newton step `du` the covered length is off by at most `|C''| du^2 / 2`
+        // (Taylor: s(u + du) = s(u) + |C'(u)| du + s''/2 du^2, |s''| = |C'.C''| / |C'|
+        // <= |C''|), so where that is below a thousandth of ARC_TOLERANCE the step is
+        // taken as covering what it aimed at, not measured again.
+        let second_max = curve.second_max.get(span - curve.degree).copied();
         for _ in 0..200 {
             let err = ds - covered;
             if err.abs() <= ARC_TOLERANCE {
@@ -619,8 +663,17 @@ impl NurbsCursor {
             } else {
                 hi = u;
             }
-            let step = u + err / curve.speed_on(u, span).max(1e-300);
-            u = if step > lo && step < hi { step } else { 0.5 * (lo + hi) };
+            let du = err / curve.speed_on(u, span).max(1e-300);
+            let step = u + du;
+            if step > lo && step < hi {
+                u = step;
+                if second_max.is_some_and(|m| 0.5 * m * du * du <= 1e-3 * ARC_TOLERANCE) {
+                    covered += err;
+                    break;
+                }
+            } else {
+                u = 0.5 * (lo + hi);
+            }
             covered = curve.arc_length_in(self.u, u, span);
         }
         self.u = u;

@@ -30,8 +30,9 @@ use std::sync::Arc;
 
 use crate::config::{ProfileKind, Resolved};
 use crate::element::{
-    full_caps, short_length, tangential_jerk_share, AxisShare, Caps, Element, Needs, Shape, ARC_JERK_SHARE,
-    GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, TANGENTIAL_ACCEL_SHARE,
+    full_caps_turning, short_length, tangential_jerk_share, AxisShare, Caps, Element, Needs, Shape, ARC_JERK_SHARE,
+    GEOMETRIC_ACCEL_SHARE, JUNCTION_JERK_SHARE, NORMAL_SHARE_MIN, SMOOTH_NORMAL_SHARE_MIN, SMOOTH_TURNING_JERK_SHARE,
+    TANGENTIAL_ACCEL_SHARE, TURNING_JERK_SHARE,
 };
 use crate::nurbs::{Derivatives, NurbsCurve, NurbsError};
 use crate::vec4::{norm, sub, Vec4};
@@ -58,12 +59,14 @@ fn cusp_error(d: &Derivatives) -> NurbsError {
 /// right angle that bisection cannot resolve is a cusp: refused.
 /// With each parameter the derivatives there (evaluated once: an interval's end is the
 /// next one's start, a bisected interval's start the first half's).
+/// The parameters go to `out` (cleared first), `stack` is room for the bisection.
 fn sample_parameters(
     curve: &NurbsCurve,
-    ua: f64,
-    ub: f64,
+    (ua, ub): (f64, f64),
     per_span: usize,
-) -> Result<Vec<(f64, Derivatives)>, NurbsError> {
+    out: &mut Vec<(f64, Derivatives)>,
+    stack: &mut Vec<(f64, f64, u32)>,
+) -> Result<(), NurbsError> {
     let span = curve.span_index(ua);
     // The last two evaluations, by parameter.
     let mut memo: [(f64, Vec4, Derivatives); 2] = [(f64::NAN, [0.0; 4], curve.derivatives_in(ua, span)); 2];
@@ -77,11 +80,14 @@ fn sample_parameters(
         memo = [memo[1], (u, t, d)];
         (t, d)
     };
-    let mut out = vec![(ua, tangent(ua).1)];
-    let mut stack: Vec<(f64, f64, u32)> = (0..per_span)
-        .rev()
-        .map(|j| (ua + (ub - ua) * j as f64 / per_span as f64, ua + (ub - ua) * (j + 1) as f64 / per_span as f64, 0))
-        .collect();
+    out.clear();
+    out.push((ua, tangent(ua).1));
+    stack.clear();
+    stack.extend(
+        (0..per_span).rev().map(|j| {
+            (ua + (ub - ua) * j as f64 / per_span as f64, ua + (ub - ua) * (j + 1) as f64 / per_span as f64, 0)
+        }),
+    );
     while let Some((a, b, depth)) = stack.pop() {
         let (ta, da) = tangent(a);
         let (tb, db) = tangent(b);
@@ -106,7 +112,8 @@ fn sample_parameters(
             stack.push((a, mid, depth + 1));
             continue;
         }
-        if cos.acos() > MAX_SAMPLE_TURN {
+        // acos(cos) > MAX_SAMPLE_TURN, without the arc cosine.
+        if cos < MAX_SAMPLE_TURN.cos() {
             if depth < 48 && b - a > 1e-13 * (ub - ua) {
                 let mid = 0.5 * (a + b);
                 stack.push((mid, b, depth + 1));
@@ -122,7 +129,7 @@ fn sample_parameters(
             return Err(NurbsError::TooSharp);
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The speed limits at one sample of the curve.
@@ -166,11 +173,47 @@ pub fn pieces_sampled(
         // The smoother's curves are parameterised by the chord length of their polyline.
         (end_u - start_u).max(1e-9)
     };
+    // The axes' smallest acceleration and jerk: the caps below are the smallest
+    // over the axes, and a square or cube root is monotone, so one root of the
+    // smallest limit gives the least of the axes' caps.
+    let (least_accel, least_jerk) = plane_axes
+        .iter()
+        .map(|&a| &config.axes[a])
+        .filter(|limits| limits.present)
+        .fold((f64::INFINITY, f64::INFINITY), |(a, j), l| (a.min(l.max_acceleration), j.min(l.max_jerk)));
+    let cap_of = |k: f64, dk: f64| {
+        let mut cap = f64::INFINITY;
+        if k > 1e-12 {
+            let rho = 1.0 / k;
+            let delta = config.chord_tolerance_mm.min(rho);
+            cap = cap.min(2.0 / config.period_s * (2.0 * rho * delta - delta * delta).max(0.0).sqrt());
+            cap = cap.min((GEOMETRIC_ACCEL_SHARE * least_accel / k).sqrt());
+        }
+        let turning = k * k + dk;
+        if scurve && turning > 1e-12 {
+            cap = cap.min((ARC_JERK_SHARE * least_jerk / turning).cbrt());
+        }
+        cap
+    };
+    // The smallest normal share: the rule that lowers it where the curvature changes
+    // only on a G5.2 curve (`SMOOTH_NORMAL_SHARE_MIN`).
+    // The smallest normal share and the turning's share of the jerk at the speed cap
+    // (`SMOOTH_NORMAL_SHARE_MIN`, `SMOOTH_TURNING_JERK_SHARE` on the smoother's curves).
+    let (normal_min, turning_jerk_share) = if curve.planar() {
+        (NORMAL_SHARE_MIN, TURNING_JERK_SHARE)
+    } else {
+        (SMOOTH_NORMAL_SHARE_MIN, SMOOTH_TURNING_JERK_SHARE)
+    };
+    // Room for every span's samples, kept from span to span.
+    let (mut params, mut stack, mut samples) = (Vec::new(), Vec::new(), Vec::<Sample>::new());
+    let (mut ds, mut dk, mut inner_d, mut inner_k) =
+        (Vec::new(), Vec::new(), Vec::<[Derivatives; 3]>::new(), Vec::new());
+    let (mut inner_cap, mut tangent_max, mut interval_cap) = (Vec::new(), Vec::<Vec4>::new(), Vec::new());
     for (ua, ub) in curve.spans() {
         let span = curve.span_index(ua);
-        let params = sample_parameters(&curve, ua, ub, per_span)?;
+        sample_parameters(&curve, (ua, ub), per_span, &mut params, &mut stack)?;
         let m = params.len() - 1;
-        let mut samples: Vec<Sample> = Vec::with_capacity(m + 1);
+        samples.clear();
         for &(u, d) in &params {
             let speed = d.speed();
             if speed.is_nan() || speed <= 1e-9 * size / (ub - ua).max(1e-300) || !speed.is_finite() {
@@ -180,84 +223,64 @@ pub fn pieces_sampled(
             samples.push(Sample { u, k, tangent: d.first.map(|c| c / speed), cap: f64::INFINITY });
         }
         // |dk/ds| by differences between samples.
-        let ds: Vec<f64> = (0..m).map(|j| curve.arc_length_composite(samples[j].u, samples[j + 1].u, 2)).collect();
-        let dk: Vec<f64> = (0..=m)
-            .map(|j| {
-                let back = if j > 0 { (samples[j].k - samples[j - 1].k).abs() / ds[j - 1].max(1e-300) } else { 0.0 };
-                let ahead = if j < m { (samples[j + 1].k - samples[j].k).abs() / ds[j].max(1e-300) } else { 0.0 };
-                back.max(ahead)
-            })
-            .collect();
-        let cap_of = |k: f64, dk: f64| {
-            let mut cap = f64::INFINITY;
-            if k > 1e-12 {
-                let rho = 1.0 / k;
-                let delta = config.chord_tolerance_mm.min(rho);
-                cap = cap.min(2.0 / config.period_s * (2.0 * rho * delta - delta * delta).max(0.0).sqrt());
-            }
-            for &a in &plane_axes {
-                let limits = &config.axes[a];
-                if !limits.present {
-                    continue;
-                }
-                if k > 1e-12 {
-                    cap = cap.min((GEOMETRIC_ACCEL_SHARE * limits.max_acceleration / k).sqrt());
-                }
-                let turning = k * k + dk;
-                if scurve && turning > 1e-12 {
-                    cap = cap.min((ARC_JERK_SHARE * limits.max_jerk / turning).cbrt());
-                }
-            }
-            cap
-        };
+        ds.clear();
+        ds.extend((0..m).map(|j| curve.arc_length_composite_in(samples[j].u, samples[j + 1].u, 2, span)));
+        dk.clear();
+        dk.extend((0..=m).map(|j| {
+            let back = if j > 0 { (samples[j].k - samples[j - 1].k).abs() / ds[j - 1].max(1e-300) } else { 0.0 };
+            let ahead = if j < m { (samples[j + 1].k - samples[j].k).abs() / ds[j].max(1e-300) } else { 0.0 };
+            back.max(ahead)
+        }));
         for (j, sample) in samples.iter_mut().enumerate() {
             sample.cap = cap_of(sample.k, dk[j]);
         }
         // The curvature inside each interval too, at the three points the tangent bound
         // below evaluates: a peak between samples lowers the interval's cap.
         // The derivatives at the three inner points of every interval, read for both.
-        let inner_d: Vec<[Derivatives; 3]> = (0..m)
-            .map(|j| {
-                let (a, b) = (samples[j].u, samples[j + 1].u);
-                std::array::from_fn(|i| curve.derivatives_in(a + (b - a) * (i + 1) as f64 / 4.0, span))
-            })
-            .collect();
-        let inner_k: Vec<f64> =
-            inner_d.iter().map(|d| d.iter().map(|d| d.curvature().abs()).fold(0.0, f64::max)).collect();
-        let inner_cap: Vec<f64> = (0..m).map(|j| cap_of(inner_k[j], dk[j].max(dk[j + 1]))).collect();
+        inner_d.clear();
+        inner_d.extend((0..m).map(|j| {
+            let (a, b) = (samples[j].u, samples[j + 1].u);
+            std::array::from_fn(|i| curve.derivatives_in(a + (b - a) * (i + 1) as f64 / 4.0, span))
+        }));
+        inner_k.clear();
+        inner_k.extend(inner_d.iter().map(|d| d.iter().map(|d| d.curvature().abs()).fold(0.0, f64::max)));
+        inner_cap.clear();
+        inner_cap.extend((0..m).map(|j| cap_of(inner_k[j], dk[j].max(dk[j + 1]))));
         // Per interval and axis, the largest tangent component: parabolas through the
         // values at five points of the interval, at their vertices where those are inside
         // (an inflection between samples lets the tangent swing past both ends), kept a
         // millionth high.
-        let tangent_max: Vec<Vec4> = (0..m)
-            .map(|j| {
-                let mut f = [samples[j].tangent; 5];
-                f[4] = samples[j + 1].tangent;
-                for (i, slot) in f.iter_mut().enumerate().take(4).skip(1) {
-                    let d = &inner_d[j][i - 1];
-                    let speed = d.speed();
-                    *slot = d.first.map(|c| c / speed);
-                }
-                std::array::from_fn(|c| {
-                    let mut top = f.iter().map(|t| t[c].abs()).fold(0.0, f64::max);
-                    for k in [0, 2] {
-                        let (f0, fm, f1) = (f[k][c], f[k + 1][c], f[k + 2][c]);
-                        let (lin, quad) = (-3.0 * f0 + 4.0 * fm - f1, 2.0 * f0 - 4.0 * fm + 2.0 * f1);
-                        if quad.abs() > 1e-300 {
-                            let t = -lin / (2.0 * quad);
-                            if (0.0..=1.0).contains(&t) {
-                                top = top.max((f0 + t * lin + t * t * quad).abs());
-                            }
+        tangent_max.clear();
+        tangent_max.extend((0..m).map(|j| {
+            let mut f = [samples[j].tangent; 5];
+            f[4] = samples[j + 1].tangent;
+            for (i, slot) in f.iter_mut().enumerate().take(4).skip(1) {
+                let d = &inner_d[j][i - 1];
+                let speed = d.speed();
+                *slot = d.first.map(|c| c / speed);
+            }
+            std::array::from_fn(|c| {
+                let mut top = f.iter().map(|t| t[c].abs()).fold(0.0, f64::max);
+                for k in [0, 2] {
+                    let (f0, fm, f1) = (f[k][c], f[k + 1][c], f[k + 2][c]);
+                    let (lin, quad) = (-3.0 * f0 + 4.0 * fm - f1, 2.0 * f0 - 4.0 * fm + 2.0 * f1);
+                    if quad.abs() > 1e-300 {
+                        let t = -lin / (2.0 * quad);
+                        if (0.0..=1.0).contains(&t) {
+                            top = top.max((f0 + t * lin + t * t * quad).abs());
                         }
                     }
-                    (top * (1.0 + 1e-6)).min(1.0)
-                })
+                }
+                (top * (1.0 + 1e-6)).min(1.0)
             })
-            .collect();
+        }));
         // Per interval: the smallest cap of the four samples around it and of its inside.
-        let interval_cap: Vec<f64> = (0..m)
-            .map(|j| samples[j.saturating_sub(1)..=(j + 2).min(m)].iter().map(|s| s.cap).fold(inner_cap[j], f64::min))
-            .collect();
+        interval_cap.clear();
+        interval_cap.extend(
+            (0..m).map(|j| {
+                samples[j.saturating_sub(1)..=(j + 2).min(m)].iter().map(|s| s.cap).fold(inner_cap[j], f64::min)
+            }),
+        );
         let mut j = 0;
         while j < m {
             let (mut lo, mut hi) = (interval_cap[j], interval_cap[j]);
@@ -363,7 +386,8 @@ pub fn pieces_sampled(
                     jerk: axis.max_jerk,
                 }
             });
-            let Caps { v_cap, accel, jerk } = full_caps(&axes, v_limit, k_top, dk_top, scurve);
+            let Caps { v_cap, accel, jerk } =
+                full_caps_turning(&axes, v_limit, k_top, dk_top, scurve, turning_jerk_share, normal_min);
             let start = curve.point(u0);
             let end_point = curve.point(u1);
             out.push(Element {
@@ -376,7 +400,14 @@ pub fn pieces_sampled(
                 accel,
                 jerk,
                 shared,
-                needs: Some(Needs { axes, k: k_top, dk: dk_top, scurve }),
+                needs: Some(Box::new(Needs {
+                    axes,
+                    k: k_top,
+                    dk: dk_top,
+                    scurve,
+                    normal_min,
+                    turning_share: turning_jerk_share,
+                })),
                 tangential_jerk_share: tangential_share,
                 turning_jerk_share: turning_share,
                 junction_jerk_share: JUNCTION_JERK_SHARE,

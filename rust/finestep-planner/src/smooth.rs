@@ -214,6 +214,11 @@ fn deviating(curve: &NurbsCurve, points: &[Vec4], s: &[f64], limit: f64) -> Vec<
             j += 1;
         }
         let p = curve.point(u);
+        // The segment the sample's parameter lies on first: where it is near enough,
+        // so is the nearest of all, and the others need not be measured.
+        if to_segment_squared(p, points[j], points[j + 1]).sqrt() <= limit {
+            continue;
+        }
         let near = (j.saturating_sub(2)..=(j + 2).min(segments - 1))
             .map(|i| to_segment_squared(p, points[i], points[i + 1]))
             .fold(f64::INFINITY, f64::min)
