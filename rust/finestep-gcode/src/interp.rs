@@ -1291,6 +1291,15 @@ impl State {
         if self.comp != CompSide::Off && code != 700 {
             return Err(LineError::new(column, format!("{name} cannot be used with cutter compensation enabled")));
         }
+        if self.comp != CompSide::Off {
+            // LinuxCNC 2.9 allows G70 here, but leaves its position at the profile's end
+            // while reading the profile, so the compensated lead-in runs from there: a
+            // rapid through the part (docs/gcode.md, "Lathe cycles G70, G71, G72").
+            return Err(LineError::new(
+                column,
+                format!("unsupported: G70 with cutter compensation on ({})", unsupported::G70_COMPENSATED),
+            ));
+        }
         if self.plane != Plane::Zx {
             return Err(LineError::new(column, format!("{name} can only be used in XZ plane (G18)")));
         }

@@ -37,6 +37,9 @@ pub const G10_L: &str = "only L1, L2, L10, L11 and L20 are implemented";
 /// `unsupported: G10 L10 X/Y under an XY rotation`.
 pub const G10_TOOL_ROTATION: &str = "the tool table is set in the unrotated frame only";
 
+/// `unsupported: G70 with cutter compensation on`.
+pub const G70_COMPENSATED: &str = "LinuxCNC 2.9 starts the cycle with a rapid from the profile's end through the part";
+
 /// Every reason above, once.
 pub fn reasons() -> Vec<&'static str> {
     let mut all: Vec<&'static str> = G_CODES.iter().map(|&(_, why)| why).collect();
@@ -52,6 +55,7 @@ pub fn reasons() -> Vec<&'static str> {
         G10_L,
         INVERSE_TIME_SPLINE,
         G10_TOOL_ROTATION,
+        G70_COMPENSATED,
     ]);
     all
 }
