@@ -317,7 +317,9 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             | BlockKind::Overrides(_)
             | BlockKind::DigitalOutput { .. }
             // rs274 prints nothing for M66 (its canon reads no input).
-            | BlockKind::WaitInput { .. } => {}
+            | BlockKind::WaitInput { .. }
+            // rs274 refuses every user M-code (its canon has none: `Unknown m code used`).
+            | BlockKind::UserMCode { .. } => {}
         }
     }
     events

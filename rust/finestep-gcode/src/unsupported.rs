@@ -15,15 +15,13 @@ pub const G_CODES: &[(&[u32], &str)] = &[
 pub const G_OTHER: &str = "not a G-code finestep implements";
 
 /// M-codes LinuxCNC knows and finestep refuses (first, last), with why.
-pub const M_CODES: &[(u32, u32, &str)] = &[(100, 199, "user M-codes run external programs, which finestep does not")];
+pub const M_CODES: &[(u32, u32, &str)] = &[];
 
 /// Any other M number.
 pub const M_OTHER: &str = "not an M-code finestep implements";
 
 /// `unsupported: $ spindle selection`.
 pub const SPINDLE_SELECTION: &str = "finestep drives one spindle: leave $ out";
-/// `unsupported: #<_ini[...]>`.
-pub const INI: &str = "finestep reads no LinuxCNC INI file; give the value in the program";
 /// `unsupported: #<_hal[...]>`.
 pub const HAL: &str = "finestep reads no HAL pins";
 /// `unsupported: exponent in the number of ...`.
@@ -48,7 +46,6 @@ pub fn reasons() -> Vec<&'static str> {
         G_OTHER,
         M_OTHER,
         SPINDLE_SELECTION,
-        INI,
         HAL,
         EXPONENT,
         CYCLE_PLANE,
