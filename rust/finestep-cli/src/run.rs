@@ -133,6 +133,9 @@ pub fn stream_planned<B: Bus>(
                 IoAction::AnalogOutput { .. } => bail!(
                     "{name}:{line}: M67/M68 set an analog output, but the chip has none (its DAC is the spindle's)"
                 ),
+                IoAction::UserMCode { code, .. } => bail!(
+                    "{name}:{line}: M{code} runs a user M-code program, which `finestep run` does not do yet (the planner carries it as an event)"
+                ),
                 _ => {}
             }
         }
@@ -166,7 +169,7 @@ pub fn stream_planned<B: Bus>(
                         Ok(())
                     }
                     // Refused above.
-                    IoAction::WaitInput { .. } | IoAction::AnalogOutput { .. } => Ok(()),
+                    IoAction::WaitInput { .. } | IoAction::AnalogOutput { .. } | IoAction::UserMCode { .. } => Ok(()),
                 }
             })?;
         // LinuxCNC stops a G38.2/G38.4 move whose probe did not change with an error.
@@ -204,6 +207,17 @@ pub fn run(
     if let Some(path) = &parameter_file {
         options.parameters = crate::parameter_file::load(path)?;
     }
+    // The machine's INI file, for `#<_ini[section]name>` (relative to the configuration
+    // as the parameter file is).
+    if let Some(path) = crate::parameter_file::path_of(config.ini_file.as_deref(), config_path) {
+        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        options.ini = finestep_gcode::Options::read_ini(&text);
+    }
+    options.user_m_path = config
+        .user_m_path
+        .iter()
+        .filter_map(|dir| crate::parameter_file::path_of(Some(dir.as_path()), config_path))
+        .collect();
     let (program, parameters) = finestep_gcode::parse_file_with_parameters(file, &options)?;
     let write_back = || -> anyhow::Result<()> {
         if let Some(path) = &parameter_file {

@@ -20,6 +20,104 @@ use crate::{BlockKind, Plane, Program, SpindleRotation};
 /// Millimetres per inch.
 const MM_PER_INCH: f64 = 25.4;
 
+/// The words of a line outside its comments: (start, end, upper-case letter, value; None
+/// for an expression or parameter).
+fn words(line: &str) -> Vec<(usize, usize, u8, Option<f64>)> {
+    let mut words = Vec::new();
+    let bytes = line.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'(' => i += line[i..].find(')').map_or(bytes.len() - i, |e| e + 1),
+            b';' => break,
+            c if c.is_ascii_alphabetic() => {
+                let start = i;
+                i += 1;
+                let digits =
+                    line[i..].find(|c: char| !(c.is_ascii_digit() || "+-. ".contains(c))).unwrap_or(line.len() - i);
+                let value: Option<f64> = line[i..i + digits].replace(' ', "").parse().ok();
+                i += digits;
+                words.push((start, i, c.to_ascii_uppercase(), value));
+            }
+            _ => i += 1,
+        }
+    }
+    words
+}
+
+/// `source` with every line that holds both a tool change (M6) and a length offset
+/// (G43, G43.1, G43.2, G49 with its H) split in two: the line without the offset, then
+/// the offset on a line of its own. LinuxCNC runs both forms alike (its task re-reads the
+/// position after the M6 block through the canonical layer, which takes every offset off);
+/// rs274's stand-alone canon re-reads the last position it printed, without the offset
+/// set in the block (saicanon.cc, `GET_EXTERNAL_POSITION_Z`), so only the split form
+/// runs there as it runs on a machine. None when no line has both (or one has them among
+/// parameters or expressions, which this does not rewrite).
+pub fn split_length_offset(source: &str) -> Option<String> {
+    let mut out = String::with_capacity(source.len() + 64);
+    let mut split = false;
+    for line in source.split_inclusive('\n') {
+        let words = words(line);
+        let has = |letter: u8, values: &[f64]| {
+            words.iter().any(|&(_, _, l, v)| l == letter && v.is_some_and(|v| values.contains(&v)))
+        };
+        if !(has(b'M', &[6.0]) && has(b'G', &[43.0, 43.1, 43.2, 49.0])) {
+            out.push_str(line);
+            continue;
+        }
+        if line.contains(['[', '#']) {
+            return None;
+        }
+        let offset = |&&(_, _, l, v): &&(usize, usize, u8, Option<f64>)| {
+            l == b'H' || (l == b'G' && v.is_some_and(|v| [43.0, 43.1, 43.2, 49.0].contains(&v)))
+        };
+        let (mut kept, mut moved, mut at) = (String::new(), String::new(), 0);
+        for word in words.iter().filter(offset) {
+            kept.push_str(&line[at..word.0]);
+            moved.push_str(line[word.0..word.1].trim());
+            moved.push(' ');
+            at = word.1;
+        }
+        kept.push_str(&line[at..]);
+        let kept = kept.trim_end_matches(['\r', '\n']);
+        out.push_str(&format!("{kept}\n{}\n", moved.trim_end()));
+        split = true;
+    }
+    split.then_some(out)
+}
+
+/// `source` with the G41 or G42 of line `line` (1-based) turned into G41.1 or G42.1 with
+/// the tool's diameter in the block, `diameter_inch` inches (a LinuxCNC tool table read
+/// without an INI file) as an expression exact in the program's units (`#<_metric>`);
+/// the line's D word goes. rs274's stand-alone canon reads the table's diameter through
+/// a rounded unit (`0.03937007874016` inch/mm, saicanon.cc `GET_EXTERNAL_LENGTH_UNITS`),
+/// a radius 6.4e-14 short of the table's; given in the block it reads it exact. None if
+/// that line has no G41 or G42 with a number.
+pub fn diameter_in_block(source: &str, line: usize, diameter_inch: f64) -> Option<String> {
+    let mut variant = String::with_capacity(source.len() + 64);
+    for (n, text) in source.split_inclusive('\n').enumerate() {
+        if n + 1 != line {
+            variant.push_str(text);
+            continue;
+        }
+        let words = words(text);
+        let &(start, end, _, g) =
+            words.iter().find(|&&(_, _, l, v)| l == b'G' && matches!(v, Some(v) if v == 41.0 || v == 42.0))?;
+        let mut kept = String::new();
+        let mut at = 0;
+        for &(s, e, l, _) in &words {
+            if (s, e) == (start, end) || l == b'D' {
+                kept.push_str(&text[at..s]);
+                at = e;
+            }
+        }
+        kept.push_str(&text[at..]);
+        let kept = kept.trim_end_matches(['\r', '\n']);
+        variant.push_str(&format!("{kept} G{}.1 D[{diameter_inch} * [1 + 24.4 * #<_metric>]]\n", g.unwrap_or(41.0)));
+    }
+    Some(variant)
+}
+
 /// The spindle and coolant state a move runs under.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Machine {
@@ -219,7 +317,9 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             | BlockKind::Overrides(_)
             | BlockKind::DigitalOutput { .. }
             // rs274 prints nothing for M66 (its canon reads no input).
-            | BlockKind::WaitInput { .. } => {}
+            | BlockKind::WaitInput { .. }
+            // rs274 refuses every user M-code (its canon has none: `Unknown m code used`).
+            | BlockKind::UserMCode { .. } => {}
         }
     }
     events
@@ -591,4 +691,37 @@ pub fn compare(ours: &[Event], theirs: &Rs274Output) -> Option<String> {
         text.push_str(&format!("{mark} {:>5} rs274:    {}\n", i + 1, show(theirs.events.get(i))));
     }
     Some(text)
+}
+
+#[cfg(test)]
+mod variant_tests {
+    use super::*;
+
+    #[test]
+    fn a_tool_change_with_a_length_offset_is_split_in_two_lines() {
+        let source = "G20\nN80 T1 M06 G43 H1 (get its length)\nG0 X1\nG40 T2M6G43\nM2\n";
+        assert_eq!(
+            split_length_offset(source).as_deref(),
+            Some("G20\nN80 T1 M06 (get its length)\nG43 H1\nG0 X1\nG40 T2M6\nG43\nM2\n")
+        );
+        // Nothing to split, or an expression it does not rewrite.
+        assert_eq!(split_length_offset("T1 M6\nG43 H1\n"), None);
+        assert_eq!(split_length_offset("T1 M6 G43 H#1\n"), None);
+        // A G43 in a comment or after `;` is not a word.
+        assert_eq!(split_length_offset("T1 M6 (G43 H1) ; G49\n"), None);
+    }
+
+    #[test]
+    fn the_compensation_of_a_line_takes_the_diameter_in_the_block() {
+        let source = "G20\ng41 g1 y4 d4\ng1 x1\n";
+        assert_eq!(
+            diameter_in_block(source, 2, 2.0).as_deref(),
+            Some("G20\ng1 y4  G41.1 D[2 * [1 + 24.4 * #<_metric>]]\ng1 x1\n")
+        );
+        assert_eq!(
+            diameter_in_block("G42 X1\n", 1, 0.5).as_deref(),
+            Some("X1 G42.1 D[0.5 * [1 + 24.4 * #<_metric>]]\n")
+        );
+        assert_eq!(diameter_in_block("G1 X1\n", 1, 0.5), None);
+    }
 }

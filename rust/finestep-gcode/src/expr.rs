@@ -357,14 +357,13 @@ pub(crate) fn read_value(s: &mut Chars, word: What, depth: usize) -> Result<Expr
 }
 
 /// `<name>` of a named parameter, after its `#` (which stands at `column`): as
-/// [`read_name`], with LinuxCNC's `#<_ini[section]name>` and `#<_hal[pin]>` refused
-/// (they read the machine's INI file and HAL pins, which a part program alone lacks).
+/// [`read_name`], with LinuxCNC's `#<_hal[pin]>` refused (it reads the machine's HAL
+/// pins, which a part program alone lacks). `#<_ini[section]name>` reads the machine's
+/// INI file ([`crate::Options::ini`]).
 pub(crate) fn read_parameter_name(s: &mut Chars, column: usize) -> Result<String, LineError> {
     let name = read_name(s)?;
-    for (prefix, why) in [("_ini[", crate::unsupported::INI), ("_hal[", crate::unsupported::HAL)] {
-        if name.starts_with(prefix) {
-            return Err(LineError::new(column, format!("unsupported: #<{prefix}...]> ({why})")));
-        }
+    if name.starts_with("_hal[") {
+        return Err(LineError::new(column, format!("unsupported: #<_hal[...]> ({})", crate::unsupported::HAL)));
     }
     Ok(name)
 }

@@ -57,6 +57,8 @@ struct OpenNurbs {
 /// The modal state between blocks.
 #[derive(Debug, Clone)]
 pub(crate) struct State {
+    /// Folders searched for user M-code programs (M100-M199).
+    user_m_path: Vec<std::path::PathBuf>,
     position: Axes,
     motion: Option<Code>,
     plane: Plane,
@@ -126,6 +128,7 @@ impl Default for State {
     /// at 0 rpm, coolant off, tool 0.
     fn default() -> Self {
         State {
+            user_m_path: Vec::new(),
             position: [0.0; N_AXES],
             motion: None,
             plane: Plane::Xy,
@@ -236,9 +239,10 @@ enum Group {
     ModalState,  // M group 10: M70 M71 M72 M73
     Override,    // M group 9: M48 M49 M50 M51 M52 M53
     Io,          // M group 5: M62 M63 M64 M65 M66 M67 M68
+    User,        // M group 10 in LinuxCNC's table too: M100-M199
 }
 
-const GROUPS: usize = 21;
+const GROUPS: usize = 22;
 
 /// The canned cycles implemented (in tenths).
 const CYCLES: [Code; 8] = [730, 810, 820, 830, 850, 860, 870, 890];
@@ -275,6 +279,7 @@ fn m_group(code: u32) -> Option<Group> {
         70..=73 => Group::ModalState,
         48..=53 => Group::Override,
         62..=68 => Group::Io,
+        100..=199 => Group::User,
         _ => return None,
     })
 }
@@ -564,6 +569,11 @@ impl State {
         self.tools = tools.clone();
     }
 
+    /// The folders searched for user M-code programs ([`crate::Options::user_m_path`]).
+    pub(crate) fn set_user_m_path(&mut self, path: &[std::path::PathBuf]) {
+        self.user_m_path = path.to_vec();
+    }
+
     /// A length in mm (or an angle) in program units.
     fn user_units(&self, axis: usize, mm: f64) -> f64 {
         if !rotary(axis) && self.inches {
@@ -836,11 +846,12 @@ impl State {
                 w.group(Group::Override).is_some_and(|(code, _)| code >= 500),
                 matches!(io, Some(620..=660)),
                 orient_words,
+                w.group(Group::User).is_some(),
             ];
             match users.iter().filter(|&&u| u).count() {
                 0 => return Err(LineError::new(
                     column,
-                    "P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it",
+                    "P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53, M62-M66 or M100-M199 to use it",
                 )),
                 1 => {}
                 _ => return Err(LineError::new(column, "P word is used by more than one code")),
@@ -858,9 +869,13 @@ impl State {
                 || orient_words
                 || w.has(Group::ToolChange, 610)
                 || matches!(io, Some(660..=680))
+                || w.group(Group::User).is_some()
                 || cycle_move && matches!(motion, Some(730 | 830)))
             {
-                return Err(LineError::new(column, "Q word with no G5, G64, G73, G83, M19, M61 or M66-M68 to use it"));
+                return Err(LineError::new(
+                    column,
+                    "Q word with no G5, G64, G73, G83, M19, M61, M66-M68 or M100-M199 to use it",
+                ));
             }
         }
         if let Some((_, column)) = w.param('H') {
@@ -988,6 +1003,28 @@ impl State {
                 .filter(|&i| i < 64)
                 .ok_or_else(|| LineError::new(p_column, "digital output P must be an integer 0 to 63"))?;
             kinds.push(BlockKind::DigitalOutput { index, on: matches!(code, 620 | 640) });
+        }
+
+        // A user M-code (after the overrides, before the dwell, in LinuxCNC's order).
+        if let Some((code, column)) = w.group(Group::User) {
+            let code = code / 10;
+            let name = format!("M{code}");
+            if !self.user_m_path.iter().any(|dir| is_executable(&dir.join(&name))) {
+                return Err(LineError::new(
+                    column,
+                    format!(
+                        "Unknown M code used: {name} (no executable {name} in the user M-code path{})",
+                        if self.user_m_path.is_empty() {
+                            ", which the machine configuration does not give"
+                        } else {
+                            ""
+                        }
+                    ),
+                ));
+            }
+            let p = w.param('P').map_or(0.0, |(p, _)| p);
+            let q = w.param('Q').map_or(0.0, |(q, _)| q);
+            kinds.push(BlockKind::UserMCode { code, p, q });
         }
 
         // Dwell.
@@ -1290,6 +1327,15 @@ impl State {
             q.ok_or_else(|| LineError::new(column, format!("{name} requires a Q word (the profile's subroutine)")))?;
         if self.comp != CompSide::Off && code != 700 {
             return Err(LineError::new(column, format!("{name} cannot be used with cutter compensation enabled")));
+        }
+        if self.comp != CompSide::Off {
+            // LinuxCNC 2.9 allows G70 here, but leaves its position at the profile's end
+            // while reading the profile, so the compensated lead-in runs from there: a
+            // rapid through the part (docs/gcode.md, "Lathe cycles G70, G71, G72").
+            return Err(LineError::new(
+                column,
+                format!("unsupported: G70 with cutter compensation on ({})", unsupported::G70_COMPENSATED),
+            ));
         }
         if self.plane != Plane::Zx {
             return Err(LineError::new(column, format!("{name} can only be used in XZ plane (G18)")));
@@ -2382,4 +2428,19 @@ fn nurbs_weight(w: &Words) -> Result<f64, LineError> {
 /// The column of a move's motion word: its G word if the block has one, else `axis`.
 fn column_of(w: &Words, axis: usize) -> usize {
     w.group(Group::Motion).map_or(axis, |(_, c)| c)
+}
+
+/// Whether `path` is a file LinuxCNC would run as a user M-code: a regular file (on Unix,
+/// with an execute bit set).
+fn is_executable(path: &std::path::Path) -> bool {
+    let Ok(meta) = std::fs::metadata(path) else { return false };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        meta.is_file() && meta.permissions().mode() & 0o111 != 0
+    }
+    #[cfg(not(unix))]
+    {
+        meta.is_file()
+    }
 }

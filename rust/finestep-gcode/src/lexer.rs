@@ -192,7 +192,12 @@ pub(crate) fn lex_into(
                 }
                 s.i += 1;
                 let target = if s.peek() == Some('<') {
-                    Target::Named(read_parameter_name(&mut s, column)?.into())
+                    let name = read_parameter_name(&mut s, column)?;
+                    if name.starts_with("_ini[") {
+                        // rs274's words: an INI value is read-only.
+                        return Err(LineError::new(column, format!("Cannot assign to read-only parameter #<{name}>")));
+                    }
+                    Target::Named(name.into())
                 } else {
                     Target::Numbered(read_value(&mut s, What::Named("the parameter number"), 0)?)
                 };

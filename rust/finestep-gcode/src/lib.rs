@@ -428,6 +428,17 @@ pub enum BlockKind {
         /// Q: the longest wait, seconds (0 with `WaitMode::Immediate`).
         timeout_s: f64,
     },
+    /// M100-M199: LinuxCNC's user M-code, the executable file `M1nn` found in
+    /// [`Options::user_m_path`], run with P and Q as its two arguments; the machine waits,
+    /// at rest, until it has finished.
+    UserMCode {
+        /// The M number, 100 to 199.
+        code: u32,
+        /// P (0 when absent).
+        p: f64,
+        /// Q (0 when absent).
+        q: f64,
+    },
     /// M67 (with the next move) and M68 (at once): analog output `index` set to `value`.
     AnalogOutput {
         /// E: the output, 0 to 63.
@@ -482,6 +493,17 @@ pub struct Options {
     /// the first line, as in LinuxCNC. [`parse_file_with_parameters`] gives them back as
     /// the program leaves them, to be written to the file.
     pub parameters: Parameters,
+    /// The machine's INI file for `#<_ini[section]name>` ([`Options::read_ini`]):
+    /// (section, name) to the value's text, as written. LinuxCNC looks a parameter up
+    /// with its section and name in upper case (so `#<_ini[traj]max_velocity>` reads
+    /// `[TRAJ]MAX_VELOCITY`), and a value that is not a number is not found; a parameter
+    /// not found is not defined, as any other. Read-only: assigning one is an error.
+    pub ini: std::collections::BTreeMap<(String, String), String>,
+    /// Folders searched, in order, for the executable file `M1nn` of a user M-code
+    /// M100-M199 (LinuxCNC's `[RS274NGC]USER_M_PATH`). A program naming one that is in
+    /// none of them is refused where it names it, as LinuxCNC refuses it (`Unknown M code
+    /// used`).
+    pub user_m_path: Vec<std::path::PathBuf>,
 }
 
 impl Default for Options {
@@ -491,11 +513,32 @@ impl Default for Options {
             subroutine_path: Vec::new(),
             tools: std::collections::HashMap::new(),
             parameters: Parameters::default(),
+            ini: std::collections::BTreeMap::new(),
+            user_m_path: Vec::new(),
         }
     }
 }
 
 impl Options {
+    /// The entries of an INI file: `[SECTION]` lines, then `NAME = value` lines (blanks
+    /// around both trimmed); lines starting with `#` or `;` and lines without `=` are
+    /// skipped, as LinuxCNC's reader skips them. A later entry of a name wins.
+    pub fn read_ini(text: &str) -> std::collections::BTreeMap<(String, String), String> {
+        let mut entries = std::collections::BTreeMap::new();
+        let mut section = String::new();
+        for line in text.lines().map(str::trim) {
+            if line.starts_with('#') || line.starts_with(';') {
+                continue;
+            }
+            if let Some(name) = line.strip_prefix('[').and_then(|l| l.split_once(']')).map(|(name, _)| name) {
+                section = name.trim().to_string();
+            } else if let Some((name, value)) = line.split_once('=') {
+                entries.insert((section.clone(), name.trim().to_string()), value.trim().to_string());
+            }
+        }
+        entries
+    }
+
     /// Reads the tool lengths of a LinuxCNC tool table (`T1 P1 Z0.511 D0.125 ;comment`
     /// lines) whose lengths are in `mm_per_unit` millimetres (25.4 for inches).
     pub fn read_tool_table(text: &str, mm_per_unit: f64) -> Result<std::collections::HashMap<u32, [f64; 9]>, String> {

@@ -561,8 +561,19 @@ impl<'t> Runner<'t> {
             columns: Vec::new(),
         };
         runner.state.set_tools(&options.tools);
+        runner.state.set_user_m_path(&options.user_m_path);
         runner.state.set_machine_unit(options.machine_unit_mm);
         runner.state.load_parameters(&options.parameters.values);
+        // `#<_ini[section]name>`: each entry whose section and name are upper case (the
+        // only ones LinuxCNC's upper-cased lookup finds) and whose value is a number.
+        for ((section, name), value) in &options.ini {
+            if let Ok(value) = value.parse::<f64>() {
+                if *section == section.to_uppercase() && *name == name.to_uppercase() {
+                    let key = format!("_ini[{}]{}", section.to_lowercase(), name.to_lowercase());
+                    runner.globals.insert(key.into(), value);
+                }
+            }
+        }
         // Scanned up to the first line with content: an empty program is refused.
         let main = &mut runner.sources[0];
         while main.content_lines == 0 && main.scan_one() {}

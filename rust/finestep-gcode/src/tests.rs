@@ -264,13 +264,15 @@ fn every_error_message_with_its_place() {
         ("G0 X1 @", "1:8: missing value for word @"),
         ("G0 X1 @1", "1:7: X or Y with polar coordinates @ ^ in one block"),
         (
+            // No INI file given: not defined (rs274 without -i: 'Named parameter
+            // #<_ini[axis_x]max_velocity> not defined').
             "G0 X#<_ini[axis_x]max_velocity>",
-            "1:5: unsupported: #<_ini[...]> (finestep reads no LinuxCNC INI file; give the value in the program)",
+            "1:5: named parameter #<_ini[axis_x]max_velocity> is not defined",
         ),
         ("#<_hal[motion.spindle-speed-out]> = 1", "1:1: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
         ("G0 X[EXISTS[#<_hal[x]>]]", "1:13: unsupported: #<_hal[...]> (finestep reads no HAL pins)"),
         // Words.
-        ("G0 X1 Q2", "1:7: Q word with no G5, G64, G73, G83, M19, M61 or M66-M68 to use it"),
+        ("G0 X1 Q2", "1:7: Q word with no G5, G64, G73, G83, M19, M61, M66-M68 or M100-M199 to use it"),
         ("G64 P0.1 Q-1", "1:10: negative naive-CAM tolerance Q"),
         ("F1 G5.1 X1 Y1 I1 J0 B2", "1:21: axis B in a G5.1 spline: only X and Y move"),
         ("G95 F0.1\nG1 X1", "2:1: G1 with zero spindle speed in feed per revolution (G95): S first"),
@@ -335,7 +337,7 @@ fn every_error_message_with_its_place() {
         ("F100 Y2 X1", "1:6: axis word with no motion mode (G0, G1, G2, G3 or a cycle) to use it"),
         ("G0 X1 I1", "1:7: I word with no G2 or G3 to use it"),
         ("R1", "1:1: R word with no G2, G3, canned cycle, G10 or M19 to use it"),
-        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it"),
+        ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53, M62-M66 or M100-M199 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
         ("G40 D1", "1:5: D word with no G41, G41.1, G42 or G42.1 to use it"),
@@ -525,7 +527,7 @@ fn nurbs_errors_with_their_place() {
         ("F600\nG1 X1 L3\n", "2:7: L word with no G5.2, G10, canned cycle or M66 to use it"),
         (
             "F600\nG5.2 X1 Y1\nX2 Y2\nG5.3 P2\n",
-            "4:6: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it",
+            "4:6: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53, M62-M66 or M100-M199 to use it",
         ),
         // The program ends inside the block: the error points at its G5.2.
         (
@@ -797,7 +799,7 @@ fn override_switches_read_back_as_rs274_reads_them() {
     assert_eq!(err("M48 M53\n"), format!("{FILE}:1:5: M48 and M53 are in the same modal group"));
     assert_eq!(
         err("M48 P1\n"),
-        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it")
+        format!("{FILE}:1:5: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53, M62-M66 or M100-M199 to use it")
     );
 }
 
@@ -1415,7 +1417,7 @@ fn inputs_and_analog_outputs_are_events() {
         ("M68 E-1 Q1\n", "1:5: E word of M68 must be an integer 0 to 63"),
         (
             "M67 E1 Q1 P2\n",
-            "1:11: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53 or M62-M66 to use it",
+            "1:11: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53, M62-M66 or M100-M199 to use it",
         ),
         ("G1 X1 E5 F10\n", "1:7: E word with no M66, M67 or M68 to use it"),
         ("F10 G41\nM68 E1 Q1\n", "2:1: M68 with cutter radius compensation on (G40 first)"),
@@ -1482,4 +1484,99 @@ fn a_lathe_profile_is_read_not_run() {
     // profile's first point, and the profile fed.
     assert_eq!(moves, [('R', 8.0, 2.0), ('R', 8.0, 2.0), ('R', 2.0, 0.0), ('F', 4.0, -5.0)]);
     assert!(!kinds.iter().any(|k| matches!(k, BlockKind::Spindle { .. })));
+}
+
+/// `#<_ini[section]name>` from the machine's INI file, as rs274 2.9 reads it with
+/// `-i FILE.ini` (each case run there: `[TRAJ] MAX_LINEAR_VELOCITY = 12.5` gives
+/// `STRAIGHT_TRAVERSE(12.5000, ...)` for `G0 X#<_ini[traj]max_linear_velocity>`, in any
+/// case of the letters; `Name = 3` is not found (the lookup is upper case), nor
+/// `B = 2.5 # c` (not a number): 'Named parameter #<_ini[traj]name> not defined'; EXISTS
+/// is 1; an assignment is 'Cannot assign to read-only parameter #<_ini[traj]...>').
+#[test]
+fn ini_parameters_are_read_from_the_machines_ini_file_as_rs274_reads_them() {
+    let ini = "# the machine\n[RS274NGC]\nFEATURES = 12\n[TRAJ]\nMAX_LINEAR_VELOCITY = 12.5\nName = 3\nB = 2.5 # c\n\
+               ; a comment\n[AXIS_X]\nMAX_VELOCITY=-4\n";
+    let options = Options { ini: Options::read_ini(ini), ..Options::default() };
+    assert_eq!(options.ini.get(&("TRAJ".to_string(), "Name".to_string())).map(String::as_str), Some("3"));
+    let rapid = |source: &str| -> Result<Point, String> {
+        let program = parse_str_with(&format!("{source}\nM2\n"), FILE, &options).map_err(|e| e.to_string())?;
+        Ok(program
+            .blocks
+            .iter()
+            .find_map(|b| if let BlockKind::Rapid { to } = b.kind { Some(to) } else { None })
+            .expect("a rapid"))
+    };
+    assert_eq!(rapid("G0 X#<_ini[traj]max_linear_velocity> Y#<_INI[Axis_X]MAX_velocity>"), Ok(p(12.5, -4.0, 0.0, 0.0)));
+    assert_eq!(rapid("G0 X[EXISTS[#<_ini[traj]max_linear_velocity>]]"), Ok(p(1.0, 0.0, 0.0, 0.0)));
+    assert_eq!(rapid("G0 X[EXISTS[#<_ini[traj]name>]]"), Ok(p(0.0, 0.0, 0.0, 0.0)));
+    assert_eq!(
+        rapid("G0 X#<_ini[traj]name>"),
+        Err(format!("{FILE}:1:5: named parameter #<_ini[traj]name> is not defined"))
+    );
+    assert_eq!(rapid("G0 X#<_ini[traj]b>"), Err(format!("{FILE}:1:5: named parameter #<_ini[traj]b> is not defined")));
+    assert_eq!(
+        rapid("#<_ini[traj]max_linear_velocity> = 3"),
+        Err(format!("{FILE}:1:1: Cannot assign to read-only parameter #<_ini[traj]max_linear_velocity>"))
+    );
+    // Inside a subroutine too (a global).
+    assert_eq!(rapid("o1 sub\nG0 X#<_ini[traj]max_linear_velocity>\no1 endsub\no1 call"), Ok(p(12.5, 0.0, 0.0, 0.0)));
+}
+
+/// M100-M199: the user M-code's program `M1nn` is looked for in the user M-code path
+/// (LinuxCNC's USER_M_PATH), executable; found, the block is an event naming the code
+/// with P and Q (0 when absent), in LinuxCNC's order of execution (after the overrides,
+/// before the dwell and the motion). rs274 refuses every one (`Unknown m code used:
+/// M101`: its stand-alone canon has no user M-codes), so these are unit tests only.
+#[test]
+fn user_m_codes_are_events_with_p_and_q_when_their_program_is_in_the_path() {
+    let dir = std::env::temp_dir().join(format!("finestep-user-m-{}", std::process::id()));
+    let (first, second) = (dir.join("a"), dir.join("b"));
+    std::fs::create_dir_all(&first).unwrap();
+    std::fs::create_dir_all(&second).unwrap();
+    let make = |path: std::path::PathBuf, mode: u32| {
+        std::fs::write(&path, "#!/bin/sh\nexit 0\n").unwrap();
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            std::fs::set_permissions(&path, std::fs::Permissions::from_mode(mode)).unwrap();
+        }
+    };
+    make(second.join("M101"), 0o755);
+    make(first.join("M102"), 0o644);
+    let options = Options { user_m_path: vec![first.clone(), second.clone()], ..Options::default() };
+    let kinds = |source: &str| -> Result<Vec<BlockKind>, String> {
+        parse_str_with(source, FILE, &options)
+            .map(|p| p.blocks.into_iter().map(|b| b.kind).collect())
+            .map_err(|e| e.to_string())
+    };
+    let got = kinds("G0 X1\nM101 P1.5 Q-2\nM101\nM2\n");
+    let user: Vec<BlockKind> = got.unwrap().into_iter().filter(|k| matches!(k, BlockKind::UserMCode { .. })).collect();
+    assert_eq!(
+        user,
+        [BlockKind::UserMCode { code: 101, p: 1.5, q: -2.0 }, BlockKind::UserMCode { code: 101, p: 0.0, q: 0.0 }]
+    );
+    // The dwell's P is P for both: LinuxCNC's P is one word a block.
+    assert!(kinds("M101 P1 G4 P2\nM2\n").unwrap_err().ends_with("word P appears twice"));
+    // Before the motion of its block.
+    let order = kinds("M101 G0 X1\nM2\n").unwrap();
+    assert!(matches!(order[..], [BlockKind::UserMCode { .. }, BlockKind::Rapid { .. }, ..]), "{order:?}");
+    // Not executable, not in the path, no path at all.
+    assert_eq!(
+        kinds("M102\nM2\n"),
+        Err(format!("{FILE}:1:1: Unknown M code used: M102 (no executable M102 in the user M-code path)"))
+    );
+    assert_eq!(
+        kinds("G0 X1 M199\nM2\n"),
+        Err(format!("{FILE}:1:7: Unknown M code used: M199 (no executable M199 in the user M-code path)"))
+    );
+    assert_eq!(
+        err("M101 P1\n"),
+        format!(
+            "{FILE}:1:1: Unknown M code used: M101 (no executable M101 in the user M-code path, which the machine \
+             configuration does not give)"
+        )
+    );
+    // One user M-code a block (LinuxCNC's modal group 10).
+    assert!(kinds("M101 M101\nM2\n").is_err());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

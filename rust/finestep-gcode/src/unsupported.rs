@@ -15,15 +15,13 @@ pub const G_CODES: &[(&[u32], &str)] = &[
 pub const G_OTHER: &str = "not a G-code finestep implements";
 
 /// M-codes LinuxCNC knows and finestep refuses (first, last), with why.
-pub const M_CODES: &[(u32, u32, &str)] = &[(100, 199, "user M-codes run external programs, which finestep does not")];
+pub const M_CODES: &[(u32, u32, &str)] = &[];
 
 /// Any other M number.
 pub const M_OTHER: &str = "not an M-code finestep implements";
 
 /// `unsupported: $ spindle selection`.
 pub const SPINDLE_SELECTION: &str = "finestep drives one spindle: leave $ out";
-/// `unsupported: #<_ini[...]>`.
-pub const INI: &str = "finestep reads no LinuxCNC INI file; give the value in the program";
 /// `unsupported: #<_hal[...]>`.
 pub const HAL: &str = "finestep reads no HAL pins";
 /// `unsupported: exponent in the number of ...`.
@@ -37,6 +35,9 @@ pub const G10_L: &str = "only L1, L2, L10, L11 and L20 are implemented";
 /// `unsupported: G10 L10 X/Y under an XY rotation`.
 pub const G10_TOOL_ROTATION: &str = "the tool table is set in the unrotated frame only";
 
+/// `unsupported: G70 with cutter compensation on`.
+pub const G70_COMPENSATED: &str = "LinuxCNC 2.9 starts the cycle with a rapid from the profile's end through the part";
+
 /// Every reason above, once.
 pub fn reasons() -> Vec<&'static str> {
     let mut all: Vec<&'static str> = G_CODES.iter().map(|&(_, why)| why).collect();
@@ -45,13 +46,13 @@ pub fn reasons() -> Vec<&'static str> {
         G_OTHER,
         M_OTHER,
         SPINDLE_SELECTION,
-        INI,
         HAL,
         EXPONENT,
         CYCLE_PLANE,
         G10_L,
         INVERSE_TIME_SPLINE,
         G10_TOOL_ROTATION,
+        G70_COMPENSATED,
     ]);
     all
 }

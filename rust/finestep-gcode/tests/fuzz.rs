@@ -420,16 +420,23 @@ fn dialect_line() -> impl Strategy<Value = String> {
 #[test]
 fn dialect_soup_never_panics_or_hangs() {
     let mut runner = finestep_testkit::runner("dialect_soup_never_panics_or_hangs", 3000);
+    // The slowest case, printed for the record (issue 17 asks for it with the figures).
+    let slowest = std::cell::RefCell::new((0.0f64, String::new()));
     runner
         .run(&proptest::collection::vec(dialect_line(), 0..16), |lines| {
             let source = lines.join("\n");
             let start = cpu_time::ThreadTime::now();
             let result = parse_str(&source, "fuzz.ngc");
             let took = start.elapsed().as_secs_f64();
+            if took > slowest.borrow().0 {
+                *slowest.borrow_mut() = (took, source.clone());
+            }
             prop_assert!(took < 1.0, "{took:.2} s for\n{source}");
             check_location(&source, &result)
         })
         .unwrap();
+    let (took, source) = slowest.into_inner();
+    println!("slowest case: {took:.3} s of CPU for\n{source}");
 }
 
 #[test]

@@ -460,6 +460,7 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
             | BlockKind::Spindle { .. }
             | BlockKind::Coolant { .. }
             | BlockKind::WaitInput { .. }
+            | BlockKind::UserMCode { .. }
             | BlockKind::AnalogOutput { .. } => {
                 mark_stop(&mut out);
                 continue;

@@ -11,6 +11,8 @@
 //! lookahead_moves = 2000        # every move is planned seeing at least this many ahead
 //! parameter_file = "sim.var"    # LinuxCNC's parameter file: read before a program, the
 //!                               # persistent parameters written back at its end (none)
+//! ini_file = "sim.ini"          # LinuxCNC's INI file, for #<_ini[section]name> (none)
+//! user_m_path = ["mcodes"]      # folders of the user M-code programs M100-M199 (none)
 //! cutter_comp_entry = "tangent" # G41/G42 entry and G40 exit moves: "tangent" lines, or
 //!                               # "linuxcnc" (LinuxCNC's, which can cut into the part;
 //!                               # with its nearly tangent corners and corners at rapid)
@@ -167,6 +169,15 @@ pub struct MachineConfig {
     /// back, crash-safe, when the program has run to its end. A relative path is taken
     /// from the configuration file's folder. The planner does not read it.
     pub parameter_file: Option<std::path::PathBuf>,
+    /// The machine's LinuxCNC INI file, read by `finestep run` for the program's
+    /// `#<_ini[section]name>` parameters (`finestep_gcode::Options::ini`; without one they
+    /// are not defined). A relative path is taken from the configuration file's folder.
+    /// The planner does not read it.
+    pub ini_file: Option<std::path::PathBuf>,
+    /// Folders searched for user M-code programs M100-M199 (LinuxCNC's
+    /// `[RS274NGC]USER_M_PATH`; `finestep_gcode::Options::user_m_path`), relative ones
+    /// from the configuration file's folder. The planner does not read it.
+    pub user_m_path: Vec<std::path::PathBuf>,
     /// How cutter compensation lays out the entry move after G41/G42 and the exit move
     /// after G40, and with `linuxcnc` its corners ([`crate::cutter_comp::EntryExit`]).
     pub cutter_comp_entry: crate::cutter_comp::EntryExit,
@@ -463,6 +474,8 @@ impl Default for MachineConfig {
             lookahead_moves: 2000,
             bus: None,
             parameter_file: None,
+            ini_file: None,
+            user_m_path: Vec::new(),
             cutter_comp_entry: crate::cutter_comp::EntryExit::Tangent,
             measure: MeasureConfig::default(),
             gantry: GantryConfig::default(),

@@ -205,6 +205,16 @@ pub enum IoAction {
         /// The longest wait, seconds.
         timeout_s: f64,
     },
+    /// M100-M199: run the user M-code program `M<code>` (found in the configuration's
+    /// `user_m_path`) with P and Q as its arguments, at rest, and go on when it ends.
+    UserMCode {
+        /// The M number, 100 to 199.
+        code: u32,
+        /// P.
+        p: f64,
+        /// Q.
+        q: f64,
+    },
     /// M67/M68: analog output `index` set to `value` (M67's, synchronised with the next
     /// move in LinuxCNC, acts at rest before it, as M62/M63 do).
     AnalogOutput {

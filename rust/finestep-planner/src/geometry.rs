@@ -277,6 +277,7 @@ impl MoveReader {
                 }
                 BlockKind::WaitInput { input, mode, timeout_s } => Some(IoAction::WaitInput { input, mode, timeout_s }),
                 BlockKind::AnalogOutput { index, value, .. } => Some(IoAction::AnalogOutput { index, value }),
+                BlockKind::UserMCode { code, p, q } => Some(IoAction::UserMCode { code, p, q }),
                 _ => None,
             };
             if let Some(action) = action {
