@@ -486,7 +486,7 @@ fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_sn
         // The driver knows: the positions are refused, the feedback marked as the probe's.
         assert!(matches!(machine.positions(), Err(BusError::ProbeHoldsPositions)));
         let held = machine.feedback().unwrap();
-        assert!(held.probe_held && held.steps == hit.steps[..2], "{held:?}");
+        assert!(held.probe_held && held.steps[..2] == hit.steps[..2], "{held:?}");
         // Released (an arm with the configuration as it is), the snapshot goes back to
         // the period latch: taken at the next boundary (RUN stays set, the FIFO empty),
         // within a period; the probe armed again.
@@ -498,8 +498,8 @@ fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_sn
     }
     assert_eq!(steps, vec![50, 100], "POSITION from the period latch");
     let live = machine.feedback().unwrap();
-    assert!(!live.probe_held && live.steps == [50, 100], "{live:?}");
-    assert_eq!(machine.positions().unwrap().steps, [50, 100]);
+    assert!(!live.probe_held && live.steps[..2] == [50, 100], "{live:?}");
+    assert_eq!(machine.positions().unwrap().steps[..2], [50, 100]);
 }
 
 fn wheel_plant(bounce: u64) -> Plant {

@@ -75,7 +75,7 @@ fn a_few_constants_by_hand() {
     assert_eq!(constants["FS_AXIS_MODE_STRIDE"], integer(4u32));
     assert_eq!(constants["FS_ADDR_WIDTH"], integer(7u32));
     assert_eq!(constants["FS_MAP_VERSION_MAJOR"], integer(1u32));
-    assert_eq!(constants["FS_MAP_VERSION_MINOR"], integer(0u32));
+    assert_eq!(constants["FS_MAP_VERSION_MINOR"], integer(1u32));
     assert_eq!(constants["FS_CAPS_STEP_ROUND_LOG2_LSB"], integer(22u32));
     assert_eq!(constants["FS_CAPS_STEP_ROUND_LOG2_WIDTH"], integer(4u32));
     assert_eq!(constants["FS_ENC_COUNT_ADDR"], sized(7, 0x60u8));
