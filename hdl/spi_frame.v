@@ -385,7 +385,8 @@ module spi_frame #(
 
 `ifdef F_PORTS
     // The frame at the block's ports, from docs/spec/spi_frame.md alone (no internal
-    // state of the layer is read): the bytes handled since the frame's start, the header
+    // state of the layer is read, except one lemma below that ties the layer's CRC
+    // register to the spec's CRC to help the solver): the bytes handled since the frame's start, the header
     // they carry and the spec's CRC over them say what every byte out is (status, zeros,
     // the read words most significant byte first, the read CRC, the result code), which
     // register reads and writes are requested, what a FIFO record's lanes carry, and when

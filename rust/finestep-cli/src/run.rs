@@ -163,9 +163,15 @@ pub fn stream_planned<B: Bus>(
                     // The latch's event: the probe's signal going active (contact), or, for
                     // G38.4/G38.5, inactive (armed with the polarity inverted).
                     IoAction::ProbeArm { on_contact, .. } => chip.arm_probe(on_contact, PROBE_FILTER),
+                    // A chip with one position snapshot (VERSION.ONE_SNAPSHOT) holds the
+                    // probe's positions in POSITION once read: handed back to the period
+                    // latch, or the run's later position reads would be refused.
                     IoAction::ProbeCheck { must_change } => {
                         let hit = chip.probe_hit()?;
                         probes.push((event.line, must_change, hit.is_some()));
+                        if hit.is_some() {
+                            chip.release_probe_snapshot()?;
+                        }
                         Ok(())
                     }
                     // Refused above.

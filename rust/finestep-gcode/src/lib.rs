@@ -522,7 +522,9 @@ impl Default for Options {
 impl Options {
     /// The entries of an INI file: `[SECTION]` lines, then `NAME = value` lines (blanks
     /// around both trimmed); lines starting with `#` or `;` and lines without `=` are
-    /// skipped, as LinuxCNC's reader skips them. A later entry of a name wins.
+    /// skipped, as LinuxCNC's reader skips them. The first entry of a name in a section
+    /// wins, as LinuxCNC's `IniFile::Find` (and `inivar`) returns the first. Read whatever
+    /// `[RS274NGC] FEATURES` says: as a configuration with its INI_VARS bit (4) set.
     pub fn read_ini(text: &str) -> std::collections::BTreeMap<(String, String), String> {
         let mut entries = std::collections::BTreeMap::new();
         let mut section = String::new();
@@ -533,7 +535,7 @@ impl Options {
             if let Some(name) = line.strip_prefix('[').and_then(|l| l.split_once(']')).map(|(name, _)| name) {
                 section = name.trim().to_string();
             } else if let Some((name, value)) = line.split_once('=') {
-                entries.insert((section.clone(), name.trim().to_string()), value.trim().to_string());
+                entries.entry((section.clone(), name.trim().to_string())).or_insert_with(|| value.trim().to_string());
             }
         }
         entries

@@ -1491,11 +1491,13 @@ fn a_lathe_profile_is_read_not_run() {
 /// `STRAIGHT_TRAVERSE(12.5000, ...)` for `G0 X#<_ini[traj]max_linear_velocity>`, in any
 /// case of the letters; `Name = 3` is not found (the lookup is upper case), nor
 /// `B = 2.5 # c` (not a number): 'Named parameter #<_ini[traj]name> not defined'; EXISTS
-/// is 1; an assignment is 'Cannot assign to read-only parameter #<_ini[traj]...>').
+/// is 1; an assignment is 'Cannot assign to read-only parameter #<_ini[traj]...>'; of
+/// two `MAX_VELOCITY` in `[AXIS_X]` the first, -4, is read: `STRAIGHT_TRAVERSE(-4.0000,
+/// ...)`).
 #[test]
 fn ini_parameters_are_read_from_the_machines_ini_file_as_rs274_reads_them() {
     let ini = "# the machine\n[RS274NGC]\nFEATURES = 12\n[TRAJ]\nMAX_LINEAR_VELOCITY = 12.5\nName = 3\nB = 2.5 # c\n\
-               ; a comment\n[AXIS_X]\nMAX_VELOCITY=-4\n";
+               ; a comment\n[AXIS_X]\nMAX_VELOCITY=-4\nMAX_VELOCITY=9\n";
     let options = Options { ini: Options::read_ini(ini), ..Options::default() };
     assert_eq!(options.ini.get(&("TRAJ".to_string(), "Name".to_string())).map(String::as_str), Some("3"));
     let rapid = |source: &str| -> Result<Point, String> {

@@ -48,8 +48,9 @@ pub struct FeedbackSnapshot {
     pub latch_time: u32,
     /// `steps` and `latch_time` are the probe event's snapshot, not the period latch's: a
     /// core with [`crate::Caps::one_snapshot`] whose probe has latched
-    /// ([`Machine::probe_holds_positions`]); the counts and edge times are the period
-    /// latch's still (docs/spec/register_file.md#one-snapshot).
+    /// ([`Machine::probe_holds_positions`]), or whose released snapshot the period latch
+    /// has not replaced yet ([`Machine::release_probe_snapshot`]); the counts and edge
+    /// times are the period latch's still (docs/spec/register_file.md#one-snapshot).
     pub probe_held: bool,
 }
 
@@ -226,8 +227,9 @@ impl<B: Bus> Machine<B> {
             Ok((steps, counts, edge_times))
         })?;
         // Read after the positions: SEEN stays set until the host arms the probe, so a 0
-        // here says they were the period latch's.
-        let probe_held = self.probe_holds_positions()?;
+        // here (and a LATCH_TIME not the released snapshot's) says they were the period
+        // latch's.
+        let probe_held = self.snapshot_is_the_probes(latch_time)?;
         Ok(FeedbackSnapshot {
             steps: steps.into_iter().map(|w| w as i32).collect(),
             counts: counts.into_iter().map(|w| w as i32).collect(),

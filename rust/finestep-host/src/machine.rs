@@ -4,7 +4,7 @@
 use crate::machine_io::SpindleSetup;
 use crate::regs::{
     axis_enable, axis_mode, caps, clock_hz, command, control, fifo_level, id, latch_time, period_clocks, position,
-    probe_control, probe_status, start_level, status, version,
+    probe_control, probe_status, probe_time, start_level, status, version,
 };
 use crate::{Bus, BusError};
 use finestep_interface::{invert, DriveTiming, OutMode};
@@ -114,6 +114,10 @@ pub struct Machine<B> {
     pub(crate) period_clocks: u32,
     /// The spindle's output configuration last written (the reset values until then).
     pub(crate) spindle: SpindleSetup,
+    /// On a [`Caps::one_snapshot`] core, the `LATCH_TIME` of a probe snapshot released by
+    /// [`Machine::release_probe_snapshot`] that the period latch may not have replaced yet
+    /// (running, it takes `POSITION` back at the next boundary, with `SEEN` already 0).
+    pub(crate) released_probe_time: Option<u32>,
 }
 
 impl<B: Bus> Machine<B> {
@@ -181,7 +185,14 @@ impl<B: Bus> Machine<B> {
             return Err(BusError::StepSlots { word: caps_word, found: caps.step_slots, built: built_slots });
         }
         let timings = vec![DriveTiming::RESET; caps.n_axes];
-        Ok(Machine { bus, caps, timings, period_clocks: period_clocks::CLOCKS_RESET, spindle: SpindleSetup::default() })
+        Ok(Machine {
+            bus,
+            caps,
+            timings,
+            period_clocks: period_clocks::CLOCKS_RESET,
+            spindle: SpindleSetup::default(),
+            released_probe_time: None,
+        })
     }
 
     /// The capabilities read at connection.
@@ -306,7 +317,9 @@ impl<B: Bus> Machine<B> {
     /// On a core with [`Caps::one_snapshot`] whose probe has latched (`PROBE_STATUS.SEEN`)
     /// the positions are the probe event's, not live: refused with
     /// [`BusError::ProbeHoldsPositions`] ([`Machine::release_probe_snapshot`] resumes the
-    /// period latch).
+    /// period latch), and so are they after a release until the latch has taken them
+    /// (while running, at the next period boundary: the `LATCH_TIME` read with them is
+    /// still the probe's).
     pub fn positions(&mut self) -> Result<Positions, BusError> {
         let n = self.caps.n_axes;
         let (steps, latch_time) = self.read_latched(8, "positions", |bus| {
@@ -314,7 +327,7 @@ impl<B: Bus> Machine<B> {
             bus.read(position::addr(0), &mut words)?;
             Ok(words.into_iter().map(|w| w as i32).collect::<Vec<i32>>())
         })?;
-        if self.probe_holds_positions()? {
+        if self.snapshot_is_the_probes(latch_time)? {
             return Err(BusError::ProbeHoldsPositions);
         }
         Ok(Positions { steps, latch_time })
@@ -332,15 +345,36 @@ impl<B: Bus> Machine<B> {
         Ok(probe_status::SEEN.get(self.bus.read_one(probe_status::ADDR)?) != 0)
     }
 
+    /// Whether positions read with `latch_time` on this core are a probe event's
+    /// snapshot: `SEEN` set ([`Machine::probe_holds_positions`]), or a snapshot released
+    /// with that `LATCH_TIME` that the period latch has not replaced yet. Read after the
+    /// positions (`SEEN` stays set until the host arms the probe).
+    pub(crate) fn snapshot_is_the_probes(&mut self, latch_time: u32) -> Result<bool, BusError> {
+        if self.probe_holds_positions()? {
+            return Ok(true);
+        }
+        if self.released_probe_time == Some(latch_time) {
+            return Ok(true);
+        }
+        // A later latch: the release is complete.
+        self.released_probe_time = None;
+        Ok(false)
+    }
+
     /// On a [`Caps::one_snapshot`] core, hands `POSITION` and `LATCH_TIME` back to the
     /// period latch after a probe event (the probe's snapshot read or not wanted): writes
     /// `PROBE_CONTROL.ARM` with the polarity and filter as they are, which clears `SEEN`;
     /// the latch takes the positions again from the clock after (at the next period
-    /// boundary while running). The probe stays armed: its next event holds the positions
-    /// again. Nothing on other cores.
+    /// boundary while running: until then [`Machine::positions`] still refuses them, told
+    /// by the snapshot's `LATCH_TIME`, kept here). The probe stays armed: its next event
+    /// holds the positions again. Nothing on other cores.
     pub fn release_probe_snapshot(&mut self) -> Result<(), BusError> {
         if !self.caps.one_snapshot {
             return Ok(());
+        }
+        if self.probe_holds_positions()? {
+            // PROBE_TIME reads LATCH_TIME on such a core: the snapshot's time.
+            self.released_probe_time = Some(self.bus.read_one(probe_time::ADDR)?);
         }
         let word = self.bus.read_one(probe_control::ADDR)?;
         let keep = probe_control::ACTIVE_HIGH.set(0, probe_control::ACTIVE_HIGH.get(word));
@@ -391,11 +425,15 @@ mod tests {
 
     /// A core of map 1.1 whose VERSION reports `version_bits` (ONE_SNAPSHOT,
     /// INC_WRITE_ONLY), its probe's SEEN as `seen` (cleared by a write of ARM, as the
-    /// register file does), POSITION[i] = 100 + i; it records every read address and
-    /// every write.
+    /// register file does), POSITION[i] = 100 + i, LATCH_TIME (and PROBE_TIME)
+    /// `latch_time`, which a write of ARM advances unless `boundary_pending` (a running
+    /// core: the period latch takes the positions back at the next boundary, `boundary()`);
+    /// it records every read address and every write.
     struct Snapshot {
         version_bits: u32,
         seen: bool,
+        latch_time: u32,
+        boundary_pending: bool,
         probe_control: u32,
         reads: Vec<u8>,
         writes: Vec<(u8, u32)>,
@@ -416,6 +454,7 @@ mod tests {
                     clock_hz::ADDR => 50_000_000,
                     probe_status::ADDR => probe_status::SEEN.set(0, u32::from(self.seen)),
                     probe_control::ADDR => self.probe_control,
+                    latch_time::ADDR | probe_time::ADDR => self.latch_time,
                     a if (position::addr(0)..position::addr(2)).contains(&a) => 100 + u32::from(a - position::addr(0)),
                     _ => 0,
                 };
@@ -425,6 +464,9 @@ mod tests {
         fn write(&mut self, addr: u8, value: u32) -> Result<(), BusError> {
             if addr == probe_control::ADDR && probe_control::ARM.get(value) != 0 {
                 self.seen = false;
+                if !self.boundary_pending {
+                    self.latch_time += 1;
+                }
             }
             self.writes.push((addr, value));
             Ok(())
@@ -439,8 +481,36 @@ mod tests {
 
     fn snapshot_core(version_bits: u32, seen: bool) -> Machine<Snapshot> {
         let probe_control = probe_control::FILTER.set(probe_control::ACTIVE_HIGH.set(0, 0), 5);
-        let bus = Snapshot { version_bits, seen, probe_control, reads: Vec::new(), writes: Vec::new() };
+        let bus = Snapshot {
+            version_bits,
+            seen,
+            latch_time: 7,
+            boundary_pending: false,
+            probe_control,
+            reads: Vec::new(),
+            writes: Vec::new(),
+        };
         Machine::connect(bus).unwrap()
+    }
+
+    /// Released while running, the probe's snapshot stays in POSITION until the next
+    /// boundary with SEEN already 0: the positions are still refused and the feedback
+    /// still marked as the probe's (its LATCH_TIME is the snapshot's), until the latch
+    /// has moved; a second release in that window keeps the snapshot's time.
+    #[test]
+    fn one_snapshot_release_holds_until_the_latch_moves() {
+        let mut m = snapshot_core(version::ONE_SNAPSHOT.set(0, 1), true);
+        m.bus().boundary_pending = true;
+        m.release_probe_snapshot().unwrap();
+        assert!(!m.probe_holds_positions().unwrap(), "SEEN cleared by the arm");
+        assert!(matches!(m.positions(), Err(BusError::ProbeHoldsPositions)));
+        assert!(m.feedback().unwrap().probe_held);
+        m.release_probe_snapshot().unwrap();
+        assert!(matches!(m.positions(), Err(BusError::ProbeHoldsPositions)));
+        // The boundary: the period latch takes POSITION and LATCH_TIME.
+        m.bus().latch_time += 1;
+        assert_eq!(m.positions().unwrap().latch_time, 8);
+        assert!(!m.feedback().unwrap().probe_held);
     }
 
     /// ONE_SNAPSHOT from VERSION: while the probe's SEEN is set the positions are refused
