@@ -501,11 +501,18 @@ impl ObjectCache {
         for (i, h) in hashers.iter_mut().enumerate() {
             i.hash(h);
         }
+        // What went into the key, one line per input (label and a hash of its bytes), kept
+        // in OUT_DIR/object-cache-key.txt: two builds that should share an entry and do
+        // not are told apart by a diff of their two files.
+        let mut listing = String::new();
         let mut feed = |label: &str, bytes: &[u8]| {
             for h in hashers.iter_mut() {
                 label.hash(h);
                 bytes.hash(h);
             }
+            let mut one = std::hash::DefaultHasher::new();
+            bytes.hash(&mut one);
+            listing.push_str(&format!("{label} {:016x}\n", one.finish()));
         };
         let files_of = |dir: &Path| -> Vec<PathBuf> {
             let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -521,7 +528,9 @@ impl ObjectCache {
             inputs.extend(files_of(&dir));
         }
         for path in &inputs {
-            let name = path.strip_prefix(repo).unwrap_or(path.strip_prefix(gen).unwrap_or(path));
+            // The generated headers by their names alone: OUT_DIR (under the repository's
+            // target/) differs between clippy's build and the tests'.
+            let name = path.strip_prefix(gen).or_else(|_| path.strip_prefix(repo)).unwrap_or(path);
             let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             feed(&name.to_string_lossy(), &bytes);
         }
@@ -554,6 +563,11 @@ impl ObjectCache {
         feed("compiler", format!("{} {args:?}", compiler.path().display()).as_bytes());
         feed("compiler version", &version);
         let key = hashers.iter().map(|h| format!("{:016x}", h.finish())).collect::<String>();
+        let listing = format!("{listing}compiler arguments: {args:?}\nkey {key}\n");
+        std::fs::write(PathBuf::from(&out).join("object-cache-key.txt"), listing).ok();
+        if env::var_os("FINESTEP_CACHE_KEY_ONLY").is_some() {
+            panic!("FINESTEP_CACHE_KEY_ONLY: the key's inputs are in {out}/object-cache-key.txt");
+        }
         let root = repo.join("build/rtl-sys-cache");
         ObjectCache { dir: root.join(key), root }
     }
