@@ -1583,3 +1583,41 @@ fn user_m_codes_are_events_with_p_and_q_when_their_program_is_in_the_path() {
     assert!(kinds("M101 M101\nM2\n").is_err());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// G96's spindle block carries S in mm/min (m/min in G21, ft/min in G20), D, and the
+/// spindle's axis at the X offsets in force (G5x + G92 + tool length, unrotated), as
+/// LinuxCNC's canon takes them with the speed; G97 and G96 D0 carry none.
+#[test]
+fn constant_surface_speed_carries_the_speed_its_maximum_and_the_axis() {
+    let text =
+        "G10 L2 P2 X3\nG55 G92 X-1\nG43.1 X2\nG96 S100 D2000 M3\nG20\nG96 S10\nG96 S10 G21\nG97 S300\nG96 S5 D0\nM2\n";
+    let program = parse_str(text, "css.ngc").unwrap();
+    let css: Vec<(f64, Option<SurfaceSpeed>)> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Spindle { rpm, css, .. } = b.kind { Some((rpm, css)) } else { None })
+        .collect();
+    // G55's X 3; G92 X-1 at machine X 0 under it is an offset of -2; the tool's X 2.
+    let axis = 3.0 - 2.0 + 2.0;
+    let want = [
+        (100.0, Some(SurfaceSpeed { mm_per_min: 100_000.0, max_rpm: Some(2000.0), axis_x_mm: axis })),
+        (10.0, Some(SurfaceSpeed { mm_per_min: 3048.0, max_rpm: None, axis_x_mm: axis })),
+        // G21 on the line acts after the spindle's calls (LinuxCNC's order): ft/min still.
+        (10.0, Some(SurfaceSpeed { mm_per_min: 3048.0, max_rpm: None, axis_x_mm: axis })),
+        (300.0, None),
+        (5.0, None),
+    ];
+    assert_eq!(css.len(), want.len(), "{css:?}");
+    for ((rpm, got), (want_rpm, want)) in css.iter().zip(want) {
+        assert_eq!(*rpm, want_rpm);
+        match (got, want) {
+            (Some(g), Some(w)) => {
+                assert!((g.mm_per_min - w.mm_per_min).abs() < 1e-9, "{g:?} {w:?}");
+                assert_eq!(g.max_rpm, w.max_rpm);
+                assert!((g.axis_x_mm - w.axis_x_mm).abs() < 1e-9, "{g:?} against {w:?}");
+            }
+            (g, w) => assert_eq!(*g, w),
+        }
+    }
+    assert_eq!(SurfaceSpeed { mm_per_min: 1000.0, max_rpm: None, axis_x_mm: 2.0 }.rpm_at(2.0), f64::INFINITY);
+}
