@@ -128,10 +128,10 @@ pub fn stream_planned<B: Bus>(
                     bail!("{name}:{line}: the program probes (G38.x), but the chip has no probe input (no encoder bank, CAPS)")
                 }
                 IoAction::WaitInput { .. } => {
-                    bail!("{name}:{line}: M66 waits on an input, but the chip has no general inputs to read")
+                    bail!("{name}:{line}: unsupported: M66 on this chip (it has no general inputs to wait on or read)")
                 }
                 IoAction::AnalogOutput { .. } => bail!(
-                    "{name}:{line}: M67/M68 set an analog output, but the chip has none (its DAC is the spindle's)"
+                    "{name}:{line}: unsupported: M67/M68 on this chip (it has no analog outputs: its DAC is the spindle's)"
                 ),
                 IoAction::UserMCode { code, .. } => bail!(
                     "{name}:{line}: M{code} runs a user M-code program, which `finestep run` does not do yet (the planner carries it as an event)"

@@ -46,6 +46,22 @@ fn a_compensation_gouge_is_refused_by_line() {
 }
 
 #[test]
+fn inputs_and_analog_outputs_are_refused_as_unsupported_on_the_chip_before_anything_moves() {
+    for (name, line, message) in [
+        ("m66.ngc", "M66 P0 L0", "unsupported: M66 on this chip"),
+        ("m67.ngc", "M67 E0 Q2.5", "unsupported: M67/M68 on this chip"),
+        ("m68.ngc", "M68 E1 Q1", "unsupported: M67/M68 on this chip"),
+    ] {
+        let path = scratch(name, &format!("G21 G90 F600\nG1 X1\n{line}\nG1 X2\nM2\n"));
+        let out = std::env::temp_dir().join(format!("finestep-cli-io-{}", std::process::id()));
+        let (ok, text) = finestep(&["run", "--out", &out.display().to_string(), &path]);
+        assert!(!ok, "{text}");
+        assert!(text.contains(&format!("{path}:3: {message}")), "{text}");
+        assert!(!text.contains("steps moved"), "{text}");
+    }
+}
+
+#[test]
 fn a_short_program_streams_over_spi_into_the_chip_in_lockstep() {
     let path = scratch("short.ngc", "G21 G90 G17 G64 P0.01 F6000\nG42 D3\nG1 X2 Y0\nG1 X2 Y2\nG40\nG1 X0 Y0\nM2\n");
     let out = std::env::temp_dir().join(format!("finestep-cli-short-{}", std::process::id()));

@@ -19,6 +19,8 @@ use crate::{BlockKind, Plane, Program, SpindleRotation};
 
 /// Millimetres per inch.
 const MM_PER_INCH: f64 = 25.4;
+/// The highest speed LinuxCNC gives G96 without D (`SET_SPINDLE_MODE(0 1e30)`).
+const LINUXCNC_NO_MAX_RPM: f64 = 1e30;
 
 /// The words of a line outside its comments: (start, end, upper-case letter, value; None
 /// for an expression or parameter).
@@ -123,8 +125,11 @@ pub fn diameter_in_block(source: &str, line: usize, diameter_inch: f64) -> Optio
 pub struct Machine {
     /// Rotation: -1 counter-clockwise, 0 off, 1 clockwise.
     pub rotation: i8,
-    /// Speed in rpm.
+    /// The last S: speed in rpm, or in G96 the surface speed in program units a minute.
     pub rpm: f64,
+    /// G96's highest speed, rev/min, as rs274's `SET_SPINDLE_MODE` prints it: D, 1e30
+    /// without D, 0 in G97.
+    pub css_max: f64,
     /// Mist coolant on.
     pub mist: bool,
     /// Flood coolant on.
@@ -133,7 +138,7 @@ pub struct Machine {
 
 impl Default for Machine {
     fn default() -> Self {
-        Machine { rotation: 0, rpm: 0.0, mist: false, flood: false }
+        Machine { rotation: 0, rpm: 0.0, css_max: 0.0, mist: false, flood: false }
     }
 }
 
@@ -231,9 +236,10 @@ impl fmt::Display for Event {
         };
         let m = |m: &Machine| {
             format!(
-                "spindle {} {:.1} rpm{}{}",
+                "spindle {} {:.1} {}{}{}",
                 m.rotation,
                 m.rpm,
+                if m.css_max == 0.0 { "rpm".to_string() } else { format!("surface speed D{:.1}", m.css_max) },
                 if m.mist { " mist" } else { "" },
                 if m.flood { " flood" } else { "" }
             )
@@ -294,7 +300,9 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             BlockKind::AnalogOutput { index, value, synchronised } => {
                 events.push(Event::AnalogOutput { index: *index, value: *value, synchronised: *synchronised })
             }
-            BlockKind::Spindle { rotation, rpm } => {
+            BlockKind::Spindle { rotation, rpm, css } => {
+                // rs274's `SET_SPINDLE_MODE`: D, 1e30 without it, 0 in G97.
+                machine.css_max = css.map_or(0.0, |css| css.max_rpm.unwrap_or(LINUXCNC_NO_MAX_RPM));
                 machine.rotation = match rotation {
                     SpindleRotation::Off => 0,
                     SpindleRotation::Clockwise => 1,
@@ -460,6 +468,11 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                 };
                 None
             }
+            // SET_SPINDLE_MODE(spindle css_max): G96's D (1e30 without it), 0 for G97.
+            "SET_SPINDLE_MODE" => {
+                canon.machine.css_max = nums()?.get(1).copied().unwrap_or(0.0);
+                None
+            }
             "SET_SPINDLE_SPEED" => {
                 canon.machine.rpm = nums()?.get(1).copied().unwrap_or(0.0);
                 None
@@ -567,7 +580,11 @@ fn close(a: &[f64], b: &[f64], tolerance: f64) -> bool {
 }
 
 fn machine_close(a: &Machine, b: &Machine) -> bool {
-    a.rotation == b.rotation && (a.rpm - b.rpm).abs() <= 5e-5 && a.mist == b.mist && a.flood == b.flood
+    a.rotation == b.rotation
+        && (a.rpm - b.rpm).abs() <= 5e-5
+        && (a.css_max - b.css_max).abs() <= 5e-5 * a.css_max.abs().max(1.0)
+        && a.mist == b.mist
+        && a.flood == b.flood
 }
 
 /// Whether finestep's event `ours` agrees with rs274's `theirs` within `tolerance` mm.

@@ -7,11 +7,14 @@ use crate::lexer::Word;
 use crate::unsupported;
 use crate::{
     nurbs_knots, BlockKind, CompSide, Input, NurbsPoint, Overrides, PathControl, Plane, Point, SpindleRotation,
-    WaitMode, PROBE_BACKOFF_MM,
+    SurfaceSpeed, WaitMode, PROBE_BACKOFF_MM,
 };
 
 /// Millimetres per inch.
 const MM_PER_INCH: f64 = 25.4;
+/// G96's S: millimetres per metre (G21) and per foot (G20).
+const METRES_TO_MM: f64 = 1000.0;
+const FEET_TO_MM: f64 = 12.0 * MM_PER_INCH;
 /// Largest absolute coordinate a resolved position may have, in mm (or degrees).
 const MAX_POSITION: f64 = 1e10;
 /// A centre-form arc is refused when its start and end radii differ by more than this
@@ -79,6 +82,8 @@ pub(crate) struct State {
     overrides: Overrides,
     rotation: SpindleRotation,
     rpm: f64,
+    /// G96: constant surface speed with D (`Some(None)` without D); `None` in G97.
+    css: Option<Option<f64>>,
     mist: bool,
     flood: bool,
     tool: u32,
@@ -143,6 +148,7 @@ impl Default for State {
             overrides: Overrides { feed: true, speed: true, adaptive_feed: false, feed_hold: true },
             rotation: SpindleRotation::Off,
             rpm: 0.0,
+            css: None,
             mist: false,
             flood: false,
             tool: 0,
@@ -226,7 +232,7 @@ enum Group {
     Units,       // G group 6: G20 G21
     Comp,        // G group 7: G40 G41 G41.1 G42 G42.1
     FeedMode,    // G group 5: G93 G94 G95
-    SpindleMode, // G group 14: G97
+    SpindleMode, // G group 14: G96 G97
     LatheMode,   // G group 15: G7 G8
     ToolLength,  // G group 8: G43 G43.1 G43.2 G49
     ReturnMode,  // G group 10: G98 G99
@@ -254,9 +260,8 @@ fn g_group(code: Code) -> Option<Group> {
         | 830 | 850 | 860 | 870 | 890 => Group::Motion,
         382..=385 => Group::Motion,
         430 | 431 | 432 | 490 => Group::ToolLength,
-        // G97 (spindle in rpm) is the only spindle mode and always in force.
         930 | 940 | 950 => Group::FeedMode,
-        970 => Group::SpindleMode,
+        960 | 970 => Group::SpindleMode,
         70 | 80 => Group::LatheMode,
         980 | 990 => Group::ReturnMode,
         540 | 550 | 560 | 570 | 580 | 590 | 591 | 592 | 593 => Group::Coord,
@@ -474,6 +479,8 @@ pub(crate) struct Modal {
     inverse_time: bool,
     per_rev: bool,
     rpm: f64,
+    /// G96 (without its D: rs274's M72 restores G96 with none, `SET_SPINDLE_MODE(0 1e30)`).
+    css: bool,
     rotation: SpindleRotation,
     mist: bool,
     flood: bool,
@@ -493,6 +500,7 @@ impl State {
             inverse_time: self.inverse_time,
             per_rev: self.per_rev,
             rpm: self.rpm,
+            css: self.css.is_some(),
             rotation: self.rotation,
             mist: self.mist,
             flood: self.flood,
@@ -505,8 +513,10 @@ impl State {
     /// change the machine (spindle, coolant, path control) where it differs.
     pub(crate) fn restore_modal(&mut self, saved: &Modal) -> Vec<BlockKind> {
         let mut kinds = Vec::new();
-        if (saved.rotation, saved.rpm) != (self.rotation, self.rpm) {
-            kinds.push(BlockKind::Spindle { rotation: saved.rotation, rpm: saved.rpm });
+        let css = if saved.css == self.css.is_some() { self.css } else { saved.css.then_some(None) };
+        if (saved.rotation, saved.rpm, css) != (self.rotation, self.rpm, self.css) {
+            (self.rotation, self.rpm, self.css) = (saved.rotation, saved.rpm, css);
+            kinds.push(self.spindle_block(self.rotation));
         }
         if (saved.mist, saved.flood) != (self.mist, self.flood) {
             kinds.push(BlockKind::Coolant { mist: saved.mist, flood: saved.flood });
@@ -646,6 +656,26 @@ impl State {
         p
     }
 
+    /// G96's surface speed as LinuxCNC's canon takes it with a spindle call: S in m/min
+    /// (G21) or ft/min (G20), D, and the X offsets in force (G96 D0 runs as G97 there:
+    /// its canon reads a zero maximum as no surface speed).
+    fn surface_speed(&self) -> Option<SurfaceSpeed> {
+        let max_rpm = self.css?;
+        if max_rpm == Some(0.0) {
+            return None;
+        }
+        Some(SurfaceSpeed {
+            mm_per_min: self.rpm * if self.inches { FEET_TO_MM } else { METRES_TO_MM },
+            max_rpm,
+            axis_x_mm: self.g92_now()[0] + self.active_g5x[0] + self.tool_offset[0],
+        })
+    }
+
+    /// The spindle's block with `rotation`: the last S and the surface speed in force.
+    fn spindle_block(&self, rotation: SpindleRotation) -> BlockKind {
+        BlockKind::Spindle { rotation, rpm: self.rpm, css: self.surface_speed() }
+    }
+
     /// The current position of axis `axis` (X Y Z A) in the program frame and units.
     fn program_position(&self, axis: usize) -> f64 {
         self.user_units(axis, self.to_program(self.position)[axis])
@@ -681,6 +711,8 @@ impl State {
             "_lathe_diameter_mode" => flag(self.diameter_mode),
             "_lathe_radius_mode" => flag(!self.diameter_mode),
             "_spindle_on" => flag(self.rotation != SpindleRotation::Off),
+            "_spindle_rpm_mode" => flag(self.css.is_none()),
+            "_spindle_css_mode" => flag(self.css.is_some()),
             "_spindle_cw" => flag(self.rotation == SpindleRotation::Clockwise),
             "_mist" => flag(self.mist),
             "_flood" => flag(self.flood),
@@ -884,8 +916,8 @@ impl State {
             }
         }
         if let Some((_, column)) = w.param('D') {
-            if !(w.has(Group::Comp, 410) || w.has(Group::Comp, 420) || dynamic_comp) {
-                return Err(LineError::new(column, "D word with no G41, G41.1, G42 or G42.1 to use it"));
+            if !(w.has(Group::Comp, 410) || w.has(Group::Comp, 420) || dynamic_comp || w.has(Group::SpindleMode, 960)) {
+                return Err(LineError::new(column, "D word with no G41, G41.1, G42, G42.1 or G96 to use it"));
             }
         }
         if let (true, Some(column), None | Some(800)) = (moving, first_axis, motion) {
@@ -899,6 +931,20 @@ impl State {
             if self.incremental || w.has(Group::Distance, 910) {
                 return Err(LineError::new(column, "G53 in incremental distance mode (G91)"));
             }
+        }
+
+        // Spindle mode (first, as LinuxCNC orders them): G96 S- D- (S the surface speed,
+        // D the highest speed, its magnitude) or G97; the spindle block below carries it.
+        let spindle_mode = w.group(Group::SpindleMode);
+        if let Some((code, column)) = spindle_mode {
+            self.css = if code == 960 {
+                if w.param('S').is_none() {
+                    return Err(LineError::new(column, "S word missing with G96"));
+                }
+                Some(w.param('D').map(|(d, _)| d.abs()))
+            } else {
+                None
+            };
         }
 
         // Feed mode (before F, as LinuxCNC orders them): a change unsets the feed rate.
@@ -938,7 +984,7 @@ impl State {
         } else if w.group(Group::ToolChange).is_some() {
             // LinuxCNC stops the spindle for a tool change.
             self.rotation = SpindleRotation::Off;
-            kinds.push(BlockKind::Spindle { rotation: self.rotation, rpm: self.rpm });
+            kinds.push(self.spindle_block(self.rotation));
             kinds.push(BlockKind::ToolChange { tool: self.tool });
             self.tool_in_spindle = self.tool;
         }
@@ -955,8 +1001,8 @@ impl State {
                 _ => SpindleRotation::Off,
             };
         }
-        if (w.group(Group::Spindle).is_some() && !orient) || w.param('S').is_some() {
-            kinds.push(BlockKind::Spindle { rotation: self.rotation, rpm: self.rpm });
+        if (w.group(Group::Spindle).is_some() && !orient) || w.param('S').is_some() || spindle_mode.is_some() {
+            kinds.push(self.spindle_block(self.rotation));
         }
         if orient {
             if let Some(kind) = spindle_orient(&w)? {
@@ -1265,6 +1311,15 @@ impl State {
             Some((code, _)) => self.motion = Some(code),
             None => {}
         }
+        // G95 under G96: the feed per revolution would follow a speed that changes along
+        // the move (rs274 multiplies F by the surface speed's S).
+        let feeding = lathe_words.is_some()
+            || ((moving || full_circle) && self.motion.is_some_and(|code| code != 0 && code != 800));
+        if let (true, true, Some(column)) =
+            (feeding, self.per_rev && self.surface_speed().is_some(), first_axis.or(motion_column))
+        {
+            return Err(LineError::new(column, format!("unsupported: G95 in G96 ({})", unsupported::FEED_PER_REV_CSS)));
+        }
         let mut lathe = None;
         if let Some((code, column, taken)) = lathe_words {
             lathe = Some(self.lathe_cycle(&w, code, column, taken, &mut kinds)?);
@@ -1297,8 +1352,9 @@ impl State {
                 kinds.push(BlockKind::End);
                 end = true;
                 // M2/M30 put G54 back in force (LinuxCNC's reset: #5220 is 1 in the
-                // parameter file written after it).
+                // parameter file written after it), and G97 (its `SET_SPINDLE_MODE(0 0)`).
                 self.select_system(0);
+                self.css = None;
             }
         }
         let modal = w.group(Group::ModalState).map(|(code, _)| match code {
@@ -2318,25 +2374,26 @@ impl State {
                 if off(z).iter().any(|v| v.is_nan() || v.abs() > MAX_POSITION) {
                     return Err(LineError::new(column, "position out of range"));
                 }
-                let (rotation, rpm) = (self.rotation, self.rpm);
+                let rotation = self.rotation;
                 let orient = BlockKind::SpindleOrient {
                     angle_deg: 0.0,
                     direction: if rotation == SpindleRotation::Clockwise { 2 } else { 3 },
                     timeout_s: None,
                 };
-                let stop = BlockKind::Spindle { rotation: SpindleRotation::Off, rpm };
+                let stop = self.spindle_block(SpindleRotation::Off);
+                let turn = self.spindle_block(rotation);
                 rapid(self, &mut out, off(r));
                 out.extend([stop.clone(), orient.clone()]);
                 rapid(self, &mut out, off(z));
                 rapid(self, &mut out, at(z));
-                out.push(BlockKind::Spindle { rotation, rpm });
+                out.push(turn.clone());
                 cut(self, &mut out, at(k));
                 cut(self, &mut out, at(z));
                 out.extend([stop, orient]);
                 rapid(self, &mut out, off(z));
                 rapid(self, &mut out, off(clear));
                 rapid(self, &mut out, at(clear));
-                out.push(BlockKind::Spindle { rotation, rpm });
+                out.push(turn.clone());
                 cur[drill] = clear;
                 if out.len() > 1_000_000 {
                     return Err(LineError::new(column, format!("{name} makes more than 10^6 moves")));
@@ -2366,13 +2423,12 @@ impl State {
             }
             // G86: the spindle stops at the bottom, the tool leaves at traverse and the
             // spindle starts again as it turned (rs274's order).
-            let spindle = (self.rotation, self.rpm);
             if code == 860 {
-                out.push(BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: spindle.1 });
+                out.push(self.spindle_block(SpindleRotation::Off));
             }
             rapid(self, &mut out, at(clear));
             if code == 860 {
-                out.push(BlockKind::Spindle { rotation: spindle.0, rpm: spindle.1 });
+                out.push(self.spindle_block(self.rotation));
             }
             cur[drill] = clear;
             if out.len() > 1_000_000 {

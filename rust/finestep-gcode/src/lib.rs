@@ -49,7 +49,7 @@
 //!   run again by loops and calls (each an error at the line that reaches it).
 //! - G0 G1 G2 G3 G4 G5.1 G5.2 G5.3 G10 L1/L2/L10/L11/L20 G17 G18 G19 G20 G21 G28 G28.1 G30 G30.1 G38.2-G38.5 G40
 //!   G41 G42 G43 G43.1 G43.2 G49 G53 G54-G59.3 G61 G64 G70 G71 G71.1 G71.2 G72 G72.1 G72.2 G73 G80 G81 G82 G83 G85 G86 G89 G90 G91
-//!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G95 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
+//!   G90.1 G91.1 G92 G92.1 G92.2 G92.3 G93 G94 G95 G96 G97 G8 G98 G99 G61.1; M0 M1 M2 M3 M4 M5 M6 M7 M8 M9 M30
 //!   M48-M53 M61 M62-M68 M70 M71 M72 M73; E F S T D H P Q R I J K L, polar `@ ^` (G17); axes X Y Z A B C U V W. What LinuxCNC has
 //!   beyond that is refused as `unsupported: <what> (<why>)` at its word (`unsupported:
 //!   G33 (spindle-synchronised motion ...)`, `unsupported: M101 (...)`).
@@ -324,12 +324,16 @@ pub enum BlockKind {
         /// Time in seconds.
         seconds: f64,
     },
-    /// M3/M4/M5 or S: the spindle's state after the block.
+    /// M3/M4/M5, S, G96 or G97: the spindle's state after the block.
     Spindle {
         /// Rotation.
         rotation: SpindleRotation,
-        /// Speed in revolutions per minute (the last S).
+        /// The last S as programmed: the speed in revolutions per minute, or in G96
+        /// (`css`) the surface speed in program units (m/min in G21, ft/min in G20), as
+        /// LinuxCNC's interpreter keeps it (`#<_rpm>`).
         rpm: f64,
+        /// G96: constant surface speed, the speed following X; `None` in G97.
+        css: Option<SurfaceSpeed>,
     },
     /// M7/M8/M9: the coolant's state after the block.
     Coolant {
@@ -453,6 +457,34 @@ pub enum BlockKind {
     Pause,
     /// M2/M30: end of program.
     End,
+}
+
+/// G96 (constant surface speed) as LinuxCNC's motion controller runs it: the spindle
+/// turns at `mm_per_min / (2 pi r)` rev/min, r the distance of the tool from the spindle's
+/// axis along X (`|X - axis_x_mm|` in the machine frame), at most `max_rpm`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfaceSpeed {
+    /// The surface speed, mm/min (S m/min in G21, S ft/min in G20).
+    pub mm_per_min: f64,
+    /// D: the highest speed, rev/min; `None` without D (LinuxCNC's 1e30).
+    pub max_rpm: Option<f64>,
+    /// The machine X of the spindle's axis: the X offsets (G5x, G92, tool length) in
+    /// force when the block was run, as LinuxCNC's canon takes them with the speed.
+    pub axis_x_mm: f64,
+}
+
+impl SurfaceSpeed {
+    /// The speed at machine X `x_mm`, rev/min: at the axis itself D (unbounded without
+    /// D), as LinuxCNC's motion controller does.
+    pub fn rpm_at(&self, x_mm: f64) -> f64 {
+        let r = (x_mm - self.axis_x_mm).abs();
+        let max = self.max_rpm.unwrap_or(f64::INFINITY);
+        if r > 0.0 {
+            (self.mm_per_min / (std::f64::consts::TAU * r)).min(max)
+        } else {
+            max
+        }
+    }
 }
 
 /// One canonical operation and where it came from.

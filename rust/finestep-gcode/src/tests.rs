@@ -118,10 +118,10 @@ fn dwell_spindle_coolant_tools_comp_path() {
         parse("G4 P1.5\nS1000 M3\nM4\nS200\nM5\nM7\nM8\nM9\nM7 M8\nT3\nT4 M6\nM6\nG41 D3\nG40\nG42\nG40\nG61\nG64\nG64 P0.01\nG20 G64 P0.001\n"),
         vec![
             BlockKind::Dwell { seconds: 1.5 },
-            BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 1000.0 },
-            BlockKind::Spindle { rotation: SpindleRotation::CounterClockwise, rpm: 1000.0 },
-            BlockKind::Spindle { rotation: SpindleRotation::CounterClockwise, rpm: 200.0 },
-            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 1000.0, css: None },
+            BlockKind::Spindle { rotation: SpindleRotation::CounterClockwise, rpm: 1000.0, css: None },
+            BlockKind::Spindle { rotation: SpindleRotation::CounterClockwise, rpm: 200.0, css: None },
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0, css: None },
             BlockKind::Coolant { mist: true, flood: false },
             BlockKind::Coolant { mist: true, flood: true },
             BlockKind::Coolant { mist: false, flood: false },
@@ -129,9 +129,9 @@ fn dwell_spindle_coolant_tools_comp_path() {
             BlockKind::ToolSelect { tool: 3 },
             BlockKind::ToolSelect { tool: 4 },
             // M6 stops the spindle, as in LinuxCNC.
-            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0, css: None },
             BlockKind::ToolChange { tool: 4 },
-            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 200.0, css: None },
             BlockKind::ToolChange { tool: 4 },
             BlockKind::CutterComp { side: CompSide::Left, tool: Some(3), plane: Plane::Xy },
             BlockKind::CutterComp { side: CompSide::Off, tool: None, plane: Plane::Xy },
@@ -152,9 +152,9 @@ fn one_block_runs_in_linuxcnc_order() {
         got,
         vec![
             BlockKind::ToolSelect { tool: 2 },
-            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 500.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::Off, rpm: 500.0, css: None },
             BlockKind::ToolChange { tool: 2 },
-            BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 500.0 },
+            BlockKind::Spindle { rotation: SpindleRotation::Clockwise, rpm: 500.0, css: None },
             BlockKind::Coolant { mist: false, flood: true },
             BlockKind::Dwell { seconds: 1.0 },
             BlockKind::CutterComp { side: CompSide::Left, tool: Some(1), plane: Plane::Xy },
@@ -340,8 +340,11 @@ fn every_error_message_with_its_place() {
         ("G0 X1 P1", "1:7: P word with no G4, G64, G2, G3, G5, G5.2, G10, G82, G86, G89, M19, M50-M53, M62-M66 or M100-M199 to use it"),
         ("G4 G64 P1", "1:8: P word is used by more than one code"),
         ("G4 P1 G2 X1 I1 F1", "1:4: P word is used by more than one code"),
-        ("G40 D1", "1:5: D word with no G41, G41.1, G42 or G42.1 to use it"),
-        ("D1", "1:1: D word with no G41, G41.1, G42 or G42.1 to use it"),
+        ("G40 D1", "1:5: D word with no G41, G41.1, G42, G42.1 or G96 to use it"),
+        ("D1", "1:1: D word with no G41, G41.1, G42, G42.1 or G96 to use it"),
+        ("G97 D100 S10", "1:5: D word with no G41, G41.1, G42, G42.1 or G96 to use it"),
+        ("G96 D100", "1:1: S word missing with G96"),
+        ("G96 G97 S1", "1:5: G96 and G97 are in the same modal group"),
         ("F1 G2 R1", "1:4: G2 with no axis words"),
         ("F1 G2 X1 I0.5\nI1", "2:1: G2 with no axis words"),
         ("F1 G3 X1 Y1 I1\nJ1", "2:1: G3 with no axis words"),
@@ -1581,4 +1584,42 @@ fn user_m_codes_are_events_with_p_and_q_when_their_program_is_in_the_path() {
     // One user M-code a block (LinuxCNC's modal group 10).
     assert!(kinds("M101 M101\nM2\n").is_err());
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// G96's spindle block carries S in mm/min (m/min in G21, ft/min in G20), D, and the
+/// spindle's axis at the X offsets in force (G5x + G92 + tool length, unrotated), as
+/// LinuxCNC's canon takes them with the speed; G97 and G96 D0 carry none.
+#[test]
+fn constant_surface_speed_carries_the_speed_its_maximum_and_the_axis() {
+    let text =
+        "G10 L2 P2 X3\nG55 G92 X-1\nG43.1 X2\nG96 S100 D2000 M3\nG20\nG96 S10\nG96 S10 G21\nG97 S300\nG96 S5 D0\nM2\n";
+    let program = parse_str(text, "css.ngc").unwrap();
+    let css: Vec<(f64, Option<SurfaceSpeed>)> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Spindle { rpm, css, .. } = b.kind { Some((rpm, css)) } else { None })
+        .collect();
+    // G55's X 3; G92 X-1 at machine X 0 under it is an offset of -2; the tool's X 2.
+    let axis = 3.0 - 2.0 + 2.0;
+    let want = [
+        (100.0, Some(SurfaceSpeed { mm_per_min: 100_000.0, max_rpm: Some(2000.0), axis_x_mm: axis })),
+        (10.0, Some(SurfaceSpeed { mm_per_min: 3048.0, max_rpm: None, axis_x_mm: axis })),
+        // G21 on the line acts after the spindle's calls (LinuxCNC's order): ft/min still.
+        (10.0, Some(SurfaceSpeed { mm_per_min: 3048.0, max_rpm: None, axis_x_mm: axis })),
+        (300.0, None),
+        (5.0, None),
+    ];
+    assert_eq!(css.len(), want.len(), "{css:?}");
+    for ((rpm, got), (want_rpm, want)) in css.iter().zip(want) {
+        assert_eq!(*rpm, want_rpm);
+        match (got, want) {
+            (Some(g), Some(w)) => {
+                assert!((g.mm_per_min - w.mm_per_min).abs() < 1e-9, "{g:?} {w:?}");
+                assert_eq!(g.max_rpm, w.max_rpm);
+                assert!((g.axis_x_mm - w.axis_x_mm).abs() < 1e-9, "{g:?} against {w:?}");
+            }
+            (g, w) => assert_eq!(*g, w),
+        }
+    }
+    assert_eq!(SurfaceSpeed { mm_per_min: 1000.0, max_rpm: None, axis_x_mm: 2.0 }.rpm_at(2.0), f64::INFINITY);
 }

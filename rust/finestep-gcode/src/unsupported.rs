@@ -8,7 +8,6 @@
 pub const G_CODES: &[(&[u32], &str)] = &[
     (&[330, 331, 740, 760, 840], "spindle-synchronised motion needs the spindle feedback finestep does not have yet"),
     (&[880], "the tool is left at the bottom for the operator to retract by hand during the stop, and finestep offers no hand moves in a program"),
-    (&[960], "constant surface speed changes the spindle speed with X along each move; finestep sets the spindle at rest between moves"),
 ];
 
 /// Any other G number.
@@ -35,6 +34,10 @@ pub const G10_L: &str = "only L1, L2, L10, L11 and L20 are implemented";
 /// `unsupported: G10 L10 X/Y under an XY rotation`.
 pub const G10_TOOL_ROTATION: &str = "the tool table is set in the unrotated frame only";
 
+/// `unsupported: G95 in G96`.
+pub const FEED_PER_REV_CSS: &str =
+    "feed per revolution under constant surface speed follows a spindle speed that changes along the move; finestep sets one speed per move";
+
 /// `unsupported: G70 with cutter compensation on`.
 pub const G70_COMPENSATED: &str = "LinuxCNC 2.9 starts the cycle with a rapid from the profile's end through the part";
 
@@ -53,6 +56,7 @@ pub fn reasons() -> Vec<&'static str> {
         INVERSE_TIME_SPLINE,
         G10_TOOL_ROTATION,
         G70_COMPENSATED,
+        FEED_PER_REV_CSS,
     ]);
     all
 }

@@ -405,6 +405,10 @@ fn dialect_line() -> impl Strategy<Value = String> {
         "M66",
         "M67",
         "M68",
+        "G96 S100 D2000",
+        "G96",
+        "G97",
+        "G95",
         "#5070 = 1",
     ])
     .prop_map(str::to_string);

@@ -156,6 +156,8 @@ struct MoveReader {
     /// The spindle and coolant as the program leaves them: M2 or M30 (or the program's
     /// last line) turns on ones off, as LinuxCNC's M2 does (M5, M9).
     left_on: (Option<IoAction>, bool),
+    /// G96: the surface speed in force ([`crate::css`]).
+    css: Option<finestep_gcode::SurfaceSpeed>,
     last_line: usize,
     /// Idle periods and I/O events before the first move (final once it is read).
     leading_dwell: u64,
@@ -173,6 +175,7 @@ impl MoveReader {
             at_programmed: [0.0; 4],
             blend: Some(config.path_tolerance_mm), // LinuxCNC starts in G64
             left_on: (None, false),
+            css: None,
             last_line: 0,
             leading_dwell: 0,
             leading_events: Vec::new(),
@@ -207,6 +210,41 @@ impl MoveReader {
                 last.events.push((last.dwell_periods, event));
             }
             None => self.leading_events.push((self.leading_dwell, event)),
+        }
+    }
+
+    /// G96 with the spindle turning: the speed of the move from the last programmed point
+    /// to `to` (an arc about `arc`'s centre, a NURBS of `nurbs`' control points), set at
+    /// an exact stop before it where it differs from the speed now ([`crate::css`]).
+    fn surface_speed_for(
+        &mut self,
+        config: &Resolved,
+        line: usize,
+        to: Vec4,
+        arc: Option<(Vec4, (usize, usize), bool, u32)>,
+        nurbs: Option<&[(f64, f64, f64)]>,
+    ) {
+        let (Some(css), Some(IoAction::Spindle { rotation, rpm: now, .. })) = (self.css, self.left_on.0) else {
+            return;
+        };
+        let from = self.at_programmed;
+        let span = arc.filter(|&(_, (a, b), ..)| a == 0 || b == 0).map(|(c, (a, b), clockwise, turns)| {
+            let angle = |p: Vec4| (p[b] - c[b]).atan2(p[a] - c[a]);
+            crate::css::ArcSpan {
+                centre_x: c[0],
+                radius: (from[a] - c[a]).hypot(from[b] - c[b]),
+                start: angle(from),
+                sweep: sweep_angle(angle(from), angle(to), clockwise, turns),
+                x_first: a == 0,
+            }
+        });
+        let control_x: Vec<f64> = nurbs.unwrap_or(&[]).iter().map(|p| p.0).collect();
+        let max = config.spindle_max_rpm;
+        let rpm = crate::css::move_rpm(&css, max, from[0], to[0], span.as_ref(), &control_x);
+        if rpm != now {
+            let action = IoAction::Spindle { rotation, rpm, fraction: rpm / max };
+            self.left_on.0 = Some(action);
+            self.event_at_stop(IoEvent { line, action });
         }
     }
 
@@ -261,11 +299,20 @@ impl MoveReader {
                 None
             };
             let action = match block.kind {
-                BlockKind::Spindle { rotation, rpm } => {
+                BlockKind::Spindle { rotation, rpm, css } => {
                     let max = config.spindle_max_rpm;
-                    if !(0.0..=max).contains(&rpm) {
-                        return Err(fail(format!("S{rpm} is outside 0..={max} rev/min (spindle.max_rpm)")));
-                    }
+                    self.css = css;
+                    // G96: the speed where the tool stands; each move sets its own below.
+                    let rpm = match css {
+                        Some(css) => {
+                            let x = self.at_programmed[0];
+                            crate::css::move_rpm(&css, max, x, x, None, &[])
+                        }
+                        None if !(0.0..=max).contains(&rpm) => {
+                            return Err(fail(format!("S{rpm} is outside 0..={max} rev/min (spindle.max_rpm)")))
+                        }
+                        None => rpm,
+                    };
                     Some(IoAction::Spindle { rotation, rpm, fraction: rpm / max })
                 }
                 BlockKind::Coolant { mist, flood } => Some(IoAction::Coolant { mist, flood }),
@@ -366,6 +413,7 @@ impl MoveReader {
             if feed.is_nan() || feed <= 0.0 {
                 return Err(fail(format!("feed {} mm/min must be positive", feed * 60.0)));
             }
+            self.surface_speed_for(config, block.line, to, arc, nurbs.as_deref());
             let programmed = (self.at_programmed, to);
             self.at_programmed = to;
             let to = round_to_steps(config, to);

@@ -108,6 +108,7 @@
 pub mod bound;
 pub mod checker;
 pub mod config;
+pub mod css;
 pub mod cutter_comp;
 pub mod element;
 pub mod error;

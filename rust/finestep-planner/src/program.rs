@@ -341,6 +341,59 @@ mod tests {
         assert_eq!(idle, 0);
     }
 
+    /// G96: each move runs at the speed of its point farthest from the spindle's axis
+    /// (X 0 here), capped by D, set at an exact stop before it where it changes; moves
+    /// whose farthest point keeps the speed keep their blends.
+    #[test]
+    fn constant_surface_speed_sets_each_moves_speed_at_a_stop_where_it_changes() {
+        use crate::element::IoAction;
+        use finestep_gcode::SpindleRotation::{Clockwise, Off};
+        let config = MachineConfig::default(); // X at 800, Z at 400 steps/mm
+        let text = "G18 G21 G90 G64 F300\nG0 X40 Z1\nG96 S100 D3000 M3\nG1 Z-10\nG1 X10\nG1 Z-20\nG1 X1\n\
+                    G1 Z-25\nG97 S500\nG1 X5\nM2\n";
+        let program = finestep_gcode::parse_str(text, "css.ngc").unwrap();
+        let planned = plan_program(&config, &program).unwrap();
+        let events: Vec<(u64, usize, IoAction)> =
+            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+        let rpm = |r: f64| 100_000.0 / (std::f64::consts::TAU * r);
+        let spindle = |rotation, rpm: f64| IoAction::Spindle { rotation, rpm, fraction: rpm / 24_000.0 };
+        let expected = [
+            (3, spindle(Clockwise, rpm(40.0))), // M3 at X40
+            (6, spindle(Clockwise, rpm(10.0))), // G1 Z-20 at X10 (G1 X10 ran at X40's)
+            (8, spindle(Clockwise, 3000.0)),    // G1 Z-25 at X1: 15 915 rev/min, D 3000
+            (9, spindle(Clockwise, 500.0)),     // G97 S500
+            (11, spindle(Off, 500.0)),          // M2
+        ];
+        let got: Vec<(usize, IoAction)> = events.iter().map(|e| (e.1, e.2)).collect();
+        assert_eq!(got.len(), expected.len(), "{got:?}");
+        for ((line, action), (want_line, want)) in got.iter().zip(expected) {
+            assert_eq!(*line, want_line);
+            let (IoAction::Spindle { rpm: a, rotation: ra, .. }, IoAction::Spindle { rpm: b, rotation: rb, .. }) =
+                (action, want)
+            else {
+                panic!("{action:?}")
+            };
+            assert!(ra == &rb && (a - b).abs() < 1e-9, "line {line}: {action:?} against {want:?}");
+        }
+        // The speed changes at rest where the move before it ends: X10 Z-10 for line 6.
+        let at = |n: u64, axis: usize| -> i64 {
+            planned.records[..n as usize].iter().map(|r| i64::from(r.inc[axis].to_bits())).sum()
+        };
+        let stop = events[1].0;
+        assert_eq!((at(stop, 0), at(stop, 2)), ((10 * 800) << 16, -((10 * 400) << 16)));
+        assert!(planned.records[stop as usize - 1].flags & 1 != 0);
+        // The corner X40 Z-10 (lines 4-5) is blended: no record ends at rest there.
+        let corner = (0..planned.records.len() as u64)
+            .find(|&n| at(n, 0) == (40 * 800) << 16 && at(n, 2) == -((10 * 400) << 16));
+        assert_eq!(corner, None, "an exact stop at the corner X40 Z-10");
+        // G95 under G96 is refused (`unsupported`); G96 D0 runs as G97, as LinuxCNC's canon does.
+        let refused = finestep_gcode::parse_str("G96 S100 D2000\nG95 F0.1\nG1 X1\n", "t.ngc").unwrap_err();
+        assert!(refused.to_string().contains("unsupported: G95 in G96"), "{refused}");
+        let d0 = finestep_gcode::parse_str("G96 S100 D0 M3\nG95 F0.1\nG1 X1\nM2\n", "t.ngc").unwrap();
+        let d0 = plan_program(&config, &d0).unwrap();
+        assert_eq!(d0.events[0].event.action, spindle(Clockwise, 100.0));
+    }
+
     /// G38.x: the probe armed at an exact stop before the probe move, checked at the
     /// exact stop after it; the path goes on from the probe move's end (where a machine
     /// would be had the probe not tripped). M66-M68 are events at exact stops.
