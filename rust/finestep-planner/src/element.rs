@@ -402,14 +402,9 @@ impl Needs {
         }
         // The acceleration held to `accel * v_cap / v`, the jerk again at it.
         let accel_kept = caps.accel.min(accel * v_cap / v.max(1e-300)).max(accel);
-        let turning = self.k * self.k + self.dk;
         let mut jerk_kept = f64::INFINITY;
         for axis in self.axes.iter().filter(|a| a.w > 1e-12) {
-            let turning_jerk = if self.scurve {
-                turning * v.powi(3) * axis.w.max(axis.n) + 3.0 * self.k * v * accel_kept * axis.n
-            } else {
-                0.0
-            };
+            let turning_jerk = if self.scurve { turning_jerk(axis, self.k, self.dk, v, accel_kept) } else { 0.0 };
             jerk_kept = jerk_kept.min((FULL_SHARE * axis.jerk - turning_jerk) / axis.w);
         }
         Caps { v_cap: caps.v_cap, accel: accel_kept, jerk: jerk_kept }
@@ -487,6 +482,17 @@ pub struct AxisShare {
     pub jerk: f64,
 }
 
+/// The most of `axis`'s jerk that turning takes at speed `v` and tangential acceleration
+/// `accel` on an element of largest curvature `k` and curvature change `dk`: each
+/// term of the jerk (module docs) on the component it acts along, `k^2 v^3` along the
+/// tangent (`w`), `k' v^3` and `3 k v a_t` along the normal (`n`). (Until plan25 both
+/// curvature terms were taken on the larger of the two components: on seed 002's star
+/// the curvature change read on the axis along the path held its tangential jerk at
+/// 0.72 of the limit.)
+pub fn turning_jerk(axis: &AxisShare, k: f64, dk: f64, v: f64, accel: f64) -> f64 {
+    (k * k * axis.w + dk * axis.n) * v.powi(3) + 3.0 * k * v * accel * axis.n
+}
+
 /// The caps of an element of largest curvature `k` and curvature change `dk` (|dk/ds|)
 /// under the speed limit `v_limit` (feed, chord tolerance), the limits shared by what
 /// the path needs (module docs).
@@ -546,8 +552,7 @@ pub fn full_caps_turning(
     let mut jerk = f64::INFINITY;
     for axis in axes.iter().filter(|a| a.w > 1e-12) {
         // A trapezoid's jerk is unbounded by design: the jerk cap is not used there.
-        let turning_jerk =
-            if scurve { turning * v_cap.powi(3) * axis.w.max(axis.n) + 3.0 * k * v_cap * accel * axis.n } else { 0.0 };
+        let turning_jerk = if scurve { turning_jerk(axis, k, dk, v_cap, accel) } else { 0.0 };
         jerk = jerk.min((FULL_SHARE * axis.jerk - turning_jerk) / axis.w);
     }
     Caps { v_cap, accel, jerk }
@@ -635,7 +640,8 @@ mod tests {
                             assert!(accel <= FULL_SHARE * axis.accel * (1.0 + 1e-9), "{k} {dk} {angle}: {accel}");
                             if scurve {
                                 let jerk = c.jerk * axis.w
-                                    + (k * k + dk) * v.powi(3) * axis.w.max(axis.n)
+                                    + k * k * v.powi(3) * axis.w
+                                    + dk * v.powi(3) * axis.n
                                     + 3.0 * k * v * c.accel * axis.n;
                                 assert!(jerk <= FULL_SHARE * axis.jerk * (1.0 + 1e-9), "{k} {dk} {angle}: {jerk}");
                             }
@@ -673,7 +679,8 @@ mod tests {
                         let accel = c.accel * axis.w + k * v * v * axis.n;
                         assert!(accel <= FULL_SHARE * axis.accel * (1.0 + 1e-9), "{k} {dk} {angle}: {accel}");
                         let jerk = c.jerk * axis.w
-                            + (k * k + dk) * v.powi(3) * axis.w.max(axis.n)
+                            + k * k * v.powi(3) * axis.w
+                            + dk * v.powi(3) * axis.n
                             + 3.0 * k * v * c.accel * axis.n;
                         assert!(jerk <= FULL_SHARE * axis.jerk * (1.0 + 1e-9), "{k} {dk} {angle}: {jerk}");
                     }

@@ -32,7 +32,7 @@ use crate::error::ProgramError;
 use crate::lookahead::{element_limits, ElementWindow, WindowedSpeeds};
 use crate::nurbs::NurbsCursor;
 use crate::vec4::Vec4;
-use crate::velocity::{run_profiles, Limits, Profile, RunElement, MAX_RUN_ELEMENTS};
+use crate::velocity::{run_profiles_into, Limits, Profile, RunElement, MAX_RUN_ELEMENTS};
 use finestep_interface::flags::BLOCK_END;
 use std::collections::VecDeque;
 
@@ -64,6 +64,11 @@ pub struct Periods<'p> {
     /// ([`Periods::try_run`]).
     run: Vec<Profile>,
     run_first: usize,
+    /// Room for [`Periods::try_run`]: the junction speeds and elements of a run tried,
+    /// and its profiles before they replace `run`, kept from run to run.
+    run_speeds: Vec<f64>,
+    run_elements: Vec<RunElement>,
+    run_trial: Vec<Profile>,
 }
 
 /// A source of a path's elements, in order, or the error that ends the path.
@@ -172,6 +177,9 @@ impl<'p> Periods<'p> {
             events: Vec::new(),
             run: Vec::new(),
             run_first: usize::MAX,
+            run_speeds: Vec::new(),
+            run_elements: Vec::new(),
+            run_trial: Vec::new(),
         }
     }
 
@@ -247,7 +255,17 @@ impl<'p> Periods<'p> {
             return Ok(false);
         }
         let rising = v1 > v0;
-        let mut speeds = vec![v0, v1];
+        let mut speeds = std::mem::take(&mut self.run_speeds);
+        speeds.clear();
+        speeds.extend([v0, v1]);
+        let planned = self.plan_run(i, rising, &mut speeds);
+        self.run_speeds = speeds;
+        planned
+    }
+
+    /// [`Periods::try_run`] from `i` with the run's first junction speeds in `speeds`.
+    fn plan_run(&mut self, i: usize, rising: bool, speeds: &mut Vec<f64>) -> Result<bool, ProgramError> {
+        let smooth = |e: &Element| matches!(e.shape, Shape::Nurbs { .. }) && !e.stop_after && !e.jump_after;
         // Elements i..i + speeds.len() - 1 so far; extend while the junction after the
         // last is smooth and the speeds keep going the same way.
         while speeds.len() <= MAX_RUN_ELEMENTS {
@@ -268,25 +286,28 @@ impl<'p> Periods<'p> {
         }
         // The speed never passes the run's higher end: each element's caps at it.
         let top = speeds[0].max(speeds[speeds.len() - 1]);
-        let elements: Vec<RunElement> = (0..speeds.len() - 1)
-            .map(|k| {
-                let e = self.path.element(i + k);
-                match needs_limits(&self.config, e, top) {
-                    Some((limits, cap)) => RunElement { length: e.length, limits, cap },
-                    None => RunElement { length: e.length, limits: element_limits(&self.config, e), cap: e.v_cap },
-                }
-            })
-            .collect();
+        let mut elements = std::mem::take(&mut self.run_elements);
+        elements.clear();
+        elements.extend((0..speeds.len() - 1).map(|k| {
+            let e = self.path.element(i + k);
+            match needs_limits(&self.config, e, top) {
+                Some((limits, cap)) => RunElement { length: e.length, limits, cap },
+                None => RunElement { length: e.length, limits: element_limits(&self.config, e), cap: e.v_cap },
+            }
+        }));
         let mut n = elements.len();
+        let mut planned = false;
         while n >= 2 {
-            if let Some(run) = run_profiles(&elements[..n], &speeds[..=n]) {
-                self.run = run;
+            if run_profiles_into(&elements[..n], &speeds[..=n], &mut self.run_trial) {
+                std::mem::swap(&mut self.run, &mut self.run_trial);
                 self.run_first = i;
-                return Ok(true);
+                planned = true;
+                break;
             }
             n /= 2;
         }
-        Ok(false)
+        self.run_elements = elements;
+        Ok(planned)
     }
 
     fn emit(&mut self, grid: [i64; 4], flags: u8, line: usize) -> Result<(PeriodRecord, usize), ProgramError> {
@@ -312,7 +333,7 @@ impl<'p> Periods<'p> {
     fn grid(&self, p: Vec4) -> [i64; 4] {
         let mut g = [0i64; 4];
         for (a, axis) in self.config.axes.iter().enumerate() {
-            g[a] = (p[a] * axis.steps_per_unit * 65536.0).round() as i64;
+            g[a] = round_to_i64(p[a] * axis.steps_per_unit * 65536.0);
         }
         g
     }
@@ -394,7 +415,8 @@ impl<'p> Periods<'p> {
                 if s >= element.length {
                     element.end
                 } else {
-                    curve.point(self.cursor.advance(curve, u1, s))
+                    self.cursor.advance(curve, u1, s);
+                    self.cursor.point(curve)
                 }
             }
             _ => element.position(s),
@@ -402,6 +424,22 @@ impl<'p> Periods<'p> {
         let line = element.line;
         let grid = self.grid(point);
         Some(self.emit(grid, flags, line))
+    }
+}
+
+/// `x.round() as i64` (half away from zero, saturating, NaN to 0) without the library
+/// call `f64::round` is on the baseline x86-64 target: the fraction `x - trunc(x)` is
+/// exact, so comparing it with one half decides the rounding exactly.
+#[inline]
+fn round_to_i64(x: f64) -> i64 {
+    let t = x as i64;
+    let fraction = x - t as f64;
+    if fraction >= 0.5 {
+        t.saturating_add(1)
+    } else if fraction <= -0.5 {
+        t.saturating_sub(1)
+    } else {
+        t
     }
 }
 
@@ -436,5 +474,29 @@ impl Iterator for Periods<'_> {
             self.idle = 0;
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_to_i64;
+
+    /// The rounding of the grid agrees with `f64::round` everywhere it is used and at the
+    /// edges: halves either side of zero, the largest exact integers, beyond i64, NaN.
+    #[test]
+    fn rounding_to_the_grid_agrees_with_the_library() {
+        let mut values = vec![0.0, -0.0, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5, 0.49999999999999994, -0.49999999999999994];
+        values.extend([4503599627370495.5, -4503599627370495.5, 9007199254740993.0, 1e19, -1e19, f64::NAN]);
+        values.extend([f64::INFINITY, f64::NEG_INFINITY, 1e-300, -1e-300]);
+        let mut x = 0.123_456_789f64;
+        for _ in 0..100_000 {
+            x = (x * 3.987_654_321 + 0.5).fract() * 2e9 - 1e9;
+            values.push(x);
+            values.push(x.trunc() + 0.5);
+            values.push(x.trunc() - 0.5);
+        }
+        for v in values {
+            assert_eq!(round_to_i64(v), v.round() as i64, "{v:e}");
+        }
     }
 }

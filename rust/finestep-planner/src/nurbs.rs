@@ -465,7 +465,26 @@ impl NurbsCurve {
         if u >= last {
             return self.ends[1];
         }
-        let i = self.span(u);
+        self.point_in(u, self.span(u))
+    }
+
+    /// [`NurbsCurve::point`] at `u` at or after the knot span `span`, which is moved
+    /// on to the span of `u` (points taken in increasing `u` find their spans without
+    /// a search).
+    pub(crate) fn point_after(&self, u: f64, span: &mut usize) -> Vec4 {
+        let (first, last) = self.domain();
+        if u <= first || u >= last {
+            return self.point(u);
+        }
+        while self.knots[*span + 1] <= u {
+            *span += 1;
+        }
+        self.point_in(u, *span)
+    }
+
+    /// [`NurbsCurve::point`] at `u` inside the domain on knot span `i`
+    /// ([`NurbsCurve::span_index`] of `u`).
+    fn point_in(&self, u: f64, i: usize) -> Vec4 {
         let a = match self.power.get(i - self.degree) {
             Some([c0, c1, c2, c3]) => {
                 let t = u - self.knots[i];
@@ -602,6 +621,16 @@ pub struct NurbsCursor {
 }
 
 impl NurbsCursor {
+    /// The curve's point at the parameter reached ([`NurbsCurve::point`], on the
+    /// sub-piece's knot span once the cursor has found it).
+    pub fn point(&self, curve: &NurbsCurve) -> Vec4 {
+        let (first, last) = curve.domain();
+        match self.span {
+            Some(span) if self.u > first && self.u < last => curve.point_in(self.u, span),
+            _ => curve.point(self.u),
+        }
+    }
+
     /// At the start `u0` of element `element`.
     pub fn new(element: usize, u0: f64) -> NurbsCursor {
         NurbsCursor { element, u0, u: u0, s: 0.0, span: None }

@@ -191,7 +191,13 @@ pub fn pieces_sampled(
         }
         let turning = k * k + dk;
         if scurve && turning > 1e-12 {
-            cap = cap.min((ARC_JERK_SHARE * least_jerk / turning).cbrt());
+            // The cube root only where it binds: a cap whose cube is within the turning's
+            // is kept as it is.
+            let cubed = ARC_JERK_SHARE * least_jerk / turning;
+            let kept = cap * cap * cap <= cubed;
+            if !kept {
+                cap = cap.min(cubed.cbrt());
+            }
         }
         cap
     };
@@ -204,6 +210,11 @@ pub fn pieces_sampled(
     } else {
         (SMOOTH_NORMAL_SHARE_MIN, SMOOTH_TURNING_JERK_SHARE)
     };
+    // The arc length between samples: a G5.2 curve by two 5-point quadratures (a heavy
+    // weight swings |C'| within a span), a smoother's cubic (weights 1, |C'| the root of
+    // a quartic in the parameter, its spans a millimetre or two) by one, which the
+    // quadrature halves itself where |C'| spreads (`NurbsCurve::arc_length`).
+    let quadrature_parts = if curve.planar() { 2 } else { 1 };
     // Room for every span's samples, kept from span to span.
     let (mut params, mut stack, mut samples) = (Vec::new(), Vec::new(), Vec::<Sample>::new());
     let (mut ds, mut dk, mut inner_d, mut inner_k) =
@@ -224,7 +235,9 @@ pub fn pieces_sampled(
         }
         // |dk/ds| by differences between samples.
         ds.clear();
-        ds.extend((0..m).map(|j| curve.arc_length_composite_in(samples[j].u, samples[j + 1].u, 2, span)));
+        ds.extend(
+            (0..m).map(|j| curve.arc_length_composite_in(samples[j].u, samples[j + 1].u, quadrature_parts, span)),
+        );
         dk.clear();
         dk.extend((0..=m).map(|j| {
             let back = if j > 0 { (samples[j].k - samples[j - 1].k).abs() / ds[j - 1].max(1e-300) } else { 0.0 };

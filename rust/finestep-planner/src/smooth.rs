@@ -160,18 +160,27 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, k0: Option<Vec4>, d1: Vec4, i
         let fixed = |j: usize| j < first_free || j >= count - 2;
         let mut m = vec![[0.0; 4]; free];
         let mut rhs = vec![[0.0; 4]; free];
+        // One row of the normal equations: the fixed control points move to the target's
+        // side, the free ones (consecutive indices here, rows of the band) add their
+        // products.
         let mut add_row = |coef: &[(usize, f64)], target: Vec4, weight: f64| {
             let mut r = target;
+            let mut free_row = [(0usize, 0.0f64); 4];
+            let mut n_free = 0;
             for &(j, c) in coef {
                 if fixed(j) {
                     r = add_scaled(r, -c, q[j]);
+                } else {
+                    free_row[n_free] = (j - first_free, c);
+                    n_free += 1;
                 }
             }
-            for &(j, c) in coef.iter().filter(|(j, _)| !fixed(*j)) {
-                let a = j - first_free;
-                rhs[a] = add_scaled(rhs[a], weight * c, r);
-                for &(k, ck) in coef.iter().filter(|(k, _)| !fixed(*k) && *k <= j) {
-                    m[a][j - k] += weight * c * ck;
+            let free_row = &free_row[..n_free];
+            for (x, &(a, c)) in free_row.iter().enumerate() {
+                let wc = weight * c;
+                rhs[a] = add_scaled(rhs[a], wc, r);
+                for &(b, cb) in &free_row[..=x] {
+                    m[a][a - b] += wc * cb;
                 }
             }
         };
@@ -208,12 +217,13 @@ fn deviating(curve: &NurbsCurve, points: &[Vec4], s: &[f64], limit: f64) -> Vec<
     let samples = SAMPLES_PER_SEGMENT * segments;
     let mut out = Vec::new();
     let mut j = 0;
+    let mut span = curve.span_index(0.0);
     for k in 1..samples {
         let u = total * k as f64 / samples as f64;
         while j + 1 < segments && s[j + 1] <= u {
             j += 1;
         }
-        let p = curve.point(u);
+        let p = curve.point_after(u, &mut span);
         // The segment the sample's parameter lies on first: where it is near enough,
         // so is the nearest of all, and the others need not be measured.
         if to_segment_squared(p, points[j], points[j + 1]).sqrt() <= limit {

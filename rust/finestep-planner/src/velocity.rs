@@ -136,19 +136,31 @@ impl Half {
         v2 + s * (ap * t3 - 0.5 * j * t3 * t3)
     }
 
+    /// The time into the half at which its speed passes `v` (between its ends), from
+    /// the speed's closed form phase by phase ([`Half::speed_at`]): the square root of
+    /// the first jerk phase, the line of the constant acceleration, the quadratic of the
+    /// last jerk phase (in the form without cancellation).
+    fn time_to_speed(&self, v: f64) -> f64 {
+        let target = (self.sign * (v - self.v_from)).max(0.0);
+        let (tj, ta, ap, j) = (self.t_jerk, self.t_accel, self.a_peak, self.jerk);
+        let gain_jerk = 0.5 * j * tj * tj;
+        if target <= gain_jerk {
+            return if j > 0.0 { (2.0 * target / j).sqrt().min(tj) } else { 0.0 };
+        }
+        let gain_accel = ap * ta;
+        if target <= gain_jerk + gain_accel {
+            return tj + ((target - gain_jerk) / ap).min(ta);
+        }
+        // ap t - j t^2 / 2 = r for t in 0..=tj: t = 2 r / (ap + sqrt(ap^2 - 2 j r)).
+        let r = target - gain_jerk - gain_accel;
+        let root = (ap * ap - 2.0 * j * r).max(0.0).sqrt();
+        let t3 = if ap + root > 0.0 { 2.0 * r / (ap + root) } else { tj };
+        (tj + ta + t3.min(tj)).min(self.time)
+    }
+
     /// The distance into the half at which its speed passes `v` (between its ends).
     fn distance_to_speed(&self, v: f64) -> f64 {
-        let target = self.sign * (v - self.v_from);
-        let (mut lo, mut hi) = (0.0, self.time);
-        for _ in 0..80 {
-            let mid = 0.5 * (lo + hi);
-            if self.sign * (self.speed_at(mid) - self.v_from) < target {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        self.distance_at(lo)
+        self.distance_at(self.time_to_speed(v))
     }
 
     /// Distance covered `t` (0..=time) into the half.
@@ -293,22 +305,49 @@ impl Profile {
         }
     }
 
-    /// The time into the whole profile at which it has covered `s` (bisection: the
-    /// distance rises with time).
-    fn raw_time_at(&self, s: f64, total: f64) -> f64 {
-        let (mut lo, mut hi) = (0.0, total);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if self.raw_distance_at(mid) < s {
-                lo = mid;
+    /// Speed along the whole profile (a run's, from its start) `t` seconds into it.
+    #[inline]
+    fn raw_speed_at(&self, t: f64) -> f64 {
+        if t <= self.pre_time {
+            return self.up.v_from;
+        }
+        let t = t - self.pre_time;
+        if t <= self.up.time {
+            self.up.speed_at(t)
+        } else if t <= self.up.time + self.cruise_time {
+            self.cruise_speed
+        } else {
+            let into = t - self.up.time - self.cruise_time;
+            if into <= self.down.time {
+                self.down.speed_at(into)
             } else {
-                hi = mid;
-            }
-            if hi - lo <= 1e-15 * total {
-                break;
+                self.end_speed
             }
         }
-        hi
+    }
+
+    /// The time into the whole profile at which it has covered `s`, at or after `from`
+    /// (where it has covered at most `s`): Newton on the distance (its derivative the
+    /// speed) from `from`, inside a bracket that bisection narrows wherever a Newton
+    /// step leaves it (the distance rises with time).
+    fn raw_time_at(&self, s: f64, from: f64, total: f64) -> f64 {
+        let (mut lo, mut hi) = (from.clamp(0.0, total), total);
+        let mut t = lo;
+        for _ in 0..100 {
+            let err = self.raw_distance_at(t) - s;
+            if err < 0.0 {
+                lo = t;
+            } else {
+                hi = t;
+            }
+            if err.abs() <= 1e-15 * s.abs().max(1e-300) || hi - lo <= 1e-15 * total {
+                break;
+            }
+            let speed = self.raw_speed_at(t);
+            let step = t - err / speed;
+            t = if speed > 0.0 && step > lo && step < hi { step } else { 0.5 * (lo + hi) };
+        }
+        t
     }
 }
 
@@ -341,6 +380,18 @@ pub const MAX_RUN_ELEMENTS: usize = 64;
 /// monotone, the half does not fit, a cap cannot be kept, or the run would not be
 /// faster than the per-element profiles.
 pub fn run_profiles(elements: &[RunElement], speeds: &[f64]) -> Option<Vec<Profile>> {
+    let mut out = Vec::with_capacity(elements.len());
+    run_profiles_into(elements, speeds, &mut out).then_some(out)
+}
+
+/// [`run_profiles`] into `out` (cleared first; its room kept from run to run): whether
+/// the run was planned.
+pub fn run_profiles_into(elements: &[RunElement], speeds: &[f64], out: &mut Vec<Profile>) -> bool {
+    out.clear();
+    run_profiles_in(elements, speeds, out).is_some()
+}
+
+fn run_profiles_in(elements: &[RunElement], speeds: &[f64], out: &mut Vec<Profile>) -> Option<()> {
     let n = elements.len();
     if n < 2 || speeds.len() != n + 1 {
         return None;
@@ -360,7 +411,89 @@ pub fn run_profiles(elements: &[RunElement], speeds: &[f64]) -> Option<Vec<Profi
         return None;
     }
     let length: f64 = elements.iter().map(|e| e.length).sum();
-    let half = Half::new(&limits, v_a, v_b);
+    let (mut limits, (mut half, mut spare, mut x)) = (limits, place_half(elements, &limits, v_a, v_b, length)?);
+    // The acceleration and jerk are zero outside the half: only the elements it overlaps
+    // need hold it. Planned again under the least limits of those, it is kept where the
+    // elements it then overlaps all allow them.
+    for _ in 0..2 {
+        let wider = overlapped_limits(elements, &limits, x, half.distance, length);
+        if wider.accel <= limits.accel && wider.jerk <= limits.jerk {
+            break;
+        }
+        let Some((h, sp, xx)) = place_half(elements, &wider, v_a, v_b, length) else { break };
+        let held = overlapped_limits(elements, &limits, xx, h.distance, length);
+        if !(held.accel >= wider.accel && held.jerk >= wider.jerk) {
+            break;
+        }
+        (limits, half, spare, x) = (wider, h, sp, xx);
+    }
+    let pre_time = if x > 0.0 { x / v_a } else { 0.0 };
+    let post = spare - x;
+    let post_time = if post > 0.0 && v_b > 0.0 { post / v_b } else { 0.0 };
+    let total = pre_time + half.time + post_time;
+    let separate: f64 = elements
+        .iter()
+        .zip(speeds.windows(2))
+        .map(|(e, v)| Profile::new(&e.limits, e.length, v[0], v[1], e.cap).duration)
+        .sum();
+    if total.is_nan() || total >= separate * (1.0 - 1e-9) {
+        return None;
+    }
+    let still = |v: f64| Half::new(&limits, v, v);
+    let base = if rising {
+        Profile {
+            pre_time,
+            up: half,
+            cruise_speed: v_b,
+            cruise_time: post_time,
+            down: still(v_b),
+            end_speed: v_b,
+            ..Profile::default()
+        }
+    } else {
+        Profile {
+            up: still(v_a),
+            cruise_speed: v_a,
+            cruise_time: pre_time,
+            down: half,
+            post_time,
+            end_speed: v_b,
+            ..Profile::default()
+        }
+    };
+    let (mut s0, mut t0) = (0.0, 0.0);
+    for (k, e) in elements.iter().enumerate() {
+        let t1 = if k + 1 == n { total } else { base.raw_time_at(s0 + e.length, t0, total) };
+        out.push(Profile { t0, s0, length: e.length, duration: (t1 - t0).max(0.0), ..base });
+        s0 += e.length;
+        t0 = t1;
+    }
+    Some(())
+}
+
+/// The least acceleration and jerk limits of the `elements` (of total `length`) that
+/// the stretch `x .. x + distance` overlaps, of `kind` as `limits`.
+fn overlapped_limits(elements: &[RunElement], limits: &Limits, x: f64, distance: f64, length: f64) -> Limits {
+    let margin = 1e-9 * length;
+    let (mut start, mut accel, mut jerk) = (0.0, f64::INFINITY, f64::INFINITY);
+    for e in elements {
+        let end = start + e.length;
+        if start < x + distance + margin && end > x - margin {
+            accel = accel.min(e.limits.accel);
+            jerk = jerk.min(e.limits.jerk);
+        }
+        start = end;
+    }
+    Limits { kind: limits.kind, accel, jerk }
+}
+
+/// The run's speed change from `v_a` to `v_b` under `limits` placed over the
+/// `elements` (of total `length`) as early (rising) or as late (falling) as their
+/// speed caps allow ([`run_profiles`]): the half, the length left over for the cruises
+/// and the cruise before the half; `None` where it does not fit or a cap cannot be kept.
+fn place_half(elements: &[RunElement], limits: &Limits, v_a: f64, v_b: f64, length: f64) -> Option<(Half, f64, f64)> {
+    let rising = v_b > v_a;
+    let half = Half::new(limits, v_a, v_b);
     let spare = length - half.distance;
     if spare.is_nan() || spare < 0.0 {
         return None;
@@ -402,49 +535,7 @@ pub fn run_profiles(elements: &[RunElement], speeds: &[f64]) -> Option<Vec<Profi
         }
         x
     };
-    let pre_time = if x > 0.0 { x / v_a } else { 0.0 };
-    let post = spare - x;
-    let post_time = if post > 0.0 && v_b > 0.0 { post / v_b } else { 0.0 };
-    let total = pre_time + half.time + post_time;
-    let separate: f64 = elements
-        .iter()
-        .zip(speeds.windows(2))
-        .map(|(e, v)| Profile::new(&e.limits, e.length, v[0], v[1], e.cap).duration)
-        .sum();
-    if total.is_nan() || total >= separate * (1.0 - 1e-9) {
-        return None;
-    }
-    let still = |v: f64| Half::new(&limits, v, v);
-    let base = if rising {
-        Profile {
-            pre_time,
-            up: half,
-            cruise_speed: v_b,
-            cruise_time: post_time,
-            down: still(v_b),
-            end_speed: v_b,
-            ..Profile::default()
-        }
-    } else {
-        Profile {
-            up: still(v_a),
-            cruise_speed: v_a,
-            cruise_time: pre_time,
-            down: half,
-            post_time,
-            end_speed: v_b,
-            ..Profile::default()
-        }
-    };
-    let mut out = Vec::with_capacity(n);
-    let (mut s0, mut t0) = (0.0, 0.0);
-    for (k, e) in elements.iter().enumerate() {
-        let t1 = if k + 1 == n { total } else { base.raw_time_at(s0 + e.length, total) };
-        out.push(Profile { t0, s0, length: e.length, duration: (t1 - t0).max(0.0), ..base });
-        s0 += e.length;
-        t0 = t1;
-    }
-    Some(out)
+    Some((half, spare, x))
 }
 
 #[cfg(test)]
@@ -453,6 +544,46 @@ mod tests {
 
     fn limits(kind: ProfileKind) -> Limits {
         Limits { kind, accel: 500.0, jerk: 20_000.0 }
+    }
+
+    /// The closed-form inverses agree with bisection on the distance and the speed:
+    /// `Half::time_to_speed` on every phase of rising and falling halves, and
+    /// `Profile::raw_time_at` over a run's profile with cruises before and after.
+    #[test]
+    fn the_inverses_agree_with_bisection() {
+        let l = limits(ProfileKind::SCurve);
+        for (v0, v1) in [(0.0, 60.0), (60.0, 0.0), (5.0, 9.0), (9.0, 5.0), (10.0, 200.0), (200.0, 3.0)] {
+            let half = Half::new(&l, v0, v1);
+            for k in 1..40 {
+                let v = v0 + (v1 - v0) * k as f64 / 40.0;
+                let (mut lo, mut hi) = (0.0, half.time);
+                for _ in 0..200 {
+                    let mid = 0.5 * (lo + hi);
+                    if half.sign * (half.speed_at(mid) - v0) < half.sign * (v - v0) {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let t = half.time_to_speed(v);
+                assert!((t - lo).abs() <= 1e-12 * half.time.max(1.0), "{v0} -> {v1} at {v}: {t} against {lo}");
+                assert!((half.speed_at(t) - v).abs() <= 1e-9 * v0.max(v1), "{v0} -> {v1}: {} at {v}", half.speed_at(t));
+            }
+        }
+        let elements = [
+            RunElement { length: 2.0, limits: l, cap: 40.0 },
+            RunElement { length: 5.0, limits: l, cap: 90.0 },
+            RunElement { length: 8.0, limits: l, cap: 120.0 },
+        ];
+        let run = run_profiles(&elements, &[10.0, 30.0, 60.0, 80.0]).expect("a run");
+        let base = run[0];
+        let total: f64 = run.iter().map(|p| p.duration).sum();
+        let length: f64 = elements.iter().map(|e| e.length).sum();
+        for k in 1..50 {
+            let s = length * k as f64 / 50.0;
+            let t = base.raw_time_at(s, 0.0, total);
+            assert!((base.raw_distance_at(t) - s).abs() <= 1e-12 * length, "{s}: {}", base.raw_distance_at(t));
+        }
     }
 
     #[test]
