@@ -654,7 +654,8 @@ mod tests {
 
     /// On the smoother's curves the normal share stays at its largest where the
     /// curvature changes fast (SMOOTH_NORMAL_SHARE_MIN), elsewhere it falls to
-    /// NORMAL_SHARE_MIN; both keep every axis within its limits (the grid above, again).
+    /// NORMAL_SHARE_MIN; both pairs of shares the planner uses (a G5.2 curve's and the
+    /// smoother's) keep every axis within its limits (the grid above, again).
     #[test]
     fn the_smoothers_normal_share_stays_where_the_curvature_changes() {
         let axes = [AxisShare { w: 1.0, n: 1.0, velocity: 200.0, accel: 1000.0, jerk: 1e9 }];
@@ -672,17 +673,21 @@ mod tests {
                         AxisShare { w, n, velocity: 200.0, accel: 300.0, jerk: 3000.0 },
                         AxisShare { w: n, n: w, velocity: 100.0, accel: 1000.0, jerk: 1e5 },
                     ];
-                    let c = full_caps_turning(&axes, 150.0, k, dk, true, TURNING_JERK_SHARE, SMOOTH_NORMAL_SHARE_MIN);
-                    assert!(c.v_cap > 0.0 && c.accel > 0.0 && c.jerk > 0.0, "{c:?}");
-                    for axis in &axes {
-                        let v = c.v_cap;
-                        let accel = c.accel * axis.w + k * v * v * axis.n;
-                        assert!(accel <= FULL_SHARE * axis.accel * (1.0 + 1e-9), "{k} {dk} {angle}: {accel}");
-                        let jerk = c.jerk * axis.w
-                            + k * k * v.powi(3) * axis.w
-                            + dk * v.powi(3) * axis.n
-                            + 3.0 * k * v * c.accel * axis.n;
-                        assert!(jerk <= FULL_SHARE * axis.jerk * (1.0 + 1e-9), "{k} {dk} {angle}: {jerk}");
+                    for (turning_share, normal_min) in
+                        [(TURNING_JERK_SHARE, NORMAL_SHARE_MIN), (SMOOTH_TURNING_JERK_SHARE, SMOOTH_NORMAL_SHARE_MIN)]
+                    {
+                        let c = full_caps_turning(&axes, 150.0, k, dk, true, turning_share, normal_min);
+                        assert!(c.v_cap > 0.0 && c.accel > 0.0 && c.jerk > 0.0, "{c:?}");
+                        for axis in &axes {
+                            let v = c.v_cap;
+                            let accel = c.accel * axis.w + k * v * v * axis.n;
+                            assert!(accel <= FULL_SHARE * axis.accel * (1.0 + 1e-9), "{k} {dk} {angle}: {accel}");
+                            let jerk = c.jerk * axis.w
+                                + k * k * v.powi(3) * axis.w
+                                + dk * v.powi(3) * axis.n
+                                + 3.0 * k * v * c.accel * axis.n;
+                            assert!(jerk <= FULL_SHARE * axis.jerk * (1.0 + 1e-9), "{k} {dk} {angle}: {jerk}");
+                        }
                     }
                 }
             }

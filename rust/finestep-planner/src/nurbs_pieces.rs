@@ -201,10 +201,9 @@ pub fn pieces_sampled(
         }
         cap
     };
-    // The smallest normal share: the rule that lowers it where the curvature changes
-    // only on a G5.2 curve (`SMOOTH_NORMAL_SHARE_MIN`).
-    // The smallest normal share and the turning's share of the jerk at the speed cap
-    // (`SMOOTH_NORMAL_SHARE_MIN`, `SMOOTH_TURNING_JERK_SHARE` on the smoother's curves).
+    // The smallest normal share and the turning's share of the jerk at the speed cap:
+    // a G5.2 curve's (planar) `NORMAL_SHARE_MIN`, `TURNING_JERK_SHARE`; the smoother's
+    // curves `SMOOTH_NORMAL_SHARE_MIN`, `SMOOTH_TURNING_JERK_SHARE`.
     let (normal_min, turning_jerk_share) = if curve.planar() {
         (NORMAL_SHARE_MIN, TURNING_JERK_SHARE)
     } else {
