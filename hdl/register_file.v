@@ -540,8 +540,9 @@ module register_file #(
     integer axis;
 
     // INC_DIRECT: a write of RECORD_INC[k] (k < N_AXES) in its serving cycle writes lane k
-    // of the FIFO's record being written, unless the FIFO is full or the SPI frame layer
-    // uses its port (the lane is lost: nothing is written); inc_written marks the lanes
+    // of the FIFO's record being written, unless the FIFO is full, the SPI frame layer
+    // uses its port or a push stages the record in this cycle (the lane is lost: nothing
+    // is written, so it cannot slip into the record staged); inc_written marks the lanes
     // written since the last push, flush or use of the port by the SPI frame layer (whose
     // records take the slot), and a push is accepted only when all are (else refused as
     // a push to a full FIFO is), so a queued record never holds a lane of another one.
@@ -550,7 +551,7 @@ module register_file #(
     genvar inc_lane;
     generate
         for (inc_lane = 0; inc_lane < N_AXES; inc_lane = inc_lane + 1) begin : direct_lanes
-            assign inc_lane_write[inc_lane] = DIRECT && write && !fifo_full && !spi_fifo_in_use &&
+            assign inc_lane_write[inc_lane] = DIRECT && write && !fifo_full && !spi_fifo_in_use && !push_reg &&
                 ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + inc_lane * FS_RECORD_INC_STRIDE);
         end
     endgenerate
@@ -843,7 +844,7 @@ module register_file #(
         // staged only with every lane written since the last push or flush.
         if (DIRECT) begin
             assert (push_seq_reg == {SEQ_W{1'b0}} && !push_active_reg && !bus_hold);
-            if (|push_lane[N_AXES-1:0]) assert (write && !fifo_full && !spi_fifo_in_use && push_word == bus_wdata);
+            if (|push_lane[N_AXES-1:0]) assert (write && !fifo_full && !spi_fifo_in_use && !push_reg && push_word == bus_wdata);
             if (push_wr_en) assert (push_reg && &inc_written_reg && !fifo_full && push_lane[N_AXES]);
             if (push_reg && !(&inc_written_reg)) assert (push_refused && !push_wr_en);
         end

@@ -977,15 +977,18 @@ impl RegisterFile {
             // No sequence: an accepted push is staged now and committed next cycle. The
             // lanes written: cleared by a push (accepted or not), a flush or the SPI
             // frame layer's use of the port (its records take the slot), else this
-            // cycle's RECORD_INC write if the FIFO has room.
+            // cycle's RECORD_INC write if the FIFO has room (a write in a push's cycle
+            // is lost: it would not be in the record the push stages).
             self.push_commit = self.push && !inp.push_refused;
             let lane = match inp.served {
-                Some(BusRequest { write: true, addr, .. }) if !inp.fifo_full && !inp.spi_fifo_in_use => element_index(
-                    addr & (ADDRESSES - 1) as u8,
-                    regs::record_inc::ADDR,
-                    regs::record_inc::STRIDE,
-                    n_axes,
-                ),
+                Some(BusRequest { write: true, addr, .. }) if !inp.fifo_full && !inp.spi_fifo_in_use && !self.push => {
+                    element_index(
+                        addr & (ADDRESSES - 1) as u8,
+                        regs::record_inc::ADDR,
+                        regs::record_inc::STRIDE,
+                        n_axes,
+                    )
+                }
                 _ => None,
             };
             self.inc_written = if self.push || inp.fifo_flush || inp.spi_fifo_in_use {
