@@ -36,6 +36,7 @@ module finestep_top #(
     parameter ONE_SNAPSHOT    = 0,   // 1: the probe's snapshot is the position latch (POSITION, LATCH_TIME)
     parameter INC_WRITE_ONLY  = 0,   // 1: RECORD_INC reads 0 (needs READ_STORE 0)
     parameter AXIS_WRITE_ONLY = 0,   // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (needs READ_STORE 0)
+    parameter INC_DIRECT      = 0,   // 1: RECORD_INC writes go straight into the FIFO's record (needs INC_WRITE_ONLY 1)
     parameter HAS_SPINDLE     = 1,
     parameter HAS_OUTPUTS     = 1,
     parameter N_GPIO          = 4,
@@ -294,7 +295,7 @@ module finestep_top #(
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
         .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK),
         .STEP_ROUND_LOG2(STEP_ROUND_LOG2), .ONE_SNAPSHOT(ONE_SNAPSHOT), .INC_WRITE_ONLY(INC_WRITE_ONLY),
-        .AXIS_WRITE_ONLY(AXIS_WRITE_ONLY)
+        .AXIS_WRITE_ONLY(AXIS_WRITE_ONLY), .INC_DIRECT(INC_DIRECT)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),
@@ -349,7 +350,8 @@ module finestep_top #(
     ) fifo (
         .clk(clk), .rst(rst), .flush(flush), .clear_errors(clear_errors),
         .wr_lane(push_lane | spi_wr_lane),
-        .wr_data(push_in_flight ? {push_flags[FS_REC_FLAGS_WIDTH-1:0], {N_AXES{push_word}}} : spi_wr_data),
+        // (INC_DIRECT: a RECORD_INC lane write is a push lane outside push_in_flight)
+        .wr_data((push_in_flight || (INC_DIRECT != 0 && |push_lane)) ? {push_flags[FS_REC_FLAGS_WIDTH-1:0], {N_AXES{push_word}}} : spi_wr_data),
         .wr_en(spi_wr_en || push_wr_en),
         .wr_commit(spi_wr_commit || push_commit),
         .wr_abort(spi_wr_abort),

@@ -32,7 +32,9 @@ module register_file #(
     parameter ONE_SNAPSHOT    = 0,    // 1: the position latch is the probe's snapshot too (PROBE_POSITION,
                                       // PROBE_TIME read POSITION, LATCH_TIME)
     parameter INC_WRITE_ONLY  = 0,    // 1: RECORD_INC reads 0 (with READ_STORE 0: no multiplexer inputs)
-    parameter AXIS_WRITE_ONLY = 0     // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (the same, with READ_STORE 0)
+    parameter AXIS_WRITE_ONLY = 0,    // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (the same, with READ_STORE 0)
+    parameter INC_DIRECT      = 0     // 1: a RECORD_INC write goes straight into the FIFO's record being
+                                      // written, no copy here and no push sequence (needs INC_WRITE_ONLY 1)
 ) (
     // clock, reset
     input  wire                         clk,
@@ -150,7 +152,8 @@ module register_file #(
                                      (FS_MAP_VERSION_PATCH << FS_VERSION_PATCH_LSB) |
                                      ((ONE_SNAPSHOT != 0 ? 1 : 0) << FS_VERSION_ONE_SNAPSHOT_LSB) |
                                      ((INC_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_INC_WRITE_ONLY_LSB) |
-                                     ((AXIS_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_AXIS_WRITE_ONLY_LSB);
+                                     ((AXIS_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_AXIS_WRITE_ONLY_LSB) |
+                                     ((INC_DIRECT != 0 ? 1 : 0) << FS_VERSION_INC_DIRECT_LSB);
     localparam [31:0] CAPS_WORD = (N_AXES << FS_CAPS_N_AXES_LSB) |
                                   (N_ENC << FS_CAPS_N_ENC_LSB) |
                                   ((HAS_MPG != 0 ? 1 : 0) << FS_CAPS_HAS_MPG_LSB) |
@@ -227,7 +230,9 @@ module register_file #(
     reg  [SEQ_W-1:0]  push_seq_reg;
     reg               push_served_reg;
     reg               seq_hold_reg;
-    wire              bus_hold    = push_served_reg || seq_hold_reg;
+    // INC_DIRECT: no push sequence, so no hold (its flip-flops stay 0 and go).
+    localparam        DIRECT      = (INC_DIRECT != 0);
+    wire              bus_hold    = !DIRECT && (push_served_reg || seq_hold_reg);
     localparam [ADDR_W-6:0] BLOCK_HIGH = FS_AXIS_TIMING_A_ADDR[ADDR_W-1:5];   // the axis block's 32 words
     localparam [ADDR_W-4:0] INC_HIGH   = FS_RECORD_INC_ADDR[ADDR_W-1:3];      // RECORD_INC's 8
     // A request that touches the push: a read of the axis block (AXIS_TIMING_A/B,
@@ -534,7 +539,27 @@ module register_file #(
 
     integer axis;
 
-    wire push_refused = push_reg && (fifo_full || spi_fifo_in_use);
+    // INC_DIRECT: a write of RECORD_INC[k] (k < N_AXES) in its serving cycle writes lane k
+    // of the FIFO's record being written, unless the FIFO is full, the SPI frame layer
+    // uses its port or a push stages the record in this cycle (the lane is lost: nothing
+    // is written, so it cannot slip into the record staged); inc_written marks the lanes
+    // written since the last push, flush or use of the port by the SPI frame layer (whose
+    // records take the slot), and a push is accepted only when all are (else refused as
+    // a push to a full FIFO is), so a queued record never holds a lane of another one.
+    reg  [N_AXES-1:0] inc_written_reg;
+    wire [N_AXES-1:0] inc_lane_write;
+    genvar inc_lane;
+    generate
+        for (inc_lane = 0; inc_lane < N_AXES; inc_lane = inc_lane + 1) begin : direct_lanes
+            assign inc_lane_write[inc_lane] = DIRECT && write && !fifo_full && !spi_fifo_in_use && !push_reg &&
+                ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + inc_lane * FS_RECORD_INC_STRIDE);
+        end
+    endgenerate
+    always @(posedge clk) begin
+        if (rst || !DIRECT || push_reg || fifo_flush || spi_fifo_in_use) inc_written_reg <= {N_AXES{1'b0}};
+        else inc_written_reg <= inc_written_reg | inc_lane_write;
+    end
+    wire push_refused = push_reg && (fifo_full || spi_fifo_in_use || (DIRECT && !(&inc_written_reg)));
     wire push_accept  = push_reg && !push_refused;
     // The push sequence's FIFO writes: lane k - 1 in cycle k, the flags and wr_en in
     // cycle N_AXES, while the push is accepted (cycle 1) or goes on (no flush since).
@@ -543,10 +568,10 @@ module register_file #(
     genvar lane;
     generate
         for (lane = 0; lane < N_AXES; lane = lane + 1) begin : push_lanes
-            assign push_lane[lane] = push_go && ({28'd0, push_seq_reg} == lane + 1);
+            assign push_lane[lane] = DIRECT ? inc_lane_write[lane] : push_go && ({28'd0, push_seq_reg} == lane + 1);
         end
     endgenerate
-    wire push_stage = push_go && push_last;   // the flags lane and wr_en
+    wire push_stage = DIRECT ? push_accept : push_go && push_last;   // the flags lane and wr_en
     assign push_lane[N_AXES] = push_stage;
     // RECORD_INC[k - 1]: the store word read in the cycle before (its reset value until
     // written), or its flip-flops in a build without the store.
@@ -677,7 +702,7 @@ module register_file #(
             push_flags_reg     <= {FS_REC_FLAGS_WIDTH{1'b0}};
         end else begin
             push_commit_reg    <= push_stage;
-            push_active_reg    <= push_go && !push_last && !fifo_flush;
+            push_active_reg    <= !DIRECT && push_go && !push_last && !fifo_flush;
             push_seq_reg       <= (bus_hold && !push_last) ? push_seq_reg + 1'b1 : {SEQ_W{1'b0}};
             // push_seq after this edge is 1 .. N_AXES - 1
             seq_hold_reg       <= bus_hold && ({28'd0, push_seq_reg} + 1 < N_AXES);
@@ -760,11 +785,11 @@ module register_file #(
     assign clear_faults      = clear_faults_reg;
     assign flush_cmd         = flush_reg;
     assign kick              = kick_reg;
-    assign push_word         = push_inc;
+    assign push_word         = DIRECT ? bus_wdata[INC_W-1:0] : push_inc;
     assign push_flags        = push_flags_reg;
     assign push_wr_en        = push_stage;
     assign push_commit       = push_commit_reg;
-    assign push_in_flight    = push_go;
+    assign push_in_flight    = DIRECT ? push_accept : push_go;
     assign status_byte       = status_word[7:0];
     assign irq               = irq_reg;
 
@@ -809,11 +834,20 @@ module register_file #(
         assert (push_served_reg == (stage_valid_reg && bus_we && bus_addr == FS_RECORD_PUSH_ADDR));
         assert (seq_hold_reg == (push_seq_reg != {SEQ_W{1'b0}} && {28'd0, push_seq_reg} < N_AXES));
         assert ({28'd0, push_seq_reg} <= N_AXES);
-        assert (push_reg == (push_seq_reg == {{(SEQ_W-1){1'b0}}, 1'b1}));
+        if (!DIRECT) assert (push_reg == (push_seq_reg == {{(SEQ_W-1){1'b0}}, 1'b1}));
         if (push_active_reg) assert (push_seq_reg > {{(SEQ_W-1){1'b0}}, 1'b1});
         // The word a push writes is RECORD_INC[k - 1] (its register).
-        if (push_go && (!STORED || push_word_addr == f_word))
+        if (!DIRECT && push_go && (!STORED || push_word_addr == f_word))
             assert (push_word == record_inc_reg[INC_W*push_axis +: INC_W]);
+        // INC_DIRECT: no sequence; a lane is written only by a served write of its
+        // RECORD_INC while the FIFO has room, with that write's word, and a record is
+        // staged only with every lane written since the last push or flush.
+        if (DIRECT) begin
+            assert (push_seq_reg == {SEQ_W{1'b0}} && !push_active_reg && !bus_hold);
+            if (|push_lane[N_AXES-1:0]) assert (write && !fifo_full && !spi_fifo_in_use && !push_reg && push_word == bus_wdata);
+            if (push_wr_en) assert (push_reg && &inc_written_reg && !fifo_full && push_lane[N_AXES]);
+            if (push_reg && !(&inc_written_reg)) assert (push_refused && !push_wr_en);
+        end
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(halt) || $past(jog_engaged)) assert (!run_reg);
@@ -830,7 +864,12 @@ module register_file #(
                     parallel_error_count_reg == $past(parallel_error_count_reg) + {15'd0, $past(par_error)});
         if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
         assert (push_commit == $past(push_stage));
-        if ($past(push_go) && !$past(push_last) && !$past(fifo_flush)) assert (push_go);
+        if (!DIRECT && $past(push_go) && !$past(push_last) && !$past(fifo_flush)) assert (push_go);
+        // INC_DIRECT: a lane written stays marked until the next push or flush.
+        if (DIRECT && !$past(push_reg) && !$past(fifo_flush) && !$past(spi_fifo_in_use))
+            assert (inc_written_reg == ($past(inc_written_reg) | $past(push_lane[N_AXES-1:0])));
+        if (DIRECT && ($past(push_reg) || $past(fifo_flush) || $past(spi_fifo_in_use)))
+            assert (inc_written_reg == {N_AXES{1'b0}});
         // The bus stage serves exactly the request granted in the cycle before.
         assert (stage_valid_reg == $past(granted));
         if ($past(grant_spi)) assert (bus_we == $past(spi_we) && bus_addr == $past(spi_addr) &&

@@ -65,7 +65,9 @@ module max2_epm1270 #(
         .ONE_SNAPSHOT(1),   // one position snapshot for the period latch and the probe (PROBE_POSITION
                             // and PROBE_TIME read POSITION and LATCH_TIME: docs/spec/register_file.md)
         .INC_WRITE_ONLY(1), // RECORD_INC reads 0: 4 x 32 bits fewer into the read multiplexer
-        .AXIS_WRITE_ONLY(1) // AXIS_TIMING_A/B and AXIS_MODE read 0: 4 x 3 words fewer into it
+        .AXIS_WRITE_ONLY(1), // AXIS_TIMING_A/B and AXIS_MODE read 0: 4 x 3 words fewer into it
+        .INC_DIRECT(1)      // RECORD_INC written straight into the FIFO's record: no 4 x 32-bit copy
+                            // and no push sequence (docs/spec/register_file.md)
     ) chip (
         .clk(clk50), .rst(rst),
         .spi_cs_n(1'b1), .spi_sck(1'b0), .spi_mosi(1'b0),

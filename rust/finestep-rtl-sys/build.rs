@@ -804,7 +804,8 @@ fn verilate(
         // register; no effect on behaviour), its one position snapshot (ONE_SNAPSHOT) and
         // its write-only RECORD_INC and per-axis registers (INC_WRITE_ONLY,
         // AXIS_WRITE_ONLY; the shim's ft_one_snapshot, ft_inc_write_only and
-        // ft_axis_write_only tell the model), so the lockstep runs those shapes too.
+        // ft_axis_write_only tell the model) and RECORD_INC straight into the FIFO's
+        // record (INC_DIRECT, ft_inc_direct), so the lockstep runs those shapes too.
         .args(
             matches!(build, Build::Top { digit, .. } if digit != 0)
                 .then_some([
@@ -814,6 +815,7 @@ fn verilate(
                     "-GONE_SNAPSHOT=1",
                     "-GINC_WRITE_ONLY=1",
                     "-GAXIS_WRITE_ONLY=1",
+                    "-GINC_DIRECT=1",
                 ])
                 .into_iter()
                 .flatten(),

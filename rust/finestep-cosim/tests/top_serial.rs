@@ -14,7 +14,8 @@ mod pin_probe;
 
 use finestep_cosim::{rtl_top_params_of, TopVariant};
 use finestep_host::regs::{
-    axis_mode, axis_timing_a, axis_timing_b, estop_filter, record_inc, status, underrun_count, version,
+    axis_mode, axis_timing_a, axis_timing_b, estop_filter, fifo_level, record_inc, record_push, refused_record_count,
+    status, underrun_count, version,
 };
 use finestep_host::stream::wait_idle;
 use finestep_host::{AxisSetup, Bus, BusError, Machine};
@@ -94,18 +95,32 @@ fn serial_chip_reports_its_round() {
 fn serial_chip_reports_its_register_shapes() {
     let build = rtl_top_params_of(TopVariant::MotionSerial);
     assert!(
-        build.one_snapshot && build.inc_write_only && build.axis_write_only,
+        build.one_snapshot && build.inc_write_only && build.axis_write_only && build.inc_direct,
         "the serial chip has the MAX II's shapes: {build:?}"
     );
     let mut m = parallel_machine("serial_chip_reports_its_register_shapes");
     let caps = m.caps();
-    assert!(caps.one_snapshot && caps.inc_write_only && caps.axis_write_only, "{caps:?}");
+    assert!(caps.one_snapshot && caps.inc_write_only && caps.axis_write_only && caps.inc_direct, "{caps:?}");
     let word = ok(m.bus().read_one(version::ADDR));
     assert_eq!((version::MAJOR.get(word), version::MINOR.get(word), version::PATCH.get(word)), (1, 1, 0));
-    let bits = [version::ONE_SNAPSHOT, version::INC_WRITE_ONLY, version::AXIS_WRITE_ONLY].map(|f| f.get(word));
-    assert_eq!(bits, [1, 1, 1], "{word:#x}");
+    let bits = [version::ONE_SNAPSHOT, version::INC_WRITE_ONLY, version::AXIS_WRITE_ONLY, version::INC_DIRECT]
+        .map(|f| f.get(word));
+    assert_eq!(bits, [1, 1, 1, 1], "{word:#x}");
     ok(m.bus().write(record_inc::addr(1), 0x1234_5678));
     assert_eq!(ok(m.bus().read_one(record_inc::addr(1))), 0, "RECORD_INC is write-only");
+    // INC_DIRECT (docs/spec/register_file.md#record_inc-straight-into-the-fifo): a push with
+    // one axis's RECORD_INC written is refused and queues nothing; with every axis's
+    // written it is queued, and the same push again without writes is refused.
+    let level = |m: &mut ParallelMachine| fifo_level::LEVEL.get(ok(m.bus().read_one(fifo_level::ADDR)));
+    let refused = |m: &mut ParallelMachine| ok(m.bus().read_one(refused_record_count::ADDR));
+    ok(m.bus().write(record_push::ADDR, 0));
+    assert_eq!((level(&mut m), refused(&mut m)), (0, 1));
+    for axis in 0..N_AXES {
+        ok(m.bus().write(record_inc::addr(axis), 0));
+    }
+    ok(m.bus().write(record_push::ADDR, 0));
+    ok(m.bus().write(record_push::ADDR, 0));
+    assert_eq!((level(&mut m), refused(&mut m)), (1, 2));
     // The axis registers too; the core still takes what was written (the rated-rate
     // and pulse checks of the other tests run on the timings written).
     ok(m.configure_axis(2, &AXIS));

@@ -52,6 +52,11 @@ pub struct Caps {
     /// (`VERSION.AXIS_WRITE_ONLY`). This driver never reads them back in any build: it
     /// keeps the timings it wrote.
     pub axis_write_only: bool,
+    /// A `RECORD_INC` write goes straight into the FIFO's record and `RECORD_PUSH` queues
+    /// it only when every axis's was written since the last push (`VERSION.INC_DIRECT`,
+    /// docs/spec/register_file.md#record_inc-straight-into-the-fifo). The bus's
+    /// `push_records` writes every axis's increment before each push in any build.
+    pub inc_direct: bool,
 }
 
 impl Caps {
@@ -152,6 +157,7 @@ impl<B: Bus> Machine<B> {
             one_snapshot: version::ONE_SNAPSHOT.get(version_word) != 0,
             inc_write_only: version::INC_WRITE_ONLY.get(version_word) != 0,
             axis_write_only: version::AXIS_WRITE_ONLY.get(version_word) != 0,
+            inc_direct: version::INC_DIRECT.get(version_word) != 0,
         };
         let Some(step_digit) = serial_digit(caps.n_axes, caps::STEP_ROUND_LOG2.get(caps_word)) else {
             let engine =
@@ -175,6 +181,7 @@ impl<B: Bus> Machine<B> {
             one_snapshot: caps.one_snapshot,
             inc_write_only: caps.inc_write_only,
             axis_write_only: caps.axis_write_only,
+            inc_direct: caps.inc_direct,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
@@ -549,8 +556,8 @@ mod tests {
     #[test]
     fn write_only_registers_are_never_read_back() {
         let all = version::INC_WRITE_ONLY.set(version::ONE_SNAPSHOT.set(0, 1), 1);
-        let mut m = snapshot_core(version::AXIS_WRITE_ONLY.set(all, 1), false);
-        assert!(m.caps().inc_write_only && m.caps().one_snapshot && m.caps().axis_write_only);
+        let mut m = snapshot_core(version::INC_DIRECT.set(version::AXIS_WRITE_ONLY.set(all, 1), 1), false);
+        assert!(m.caps().inc_write_only && m.caps().one_snapshot && m.caps().axis_write_only && m.caps().inc_direct);
         m.configure_axis(1, &AxisSetup::default()).unwrap();
         m.set_period(1000).unwrap();
         m.positions().unwrap();

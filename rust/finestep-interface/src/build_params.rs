@@ -260,6 +260,12 @@ pub struct TopParams {
     /// `AXIS_WRITE_ONLY`: `AXIS_TIMING_A/B` and `AXIS_MODE` are write-only (read 0);
     /// needs `READ_STORE` 0, as `inc_write_only`.
     pub axis_write_only: bool,
+    /// `INC_DIRECT`: a `RECORD_INC` write goes straight into the FIFO's record being
+    /// written (lost while full) and `RECORD_PUSH` queues it only when every axis's lane
+    /// was written since the last push, flush or use of the FIFO's port by the SPI frame
+    /// layer; no push sequence. Needs `INC_WRITE_ONLY` (an elaboration check, and
+    /// [`Self::validate`]).
+    pub inc_direct: bool,
     /// `HAS_SPINDLE`: the spindle block (PWM or SPI DAC) is built.
     pub has_spindle: bool,
     /// `HAS_OUTPUTS`: the logic outputs and the interlock are built.
@@ -295,6 +301,7 @@ impl Default for TopParams {
             one_snapshot: finestep_top::ONE_SNAPSHOT.default != 0,
             inc_write_only: finestep_top::INC_WRITE_ONLY.default != 0,
             axis_write_only: finestep_top::AXIS_WRITE_ONLY.default != 0,
+            inc_direct: finestep_top::INC_DIRECT.default != 0,
             has_spindle: finestep_top::HAS_SPINDLE.default != 0,
             has_outputs: finestep_top::HAS_OUTPUTS.default != 0,
             n_gpio: finestep_top::N_GPIO.default as usize,
@@ -323,6 +330,11 @@ impl TopParams {
         finestep_top::ONE_SNAPSHOT.check(self.one_snapshot)?;
         finestep_top::INC_WRITE_ONLY.check(self.inc_write_only)?;
         finestep_top::AXIS_WRITE_ONLY.check(self.axis_write_only)?;
+        finestep_top::INC_DIRECT.check(self.inc_direct)?;
+        if self.inc_direct && !self.inc_write_only {
+            let because = "INC_DIRECT needs INC_WRITE_ONLY = 1";
+            return Err(finestep_top::INC_DIRECT.narrowed(1, 0, 0, because));
+        }
         finestep_top::HAS_SPINDLE.check(self.has_spindle)?;
         finestep_top::HAS_OUTPUTS.check(self.has_outputs)?;
         finestep_top::N_GPIO.check(self.n_gpio as u64)?;

@@ -192,6 +192,12 @@ pub struct RegisterFileInputs {
     pub push_refused: bool,
     /// The FIFO is flushed in this cycle (a push in flight is dropped).
     pub fifo_flush: bool,
+    /// The FIFO is full in this cycle (`INC_DIRECT`: a `RECORD_INC` write is lost).
+    pub fifo_full: bool,
+    /// The SPI frame layer uses the FIFO's write port in this cycle
+    /// ([`SpiFifoPort::owns_port`]; `INC_DIRECT`: a `RECORD_INC` write is lost and the
+    /// lanes written are forgotten).
+    pub spi_fifo_in_use: bool,
 }
 
 /// State of the register file.
@@ -220,6 +226,10 @@ pub struct RegisterFile {
     push_flight: PeriodRecord,
     /// The record a push wrote (staged) in the previous cycle: committed in this one.
     push_commit: bool,
+    /// `INC_DIRECT`: bit `i` set when `RECORD_INC[i]` was written into the FIFO's record
+    /// (the FIFO not full, its port not the SPI frame layer's) since the last push, flush
+    /// or use of the port by the SPI frame layer.
+    inc_written: u8,
     kick: bool,
     /// `ENC_CONTROL.ARM_INDEX_LATCH` pulses, bit `c` for channel `c`.
     arm_index_latch: u8,
@@ -383,6 +393,7 @@ impl RegisterFile {
             push_active: false,
             push_flight: PeriodRecord::default(),
             push_commit: false,
+            inc_written: 0,
             kick: false,
             arm_index_latch: 0,
             arm_index_clear: 0,
@@ -523,6 +534,13 @@ impl RegisterFile {
         }
     }
 
+    /// `INC_DIRECT`: every axis's `RECORD_INC` was written into the FIFO's record since the
+    /// last push or flush (a push is accepted only then).
+    fn inc_complete(&self) -> bool {
+        let all = (1u16 << self.params.n_axes) - 1;
+        u16::from(self.inc_written) == all
+    }
+
     /// The record `RECORD_PUSH` queues: `RECORD_INC[0..N_AXES)` and `flags`.
     pub fn push_record(&self, flags: u8) -> PeriodRecord {
         let mut record = PeriodRecord { flags, ..PeriodRecord::default() };
@@ -646,6 +664,9 @@ impl RegisterFile {
     /// store for it (the cycle serving the `RECORD_PUSH` write, `served`, and the
     /// `N_AXES - 1` after it); requests that touch the push wait ([`arbitrate`]).
     pub fn bus_hold(&self, served: Option<BusRequest>) -> bool {
+        if self.params.inc_direct {
+            return false; // no push sequence
+        }
         let push_served = matches!(served, Some(r) if r.write
             && r.addr & (ADDRESSES - 1) as u8 == regs::record_push::ADDR);
         push_served || (self.push_seq != 0 && self.push_seq < self.params.n_axes)
@@ -679,8 +700,17 @@ impl RegisterFile {
             inputs.abort = spi.abort;
             refused = self.push;
         } else if self.push {
-            refused = fifo_full;
-            accepted = !fifo_full;
+            refused = fifo_full || (self.params.inc_direct && !self.inc_complete());
+            accepted = !refused;
+        }
+        if self.params.inc_direct {
+            // RECORD_INC is in the FIFO's record already: the push stages it with the
+            // flags, now; it is committed in the next cycle.
+            if accepted {
+                inputs.write = Some(self.push_record(self.push_flags));
+            }
+            inputs.commit |= self.push_commit;
+            return (inputs, refused, accepted);
         }
         let in_flight = self.push_in_flight(accepted);
         if in_flight && self.push_seq == self.params.n_axes {
@@ -943,8 +973,34 @@ impl RegisterFile {
 
         // The push sequence (see `fifo_port`).
         let n_axes = self.params.n_axes;
-        let in_flight = self.push_in_flight(self.push && !inp.push_refused);
-        self.push_commit = in_flight && self.push_seq == n_axes;
+        if self.params.inc_direct {
+            // No sequence: an accepted push is staged now and committed next cycle. The
+            // lanes written: cleared by a push (accepted or not), a flush or the SPI
+            // frame layer's use of the port (its records take the slot), else this
+            // cycle's RECORD_INC write if the FIFO has room (a write in a push's cycle
+            // is lost: it would not be in the record the push stages).
+            self.push_commit = self.push && !inp.push_refused;
+            let lane = match inp.served {
+                Some(BusRequest { write: true, addr, .. }) if !inp.fifo_full && !inp.spi_fifo_in_use && !self.push => {
+                    element_index(
+                        addr & (ADDRESSES - 1) as u8,
+                        regs::record_inc::ADDR,
+                        regs::record_inc::STRIDE,
+                        n_axes,
+                    )
+                }
+                _ => None,
+            };
+            self.inc_written = if self.push || inp.fifo_flush || inp.spi_fifo_in_use {
+                0
+            } else {
+                self.inc_written | lane.map_or(0, |axis| 1 << axis)
+            };
+        }
+        let in_flight = !self.params.inc_direct && self.push_in_flight(self.push && !inp.push_refused);
+        if !self.params.inc_direct {
+            self.push_commit = in_flight && self.push_seq == n_axes;
+        }
         if self.push_seq == 1 {
             self.push_flight = self.push_record(self.push_flags);
         }

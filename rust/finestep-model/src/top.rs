@@ -868,6 +868,8 @@ impl Top {
             underrun,
             push_refused,
             fifo_flush: fifo_inputs.flush,
+            fifo_full: self.fifo.full(),
+            spi_fifo_in_use: spi_port.owns_port(),
         });
         self.fifo.step(&fifo_inputs);
         self.safety.step(&safety_inputs);

@@ -258,6 +258,79 @@ fn write_only_record_inc_reads_zero_and_still_pushes() {
     }
 }
 
+/// `INC_DIRECT` (docs/spec/register_file.md#record_inc-straight-into-the-fifo): a push
+/// queues the increments written since the last push, and only when every axis's was
+/// written; a push without them, or with one missing, is refused (`OVERFLOW`, one refused
+/// record) and queues nothing, where the default build queues `RECORD_INC` as it holds it.
+/// A write of `RECORD_INC` while the FIFO is full is lost: the push after it is refused
+/// even after a flush made room.
+#[test]
+fn direct_record_inc_pushes_only_whole_records() {
+    let bus = ParallelMaster::default();
+    let incs: [i32; 4] = [0x0001_8000, -0x0001_0000, 0x0000_4000, -3];
+    let record = |flags| finestep_model::PeriodRecord::from_raw(&incs, flags);
+    for direct in [false, true] {
+        let params = TopParams {
+            has_spi: false,
+            inc_write_only: true,
+            inc_direct: direct,
+            fifo_depth_log2: 2,
+            ..TopParams::default()
+        };
+        let mut bench = Bench::new(params);
+        bench.bring_up(&bus);
+        let write_incs = |bench: &mut Bench, lanes: usize| {
+            for (axis, &inc) in incs.iter().enumerate().take(lanes) {
+                bus.write32(bench, regs::record_inc::addr(axis), inc as u32);
+            }
+        };
+        let push = |bench: &mut Bench, flags: u32| {
+            bus.write32(bench, regs::record_push::ADDR, regs::record_push::FLAGS.set(0, flags));
+            bench.clock(10);
+        };
+        write_incs(&mut bench, 4);
+        push(&mut bench, 1);
+        // Again without writing, then with 3 of the 4 lanes written.
+        push(&mut bench, 0);
+        write_incs(&mut bench, 3);
+        push(&mut bench, 0);
+        let queued: Vec<_> = bench.top.fifo().records().copied().collect();
+        let refused = bench.reg(regs::refused_record_count::ADDR);
+        let overflow = regs::status::OVERFLOW.get(bench.reg(regs::status::ADDR));
+        if direct {
+            assert_eq!(queued, vec![record(1)]);
+            assert_eq!((refused, overflow), (2, 1));
+        } else {
+            assert_eq!(queued, vec![record(1), record(0), record(0)]);
+            assert_eq!((refused, overflow), (0, 0));
+        }
+        // Fill the FIFO, then write the lanes while it is full and flush: the lanes
+        // written while full are lost (INC_DIRECT), the push is refused.
+        bus.write32(&mut bench, regs::command::ADDR, regs::command::CLEAR_COUNTERS.set(0, 1));
+        while bench.top.fifo_level() < 4 {
+            write_incs(&mut bench, 4);
+            push(&mut bench, 0);
+        }
+        write_incs(&mut bench, 4);
+        bus.write32(&mut bench, regs::command::ADDR, regs::command::FLUSH_FIFO.set(0, 1));
+        bench.clock(10);
+        push(&mut bench, 1);
+        let queued: Vec<_> = bench.top.fifo().records().copied().collect();
+        let refused = bench.reg(regs::refused_record_count::ADDR);
+        if direct {
+            assert!(queued.is_empty(), "{queued:?}");
+            assert_eq!(refused, 1);
+        } else {
+            assert_eq!(queued, vec![record(1)]);
+            assert_eq!(refused, 0);
+        }
+        // The whole record written again is queued.
+        write_incs(&mut bench, 4);
+        push(&mut bench, 0);
+        assert_eq!(bench.top.fifo().records().last().copied(), Some(record(0)), "direct {direct}");
+    }
+}
+
 /// `AXIS_WRITE_ONLY` (docs/spec/register_file.md#write-only-axis-registers):
 /// `AXIS_TIMING_A/B` and `AXIS_MODE` read 0 over the bus, and the core still takes what
 /// was written; without it they read back as written.

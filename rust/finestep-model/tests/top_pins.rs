@@ -45,6 +45,8 @@ fn params() -> impl Strategy<Value = TopParams> {
                 one_snapshot,
                 inc_write_only,
                 axis_write_only,
+                // INC_DIRECT needs INC_WRITE_ONLY; drawn with ONE_SNAPSHOT's bit
+                inc_direct: inc_write_only && one_snapshot,
                 has_spindle,
                 has_outputs,
                 n_gpio,

@@ -68,6 +68,8 @@ pub struct TopBuild {
     pub inc_write_only: bool,
     /// `AXIS_WRITE_ONLY`: `AXIS_TIMING_A/B` and `AXIS_MODE` read 0.
     pub axis_write_only: bool,
+    /// `INC_DIRECT`: a `RECORD_INC` write goes straight into the FIFO's record.
+    pub inc_direct: bool,
     /// The spindle block is built (`HAS_SPINDLE`).
     pub has_spindle: bool,
     /// The logic outputs and the interlock input are built (`HAS_OUTPUTS`).
@@ -98,6 +100,7 @@ pub fn top_build_of(variant: TopVariant) -> TopBuild {
             one_snapshot: ffi::ft_one_snapshot(v) != 0,
             inc_write_only: ffi::ft_inc_write_only(v) != 0,
             axis_write_only: ffi::ft_axis_write_only(v) != 0,
+            inc_direct: ffi::ft_inc_direct(v) != 0,
             has_spindle: ffi::ft_has_spindle(v) != 0,
             has_outputs: ffi::ft_has_outputs(v) != 0,
             n_gpio: ffi::ft_n_gpio(v) as usize,
