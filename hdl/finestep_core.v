@@ -114,6 +114,9 @@ module finestep_core #(
     wire                 timer_block_end;
     wire [N_AXES-1:0]    pbp_req_valid;
     wire [N_AXES-1:0]    pbp_req_negative;
+    // With the step engine: a request of the block not yet taken by its axis's shaper
+    // visit (the engine holds it up to S clocks); 0 with a DDA and a shaper per axis.
+    wire                 pbp_ext_pending;
 
     // The digit-serial engine is the CPLD's: its period timer is shaped for area (the
     // same behaviour, see period_timer).
@@ -151,22 +154,29 @@ module finestep_core #(
             localparam COORD_W = 24;
             localparam DIV_W   = 16;
             localparam TOP     = 24;    // lane 0's top byte holds the PBP_RECORD bits
+            // The clocks between two visits of an axis: the block's decisions must be at
+            // least that far apart (one request per axis per visit, as the DDA's).
+            localparam [DIV_W:0] S_CLOCKS = 1 << SL;
             wire alt_offered = (HAS_ALT != 0) && rec_alt;
             wire offered_pbp = rec_flags[FS_REC_FLAG_PBP_BIT] && !alt_offered;
             wire busy;
             wire done;
-            // The timer is offered nothing while a pbp record runs (its boundaries run idle
-            // periods), and a pbp record as an idle period without BLOCK_END (the block's
-            // done gives it), so the FIFO advances at the boundary that starts it.
-            assign timer_rec_valid = rec_valid && !busy;
-            assign rec_ready       = timer_rec_ready && !busy;
+            // The timer is offered nothing while a pbp record runs or a request of it has
+            // not reached its axis's shaper (its boundaries run idle periods), and a pbp
+            // record as an idle period without BLOCK_END (the block's done gives it), so
+            // the FIFO advances at the boundary that starts it.
+            wire wait_pbp = busy || pbp_ext_pending;
+            assign timer_rec_valid = rec_valid && !wait_pbp;
+            assign rec_ready       = timer_rec_ready && !wait_pbp;
             assign timer_rec_inc   = offered_pbp ? {32*N_AXES{1'b0}} : rec_inc;
             assign timer_rec_flags = offered_pbp ? (rec_flags & ~(8'd1 << FS_REC_FLAG_BLOCK_END_BIT)) : rec_flags;
             wire [1:0] pair = rec_inc[TOP + FS_PBP_RECORD_PAIR_0_BIT +: 2];
-            wire pair_ok = ({1'b0, pair, 1'b1} < N_AXES);
+            wire [DIV_W-1:0] tick = rec_inc[96 +: DIV_W];
+            wire pair_ok = ({1'b0, pair, 1'b1} < N_AXES) && ({1'b0, tick} + 1'b1 >= S_CLOCKS);
             // Taken with the timer's record (a boundary while running); one on a pair not
-            // built is refused (record_error) and runs as the idle period it is.
-            wire take = run && timer_rec_ready && rec_valid && !busy && offered_pbp;
+            // built, or with decisions closer than S clocks, is refused (record_error) and
+            // runs as the idle period it is.
+            wire take = run && timer_rec_ready && rec_valid && !wait_pbp && offered_pbp;
             reg [1:0]       pair_reg;
             reg [DIV_W-1:0] tick_reg;
             reg             end_reg;
@@ -174,7 +184,7 @@ module finestep_core #(
             always @(posedge clk) begin
                 if (take) begin
                     pair_reg <= pair;
-                    tick_reg <= rec_inc[96 +: DIV_W];
+                    tick_reg <= tick;
                     end_reg  <= rec_flags[FS_REC_FLAG_BLOCK_END_BIT];
                 end
                 if (take && !pair_ok)
@@ -228,6 +238,7 @@ module finestep_core #(
             assign pbp_req_negative = {N_AXES{1'b0}};
             assign block_end        = timer_block_end;
             assign record_error     = timer_record_error;
+            wire unused_pending = &{1'b0, pbp_ext_pending};
         end
     endgenerate
 
@@ -327,12 +338,14 @@ module finestep_core #(
             assign dda_req_negative = {N_AXES{1'b0}};
             wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, RAM_BLOCK[0], pbp_req_valid,
                                     pbp_req_negative};
+            assign pbp_ext_pending = 1'b0;
         end else if (STEP_SHARED != 0) begin : shared
             step_engine #(
                 .N_AXES(N_AXES),
                 .P_WIDTH(P_WIDTH),
                 .TIMING_W(TIMING_W),
-                .RAM_BLOCK(RAM_BLOCK)
+                .RAM_BLOCK(RAM_BLOCK),
+                .EXT_REQ(HAS_PBP)
             ) engine (
                 .clk(clk), .rst(rst),
                 .run(dda_run), .p_active(p_active), .inc(inc),
@@ -341,16 +354,20 @@ module finestep_core #(
                 .step_len(step_len), .step_space(step_space), .dir_setup(dir_setup), .dir_hold(dir_hold),
                 .out_mode(out_mode), .invert(invert),
                 .clear_errors(clear_errors), .halt(halt),
+                .ext_req_valid(pbp_req_valid), .ext_req_negative(pbp_req_negative),
+                .ext_pending(pbp_ext_pending),
                 .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
                 .position(position), .rate_error(rate_error), .step_lost(step_lost)
             );
-            // No gantry block with the engine: no axis takes another's requests.
+            // No gantry block with the engine: no axis takes another's requests. The pbp
+            // block's requests reach the engine's shaper visits (EXT_REQ).
             wire unused_slave = &{1'b0, slave_req_valid, slave_req_negative, slave_axis};
             assign dda_req_valid    = {N_AXES{1'b0}};
             assign dda_req_negative = {N_AXES{1'b0}};
-            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, pbp_req_valid, pbp_req_negative};
+            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative};
         end else begin : per_axis
             assign start_ok = 1'b1;
+            assign pbp_ext_pending = 1'b0;
             for (i = 0; i < N_AXES; i = i + 1) begin : axis
                 // The gantry's slave takes the gantry's request, every other axis its DDA's.
                 // A request of the pbp block (only while its record runs, when the DDAs
@@ -399,6 +416,46 @@ module finestep_core #(
             end
         end
     endgenerate
+
+`ifdef FORMAL
+    // The pbp block's hand-off (docs/spec/pbp_interp.md#in-the-core), stated on the ports
+    // of the blocks: the period timer's record port and increments, the block's requests
+    // on the axes and the DDAs' (sim/formal/pbp_handoff.sby: with the step engine and
+    // with a DDA and a shaper per axis).
+    generate
+        if (HAS_PBP != 0) begin : f_pbp
+            reg f_past_valid;
+            initial f_past_valid = 1'b0;
+            initial assume (rst);
+            always @(posedge clk) f_past_valid <= 1'b1;
+            wire f_busy = with_pbp.busy;
+            always @(*) if (f_past_valid && !rst) begin
+                // While a pbp record runs, or a request of it has not reached its axis's
+                // shaper, the period timer is offered nothing and the port is not ready ...
+                if (f_busy || pbp_ext_pending) assert (!timer_rec_valid && !rec_ready);
+                // ... and while it runs every increment the timer hands the DDAs (or the
+                // engine's DDA visits) is zero: they have nothing of their own to request.
+                if (f_busy) assert (inc == {32*N_AXES{1'b0}});
+                // The block requests on one axis at a time, and only on its pair's.
+                assert (!(with_pbp.req_valid2[0] && with_pbp.req_valid2[1]));
+            end
+            always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+                // A halt (or a stop) ends the block's record and its requests from the
+                // next clock.
+                if ($past(halt || !run)) assert (pbp_req_valid == {N_AXES{1'b0}} && !f_busy);
+`ifdef FORMAL_DDA_REQ
+                // With a DDA per axis: from a record's second clock on, no DDA request
+                // (the last of the period before may come in its first). Bounded (task
+                // bmc_per_axis): the induction would need dda_axis's acc < M, which its
+                // own proof shows; with zero increments (above) and acc < M no DDA wraps.
+                if (STEP_SHARED == 0 && f_busy && $past(f_busy)) assert (dda_req_valid == {N_AXES{1'b0}});
+`endif
+                cover (f_busy && $past(f_busy) && |pbp_req_valid);
+                cover ($past(f_busy) && !f_busy && !$past(halt) && run);
+            end
+        end
+    endgenerate
+`endif
 
 endmodule
 

@@ -28,6 +28,12 @@
 //
 // Latency: a DDA visit in cycle n gives the shaper's decision in n+1 and the pin edge and
 // position in n+2.
+//
+// With EXT_REQ (finestep_core's pbp block, docs/spec/step_engine.md#requests-from-outside):
+// a request on ext_req_* in cycle m is held for its axis and taken by the axis's first
+// shaper visit after m (m+1 .. m+S) as that visit's request, the DDA's in its place;
+// ext_pending says one is on the port or held. A second one on an axis must wait S
+// clocks (the sender's rule, as the period timer's for the DDA).
 module step_engine #(
     parameter N_AXES    = 4,
     parameter P_WIDTH   = 20,
@@ -42,7 +48,10 @@ module step_engine #(
     // 1: the DDA's b - M and b + M formed a cycle ahead, in registers (two more carry
     // chains and their flip-flops, fast: the ECP5); 0: formed at the visit (dda_step
     // AHEAD 0: fewer logic cells, the iCE40). Same results either way.
-    parameter SUM_AHEAD = (RAM_BLOCK == 0) ? 1 : 0
+    parameter SUM_AHEAD = (RAM_BLOCK == 0) ? 1 : 0,
+    // 1: requests from outside the DDA on ext_req_* (finestep_core with HAS_PBP); 0: the
+    // ports are not read and ext_pending is 0.
+    parameter EXT_REQ   = 0
 ) (
     // clock, reset
     input  wire                       clk,
@@ -62,6 +71,10 @@ module step_engine #(
     input  wire [3*N_AXES-1:0]        invert,
     input  wire                       clear_errors,
     input  wire                       halt,
+    // requests from outside the DDA (EXT_REQ), one clock each
+    input  wire [N_AXES-1:0]          ext_req_valid,
+    input  wire [N_AXES-1:0]          ext_req_negative,
+    output wire                       ext_pending,     // a request on the port or held
     // pins and status
     output wire [N_AXES-1:0]          pin_a,
     output wire [N_AXES-1:0]          pin_b,
@@ -218,6 +231,40 @@ module step_engine #(
         req_negative_reg <= !rst && wrap_down;
     end
 
+    // ---- Requests from outside (EXT_REQ) ----------------------------------------------
+    // Held per axis from the clock after they come until the axis's shaper visit takes
+    // them (one that comes in a visit of its axis waits for the next); the visited axis's
+    // is chosen a cycle ahead, as its state is, so no select by the slot sits in front of
+    // the shaper's arithmetic. A held request is the visit's, else the DDA's.
+    wire visit_req_valid;
+    wire visit_req_negative;
+    generate
+        if (EXT_REQ != 0) begin : ext
+            reg [N_AXES-1:0] held_reg;
+            reg [N_AXES-1:0] held_negative_reg;
+            reg              visit_held_reg;
+            reg              visit_negative_reg;
+            wire [N_AXES-1:0] held_next = ext_req_valid | (held_reg & ~sh_hot);
+            wire [N_AXES-1:0] negative_next = (ext_req_valid & ext_req_negative) |
+                                              (~ext_req_valid & held_negative_reg);
+            always @(posedge clk) begin
+                held_reg           <= rst ? {N_AXES{1'b0}} : held_next;
+                held_negative_reg  <= negative_next;
+                // The next cycle's shaper visit is of axis slot_reg (not visited now).
+                visit_held_reg     <= !rst && held_next[sh_ix_after] && ({{(32-SL){1'b0}}, sh_axis_after} < N_AXES);
+                visit_negative_reg <= negative_next[sh_ix_after];
+            end
+            assign visit_req_valid    = req_valid_reg || visit_held_reg;
+            assign visit_req_negative = visit_held_reg ? visit_negative_reg : req_negative_reg;
+            assign ext_pending        = (|ext_req_valid) || (|held_reg);
+        end else begin : no_ext
+            assign visit_req_valid    = req_valid_reg;
+            assign visit_req_negative = req_negative_reg;
+            assign ext_pending        = 1'b0;
+            wire unused_ext = &{1'b0, ext_req_valid, ext_req_negative};
+        end
+    endgenerate
+
     // ---- Shaper visit ----------------------------------------------------------------
     // The visited axis's state, loaded a cycle ahead (the reset values until its first
     // visit).
@@ -270,7 +317,7 @@ module step_engine #(
     wire signed [PEND_W-1:0] pending_next;
     shaper_step decide (
         .pending(pending), .level(level), .dir(dir),
-        .req_valid(req_valid_reg), .req_negative(req_negative_reg), .halt(halt),
+        .req_valid(visit_req_valid), .req_negative(visit_req_negative), .halt(halt),
         .len_reached(len_reached), .space_reached(space_reached),
         .setup_reached(setup_reached), .hold_reached(hold_reached),
         .rise(rise), .fall(fall), .dir_change(dir_change), .pending_next(pending_next),
@@ -392,7 +439,7 @@ module step_engine #(
     reg [N_AXES-1:0] f_live;                // the axis's last DDA visit ran
     integer f;
     localparam [PEND_W-1:0] PEND_MAX = 8'sd127;
-    wire signed [PEND_W:0] f_request = req_valid_reg ? (req_negative_reg ? -9'sd1 : 9'sd1) : 9'sd0;
+    wire signed [PEND_W:0] f_request = visit_req_valid ? (visit_req_negative ? -9'sd1 : 9'sd1) : 9'sd0;
     always @(posedge clk) begin
         for (f = 0; f < N_AXES; f = f + 1) begin
             // The spec's accumulator: M/2 + 0 after the first running cycle's visit.

@@ -1,7 +1,9 @@
 // C ABI shim around the Verilated finestep_core (see finestep_sim.h).
 //
-// Seven Verilations of the same RTL are linked (the seventh, Vfinestep_core_pbp, the core
-// with the point-by-point interpolator, traced only): the core without the gantry block
+// Eight Verilations of the same RTL are linked (the seventh and eighth,
+// Vfinestep_core_pbp and Vfinestep_core_pbp_shared, the core with the point-by-point
+// interpolator with a DDA and a shaper per axis and with the step engine, traced only):
+// the core without the gantry block
 // (HAS_GANTRY = 0, what every test that does not exercise the gantry runs), with it, and
 // with the digit-serial step engine (STEP_DIGIT 4, the CPLD's), each without tracing (fast) and with it (Vfinestep_core*_traced); tracing support costs
 // about a third of the speed even when no waveform is open. Each is Verilated from
@@ -17,6 +19,7 @@
 #include "Vfinestep_core_gantry.h"
 #include "Vfinestep_core_gantry_traced.h"
 #include "Vfinestep_core_pbp.h"
+#include "Vfinestep_core_pbp_shared.h"
 #include "Vfinestep_core_serial.h"
 #include "Vfinestep_core_serial_traced.h"
 #include "Vfinestep_core_traced.h"
@@ -293,12 +296,14 @@ uint32_t fs_serial_digit(void) { return FS_SERIAL_DIGIT; }
 fs_sim *fs_new(int variant) {
     // The core with the point-by-point interpolator is Verilated traced only.
     if (variant == 3) return new Sim<Vfinestep_core_pbp, true>;
+    if (variant == 4) return new Sim<Vfinestep_core_pbp_shared, true>;
     if (variant == 1) return new Sim<Untraced<Vfinestep_core_gantry>, false>;
     if (variant == 2) return new Sim<Untraced<Vfinestep_core_serial>, false>;
     return new Sim<Untraced<Vfinestep_core>, false>;
 }
 fs_sim *fs_new_traced(int variant) {
     if (variant == 3) return new Sim<Vfinestep_core_pbp, true>;
+    if (variant == 4) return new Sim<Vfinestep_core_pbp_shared, true>;
     if (variant == 1) return new Sim<Vfinestep_core_gantry_traced, true>;
     if (variant == 2) return new Sim<Vfinestep_core_serial_traced, true>;
     return new Sim<Vfinestep_core_traced, true>;

@@ -88,7 +88,8 @@ int fs_trace_is_fst(void);
 
 /* STEP_DIGIT of the core with the digit-serial step engine (variant 2). */
 uint32_t fs_serial_digit(void);
-/* Variant 3: the core with the point-by-point interpolator (HAS_PBP), traced from both.
+/* Variants 3 and 4: the core with the point-by-point interpolator (HAS_PBP) with a DDA
+ * and a shaper per axis (3) and with the step engine (4), traced from both.
  * A core built without waveform support (the fast one): variant 1 with the gantry block
  * and a DDA and a shaper per axis, 2 with the digit-serial step engine (STEP_DIGIT =
  * fs_serial_digit()), else (0) with the step engine. */

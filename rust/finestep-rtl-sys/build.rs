@@ -273,21 +273,23 @@ fn main() {
     // two blocks cost about a third of the chip's simulation time).
     let core_sim = sim.join("finestep_core_sim.v");
     let mut models = vec![
-        (Build::Core { gantry: false, digit: 0, pbp: false }, "Vfinestep_core", None),
-        (Build::Core { gantry: false, digit: 0, pbp: false }, "Vfinestep_core_traced", Some(trace_flag)),
-        (Build::Core { gantry: true, digit: 0, pbp: false }, "Vfinestep_core_gantry", None),
-        (Build::Core { gantry: true, digit: 0, pbp: false }, "Vfinestep_core_gantry_traced", Some(trace_flag)),
+        (Build::Core { gantry: false, digit: 0, pbp: None }, "Vfinestep_core", None),
+        (Build::Core { gantry: false, digit: 0, pbp: None }, "Vfinestep_core_traced", Some(trace_flag)),
+        (Build::Core { gantry: true, digit: 0, pbp: None }, "Vfinestep_core_gantry", None),
+        (Build::Core { gantry: true, digit: 0, pbp: None }, "Vfinestep_core_gantry_traced", Some(trace_flag)),
         // The core with the digit-serial step engine (the CPLD's), SERIAL_CORE_DIGIT bits
         // a clock.
-        (Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT, pbp: false }, "Vfinestep_core_serial", None),
+        (Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT, pbp: None }, "Vfinestep_core_serial", None),
         (
-            Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT, pbp: false },
+            Build::Core { gantry: false, digit: SERIAL_CORE_DIGIT, pbp: None },
             "Vfinestep_core_serial_traced",
             Some(trace_flag),
         ),
-        // The core with the point-by-point comparison interpolator (HAS_PBP, a DDA and a
-        // shaper per axis, no gantry block), traced only (its own lockstep test).
-        (Build::Core { gantry: false, digit: 0, pbp: true }, "Vfinestep_core_pbp", Some(trace_flag)),
+        // The core with the point-by-point comparison interpolator (HAS_PBP, no gantry
+        // block), traced only (its own lockstep test): with a DDA and a shaper per axis,
+        // and with the step engine (STEP_SHARED = 1, every board top's).
+        (Build::Core { gantry: false, digit: 0, pbp: Some(false) }, "Vfinestep_core_pbp", Some(trace_flag)),
+        (Build::Core { gantry: false, digit: 0, pbp: Some(true) }, "Vfinestep_core_pbp_shared", Some(trace_flag)),
         (Build::Top { motion: false, mpg: true, digit: 0 }, "Vfinestep_top", None),
         (Build::Top { motion: false, mpg: true, digit: 0 }, "Vfinestep_top_traced", Some(trace_flag)),
         // The motion chip once, without tracing (a second traced top would add a third
@@ -633,9 +635,9 @@ enum Build {
     /// `finestep_core` behind its input registers (`sim/finestep_core_sim.v`): with the
     /// gantry block and a DDA and a shaper per axis, or without it and with the shared
     /// step engine (`digit` 0: step_engine; 1, 2, 4, 8: step_serial with that digit);
-    /// `pbp`: with the point-by-point interpolator (`HAS_PBP`, a DDA and a shaper per
-    /// axis, no gantry block).
-    Core { gantry: bool, digit: u32, pbp: bool },
+    /// `pbp`: with the point-by-point interpolator (`HAS_PBP`, no gantry block), with a
+    /// DDA and a shaper per axis (`Some(false)`) or the step engine (`Some(true)`).
+    Core { gantry: bool, digit: u32, pbp: Option<bool> },
     /// `finestep_top`: with its defaults, or without the spindle and the logic outputs
     /// (`motion`, as every board top); without the hand wheel and the jog (`!mpg`); with
     /// the core's digit-serial step engine of `digit` bits a clock (0: the step engine).
@@ -699,7 +701,10 @@ fn verilate(
         Build::StepSerial { .. } => ("step_serial", None, None, None),
         Build::PanelChip => ("finestep_top", None, Some(false), Some(true)),
     };
-    let pbp = matches!(build, Build::Core { pbp: true, .. });
+    let pbp = match build {
+        Build::Core { pbp, .. } => pbp,
+        _ => None,
+    };
     let core_digit = match build {
         Build::Core { digit, .. } => Some(digit),
         Build::Top { digit, .. } => Some(digit),
@@ -788,8 +793,8 @@ fn verilate(
         .arg(format!("-GP_WIDTH={}", params.p_width))
         .arg(format!("-GTIMING_W={}", params.timing_w))
         .args(gantry.map(|g| format!("-GHAS_GANTRY={}", u8::from(g))))
-        .args(gantry.map(|g| format!("-GSTEP_SHARED={}", u8::from(!g && !pbp))))
-        .args(pbp.then_some("-GHAS_PBP=1"))
+        .args(gantry.map(|g| format!("-GSTEP_SHARED={}", u8::from(!g && pbp.unwrap_or(true)))))
+        .args(pbp.is_some().then_some("-GHAS_PBP=1"))
         .args(core_digit.map(|d| format!("-GSTEP_DIGIT={d}")))
         .args((top == "finestep_top").then(|| format!("-GFIFO_DEPTH_LOG2={}", params.fifo_depth_log2)))
         .args((top == "finestep_top").then(|| format!("-GN_ENC={}", params.n_enc)))

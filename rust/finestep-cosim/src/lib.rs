@@ -93,6 +93,12 @@ impl Harness {
         Harness::for_params(name, path, finestep_rtl_sys::core_pbp_params())
     }
 
+    /// Both sides fresh out of reset, with the point-by-point comparison interpolator and
+    /// the step engine ([`finestep_rtl_sys::core_pbp_shared_params`]; traced RTL).
+    pub fn with_pbp_shared(name: &str, path: ModelPath) -> Harness {
+        Harness::for_params(name, path, finestep_rtl_sys::core_pbp_shared_params())
+    }
+
     fn for_params(name: &str, path: ModelPath, params: finestep_model::CoreParams) -> Harness {
         let rtl = Rtl::for_params(&params, false);
         let model = Core::new(params);

@@ -4,7 +4,10 @@
 //! streams that mix DDA records with pbp lines and arcs on both axis pairs: every
 //! quadrant, CW and CCW, arcs crossing quadrants and whole turns, random decision
 //! dividers and `BLOCK_END`s; a halt (E-stop) in the middle of a pbp record and the
-//! motion after it; a record on a pair the core does not have. The end positions are
+//! motion after it; a record on a pair the core does not have. Both cores: with a DDA and
+//! a shaper per axis (`Vfinestep_core_pbp`) and with the step engine
+//! (`Vfinestep_core_pbp_shared`, `STEP_SHARED = 1` as every board top), whose shaper
+//! visits take the block's requests and which refuses a divider below a visit. The end positions are
 //! checked against the records' displacements (a line's end point, an arc's end minus its
 //! start), exact. A failure prints the seed (rerun with FINESTEP_SEED) and the first
 //! cycle, signal, expected and actual value.
@@ -16,6 +19,35 @@ use finestep_model::{AxisConfig, CoreInputs, DriveTiming, Increment, PeriodRecor
 
 const PERIOD: u32 = 40;
 const AXES: usize = 4;
+
+/// One of the two Verilated cores with the block.
+#[derive(Clone, Copy, Debug)]
+enum Variant {
+    /// A DDA and a shaper per axis (`STEP_SHARED = 0`).
+    PerAxis,
+    /// The step engine (`STEP_SHARED = 1`).
+    Shared,
+}
+
+impl Variant {
+    const ALL: [Variant; 2] = [Variant::PerAxis, Variant::Shared];
+
+    fn harness(self, name: &str, path: ModelPath) -> Harness {
+        match self {
+            Variant::PerAxis => Harness::with_pbp(name, path),
+            Variant::Shared => Harness::with_pbp_shared(name, path),
+        }
+    }
+
+    /// Added to the streams' decision dividers (3 and up): with the engine the drive
+    /// timing's step is whole visits, 2 S = 8 clocks, and a divider below S - 1 is refused.
+    fn slower(self) -> u16 {
+        match self {
+            Variant::PerAxis => 0,
+            Variant::Shared => 4,
+        }
+    }
+}
 
 /// xorshift64*: the stream's choices, from the printed seed.
 struct Rng(u64);
@@ -76,31 +108,33 @@ fn dda(steps: [i64; AXES], flags: u8) -> Move {
     Move { record: PeriodRecord::from_raw(&raw, flags), delta: steps }
 }
 
-/// Lines and arcs in every quadrant, both directions, on both pairs, between DDA records.
-fn fixed_moves() -> Vec<Move> {
+/// Lines and arcs in every quadrant, both directions, on both pairs, between DDA records;
+/// the dividers `slower` more than 3 to 5.
+fn fixed_moves(slower: u16) -> Vec<Move> {
     let mut moves = Vec::new();
+    let (t3, t4, t5) = (3 + slower, 4 + slower, 5 + slower);
     for (q, &(sx, sy)) in [(1, 1), (-1, 1), (-1, -1), (1, -1)].iter().enumerate() {
         let pair = (q % 2) as u8;
-        moves.push(line(pair, 9 * sx, 4 * sy, 3, 0));
+        moves.push(line(pair, 9 * sx, 4 * sy, t3, 0));
         moves.push(dda([sx, -sy, 2 * sy, 0], 0));
         for cw in [false, true] {
             // A quarter and more from inside the quadrant: crosses an axis.
-            moves.push(arc(pair, (5 * sx, 3 * sy), cw, 14, 4, 0));
+            moves.push(arc(pair, (5 * sx, 3 * sy), cw, 14, t4, 0));
         }
-        moves.push(line(pair, 0, 7 * sy, 5, flags::BLOCK_END));
-        moves.push(line(1 - pair, 6 * sx, 0, 5, 0));
+        moves.push(line(pair, 0, 7 * sy, t5, flags::BLOCK_END));
+        moves.push(line(1 - pair, 6 * sx, 0, t5, 0));
     }
     // Whole turns both ways, and an arc from an axis point.
-    moves.push(arc(0, (4, 0), false, arc_steps((4, 0), (4, 0), false).unwrap() as usize, 3, 0));
-    moves.push(arc(1, (0, -6), true, arc_steps((0, -6), (0, -6), true).unwrap() as usize, 3, flags::BLOCK_END));
+    moves.push(arc(0, (4, 0), false, arc_steps((4, 0), (4, 0), false).unwrap() as usize, t3, 0));
+    moves.push(arc(1, (0, -6), true, arc_steps((0, -6), (0, -6), true).unwrap() as usize, t3, flags::BLOCK_END));
     moves
 }
 
-fn random_moves(rng: &mut Rng, count: usize) -> Vec<Move> {
+fn random_moves(rng: &mut Rng, count: usize, slower: u16) -> Vec<Move> {
     let mut moves = Vec::new();
     while moves.len() < count {
         let pair = rng.range(0, 1) as u8;
-        let tick = rng.range(3, 9) as u16;
+        let tick = rng.range(3, 9) as u16 + slower;
         let end = if rng.range(0, 4) == 0 { flags::BLOCK_END } else { 0 };
         match rng.range(0, 2) {
             0 => {
@@ -153,53 +187,83 @@ fn sum(moves: &[Move]) -> [i64; AXES] {
 fn pbp_and_dda_records_in_lockstep_and_exact() {
     let seed = finestep_testkit::seed("core_pbp_stream");
     eprintln!("core_pbp_stream: FINESTEP_SEED={seed:#x} (rerun with this to reproduce)");
-    let mut rng = Rng(seed | 1);
-    let mut moves = fixed_moves();
-    moves.extend(random_moves(&mut rng, finestep_testkit::cases(60) as usize));
+    for variant in Variant::ALL {
+        let mut rng = Rng(seed | 1);
+        let mut moves = fixed_moves(variant.slower());
+        moves.extend(random_moves(&mut rng, finestep_testkit::cases(60) as usize, variant.slower()));
+        for path in [ModelPath::PerClock, ModelPath::Fast] {
+            let mut h = variant.harness("core_pbp_stream", path);
+            let mut inp = inputs();
+            h.idle(&inp, 4).unwrap();
+            inp.run = true;
+            let end = stream(&mut h, &mut inp, &moves, seed);
+            assert_eq!(end, sum(&moves), "{variant:?} {path:?} FINESTEP_SEED={seed:#x}: end positions");
+            assert!(!h.outputs().record_error(), "{variant:?}");
+        }
+    }
+}
+
+#[test]
+fn with_the_step_engine_a_divider_below_a_visit_is_refused() {
     for path in [ModelPath::PerClock, ModelPath::Fast] {
-        let mut h = Harness::with_pbp("core_pbp_stream", path);
+        let mut h = Variant::Shared.harness("core_pbp_divider", path);
         let mut inp = inputs();
         h.idle(&inp, 4).unwrap();
         inp.run = true;
-        let end = stream(&mut h, &mut inp, &moves, seed);
-        assert_eq!(end, sum(&moves), "{path:?} FINESTEP_SEED={seed:#x}: end positions");
-        assert!(!h.outputs().record_error());
+        // S = 4 slots: decisions 3 clocks apart are refused (an idle period), 4 apart run.
+        let refused = line(0, 7, -3, 2, 0);
+        h.feed(&mut inp, [refused.record]).unwrap();
+        h.idle(&inp, u64::from(3 * PERIOD)).unwrap();
+        assert_eq!(positions(&h), [0; AXES], "{path:?}: the refused record moved nothing");
+        assert!(h.outputs().record_error(), "{path:?}: refused");
+        inp.clear_errors = true;
+        h.idle(&inp, 2).unwrap();
+        inp.clear_errors = false;
+        let taken = line(0, 7, -3, 3, 0);
+        let end = stream(&mut h, &mut inp, &[taken], 0);
+        assert_eq!(end, [7, -3, 0, 0], "{path:?}");
+        assert!(!h.outputs().record_error(), "{path:?}");
     }
 }
 
 #[test]
 fn a_halt_stops_a_pbp_record_and_the_motion_after_it_is_exact() {
-    for path in [ModelPath::PerClock, ModelPath::Fast] {
-        let mut h = Harness::with_pbp("core_pbp_halt", path);
+    for (variant, path) in Variant::ALL.into_iter().flat_map(|v| [(v, ModelPath::PerClock), (v, ModelPath::Fast)]) {
+        let slower = variant.slower();
+        let mut h = variant.harness("core_pbp_halt", path);
         let mut inp = inputs();
         h.idle(&inp, 4).unwrap();
         inp.run = true;
         // A long line on pair 1, halted in its middle (E-stop: the top raises halt, then
         // drops run and empties the FIFO).
-        let long = line(1, 150, -70, 5, 0);
+        let long = line(1, 150, -70, 5 + slower, 0);
         h.feed(&mut inp, [long.record]).unwrap();
         h.idle(&inp, 400).unwrap();
         let before = positions(&h);
-        assert!(before[2] > 0 && before[2] < 150, "{path:?}: the line is under way: {before:?}");
+        assert!(before[2] > 0 && before[2] < 150, "{variant:?} {path:?}: the line is under way: {before:?}");
         inp.halt = true;
         h.idle(&inp, 3).unwrap();
         let halted = positions(&h);
         h.idle(&inp, 300).unwrap();
-        assert_eq!(positions(&h), halted, "{path:?}: no step after the halt");
+        assert_eq!(positions(&h), halted, "{variant:?} {path:?}: no step after the halt");
         inp.run = false;
         h.idle(&inp, 10).unwrap();
         inp.halt = false;
         h.idle(&inp, 10).unwrap();
-        assert!(h.outputs().rec_ready() || !inp.run, "{path:?}");
+        assert!(h.outputs().rec_ready() || !inp.run, "{variant:?} {path:?}");
         // The motion after it: from where the halt left the axes.
         inp.run = true;
-        let after = [line(1, -9, 12, 4, 0), dda([1, -2, 0, 3], 0), arc(0, (6, -2), true, 20, 4, flags::BLOCK_END)];
+        let after = [
+            line(1, -9, 12, 4 + slower, 0),
+            dda([1, -2, 0, 3], 0),
+            arc(0, (6, -2), true, 20, 4 + slower, flags::BLOCK_END),
+        ];
         let end = stream(&mut h, &mut inp, &after, 0);
         let mut expect = halted;
         for (e, d) in expect.iter_mut().zip(sum(&after)) {
             *e += d;
         }
-        assert_eq!(end, expect, "{path:?}");
+        assert_eq!(end, expect, "{variant:?} {path:?}");
         // A record on pair 2 (axes 4 and 5, not built): refused, an idle period.
         let refused = line(1, 5, 5, 4, 0);
         let mut record = refused.record;
@@ -209,10 +273,10 @@ fn a_halt_stops_a_pbp_record_and_the_motion_after_it_is_exact() {
             h.idle(&inp, u64::from(3 * PERIOD)).unwrap();
             positions(&h)
         };
-        assert_eq!(end, expect, "{path:?}: the refused record moved nothing");
-        assert!(h.outputs().record_error(), "{path:?}: refused");
+        assert_eq!(end, expect, "{variant:?} {path:?}: the refused record moved nothing");
+        assert!(h.outputs().record_error(), "{variant:?} {path:?}: refused");
         inp.clear_errors = true;
         h.idle(&inp, 2).unwrap();
-        assert!(!h.outputs().record_error(), "{path:?}: cleared");
+        assert!(!h.outputs().record_error(), "{variant:?} {path:?}: cleared");
     }
 }

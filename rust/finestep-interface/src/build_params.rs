@@ -95,7 +95,7 @@ pub struct CoreParams {
     pub step_digit: u32,
     /// `HAS_PBP`: the point-by-point comparison interpolator runs the records with the
     /// flag PBP on the axis pair they name ([`finestep_core::HAS_PBP`],
-    /// docs/spec/pbp_interp.md#in-the-core); needs 4 axes and `STEP_SHARED = 0`.
+    /// docs/spec/pbp_interp.md#in-the-core); needs 4 axes and not the digit-serial engine.
     pub has_pbp: bool,
 }
 
@@ -128,8 +128,8 @@ impl CoreParams {
         finestep_core::STEP_SHARED.check(self.step_shared)?;
         finestep_core::STEP_DIGIT.check(self.step_digit)?;
         finestep_core::HAS_PBP.check(self.has_pbp)?;
-        if self.has_pbp && (self.n_axes < 4 || self.step_shared) {
-            let because = "HAS_PBP needs N_AXES >= 4 and STEP_SHARED = 0";
+        if self.has_pbp && (self.n_axes < 4 || self.step_serial()) {
+            let because = "HAS_PBP needs N_AXES >= 4 and no digit-serial engine (STEP_SHARED = 0 or STEP_DIGIT = 0)";
             return Err(finestep_core::HAS_PBP.narrowed(1, 0, 0, because));
         }
         if !matches!(self.step_digit, 0 | 1 | 2 | 4 | 8) {

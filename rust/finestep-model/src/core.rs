@@ -379,27 +379,49 @@ impl Core {
         out
     }
 
-    /// `rec_ready`: the period timer's, held low while a pbp record runs.
+    /// `rec_ready`: the period timer's, held low while a pbp record runs or a request of
+    /// it waits for its axis's shaper visit.
     pub fn rec_ready(&self) -> bool {
-        self.timer.rec_ready() && !self.pbp.as_ref().is_some_and(PbpCore::busy)
+        self.timer.rec_ready() && !self.pbp_waits()
     }
 
-    /// The pbp block's edge (with the values of this cycle: the timer's boundary, the
-    /// block's busy) and the record the period timer is offered: none while a pbp record
-    /// runs; a pbp record as an idle period without `BLOCK_END`.
-    fn pbp_edge(&mut self, inputs: &CoreInputs) -> (bool, PeriodRecord) {
+    /// The block's requests of this cycle, per axis (+1, -1 or 0; none without it).
+    fn pbp_requests(&self) -> [i8; MAX_AXES] {
+        let mut reqs = [0i8; MAX_AXES];
+        if let Some(p) = &self.pbp {
+            for (i, r) in reqs.iter_mut().enumerate().take(self.params.n_axes) {
+                *r = p.request(i);
+            }
+        }
+        reqs
+    }
+
+    /// The pbp block holds the record port: its record runs, or (with the step engine)
+    /// one of its requests has not reached its axis's shaper visit yet.
+    fn pbp_waits(&self) -> bool {
+        self.pbp.as_ref().is_some_and(PbpCore::busy)
+            || self.engine.as_ref().is_some_and(|e| e.ext_pending(&self.pbp_requests()))
+    }
+
+    /// The pbp block's edge (with the values of this cycle: the timer's boundary, `wait`
+    /// = [`Self::pbp_waits`] before the edge) and the record the period timer is offered:
+    /// none while the block waits; a pbp record as an idle period without `BLOCK_END`.
+    fn pbp_edge(&mut self, inputs: &CoreInputs, wait: bool) -> (bool, PeriodRecord) {
         let n = self.params.n_axes;
+        let slots = self.params.step_slots();
         let timer_ready = self.timer.rec_ready();
         let Some(p) = self.pbp.as_mut() else { return (inputs.rec_valid, inputs.record) };
         use finestep_interface::{flags, pbp_record};
-        let busy = p.busy();
         let record = &inputs.record;
         let offered = record.flags & flags::PBP != 0;
         let lane = |k: usize| record.inc[k].to_bits() as u32;
         let top = lane(0) >> pbp_lanes::TOP;
         let pair = ((top >> pbp_record::PAIR_0_BIT) & 0b11) as usize;
-        let pair_ok = 2 * pair + 1 < n;
-        let take = inputs.run && timer_ready && inputs.rec_valid && !busy && offered;
+        let tick_div = lane(3) & ((1 << pbp_lanes::DIV_W) - 1);
+        // The pair is built, and the decisions are at least a visit of the step engine
+        // apart (S clocks; 1 without it): one request per axis per visit.
+        let pair_ok = 2 * pair + 1 < n && tick_div + 1 >= slots;
+        let take = inputs.run && timer_ready && inputs.rec_valid && !wait && offered;
         // The lanes as they reach the block's ports (it keeps COORD_W and COUNT_W bits).
         let rec = PbpRecord {
             arc: top & u32::from(pbp_record::ARC) != 0,
@@ -416,7 +438,7 @@ impl Core {
         });
         if take {
             p.pair = pair;
-            p.tick_div = lane(3) & ((1 << pbp_lanes::DIV_W) - 1);
+            p.tick_div = tick_div;
             p.block_end = record.block_end();
         }
         if take && !pair_ok {
@@ -425,9 +447,9 @@ impl Core {
             p.refused = false;
         }
         if offered {
-            (inputs.rec_valid && !busy, PeriodRecord::from_raw(&[], record.flags & !flags::BLOCK_END))
+            (inputs.rec_valid && !wait, PeriodRecord::from_raw(&[], record.flags & !flags::BLOCK_END))
         } else {
-            (inputs.rec_valid && !busy, *record)
+            (inputs.rec_valid && !wait, *record)
         }
     }
 
@@ -471,6 +493,7 @@ impl Core {
         let mut changed = false;
         // With the pbp block its outputs change too: compared as a whole.
         let before = self.pbp.is_some().then(|| self.outputs());
+        let wait = self.pbp_waits();
         // The DDA requests of this cycle, and the gantry's choice among them.
         let mut reqs = [0i8; MAX_AXES];
         for (r, dda) in reqs.iter_mut().zip(&self.dda[..n]) {
@@ -478,12 +501,7 @@ impl Core {
         }
         // The pbp block's requests, which take the pair's shapers while its record runs
         // (the DDAs are idle then).
-        let mut pbp_reqs = [0i8; MAX_AXES];
-        if let Some(p) = &self.pbp {
-            for (i, r) in pbp_reqs.iter_mut().enumerate().take(n) {
-                *r = p.request(i);
-            }
-        }
+        let pbp_reqs = self.pbp_requests();
         let gantry = self.gantry;
         let increments = self.timer.inc;
         let axes = self.shaper[..n].iter_mut().zip(&mut self.dda[..n]).zip(&self.timer.inc[..n]).enumerate();
@@ -516,7 +534,7 @@ impl Core {
                 dda.step(running, period, d, m);
             }
         }
-        changed |= self.timer_edge(inputs, period, 0, 0);
+        changed |= self.timer_edge(inputs, period, 0, 0, wait);
         before.map_or(changed, |before| self.outputs() != before)
     }
 
@@ -532,6 +550,10 @@ impl Core {
     ) -> bool {
         let n = self.params.n_axes;
         let slot = engine.slot;
+        // With the pbp block its outputs change too: compared as a whole. Its requests
+        // reach the engine's shaper visits (held until then).
+        let before = self.pbp.is_some().then(|| self.outputs());
+        let wait = self.pbp_waits();
         let changed = engine.step(
             &EngineInputs {
                 running: inputs.run && self.timer.active,
@@ -539,13 +561,15 @@ impl Core {
                 inc: &self.timer.inc,
                 clear_errors: inputs.clear_errors,
                 counter_max: self.counter_max,
+                ext: self.pbp_requests(),
             },
             axis,
             &mut self.dda[..n],
             &mut self.shaper[..n],
         );
         self.engine = Some(engine);
-        changed | self.timer_edge(inputs, period, engine.slot_bits, slot)
+        let changed = changed | self.timer_edge(inputs, period, engine.slot_bits, slot, wait);
+        before.map_or(changed, |before| self.outputs() != before)
     }
 
     /// One rising edge of a core with the digit-serial step engine: the engine's clock
@@ -581,16 +605,18 @@ impl Core {
         serial.collect_digit();
         serial.engine.step(&inp);
         let bits = self.params.step_round_bits();
-        self.timer_edge(inputs, period, bits, phase);
+        // (no pbp block with the digit-serial engine: nothing waits)
+        self.timer_edge(inputs, period, bits, phase, false);
         self.outputs() != before
     }
 
     /// The period timer's edge (with the engine's `SL` and this cycle's `slot`, 0 and 0
-    /// without it) and the cycle count; returns whether the timer's outputs changed.
+    /// without it; `pbp_wait`: [`Self::pbp_waits`] before the edge) and the cycle count;
+    /// returns whether the timer's outputs changed.
     #[inline(always)]
-    fn timer_edge(&mut self, inputs: &CoreInputs, period: u32, slot_bits: u32, slot: u32) -> bool {
+    fn timer_edge(&mut self, inputs: &CoreInputs, period: u32, slot_bits: u32, slot: u32, pbp_wait: bool) -> bool {
         let timer_before = self.timer.output_bits();
-        let (rec_valid, record) = self.pbp_edge(inputs);
+        let (rec_valid, record) = self.pbp_edge(inputs, pbp_wait);
         self.timer.step(&TimerInputs {
             run: inputs.run,
             period,

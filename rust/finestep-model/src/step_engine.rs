@@ -23,6 +23,11 @@
 //! `pin_en <- (axis_enable && !halt) ^ invert[2]` in every cycle. Latency: a DDA visit in
 //! cycle `n`, the rise decision in `n + 1`, `position` and the pin edge in `n + 2`.
 //!
+//! Requests from outside the DDA (`EXT_REQ`: the core's pbp block,
+//! docs/spec/step_engine.md#requests-from-outside): one in cycle `m` is held for its axis
+//! (`held`) and taken by the axis's first shaper visit after `m` (`m + 1 ..= m + S`) as
+//! that visit's request, in place of the DDA's; the sender keeps them `S` clocks apart.
+//!
 //! The per-axis stores (`acc`, `req`; `pending`, `level`, `dir`, `cnt`, `dcnt`, `quad`,
 //! `position`, the flags and the pins) are the core's [`DdaAxis`] and [`StepShaper`]
 //! arrays, the engine's RAM: [`Core::dda`](crate::Core::dda) and
@@ -32,6 +37,7 @@
 use crate::config::AxisSettings;
 use crate::dda_axis::{DdaAxis, ONE_STEP};
 use crate::step_shaper::{enable_pin, StepShaper, PIN_EN};
+use crate::MAX_AXES;
 
 /// The engine's schedule (`SL`, `slot`) and each axis's `live` bit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -43,6 +49,10 @@ pub struct StepEngine {
     /// `live[a]` at bit `a`: axis `a`'s accumulator holds a running value (else its next
     /// running visit starts from `M / 2`).
     pub(crate) live: u8,
+    /// A request from outside held for axis `a` at bit `a` (its next shaper visit takes
+    /// it), and its sign (bit set: negative).
+    pub(crate) held: u8,
+    pub(crate) held_negative: u8,
 }
 
 /// This cycle's inputs of the engine that are not per axis.
@@ -58,12 +68,14 @@ pub(crate) struct EngineInputs<'a> {
     pub(crate) clear_errors: bool,
     /// Saturation value of `cnt` and `dcnt`, `2^TIMING_W - 1`.
     pub(crate) counter_max: u32,
+    /// The requests from outside in this cycle, per axis (+1, -1 or 0).
+    pub(crate) ext: [i8; MAX_AXES],
 }
 
 impl StepEngine {
     /// The reset state (`slot = 0`, no axis live) for `slot_bits = SL`.
     pub fn new(slot_bits: u32) -> StepEngine {
-        StepEngine { slot_bits, slot: 0, live: 0 }
+        StepEngine { slot_bits, slot: 0, live: 0, held: 0, held_negative: 0 }
     }
 
     /// `S = 2^SL`: the clocks between two visits of an axis.
@@ -80,6 +92,22 @@ impl StepEngine {
     /// visit adds to it rather than starting from `M / 2`).
     pub fn live(&self, axis: usize) -> bool {
         axis < 8 && self.live & (1 << axis) != 0
+    }
+
+    /// A request from outside is in this cycle's inputs (`ext`) or held: one that has
+    /// not reached its axis's shaper visit.
+    pub fn ext_pending(&self, ext: &[i8]) -> bool {
+        self.held != 0 || ext.iter().any(|&r| r != 0)
+    }
+
+    /// The request a shaper visit of `axis` takes: the held one, else the DDA's `req`.
+    #[inline(always)]
+    fn visit_request(&self, axis: usize, req: i8) -> i8 {
+        match (self.held >> axis & 1 != 0, self.held_negative >> axis & 1 != 0) {
+            (true, true) => -1,
+            (true, false) => 1,
+            _ => req,
+        }
     }
 
     /// The axis whose DDA this cycle visits (`slot`; `None` at and above `n_axes`).
@@ -121,8 +149,10 @@ impl StepEngine {
             let set = axis(i);
             let before = sh.output_bits();
             if visited == Some(i) {
-                // The request the DDA visit of the previous cycle left.
-                let d = sh.decide(dda[i].req, &set, |count, x| Self::reached(self.slot_bits, count, x));
+                // The request held for the axis, else the one the DDA visit of the
+                // previous cycle left.
+                let r = self.visit_request(i, dda[i].req);
+                let d = sh.decide(r, &set, |count, x| Self::reached(self.slot_bits, count, x));
                 sh.apply(d, set.halt, inp.counter_max, inp.clear_errors);
                 // Pins A and B from the state the visit leaves.
                 sh.pins = sh.step_pins(&set) | enable_pin(&set);
@@ -151,6 +181,17 @@ impl StepEngine {
             // A stop of any length restarts every accumulator.
             self.live = 0;
         }
+        // The requests from outside: held from the next cycle until their axis's shaper
+        // visit (the visit of this cycle takes the one held before, not one coming now).
+        for (a, &r) in inp.ext.iter().enumerate().take(n) {
+            let bit = 1u8 << a;
+            if r != 0 {
+                self.held |= bit;
+                self.held_negative = if r < 0 { self.held_negative | bit } else { self.held_negative & !bit };
+            } else if visited == Some(a) {
+                self.held &= !bit;
+            }
+        }
         self.slot = (self.slot + 1) & (self.slots() - 1);
         changed
     }
@@ -170,7 +211,14 @@ mod tests {
         ] {
             let mut e = StepEngine::new(sl);
             let inc = [0; 8];
-            let inp = EngineInputs { running: false, p_act: 8, inc: &inc, clear_errors: false, counter_max: 15 };
+            let inp = EngineInputs {
+                running: false,
+                p_act: 8,
+                inc: &inc,
+                clear_errors: false,
+                counter_max: 15,
+                ext: [0; MAX_AXES],
+            };
             let mut d = [DdaAxis::default(); 8];
             let mut s = [StepShaper::new(15); 8];
             for round in 0..3 {
@@ -189,7 +237,14 @@ mod tests {
         let inc = [5 << 15, -1, 0, 0, 0, 0, 0, 0];
         // P = 8, S = 2: V = 4, M = 4 * 65536.
         let m = 4 * ONE_STEP;
-        let running = |running| EngineInputs { running, p_act: 8, inc: &inc, clear_errors: false, counter_max: 15 };
+        let running = |running| EngineInputs {
+            running,
+            p_act: 8,
+            inc: &inc,
+            clear_errors: false,
+            counter_max: 15,
+            ext: [0; MAX_AXES],
+        };
         let mut d = [DdaAxis { acc: 12345, req: 1 }; 2];
         let mut s = [StepShaper::new(15); 2];
         e.step(&running(false), |_| AxisSettings::default(), &mut d, &mut s);
@@ -203,6 +258,47 @@ mod tests {
         assert_eq!(e.live, 0);
         e.step(&running(true), |_| AxisSettings::default(), &mut d, &mut s);
         assert_eq!((d[0].acc, d[0].req), (m / 2 + (5 << 15) - m, 1), "from M/2 again");
+    }
+
+    #[test]
+    fn a_request_from_outside_waits_for_its_axis_s_next_shaper_visit() {
+        // S = 4, 4 axes, the DDAs stopped: only the requests from outside move axis 1,
+        // whose shaper visits are the cycles with slot 2.
+        let inc = [0; 8];
+        let mut ext = [0i8; MAX_AXES];
+        let mut e = StepEngine::new(2);
+        let mut d = [DdaAxis::default(); 4];
+        let mut s = [StepShaper::new(15); 4];
+        let set = |_| AxisSettings { timing: DriveTiming::new(1, 1, 1, 1), ..AxisSettings::default() };
+        let mut edge = |e: &mut StepEngine, d: &mut [DdaAxis], s: &mut [StepShaper], ext: [i8; MAX_AXES]| {
+            let inp = EngineInputs { running: false, p_act: 8, inc: &inc, clear_errors: false, counter_max: 15, ext };
+            e.step(&inp, set, d, s);
+        };
+        // (slot of the request's cycle m, the cycle m + wait of the visit that takes it)
+        for (slot, wait) in [(1, 1), (2, 4), (3, 3), (0, 2)] {
+            while e.slot() != slot {
+                edge(&mut e, &mut d, &mut s, ext);
+            }
+            let before = (s[1].position, s[1].pending);
+            ext[1] = 1;
+            // The edges ending cycles m .. m + wait - 1: held, not yet taken.
+            for k in 0..wait {
+                edge(&mut e, &mut d, &mut s, ext);
+                ext[1] = 0;
+                assert_eq!((s[1].position, s[1].pending), before, "slot {slot}: taken in cycle m + {k}");
+                assert!(e.ext_pending(&ext), "slot {slot}: held after cycle m + {k}");
+            }
+            // The edge ending the visit in m + wait takes it.
+            edge(&mut e, &mut d, &mut s, ext);
+            assert_ne!((s[1].position, s[1].pending), before, "slot {slot}: taken in cycle m + {wait}");
+            assert!(!e.ext_pending(&ext), "slot {slot}: no longer held");
+            // The step goes out; then the next request.
+            for _ in 0..16 {
+                edge(&mut e, &mut d, &mut s, ext);
+            }
+        }
+        assert_eq!(s[1].position, 4, "four requests, four steps");
+        assert_eq!([s[0].position, s[2].position, s[3].position], [0; 3], "the other axes stay");
     }
 
     #[test]

@@ -5,8 +5,11 @@
 //! a quarter, a half, a whole turn and a short prefix) on both axis pairs, between DDA
 //! records: after every step the pair moved one step on one axis, a line's position is
 //! within one step of its segment, an arc's within one step of its circle; the end point
-//! is exact, and the axes off the pair do not move. The ideals are the integer ones of
-//! the block's own test (tests/geometry), not the model's helpers.
+//! is exact, and the axes off the pair do not move. Both with a DDA and a shaper per axis
+//! and with the step engine (`STEP_SHARED = 1`, the board tops'), which takes the block's
+//! requests at its shaper visits; a record whose decisions come closer than a visit (`S`
+//! clocks) is refused there. The ideals are the integer ones of the block's own test
+//! (tests/geometry), not the model's helpers.
 
 use finestep_interface::{flags, PbpLanes};
 use finestep_model::{AxisConfig, Core, CoreInputs, CoreParams, DriveTiming, PeriodRecord, MAX_AXES};
@@ -28,18 +31,23 @@ enum Ideal {
 struct Bench {
     core: Core,
     inputs: CoreInputs,
+    /// The decision divider: a decision every `tick_div + 1` clocks, at least the
+    /// drive timing's step (with the engine its timings are whole visits: 2 S clocks).
+    tick_div: u16,
 }
 
 impl Bench {
-    fn new() -> Bench {
-        let mut core =
-            Core::new(CoreParams { has_pbp: true, step_shared: false, has_gantry: false, ..CoreParams::default() });
+    /// With the step engine (`shared`) or a DDA and a shaper per axis.
+    fn new(shared: bool) -> Bench {
+        let params = CoreParams { has_pbp: true, step_shared: shared, has_gantry: false, ..CoreParams::default() };
+        let mut core = Core::new(params);
         let axis = AxisConfig { timing: DriveTiming::new(1, 1, 1, 1), enable: true, ..AxisConfig::default() };
         let mut inputs =
             CoreInputs { run: false, period_clocks: PERIOD, axes: [axis; MAX_AXES], ..CoreInputs::default() };
         core.step(&inputs);
         inputs.run = true;
-        Bench { core, inputs }
+        let tick_div = if shared { 2 * params.step_slots() as u16 - 1 } else { 2 };
+        Bench { core, inputs, tick_div }
     }
 
     fn positions(&self) -> [i64; 4] {
@@ -109,32 +117,68 @@ impl Bench {
     }
 }
 
-fn line(pair: u8, xe: i64, ye: i64) -> PeriodRecord {
-    let lanes = PbpLanes { pair, x: xe as i32, y: ye as i32, tick_div: 2, ..PbpLanes::default() };
+fn line(pair: u8, xe: i64, ye: i64, tick_div: u16) -> PeriodRecord {
+    let lanes = PbpLanes { pair, x: xe as i32, y: ye as i32, tick_div, ..PbpLanes::default() };
     PeriodRecord::pbp(&lanes, 0)
 }
 
 #[test]
 fn every_line_up_to_10_on_both_pairs_stays_within_a_step_and_ends_exactly() {
-    let mut bench = Bench::new();
-    for pair in 0..2u8 {
-        for xe in -10i64..=10 {
-            for ye in -10i64..=10 {
-                let what = format!("line ({xe}, {ye}) on pair {pair}");
-                let end = bench.run(line(pair, xe, ye), usize::from(pair), Some(Ideal::Line(xe, ye)), &what);
-                assert_eq!(end, (xe, ye), "{what}: end point");
+    for shared in [false, true] {
+        let mut bench = Bench::new(shared);
+        for pair in 0..2u8 {
+            for xe in -10i64..=10 {
+                for ye in -10i64..=10 {
+                    let what = format!("line ({xe}, {ye}) on pair {pair}, engine {shared}");
+                    let record = line(pair, xe, ye, bench.tick_div);
+                    let end = bench.run(record, usize::from(pair), Some(Ideal::Line(xe, ye)), &what);
+                    assert_eq!(end, (xe, ye), "{what}: end point");
+                }
+                // A DDA record between: the pbp records start from wherever it left the axes.
+                let dda = PeriodRecord::from_raw(&[1 << 16, -(2 << 16), 3 << 16, -(1 << 16)], flags::BLOCK_END);
+                bench.run(dda, 2, None, "dda");
             }
-            // A DDA record between: the pbp records start from wherever it left the axes.
-            let dda = PeriodRecord::from_raw(&[1 << 16, -(2 << 16), 3 << 16, -(1 << 16)], flags::BLOCK_END);
-            bench.run(dda, 2, None, "dda");
         }
     }
 }
 
 #[test]
+fn with_the_step_engine_decisions_closer_than_a_visit_are_refused() {
+    let mut bench = Bench::new(true);
+    let slots = bench.core.params().step_slots() as u16;
+    let start = bench.positions();
+    // S - 1 clocks apart: refused, an idle period, record_error; S apart: taken.
+    bench.inputs.rec_valid = true;
+    bench.inputs.record = line(0, 5, 3, slots - 2);
+    for _ in 0..4 * PERIOD {
+        bench.core.step(&bench.inputs);
+    }
+    bench.inputs.rec_valid = false;
+    for _ in 0..4 * PERIOD {
+        bench.core.step(&bench.inputs);
+    }
+    assert!(bench.core.outputs().record_error(), "refused");
+    assert_eq!(bench.positions(), start, "a refused record moves nothing");
+    bench.inputs.clear_errors = true;
+    bench.core.step(&bench.inputs);
+    bench.inputs.clear_errors = false;
+    bench.tick_div = slots - 1;
+    // (the shaper falls behind at this rate, as the block's spec says, and catches up)
+    let what = "line (5, 3) with decisions S clocks apart";
+    let end = bench.run(line(0, 5, 3, slots - 1), 0, Some(Ideal::Line(5, 3)), what);
+    assert_eq!(end, (5, 3), "{what}");
+}
+
+#[test]
 fn arcs_up_to_r2_64_stay_within_a_step_of_the_circle_and_end_exactly() {
+    for shared in [false, true] {
+        arcs(shared);
+    }
+}
+
+fn arcs(shared: bool) {
     use finestep_model::pbp_interp::arc_steps;
-    let mut bench = Bench::new();
+    let mut bench = Bench::new(shared);
     let mut count = 0;
     for x0 in -8i64..=8 {
         for y0 in -8i64..=8 {
@@ -156,11 +200,11 @@ fn arcs_up_to_r2_64_stay_within_a_step_of_the_circle_and_end_exactly() {
                         x: x0 as i32,
                         y: y0 as i32,
                         steps: k,
-                        tick_div: 3,
+                        tick_div: bench.tick_div.max(3),
                     };
                     let pair = count % 2;
                     count += 1;
-                    let what = format!("arc from ({x0}, {y0}) cw {cw}, {k} of {full} decisions");
+                    let what = format!("arc from ({x0}, {y0}) cw {cw}, {k} of {full} decisions, engine {shared}");
                     let (dx, dy) = bench.run(PeriodRecord::pbp(&lanes, 0), pair, Some(Ideal::Arc(x0, y0)), &what);
                     let end = (x0 + dx, y0 + dy);
                     let end_r2 = (end.0 as i128).pow(2) + (end.1 as i128).pow(2);

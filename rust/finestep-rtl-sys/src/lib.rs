@@ -99,6 +99,14 @@ pub fn core_pbp_params() -> CoreParams {
     CoreParams { has_pbp: true, step_shared: false, ..params() }
 }
 
+/// The parameters of the Verilated core [`Rtl::for_params`] makes with the point-by-point
+/// comparison interpolator and the step engine (`STEP_SHARED = 1`, as every board top
+/// builds the core; docs/spec/pbp_interp.md#in-the-core): [`params`] with `HAS_PBP`.
+/// Verilated with waveform support only.
+pub fn core_pbp_shared_params() -> CoreParams {
+    CoreParams { has_pbp: true, ..params() }
+}
+
 /// Whether waveforms are written as FST (feature `fst`) rather than VCD.
 pub fn trace_is_fst() -> bool {
     // SAFETY: pure function.
@@ -167,7 +175,8 @@ impl Rtl {
     }
 
     /// The core built as `params` say ([`params`], [`gantry_params`],
-    /// [`serial_params`] or [`core_pbp_params`]), able to write waveforms when `traced`.
+    /// [`serial_params`], [`core_pbp_params`] or [`core_pbp_shared_params`]), able to
+    /// write waveforms when `traced`.
     ///
     /// # Panics
     /// If `params` are none of them.
@@ -180,6 +189,8 @@ impl Rtl {
             2
         } else if *params == core_pbp_params() {
             3
+        } else if *params == core_pbp_shared_params() {
+            4
         } else {
             panic!("no Verilated core was built with these parameters")
         };
