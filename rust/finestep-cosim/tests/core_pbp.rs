@@ -250,7 +250,7 @@ fn a_halt_stops_a_pbp_record_and_the_motion_after_it_is_exact() {
         h.idle(&inp, 10).unwrap();
         inp.halt = false;
         h.idle(&inp, 10).unwrap();
-        assert!(h.outputs().rec_ready() || !inp.run, "{variant:?} {path:?}");
+        assert_eq!(positions(&h), halted, "{variant:?} {path:?}: nothing moves while stopped and released");
         // The motion after it: from where the halt left the axes.
         inp.run = true;
         let after = [
@@ -264,7 +264,8 @@ fn a_halt_stops_a_pbp_record_and_the_motion_after_it_is_exact() {
             *e += d;
         }
         assert_eq!(end, expect, "{variant:?} {path:?}");
-        // A record on pair 2 (axes 4 and 5, not built): refused, an idle period.
+        // A record on pair 3 (pair 1's record with bit 1 of PAIR also set: axes 6 and 7,
+        // not built): refused, an idle period.
         let refused = line(1, 5, 5, 4, 0);
         let mut record = refused.record;
         record.inc[0] = Increment::from_bits(record.inc[0].to_bits() | (2 << (PbpLanes::TOP + 4)));

@@ -4,13 +4,16 @@
 //! evenly); an arc becomes one record per turn or part of a turn with its decision count
 //! from `arc_steps`, its centre on the step grid and its end moved onto the path (the
 //! path point nearest the programmed end: where the move really ends, which the caller
-//! takes as the next move's start). The rate of decisions follows the feed.
+//! takes as the next move's start). Whether a part whose end lands on its start's path
+//! point is a whole turn or nothing is the caller's to say from the program (its sweep),
+//! never read from steps: an arc shorter than a step sends nothing, a full circle or an
+//! arc a step short of one a whole turn. The rate of decisions follows the feed.
 //!
 //! ```
 //! use finestep_planner::pbp::{arc_records, line_records};
 //! let lines = line_records((0, 0), (20_000_000, -3), 9);
 //! assert_eq!(lines.len(), 3);
-//! let arc = arc_records((1000, 0), (0, 0), (0, 1000), false, 0, 9).unwrap();
+//! let arc = arc_records((1000, 0), (0, 0), (0, 1000), false, 0, false, 9).unwrap();
 //! assert_eq!(arc.end, (0, 1000));
 //! ```
 
@@ -59,16 +62,19 @@ pub struct ArcRecords {
 }
 
 /// The records of an arc from `start` around `centre` to `end` (steps on the pair's X and
-/// Y; the centre rounded to the step grid), clockwise or not, with `extra_turns` whole
-/// turns before the programmed part. The end is moved to the nearest point of the path
-/// within two steps of it (the path stays within one step of the circle); an end equal to
-/// the start is a whole turn.
+/// Y; the centre rounded to the step grid), clockwise or not: `extra_turns` whole turns,
+/// then the part to the end. The end is moved to the nearest point of the path within two
+/// steps of it (the path stays within one step of the circle). A part whose end lands on
+/// the start's point is a whole turn if `closed_is_turn` (the caller's, from the program:
+/// a programmed sweep of more than half a turn, e.g. a full circle, G2/G3 ending where it
+/// starts), else empty (no record: an arc shorter than a step).
 pub fn arc_records(
     start: (i64, i64),
     centre: (i64, i64),
     end: (i64, i64),
     cw: bool,
     extra_turns: u32,
+    closed_is_turn: bool,
     tick_div: u16,
 ) -> Result<ArcRecords, PbpError> {
     let s = (start.0 - centre.0, start.1 - centre.1);
@@ -95,9 +101,11 @@ pub fn arc_records(
         }
     }
     let (_, count, on_path) = best.ok_or(ArcError::NotOnPath(e.0, e.1))?;
-    // An end at the start is a whole turn (arc_steps gives the turn for it).
     let mut records: Vec<PbpLanes> = (0..extra_turns).map(|_| lanes(turn)).collect();
-    records.push(lanes(count));
+    // arc_steps counts a whole turn for an end at the start.
+    if on_path != s || closed_is_turn {
+        records.push(lanes(count));
+    }
     Ok(ArcRecords { records, end: (centre.0 + on_path.0, centre.1 + on_path.1) })
 }
 
@@ -144,14 +152,14 @@ mod tests {
     #[test]
     fn an_arc_ends_on_its_path_nearest_the_programmed_end() {
         // A quarter from (1000, 0) to (0, 1000) CCW: both ends lie on the path.
-        let q = arc_records((1000, 0), (0, 0), (0, 1000), false, 0, 7).unwrap();
+        let q = arc_records((1000, 0), (0, 0), (0, 1000), false, 0, false, 7).unwrap();
         assert_eq!(q.end, (0, 1000));
         assert_eq!(q.records.len(), 1);
         assert_eq!(q.records[0].steps, arc_steps((1000, 0), (0, 1000), false).unwrap());
         // An end off the grid's path point (cos 30 deg * 1000 = 866.03): moved onto the
         // path, within two steps, and the count is the path's to that point.
         let ideal = (10_866, 5_500);
-        let a = arc_records((11_000, 5_000), (10_000, 5_000), ideal, false, 0, 7).unwrap();
+        let a = arc_records((11_000, 5_000), (10_000, 5_000), ideal, false, 0, false, 7).unwrap();
         assert!((a.end.0 - ideal.0).abs() <= 2 && (a.end.1 - ideal.1).abs() <= 2, "{a:?}");
         let rel = (a.end.0 - 10_000, a.end.1 - 5_000);
         assert_eq!(a.records[0].steps, arc_steps((1000, 0), rel, false).unwrap());
@@ -162,15 +170,40 @@ mod tests {
 
     #[test]
     fn whole_turns_and_refusals() {
-        let full = arc_records((0, -50), (0, 0), (0, -50), true, 2, 3).unwrap();
+        let full = arc_records((0, -50), (0, 0), (0, -50), true, 2, true, 3).unwrap();
         let turn = arc_steps((0, -50), (0, -50), true).unwrap();
         assert_eq!(full.records.iter().map(|r| r.steps).collect::<Vec<_>>(), vec![turn; 3]);
         assert_eq!(full.end, (0, -50));
         assert!(full.records.iter().all(|r| r.cw && r.arc));
-        assert_eq!(arc_records((1, 0), (0, 0), (0, 1), false, 0, 3), Err(PbpError::Arc(ArcError::TooSmall(1))));
-        assert_eq!(arc_records((1 << 23, 0), (0, 0), (0, 1 << 23), false, 0, 3), Err(PbpError::TooLarge(1 << 23, 0)));
+        assert_eq!(arc_records((1, 0), (0, 0), (0, 1), false, 0, false, 3), Err(PbpError::Arc(ArcError::TooSmall(1))));
+        assert_eq!(
+            arc_records((1 << 23, 0), (0, 0), (0, 1 << 23), false, 0, false, 3),
+            Err(PbpError::TooLarge(1 << 23, 0))
+        );
         // An end far off the circle.
-        assert!(matches!(arc_records((100, 0), (0, 0), (40, 40), false, 0, 3), Err(PbpError::Arc(_))));
+        assert!(matches!(arc_records((100, 0), (0, 0), (40, 40), false, 0, false, 3), Err(PbpError::Arc(_))));
+    }
+
+    /// An arc shorter than a step (its end's nearest path point is the start's) sends
+    /// nothing and ends where it started: not a whole turn unless the caller says the
+    /// program's sweep closes the circle (an arc a step short of a whole one).
+    #[test]
+    fn an_arc_shorter_than_a_step_sends_nothing() {
+        for (start, end, cw) in
+            [((1000, 0), (1000, 0), false), ((1000, 0), (1001, 0), true), ((0, 700), (0, 700), true)]
+        {
+            let a = arc_records(start, (0, 0), end, cw, 0, false, 3).unwrap();
+            assert!(a.records.is_empty(), "{start:?} -> {end:?}: {a:?}");
+            assert_eq!(a.end, start);
+            let closed = arc_records(start, (0, 0), end, cw, 0, true, 3).unwrap();
+            let turn = arc_steps((start.0, start.1), (start.0, start.1), cw).unwrap();
+            assert_eq!(closed.records.iter().map(|r| r.steps).collect::<Vec<_>>(), [turn], "{start:?} -> {end:?}");
+            assert_eq!(closed.end, start);
+        }
+        // A step along the path is a part of its own (one decision or two).
+        let short = arc_records((1000, 0), (0, 0), (1000, 1), false, 0, true, 3).unwrap();
+        assert_eq!(short.records.len(), 1);
+        assert!(short.records[0].steps >= 1 && short.records[0].steps <= 2, "{short:?}");
     }
 
     #[test]
