@@ -806,6 +806,7 @@ impl RegisterFile {
                 let word = v::ONE_SNAPSHOT.set(word, u32::from(p.one_snapshot));
                 let word = v::INC_WRITE_ONLY.set(word, u32::from(p.inc_write_only));
                 let word = v::HAS_PBP.set(word, u32::from(p.has_pbp));
+                let word = v::INC_DIRECT.set(word, u32::from(p.inc_direct));
                 v::AXIS_WRITE_ONLY.set(word, u32::from(p.axis_write_only))
             }
             regs::caps::ADDR => {

@@ -270,7 +270,7 @@ mod tests {
         let mut d = [DdaAxis::default(); 4];
         let mut s = [StepShaper::new(15); 4];
         let set = |_| AxisSettings { timing: DriveTiming::new(1, 1, 1, 1), ..AxisSettings::default() };
-        let mut edge = |e: &mut StepEngine, d: &mut [DdaAxis], s: &mut [StepShaper], ext: [i8; MAX_AXES]| {
+        let edge = |e: &mut StepEngine, d: &mut [DdaAxis], s: &mut [StepShaper], ext: [i8; MAX_AXES]| {
             let inp = EngineInputs { running: false, p_act: 8, inc: &inc, clear_errors: false, counter_max: 15, ext };
             e.step(&inp, set, d, s);
         };
