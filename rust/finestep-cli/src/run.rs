@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use anyhow::{anyhow, bail, Context};
-use finestep_gcode::{BlockKind, Program, SpindleRotation};
+use finestep_gcode::{BlockKind, MessageKind, Program, SpindleRotation};
 use finestep_host::regs::underrun_count;
 use finestep_host::stream::{self, RunReport, StreamEvent};
 use finestep_host::{Bus, BusError, Machine, Outputs, SpindleSetup};
@@ -14,7 +14,7 @@ use finestep_model::{Core, CoreInputs};
 use finestep_planner::config::Resolved;
 use finestep_planner::config::AXIS_NAMES;
 use finestep_planner::{
-    check_program, plan_program, CheckReport, IoAction, MachineConfig, PlannedProgram, SpindleConfig,
+    check_program, plan_program, CheckReport, IoAction, IoEvent, MachineConfig, PlannedProgram, SpindleConfig,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -141,7 +141,7 @@ pub fn stream_planned<B: Bus>(
         }
         // The probe moves' outcomes, in order: whether the latch saw the probe change.
         let mut probes: Vec<(usize, bool, bool)> = Vec::new();
-        let events = planned.events.iter().map(|timed| (timed.period, timed.event));
+        let events = planned.events.iter().map(|timed| (timed.period, timed.event.clone()));
         let streamed =
             stream::run_with_events(chip, planned.records.iter().copied(), events, &config, observe, |chip, event| {
                 match event.action {
@@ -174,6 +174,10 @@ pub fn stream_planned<B: Bus>(
                         }
                         Ok(())
                     }
+                    IoAction::Message { .. } => {
+                        print_message(name, &event);
+                        Ok(())
+                    }
                     // Refused above.
                     IoAction::WaitInput { .. } | IoAction::AnalogOutput { .. } | IoAction::UserMCode { .. } => Ok(()),
                 }
@@ -188,6 +192,14 @@ pub fn stream_planned<B: Bus>(
         bail!("{} FIFO underruns", streamed.stream.underruns);
     }
     Ok(streamed)
+}
+
+/// Shows a MSG or DEBUG message (`name`:line: MSG: text on standard output), when the
+/// motion before it has ended.
+fn print_message(name: &str, event: &IoEvent) {
+    if let IoAction::Message { text, .. } = &event.action {
+        println!("{name}:{}: MSG: {text}", event.line);
+    }
 }
 
 /// The probe input's filter (`PROBE_CONTROL.FILTER`, samples that must agree) for G38.x.
@@ -266,6 +278,13 @@ pub fn run_program_on(
     machine_setup::check_gantry_records(&resolved, records, name)?;
     for note in &planned.notes {
         println!("  note: {note}");
+    }
+    // PRINT goes to standard error as the program is interpreted (LinuxCNC's interpreter
+    // writes it while reading ahead, not in step with the motion).
+    for block in &program.blocks {
+        if let BlockKind::Message { kind: MessageKind::Print, text } = &block.kind {
+            eprintln!("{name}:{}: PRINT: {text}", block.line);
+        }
     }
     println!(
         "finestep run {}: {} elements, {} periods of {} ms: {:.3} s of machining ({:?} profile), {}",
@@ -407,10 +426,11 @@ fn run_records<B: Bus>(
     if fast && resolved.gantry.is_some() {
         println!("  note: the fast path runs the motion core alone: [gantry] not carried out (the slave stays)");
     }
-    if fast && !planned.events.is_empty() {
+    let is_message = |timed: &&finestep_planner::TimedEvent| matches!(timed.event.action, IoAction::Message { .. });
+    let machine_events = planned.events.iter().filter(|timed| !is_message(timed)).count();
+    if fast && machine_events != 0 {
         println!(
-            "  note: the fast path runs the motion core alone: {} spindle/coolant changes not carried out",
-            planned.events.len()
+            "  note: the fast path runs the motion core alone: {machine_events} spindle/coolant changes not carried out"
         );
     }
     let (positions, cycles) = match chip {
@@ -421,7 +441,12 @@ fn run_records<B: Bus>(
             }
             let mut core = Core::new(machine_setup::model_core_params());
             let mut events = Vec::new();
+            // The messages, shown as the run reaches them.
+            let mut messages = planned.events.iter().filter(is_message).peekable();
             for (index, record) in records.iter().enumerate() {
+                while let Some(timed) = messages.next_if(|timed| timed.period <= index as u64) {
+                    print_message(name, &timed.event);
+                }
                 inputs.record = *record;
                 while !core.run_chunk_fast(&inputs, u64::MAX, &mut events).consumed {}
                 events.clear();
@@ -452,6 +477,9 @@ fn run_records<B: Bus>(
             }
             inputs.rec_valid = false;
             core.run_chunk_fast(&inputs, drain, &mut events);
+            for timed in messages {
+                print_message(name, &timed.event);
+            }
             let steps = core.outputs().positions.map(|p| p as i32);
             if let Some((live, _)) = live {
                 let position = units(resolved, &steps);

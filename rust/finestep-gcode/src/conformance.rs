@@ -15,7 +15,7 @@
 
 use std::fmt;
 
-use crate::{BlockKind, Plane, Program, SpindleRotation};
+use crate::{BlockKind, MessageKind, Plane, Program, SpindleRotation};
 
 /// Millimetres per inch.
 const MM_PER_INCH: f64 = 25.4;
@@ -223,6 +223,9 @@ pub enum Event {
     Pause,
     /// M2/M30.
     End,
+    /// `MESSAGE(text)`: a MSG comment, or a DEBUG one with its parameters substituted
+    /// (rs274 prints a PRINT comment's text bare, not as a call: not compared).
+    Message(String),
     /// A call finestep does not produce (probing, threading, ...): it cannot agree.
     Other(String),
 }
@@ -261,6 +264,7 @@ impl fmt::Display for Event {
             Event::SpindleOrient { angle, direction } => write!(f, "ORIENT_SPINDLE({angle:.4}, {direction})"),
             Event::Pause => write!(f, "PAUSE"),
             Event::End => write!(f, "END"),
+            Event::Message(text) => write!(f, "MESSAGE(\"{text}\")"),
             Event::Other(call) => write!(f, "{call}"),
         }
     }
@@ -318,6 +322,9 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             }
             BlockKind::Pause => events.push(Event::Pause),
             BlockKind::End => events.push(Event::End),
+            BlockKind::Message { kind: MessageKind::Msg | MessageKind::Debug, text } => {
+                events.push(Event::Message(text.clone()))
+            }
             BlockKind::ToolSelect { .. }
             | BlockKind::CutterComp { .. }
             | BlockKind::CutterCompRadius { .. }
@@ -327,7 +334,9 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             // rs274 prints nothing for M66 (its canon reads no input).
             | BlockKind::WaitInput { .. }
             // rs274 refuses every user M-code (its canon has none: `Unknown m code used`).
-            | BlockKind::UserMCode { .. } => {}
+            | BlockKind::UserMCode { .. }
+            // rs274 writes a PRINT's text to its standard output, not as a call.
+            | BlockKind::Message { kind: MessageKind::Print, .. } => {}
         }
     }
     events
@@ -549,6 +558,13 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
             "CHANGE_TOOL" => Some(Event::ToolChange { tool: nums()?.first().copied().unwrap_or(0.0) as u32 }),
             "PROGRAM_STOP" | "OPTIONAL_PROGRAM_STOP" => Some(Event::Pause),
             "PROGRAM_END" => Some(Event::End),
+            // MESSAGE("text"), the text as it is (rs274 escapes nothing).
+            "MESSAGE" => Some(Event::Message(
+                args.strip_prefix('"')
+                    .and_then(|a| a.strip_suffix('"'))
+                    .ok_or_else(|| at("MESSAGE without its quoted text".into()))?
+                    .to_string(),
+            )),
             "NURBS_FEED" => {
                 let count = args.split(',').next().and_then(|n| n.trim().parse::<usize>().ok());
                 Some(Event::Nurbs { to: None, points: count.ok_or_else(|| at("NURBS_FEED without its count".into()))? })
@@ -624,6 +640,7 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
             (a - b).abs() <= 5e-5 && da == db
         }
         (Event::Pause, Event::Pause) | (Event::End, Event::End) => true,
+        (Event::Message(a), Event::Message(b)) => a == b,
         _ => false,
     }
 }
@@ -740,5 +757,27 @@ mod variant_tests {
             Some("X1 G42.1 D[0.5 * [1 + 24.4 * #<_metric>]]\n")
         );
         assert_eq!(diameter_in_block("G1 X1\n", 1, 0.5), None);
+    }
+}
+
+#[cfg(test)]
+mod message_tests {
+    use super::*;
+
+    /// rs274's `MESSAGE` calls are events compared by their text: `(MSG, hello)` then
+    /// `G0 X1` agree with rs274's `MESSAGE(" hello")` and `STRAIGHT_TRAVERSE(1, ...)`,
+    /// and not with another text; PRINT's bare line in rs274's output is no event.
+    #[test]
+    fn messages_are_compared_by_their_text() {
+        let ours = events_of(&crate::parse_str("(MSG, hello)\n(PRINT, x)\nG0 X1\nM2\n", "m.ngc").unwrap());
+        let rs274 = |text: &str| {
+            rs274_events(&format!(
+                "    7 N..... MESSAGE(\"{text}\")\n x\n    8 N..... STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)\n    9 N..... PROGRAM_END()\n"
+            ))
+            .unwrap()
+        };
+        assert_eq!(ours[0], Event::Message(" hello".into()));
+        assert_eq!(compare(&ours, &rs274(" hello")), None);
+        assert!(compare(&ours, &rs274(" hullo")).is_some());
     }
 }

@@ -206,9 +206,13 @@ const PARAM_TOOL: usize = 5400;
 /// #5420-#5425: the current position X Y Z A B C in program units.
 const PARAM_POSITION: usize = 5420;
 
+/// #5599: DEBUG comments are shown while it is above 0 (1 at the start, as in rs274).
+pub(crate) const PARAM_DEBUG: usize = 5599;
+
 fn default_parameters() -> Vec<f64> {
     let mut params = vec![0.0; crate::expr::MAX_PARAMETER + 1];
     params[PARAM_COORD_SYSTEM] = 1.0;
+    params[PARAM_DEBUG] = 1.0;
     params
 }
 

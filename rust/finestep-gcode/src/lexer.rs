@@ -4,11 +4,13 @@
 //! As in LinuxCNC, blanks (spaces and tabs) are removed everywhere outside comments,
 //! also inside numbers and parameter names (`G 1 X 1 0 . 5` is `G1 X10.5`), and letters
 //! are case-insensitive. Comments are `( ... )` (not nested, closed on the same line)
-//! and everything after `;`. A leading `/` (block delete) is accepted and ignored: the
+//! and everything after `;`; the last `( ... )` of a line is kept when it is a message
+//! (`(MSG,` `(DEBUG,` `(PRINT,`, [`crate::message`]). A leading `/` (block delete) is accepted and ignored: the
 //! block runs, as with LinuxCNC's block-delete switch off.
 
 use crate::error::LineError;
 use crate::expr::{read_expression, read_name, read_parameter_name, read_value, Chars, Expr, What};
+use crate::message::{classify, LexedMessage};
 
 /// One word with its value computed: an upper-case letter, its value, and the 1-based
 /// column of the letter.
@@ -100,25 +102,36 @@ pub(crate) struct Line {
     pub words: Vec<RawWord>,
     pub assigns: Vec<Assign>,
     pub oword: Option<OWord>,
+    /// The message of the line's last parenthesised comment, if that is one.
+    pub message: Option<Box<LexedMessage>>,
 }
 
-/// The line without blanks and comments, lower case, each character with its column.
-fn normalize(line: &str, chars: &mut Vec<char>, columns: &mut Vec<usize>) -> Result<(), LineError> {
-    let mut comment_open: Option<usize> = None;
-    for (index, c) in line.chars().enumerate() {
+/// The line without blanks and comments, lower case, each character with its column;
+/// the text of its last parenthesised comment in `last_comment` (None if it has none).
+fn normalize<'a>(
+    line: &'a str,
+    chars: &mut Vec<char>,
+    columns: &mut Vec<usize>,
+    last_comment: &mut Option<&'a str>,
+) -> Result<(), LineError> {
+    // The open comment: its column and the byte its text starts at.
+    let mut comment_open: Option<(usize, usize)> = None;
+    for (index, (byte, c)) in line.char_indices().enumerate() {
         let column = index + 1;
-        if let Some(open) = comment_open {
+        if let Some((_, start)) = comment_open {
             match c {
-                ')' => comment_open = None,
+                ')' => {
+                    *last_comment = Some(&line[start..byte]);
+                    comment_open = None;
+                }
                 '(' => return Err(LineError::new(column, "nested comment")),
                 _ => {}
             }
-            let _ = open;
             continue;
         }
         match c {
             ' ' | '\t' => {}
-            '(' => comment_open = Some(column),
+            '(' => comment_open = Some((column, byte + 1)),
             ';' => break,
             c => {
                 chars.push(c.to_ascii_lowercase());
@@ -127,7 +140,7 @@ fn normalize(line: &str, chars: &mut Vec<char>, columns: &mut Vec<usize>) -> Res
         }
     }
     match comment_open {
-        Some(open) => Err(LineError::new(open, "unclosed comment")),
+        Some((open, _)) => Err(LineError::new(open, "unclosed comment")),
         None => Ok(()),
     }
 }
@@ -155,13 +168,16 @@ pub(crate) fn lex_into(
     out.words.clear();
     out.assigns.clear();
     out.oword = None;
+    out.message = None;
     if lex_plain(line, out) {
         return Ok(());
     }
     out.words.clear();
     chars.clear();
     columns.clear();
-    normalize(line, chars, columns)?;
+    let mut last_comment = None;
+    normalize(line, chars, columns, &mut last_comment)?;
+    out.message = last_comment.and_then(classify).map(Box::new);
     let (chars, columns) = (&chars[..], &columns[..]);
     let mut s = Chars { chars, columns, i: 0 };
     if s.peek() == Some('/') {

@@ -25,8 +25,9 @@
 //! - Words: a letter (any case) and a value: a number (optional sign, digits, at most one
 //!   decimal point, no exponent, magnitude at most 1e9), `[expression]`, `#parameter`
 //!   or a function, with an optional sign; spaces and tabs anywhere outside comments,
-//!   also inside numbers. Comments `( ... )` (one line, not nested; `(MSG,` `(DEBUG,`
-//!   `(PRINT,` are read as comments) and after `;`. `N` line number (integer, first
+//!   also inside numbers. Comments `( ... )` (one line, not nested) and after `;`;
+//!   `(MSG, text)`, `(DEBUG, text)` (parameters substituted: `#1`, `#<name>`, `%d`
+//!   `%f` `%.Nf`) and `(PRINT, text)` give [`BlockKind::Message`], as LinuxCNC 2.9. `N` line number (integer, first
 //!   word). A leading `/` (block delete) is ignored and the block runs. A line holding
 //!   only `%` opens the program if it is the first non-blank line; any later `%` line
 //!   ends it. Lines after M2/M30 are not read. An empty program is refused.
@@ -78,6 +79,7 @@ mod expr;
 mod g7x;
 mod interp;
 mod lexer;
+mod message;
 mod persistent;
 mod program;
 pub mod unsupported;
@@ -453,10 +455,34 @@ pub enum BlockKind {
         /// M68: at once.
         synchronised: bool,
     },
+    /// `(MSG, text)`, `(DEBUG, text)` or `(PRINT, text)`: a message, before the rest of
+    /// its block, as LinuxCNC 2.9 gives it (docs/gcode.md, "Messages"). MSG and DEBUG go
+    /// to the operator once the motion before them has ended (LinuxCNC's task waits for
+    /// it: an exact stop); PRINT goes to standard error as the program is interpreted.
+    /// DEBUG and PRINT have their parameters substituted; a DEBUG while #5599 is 0 or
+    /// less gives nothing.
+    Message {
+        /// Which comment.
+        kind: MessageKind,
+        /// The text after the keyword's comma, as written (its leading blank too), with
+        /// the parameters substituted for DEBUG and PRINT.
+        text: String,
+    },
     /// M0: pause until resumed.
     Pause,
     /// M2/M30: end of program.
     End,
+}
+
+/// Which message comment a [`BlockKind::Message`] comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MessageKind {
+    /// `(MSG, text)`: shown to the operator as written.
+    Msg,
+    /// `(DEBUG, text)`: shown to the operator, parameters substituted, when #5599 > 0.
+    Debug,
+    /// `(PRINT, text)`: written to standard error, parameters substituted.
+    Print,
 }
 
 /// G96 (constant surface speed) as LinuxCNC's motion controller runs it: the spindle

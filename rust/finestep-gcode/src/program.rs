@@ -13,10 +13,11 @@ use std::path::{Path, PathBuf};
 use crate::error::LineError;
 use crate::expr::{parameter_index, Params};
 use crate::g7x::{cycle_moves, LatheCycle, ProfileReader};
-use crate::interp::{Modal, ModalOp, State};
+use crate::interp::{Modal, ModalOp, State, PARAM_DEBUG};
 use crate::lexer::{lex_into, lex_line_into, Line, OKind, OWord, Target, Word};
+use crate::message::{expand, has_message, LexedMessage};
 use crate::persistent::{required_parameters, Parameters};
-use crate::{Block, GcodeError, Options};
+use crate::{Block, BlockKind, GcodeError, MessageKind, Options};
 
 /// Loop iterations (backward jumps) and subroutine calls a program may make in all
 /// before it is refused as running away (`while` without end).
@@ -678,8 +679,9 @@ impl<'t> Runner<'t> {
                 Err(e) => return Err(GcodeError::Io { file: source.name.clone(), source: e }),
             };
             let (content, _) = scan(&self.text);
-            // The opening `%` (the closing one ends the file above).
-            if !content || self.text.trim_matches([' ', '\t']) == "%" {
+            // The opening `%` (the closing one ends the file above). A line of comments
+            // alone is skipped unless its last one is a message.
+            if !(content || has_message(&self.text)) || self.text.trim_matches([' ', '\t']) == "%" {
                 pc = Pc { offset: next, line: pc.line + 1 };
                 continue;
             }
@@ -827,6 +829,8 @@ impl<'t> Runner<'t> {
                 }
             }
         }
+        // The message comment, expanded once the assignments have taken effect.
+        let message = line.message.clone();
         self.line = buffer;
         // Assignments take effect after the whole line is read, before it executes.
         for (n, value) in numbered {
@@ -838,6 +842,11 @@ impl<'t> Runner<'t> {
             } else {
                 self.frames.last_mut().expect("frame").locals.insert(name, value);
             }
+        }
+        // As rs274, the comment acts first in its block; a lathe cycle's profile, read
+        // rather than run, gives none.
+        if let (Some(message), None) = (message, &self.lathe) {
+            self.message(&message, &words);
         }
         if words.is_empty() {
             self.words = words;
@@ -881,6 +890,28 @@ impl<'t> Runner<'t> {
             self.lathe = Some(LatheRead { cycle, reader, frames, source, line, n: executed.n });
         }
         Ok(!executed.end)
+    }
+
+    /// Emits the block of a message comment (`words` are its line's, for the N number).
+    fn message(&mut self, message: &LexedMessage, words: &[Word]) {
+        let scope = Scope {
+            state: &self.state,
+            locals: &self.frames.last().expect("frame").locals,
+            globals: &self.globals,
+            call_level: self.frames.len() - 1,
+        };
+        let text = match message.kind {
+            MessageKind::Msg => message.text.to_string(),
+            // rs274 shows a DEBUG only while #5599 is above 0 (1 at the start).
+            MessageKind::Debug if scope.numbered(PARAM_DEBUG) <= 0.0 => return,
+            MessageKind::Debug | MessageKind::Print => expand(&message.text, &scope),
+        };
+        let n = words.iter().find(|w| w.letter == 'N').map(|w| w.value as u32);
+        self.blocks.push_back(Block {
+            line: self.state.line,
+            n,
+            kind: BlockKind::Message { kind: message.kind, text },
+        });
     }
 
     /// Executes an O-word line.

@@ -1623,3 +1623,96 @@ fn constant_surface_speed_carries_the_speed_its_maximum_and_the_axis() {
     }
     assert_eq!(SurfaceSpeed { mm_per_min: 1000.0, max_rpm: None, axis_x_mm: 2.0 }.rpm_at(2.0), f64::INFINITY);
 }
+
+/// The message blocks of `source`: (line, N, kind, text).
+fn messages(source: &str) -> Vec<(usize, Option<u32>, MessageKind, String)> {
+    let program = parse_str(source, FILE).unwrap_or_else(|e| panic!("{source:?} failed: {e}"));
+    program
+        .blocks
+        .into_iter()
+        .filter_map(|b| match b.kind {
+            BlockKind::Message { kind, text } => Some((b.line, b.n, kind, text)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Checked against `rs274 -g` (LinuxCNC 2.9) on this program, which printed (the other
+/// calls left out; PRINT's text bare on standard output, in order):
+/// ```text
+///     7 N..... MESSAGE(" hello World")
+///     8 N..... MESSAGE("lower case")
+///     9 N..... COMMENT("MSG , spaced")
+///    10 N..... MESSAGE(" one 2.500000 foo 3.000000 x")
+///    11 N..... MESSAGE("low 2.500000")
+///  p 2.500000 3.000000
+///    12 N..... MESSAGE(" with move")
+///    13 N..... STRAIGHT_TRAVERSE(1.0000, 0.0000, 0.0000, 0.0000, 0.0000, 0.0000)
+///    14 N..... MESSAGE(" second")
+///    15 N..... COMMENT("comment")
+///    16 N..... STRAIGHT_TRAVERSE(1.0000, 2.0000, 0.0000, 0.0000, 0.0000, 0.0000)
+///    17 N..... MESSAGE(" unknown ###### end 1.000000")
+///    18 N..... STRAIGHT_TRAVERSE(1.0000, 2.0000, 0.0000, 0.0000, 0.0000, 0.0000)
+///    19 N10    MESSAGE(" with N")
+///  printed
+///    20 N..... MESSAGE("")
+/// ```
+/// (`;` comments and an O-word line's comment give nothing; #5599 = 0 silences DEBUG
+/// but not PRINT.)
+#[test]
+fn message_comments_as_rs274_gives_them() {
+    let source = "#1 = 2.5\n\
+                  #<foo> = 3\n\
+                  (MSG, hello World)\n\
+                  (msg,lower case)\n\
+                  (  MSG , spaced)\n\
+                  (DEBUG, one #1 foo #<foo> x)\n\
+                  (debug,low #1)\n\
+                  (PRINT, p #1 #<foo>)\n\
+                  G0 X1 (MSG, with move)\n\
+                  (MSG, first) (MSG, second)\n\
+                  G0 Y2 (MSG, a) (comment)\n\
+                  (DEBUG, unknown #<nope> end #<_x>)\n\
+                  G0 X1 ; (MSG, semi)\n\
+                  o100 if [1] (MSG, in if)\n\
+                  o100 endif\n\
+                  N10 (MSG, with N)\n\
+                  #5599 = 0\n\
+                  (DEBUG, silent)\n\
+                  (PRINT, printed)\n\
+                  (MSG,)\n\
+                  M2\n";
+    use MessageKind::*;
+    let m = |line, n, kind, text: &str| (line, n, kind, text.to_string());
+    assert_eq!(
+        messages(source),
+        vec![
+            m(3, None, Msg, " hello World"),
+            m(4, None, Msg, "lower case"),
+            m(6, None, Debug, " one 2.500000 foo 3.000000 x"),
+            m(7, None, Debug, "low 2.500000"),
+            m(8, None, Print, " p 2.500000 3.000000"),
+            m(9, None, Msg, " with move"),
+            m(10, None, Msg, " second"),
+            m(12, None, Debug, " unknown ###### end 1.000000"),
+            m(16, Some(10), Msg, " with N"),
+            m(19, None, Print, " printed"),
+            m(20, None, Msg, ""),
+        ]
+    );
+    // The message comes first in its block, before the move.
+    let kinds = parse("G0 X1 (MSG, with move)\nM2\n");
+    assert!(matches!(&kinds[0], BlockKind::Message { text, .. } if text == " with move"));
+    assert!(matches!(kinds[1], BlockKind::Rapid { .. }));
+}
+
+/// rs274: `#1=2.5` then `#1=7 (DEBUG, #1)` gives `MESSAGE(" 7.000000")` (the line's
+/// assignments act first); in a loop each pass gives its own (`o100 repeat [2]` ...
+/// `G1 F100 X[#<_x> + 1] (DEBUG, pass at x %.1f#<_x>)` from X1: `MESSAGE(" pass at x
+/// 1.0")` then `MESSAGE(" pass at x 2.0")`, the comment acting before the move).
+#[test]
+fn debug_reads_the_line_s_assignments_and_each_loop_pass() {
+    let got = messages("#1=2.5\n#1=7 (DEBUG, #1)\nG0 X1\no100 repeat [2]\nG1 F100 X[#<_x> + 1] (DEBUG, pass at x %.1f#<_x>)\no100 endrepeat\nM2\n");
+    let texts: Vec<&str> = got.iter().map(|m| m.3.as_str()).collect();
+    assert_eq!(texts, [" 7.000000", " pass at x 1.0", " pass at x 2.0"]);
+}

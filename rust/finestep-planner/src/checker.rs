@@ -461,7 +461,9 @@ fn pieces(program: &Program, default_tolerance: f64, scale: &[f64; 4]) -> (Vec<P
             | BlockKind::Coolant { .. }
             | BlockKind::WaitInput { .. }
             | BlockKind::UserMCode { .. }
-            | BlockKind::AnalogOutput { .. } => {
+            | BlockKind::AnalogOutput { .. }
+            // MSG and DEBUG wait for the motion before them (PRINT does not).
+            | BlockKind::Message { kind: finestep_gcode::MessageKind::Msg | finestep_gcode::MessageKind::Debug, .. } => {
                 mark_stop(&mut out);
                 continue;
             }

@@ -156,8 +156,9 @@ pub struct Element {
 }
 
 /// A machine-I/O action the program takes at a point of the path (S, M3/M4/M5,
-/// M7/M8/M9, M62-M68, the probe of G38.x), applied at an exact stop.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// M7/M8/M9, M62-M68, the probe of G38.x, a MSG or DEBUG message), applied at an exact
+/// stop.
+#[derive(Clone, Debug, PartialEq)]
 pub enum IoAction {
     /// The spindle after the block.
     Spindle {
@@ -223,10 +224,20 @@ pub enum IoAction {
         /// The value.
         value: f64,
     },
+    /// `(MSG, text)` or `(DEBUG, text)`: show `text` to the operator once the motion
+    /// before it has ended (LinuxCNC's task sends an operator message when everything
+    /// queued before it is done). PRINT gives no event: LinuxCNC writes it as the
+    /// program is interpreted.
+    Message {
+        /// [`finestep_gcode::MessageKind::Msg`] or [`finestep_gcode::MessageKind::Debug`].
+        kind: finestep_gcode::MessageKind,
+        /// The text (DEBUG's with its parameters substituted).
+        text: String,
+    },
 }
 
 /// An [`IoAction`] and the source line that wrote it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct IoEvent {
     /// 1-based source line.
     pub line: usize,
@@ -236,7 +247,7 @@ pub struct IoEvent {
 
 /// An [`IoEvent`] placed in the record stream: it takes effect once the first `period`
 /// records have run (the one before it ends at rest, with the block-end flag).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TimedEvent {
     /// Records before the event.
     pub period: u64,

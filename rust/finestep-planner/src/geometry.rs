@@ -55,7 +55,7 @@ use std::collections::VecDeque;
 use std::f64::consts::TAU;
 use std::sync::{Arc, OnceLock};
 
-use finestep_gcode::{Block, BlockKind, CompSide, PathControl, Plane, Point, Program};
+use finestep_gcode::{Block, BlockKind, CompSide, MessageKind, PathControl, Plane, Point, Program};
 
 use crate::config::{ProfileKind, Resolved, AXIS_NAMES};
 pub use crate::element::{
@@ -104,7 +104,7 @@ fn take_after(e: &mut Element, m: &Move) {
 /// `m` made no element: the stop, dwell and events after it go after `last`.
 fn merge_after(last: &mut Element, m: &Move) {
     last.stop_after |= m.stop_after;
-    last.events.extend(m.events.iter().map(|&(d, event)| (last.dwell_periods + d, event)));
+    last.events.extend(m.events.iter().map(|(d, event)| (last.dwell_periods + d, event.clone())));
     last.dwell_periods += m.dwell_periods;
     last.dwell_line = last.dwell_line.max(m.dwell_line);
 }
@@ -224,7 +224,7 @@ impl MoveReader {
         arc: Option<(Vec4, (usize, usize), bool, u32)>,
         nurbs: Option<&[(f64, f64, f64)]>,
     ) {
-        let (Some(css), Some(IoAction::Spindle { rotation, rpm: now, .. })) = (self.css, self.left_on.0) else {
+        let (Some(css), Some(IoAction::Spindle { rotation, rpm: now, .. })) = (self.css, self.left_on.0.clone()) else {
             return;
         };
         let from = self.at_programmed;
@@ -243,7 +243,7 @@ impl MoveReader {
         let rpm = crate::css::move_rpm(&css, max, from[0], to[0], span.as_ref(), &control_x);
         if rpm != now {
             let action = IoAction::Spindle { rotation, rpm, fraction: rpm / max };
-            self.left_on.0 = Some(action);
+            self.left_on.0 = Some(action.clone());
             self.event_at_stop(IoEvent { line, action });
         }
     }
@@ -325,14 +325,19 @@ impl MoveReader {
                 BlockKind::WaitInput { input, mode, timeout_s } => Some(IoAction::WaitInput { input, mode, timeout_s }),
                 BlockKind::AnalogOutput { index, value, .. } => Some(IoAction::AnalogOutput { index, value }),
                 BlockKind::UserMCode { code, p, q } => Some(IoAction::UserMCode { code, p, q }),
+                // MSG and DEBUG go out once the motion before them has ended, as in
+                // LinuxCNC; PRINT is written as the program is read (by its reader).
+                BlockKind::Message { kind: kind @ (MessageKind::Msg | MessageKind::Debug), ref text } => {
+                    Some(IoAction::Message { kind, text: text.clone() })
+                }
                 _ => None,
             };
             if let Some(action) = action {
-                match action {
+                match &action {
                     IoAction::Spindle { rotation, .. } => {
-                        self.left_on.0 = (rotation != finestep_gcode::SpindleRotation::Off).then_some(action)
+                        self.left_on.0 = (*rotation != finestep_gcode::SpindleRotation::Off).then(|| action.clone())
                     }
-                    IoAction::Coolant { mist, flood } => self.left_on.1 = mist || flood,
+                    IoAction::Coolant { mist, flood } => self.left_on.1 = *mist || *flood,
                     _ => {}
                 }
                 // An exact stop where the block is: the change takes effect at rest there.

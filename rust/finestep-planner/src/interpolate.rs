@@ -186,7 +186,7 @@ impl<'p> Periods<'p> {
     /// With the I/O events before the first move, each after that many of the leading
     /// idle periods ([`crate::geometry::PathElements::leading_events`]).
     pub fn with_leading_events(mut self, events: &[(u64, IoEvent)]) -> Periods<'p> {
-        self.events.extend(events.iter().map(|&(period, event)| TimedEvent { period, event }));
+        self.events.extend(events.iter().map(|(period, event)| TimedEvent { period: *period, event: event.clone() }));
         self
     }
 
@@ -385,7 +385,8 @@ impl<'p> Periods<'p> {
                 let e = self.path.element(self.index);
                 (self.idle, self.idle_line) = (e.dwell_periods, e.dwell_line);
                 let emitted = self.emitted;
-                self.events.extend(e.events.iter().map(|&(d, event)| TimedEvent { period: emitted + d, event }));
+                self.events
+                    .extend(e.events.iter().map(|(d, event)| TimedEvent { period: emitted + d, event: event.clone() }));
                 self.index += 1;
                 if last_element {
                     self.done = true;

@@ -196,6 +196,37 @@ mod tests {
         assert_eq!(error.key, "tools[0].radius_mm");
     }
 
+    /// MSG and DEBUG are events at an exact stop where they are written (LinuxCNC's task
+    /// sends an operator message once the motion before it has ended); PRINT is none and
+    /// does not stop the path.
+    #[test]
+    fn msg_and_debug_stop_the_path_and_print_does_not() {
+        use crate::element::IoAction;
+        use finestep_gcode::MessageKind;
+        let config = MachineConfig::default(); // X at 800 steps/mm, T = 1 ms
+        let text = "G64\nG1 X1 F600\n(MSG, at one)\nG1 X2\n#1 = 3 (DEBUG, at two, #1)\nG1 X3\n(PRINT, p)\nG1 X4\nM2\n";
+        let planned = plan_program(&config, &finestep_gcode::parse_str(text, "msg.ngc").unwrap()).unwrap();
+        let x_after =
+            |n: u64| -> i64 { planned.records[..n as usize].iter().map(|r| i64::from(r.inc[0].to_bits())).sum() };
+        let x_inc = |i: u64| i64::from(planned.records[i as usize].inc[0].to_bits());
+        let events: Vec<(u64, usize, IoAction)> =
+            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action.clone())).collect();
+        let message = |kind, text: &str| IoAction::Message { kind, text: text.to_string() };
+        assert_eq!(events.len(), 2, "{events:?}");
+        assert_eq!((events[0].1, events[0].2.clone()), (3, message(MessageKind::Msg, " at one")));
+        assert_eq!((events[1].1, events[1].2.clone()), (5, message(MessageKind::Debug, " at two, 3.000000")));
+        let steps = |mm: i64| (mm * 800) << 16;
+        for (p, mm) in [(events[0].0, 1), (events[1].0, 2)] {
+            assert_eq!(x_after(p), steps(mm));
+            assert!(planned.records[p as usize - 1].flags & 1 != 0);
+            assert!(x_inc(p - 1).abs() < 1 << 16, "{}", x_inc(p - 1));
+            assert!(x_inc(p).abs() < 1 << 16, "{}", x_inc(p));
+        }
+        // At X3 (the PRINT) the path goes on at speed: full feed is 8 steps per period.
+        let at_three = (0..planned.records.len() as u64).find(|&n| x_after(n) >= steps(3)).unwrap();
+        assert!(x_inc(at_three).abs() > 4 << 16, "{}", x_inc(at_three));
+    }
+
     #[test]
     fn spindle_and_coolant_changes_stop_the_path_where_they_are_written() {
         use crate::element::IoAction;
@@ -207,16 +238,16 @@ mod tests {
             |n: u64| -> i64 { planned.records[..n as usize].iter().map(|r| i64::from(r.inc[0].to_bits())).sum() };
         let x_inc = |i: u64| i64::from(planned.records[i as usize].inc[0].to_bits());
         let events: Vec<(u64, usize, IoAction)> =
-            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action.clone())).collect();
         assert_eq!(events.len(), 4, "{events:?}");
         let on = IoAction::Spindle { rotation: SpindleRotation::Clockwise, rpm: 1000.0, fraction: 1000.0 / 24000.0 };
         let off = IoAction::Spindle { rotation: SpindleRotation::Off, rpm: 1000.0, fraction: 1000.0 / 24000.0 };
-        assert_eq!((events[0].1, events[0].2), (3, on));
-        assert_eq!((events[1].1, events[1].2), (5, IoAction::Coolant { mist: false, flood: true }));
-        assert_eq!((events[2].1, events[2].2), (7, off));
-        assert_eq!((events[3].1, events[3].2), (7, IoAction::Coolant { mist: false, flood: false }));
+        assert_eq!((events[0].1, events[0].2.clone()), (3, on));
+        assert_eq!((events[1].1, events[1].2.clone()), (5, IoAction::Coolant { mist: false, flood: true }));
+        assert_eq!((events[2].1, events[2].2.clone()), (7, off.clone()));
+        assert_eq!((events[3].1, events[3].2.clone()), (7, IoAction::Coolant { mist: false, flood: false }));
         let steps = |mm: i64| (mm * 800) << 16;
-        for (event, mm) in [(events[0], 1), (events[1], 2), (events[2], 3)] {
+        for (event, mm) in [(events[0].clone(), 1), (events[1].clone(), 2), (events[2].clone(), 3)] {
             let p = event.0;
             // The program position at the event is the block's point, exactly on the step.
             assert_eq!(x_after(p), steps(mm), "{event:?}");
@@ -257,7 +288,7 @@ mod tests {
         let left = "M3 S1000\nM7\nG1 X1 F600\nM2\n";
         let left = plan_program(&config, &finestep_gcode::parse_str(left, "left.ngc").unwrap()).unwrap();
         let ends: Vec<(u64, usize, IoAction)> =
-            left.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+            left.events.iter().map(|e| (e.period, e.event.line, e.event.action.clone())).collect();
         let n = left.records.len() as u64;
         let on = IoAction::Spindle { rotation: SpindleRotation::Clockwise, rpm: 1000.0, fraction: 1000.0 / 24000.0 };
         assert_eq!(
@@ -354,7 +385,7 @@ mod tests {
         let program = finestep_gcode::parse_str(text, "css.ngc").unwrap();
         let planned = plan_program(&config, &program).unwrap();
         let events: Vec<(u64, usize, IoAction)> =
-            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action.clone())).collect();
         let rpm = |r: f64| 100_000.0 / (std::f64::consts::TAU * r);
         let spindle = |rotation, rpm: f64| IoAction::Spindle { rotation, rpm, fraction: rpm / 24_000.0 };
         let expected = [
@@ -364,16 +395,16 @@ mod tests {
             (9, spindle(Clockwise, 500.0)),     // G97 S500
             (11, spindle(Off, 500.0)),          // M2
         ];
-        let got: Vec<(usize, IoAction)> = events.iter().map(|e| (e.1, e.2)).collect();
+        let got: Vec<(usize, IoAction)> = events.iter().map(|e| (e.1, e.2.clone())).collect();
         assert_eq!(got.len(), expected.len(), "{got:?}");
         for ((line, action), (want_line, want)) in got.iter().zip(expected) {
             assert_eq!(*line, want_line);
             let (IoAction::Spindle { rpm: a, rotation: ra, .. }, IoAction::Spindle { rpm: b, rotation: rb, .. }) =
-                (action, want)
+                (action, &want)
             else {
                 panic!("{action:?}")
             };
-            assert!(ra == &rb && (a - b).abs() < 1e-9, "line {line}: {action:?} against {want:?}");
+            assert!(ra == rb && (a - b).abs() < 1e-9, "line {line}: {action:?} against {want:?}");
         }
         // The speed changes at rest where the move before it ends: X10 Z-10 for line 6.
         let at = |n: u64, axis: usize| -> i64 {
@@ -406,18 +437,18 @@ mod tests {
         let program = finestep_gcode::parse_str(text, "probe.ngc").unwrap();
         let planned = plan_program(&config, &program).unwrap();
         let events: Vec<(u64, usize, IoAction)> =
-            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action)).collect();
+            planned.events.iter().map(|e| (e.period, e.event.line, e.event.action.clone())).collect();
         let at = |n: u64, axis: usize| -> i64 {
             planned.records[..n as usize].iter().map(|r| i64::from(r.inc[axis].to_bits())).sum()
         };
         assert_eq!(events.len(), 4, "{events:?}");
-        assert_eq!((events[0].1, events[0].2), (3, IoAction::ProbeArm { on_contact: true, must_change: true }));
-        assert_eq!((events[1].1, events[1].2), (3, IoAction::ProbeCheck { must_change: true }));
+        assert_eq!((events[0].1, events[0].2.clone()), (3, IoAction::ProbeArm { on_contact: true, must_change: true }));
+        assert_eq!((events[1].1, events[1].2.clone()), (3, IoAction::ProbeCheck { must_change: true }));
         assert_eq!(
-            (events[2].1, events[2].2),
+            (events[2].1, events[2].2.clone()),
             (5, IoAction::WaitInput { input: Input::Digital(1), mode: WaitMode::High, timeout_s: 2.0 })
         );
-        assert_eq!((events[3].1, events[3].2), (6, IoAction::AnalogOutput { index: 1, value: 2.5 }));
+        assert_eq!((events[3].1, events[3].2.clone()), (6, IoAction::AnalogOutput { index: 1, value: 2.5 }));
         // Armed at rest at X1 Z0, checked at rest at the probe's end Z-2 (not 0.254 mm
         // short: the machine's stop is where the probe trips, which the host reads).
         let (arm, check) = (events[0].0, events[1].0);
