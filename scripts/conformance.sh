@@ -13,7 +13,9 @@ mkdir -p "$out/rs274"
 table=tests/conformance/tool.tbl
 # rs274's tool table lives in a file mapped at $HOME/.tool.mmap, which every LinuxCNC
 # process sharing a HOME truncates and rewrites at start: a running LinuxCNC's task then
-# dies of SIGBUS (docs/linuxcnc.md). These runs get a HOME of their own.
+# dies of SIGBUS (docs/linuxcnc.md). These runs get a HOME of their own; cargo and rustup
+# keep finding theirs (by default under the real HOME).
+export RUSTUP_HOME="${RUSTUP_HOME:-$HOME/.rustup}" CARGO_HOME="${CARGO_HOME:-$HOME/.cargo}"
 export HOME="$PWD/$out/home"
 mkdir -p "$HOME"
 manifest="$out/manifest.tsv"

@@ -689,8 +689,11 @@ impl State {
     pub(crate) fn predefined(&self, name: &str) -> Option<f64> {
         let flag = |b: bool| f64::from(u8::from(b));
         Some(match name {
-            "_vmajor" => 2.0,
-            "_vminor" => 9.0,
+            // LinuxCNC reads its package version "2.9.0" as two numbers, "2.9" and ".0"
+            // (LinuxCNC's documentation: 2.6.2 gives 2.6 and 0.2); rs274 2.9 prints
+            // _vmajor 2.900000, _vminor 0.000000 (roparams.ngc, make conformance).
+            "_vmajor" => 2.9,
+            "_vminor" => 0.0,
             "_line" => self.line as f64,
             "_motion_mode" => f64::from(self.motion.unwrap_or(800)),
             "_plane" => match self.plane {

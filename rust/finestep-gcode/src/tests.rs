@@ -1716,3 +1716,13 @@ fn debug_reads_the_line_s_assignments_and_each_loop_pass() {
     let texts: Vec<&str> = got.iter().map(|m| m.3.as_str()).collect();
     assert_eq!(texts, [" 7.000000", " pass at x 1.0", " pass at x 2.0"]);
 }
+
+/// `#<_vmajor>` and `#<_vminor>` as LinuxCNC 2.9.0 gives them: rs274 prints
+/// `MESSAGE(" _vmajor: = 2.900000")` and `MESSAGE(" _vminor: = 0.000000")` for
+/// `(DEBUG, _vmajor: = #<_vmajor>)` (roparams.ngc in make conformance).
+#[test]
+fn version_parameters_are_linuxcnc_2_9_0s() {
+    let program = parse_str_with("G0 X#<_vmajor> Y#<_vminor>\nM2\n", FILE, &Options::default()).unwrap();
+    let to = program.blocks.iter().find_map(|b| if let BlockKind::Rapid { to } = b.kind { Some(to) } else { None });
+    assert_eq!(to, Some(p(2.9, 0.0, 0.0, 0.0)));
+}
