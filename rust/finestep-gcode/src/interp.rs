@@ -715,6 +715,10 @@ impl State {
             "_units_per_rev" => flag(self.per_rev),
             "_coord_system" => [540.0, 550.0, 560.0, 570.0, 580.0, 590.0, 591.0, 592.0, 593.0][self.system],
             "_ijk_absolute_mode" => flag(!self.arc_incremental),
+            // A tool length offset in force (G43, G43.1, G43.2 with a non-zero offset).
+            "_tool_offset" => flag(self.tool_offset.iter().any(|&o| o != 0.0)),
+            "_retract_r_plane" => flag(self.retract_to_r),
+            "_retract_old_z" => flag(!self.retract_to_r),
             "_lathe_diameter_mode" => flag(self.diameter_mode),
             "_lathe_radius_mode" => flag(!self.diameter_mode),
             "_spindle_on" => flag(self.rotation != SpindleRotation::Off),

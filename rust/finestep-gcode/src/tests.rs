@@ -1725,4 +1725,14 @@ fn version_parameters_are_linuxcnc_2_9_0s() {
     let program = parse_str_with("G0 X#<_vmajor> Y#<_vminor>\nM2\n", FILE, &Options::default()).unwrap();
     let to = program.blocks.iter().find_map(|b| if let BlockKind::Rapid { to } = b.kind { Some(to) } else { None });
     assert_eq!(to, Some(p(2.9, 0.0, 0.0, 0.0)));
+    // _tool_offset, _retract_r_plane, _retract_old_z at the start: 0, 1 (G99), 0; after
+    // G98 _retract_r_plane 0 and _retract_old_z 1 (rs274: MESSAGE(" 0.000000 1.000000")).
+    let source = "G0 X#<_tool_offset> Y#<_retract_r_plane> Z#<_retract_old_z>\nG98\nG0 X#<_retract_r_plane> Y#<_retract_old_z>\nM2\n";
+    let program = parse_str_with(source, FILE, &Options::default()).unwrap();
+    let rapids: Vec<Point> = program
+        .blocks
+        .iter()
+        .filter_map(|b| if let BlockKind::Rapid { to } = b.kind { Some(to) } else { None })
+        .collect();
+    assert_eq!(rapids, [p(0.0, 1.0, 0.0, 0.0), p(0.0, 1.0, 0.0, 0.0)]);
 }
