@@ -567,6 +567,72 @@ module step_engine #(
         cover ($past(dir_change));
         cover (|rate_error_reg);
     end
+
+    // With EXT_REQ (docs/spec/step_engine.md#requests-from-outside), stated on the ports:
+    // under the sender's rules (two requests on one axis at least S clocks apart; every
+    // increment zero while a request is on the port or not yet taken and in the clock
+    // after, as the core keeps its DDAs idle then), every request on ext_req_* is taken
+    // exactly once, by its axis's first shaper visit after it (within S clocks), with its
+    // sign, never at a visit that also has a DDA request; none is made up; ext_pending is
+    // "a request on the port or not yet taken". With the conservation above (position +
+    // pending = the visits' requests) no request of the port is lost on its way to the pins.
+    generate
+        if (EXT_REQ != 0) begin : f_ext
+            reg  [1:0]    f_cnt [0:N_AXES-1];   // requests of the port not yet taken, per axis
+            reg  [N_AXES-1:0] f_neg;            // the last one's sign
+            reg  [SL+1:0] f_age [0:N_AXES-1];   // clocks since the last request (saturating)
+            reg           f_pending_prev;
+            localparam [SL+1:0] F_AGE_MAX = {(SL+2){1'b1}};
+            wire visit_held_reg_f = ext.visit_held_reg;
+            wire [N_AXES-1:0] f_taken = sh_hot & {N_AXES{visit_held_reg_f}};
+            reg  [SL-1:0] f_to_visit;           // clocks to the axis's next shaper visit
+            reg  [N_AXES-1:0] f_out;
+            integer g;
+            always @(*) for (g = 0; g < N_AXES; g = g + 1) f_out[g] = (f_cnt[g] != 2'd0);
+            always @(posedge clk) begin
+                f_pending_prev <= !rst && ext_pending;
+                for (g = 0; g < N_AXES; g = g + 1) begin
+                    f_cnt[g] <= f_cnt[g] - {1'b0, f_taken[g]} + {1'b0, ext_req_valid[g]};
+                    if (ext_req_valid[g]) f_neg[g] <= ext_req_negative[g];
+                    f_age[g] <= ext_req_valid[g] ? {{(SL+1){1'b0}}, 1'b1} :
+                                (f_age[g] == F_AGE_MAX) ? F_AGE_MAX : f_age[g] + 1'b1;
+                    if (rst) begin
+                        f_cnt[g] <= 2'd0;
+                        f_age[g] <= F_AGE_MAX;
+                    end
+                end
+            end
+            always @(*) begin
+                // The sender's rules, and no request in a reset clock.
+                if (rst) assume (ext_req_valid == {N_AXES{1'b0}});
+                for (g = 0; g < N_AXES; g = g + 1)
+                    if (ext_req_valid[g]) assume (f_age[g] >= S);
+                if (ext_pending || f_pending_prev) assume (inc == {32*N_AXES{1'b0}});
+            end
+            always @(*) if (f_past_valid && !rst) begin
+                assert (ext_pending == ((|ext_req_valid) || (|f_out)));
+                // Never two outstanding on an axis (none overwritten), none made up, and
+                // a visit never takes a held request and a DDA request together.
+                if (sh_visit && visit_held_reg_f) assert (f_out[sh_ix] && visit_req_negative == f_neg[sh_ix]);
+                if (sh_visit) assert (!(req_valid_reg && visit_held_reg_f));
+                if (!sh_visit) assert (!visit_held_reg_f);
+                for (g = 0; g < N_AXES; g = g + 1) begin
+                    assert (f_cnt[g] <= 2'd1);
+                    assert (ext.held_reg[g] == f_out[g]);
+                    if (f_out[g]) assert (ext.held_negative_reg[g] == f_neg[g]);
+                    // The first visit of the axis takes it: the clocks it has waited and
+                    // the clocks to the axis's next visit are at most S together.
+                    f_to_visit = g[SL-1:0] - sh_axis;
+                    if (f_out[g]) assert (f_age[g] >= 1 &&
+                                          {{(32-SL){1'b0}}, f_to_visit} + {{(30-SL){1'b0}}, f_age[g]} <= S);
+                    if (f_out[g] && sh_hot[g]) assert (f_taken[g]);
+                end
+            end
+            always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+                cover (visit_held_reg_f && $past(ext_pending) && |ext_req_valid);
+            end
+        end
+    endgenerate
 `endif
 
 endmodule

@@ -506,9 +506,16 @@ fn run_records<B: Bus>(
                 if now - last_update < VIEW_UPDATE_S {
                     return Ok(());
                 }
+                // A tripped probe holds the position registers (ONE_SNAPSHOT) until the
+                // run's probe check releases them and a period boundary passes: the view
+                // skips its update until then; the run goes on.
+                let positions = match chip.positions() {
+                    Err(BusError::ProbeHoldsPositions) => return Ok(()),
+                    positions => positions?,
+                };
                 last_update = now;
                 let steps: Vec<i32> =
-                    chip.positions()?.steps.iter().zip(&start).map(|(p, s)| p.wrapping_sub(*s)).collect();
+                    positions.steps.iter().zip(&start).map(|(p, s)| p.wrapping_sub(*s)).collect();
                 let (level, free) = chip.fifo()?;
                 let underruns = underrun_count::COUNT.get(chip.bus().read_one(underrun_count::ADDR)?);
                 let position = units(resolved, &steps);
