@@ -169,3 +169,27 @@ fn reversals_at_corners_pass_within_p() {
         })
         .unwrap();
 }
+
+#[test]
+fn a_steep_helix_of_short_segments_keeps_every_limit() {
+    // A helix of radius 2 mm rising 2 mm a radian, as 1 500 short G1 segments in G64 (the
+    // smoother's 3-axis curves): its torsion is as large as its curvature, where a
+    // jerk estimate from curvature alone (|k'| v^3 and k^2 v^3 with no torsion term)
+    // would be too low by (R^2 + c^2) / R^2 = 2 (review of 7d2ed84).
+    let mut source = String::from("G21 G90 G64 P0.01\nG0 X2 Y0 Z0\nF6000\n");
+    for i in 1..=1500 {
+        let t = f64::from(i) * 0.01;
+        source.push_str(&format!("G1 X{:.4} Y{:.4} Z{:.4}\n", 2.0 * t.cos(), 2.0 * t.sin(), 2.0 * t));
+    }
+    source.push_str("M2\n");
+    let program = parse("steep_helix.ngc", &source);
+    for profile in PROFILES {
+        let (_, report) = plan_and_check("steep_helix.ngc", &program, &config(profile));
+        // The case is meant to press the limits: some axis's jerk (S-curve) or
+        // acceleration (trapezoid) must come near its limit, or it tests nothing.
+        let used = |k: usize| (0..3).map(|a| report.axis_max[a][k] / report.axis_limit[a][k]).fold(0.0, f64::max);
+        println!("{profile:?}: peak v {:.3}, a {:.3}, j {:.3} of the limits", used(0), used(1), used(2));
+        let pressed = if profile == ProfileKind::SCurve { used(2) } else { used(1) };
+        assert!(pressed > 0.8, "{profile:?}: the helix does not press the limits ({pressed:.3})");
+    }
+}
