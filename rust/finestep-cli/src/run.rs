@@ -514,8 +514,7 @@ fn run_records<B: Bus>(
                     positions => positions?,
                 };
                 last_update = now;
-                let steps: Vec<i32> =
-                    positions.steps.iter().zip(&start).map(|(p, s)| p.wrapping_sub(*s)).collect();
+                let steps: Vec<i32> = positions.steps.iter().zip(&start).map(|(p, s)| p.wrapping_sub(*s)).collect();
                 let (level, free) = chip.fifo()?;
                 let underruns = underrun_count::COUNT.get(chip.bus().read_one(underrun_count::ADDR)?);
                 let position = units(resolved, &steps);
