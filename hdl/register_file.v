@@ -740,6 +740,12 @@ module register_file #(
     end
 
     // Error counters (wrap at 16 bits); CLEAR_COUNTERS zeroes them all and wins.
+`ifdef F_FREE_COUNTERS
+    // The formal task counters: any value at reset, so that the counting properties meet
+    // every counter value a few clocks after it (from 0 a 16-bit counter's bit 15 takes
+    // 2^15 events: a base case never gets there).
+    (* anyconst *) reg [5*COUNT_W-1:0] f_count_start;
+`endif
     always @(posedge clk) begin
         if (rst || clear_counters_reg) begin
             underrun_count_reg       <= {COUNT_W{1'b0}};
@@ -747,6 +753,10 @@ module register_file #(
             frame_error_count_reg    <= {COUNT_W{1'b0}};
             parallel_error_count_reg <= {COUNT_W{1'b0}};
             refused_count_reg        <= {COUNT_W{1'b0}};
+`ifdef F_FREE_COUNTERS
+            if (rst) {underrun_count_reg, crc_error_count_reg, frame_error_count_reg,
+                      parallel_error_count_reg, refused_count_reg} <= f_count_start;
+`endif
         end else begin
             if (underrun_event) underrun_count_reg <= underrun_count_reg + 1'b1;
             if (spi_crc_error) crc_error_count_reg <= crc_error_count_reg + 1'b1;
@@ -861,7 +871,8 @@ module register_file #(
             assert (underrun_count_reg == $past(underrun_count_reg) + {15'd0, $past(underrun_event)} &&
                     crc_error_count_reg == $past(crc_error_count_reg) + {15'd0, $past(spi_crc_error)} &&
                     frame_error_count_reg == $past(frame_error_count_reg) + {15'd0, $past(spi_frame_error)} &&
-                    parallel_error_count_reg == $past(parallel_error_count_reg) + {15'd0, $past(par_error)});
+                    parallel_error_count_reg == $past(parallel_error_count_reg) + {15'd0, $past(par_error)} &&
+                    refused_count_reg == $past(refused_count_reg) + $past(refused_now));
         if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
         assert (push_commit == $past(push_stage));
         if (!DIRECT && $past(push_go) && !$past(push_last) && !$past(fifo_flush)) assert (push_go);
