@@ -106,12 +106,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         match corpus_summary(&outcomes) {
             Some(summary) => {
                 println!(
-                    "  time / lower bound ({profile:?}): {:.3} over the sums ({:.2} s of motion against {:.2} s), mean of the {} programs' ratios {:.3}",
+                    "  time / lower bound ({profile:?}): {:.3} over the sums ({:.2} s of motion against {:.2} s), the {} programs' ratios: mean {:.3}, median {:.3}",
                     summary.total_ratio,
                     summary.time,
                     summary.bound,
                     summary.ratios.len(),
-                    summary.mean_ratio
+                    summary.mean_ratio,
+                    summary.median_ratio
                 );
                 for (name, ratio) in summary.ratios.iter().take(8) {
                     println!("    {ratio:.3} {name}");

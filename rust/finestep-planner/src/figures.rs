@@ -246,6 +246,8 @@ pub struct CorpusSummary {
     pub total_ratio: f64,
     /// The mean of the timed programs' ratios.
     pub mean_ratio: f64,
+    /// Their median (of an even count, the mean of the middle two).
+    pub median_ratio: f64,
     /// Machining time and bound summed, s.
     pub time: f64,
     /// The bound summed, s.
@@ -270,5 +272,30 @@ pub fn corpus_summary(outcomes: &[(String, CorpusOutcome)]) -> Option<CorpusSumm
     }
     let mean_ratio = ratios.iter().map(|(_, r)| r).sum::<f64>() / ratios.len() as f64;
     ratios.sort_by(|a, b| b.1.total_cmp(&a.1));
-    Some(CorpusSummary { total_ratio: time / bound, mean_ratio, time, bound, ratios })
+    let n = ratios.len();
+    let median_ratio = 0.5 * (ratios[(n - 1) / 2].1 + ratios[n / 2].1);
+    Some(CorpusSummary { total_ratio: time / bound, mean_ratio, median_ratio, time, bound, ratios })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_corpus_summary_counts_only_the_timed_programs() {
+        let outcomes = [
+            ("a".to_string(), CorpusOutcome::Timed { time: 2.0, bound: 2.0 }),
+            ("b".to_string(), CorpusOutcome::NoMotion),
+            ("c".to_string(), CorpusOutcome::Timed { time: 3.0, bound: 1.0 }),
+            ("d".to_string(), CorpusOutcome::Refused { line: 3, reason: "no".into() }),
+            ("e".to_string(), CorpusOutcome::Timed { time: 3.0, bound: 2.0 }),
+            ("f".to_string(), CorpusOutcome::Violations { count: 1, first: "v".into() }),
+        ];
+        let s = corpus_summary(&outcomes).unwrap();
+        assert_eq!((s.time, s.bound, s.total_ratio), (8.0, 5.0, 1.6));
+        assert_eq!((s.mean_ratio, s.median_ratio), (5.5 / 3.0, 1.5));
+        let names: Vec<&str> = s.ratios.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["c", "e", "a"]);
+        assert_eq!(corpus_summary(&outcomes[1..2]), None);
+    }
 }
