@@ -7,7 +7,11 @@
 //!
 //! Along the path, sampled densely, the speed may be at most
 //!
-//! - the programmed feed of the block (rapids: the axes' limits);
+//! - the programmed feed of the block the point is on ([`Element::feed`]: the block's
+//!   own, not its line's, since one line may hold blocks of several feeds, a canned
+//!   cycle's rapids and feeds; until plan26 the largest feed on the line was taken, so
+//!   a G81 cycle's feeds were bounded as rapids: hole-circle.ngc 3.1 times its bound;
+//!   rapids: the axes' limits);
 //! - `V_a / |T_a|` for every axis a (T the unit tangent, from central differences of
 //!   positions);
 //! - `sqrt(A_a / |kappa_a|)`, the normal acceleration alone within each axis's full
@@ -24,7 +28,7 @@
 //! each relaxation only shortens the time, so the result is a lower bound on any motion
 //! along this path within the limits, whatever its profile.
 
-use finestep_gcode::{BlockKind, Program};
+use finestep_gcode::Program;
 
 use crate::config::{MachineConfig, Resolved};
 use crate::cutter_comp::compensate;
@@ -47,20 +51,7 @@ pub fn time_lower_bound(config: &MachineConfig, program: &Program) -> Result<f64
     let resolved = config.resolve()?;
     let compensated = compensate(program, &config.tool_table()).map_err(|e| ProgramError::new(e.line, e.reason))?;
     let path = elements(&resolved, &compensated)?;
-    let mut feeds = std::collections::HashMap::new();
-    for block in &compensated.blocks {
-        let feed = match block.kind {
-            BlockKind::Linear { feed_mm_per_min, .. }
-            | BlockKind::Arc { feed_mm_per_min, .. }
-            | BlockKind::Nurbs { feed_mm_per_min, .. }
-            | BlockKind::Probe { feed_mm_per_min, .. } => feed_mm_per_min / 60.0,
-            BlockKind::Rapid { .. } => f64::INFINITY,
-            _ => continue,
-        };
-        let slot = feeds.entry(block.line).or_insert(0.0f64);
-        *slot = slot.max(feed);
-    }
-    Ok(bound_of_path(&resolved, &path.elements, &|line| feeds.get(&line).copied().unwrap_or(f64::INFINITY)))
+    Ok(bound_of_path(&resolved, &path.elements))
 }
 
 /// One sample: distance along the path, speed limit, tangential acceleration limit.
@@ -130,11 +121,11 @@ fn interval_time(length: f64, v0: f64, v1: f64, a: f64, cap: f64) -> f64 {
     (peak - v0) / a + (peak - v1) / a + (length - up - down).max(0.0) / peak
 }
 
-fn bound_of_path(config: &Resolved, path: &[Element], feed_of: &dyn Fn(usize) -> f64) -> f64 {
+fn bound_of_path(config: &Resolved, path: &[Element]) -> f64 {
     let mut points: Vec<Point> = vec![Point { s: 0.0, v: 0.0, a: f64::INFINITY }];
     let mut at = 0.0;
     for (index, e) in path.iter().enumerate() {
-        let feed = feed_of(e.line);
+        let feed = e.feed;
         let n = ((e.length * SAMPLES_PER_UNIT).ceil() as usize).clamp(MIN_SAMPLES, MAX_SAMPLES);
         for i in 1..=n {
             let s = e.length * i as f64 / n as f64;

@@ -114,6 +114,10 @@ pub struct Element {
     pub length: f64,
     /// Source line of the block.
     pub line: usize,
+    /// The programmed feed along the element, units/s (infinite for rapids; a blend's,
+    /// the smaller of its two moves'): the block's own, where one line holds blocks of
+    /// different feeds (a canned cycle's rapids and feeds, a loop's changing F).
+    pub feed: f64,
     /// Speed cap along the element, units/s: feed, per-axis speeds, arc limits.
     pub v_cap: f64,
     /// Tangential acceleration limit, units/s^2.

@@ -175,3 +175,127 @@ pub fn limit_figures(programs: &[(String, Program)], profile: ProfileKind) -> Re
     ));
     Ok(lines)
 }
+
+/// How one program of a corpus came out ([`corpus_outcome`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum CorpusOutcome {
+    /// Planned, passed by the checker and bounded: its machining time (the periods that
+    /// move) and its lower bound ([`crate::bound`]), s.
+    Timed {
+        /// Machining time, s.
+        time: f64,
+        /// The lower bound, s.
+        bound: f64,
+    },
+    /// Planned and passed by the checker, but nothing moves (a subroutine file, a
+    /// program of settings only): no ratio.
+    NoMotion,
+    /// The planner or the bound refused it (line 0: not about one line).
+    Refused {
+        /// The line.
+        line: usize,
+        /// Why.
+        reason: String,
+    },
+    /// The checker could not read it (a configuration or compensation error).
+    CheckError(String),
+    /// The checker found violations: a planner bug (or a checker bug).
+    Violations {
+        /// How many.
+        count: usize,
+        /// The first one.
+        first: String,
+    },
+}
+
+/// Plans `program` on `config`, checks the records and bounds the machining time: the
+/// corpus figure's one program ([`CorpusOutcome`]).
+pub fn corpus_outcome(config: &MachineConfig, program: &Program) -> CorpusOutcome {
+    let planned = match plan_program(config, program) {
+        Ok(planned) => planned,
+        Err(e) => return CorpusOutcome::Refused { line: e.line, reason: e.reason },
+    };
+    let report = match check_program(config, program, &planned.records) {
+        Ok(report) => report,
+        Err(e) => return CorpusOutcome::CheckError(e.to_string()),
+    };
+    if !report.passed() {
+        return CorpusOutcome::Violations {
+            count: report.violation_count,
+            first: report.violations.first().cloned().unwrap_or_default(),
+        };
+    }
+    let time = moving_time(config, planned.records.iter().map(|r| r.inc.iter().any(|i| i.to_bits() != 0)));
+    let bound = match time_lower_bound(config, program) {
+        Ok(bound) => bound,
+        Err(e) => return CorpusOutcome::Refused { line: e.line, reason: format!("(the bound) {}", e.reason) },
+    };
+    if time == 0.0 && bound == 0.0 {
+        CorpusOutcome::NoMotion
+    } else {
+        CorpusOutcome::Timed { time, bound }
+    }
+}
+
+/// A corpus's time over the lower bound ([`corpus_outcome`] on each program): the
+/// ratio of the sums, the mean of the per-program ratios, and the programs by ratio,
+/// worst first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CorpusSummary {
+    /// Machining time over the bound, summed over the timed programs.
+    pub total_ratio: f64,
+    /// The mean of the timed programs' ratios.
+    pub mean_ratio: f64,
+    /// Their median (of an even count, the mean of the middle two).
+    pub median_ratio: f64,
+    /// Machining time and bound summed, s.
+    pub time: f64,
+    /// The bound summed, s.
+    pub bound: f64,
+    /// The timed programs and their ratios, worst first.
+    pub ratios: Vec<(String, f64)>,
+}
+
+/// The summary of the timed programs among `outcomes` (None: none timed).
+pub fn corpus_summary(outcomes: &[(String, CorpusOutcome)]) -> Option<CorpusSummary> {
+    let mut ratios = Vec::new();
+    let (mut time, mut bound) = (0.0, 0.0);
+    for (name, outcome) in outcomes {
+        if let CorpusOutcome::Timed { time: t, bound: b } = outcome {
+            time += t;
+            bound += b;
+            ratios.push((name.clone(), t / b));
+        }
+    }
+    if ratios.is_empty() {
+        return None;
+    }
+    let mean_ratio = ratios.iter().map(|(_, r)| r).sum::<f64>() / ratios.len() as f64;
+    ratios.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let n = ratios.len();
+    let median_ratio = 0.5 * (ratios[(n - 1) / 2].1 + ratios[n / 2].1);
+    Some(CorpusSummary { total_ratio: time / bound, mean_ratio, median_ratio, time, bound, ratios })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_corpus_summary_counts_only_the_timed_programs() {
+        let outcomes = [
+            ("a".to_string(), CorpusOutcome::Timed { time: 2.0, bound: 2.0 }),
+            ("b".to_string(), CorpusOutcome::NoMotion),
+            ("c".to_string(), CorpusOutcome::Timed { time: 3.0, bound: 1.0 }),
+            ("d".to_string(), CorpusOutcome::Refused { line: 3, reason: "no".into() }),
+            ("e".to_string(), CorpusOutcome::Timed { time: 3.0, bound: 2.0 }),
+            ("f".to_string(), CorpusOutcome::Violations { count: 1, first: "v".into() }),
+        ];
+        let s = corpus_summary(&outcomes).unwrap();
+        assert_eq!((s.time, s.bound, s.total_ratio), (8.0, 5.0, 1.6));
+        assert_eq!((s.mean_ratio, s.median_ratio), (5.5 / 3.0, 1.5));
+        let names: Vec<&str> = s.ratios.iter().map(|(n, _)| n.as_str()).collect();
+        assert_eq!(names, ["c", "e", "a"]);
+        assert_eq!(corpus_summary(&outcomes[1..2]), None);
+    }
+}

@@ -408,6 +408,7 @@ pub fn pieces_sampled(
                 end: end_point,
                 length,
                 line,
+                feed,
                 v_cap,
                 accel,
                 jerk,

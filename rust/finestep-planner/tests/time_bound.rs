@@ -87,3 +87,19 @@ fn short_segments_keep_every_limit() {
         }
     }
 }
+
+/// A canned cycle puts its rapids and its feeds on one line: the bound takes each
+/// block's own feed (`Element::feed`), not the largest on the line. Until plan26 it
+/// took the line's largest, the rapids', so the drilling feeds were bounded as rapids
+/// (LinuxCNC's hole-circle.ngc read 3.1 times its bound). Four holes, each fed 10 mm at
+/// 120 mm/min: at least 20 s of feeding.
+#[test]
+fn a_canned_cycle_is_bounded_at_its_feeds() {
+    let program = parse("drill.ngc", "G21 G17 G90\nG0 X10 Y0 Z0\nG91 G81 R1 Z-10 X5 L4 F120\nG90\nM2\n");
+    for profile in PROFILES {
+        let (t, b) = timed_program(&program, profile);
+        eprintln!("drill {profile:?}: {t:.3} s, bound {b:.3} s, ratio {:.3}", t / b);
+        assert!(b >= 4.0 * 10.0 / 2.0, "{profile:?}: bound {b} s below the 20 s of feeding");
+        assert!(t >= b, "{profile:?}: {t} s is below the lower bound {b} s");
+    }
+}
