@@ -116,6 +116,12 @@ pub enum BusError {
         /// The slots of the build CAPS otherwise describes.
         built: u32,
     },
+    /// A point-by-point record the core cannot run as meant ([`Machine::pbp_record`]).
+    #[error("point-by-point record refused: {why}")]
+    PbpRecord {
+        /// Why.
+        why: String,
+    },
     /// An axis the core was not built with (`CAPS.N_AXES`).
     #[error("axis {axis}: the core has {n_axes} axes (CAPS.N_AXES)")]
     NoSuchAxis {
