@@ -42,7 +42,7 @@ pub use pins::{PinHost, PinTarget, PinTiming};
 pub use spi::{SpiBus, SpiTransfer};
 
 pub use finestep_interface::pin_timing::PinTimingReport;
-pub use finestep_interface::{DriveTiming, Increment, OutMode, PeriodRecord};
+pub use finestep_interface::{DriveTiming, Increment, OutMode, PbpLanes, PeriodRecord};
 
 /// Why a bus operation failed. Nothing is applied by a failed write.
 #[derive(Debug, thiserror::Error)]
