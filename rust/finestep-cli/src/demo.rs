@@ -18,7 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::bus::BusTarget;
 use crate::machine_setup::{self, BURST};
 use crate::plot::{plot_axes, AxisTrace};
-use crate::run::run_program_on;
+use crate::run::{run_program_on, ChipLacksPbp};
 
 const AXIS_NAMES: [&str; 3] = ["X", "Z", "C"];
 const AXIS_UNITS: [&str; 3] = ["mm", "mm", "deg"];
@@ -53,6 +53,7 @@ pub fn run(out: &Path, bus: Option<BusTarget>) -> anyhow::Result<()> {
         Ok(())
     })?;
     if !bus.is_lockstep() {
+        lathe_part(&bus, out)?;
         println!();
         println!(
             "finestep demo, parts 3 and 4 (feedback, hand wheel, roller compensation): skipped on {bus}; they need \
@@ -61,7 +62,34 @@ pub fn run(out: &Path, bus: Option<BusTarget>) -> anyhow::Result<()> {
         return Ok(());
     }
     crate::demo_feedback::run()?;
-    crate::roller::demo(out)
+    crate::roller::demo(out)?;
+    lathe_part(&bus, out)
+}
+
+/// Seed 003's lathe part (`tests/programs/lathe_pbp.ngc`) on its machine
+/// (`tests/machines/lathe_pbp.toml`).
+const LATHE_PART: &str = include_str!("../../../tests/programs/lathe_pbp.ngc");
+const LATHE_MACHINE: &str = include_str!("../../../tests/machines/lathe_pbp.toml");
+
+/// Part 5: seed 003's lathe part in G18 G7 (a face, a taper, an arc shoulder), G1/G2/G3
+/// by the chip's point-by-point interpolator, spindle and flood coolant on while it cuts,
+/// on `bus` (in lockstep without --bus); skipped, saying why, on a chip without
+/// `VERSION.HAS_PBP`.
+fn lathe_part(bus: &BusTarget, out: &Path) -> anyhow::Result<()> {
+    println!();
+    println!(
+        "finestep demo, part 5: seed 003's lathe part (G18 G7: a face, a taper, an arc shoulder) by point-by-point \
+         comparison, spindle and flood coolant on"
+    );
+    let program = finestep_gcode::parse_str(LATHE_PART, "lathe_pbp.ngc")?;
+    let config = MachineConfig::from_toml_str(LATHE_MACHINE, "lathe_pbp.toml")?;
+    match run_program_on(&program, "lathe_pbp.ngc", false, bus, config, "lathe_pbp.toml", out, None, &|| Ok(())) {
+        Err(error) if error.downcast_ref::<ChipLacksPbp>().is_some() => {
+            println!("  skipped: {error}");
+            Ok(())
+        }
+        result => result,
+    }
 }
 
 /// What part 1's stream took, for the waveform of its first periods.

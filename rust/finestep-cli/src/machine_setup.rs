@@ -46,6 +46,7 @@ pub fn chip_limits(caps: &Caps) -> CoreLimits {
         p_width: caps.p_width,
         timing_w: caps.timing_w,
         n_axes: caps.n_axes,
+        has_pbp: caps.has_pbp,
         step_slots: caps.step_slots,
     }
 }
@@ -94,8 +95,8 @@ pub fn axis_config(resolved: &Resolved, axis: usize) -> AxisConfig {
     AxisConfig { timing: setup.timing, mode: 0, invert: 0, enable: true }
 }
 
-/// Writes `resolved` to the chip: drive timing of every configured axis (and only those
-/// enabled), the period, a start level of one record; clears faults and errors. With
+/// Writes `resolved` to the chip: drive timing of every configured axis on its chip axis
+/// ([`Resolved::chip_axis`]; and only those enabled), the period, a start level of one record; clears faults and errors. With
 /// `[gantry]` enabled, the slave is configured and enabled too, the pair's registers and
 /// mode written and the pair engaged (the axes are at rest before a run); a chip
 /// without the gantry (CAPS.HAS_GANTRY 0) is refused before anything is written.
@@ -108,8 +109,11 @@ pub fn configure<B: Bus>(machine: &mut Machine<B>, resolved: &Resolved) -> anyho
     }
     let slave = resolved.gantry.map(|g| usize::from(g.slave));
     let mut mask = 0;
-    for axis in (0..resolved.axes.len()).filter(|&a| resolved.axes[a].present || Some(a) == slave) {
-        machine.configure_axis(axis, &axis_setup(resolved, axis))?;
+    // Each configured slot on its chip axis (the slot itself but with point-by-point,
+    // which puts the plane's axes on the chip pair: Resolved::chip_axis).
+    for slot in (0..resolved.axes.len()).filter(|&a| resolved.axes[a].present || Some(a) == slave) {
+        let axis = resolved.chip_axis[slot];
+        machine.configure_axis(axis, &axis_setup(resolved, slot))?;
         mask |= 1 << axis;
     }
     machine.enable_axes(mask)?;

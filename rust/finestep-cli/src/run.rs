@@ -11,8 +11,9 @@ use finestep_host::regs::underrun_count;
 use finestep_host::stream::{self, RunReport, StreamEvent};
 use finestep_host::{Bus, BusError, Machine, Outputs, SpindleSetup};
 use finestep_model::{Core, CoreInputs};
-use finestep_planner::config::Resolved;
 use finestep_planner::config::AXIS_NAMES;
+use finestep_planner::config::{InterpolationMode, Resolved};
+use finestep_planner::pbp::{plan_pbp, record_clocks, record_decisions};
 use finestep_planner::{
     check_program, plan_program, CheckReport, IoAction, IoEvent, MachineConfig, PlannedProgram, SpindleConfig,
 };
@@ -87,8 +88,20 @@ pub fn stream_planned<B: Bus>(
     mut watch: impl FnMut(&mut Machine<B>, u64) -> Result<(), BusError>,
 ) -> anyhow::Result<RunReport> {
     machine_setup::check_gantry_records(resolved, &planned.records, name)?;
+    // Point-by-point records (plan_pbp's) are checked against the chip before anything
+    // is written: its interpolator, the pair, the fields, the engine's visit.
+    for (index, record) in planned.records.iter().enumerate() {
+        if let Some(lanes) = record.pbp_lanes() {
+            chip.pbp_record(&lanes, record.flags).with_context(|| {
+                format!("{name}:{}: record {index}", planned.lines.get(index).copied().unwrap_or(0))
+            })?;
+        }
+    }
     machine_setup::configure(chip, resolved)?;
-    let config = machine_setup::stream_config(resolved);
+    let mut config = machine_setup::stream_config(resolved);
+    // A point-by-point record runs for its decisions, not a period.
+    config.record_clocks_max =
+        planned.records.iter().map(|r| record_clocks(r, resolved.period_clocks)).max().unwrap_or(0);
     let mut queued_so_far = 0;
     let observe = |chip: &mut Machine<B>, event: StreamEvent| {
         if let StreamEvent::Queued { queued } = event {
@@ -272,6 +285,19 @@ pub fn run_program_on(
         Some(chip) => machine_setup::chip_limits(&chip.caps()),
         None => machine_setup::model_limits(),
     };
+    if config.interpolation.mode == InterpolationMode::Pbp {
+        let Some(chip) = chip.as_mut() else {
+            bail!("{config_name}: interpolation.mode = \"pbp\" runs on a chip with VERSION.HAS_PBP: not with --fast (the model's core alone)")
+        };
+        if view.is_some() {
+            bail!("{config_name}: interpolation.mode = \"pbp\": --view is not supported in point-by-point mode yet");
+        }
+        if !chip.caps().has_pbp {
+            return Err(ChipLacksPbp { config: config_name.to_string() }.into());
+        }
+        let (config, resolved) = machine_setup::resolve(config, core, config_name)?;
+        return run_pbp(chip, program, name, bus, &config, &resolved, on_end);
+    }
     let (config, resolved) = machine_setup::resolve(config, core, config_name)?;
     let planned = plan_program(&config, program).map_err(|e| anyhow!("{name}:{}: {}", e.line, e.reason))?;
     let records = &planned.records;
@@ -366,6 +392,113 @@ pub fn run_program_on(
         server.wait();
     }
     result
+}
+
+/// A point-by-point configuration (`[interpolation] mode = "pbp"`) on a chip without
+/// the interpolator (`VERSION.HAS_PBP` 0): refused before anything is written.
+#[derive(Debug)]
+pub struct ChipLacksPbp {
+    /// The configuration's name.
+    pub config: String,
+}
+
+impl std::fmt::Display for ChipLacksPbp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}: interpolation.mode = \"pbp\", but the chip has no point-by-point interpolator (VERSION.HAS_PBP 0)",
+            self.config
+        )
+    }
+}
+
+impl std::error::Error for ChipLacksPbp {}
+
+/// `finestep run` in point-by-point mode: `program` planned by [`plan_pbp`] (G1/G2/G3 in
+/// the plane as point-by-point records on the chip pair, G0 as the DDA's records, the
+/// spindle and coolant at their exact stops), its decision rates checked against
+/// `interpolation.max_decision_hz`, streamed into `chip`, and the end positions read back
+/// (`POSITION`, on the chip axes the configuration maps the slots to) checked against
+/// where the records end, exactly.
+fn run_pbp<B: Bus>(
+    chip: &mut Machine<B>,
+    program: &Program,
+    name: &str,
+    bus: &BusTarget,
+    config: &MachineConfig,
+    resolved: &Resolved,
+    on_end: &dyn Fn() -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let pbp = resolved.pbp.context("point-by-point mode without its resolution")?;
+    let plan = plan_pbp(config, program).map_err(|e| anyhow!("{}", e.in_file(name)))?;
+    let planned = &plan.planned;
+    for note in &planned.notes {
+        println!("  note: {note}");
+    }
+    for block in &program.blocks {
+        if let BlockKind::Message { kind: MessageKind::Print, text } = &block.kind {
+            eprintln!("{name}:{}: PRINT: {text}", block.line);
+        }
+    }
+    let [u, v] = pbp.slots;
+    let dda = planned.records.len() - plan.pbp_records;
+    println!(
+        "finestep run {name}: point-by-point on chip pair {} ({} on chip axis {}, {} on {}): {} pbp records ({} decisions) for G1/G2/G3, {} DDA records of {} ms for G0: {:.3} s of machining, {}",
+        pbp.pair,
+        AXIS_NAMES[u],
+        resolved.chip_axis[u],
+        AXIS_NAMES[v],
+        resolved.chip_axis[v],
+        plan.pbp_records,
+        plan.decisions,
+        dda,
+        resolved.period_s * 1e3,
+        plan.clocks as f64 / resolved.clock_hz,
+        if bus.is_lockstep() {
+            "streamed over SPI; RTL in lockstep with the model, every pin every clock".to_string()
+        } else {
+            format!("streamed over SPI on {bus}")
+        }
+    );
+    // The rate: one step per decision, so no axis steps faster than the decisions come.
+    for (index, record) in planned.records.iter().enumerate() {
+        if let Some((_, tick_div)) = record_decisions(record) {
+            if u32::from(tick_div) + 1 < pbp.min_interval {
+                bail!(
+                    "{name}:{}: a decision every {} clocks, faster than interpolation.max_decision_hz or the drive timing allow ({} clocks)",
+                    planned.lines[index],
+                    u32::from(tick_div) + 1,
+                    pbp.min_interval
+                );
+            }
+        }
+    }
+    if let Some(interval) = plan.min_interval {
+        println!(
+            "  fastest decision rate {:.0} Hz, a decision every {interval} clocks (limit {} Hz: {} clocks with the drive timing)",
+            resolved.clock_hz / f64::from(interval),
+            pbp.max_decision_hz,
+            pbp.min_interval
+        );
+    }
+    let start = chip.positions()?.steps;
+    let streamed = stream_planned(chip, planned, resolved, &config.spindle, name, |_, _| Ok(()))?;
+    // POSITION per chip axis, back in slot order (X, Y, Z, A).
+    let moved: Vec<i32> = (0..4)
+        .map(|slot| {
+            let axis = resolved.chip_axis[slot];
+            match (streamed.end.steps.get(axis), start.get(axis)) {
+                (Some(end), Some(start)) => end.wrapping_sub(*start),
+                _ => 0,
+            }
+        })
+        .collect();
+    println!(
+        "  {} records in {} bursts, {} underruns",
+        streamed.stream.records, streamed.stream.bursts, streamed.stream.underruns
+    );
+    report_end(planned, resolved, &moved, streamed.cycles, false, bus)?;
+    on_end()
 }
 
 /// The motion plot's limits: the programmed feed of the block each period runs on, and the
@@ -599,6 +732,7 @@ mod tests {
     use finestep_host::pins::layout::{
         OUT_COOLANT_FLOOD, OUT_COOLANT_MIST, OUT_GPIO0, OUT_PIN_A0, OUT_PIN_B0, OUT_SPINDLE_EN, OUT_SPINDLE_PWM,
     };
+    use finestep_host::stream::RunReport;
     use finestep_host::{BusError, PinHost, PinTarget, PinTiming, SpiBus};
     use finestep_model::top::Top;
 
@@ -767,5 +901,164 @@ mod tests {
         let planned = plan_program(&config, &finestep_gcode::parse_str("G1 X1 F600\nM2\n", "x.ngc").unwrap()).unwrap();
         let err = stream_planned(&mut plain, &planned, &resolved, &config.spindle, "x.ngc", |_, _| Ok(())).unwrap_err();
         assert!(err.to_string().contains("the chip has no gantry (CAPS.HAS_GANTRY 0"), "{err}");
+    }
+
+    /// A 4-axis model chip with the point-by-point interpolator (`HAS_PBP`, the build the
+    /// Verilated default chip gains) at its pins: the steps of chip axes 0 and 1 counted
+    /// from their step and direction pins with their cycles, and every change of the
+    /// spindle enable and flood pins with the two positions then.
+    struct PbpPins {
+        inner: ModelPins,
+        cycle: u64,
+        at: [i64; 2],
+        steps: [Vec<u64>; 2],
+        changes: Vec<(u64, u64, [i64; 2])>,
+    }
+
+    impl PinTarget for PbpPins {
+        fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
+            for _ in 0..cycles {
+                let before = self.inner.outputs();
+                self.inner.drive(inputs, 1)?;
+                let now = self.inner.outputs();
+                self.cycle += 1;
+                for axis in 0..2 {
+                    let (a, b) = (OUT_PIN_A0 + axis as u32, OUT_PIN_B0 + axis as u32);
+                    if now >> a & 1 != 0 && before >> a & 1 == 0 {
+                        self.at[axis] += if now >> b & 1 != 0 { 1 } else { -1 };
+                        self.steps[axis].push(self.cycle);
+                    }
+                }
+                let watched = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_FLOOD;
+                if (now ^ before) & watched != 0 {
+                    self.changes.push((self.cycle, now & watched, self.at));
+                }
+            }
+            Ok(())
+        }
+
+        fn outputs(&self) -> u64 {
+            self.inner.outputs()
+        }
+    }
+
+    type PbpChip = Machine<SpiBus<PinHost<PbpPins>>>;
+
+    fn pbp_chip(has_pbp: bool) -> PbpChip {
+        let params = finestep_model::top::TopParams { has_pbp, ..rtl_top_params() };
+        let pins = PbpPins {
+            inner: ModelPins(Top::new(params)),
+            cycle: 0,
+            at: [0; 2],
+            steps: [vec![], vec![]],
+            changes: vec![],
+        };
+        let mut host = PinHost::new(pins, PinTiming::default());
+        host.reset(4).unwrap();
+        host.idle(8).unwrap();
+        let mut chip = Machine::connect(SpiBus::new(host, 1)).unwrap();
+        let n_axes = chip.caps().n_axes;
+        chip.bus().set_n_axes(n_axes);
+        chip
+    }
+
+    fn repo(path: &str) -> std::path::PathBuf {
+        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../..")).join(path)
+    }
+
+    /// `finestep run`'s point-by-point machinery on the chip: the lathe's configuration
+    /// resolved against it, `text` planned by plan_pbp and streamed with its events;
+    /// the chip, the plan and the run's report.
+    fn run_pbp_on_pins(text: &str) -> (PbpChip, finestep_planner::pbp::PbpPlan, RunReport, Resolved) {
+        let mut chip = pbp_chip(true);
+        let toml = std::fs::read_to_string(repo("tests/machines/lathe_pbp.toml")).unwrap();
+        let config = MachineConfig::from_toml_str(&toml, "lathe_pbp.toml").unwrap();
+        let limits = machine_setup::chip_limits(&chip.caps());
+        let (config, resolved) = machine_setup::resolve(config, limits, "lathe_pbp.toml").unwrap();
+        let program = finestep_gcode::parse_str(text, "lathe_pbp.ngc").unwrap();
+        let plan = plan_pbp(&config, &program).unwrap();
+        let report =
+            stream_planned(&mut chip, &plan.planned, &resolved, &config.spindle, "lathe_pbp.ngc", |_, _| Ok(()))
+                .unwrap();
+        assert_eq!(report.stream.underruns, 0);
+        (chip, plan, report, resolved)
+    }
+
+    /// Seed 003's lathe part (tests/programs/lathe_pbp.ngc) on the model chip with the
+    /// interpolator: POSITION (X on chip axis 0, Z on 1) ends exactly on the programmed
+    /// end on the step grid, the pins' step counts agree, and the spindle and the flood
+    /// coolant switch on before the first step and off after the last, at rest.
+    #[test]
+    fn the_lathe_part_runs_point_by_point_to_its_exact_end() {
+        let text = std::fs::read_to_string(repo("tests/programs/lathe_pbp.ngc")).unwrap();
+        let (mut chip, plan, report, resolved) = run_pbp_on_pins(&text);
+        // X12 in G7 is a radius of 6 mm, Z0.5: 600 and 50 steps; Y and A do not move.
+        assert_eq!(report.end.steps, [600, 50, 0, 0]);
+        assert_eq!(plan.planned.end, [6.0, 0.0, 0.5, 0.0]);
+        let pins = chip.bus().link_mut().target();
+        assert_eq!(pins.at, [600, 50]);
+        let (en, flood) = (1 << OUT_SPINDLE_EN, 1 << OUT_COOLANT_FLOOD);
+        let states: Vec<(u64, [i64; 2])> = pins.changes.iter().map(|&(_, p, at)| (p, at)).collect();
+        assert_eq!(states, [(en, [0, 0]), (en | flood, [0, 0]), (en, [600, 50]), (0, [600, 50])], "{:?}", pins.changes);
+        let first = pins.steps.iter().filter_map(|s| s.first()).min().copied().unwrap();
+        let last = pins.steps.iter().filter_map(|s| s.last()).max().copied().unwrap();
+        assert!(pins.changes[1].0 < first && pins.changes[2].0 > last, "{:?} vs steps {first}..{last}", pins.changes);
+        println!(
+            "lathe part: {} records ({} pbp, {} decisions), {} bursts, {:.3} s of machining planned, {} clocks run ({:.3} s), {} + {} steps",
+            report.stream.records,
+            plan.pbp_records,
+            plan.decisions,
+            report.stream.bursts,
+            plan.clocks as f64 / resolved.clock_hz,
+            report.cycles,
+            report.cycles as f64 / resolved.clock_hz,
+            pins.steps[0].len(),
+            pins.steps[1].len()
+        );
+    }
+
+    /// G1/G2/G3 alone (no G0: every step a decision's): the steps at the pins come at the
+    /// decisions' rate, within 8 kHz (6250 clocks): closer only by what the shaper may
+    /// delay one step and not the next, a direction change's set-up in whole visits of
+    /// the step engine and the visit itself (252 + 4 clocks); the end exact.
+    #[test]
+    fn point_by_point_steps_never_come_faster_than_the_limit() {
+        let text = "G18 G7\nG1 X4 F6000\nG1 Z-2\nG2 X6 Z-3 R1\nG3 X8 Z-4 R1\nG1 X2 Z-1 F9000\nM2\n";
+        let (mut chip, plan, report, resolved) = run_pbp_on_pins(text);
+        assert_eq!(report.end.steps, [100, -100, 0, 0]);
+        assert_eq!(plan.planned.records.len(), plan.pbp_records);
+        let slots = chip.caps().step_slots;
+        let interval = u64::from(resolved.pbp.unwrap().min_interval);
+        assert_eq!(interval, 6_250);
+        let slack = u64::from(resolved.timing[0].dir_setup.div_ceil(slots) * slots + slots);
+        let pins = chip.bus().link_mut().target();
+        let mut all: Vec<u64> = pins.steps.concat();
+        all.sort_unstable();
+        assert_eq!(all.len() as u64, plan.decisions, "one step per decision");
+        for (what, steps) in [("chip axis 0", &pins.steps[0]), ("chip axis 1", &pins.steps[1]), ("both", &all)] {
+            let shortest = steps.windows(2).map(|w| w[1] - w[0]).min().unwrap();
+            println!(
+                "{what}: {} steps, the shortest interval {shortest} clocks (decisions {interval} apart)",
+                steps.len()
+            );
+            assert!(shortest + slack >= interval, "{what}: {shortest} + {slack} < {interval}");
+        }
+    }
+
+    /// A point-by-point configuration on a chip without the interpolator is refused by
+    /// key when resolved, and its records by the driver.
+    #[test]
+    fn a_chip_without_the_interpolator_is_refused() {
+        let chip = pbp_chip(false);
+        assert!(!chip.caps().has_pbp);
+        let toml = std::fs::read_to_string(repo("tests/machines/lathe_pbp.toml")).unwrap();
+        let config = MachineConfig::from_toml_str(&toml, "lathe_pbp.toml").unwrap();
+        let err =
+            machine_setup::resolve(config, machine_setup::chip_limits(&chip.caps()), "lathe_pbp.toml").unwrap_err();
+        let text = format!("{err:#}");
+        assert!(text.contains("lathe_pbp.toml: interpolation.mode:") && text.contains("VERSION.HAS_PBP 0"), "{text}");
+        let lanes = finestep_host::PbpLanes { x: 5, tick_div: 700, ..Default::default() };
+        assert!(matches!(chip.pbp_record(&lanes, 0), Err(BusError::PbpRecord { .. })));
+        assert!(pbp_chip(true).pbp_record(&lanes, 0).is_ok());
     }
 }

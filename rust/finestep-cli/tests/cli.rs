@@ -163,3 +163,18 @@ fn the_parameter_file_carries_offsets_from_one_run_to_the_next() {
     assert!(std::fs::read_to_string(&var).unwrap().contains("5241\t10.000000\n"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Point-by-point mode (`[interpolation] mode = "pbp"`) runs on a chip: `--fast` (the
+/// model's core alone) is refused naming the file, and a plane the machine cannot map is
+/// refused by its key when the file is read.
+#[test]
+fn point_by_point_mode_is_refused_where_it_cannot_run() {
+    let machine = concat!(env!("CARGO_MANIFEST_DIR"), "/../../tests/machines/lathe_pbp.toml");
+    let (ok, text) = finestep(&["run", "--fast", "--config", machine, &program("lathe_pbp.ngc")]);
+    assert!(!ok);
+    assert!(text.contains(&format!("{machine}: interpolation.mode = \"pbp\" runs on a chip")), "{text}");
+    let config = scratch("plane.toml", "[interpolation]\nmode = \"pbp\"\nplane = \"XA\"\n");
+    let (ok, text) = finestep(&["run", "--fast", "--config", &config, &program("lathe_pbp.ngc")]);
+    assert!(!ok);
+    assert!(text.contains(&format!("{config}: interpolation.plane: \"XA\" is not two different axes")), "{text}");
+}

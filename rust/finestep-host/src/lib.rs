@@ -42,7 +42,7 @@ pub use pins::{PinHost, PinTarget, PinTiming};
 pub use spi::{SpiBus, SpiTransfer};
 
 pub use finestep_interface::pin_timing::PinTimingReport;
-pub use finestep_interface::{DriveTiming, Increment, OutMode, PeriodRecord};
+pub use finestep_interface::{DriveTiming, Increment, OutMode, PbpLanes, PeriodRecord};
 
 /// Why a bus operation failed. Nothing is applied by a failed write.
 #[derive(Debug, thiserror::Error)]
@@ -115,6 +115,12 @@ pub enum BusError {
         found: u32,
         /// The slots of the build CAPS otherwise describes.
         built: u32,
+    },
+    /// A point-by-point record the core cannot run as meant ([`Machine::pbp_record`]).
+    #[error("point-by-point record refused: {why}")]
+    PbpRecord {
+        /// Why.
+        why: String,
     },
     /// An axis the core was not built with (`CAPS.N_AXES`).
     #[error("axis {axis}: the core has {n_axes} axes (CAPS.N_AXES)")]

@@ -7,7 +7,8 @@ use crate::regs::{
     probe_control, probe_status, probe_time, start_level, status, version,
 };
 use crate::{Bus, BusError};
-use finestep_interface::{invert, DriveTiming, OutMode};
+use finestep_interface::pbp::PbpLanes;
+use finestep_interface::{invert, DriveTiming, OutMode, PeriodRecord};
 
 /// What the core was built with (`CAPS`, `CLOCK_HZ`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,6 +58,12 @@ pub struct Caps {
     /// docs/spec/register_file.md#record_inc-straight-into-the-fifo). The bus's
     /// `push_records` writes every axis's increment before each push in any build.
     pub inc_direct: bool,
+    /// The point-by-point comparison interpolator is in the core (`VERSION.HAS_PBP`,
+    /// docs/spec/pbp_interp.md#in-the-core): a record with the flag PBP
+    /// ([`finestep_interface::PeriodRecord::pbp`], checked by [`Machine::pbp_record`]) runs
+    /// a line or an arc on an axis pair. A core without it runs such a record's lanes as
+    /// increments: the host sends them only to a core that reports it.
+    pub has_pbp: bool,
 }
 
 impl Caps {
@@ -158,6 +165,7 @@ impl<B: Bus> Machine<B> {
             inc_write_only: version::INC_WRITE_ONLY.get(version_word) != 0,
             axis_write_only: version::AXIS_WRITE_ONLY.get(version_word) != 0,
             inc_direct: version::INC_DIRECT.get(version_word) != 0,
+            has_pbp: version::HAS_PBP.get(version_word) != 0,
         };
         let Some(step_digit) = serial_digit(caps.n_axes, caps::STEP_ROUND_LOG2.get(caps_word)) else {
             let engine =
@@ -182,6 +190,7 @@ impl<B: Bus> Machine<B> {
             inc_write_only: caps.inc_write_only,
             axis_write_only: caps.axis_write_only,
             inc_direct: caps.inc_direct,
+            has_pbp: caps.has_pbp,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
@@ -205,6 +214,39 @@ impl<B: Bus> Machine<B> {
     /// The capabilities read at connection.
     pub fn caps(&self) -> Caps {
         self.caps
+    }
+
+    /// The FIFO record for the point-by-point record `lanes` with `flags` besides PBP
+    /// ([`finestep_interface::PeriodRecord::pbp`]), refused before anything is sent when
+    /// the core cannot run it as meant: no interpolator ([`Caps::has_pbp`]), a pair beyond
+    /// the core's axes (the core would run an idle period and set `RECORD_ERROR`), values
+    /// outside the record's fields, or decisions closer than the step engine's visit
+    /// (`tick_div + 1 < ` [`Caps::step_slots`]: refused by the core the same way).
+    pub fn pbp_record(&self, lanes: &PbpLanes, flags: u8) -> Result<PeriodRecord, BusError> {
+        let refuse = |why: String| Err(BusError::PbpRecord { why });
+        if !self.caps.has_pbp {
+            return refuse("the core has no point-by-point interpolator (VERSION.HAS_PBP 0)".into());
+        }
+        if 2 * usize::from(lanes.pair) + 1 >= self.caps.n_axes {
+            return refuse(format!(
+                "pair {} needs axes {}, {}: the core has {} axes",
+                lanes.pair,
+                2 * lanes.pair,
+                2 * lanes.pair + 1,
+                self.caps.n_axes
+            ));
+        }
+        if !lanes.fits() {
+            return refuse(format!("{lanes:?} does not fit the record's fields"));
+        }
+        if u32::from(lanes.tick_div) + 1 < self.caps.step_slots {
+            return refuse(format!(
+                "a decision every {} clocks is closer than the step engine's visit of {} clocks",
+                u32::from(lanes.tick_div) + 1,
+                self.caps.step_slots
+            ));
+        }
+        Ok(PeriodRecord::pbp(lanes, flags))
     }
 
     /// The period last written, clocks (the reset value until then).
@@ -438,6 +480,7 @@ mod tests {
     /// it records every read address and every write.
     struct Snapshot {
         version_bits: u32,
+        n_axes: u32,
         seen: bool,
         latch_time: u32,
         boundary_pending: bool,
@@ -451,7 +494,7 @@ mod tests {
             for (i, word) in out.iter_mut().enumerate() {
                 let at = addr + i as u8;
                 self.reads.push(at);
-                let caps_word = caps::TIMING_W.set(caps::P_WIDTH.set(caps::N_AXES.set(0, 2), 16), 8);
+                let caps_word = caps::TIMING_W.set(caps::P_WIDTH.set(caps::N_AXES.set(0, self.n_axes), 16), 8);
                 let caps_word = caps::N_ENC.set(caps::FIFO_DEPTH_LOG2.set(caps_word, 1), 1);
                 let version_word = version::MINOR.set(version::MAJOR.set(0, crate::regs::MAP_VERSION_MAJOR), 1);
                 *word = match at {
@@ -487,17 +530,46 @@ mod tests {
     }
 
     fn snapshot_core(version_bits: u32, seen: bool) -> Machine<Snapshot> {
+        Machine::connect(snapshot_bus(version_bits, seen, 2)).unwrap()
+    }
+
+    fn snapshot_bus(version_bits: u32, seen: bool, n_axes: u32) -> Snapshot {
         let probe_control = probe_control::FILTER.set(probe_control::ACTIVE_HIGH.set(0, 0), 5);
-        let bus = Snapshot {
+        Snapshot {
             version_bits,
+            n_axes,
             seen,
             latch_time: 7,
             boundary_pending: false,
             probe_control,
             reads: Vec::new(),
             writes: Vec::new(),
+        }
+    }
+
+    /// HAS_PBP from VERSION: a 4-axis core with it takes point-by-point records on its
+    /// pairs 0 and 1; one without it, a pair it lacks, lanes outside the fields are refused
+    /// before anything is sent; a 2-axis core reporting it is no build the RTL makes.
+    #[test]
+    fn pbp_records_only_for_a_core_with_the_interpolator() {
+        let lanes = PbpLanes { arc: false, x: 10, y: -3, tick_div: 99, ..PbpLanes::default() };
+        let m = Machine::connect(snapshot_bus(version::HAS_PBP.set(0, 1), false, 4)).unwrap();
+        assert!(m.caps().has_pbp);
+        let record = m.pbp_record(&PbpLanes { pair: 1, ..lanes }, finestep_interface::flags::BLOCK_END).unwrap();
+        assert_eq!(record.pbp_lanes(), Some(PbpLanes { pair: 1, ..lanes }));
+        let refused = |m: &Machine<Snapshot>, l: PbpLanes| match m.pbp_record(&l, 0) {
+            Err(BusError::PbpRecord { why }) => why,
+            other => panic!("{other:?}"),
         };
-        Machine::connect(bus).unwrap()
+        assert!(refused(&m, PbpLanes { pair: 2, ..lanes }).contains("the core has 4 axes"));
+        assert!(refused(&m, PbpLanes { x: 1 << 23, ..lanes }).contains("does not fit"));
+        let plain = Machine::connect(snapshot_bus(0, false, 4)).unwrap();
+        assert!(!plain.caps().has_pbp);
+        assert!(refused(&plain, lanes).contains("VERSION.HAS_PBP 0"));
+        assert!(matches!(
+            Machine::connect(snapshot_bus(version::HAS_PBP.set(0, 1), false, 2)),
+            Err(BusError::Caps { .. })
+        ));
     }
 
     /// Released while running, the probe's snapshot stays in POSITION until the next

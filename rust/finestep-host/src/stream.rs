@@ -37,13 +37,24 @@ pub struct StreamConfig {
     pub estop_active_high: bool,
     /// [`run`]: whether the run request arms the watchdog.
     pub watchdog: bool,
+    /// The longest one record may run, clocks (0: one period). A point-by-point record
+    /// (the flag PBP) runs its decisions however long they take: the waits for the last
+    /// records give up after twice the FIFO's records of this length.
+    pub record_clocks_max: u64,
 }
 
 impl Default for StreamConfig {
     /// Bursts of 32, a poll every 2000 clocks, two bursts before the start, E-stop
-    /// active high, no watchdog.
+    /// active high, no watchdog, records of one period.
     fn default() -> Self {
-        StreamConfig { burst: 32, poll_clocks: 2000, prefill: 64, estop_active_high: true, watchdog: false }
+        StreamConfig {
+            burst: 32,
+            poll_clocks: 2000,
+            prefill: 64,
+            estop_active_high: true,
+            watchdog: false,
+            record_clocks_max: 0,
+        }
     }
 }
 
@@ -174,6 +185,12 @@ fn idle<F: Feed>(
     }
 }
 
+/// The longest wait for the last records: twice the FIFO's records (and two more) of a
+/// period or of [`StreamConfig::record_clocks_max`], whichever is longer.
+fn idle_limit(fifo_depth: usize, period: u64, config: &StreamConfig) -> u64 {
+    2 * (fifo_depth as u64 + 2) * period.max(config.record_clocks_max)
+}
+
 /// Queues every record of `records` into a running core, keeping the FIFO as full as
 /// the bursts allow, and returns once the last one is queued (not executed: see
 /// [`wait_idle`]).
@@ -246,8 +263,9 @@ pub fn run<B: Bus>(
         StreamEvent::Waited => observe(machine, event),
     })?;
     // Once the last record is queued the FIFO holds at most its depth, each record one
-    // period: twice that is a core that stopped taking records.
-    let max_clocks = 2 * (fifo_depth as u64 + 2) * period;
+    // period (or the longest a record runs): twice that is a core that stopped taking
+    // records.
+    let max_clocks = idle_limit(fifo_depth, period, config);
     idle(machine, config.poll_clocks, max_clocks, &mut observe)?;
     machine.bus().wait(2 * period)?;
     let underruns = underruns(machine.bus())?.wrapping_sub(underruns_before);
@@ -293,7 +311,7 @@ pub fn run_with_events<B: Bus, E>(
     machine.set_control(true, config.watchdog, config.estop_active_high)?;
     let first_boundary = machine.bus().read_one(latch_time::ADDR)?;
     let mut report = StreamReport::default();
-    let max_clocks = 2 * (fifo_depth as u64 + 2) * period;
+    let max_clocks = idle_limit(fifo_depth, period, config);
     loop {
         while let Some((_, action)) = events.next_if(|(at, _)| *at <= report.records) {
             apply(machine, action)?;

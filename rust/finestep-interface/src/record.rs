@@ -68,6 +68,27 @@ impl PeriodRecord {
         PeriodRecord::from_raw(&raw, flags | flags::PBP)
     }
 
+    /// The point-by-point lanes of a record with the flag PBP (the inverse of
+    /// [`PeriodRecord::pbp`] for lanes that fit), `None` without the flag.
+    pub fn pbp_lanes(&self) -> Option<PbpLanes> {
+        if self.flags & flags::PBP == 0 {
+            return None;
+        }
+        let lane = |i: usize| self.inc[i].to_bits() as u32;
+        let top = (lane(0) >> PbpLanes::TOP) as u8;
+        let shift = 32 - PbpLanes::COORD_W;
+        let coord = |word: u32| ((word << shift) as i32) >> shift;
+        Some(PbpLanes {
+            arc: top & pbp_record::ARC != 0,
+            cw: top & pbp_record::CW != 0,
+            pair: (top >> pbp_record::PAIR_0_BIT) & 0b11,
+            x: coord(lane(0)),
+            y: coord(lane(1)),
+            steps: u64::from(lane(2) & PbpLanes::COUNT_MASK),
+            tick_div: (lane(3) & 0xFFFF) as u16,
+        })
+    }
+
     /// Bytes of one record in an SPI FIFO frame for a core of `n_axes` axes.
     pub const fn wire_bytes(n_axes: usize) -> usize {
         INC_BYTES * n_axes + (record_layout::FLAGS_WIDTH as usize).div_ceil(8)
@@ -112,6 +133,29 @@ mod tests {
         let r = PeriodRecord::from_raw(&[0, 0, 1 << 20], 0);
         assert!(r.acceptable(2, 1));
         assert!(!r.acceptable(3, 1));
+    }
+
+    #[test]
+    fn pbp_lanes_read_back_what_pbp_wrote() {
+        let lanes = [
+            PbpLanes {
+                arc: true,
+                cw: true,
+                pair: 1,
+                x: -(1 << 23),
+                y: (1 << 23) - 1,
+                steps: (1 << 27) - 1,
+                tick_div: 65535,
+            },
+            PbpLanes { arc: false, cw: false, pair: 0, x: 5, y: -7, steps: 0, tick_div: 9 },
+            PbpLanes { arc: true, cw: false, pair: 3, x: 0, y: -1, steps: 12, tick_div: 0 },
+        ];
+        for l in lanes {
+            let record = PeriodRecord::pbp(&l, flags::BLOCK_END);
+            assert_eq!(record.pbp_lanes(), Some(l));
+            assert!(record.block_end());
+        }
+        assert_eq!(PeriodRecord::from_raw(&[1, 2, 3, 4], 0).pbp_lanes(), None);
     }
 
     #[test]

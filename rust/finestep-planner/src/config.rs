@@ -40,6 +40,12 @@
 //! deadband_counts = 2           # no correction while |error| <= deadband
 //! limit_counts = 100            # the alarm (which halts the machine) past it
 //!
+//! [interpolation]               # G1/G2/G3 in one plane (docs/host.md, "Interpolation")
+//! mode = "dda"                  # or "pbp": point-by-point records on a chip pair (HAS_PBP)
+//! plane = "XY"                  # the plane's axes: the first on chip axis 2 * pair,
+//! pair = 0                      # the second on 2 * pair + 1 (e.g. "XZ" for a lathe)
+//! max_decision_hz = 10000.0     # pbp: the highest step rate the drives start at unramped
+//!
 //! [axes.X]                      # X, Y, Z (mm) and A (degrees); a listed [axes] table
 //! steps_per_unit = 800.0        # replaces the default axes, missing keys take defaults
 //! max_velocity = 100.0          # units/s
@@ -160,6 +166,9 @@ pub struct MachineConfig {
     pub measure: MeasureConfig,
     /// The gantry pair: a slave axis following a master, corrected from two encoders.
     pub gantry: GantryConfig,
+    /// How G1/G2/G3 are interpolated: the DDA's period records (the default) or the
+    /// chip's point-by-point interpolator on an axis pair.
+    pub interpolation: InterpolationConfig,
     /// The host link the `finestep` tools talk over (`lockstep`, `model`,
     /// `spidev:/dev/spidevB.C[@SCK_HZ]`, `sim:SOCKET`); `--bus` overrides it. The planner
     /// does not read it.
@@ -199,6 +208,8 @@ pub struct CoreLimits {
     pub timing_w: u32,
     /// Step/dir axes (`CAPS.N_AXES`).
     pub n_axes: usize,
+    /// The point-by-point interpolator is in the core (`VERSION.HAS_PBP`).
+    pub has_pbp: bool,
     /// The step engine's round `R`, the clocks between two visits of an axis
     /// (`2^CAPS.STEP_ROUND_LOG2`: the step engine's slots `S`, `S * 32 / STEP_DIGIT` with
     /// the digit-serial engine, 1 without either): the period must be a multiple of `R`,
@@ -223,6 +234,7 @@ impl CoreLimits {
             p_width: params.p_width,
             timing_w: params.timing_w,
             n_axes: params.n_axes,
+            has_pbp: params.has_pbp,
             step_slots: params.core_params().step_slots(),
         }
     }
@@ -402,6 +414,68 @@ impl GantryConfig {
     }
 }
 
+/// Which interpolation runs G1/G2/G3.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+pub enum InterpolationMode {
+    /// The planner's period records, fine-interpolated by the DDAs (with acceleration).
+    #[default]
+    #[serde(rename = "dda")]
+    Dda,
+    /// Point-by-point comparison records (seed 003, docs/spec/pbp_interp.md): G1/G2/G3 in
+    /// the plane as lines and arcs on one chip pair at a constant decision rate, no
+    /// acceleration; G0 as the DDA's records. Needs a chip with `VERSION.HAS_PBP`.
+    #[serde(rename = "pbp")]
+    Pbp,
+}
+
+/// `[interpolation]`: the interpolation of G1/G2/G3 and, for point-by-point, the plane's
+/// chip pair and the decision-rate limit (docs/host.md, "Interpolation").
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InterpolationConfig {
+    /// DDA or point-by-point.
+    pub mode: InterpolationMode,
+    /// The plane's two axes (of X, Y, Z), e.g. `"XY"` for G17, `"XZ"` or `"ZX"` for a
+    /// lathe's G18: the first goes to chip axis `2 * pair`, the second to `2 * pair + 1`.
+    pub plane: String,
+    /// The chip pair (0..=3): chip axes `2 * pair` and `2 * pair + 1`.
+    pub pair: u8,
+    /// The highest decision rate, Hz: the highest step rate the drives start at without
+    /// a ramp (a point-by-point move has no acceleration).
+    pub max_decision_hz: f64,
+}
+
+impl Default for InterpolationConfig {
+    /// The DDA; for point-by-point the XY plane on pair 0, at most 10 000 decisions a second.
+    fn default() -> Self {
+        InterpolationConfig { mode: InterpolationMode::Dda, plane: "XY".into(), pair: 0, max_decision_hz: 10_000.0 }
+    }
+}
+
+/// `[interpolation]` resolved for point-by-point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ResolvedPbp {
+    /// The record slots (0..4: X, Y, Z, A) of the plane's first and second axis: chip
+    /// axes `2 * pair` and `2 * pair + 1`.
+    pub slots: [usize; 2],
+    /// The G-code plane they make (G17, G18, G19).
+    pub plane: finestep_gcode::Plane,
+    /// The slots are in the order opposite to the plane's own (G17 X->Y, G18 Z->X, G19
+    /// Y->Z): the plane's counter-clockwise is clockwise on the pair.
+    pub mirrored: bool,
+    /// The chip pair.
+    pub pair: u8,
+    /// The fewest clocks between two decisions: `ceil(clock_hz / max_decision_hz)`, at
+    /// least the drive timing's `R * (L_v + max(S_v, H_v + U_v))` (the step engine's
+    /// visits `R`: a step may follow the last one on either axis in either direction).
+    pub min_interval: u32,
+    /// `interpolation.max_decision_hz`.
+    pub max_decision_hz: f64,
+}
+
+/// The largest `tick_div + 1` a record carries (`pbp_interp`'s 16-bit `DIV_W`).
+pub const PBP_INTERVAL_MAX: u32 = 1 << 16;
+
 /// `finestep measure` (`[measure]`): a traverse of one axis at a steady feed while the chip
 /// latches two encoder channels on one clock at every period boundary: the traverse
 /// axis's own grating and a gauge. The planner does not read it.
@@ -479,6 +553,7 @@ impl Default for MachineConfig {
             cutter_comp_entry: crate::cutter_comp::EntryExit::Tangent,
             measure: MeasureConfig::default(),
             gantry: GantryConfig::default(),
+            interpolation: InterpolationConfig::default(),
             spindle: SpindleConfig::default(),
             drive: DriveTimingNs::default(),
             axes: axes.into_iter().map(|(n, a)| (n.to_string(), a)).collect(),
@@ -550,6 +625,12 @@ pub struct Resolved {
     pub spindle_max_rpm: f64,
     /// The gantry pair, when `[gantry]` enables it.
     pub gantry: Option<ResolvedGantry>,
+    /// Point-by-point interpolation, when `[interpolation]` selects it.
+    pub pbp: Option<ResolvedPbp>,
+    /// The chip axis of each record slot (X, Y, Z, A): the slot itself, but with
+    /// point-by-point the plane's axes on the pair and the others on the chip axes left,
+    /// in slot order.
+    pub chip_axis: [usize; 4],
     /// What was adjusted (velocity caps), for the report.
     pub notes: Vec<String>,
 }
@@ -567,8 +648,13 @@ impl MachineConfig {
             reason: e.to_string().trim_end().replace('\n', " "),
         })?;
         let default_build = config.core;
-        let at_its_clock =
-            CoreLimits { clock_hz: config.clock_hz.unwrap_or(default_build.clock_hz), step_slots: 1, ..default_build };
+        // The chip's HAS_PBP is checked when resolved for it, too.
+        let at_its_clock = CoreLimits {
+            clock_hz: config.clock_hz.unwrap_or(default_build.clock_hz),
+            step_slots: 1,
+            has_pbp: true,
+            ..default_build
+        };
         let config = config.for_core(at_its_clock);
         config.resolve_in(file)?;
         Ok(config.for_core(default_build))
@@ -761,6 +847,7 @@ impl MachineConfig {
                 ));
             }
         }
+        let (pbp, chip_axis) = self.resolve_interpolation(file, &axes, &timing, clock_hz, gantry.is_some())?;
         Ok(Resolved {
             clock_hz,
             period_s,
@@ -775,8 +862,132 @@ impl MachineConfig {
             smooth_short_segments: self.profile == ProfileKind::SCurve,
             spindle_max_rpm: self.spindle.max_rpm,
             gantry,
+            pbp,
+            chip_axis,
             notes,
         })
+    }
+
+    /// `[interpolation]` against the resolved axes and drive timing: `None` and the
+    /// identity for the DDA; errors name `interpolation.<key>` (or `axes.<name>`).
+    fn resolve_interpolation(
+        &self,
+        file: &str,
+        axes: &[ResolvedAxis; 4],
+        timing: &DriveTiming,
+        clock_hz: f64,
+        gantry: bool,
+    ) -> Result<(Option<ResolvedPbp>, [usize; 4]), ConfigError> {
+        let fail = |key: &str, reason: String| ConfigError { file: file.to_string(), key: key.into(), reason };
+        let section = &self.interpolation;
+        let identity = [0, 1, 2, 3];
+        let plane_slots = |text: &str| -> Option<[usize; 2]> {
+            let mut chars = text.chars();
+            let (a, b) = (chars.next()?, chars.next()?);
+            if chars.next().is_some() {
+                return None;
+            }
+            let slot = |c: char| "XYZ".find(c.to_ascii_uppercase());
+            let (a, b) = (slot(a)?, slot(b)?);
+            (a != b).then_some([a, b])
+        };
+        let slots = plane_slots(&section.plane).ok_or_else(|| {
+            fail(
+                "interpolation.plane",
+                format!("\"{}\" is not two different axes of X, Y, Z (e.g. \"XY\", \"XZ\")", section.plane),
+            )
+        })?;
+        if !(section.max_decision_hz.is_finite() && section.max_decision_hz > 0.0) {
+            return Err(fail(
+                "interpolation.max_decision_hz",
+                format!("must be a positive finite rate, got {}", section.max_decision_hz),
+            ));
+        }
+        if section.mode == InterpolationMode::Dda {
+            return Ok((None, identity));
+        }
+        if !self.core.has_pbp {
+            return Err(fail(
+                "interpolation.mode",
+                "\"pbp\", but the chip has no point-by-point interpolator (VERSION.HAS_PBP 0)".into(),
+            ));
+        }
+        if gantry {
+            return Err(fail("interpolation.mode", "\"pbp\" with [gantry] enabled is not supported".into()));
+        }
+        let n_axes = self.core.n_axes;
+        let pair = usize::from(section.pair);
+        if section.pair > 3 || 2 * pair + 1 >= n_axes {
+            return Err(fail(
+                "interpolation.pair",
+                format!(
+                    "pair {} is chip axes {} and {}, but the core has {n_axes} axes (CAPS.N_AXES)",
+                    section.pair,
+                    2 * pair,
+                    2 * pair + 1
+                ),
+            ));
+        }
+        for slot in slots {
+            if !axes[slot].present {
+                return Err(fail("interpolation.plane", format!("{} is not configured in [axes]", AXIS_NAMES[slot])));
+            }
+        }
+        let (spu_u, spu_v) = (axes[slots[0]].steps_per_unit, axes[slots[1]].steps_per_unit);
+        if spu_u != spu_v {
+            return Err(fail(
+                "interpolation.plane",
+                format!(
+                    "{} has {spu_u} steps per mm, {} {spu_v}: a point-by-point arc is a circle in steps, so the pair's axes need equal steps per unit",
+                    AXIS_NAMES[slots[0]], AXIS_NAMES[slots[1]]
+                ),
+            ));
+        }
+        // The plane's axes on the pair, the others on the chip axes left, in slot order.
+        let mut chip_axis = identity;
+        chip_axis[slots[0]] = 2 * pair;
+        chip_axis[slots[1]] = 2 * pair + 1;
+        let mut free = (0..4).filter(|c| *c / 2 != pair);
+        for slot in (0..4).filter(|s| !slots.contains(s)) {
+            chip_axis[slot] = free.next().unwrap_or(slot);
+            if axes[slot].present && chip_axis[slot] >= n_axes {
+                return Err(fail(
+                    &format!("axes.{}", AXIS_NAMES[slot]),
+                    format!(
+                        "{} goes to chip axis {} beside the pair {}, but the core has {n_axes} axes (CAPS.N_AXES)",
+                        AXIS_NAMES[slot], chip_axis[slot], section.pair
+                    ),
+                ));
+            }
+        }
+        let (plane, canonical) = match (slots[0].min(slots[1]), slots[0].max(slots[1])) {
+            (0, 1) => (finestep_gcode::Plane::Xy, [0, 1]),
+            (0, 2) => (finestep_gcode::Plane::Zx, [2, 0]),
+            _ => (finestep_gcode::Plane::Yz, [1, 2]),
+        };
+        let slots_clocks = u64::from(self.core.step_slots.max(1));
+        let drive = finestep_interface::rate::reversal_wait_in(timing, self.core.step_slots) + slots_clocks;
+        let by_rate = (clock_hz / section.max_decision_hz * (1.0 - 1e-12)).ceil().max(1.0);
+        let min_interval = by_rate.max(drive as f64);
+        if min_interval > f64::from(PBP_INTERVAL_MAX) {
+            return Err(fail(
+                "interpolation.max_decision_hz",
+                format!(
+                    "{} Hz is a decision every {min_interval} clocks at {} MHz, beyond the record's {PBP_INTERVAL_MAX}",
+                    section.max_decision_hz,
+                    clock_hz / 1e6
+                ),
+            ));
+        }
+        let pbp = ResolvedPbp {
+            slots,
+            plane,
+            mirrored: slots != canonical,
+            pair: section.pair,
+            min_interval: min_interval as u32,
+            max_decision_hz: section.max_decision_hz,
+        };
+        Ok((Some(pbp), chip_axis))
     }
 }
 
