@@ -10,7 +10,9 @@ use std::time::Duration;
 
 use anyhow::{bail, Context};
 use finestep_gcode::conformance::Event;
-use finestep_gcode::conformance::{compare, diameter_in_block, events_of, rs274_events, split_length_offset};
+use finestep_gcode::conformance::{
+    compare, diameter_in_block, events_of, m61_as_m6, rs274_events, split_length_offset, Rs274Output,
+};
 use finestep_gcode::{BlockKind, CompSide, Options, Plane};
 use finestep_planner::cutter_comp::{compensate, EntryExit, ToolTable};
 
@@ -260,6 +262,51 @@ fn tool_change_artefact(
     }))
 }
 
+/// The events without tool changes.
+fn without_tool_changes(events: &[Event]) -> Vec<Event> {
+    events.iter().filter(|e| !matches!(e, Event::ToolChange { .. })).cloned().collect()
+}
+
+/// Why a disagreement is rs274's stand-alone M61 artefact, if it is that: rs274's canon
+/// leaves the spindle's tool-table entry at the last M6's tool after `M61 Q` (saicanon.cc
+/// `CHANGE_TOOL_NUMBER`), where LinuxCNC loads the new tool's ([`m61_as_m6`]). Checked:
+/// with each M61 given as M6 (the variant), rs274 agrees with finestep on the variant;
+/// finestep's events on the variant are those on the program but for the variant's tool
+/// changes; and the program's own tool changes are rs274's.
+fn tool_number_artefact(
+    program: &Path,
+    (ours, theirs): (&[Event], &Rs274Output),
+    (options, radii): (&Options, &ToolTable),
+    tool_table: &Path,
+    out: &Path,
+) -> anyhow::Result<Option<String>> {
+    let source = std::fs::read_to_string(program).with_context(|| format!("reading {}", program.display()))?;
+    let Some(m6) = m61_as_m6(&source) else { return Ok(None) };
+    let tool_changes = |events: &[Event]| -> Vec<Event> {
+        events.iter().filter(|e| matches!(e, Event::ToolChange { .. })).cloned().collect()
+    };
+    if tool_changes(ours) != tool_changes(&theirs.events) {
+        return Ok(None);
+    }
+    let variant = write_variant(out, program, &m6)?;
+    let Some(Ok(variant_ours)) = interpret(&variant, options, radii) else { return Ok(None) };
+    if without_tool_changes(&variant_ours) != without_tool_changes(ours) {
+        return Ok(None);
+    }
+    let here = program.parent().unwrap_or(Path::new("."));
+    let Some(variant_theirs) = rs274(&variant, here, &std::fs::canonicalize(tool_table)?) else { return Ok(None) };
+    let variant_theirs = rs274_events(&variant_theirs).map_err(anyhow::Error::msg)?;
+    Ok(compare(&variant_ours, &variant_theirs).is_none().then(|| {
+        format!(
+            "M61: rs274's stand-alone canon (saicanon.cc CHANGE_TOOL_NUMBER) leaves the spindle's tool-table \
+             entry at the last M6's tool, which LinuxCNC's iocontrol replaces by the new tool's \
+             (EMC_TOOL_SET_NUMBER: load_tool) before the interpreter re-reads it for #5400-#5409 and G43; \
+             agrees with rs274 with each M61 Q given as M6 T ({})",
+            variant.display()
+        )
+    }))
+}
+
 /// Runs the comparison over MANIFEST's lines `rs274-exit-status<TAB>program.ngc<TAB>rs274-output`
 /// and writes `report.txt` and `diffs/` under `out`.
 pub fn run(manifest: &Path, out: &Path, tool_table: Option<&Path>) -> anyhow::Result<()> {
@@ -307,7 +354,17 @@ pub fn run(manifest: &Path, out: &Path, tool_table: Option<&Path>) -> anyhow::Re
                     None => (Outcome::Agree, String::new()),
                     Some(diff) => {
                         let artefact = match tool_table {
-                            Some(table) => tool_change_artefact(&program, &ours, (&options, &radii), table, out)?,
+                            Some(table) => match tool_change_artefact(&program, &ours, (&options, &radii), table, out)?
+                            {
+                                Some(why) => Some(why),
+                                None => tool_number_artefact(
+                                    &program,
+                                    (ours.as_slice(), &theirs),
+                                    (&options, &radii),
+                                    table,
+                                    out,
+                                )?,
+                            },
                             None => None,
                         };
                         if let Some(why) = artefact {

@@ -305,13 +305,20 @@ pub fn run_program_on(
     for note in &planned.notes {
         println!("  note: {note}");
     }
-    // PRINT goes to standard error as the program is interpreted (LinuxCNC's interpreter
-    // writes it while reading ahead, not in step with the motion).
+    // PRINT goes to standard error and the log comments to their file as the program is
+    // interpreted (LinuxCNC's interpreter writes them while reading ahead, not in step
+    // with the motion).
+    let mut log = finestep_gcode::LogFile::default();
     for block in &program.blocks {
-        if let BlockKind::Message { kind: MessageKind::Print, text } = &block.kind {
-            eprintln!("{name}:{}: PRINT: {text}", block.line);
+        match &block.kind {
+            BlockKind::Message { kind: MessageKind::Print, text } => eprintln!("{name}:{}: PRINT: {text}", block.line),
+            BlockKind::Message { kind, text } => {
+                log.apply(*kind, text).with_context(|| format!("{name}:{}", block.line))?
+            }
+            _ => {}
         }
     }
+    log.close().with_context(|| format!("{name}: the log file"))?;
     println!(
         "finestep run {}: {} elements, {} periods of {} ms: {:.3} s of machining ({:?} profile), {}",
         name,

@@ -31,6 +31,8 @@ fn words(line: &str) -> Vec<(usize, usize, u8, Option<f64>)> {
     while i < bytes.len() {
         match bytes[i] {
             b'(' => i += line[i..].find(')').map_or(bytes.len() - i, |e| e + 1),
+            // A parameter's name is no word.
+            b'#' if bytes.get(i + 1) == Some(&b'<') => i += line[i..].find('>').map_or(bytes.len() - i, |e| e + 1),
             b';' => break,
             c if c.is_ascii_alphabetic() => {
                 let start = i;
@@ -86,6 +88,42 @@ pub fn split_length_offset(source: &str) -> Option<String> {
         split = true;
     }
     split.then_some(out)
+}
+
+/// `source` with every `M61 Q<tool>` (the tool number set without a change) given as
+/// `M6 T<tool>`, the Q's value or expression kept; then, where a line now holds M6 and a
+/// length offset, split as [`split_length_offset`] splits it. LinuxCNC loads the tool's
+/// table entry into the spindle's (index 0) for both: for M61 its iocontrol
+/// (`EMC_TOOL_SET_NUMBER`: `load_tool`), after which the interpreter re-reads the table
+/// (`read_inputs`, `load_tool_table`, `set_tool_parameters`), so #5400-#5409 and G43
+/// without H name the new tool. rs274's stand-alone canon does that for M6
+/// (saicanon.cc `CHANGE_TOOL` copies the slot to index 0) but not for M61
+/// (`CHANGE_TOOL_NUMBER` records the slot only): only the M6 form runs there as M61
+/// runs on a machine. None when no line has an `M61` with a literal number.
+pub fn m61_as_m6(source: &str) -> Option<String> {
+    let mut out = String::with_capacity(source.len() + 16);
+    let mut changed = false;
+    for line in source.split_inclusive('\n') {
+        let words = words(line);
+        let m61 = words.iter().find(|&&(_, _, l, v)| l == b'M' && v == Some(61.0));
+        let q = words.iter().find(|&&(_, _, l, _)| l == b'Q');
+        let (Some(&(m_start, m_end, ..)), Some(&(q_start, ..))) = (m61, q) else {
+            out.push_str(line);
+            continue;
+        };
+        // The M word's span takes the blanks after its number: keep one.
+        let m6 = if line[m_start..m_end].ends_with(' ') { "M6 " } else { "M6" };
+        for (i, c) in line.char_indices() {
+            match i {
+                _ if i == m_start => out.push_str(m6),
+                _ if (m_start..m_end).contains(&i) => {}
+                _ if i == q_start => out.push('T'),
+                _ => out.push(c),
+            }
+        }
+        changed = true;
+    }
+    changed.then(|| split_length_offset(&out).unwrap_or(out))
 }
 
 /// `source` with the G41 or G42 of line `line` (1-based) turned into G41.1 or G42.1 with
@@ -226,6 +264,9 @@ pub enum Event {
     /// `MESSAGE(text)`: a MSG comment, or a DEBUG one with its parameters substituted
     /// (rs274 prints a PRINT comment's text bare, not as a call: not compared).
     Message(String),
+    /// A log comment's call as rs274 prints it: `LOG("text")` (parameters substituted),
+    /// `LOGOPEN("file")`, `LOGAPPEND("file")`, `LOGCLOSE()`.
+    Log(String),
     /// A call finestep does not produce (probing, threading, ...): it cannot agree.
     Other(String),
 }
@@ -265,6 +306,7 @@ impl fmt::Display for Event {
             Event::Pause => write!(f, "PAUSE"),
             Event::End => write!(f, "END"),
             Event::Message(text) => write!(f, "MESSAGE(\"{text}\")"),
+            Event::Log(call) => write!(f, "{call}"),
             Event::Other(call) => write!(f, "{call}"),
         }
     }
@@ -325,6 +367,15 @@ pub fn events_of(program: &Program) -> Vec<Event> {
             BlockKind::Message { kind: MessageKind::Msg | MessageKind::Debug, text } => {
                 events.push(Event::Message(text.clone()))
             }
+            BlockKind::Message { kind: kind @ (MessageKind::Log | MessageKind::LogOpen | MessageKind::LogAppend), text } => {
+                let name = match kind {
+                    MessageKind::LogOpen => "LOGOPEN",
+                    MessageKind::LogAppend => "LOGAPPEND",
+                    _ => "LOG",
+                };
+                events.push(Event::Log(format!("{name}(\"{text}\")")))
+            }
+            BlockKind::Message { kind: MessageKind::LogClose, .. } => events.push(Event::Log("LOGCLOSE()".into())),
             BlockKind::ToolSelect { .. }
             | BlockKind::CutterComp { .. }
             | BlockKind::CutterCompRadius { .. }
@@ -565,6 +616,8 @@ pub fn rs274_events(output: &str) -> Result<Rs274Output, String> {
                     .ok_or_else(|| at("MESSAGE without its quoted text".into()))?
                     .to_string(),
             )),
+            // LOG("text"), LOGOPEN("file"), LOGAPPEND("file"), LOGCLOSE(): compared whole.
+            "LOG" | "LOGOPEN" | "LOGAPPEND" | "LOGCLOSE" => Some(Event::Log(call.to_string())),
             "NURBS_FEED" => {
                 let count = args.split(',').next().and_then(|n| n.trim().parse::<usize>().ok());
                 Some(Event::Nurbs { to: None, points: count.ok_or_else(|| at("NURBS_FEED without its count".into()))? })
@@ -640,7 +693,7 @@ pub fn agrees(ours: &Event, theirs: &Event, tolerance: f64) -> bool {
             (a - b).abs() <= 5e-5 && da == db
         }
         (Event::Pause, Event::Pause) | (Event::End, Event::End) => true,
-        (Event::Message(a), Event::Message(b)) => a == b,
+        (Event::Message(a), Event::Message(b)) | (Event::Log(a), Event::Log(b)) => a == b,
         _ => false,
     }
 }
@@ -743,6 +796,20 @@ mod variant_tests {
         assert_eq!(split_length_offset("T1 M6 G43 H#1\n"), None);
         // A G43 in a comment or after `;` is not a word.
         assert_eq!(split_length_offset("T1 M6 (G43 H1) ; G49\n"), None);
+    }
+
+    #[test]
+    fn m61_is_given_as_m6_with_its_q_as_t() {
+        // offsets.ngc's line, and a literal Q with the offset to split off.
+        assert_eq!(
+            m61_as_m6("#<n> = 1\nM61Q#<n>G43\n(debug, #5403)\n").as_deref(),
+            Some("#<n> = 1\nM6T#<n>G43\n(debug, #5403)\n")
+        );
+        assert_eq!(m61_as_m6("G0 X1\nm61 q2 G43 (tool 2)\n").as_deref(), Some("G0 X1\nM6 T2 (tool 2)\nG43\n"));
+        assert_eq!(m61_as_m6("M61 Q[1 + 2]\n").as_deref(), Some("M6 T[1 + 2]\n"));
+        // No M61 (a name or a comment is no word), or one with an expression.
+        assert_eq!(m61_as_m6("T1 M6\n#<m61> = 2 (M61 Q1)\n"), None);
+        assert_eq!(m61_as_m6("M[61] Q1\n"), None);
     }
 
     #[test]

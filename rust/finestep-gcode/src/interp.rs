@@ -553,7 +553,10 @@ impl State {
             5221..=5400 if (n - 5221) % 20 < 9 => user((n - 5221) % 20, self.g5x[(n - 5221) / 20][(n - 5221) % 20]),
             5221..=5400 if (n - 5221) % 20 == 9 => self.rotation_deg[(n - 5221) / 20],
             PARAM_TOOL => f64::from(self.tool_in_spindle),
-            5401..=5409 => self.user_units(n - 5401, self.tool_offset[n - 5401]),
+            // LinuxCNC's `set_tool_parameters` (rs274ngc_pre.cc): the table entry of the
+            // tool in the spindle (its `tool_table[0]`), in the table's (machine) unit,
+            // whatever G20/G21 and G43 say; 0 with no tool in the spindle.
+            5401..=5409 => self.spindle_tool_parameter(n - 5401),
             PARAM_POSITION..=5428 => self.program_position(n - PARAM_POSITION),
             _ => self.params.get(n).copied().unwrap_or(0.0),
         }
@@ -586,6 +589,25 @@ impl State {
     /// The folders searched for user M-code programs ([`crate::Options::user_m_path`]).
     pub(crate) fn set_user_m_path(&mut self, path: &[std::path::PathBuf]) {
         self.user_m_path = path.to_vec();
+    }
+
+    /// #5401-#5409 (`axis` 0-8): the tool table's offset of the tool in the spindle, in
+    /// the machine unit (degrees for A B C), as LinuxCNC's `set_tool_parameters` copies
+    /// `tool_table[0]` into them. M6 and M61 both load the spindle's entry: after M61,
+    /// LinuxCNC's iocontrol (`EMC_TOOL_SET_NUMBER`: `load_tool`) copies the tool's entry
+    /// to index 0 and the interpreter re-reads the table (`read_inputs`:
+    /// `load_tool_table`) before the next line. G10 L1/L10/L11 on the loaded tool show
+    /// at once, as LinuxCNC copies the changed entry to index 0.
+    fn spindle_tool_parameter(&self, axis: usize) -> f64 {
+        if self.tool_in_spindle == 0 {
+            return 0.0;
+        }
+        let mm = self.tools.get(&self.tool_in_spindle).map_or(0.0, |entry| entry[axis]);
+        if rotary(axis) {
+            mm
+        } else {
+            mm / self.machine_unit_mm
+        }
     }
 
     /// A length in mm (or an angle) in program units.

@@ -4,9 +4,11 @@
 //! As in LinuxCNC, blanks (spaces and tabs) are removed everywhere outside comments,
 //! also inside numbers and parameter names (`G 1 X 1 0 . 5` is `G1 X10.5`), and letters
 //! are case-insensitive. Comments are `( ... )` (not nested, closed on the same line)
-//! and everything after `;`; the last `( ... )` of a line is kept when it is a message
-//! (`(MSG,` `(DEBUG,` `(PRINT,`, [`crate::message`]). A leading `/` (block delete) is accepted and ignored: the
-//! block runs, as with LinuxCNC's block-delete switch off.
+//! and everything after `;`; the last `( ... )` of a line is kept when it is an active
+//! comment (`(MSG,` `(DEBUG,` `(PRINT,` `(LOG,` `(ABORT,` ..., [`crate::message`]). This
+//! module is the one place that reads the comment syntax ([`walk`]). A leading `/`
+//! (block delete) is accepted and ignored: the block runs, as with LinuxCNC's
+//! block-delete switch off.
 
 use crate::error::LineError;
 use crate::expr::{read_expression, read_name, read_parameter_name, read_value, Chars, Expr, What};
@@ -102,26 +104,25 @@ pub(crate) struct Line {
     pub words: Vec<RawWord>,
     pub assigns: Vec<Assign>,
     pub oword: Option<OWord>,
-    /// The message of the line's last parenthesised comment, if that is one.
+    /// The line's last parenthesised comment, if that is an active one.
     pub message: Option<Box<LexedMessage>>,
 }
 
-/// The line without blanks and comments, lower case, each character with its column;
-/// the text of its last parenthesised comment in `last_comment` (None if it has none).
-fn normalize<'a>(
-    line: &'a str,
-    chars: &mut Vec<char>,
-    columns: &mut Vec<usize>,
-    last_comment: &mut Option<&'a str>,
-) -> Result<(), LineError> {
+/// Walks `line` as LinuxCNC reads it: `keep` gets every character outside comments
+/// but blanks (spaces, tabs), with its 1-based column, up to a `;`; gives the text of
+/// the last parenthesised comment and the column of its `(` (None if it has none). An
+/// unclosed or nested comment is an error, as rs274's (`Unclosed comment found`,
+/// `Nested comment found`).
+fn walk(line: &str, mut keep: impl FnMut(char, usize)) -> Result<Option<(&str, usize)>, LineError> {
+    let mut last = None;
     // The open comment: its column and the byte its text starts at.
     let mut comment_open: Option<(usize, usize)> = None;
     for (index, (byte, c)) in line.char_indices().enumerate() {
         let column = index + 1;
-        if let Some((_, start)) = comment_open {
+        if let Some((open, start)) = comment_open {
             match c {
                 ')' => {
-                    *last_comment = Some(&line[start..byte]);
+                    last = Some((&line[start..byte], open));
                     comment_open = None;
                 }
                 '(' => return Err(LineError::new(column, "nested comment")),
@@ -133,16 +134,38 @@ fn normalize<'a>(
             ' ' | '\t' => {}
             '(' => comment_open = Some((column, byte + 1)),
             ';' => break,
-            c => {
-                chars.push(c.to_ascii_lowercase());
-                columns.push(column);
-            }
+            c => keep(c, column),
         }
     }
     match comment_open {
         Some((open, _)) => Err(LineError::new(open, "unclosed comment")),
-        None => Ok(()),
+        None => Ok(last),
     }
+}
+
+/// Whether a line holds anything outside comments, and whether an `O` stands there: a
+/// quick look (bytes, no errors) before a line is lexed; [`walk`] reads it in full.
+pub(crate) fn scan(text: &str) -> (bool, bool) {
+    let (mut content, mut o, mut comment) = (false, false, false);
+    // Bytes will do: every character that matters here is ASCII.
+    for &c in text.as_bytes() {
+        match c {
+            _ if comment => comment = c != b')',
+            b'(' => comment = true,
+            b';' => break,
+            b' ' | b'\t' => {}
+            b'o' | b'O' => (content, o) = (true, true),
+            _ => content = true,
+        }
+    }
+    (content, o)
+}
+
+/// The active comment of `line` (its last parenthesised comment, if that is one), for
+/// a line without words, which is otherwise skipped; an error where the line's comments
+/// do not lex.
+pub(crate) fn line_message(line: &str) -> Result<Option<LexedMessage>, LineError> {
+    Ok(walk(line, |_, _| {})?.and_then(|(text, column)| classify(text, column)))
 }
 
 /// Lexes one line (without its line terminator).
@@ -175,9 +198,11 @@ pub(crate) fn lex_into(
     out.words.clear();
     chars.clear();
     columns.clear();
-    let mut last_comment = None;
-    normalize(line, chars, columns, &mut last_comment)?;
-    out.message = last_comment.and_then(classify).map(Box::new);
+    let last_comment = walk(line, |c, column| {
+        chars.push(c.to_ascii_lowercase());
+        columns.push(column);
+    })?;
+    out.message = last_comment.and_then(|(text, column)| classify(text, column)).map(Box::new);
     let (chars, columns) = (&chars[..], &columns[..]);
     let mut s = Chars { chars, columns, i: 0 };
     if s.peek() == Some('/') {

@@ -27,7 +27,9 @@
 //!   or a function, with an optional sign; spaces and tabs anywhere outside comments,
 //!   also inside numbers. Comments `( ... )` (one line, not nested) and after `;`;
 //!   `(MSG, text)`, `(DEBUG, text)` (parameters substituted: `#1`, `#<name>`, `%d`
-//!   `%f` `%.Nf`) and `(PRINT, text)` give [`BlockKind::Message`], as LinuxCNC 2.9. `N` line number (integer, first
+//!   `%f` `%.Nf`), `(PRINT, text)`, `(LOG, text)`, `(LOGOPEN, file)`, `(LOGAPPEND, file)`
+//!   and `(LOGCLOSE)` give [`BlockKind::Message`] ([`LogFile`] writes the log), `(ABORT,
+//!   text)` refuses the program there with its text, as LinuxCNC 2.9. `N` line number (integer, first
 //!   word). A leading `/` (block delete) is ignored and the block runs. A line holding
 //!   only `%` opens the program if it is the first non-blank line; any later `%` line
 //!   ends it. Lines after M2/M30 are not read. An empty program is refused.
@@ -455,17 +457,19 @@ pub enum BlockKind {
         /// M68: at once.
         synchronised: bool,
     },
-    /// `(MSG, text)`, `(DEBUG, text)` or `(PRINT, text)`: a message, before the rest of
-    /// its block, as LinuxCNC 2.9 gives it (docs/gcode.md, "Messages"). MSG and DEBUG go
-    /// to the operator once the motion before them has ended (LinuxCNC's task waits for
-    /// it: an exact stop); PRINT goes to standard error as the program is interpreted.
-    /// DEBUG and PRINT have their parameters substituted; a DEBUG while #5599 is 0 or
-    /// less gives nothing.
+    /// `(MSG, text)`, `(DEBUG, text)`, `(PRINT, text)` or one of the log comments: a
+    /// message, before the rest of its block, as LinuxCNC 2.9 gives it (docs/gcode.md,
+    /// "Messages"). MSG and DEBUG go to the operator once the motion before them has
+    /// ended (LinuxCNC's task waits for it: an exact stop); PRINT goes to standard error
+    /// and the log comments to their file as the program is interpreted ([`LogFile`]).
+    /// DEBUG, PRINT and LOG have their parameters substituted; a DEBUG while #5599 is 0
+    /// or less gives nothing.
     Message {
         /// Which comment.
         kind: MessageKind,
         /// The text after the keyword's comma, as written (its leading blank too), with
-        /// the parameters substituted for DEBUG and PRINT.
+        /// the parameters substituted for DEBUG, PRINT and LOG; the file name for
+        /// LOGOPEN and LOGAPPEND; empty for LOGCLOSE.
         text: String,
     },
     /// M0: pause until resumed.
@@ -483,6 +487,78 @@ pub enum MessageKind {
     Debug,
     /// `(PRINT, text)`: written to standard error, parameters substituted.
     Print,
+    /// `(LOG, text)`: written as a line to the log file open (if one is), parameters
+    /// substituted.
+    Log,
+    /// `(LOGOPEN, file)`: the log file opened, emptied if it exists (another one open is
+    /// closed first).
+    LogOpen,
+    /// `(LOGAPPEND, file)`: the log file opened to append to it.
+    LogAppend,
+    /// `(LOGCLOSE)`: the log file closed.
+    LogClose,
+}
+
+/// The log file of a program's `(LOGOPEN, ...)`, `(LOGAPPEND, ...)`, `(LOG, ...)` and
+/// `(LOGCLOSE)` comments, written as LinuxCNC's task writes it (emccanon.cc `LOGOPEN`,
+/// `LOGAPPEND`, `LOG`, `LOGCLOSE`): when the interpreter reaches them, not in step with
+/// the motion; the file name as written (relative to the working directory, a leading
+/// blank kept, as LinuxCNC's `fopen` takes it); a LOG with no file open writes nothing.
+/// Unlike LinuxCNC, which goes on without its log, a file that cannot be opened or
+/// written is an error.
+///
+/// ```
+/// use finestep_gcode::{LogFile, MessageKind};
+/// let path = std::env::temp_dir().join(format!("finestep-log-doc-{}.txt", std::process::id()));
+/// let mut log = LogFile::default();
+/// log.apply(MessageKind::LogOpen, path.to_str().unwrap()).unwrap();
+/// log.apply(MessageKind::Log, " x 2.500000").unwrap();
+/// log.apply(MessageKind::LogClose, "").unwrap();
+/// assert_eq!(std::fs::read_to_string(&path).unwrap(), " x 2.500000\n");
+/// # std::fs::remove_file(&path).unwrap();
+/// ```
+#[derive(Debug, Default)]
+pub struct LogFile {
+    file: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl LogFile {
+    /// Does what a message block of `kind` with `text` does to the log; other kinds do
+    /// nothing. The error names the file for LOGOPEN and LOGAPPEND.
+    pub fn apply(&mut self, kind: MessageKind, text: &str) -> std::io::Result<()> {
+        use std::io::Write as _;
+        match kind {
+            MessageKind::LogOpen | MessageKind::LogAppend => {
+                self.close()?;
+                let file = std::fs::OpenOptions::new()
+                    .write(true)
+                    .create(true)
+                    .append(kind == MessageKind::LogAppend)
+                    .truncate(kind == MessageKind::LogOpen)
+                    .open(text)
+                    .map_err(|e| std::io::Error::new(e.kind(), format!("log file {text:?}: {e}")))?;
+                self.file = Some(std::io::BufWriter::new(file));
+            }
+            MessageKind::Log => {
+                if let Some(file) = &mut self.file {
+                    writeln!(file, "{text}")?;
+                }
+            }
+            MessageKind::LogClose => self.close()?,
+            MessageKind::Msg | MessageKind::Debug | MessageKind::Print => {}
+        }
+        Ok(())
+    }
+
+    /// Closes the log file open, if any (also done when the program ends: call it to see
+    /// an error).
+    pub fn close(&mut self) -> std::io::Result<()> {
+        use std::io::Write as _;
+        match self.file.take() {
+            Some(mut file) => file.flush(),
+            None => Ok(()),
+        }
+    }
 }
 
 /// G96 (constant surface speed) as LinuxCNC's motion controller runs it: the spindle

@@ -1,21 +1,25 @@
-//! The message comments `(MSG, ...)`, `(DEBUG, ...)` and `(PRINT, ...)`, as LinuxCNC
-//! 2.9's interpreter reads them (`convert_comment`, `convert_param_comment`).
+//! The active comments, as LinuxCNC 2.9's interpreter reads them (`convert_comment`,
+//! `convert_param_comment` in interp_convert.cc): `(MSG, ...)`, `(DEBUG, ...)`,
+//! `(PRINT, ...)`, `(LOG, ...)`, `(LOGOPEN, ...)`, `(LOGAPPEND, ...)`, `(LOGCLOSE)` and
+//! `(ABORT, ...)`; `(PY, ...)`, `(PYRUN, ...)` and `(PYRELOAD` (LinuxCNC's embedded
+//! Python) are refused as unsupported.
 //!
-//! A comment is a message when, after its leading blanks, it starts with `msg,`,
-//! `debug,` or `print,` in any case (no blank before the comma: `(MSG ,x)` is a plain
-//! comment). The text is everything after the comma, kept as written (its leading blank
-//! too). Only a line's last parenthesised comment counts, and only on an ordinary block
-//! (not after `;`, not on an O-word line).
+//! A comment is active when, after its leading blanks, it starts with the keyword and
+//! its comma in any case (no blank before the comma: `(MSG ,x)` is a plain comment);
+//! `LOGCLOSE` must be all the comment holds, `PYRELOAD` only starts it. The text is
+//! everything after the comma, kept as written (its leading blank too). Only a line's
+//! last parenthesised comment counts, and only on an ordinary block (not after `;`, not
+//! on an O-word line): the lexer ([`crate::lexer`]) finds it.
 //!
-//! DEBUG and PRINT texts have their parameters substituted when the block executes
-//! (after the line's assignments): `#n` (digits; #0-#5601) and `#<name>` (blanks inside
-//! left out, any case) become the value with six decimals (`%lf`), `######` when the
+//! DEBUG, PRINT, LOG and ABORT texts have their parameters substituted when the block
+//! executes (after the line's assignments): `#n` (digits; #0-#5601) and `#<name>` (blanks
+//! inside left out, any case) become the value with six decimals (`%lf`), `######` when the
 //! parameter is not defined (a name never set, a number beyond 5601) or when the value
 //! takes 30 characters or more; a value within 0.0001 of zero is written as zero. A
 //! format before a parameter changes how it and every later one in the comment are
 //! written: `%d` no decimals, `%f` four, `%.Nf` N (one digit). A `%` before a `.` that
 //! does not make `%.Nf` is dropped; any other `%` is kept. A `#` followed by neither a
-//! digit nor `<` is kept.
+//! digit nor `<` is kept. LOGOPEN and LOGAPPEND take their file name as written.
 //!
 //! Where rs274 reads past the text (a `#` ending it, or `#<` without its `>`), it shows
 //! what its buffer held before (the previous expansion's tail); finestep ends the text
@@ -24,41 +28,53 @@
 use crate::expr::Params;
 use crate::MessageKind;
 
-/// A message comment as lexed: its kind and its text after the comma, unexpanded.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) struct LexedMessage {
-    pub kind: MessageKind,
-    pub text: Box<str>,
+/// What an active comment does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Active {
+    /// A [`crate::BlockKind::Message`] of this kind.
+    Message(MessageKind),
+    /// `(ABORT, text)`: the program stops there with the text as its error.
+    Abort,
+    /// `(PY, ...)`, `(PYRUN, ...)`, `(PYRELOAD`: refused.
+    Python,
 }
 
-/// The message `comment` (the text between the parentheses) holds, if any.
-pub(crate) fn classify(comment: &str) -> Option<LexedMessage> {
+/// An active comment as lexed: what it does, its text after the keyword's comma
+/// (unexpanded), and the 1-based column of its `(`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct LexedMessage {
+    pub kind: Active,
+    pub text: Box<str>,
+    pub column: usize,
+}
+
+/// The keywords in LinuxCNC's order of testing (`convert_comment`): each the start of
+/// the comment, lower case.
+const KEYWORDS: [(&str, Active); 10] = [
+    ("msg,", Active::Message(MessageKind::Msg)),
+    ("debug,", Active::Message(MessageKind::Debug)),
+    ("print,", Active::Message(MessageKind::Print)),
+    ("log,", Active::Message(MessageKind::Log)),
+    ("logopen,", Active::Message(MessageKind::LogOpen)),
+    ("logappend,", Active::Message(MessageKind::LogAppend)),
+    ("py,", Active::Python),
+    ("pyrun,", Active::Python),
+    ("pyreload", Active::Python),
+    ("abort,", Active::Abort),
+];
+
+/// The active comment `comment` (the text between the parentheses, its `(` at
+/// `column`) is, if any.
+pub(crate) fn classify(comment: &str, column: usize) -> Option<LexedMessage> {
     // C's isspace: blank, tab, newline, vertical tab, form feed, carriage return.
     let body = comment.trim_start_matches([' ', '\t', '\n', '\x0b', '\x0c', '\r']);
     let keyword =
         |word: &str| body.get(..word.len()).filter(|head| head.eq_ignore_ascii_case(word)).map(|_| &body[word.len()..]);
-    [("msg,", MessageKind::Msg), ("debug,", MessageKind::Debug), ("print,", MessageKind::Print)]
-        .into_iter()
-        .find_map(|(word, kind)| keyword(word).map(|text| LexedMessage { kind, text: text.into() }))
-}
-
-/// Whether `line` holds a message: its last closed `( ... )` before any `;` is one
-/// (for a line without words, which is otherwise skipped).
-pub(crate) fn has_message(line: &str) -> bool {
-    let (mut last, mut open) = (None, None);
-    for (i, c) in line.char_indices() {
-        match (open, c) {
-            (Some(start), ')') => {
-                last = Some(&line[start..i]);
-                open = None;
-            }
-            (Some(_), _) => {}
-            (None, '(') => open = Some(i + 1),
-            (None, ';') => break,
-            (None, _) => {}
-        }
-    }
-    last.and_then(classify).is_some()
+    let found = KEYWORDS.into_iter().find_map(|(word, kind)| keyword(word).map(|text| (kind, text)));
+    // `LOGCLOSE` is compared whole (`streq`), after the other keywords.
+    let found =
+        found.or_else(|| body.eq_ignore_ascii_case("logclose").then_some((Active::Message(MessageKind::LogClose), "")));
+    found.map(|(kind, text)| LexedMessage { kind, text: text.into(), column })
 }
 
 /// How a substituted value is written.
@@ -198,11 +214,12 @@ mod tests {
 
     #[test]
     fn keywords_in_any_case_after_blanks_and_only_before_a_comma() {
-        let m = |c: &str| classify(c).map(|m| (m.kind, m.text.to_string()));
-        assert_eq!(m("MSG, hello World"), Some((MessageKind::Msg, " hello World".into())));
-        assert_eq!(m("msg,lower case"), Some((MessageKind::Msg, "lower case".into())));
-        assert_eq!(m(" \tDeBuG, #1"), Some((MessageKind::Debug, " #1".into())));
-        assert_eq!(m("print,"), Some((MessageKind::Print, String::new())));
+        let m = |c: &str| classify(c, 1).map(|m| (m.kind, m.text.to_string()));
+        let message = |kind, text: &str| Some((Active::Message(kind), text.to_string()));
+        assert_eq!(m("MSG, hello World"), message(MessageKind::Msg, " hello World"));
+        assert_eq!(m("msg,lower case"), message(MessageKind::Msg, "lower case"));
+        assert_eq!(m(" \tDeBuG, #1"), message(MessageKind::Debug, " #1"));
+        assert_eq!(m("print,"), message(MessageKind::Print, ""));
         assert_eq!(m("  MSG , spaced"), None);
         assert_eq!(m("MSGX hi"), None);
         assert_eq!(m("message"), None);

@@ -14,8 +14,9 @@ use crate::error::LineError;
 use crate::expr::{parameter_index, Params};
 use crate::g7x::{cycle_moves, LatheCycle, ProfileReader};
 use crate::interp::{Modal, ModalOp, State, PARAM_DEBUG};
+use crate::lexer::scan;
 use crate::lexer::{lex_into, lex_line_into, Line, OKind, OWord, Target, Word};
-use crate::message::{expand, has_message, LexedMessage};
+use crate::message::{expand, Active, LexedMessage};
 use crate::persistent::{required_parameters, Parameters};
 use crate::{Block, BlockKind, GcodeError, MessageKind, Options};
 
@@ -34,23 +35,6 @@ const SCAN_AHEAD_BYTES: usize = 64 * 1024;
 pub const MAX_CALL_DEPTH: usize = 9;
 /// Subroutine parameters #1-#30 are saved around a call.
 const SUB_PARAMS: usize = 30;
-
-/// Whether a line holds anything outside comments, and whether an `O` stands there.
-fn scan(text: &str) -> (bool, bool) {
-    let (mut content, mut o, mut comment) = (false, false, false);
-    // Bytes will do: every character that matters here is ASCII.
-    for &c in text.as_bytes() {
-        match c {
-            _ if comment => comment = c != b')',
-            b'(' => comment = true,
-            b';' => break,
-            b' ' | b'\t' => {}
-            b'o' | b'O' => (content, o) = (true, true),
-            _ => content = true,
-        }
-    }
-    (content, o)
-}
 
 /// Where an O-word line's partners stand (indices into the entries).
 #[derive(Debug, Clone, Copy, Default)]
@@ -680,8 +664,10 @@ impl<'t> Runner<'t> {
             };
             let (content, _) = scan(&self.text);
             // The opening `%` (the closing one ends the file above). A line of comments
-            // alone is skipped unless its last one is a message.
-            if !(content || has_message(&self.text)) || self.text.trim_matches([' ', '\t']) == "%" {
+            // alone is skipped unless its last one is active or its comments do not lex
+            // (the lexer then says why, as rs274 refuses an unclosed or nested comment).
+            let skipped = !content && matches!(crate::lexer::line_message(&self.text), Ok(None));
+            if skipped || self.text.trim_matches([' ', '\t']) == "%" {
                 pc = Pc { offset: next, line: pc.line + 1 };
                 continue;
             }
@@ -846,7 +832,7 @@ impl<'t> Runner<'t> {
         // As rs274, the comment acts first in its block; a lathe cycle's profile, read
         // rather than run, gives none.
         if let (Some(message), None) = (message, &self.lathe) {
-            self.message(&message, &words);
+            self.message(&message, &words)?;
         }
         if words.is_empty() {
             self.words = words;
@@ -892,26 +878,41 @@ impl<'t> Runner<'t> {
         Ok(!executed.end)
     }
 
-    /// Emits the block of a message comment (`words` are its line's, for the N number).
-    fn message(&mut self, message: &LexedMessage, words: &[Word]) {
+    /// Emits the block of an active comment (`words` are its line's, for the N number);
+    /// ABORT's error, with its text, at the comment.
+    fn message(&mut self, message: &LexedMessage, words: &[Word]) -> Result<(), LineError> {
         let scope = Scope {
             state: &self.state,
             locals: &self.frames.last().expect("frame").locals,
             globals: &self.globals,
             call_level: self.frames.len() - 1,
         };
-        let text = match message.kind {
-            MessageKind::Msg => message.text.to_string(),
+        let kind = match message.kind {
+            Active::Message(kind) => kind,
+            // LinuxCNC's `convert_comment`: the text expanded as DEBUG's, the program
+            // stopped with it as its error.
+            Active::Abort => {
+                let text = expand(&message.text, &scope);
+                return Err(LineError::new(message.column, format!("ABORT:{text}")));
+            }
+            Active::Python => {
+                return Err(LineError::new(
+                    message.column,
+                    format!("unsupported: (PY, ...) ({})", crate::unsupported::PYTHON),
+                ))
+            }
+        };
+        let text = match kind {
+            MessageKind::Msg | MessageKind::LogOpen | MessageKind::LogAppend | MessageKind::LogClose => {
+                message.text.to_string()
+            }
             // rs274 shows a DEBUG only while #5599 is above 0 (1 at the start).
-            MessageKind::Debug if scope.numbered(PARAM_DEBUG) <= 0.0 => return,
-            MessageKind::Debug | MessageKind::Print => expand(&message.text, &scope),
+            MessageKind::Debug if scope.numbered(PARAM_DEBUG) <= 0.0 => return Ok(()),
+            MessageKind::Debug | MessageKind::Print | MessageKind::Log => expand(&message.text, &scope),
         };
         let n = words.iter().find(|w| w.letter == 'N').map(|w| w.value as u32);
-        self.blocks.push_back(Block {
-            line: self.state.line,
-            n,
-            kind: BlockKind::Message { kind: message.kind, text },
-        });
+        self.blocks.push_back(Block { line: self.state.line, n, kind: BlockKind::Message { kind, text } });
+        Ok(())
     }
 
     /// Executes an O-word line.

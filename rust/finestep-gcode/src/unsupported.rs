@@ -38,6 +38,9 @@ pub const G10_TOOL_ROTATION: &str = "the tool table is set in the unrotated fram
 pub const FEED_PER_REV_CSS: &str =
     "feed per revolution under constant surface speed follows a spindle speed that changes along the move; finestep sets one speed per move";
 
+/// `unsupported: (PY, ...)`, also `(PYRUN, ...)` and `(PYRELOAD`.
+pub const PYTHON: &str = "finestep runs no embedded Python, the code LinuxCNC's PY comments execute";
+
 /// `unsupported: G70 with cutter compensation on`.
 pub const G70_COMPENSATED: &str = "LinuxCNC 2.9 starts the cycle with a rapid from the profile's end through the part";
 
@@ -57,6 +60,7 @@ pub fn reasons() -> Vec<&'static str> {
         G10_TOOL_ROTATION,
         G70_COMPENSATED,
         FEED_PER_REV_CSS,
+        PYTHON,
     ]);
     all
 }
