@@ -18,6 +18,11 @@
 // (the register file ORs it after its read register, so a read's rdata still appears
 // in the cycle after its serving cycle).
 //
+// Narrow words (COUNT_W 16, finestep_top's ENC_COUNT_W): each channel's count and edge
+// time, in the store and in the copies, are COUNT_W bits (the count wraps at 2^COUNT_W, the
+// edge time is TIMESTAMP's low COUNT_W bits); a read returns a count sign-extended and an
+// edge time zero-extended, and the host extends them (docs/spec/encoder_bank.md#narrow-words).
+//
 // Latency: a pin change reaches the count 2 clocks plus max(FILTER, 1) samples later,
 // samples of a channel coming every S * (PRESCALE + 1) clocks at its slot (plus stalls).
 module encoder_bank #(
@@ -27,8 +32,10 @@ module encoder_bank #(
     parameter RAM_BLOCK = 0,     // 1: the stores in block RAM (store_ram)
     parameter COPY_FF   = 0,     // 1: the stores in flip-flops (no RAM): the live state read in its
                                  // visit, the copies through one shared read register
-    parameter PROBE_COPY = 1     // 0: no probe snapshot of TIMESTAMP and the positions here (the
+    parameter PROBE_COPY = 1,    // 0: no probe snapshot of TIMESTAMP and the positions here (the
                                  // register file's latch takes it: finestep_top's ONE_SNAPSHOT)
+    parameter COUNT_W    = 32    // 16: narrow words (finestep_top's ENC_COUNT_W): each channel's count
+                                 // and edge time, and their copies, 16 bits; reads extend them
 ) (
     // clock, reset
     input  wire                         clk,
@@ -85,7 +92,7 @@ module encoder_bank #(
 
     localparam S      = (N_ENC < 2) ? 2 : N_ENC;
     localparam CH_W   = (S > 2) ? 2 : 1;
-    localparam LIVE_W = 64 + 3 * FILTER_W;      // count, edge time, three filter counters
+    localparam LIVE_W = 2 * COUNT_W + 3 * FILTER_W;   // count, edge time, three filter counters
     localparam integer    LAST      = S - 1;
     localparam [CH_W-1:0] LAST_SLOT = LAST[CH_W-1:0];
     localparam [CH_W-1:0] CH_ONE    = {{(CH_W-1){1'b0}}, 1'b1};
@@ -189,16 +196,16 @@ module encoder_bank #(
     endgenerate
     // Until its first sample a channel's live state is 0 (reset), whatever the RAM holds.
     wire [LIVE_W-1:0] live = v_primed ? live_rd : {LIVE_W{1'b0}};
-    wire [31:0]         v_count = live[31:0];
-    wire [31:0]         v_edge  = live[63:32];
-    wire [FILTER_W-1:0] v_cnt_a = live[64 +: FILTER_W];
-    wire [FILTER_W-1:0] v_cnt_b = live[64 + FILTER_W +: FILTER_W];
-    wire [FILTER_W-1:0] v_cnt_z = live[64 + 2*FILTER_W +: FILTER_W];
+    wire [COUNT_W-1:0]  v_count = live[0 +: COUNT_W];
+    wire [COUNT_W-1:0]  v_edge  = live[COUNT_W +: COUNT_W];
+    wire [FILTER_W-1:0] v_cnt_a = live[2*COUNT_W +: FILTER_W];
+    wire [FILTER_W-1:0] v_cnt_b = live[2*COUNT_W + FILTER_W +: FILTER_W];
+    wire [FILTER_W-1:0] v_cnt_z = live[2*COUNT_W + 2*FILTER_W +: FILTER_W];
 
     wire                n_primed, n_a, n_b, n_z, illegal_event, index_event;
     wire [FILTER_W-1:0] n_cnt_a, n_cnt_b, n_cnt_z;
-    wire [31:0]         n_count, n_edge;
-    quadrature_channel #(.FILTER_W(FILTER_W)) decoder (
+    wire [COUNT_W-1:0]  n_count, n_edge;
+    quadrature_channel #(.FILTER_W(FILTER_W), .COUNT_W(COUNT_W)) decoder (
         .mode(v_mode), .z_active_high(v_zah), .filter_len(v_filter),
         .sampling(sample_now), .raw_a(v_raw_a_reg), .raw_b(v_raw_b_reg),
         .raw_z(v_raw_z_reg), .timestamp(timestamp),
@@ -233,19 +240,19 @@ module encoder_bank #(
     wire copy_probe = visit && (probe_pending_reg[ch_i] || probe_event);
     wire copy_index = visit && index_event && latch_armed_reg[ch_i];
 
-    wire [31:0] count_rd, edge_rd, index_rd, probe_rd;
+    wire [COUNT_W-1:0] count_rd, edge_rd, index_rd, probe_rd;
     generate
         if (COPY_FF == 0) begin : copy_stores
-            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) count_store (
+            store_ram #(.WIDTH(COUNT_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) count_store (
                 .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(count_rd)
             );
-            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) edge_store (
+            store_ram #(.WIDTH(COUNT_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) edge_store (
                 .clk(clk), .wr_en(copy_latch), .wr_addr(ch), .wr_data(v_edge), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(edge_rd)
             );
-            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) index_store (
+            store_ram #(.WIDTH(COUNT_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) index_store (
                 .clk(clk), .wr_en(copy_index), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(index_rd)
             );
-            store_ram #(.WIDTH(32), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) probe_store (
+            store_ram #(.WIDTH(COUNT_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) probe_store (
                 .clk(clk), .wr_en(copy_probe), .wr_addr(ch), .wr_data(v_count), .rd_en(rd_copy), .rd_addr(rd_ch), .rd_data(probe_rd)
             );
         end else begin : copy_ff
@@ -254,11 +261,11 @@ module encoder_bank #(
             // ending its serving cycle (where each store_ram would take its own), so the
             // shown word is the same from one register instead of four. The stall keeps
             // the word read from being written at that edge, as for the stores.
-            reg [31:0] count_mem [0:S-1];
-            reg [31:0] edge_mem  [0:S-1];
-            reg [31:0] index_mem [0:S-1];
-            reg [31:0] probe_mem [0:S-1];
-            reg [31:0] copy_rd_reg;
+            reg [COUNT_W-1:0] count_mem [0:S-1];
+            reg [COUNT_W-1:0] edge_mem  [0:S-1];
+            reg [COUNT_W-1:0] index_mem [0:S-1];
+            reg [COUNT_W-1:0] probe_mem [0:S-1];
+            reg [COUNT_W-1:0] copy_rd_reg;
             always @(posedge clk) begin
                 if (copy_latch) begin
                     count_mem[ch] <= v_count;
@@ -296,10 +303,21 @@ module encoder_bank #(
         end
         if (rst) served_reg <= 1'b0;
     end
-    assign copy_rdata = !(served_reg && served_written_reg) ? 32'd0 :
-                        (served_kind_reg == KIND_COUNT) ? count_rd :
-                        (served_kind_reg == KIND_INDEX) ? index_rd :
-                        (served_kind_reg == KIND_PROBE) ? probe_rd : edge_rd;
+    wire [COUNT_W-1:0] copy_word = (served_kind_reg == KIND_COUNT) ? count_rd :
+                                   (served_kind_reg == KIND_INDEX) ? index_rd :
+                                   (served_kind_reg == KIND_PROBE) ? probe_rd : edge_rd;
+    // Narrow words (COUNT_W < 32) read extended: the counts (ENC_COUNT, ENC_INDEX_LATCH,
+    // ENC_PROBE_LATCH) sign-extended, the edge time (TIMESTAMP's low bits) zero-extended.
+    wire [31:0] copy_word32;
+    generate
+        if (COUNT_W < 32) begin : extend
+            wire fill = copy_word[COUNT_W-1] && (served_kind_reg != KIND_EDGE);
+            assign copy_word32 = {{(32-COUNT_W){fill}}, copy_word};
+        end else begin : full
+            assign copy_word32 = copy_word;
+        end
+    endgenerate
+    assign copy_rdata = !(served_reg && served_written_reg) ? 32'd0 : copy_word32;
 
     // ---- Flip-flop state updates ----------------------------------------------------------
     wire [15:0] v_illegal_count = illegal_count_reg[16*ch_i +: 16];
@@ -444,6 +462,11 @@ module encoder_bank #(
             FS_ENC_PROBE_LATCH_ADDR[1:0] != 2'd0 || FS_ENC_EDGE_TIME_ADDR[1:0] != 2'd0 || N_ENC > 4) begin : stride_check
             encoder_bank_copy_arrays_need_stride_1 unsupported_register_map ();
         end
+        // A narrow count still tells the direction of a move between two reads (2^(COUNT_W-1)
+        // counts) and fits the 32-bit register.
+        if (COUNT_W < 2 || COUNT_W > 32) begin : width_check
+            encoder_bank_COUNT_W_must_be_2_to_32 unsupported_count_width ();
+        end
     endgenerate
 
     assign illegal_count     = illegal_count_reg;
@@ -478,8 +501,8 @@ module encoder_bank #(
     // makes the registers load exactly their next value).
     always @(*) assume (mode_next == mode && filter_len_next == filter_len && z_active_high_next == z_active_high);
 
-    reg [31:0] f_count [0:N_ENC-1];
-    reg [31:0] f_edge  [0:N_ENC-1];
+    reg [COUNT_W-1:0] f_count [0:N_ENC-1];
+    reg [COUNT_W-1:0] f_edge  [0:N_ENC-1];
     integer f;
     always @(posedge clk) begin
         for (f = 0; f < N_ENC; f = f + 1) begin
@@ -488,8 +511,8 @@ module encoder_bank #(
                 f_edge[f]  <= n_edge;
             end
             if (rst) begin
-                f_count[f] <= 32'd0;
-                f_edge[f]  <= 32'd0;
+                f_count[f] <= {COUNT_W{1'b0}};
+                f_edge[f]  <= {COUNT_W{1'b0}};
             end
         end
     end
@@ -499,7 +522,7 @@ module encoder_bank #(
         if (rd_copy && (copy_latch || copy_index || copy_probe)) assert (rd_ch != ch);
         assert ({{(32-CH_W){1'b0}}, slot_reg} < S);
         // Before its first sample a channel has count 0 and nothing decoded.
-        if (visit && !v_primed) assert (f_count[ch_i] == 32'd0 && f_edge[ch_i] == 32'd0);
+        if (visit && !v_primed) assert (f_count[ch_i] == {COUNT_W{1'b0}} && f_edge[ch_i] == {COUNT_W{1'b0}});
         if (visit) assert (v_count == f_count[ch_i] && v_edge == f_edge[ch_i]);
         // The visit's flip-flops, chosen a clock ahead, are the visited channel's.
         if (slot_is_channel) assert (v_primed_reg == primed_reg[ch_i] && v_a_reg == a_reg[ch_i] &&
@@ -523,9 +546,9 @@ module encoder_bank #(
         if (PROBE_COPY == 0) assert (probe_time == 32'd0 && probe_position == {32*N_AXES{1'b0}});
         else if ($past(probe_event)) assert (probe_time == $past(timestamp) && probe_position == $past(position));
         else assert (probe_time == $past(probe_time) && probe_position == $past(probe_position));
-        cover ($past(copy_latch) && $past(v_count) != 32'd0);
+        cover ($past(copy_latch) && $past(v_count) != {COUNT_W{1'b0}});
         cover ($past(stall));
-        cover ($past(copy_probe) && $past(v_count) != 32'd0);
+        cover ($past(copy_probe) && $past(v_count) != {COUNT_W{1'b0}});
     end
 
 `ifdef FORMAL_READBACK
@@ -539,23 +562,23 @@ module encoder_bank #(
     // anything else shows 0. The stores are RAMs whose words the
     // induction cannot see, so this is a bounded check from reset (task readback): the
     // free timestamp reaches every bit of an edge time within its depth.
-    reg [32*N_ENC-1:0] f_lat_count, f_lat_edge, f_idx_count, f_prb_count;
+    reg [COUNT_W*N_ENC-1:0] f_lat_count, f_lat_edge, f_idx_count, f_prb_count;
     reg [N_ENC-1:0]    f_lat_w, f_idx_w, f_prb_w;
     integer fg;
     always @(posedge clk) begin
         for (fg = 0; fg < N_ENC; fg = fg + 1) begin
             if (visit && ch_i == fg) begin
                 if (latch_pending_reg[fg] || latch_now) begin
-                    f_lat_count[32*fg +: 32] <= f_count[fg];
-                    f_lat_edge[32*fg +: 32]  <= f_edge[fg];
+                    f_lat_count[COUNT_W*fg +: COUNT_W] <= f_count[fg];
+                    f_lat_edge[COUNT_W*fg +: COUNT_W]  <= f_edge[fg];
                     f_lat_w[fg]              <= 1'b1;
                 end
                 if (index_event && latch_armed_reg[fg]) begin
-                    f_idx_count[32*fg +: 32] <= f_count[fg];
+                    f_idx_count[COUNT_W*fg +: COUNT_W] <= f_count[fg];
                     f_idx_w[fg]              <= 1'b1;
                 end
                 if (probe_pending_reg[fg] || probe_event) begin
-                    f_prb_count[32*fg +: 32] <= f_count[fg];
+                    f_prb_count[COUNT_W*fg +: COUNT_W] <= f_count[fg];
                     f_prb_w[fg]              <= 1'b1;
                 end
             end
@@ -571,27 +594,39 @@ module encoder_bank #(
     wire [4:0]  f_base  = read_addr[6:2];
     wire [31:0] f_ch    = {30'd0, read_addr[1:0]};
     wire        f_in    = f_ch < N_ENC;
+    // A narrow count reads sign-extended, a narrow edge time zero-extended (stated here
+    // by value: the copy as a signed or an unsigned number of COUNT_W bits).
     reg  [31:0] f_now, f_want;
+    reg  [COUNT_W-1:0] f_word;
+    reg         f_signed;
+    integer     fb;
     always @(*) begin
         f_now = 32'd0;
+        f_word = {COUNT_W{1'b0}};
+        f_signed = 1'b1;
         if (f_in) begin
             if (f_base == FS_ENC_COUNT_ADDR[6:2] && f_lat_w[f_ch])
-                f_now = f_lat_count[32*f_ch +: 32];
-            if (f_base == FS_ENC_EDGE_TIME_ADDR[6:2] && f_lat_w[f_ch])
-                f_now = f_lat_edge[32*f_ch +: 32];
+                f_word = f_lat_count[COUNT_W*f_ch +: COUNT_W];
+            if (f_base == FS_ENC_EDGE_TIME_ADDR[6:2] && f_lat_w[f_ch]) begin
+                f_word   = f_lat_edge[COUNT_W*f_ch +: COUNT_W];
+                f_signed = 1'b0;
+            end
             if (f_base == FS_ENC_INDEX_LATCH_ADDR[6:2] && f_idx_w[f_ch])
-                f_now = f_idx_count[32*f_ch +: 32];
+                f_word = f_idx_count[COUNT_W*f_ch +: COUNT_W];
             if (f_base == FS_ENC_PROBE_LATCH_ADDR[6:2] && f_prb_w[f_ch])
-                f_now = f_prb_count[32*f_ch +: 32];
+                f_word = f_prb_count[COUNT_W*f_ch +: COUNT_W];
         end
+        for (fb = 0; fb < 32; fb = fb + 1)
+            f_now[fb] = (fb < COUNT_W) ? f_word[fb] : (f_signed && f_word[COUNT_W-1]);
     end
+    localparam F_HIGH_BIT = (COUNT_W >= 30) ? 29 : COUNT_W - 1;   // a high edge-time bit to cover
     always @(posedge clk) begin
         if (read_served) f_want <= f_now;
         if (rst) f_want <= 32'd0;
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (copy_rdata == f_want);
-        cover ($past(read_served) && $past(f_base) == FS_ENC_EDGE_TIME_ADDR[6:2] && f_want[29]);
+        cover ($past(read_served) && $past(f_base) == FS_ENC_EDGE_TIME_ADDR[6:2] && f_want[F_HIGH_BIT]);
     end
 `endif
 `endif

@@ -37,6 +37,7 @@ module finestep_top #(
     parameter INC_WRITE_ONLY  = 0,   // 1: RECORD_INC reads 0 (needs READ_STORE 0)
     parameter AXIS_WRITE_ONLY = 0,   // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (needs READ_STORE 0)
     parameter INC_DIRECT      = 0,   // 1: RECORD_INC writes go straight into the FIFO's record (needs INC_WRITE_ONLY 1)
+    parameter ENC_COUNT_W     = 32,  // 16: the encoders' counts and edge times 16 bits, read extended (VERSION.ENC_COUNT_16)
     parameter HAS_SPINDLE     = 1,
     parameter HAS_OUTPUTS     = 1,
     parameter N_GPIO          = 4,
@@ -295,7 +296,7 @@ module finestep_top #(
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
         .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK),
         .STEP_ROUND_LOG2(STEP_ROUND_LOG2), .ONE_SNAPSHOT(ONE_SNAPSHOT), .INC_WRITE_ONLY(INC_WRITE_ONLY),
-        .AXIS_WRITE_ONLY(AXIS_WRITE_ONLY), .INC_DIRECT(INC_DIRECT)
+        .AXIS_WRITE_ONLY(AXIS_WRITE_ONLY), .INC_DIRECT(INC_DIRECT), .ENC_COUNT_W(ENC_COUNT_W)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),
@@ -456,7 +457,7 @@ module finestep_top #(
 
     encoder_bank #(
         .N_ENC(N_ENC), .N_AXES(N_AXES), .FILTER_W(FS_ENC_CONTROL_FILTER_WIDTH), .RAM_BLOCK(RAM_BLOCK),
-        .COPY_FF(NO_RAM), .PROBE_COPY(ONE_SNAPSHOT == 0 ? 1 : 0)
+        .COPY_FF(NO_RAM), .PROBE_COPY(ONE_SNAPSHOT == 0 ? 1 : 0), .COUNT_W(ENC_COUNT_W)
     ) encoders (
         .clk(clk), .rst(rst),
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),

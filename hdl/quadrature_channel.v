@@ -4,7 +4,8 @@
 // One visit of a quadrature encoder (or linear grating) channel, as logic: from the
 // synchronised pins and the channel's state before the visit, its state after it. A
 // sampling visit runs the three input filters (A, B, index Z), then decodes the change
-// of the filtered levels x4, x2, x1 or as step/dir into the 32-bit count; A and B
+// of the filtered levels x4, x2, x1 or as step/dir into the COUNT_W-bit count (32, or 16 in
+// the encoder bank's narrow build); A and B
 // changing at one sample is an illegal transition (flagged, never counted as motion);
 // a rising index clears the count when armed. Nothing is decoded at the sample that
 // first adopts the pins' levels (`primed` before the visit is the channel's `live`).
@@ -13,7 +14,8 @@
 //
 // Latency: none (combinational); the owner registers the state at the visit's edge.
 module quadrature_channel #(
-    parameter FILTER_W = 4
+    parameter FILTER_W = 4,
+    parameter COUNT_W  = 32     // bits of the count and of the edge time (TIMESTAMP's low bits)
 ) (
     // configuration
     input  wire [1:0]          mode,            // 0 x4, 1 x2, 2 x1, 3 step/dir
@@ -33,8 +35,8 @@ module quadrature_channel #(
     input  wire [FILTER_W-1:0] cnt_a,
     input  wire [FILTER_W-1:0] cnt_b,
     input  wire [FILTER_W-1:0] cnt_z,
-    input  wire [31:0]         count,
-    input  wire [31:0]         edge_time,
+    input  wire [COUNT_W-1:0]  count,
+    input  wire [COUNT_W-1:0]  edge_time,
     input  wire                clear_armed,
     // state after the visit
     output wire                primed_next,
@@ -44,8 +46,8 @@ module quadrature_channel #(
     output wire [FILTER_W-1:0] cnt_a_next,
     output wire [FILTER_W-1:0] cnt_b_next,
     output wire [FILTER_W-1:0] cnt_z_next,
-    output wire [31:0]         count_next,
-    output wire [31:0]         edge_time_next,
+    output wire [COUNT_W-1:0]  count_next,
+    output wire [COUNT_W-1:0]  edge_time_next,
     // events of the visit
     output wire                illegal_event,   // A and B changed at one sample
     output wire                index_event      // rising index (after polarity)
@@ -104,16 +106,24 @@ module quadrature_channel #(
     // decode choosing after them: one chain (count + {31{down}, step}, 29 LUT4 fewer in the
     // encoder bank) puts the filters and the decode in front of the carry chain, the
     // ECP5 board build's critical path (seed 3: 80.0 -> 69.7 MHz).
-    wire [31:0] counted = step ? (step_up ? count + 32'd1 : count - 32'd1) : count;
-    assign count_next     = (index_event && clear_armed) ? 32'd0 : counted;
-    assign edge_time_next = step ? timestamp : edge_time;
+    // (COUNT_W < 32: the count wraps at 2^COUNT_W and the edge time is TIMESTAMP's low
+    // COUNT_W bits; the encoder bank's narrow words, docs/spec/encoder_bank.md.)
+    localparam [COUNT_W-1:0] ONE = {{(COUNT_W-1){1'b0}}, 1'b1};
+    wire [COUNT_W-1:0] counted = step ? (step_up ? count + ONE : count - ONE) : count;
+    assign count_next     = (index_event && clear_armed) ? {COUNT_W{1'b0}} : counted;
+    assign edge_time_next = step ? timestamp[COUNT_W-1:0] : edge_time;
+    generate
+        if (COUNT_W < 32) begin : timestamp_high
+            wire unused_timestamp_high = &{1'b0, timestamp[31:COUNT_W]};
+        end
+    endgenerate
 
 `ifdef FORMAL
     // The count moves by at most one per visit and never on an illegal transition; a
     // visit that does not sample changes nothing; the first sample decodes nothing.
     always @(*) begin
         if (!(index_event && clear_armed))
-            assert (count_next == count || count_next == count + 32'd1 || count_next == count - 32'd1);
+            assert (count_next == count || count_next == count + ONE || count_next == count - ONE);
         if (illegal_event) assert (count_next == count || (index_event && clear_armed));
         if (!sampling) assert (count_next == count && edge_time_next == edge_time && a_next == a &&
                                b_next == b && z_level_next == z_level && cnt_a_next == cnt_a &&

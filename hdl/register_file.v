@@ -33,8 +33,9 @@ module register_file #(
                                       // PROBE_TIME read POSITION, LATCH_TIME)
     parameter INC_WRITE_ONLY  = 0,    // 1: RECORD_INC reads 0 (with READ_STORE 0: no multiplexer inputs)
     parameter AXIS_WRITE_ONLY = 0,    // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (the same, with READ_STORE 0)
-    parameter INC_DIRECT      = 0     // 1: a RECORD_INC write goes straight into the FIFO's record being
+    parameter INC_DIRECT      = 0,    // 1: a RECORD_INC write goes straight into the FIFO's record being
                                       // written, no copy here and no push sequence (needs INC_WRITE_ONLY 1)
+    parameter ENC_COUNT_W     = 32    // the encoder bank's words (VERSION.ENC_COUNT_16 when 16)
 ) (
     // clock, reset
     input  wire                         clk,
@@ -153,7 +154,8 @@ module register_file #(
                                      ((ONE_SNAPSHOT != 0 ? 1 : 0) << FS_VERSION_ONE_SNAPSHOT_LSB) |
                                      ((INC_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_INC_WRITE_ONLY_LSB) |
                                      ((AXIS_WRITE_ONLY != 0 ? 1 : 0) << FS_VERSION_AXIS_WRITE_ONLY_LSB) |
-                                     ((INC_DIRECT != 0 ? 1 : 0) << FS_VERSION_INC_DIRECT_LSB);
+                                     ((INC_DIRECT != 0 ? 1 : 0) << FS_VERSION_INC_DIRECT_LSB) |
+                                     ((ENC_COUNT_W == 16 ? 1 : 0) << FS_VERSION_ENC_COUNT_16_LSB);
     localparam [31:0] CAPS_WORD = (N_AXES << FS_CAPS_N_AXES_LSB) |
                                   (N_ENC << FS_CAPS_N_ENC_LSB) |
                                   ((HAS_MPG != 0 ? 1 : 0) << FS_CAPS_HAS_MPG_LSB) |

@@ -158,6 +158,8 @@ uint32_t ft_inc_write_only(uint32_t variant) { return is_serial(variant) ? 1 : 0
 uint32_t ft_axis_write_only(uint32_t variant) { return is_serial(variant) ? 1 : 0; }
 // ... and INC_DIRECT = 1 (RECORD_INC straight into the FIFO's record).
 uint32_t ft_inc_direct(uint32_t variant) { return is_serial(variant) ? 1 : 0; }
+// ... and the CPLDs' narrow encoder words (ENC_COUNT_W = 16).
+uint32_t ft_enc_count_w(uint32_t variant) { return is_serial(variant) ? 16 : 32; }
 
 #ifndef FT_NETLIST
 ft_sim *ft_new(uint32_t variant) {

@@ -92,6 +92,7 @@ uint32_t ft_one_snapshot(uint32_t variant);
 uint32_t ft_inc_write_only(uint32_t variant);
 uint32_t ft_axis_write_only(uint32_t variant);
 uint32_t ft_inc_direct(uint32_t variant);
+uint32_t ft_enc_count_w(uint32_t variant);
 
 /* A top of `variant` built without waveform support (the fast one). */
 ft_sim *ft_new(uint32_t variant);

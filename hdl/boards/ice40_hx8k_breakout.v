@@ -15,7 +15,8 @@ module ice40_hx8k_breakout #(
     parameter HAS_MPG         = 0,
     parameter FIFO_DEPTH_LOG2 = 8,
     parameter STEP_SHARED     = 1,
-    parameter HAS_PBP         = 0     // 1: the point-by-point interpolator (docs/spec/pbp_interp.md#cost)
+    parameter HAS_PBP         = 0,    // 1: the point-by-point interpolator (docs/spec/pbp_interp.md#cost)
+    parameter ENC_COUNT_W     = 32    // 16: narrow encoder words (docs/spec/encoder_bank.md#narrow-words)
 ) (
     // clock, reset
     input  wire              clk12,      // 12 MHz oscillator
@@ -61,7 +62,7 @@ module ice40_hx8k_breakout #(
     spi_board_chip #(
         .N_AXES(N_AXES), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
         .CLOCK_HZ(CLOCK_HZ), .RAM_BLOCK(1), .FIFO_HEAD_REG(0),  // the iCE40 has no distributed RAM
-        .STEP_SHARED(STEP_SHARED), .HAS_PBP(HAS_PBP)
+        .STEP_SHARED(STEP_SHARED), .HAS_PBP(HAS_PBP), .ENC_COUNT_W(ENC_COUNT_W)
     ) board (
         .clk(clk), .locked(pll_locked), .button_n(reset_n), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi), .spi_miso(spi_miso), .irq(irq),

@@ -15,7 +15,10 @@ module machxo2_1200 #(
     parameter FIFO_DEPTH_LOG2 = 2,
     // The core's digit-serial step engine (step_serial), STEP_DIGIT bits a clock: the
     // round R = 4 slots * 32 / STEP_DIGIT clocks (docs/spec/step_serial.md)
-    parameter STEP_DIGIT      = 4
+    parameter STEP_DIGIT      = 4,
+    // 16: narrow encoder words, counts and edge times of 16 bits read extended
+    // (VERSION.ENC_COUNT_16, docs/spec/encoder_bank.md#narrow-words)
+    parameter ENC_COUNT_W     = 16
 ) (
     // reset
     input  wire              button_n,   // pulled up: low resets
@@ -59,7 +62,7 @@ module machxo2_1200 #(
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
-        .STEP_DIGIT(STEP_DIGIT),
+        .STEP_DIGIT(STEP_DIGIT), .ENC_COUNT_W(ENC_COUNT_W),
         .FIFO_HEAD_REG(0)   // the FIFO in distributed RAM: one register holds its head
     ) chip (
         .clk(clk), .rst(rst),

@@ -17,7 +17,10 @@ module max2_epm1270 #(
     parameter FIFO_DEPTH_LOG2 = 1,
     // The core's digit-serial step engine (step_serial), STEP_DIGIT bits a clock: the
     // round R = 4 slots * 32 / STEP_DIGIT clocks (docs/spec/step_serial.md)
-    parameter STEP_DIGIT      = 4
+    parameter STEP_DIGIT      = 4,
+    // 16: narrow encoder words, counts and edge times of 16 bits read extended
+    // (VERSION.ENC_COUNT_16, docs/spec/encoder_bank.md#narrow-words)
+    parameter ENC_COUNT_W     = 16
 ) (
     // clock, reset
     input  wire              clk50,      // 50 MHz oscillator
@@ -66,8 +69,9 @@ module max2_epm1270 #(
                             // and PROBE_TIME read POSITION and LATCH_TIME: docs/spec/register_file.md)
         .INC_WRITE_ONLY(1), // RECORD_INC reads 0: 4 x 32 bits fewer into the read multiplexer
         .AXIS_WRITE_ONLY(1), // AXIS_TIMING_A/B and AXIS_MODE read 0: 4 x 3 words fewer into it
-        .INC_DIRECT(1)      // RECORD_INC written straight into the FIFO's record: no 4 x 32-bit copy
+        .INC_DIRECT(1),     // RECORD_INC written straight into the FIFO's record: no 4 x 32-bit copy
                             // and no push sequence (docs/spec/register_file.md)
+        .ENC_COUNT_W(ENC_COUNT_W)
     ) chip (
         .clk(clk50), .rst(rst),
         .spi_cs_n(1'b1), .spi_sck(1'b0), .spi_mosi(1'b0),

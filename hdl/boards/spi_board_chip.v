@@ -14,7 +14,8 @@ module spi_board_chip #(
     parameter FIFO_HEAD_REG   = 1,
     parameter HAS_PANEL       = 0,
     parameter HAS_GANTRY      = 0,
-    parameter HAS_PBP         = 0    // the core's point-by-point interpolator (VERSION.HAS_PBP)
+    parameter HAS_PBP         = 0,   // the core's point-by-point interpolator (VERSION.HAS_PBP)
+    parameter ENC_COUNT_W     = 32   // 16: narrow encoder words (VERSION.ENC_COUNT_16)
 ) (
     // clock, reset
     input  wire              clk,
@@ -61,7 +62,7 @@ module spi_board_chip #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
         .RAM_BLOCK(RAM_BLOCK), .STEP_SHARED(STEP_SHARED), .FIFO_HEAD_REG(FIFO_HEAD_REG),
-        .HAS_PANEL(HAS_PANEL), .HAS_GANTRY(HAS_GANTRY), .HAS_PBP(HAS_PBP)
+        .HAS_PANEL(HAS_PANEL), .HAS_GANTRY(HAS_GANTRY), .HAS_PBP(HAS_PBP), .ENC_COUNT_W(ENC_COUNT_W)
     ) chip (
         .clk(clk), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi),

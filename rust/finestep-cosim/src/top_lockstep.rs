@@ -130,6 +130,7 @@ pub fn rtl_top_params_of(variant: TopVariant) -> TopParams {
         inc_write_only: build.inc_write_only,
         axis_write_only: build.axis_write_only,
         inc_direct: build.inc_direct,
+        enc_count_w: build.enc_count_w,
         has_spindle: build.has_spindle,
         has_outputs: build.has_outputs,
         n_gpio: build.n_gpio,

@@ -446,6 +446,50 @@ fn probe_latches_everything_on_the_serial_chip() {
     probe_latches_everything(connect_serial, "probe_latches_everything_on_the_serial_chip", one_snapshot);
 }
 
+/// The serial chip's narrow encoder words (`ENC_COUNT_W` 16, docs/spec/encoder_bank.md#narrow-words),
+/// RTL and model in lockstep on every read: a grating driven forward past +2^15 counts
+/// and back past -2^15 and -2^16 (the 16-bit count wraps on the way, in both directions),
+/// read every chunk of motion (fewer than 2^15 counts apart). `ENC_COUNT` reads the count's
+/// low 16 bits sign-extended, and the driver's 64-bit position is the plant's true count
+/// at every read.
+#[test]
+fn narrow_counts_wrap_and_extend_on_the_serial_chip() {
+    let build = finestep_cosim::rtl_top_params_of(finestep_cosim::TopVariant::MotionSerial);
+    assert_eq!(build.enc_count_w, 16, "the serial chip is built with the CPLDs' narrow encoder words");
+    let tau = 2000;
+    let plant_config = PlantConfig {
+        drives: vec![lagging(tau); 2],
+        channels: vec![ChannelConfig {
+            axis: 0,
+            encoder: EncoderConfig::linear_grating(CountsPerStep::integer(8).unwrap(), None),
+        }],
+        probe: None,
+        hand_wheel: None,
+    };
+    let mut machine =
+        connect_serial("narrow_counts_wrap_and_extend_on_the_serial_chip", Plant::new(plant_config, 3).unwrap());
+    assert_eq!(machine.caps().enc_count_w, 16);
+    // 8 steps a period, 64 counts; chunks of 80 periods (5 120 counts) between reads:
+    // 14 chunks forward (71 680 counts), 30 back (to -81 920).
+    let chunk = |steps: i32| moves(&vec![(steps << 16, 0); 80]);
+    let mut crossed = [false; 4];
+    for (k, steps) in std::iter::repeat_n(8, 14).chain(std::iter::repeat_n(-8, 30)).enumerate() {
+        run_records(&mut machine, chunk(steps), 40 * tau);
+        let snapshot = machine.feedback().unwrap();
+        let encoder = plant_of(&machine).encoder(0);
+        assert_eq!(encoder.faults().overspeed, 0, "chunk {k}: {:?}", encoder.faults());
+        let truth = encoder.ideal_count();
+        assert_eq!(snapshot.positions[0], truth, "chunk {k}: the driver's position is the plant's count");
+        assert_eq!(snapshot.counts[0], i32::from(truth as i16), "chunk {k}: ENC_COUNT reads 16 bits sign-extended");
+        crossed[0] |= truth > 1 << 15;
+        crossed[1] |= truth > 1 << 16;
+        crossed[2] |= truth < -(1 << 15);
+        crossed[3] |= truth < -(1 << 16);
+    }
+    assert_eq!(crossed, [false; 4].map(|_| true), "the run wrapped the 16-bit count both ways");
+    assert_eq!(machine.encoder_errors(0).unwrap(), (false, 0));
+}
+
 /// With `one_snapshot` (docs/spec/register_file.md#one-snapshot) `POSITION` and
 /// `LATCH_TIME` hold the probe's snapshot until the next arm; else the period latch's.
 fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_snapshot: bool) {

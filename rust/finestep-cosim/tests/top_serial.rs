@@ -95,17 +95,30 @@ fn serial_chip_reports_its_round() {
 fn serial_chip_reports_its_register_shapes() {
     let build = rtl_top_params_of(TopVariant::MotionSerial);
     assert!(
-        build.one_snapshot && build.inc_write_only && build.axis_write_only && build.inc_direct,
+        build.one_snapshot
+            && build.inc_write_only
+            && build.axis_write_only
+            && build.inc_direct
+            && build.enc_count_w == 16,
         "the serial chip has the MAX II's shapes: {build:?}"
     );
     let mut m = parallel_machine("serial_chip_reports_its_register_shapes");
     let caps = m.caps();
-    assert!(caps.one_snapshot && caps.inc_write_only && caps.axis_write_only && caps.inc_direct, "{caps:?}");
+    assert!(
+        caps.one_snapshot && caps.inc_write_only && caps.axis_write_only && caps.inc_direct && caps.enc_count_w == 16,
+        "{caps:?}"
+    );
     let word = ok(m.bus().read_one(version::ADDR));
     assert_eq!((version::MAJOR.get(word), version::MINOR.get(word), version::PATCH.get(word)), (1, 1, 0));
-    let bits = [version::ONE_SNAPSHOT, version::INC_WRITE_ONLY, version::AXIS_WRITE_ONLY, version::INC_DIRECT]
-        .map(|f| f.get(word));
-    assert_eq!(bits, [1, 1, 1, 1], "{word:#x}");
+    let bits = [
+        version::ONE_SNAPSHOT,
+        version::INC_WRITE_ONLY,
+        version::AXIS_WRITE_ONLY,
+        version::INC_DIRECT,
+        version::ENC_COUNT_16,
+    ]
+    .map(|f| f.get(word));
+    assert_eq!(bits, [1, 1, 1, 1, 1], "{word:#x}");
     ok(m.bus().write(record_inc::addr(1), 0x1234_5678));
     assert_eq!(ok(m.bus().read_one(record_inc::addr(1))), 0, "RECORD_INC is write-only");
     // INC_DIRECT (docs/spec/register_file.md#record_inc-straight-into-the-fifo): a push with
@@ -133,6 +146,7 @@ fn serial_chip_reports_its_register_shapes() {
         pin_probe::spi_machine(Probe::new(TopVariant::Motion, "serial_chip_reports_its_register_shapes_default", 1));
     let caps = spi.caps();
     assert!(!caps.one_snapshot && !caps.inc_write_only && !caps.axis_write_only, "{caps:?}");
+    assert_eq!(caps.enc_count_w, 32, "{caps:?}");
 }
 
 /// A move over the 8080 bus ends exactly on every axis's rounded sum, every step on the

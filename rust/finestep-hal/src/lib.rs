@@ -382,9 +382,10 @@ struct AxisState {
 
 #[derive(Clone, Copy, Debug, Default)]
 struct EncoderState {
+    /// The count extended to 64 bits by the host driver ([`finestep_host::FeedbackSnapshot::positions`]:
+    /// also a core's narrow 16-bit counts, `VERSION.ENC_COUNT_16`).
     counts: i64,
     zero: i64,
-    last_raw: i32,
     velocity: f64,
     applied: Option<(bool, bool)>,
     /// The chip's index latch is armed for `index-enable` (ENC_CONTROL.ARM_INDEX_LATCH):
@@ -639,15 +640,12 @@ impl Driver {
             }
             self.steps_once = true;
         }
-        for ((channel, &raw), cmd) in self.encoders.iter_mut().zip(&snapshot.counts).zip(&self.encoder_cmds) {
-            let delta = if self.read_once { i64::from(raw.wrapping_sub(channel.last_raw)) } else { 0 };
+        for ((channel, &position), cmd) in self.encoders.iter_mut().zip(&snapshot.positions).zip(&self.encoder_cmds) {
+            let delta = if self.read_once { position - channel.counts } else { 0 };
+            channel.counts = position;
             if !self.read_once {
-                channel.counts = i64::from(raw);
                 channel.zero = channel.counts;
-            } else {
-                channel.counts += delta;
             }
-            channel.last_raw = raw;
             if cmd.reset {
                 channel.zero = channel.counts;
             }
@@ -696,11 +694,11 @@ impl Driver {
                 self.encoders[channel].index_armed = true;
                 continue;
             }
-            if let Some(latched) = self.machine.index_latch(channel).map_err(self.bus_err())? {
+            if let Some(latched) = self.machine.index_position(channel).map_err(self.bus_err())? {
                 let state = &mut self.encoders[channel];
-                // The latched count, unwrapped by its distance from the snapshot's count
-                // (negative when the index came after the snapshot's latch).
-                state.zero = state.counts - i64::from(state.last_raw.wrapping_sub(latched));
+                // The latched count, extended by its distance from the snapshot's count
+                // (after it when the index came after the snapshot's latch).
+                state.zero = latched;
                 state.index_armed = false;
             }
         }

@@ -40,9 +40,16 @@ impl Default for EncoderSetup {
 pub struct FeedbackSnapshot {
     /// Steps per axis.
     pub steps: Vec<i32>,
-    /// Counts per encoder channel.
+    /// Counts per encoder channel, as `ENC_COUNT` reads (sign-extended from 16 bits on a
+    /// core with narrow words, [`crate::Caps::enc_count_w`]).
     pub counts: Vec<i32>,
-    /// `TIMESTAMP` of each channel's last count change.
+    /// Counts per encoder channel extended to 64 bits by this driver: the first read's
+    /// count plus every later read's difference from the one before, taken modulo
+    /// `2^enc_count_w` as a signed number (exact while a channel moves fewer than
+    /// `2^(enc_count_w - 1)` counts between two reads; docs/spec/encoder_bank.md#narrow-words).
+    pub positions: Vec<i64>,
+    /// `TIMESTAMP` of each channel's last count change ([`EdgeTimeExtender`]: on a core
+    /// with narrow words, extended from its low 16 bits against `latch_time`).
     pub edge_times: Vec<u32>,
     /// `TIMESTAMP` of the latch.
     pub latch_time: u32,
@@ -57,8 +64,12 @@ pub struct FeedbackSnapshot {
 /// What a probe event latched.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ProbeHit {
-    /// Counts per encoder channel at the event.
+    /// Counts per encoder channel at the event, as `ENC_PROBE_LATCH` reads.
     pub counts: Vec<i32>,
+    /// The same on the scale of [`FeedbackSnapshot::positions`]: extended against the
+    /// last [`Machine::feedback`]'s position (exact while the channel moved fewer than
+    /// `2^(enc_count_w - 1)` counts between the event and that read).
+    pub positions: Vec<i64>,
     /// Steps per axis at the event.
     pub steps: Vec<i32>,
     /// `TIMESTAMP` of the event.
@@ -204,6 +215,16 @@ impl<B: Bus> Machine<B> {
         Ok(Some(self.bus.read_one(enc_index_latch::addr(channel))? as i32))
     }
 
+    /// [`Machine::index_latch`] on the scale of [`FeedbackSnapshot::positions`]: extended
+    /// against the last [`Machine::feedback`]'s position of the channel (exact while the
+    /// channel moved fewer than `2^(enc_count_w - 1)` counts between the index and that read).
+    pub fn index_position(&mut self, channel: usize) -> Result<Option<i64>, BusError> {
+        let Some(word) = self.index_latch(channel)? else {
+            return Ok(None);
+        };
+        Ok(Some(self.encoder_tracks[channel].0.latched(word as u32)))
+    }
+
     /// Illegal transitions of channel `channel`: the sticky flag and the count.
     pub fn encoder_errors(&mut self, channel: usize) -> Result<(bool, u16), BusError> {
         self.check_channel(channel)?;
@@ -226,6 +247,13 @@ impl<B: Bus> Machine<B> {
             bus.read(enc_edge_time::addr(0), &mut edge_times)?;
             Ok((steps, counts, edge_times))
         })?;
+        let mut positions = Vec::with_capacity(n_enc);
+        let mut extended_edges = Vec::with_capacity(n_enc);
+        for ((count, edge), (counter, edger)) in counts.iter().zip(&edge_times).zip(&mut self.encoder_tracks) {
+            let position = counter.extend(*count);
+            positions.push(position);
+            extended_edges.push(edger.extend(*edge, latch_time, position));
+        }
         // Read after the positions: SEEN stays set until the host arms the probe, so a 0
         // here (and a LATCH_TIME not the released snapshot's) says they were the period
         // latch's.
@@ -233,7 +261,8 @@ impl<B: Bus> Machine<B> {
         Ok(FeedbackSnapshot {
             steps: steps.into_iter().map(|w| w as i32).collect(),
             counts: counts.into_iter().map(|w| w as i32).collect(),
-            edge_times,
+            positions,
+            edge_times: extended_edges,
             latch_time,
             probe_held,
         })
@@ -260,7 +289,9 @@ impl<B: Bus> Machine<B> {
         let mut steps = vec![0u32; self.caps.n_axes];
         self.bus.read(probe_position::addr(0), &mut steps)?;
         let time = self.bus.read_one(probe_time::ADDR)?;
+        let positions = counts.iter().zip(&self.encoder_tracks).map(|(&w, (counter, _))| counter.latched(w)).collect();
         Ok(Some(ProbeHit {
+            positions,
             counts: counts.into_iter().map(|w| w as i32).collect(),
             steps: steps.into_iter().map(|w| w as i32).collect(),
             time,
@@ -367,6 +398,89 @@ impl<B: Bus> Machine<B> {
     }
 }
 
+/// `to - from` for two count words of a core whose counts are `width` bits (16 or 32,
+/// [`crate::Caps::enc_count_w`]): their difference modulo `2^width` as a signed number,
+/// `-2^(width-1) .. 2^(width-1) - 1` (the move between two reads, if it was shorter than
+/// `2^(width-1)` counts). Higher bits of the words are ignored.
+pub fn count_delta(width: u32, from: u32, to: u32) -> i64 {
+    let diff = to.wrapping_sub(from);
+    let shift = 32 - width.clamp(1, 32);
+    i64::from(((diff << shift) as i32) >> shift)
+}
+
+/// Extends one channel's count reads (`ENC_COUNT`, [`crate::Caps::enc_count_w`] bits) to a
+/// 64-bit position: the first read's count as a signed number, then each read's
+/// [`count_delta`] from the one before added (docs/spec/encoder_bank.md#narrow-words: the
+/// host reads a channel at least once per `2^(width-1)` counts).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CountExtender {
+    width: u32,
+    /// The last read's word and the position it gave.
+    last: Option<(u32, i64)>,
+}
+
+impl CountExtender {
+    /// No read yet, counts of `width` bits.
+    pub fn new(width: u32) -> Self {
+        CountExtender { width, last: None }
+    }
+
+    /// The position of this read's count `word`.
+    pub fn extend(&mut self, word: u32) -> i64 {
+        let position = self.latched(word);
+        self.last = Some((word, position));
+        position
+    }
+
+    /// The position of a count the core latched (`ENC_INDEX_LATCH`, `ENC_PROBE_LATCH`),
+    /// on the scale of [`Self::extend`]: its [`count_delta`] from the last read (exact if
+    /// the channel moved fewer than `2^(width-1)` counts between the event and that read);
+    /// the word as a signed number before any read.
+    pub fn latched(&self, word: u32) -> i64 {
+        match self.last {
+            Some((raw, position)) => position + count_delta(self.width, raw, word),
+            None => count_delta(self.width, 0, word),
+        }
+    }
+
+    /// The last read's position.
+    pub fn position(&self) -> Option<i64> {
+        self.last.map(|(_, position)| position)
+    }
+}
+
+/// Extends one channel's edge-time reads (`ENC_EDGE_TIME`, `TIMESTAMP`'s low `width` bits)
+/// to 32-bit `TIMESTAMP`s: the latest time at or before the read's `LATCH_TIME` with those
+/// low bits, exact for an edge fewer than `2^width` clocks before the latch (every edge
+/// since the previous read when the host reads at least every `2^width` clocks). A read
+/// whose count and word are those of the previous read saw no new edge: it keeps the
+/// previous edge time, whatever its age. With `width` 32 the word is the time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EdgeTimeExtender {
+    width: u32,
+    /// The last read's word, the edge time it gave, and the channel's position then.
+    last: Option<(u32, u32, i64)>,
+}
+
+impl EdgeTimeExtender {
+    /// No read yet, edge times of `width` bits.
+    pub fn new(width: u32) -> Self {
+        EdgeTimeExtender { width, last: None }
+    }
+
+    /// The edge time of this read's `word`, latched at `latch_time` with the channel at
+    /// `position` ([`CountExtender::extend`] of the same read).
+    pub fn extend(&mut self, word: u32, latch_time: u32, position: i64) -> u32 {
+        let mask = if self.width >= 32 { u32::MAX } else { (1u32 << self.width) - 1 };
+        let edge = match self.last {
+            Some((last_word, last_edge, last_position)) if last_word == word && last_position == position => last_edge,
+            _ => latch_time.wrapping_sub(latch_time.wrapping_sub(word) & mask),
+        };
+        self.last = Some((word, edge, position));
+        edge
+    }
+}
+
 /// Velocity of one encoder channel from successive [`FeedbackSnapshot`]s, in counts per
 /// clock, the way hostmot2's encoder does it: over the counts that changed between two
 /// snapshots, divided by the time between their last edges (not between the reads), so
@@ -411,6 +525,80 @@ impl VelocityEstimator {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What a core with `width`-bit counts reads for the count `position`: its low
+    /// `width` bits, sign-extended (docs/spec/encoder_bank.md#narrow-words).
+    fn register(position: i64, width: u32) -> u32 {
+        let shift = 64 - width;
+        ((position << shift) >> shift) as u32
+    }
+
+    #[test]
+    fn count_delta_is_the_signed_difference_modulo_the_width() {
+        assert_eq!(count_delta(16, 0x7FFF, 0xFFFF_8000), 1, "forward across +2^15");
+        assert_eq!(count_delta(16, 0xFFFF_8000, 0x7FFF), -1, "backward across -2^15");
+        assert_eq!(count_delta(16, 0xFFFF_FFFF, 0), 1);
+        assert_eq!(count_delta(16, 5, 5 + 0x7FFF), 0x7FFF, "the longest move forward");
+        assert_eq!(count_delta(16, 5, 5u32.wrapping_sub(0x8000)), -0x8000, "the longest move backward");
+        assert_eq!(count_delta(16, 0x1_0000, 0x2_0003), 3, "bits above the width are ignored");
+        assert_eq!(count_delta(32, 0x7FFF_FFFF, 0x8000_0000), 1);
+        assert_eq!(count_delta(32, 0, 0xFFFF_FFFE), -2);
+    }
+
+    #[test]
+    fn narrow_counts_extend_to_the_true_position_across_wraps_in_both_directions() {
+        for width in [16u32, 32] {
+            let longest = (1i64 << (width - 1)) - 1;
+            let mut counter = CountExtender::new(width);
+            // Start near the negative end of the narrow range, run forward through many
+            // wraps of 2^width in moves up to the longest allowed, then back past 0 and
+            // through as many wraps the other way.
+            let mut truth: i64 = -(1 << (width - 1)) + 3;
+            assert_eq!(counter.extend(register(truth, width)), truth, "first read, width {width}");
+            let moves = [longest, 1, 12_345, longest, 0, 7, longest - 1];
+            for k in 0..40 {
+                truth += moves[k % moves.len()];
+                assert_eq!(counter.extend(register(truth, width)), truth, "forward, width {width}, move {k}");
+            }
+            assert!(truth > 8 << width, "ran through many wraps: {truth}");
+            for k in 0..90 {
+                truth -= moves[k % moves.len()];
+                assert_eq!(counter.extend(register(truth, width)), truth, "backward, width {width}, move {k}");
+            }
+            assert!(truth < -(8 << width), "ran back through many wraps: {truth}");
+            assert_eq!(counter.position(), Some(truth));
+            // A latched count (index, probe) within the longest move of the last read.
+            for offset in [-longest - 1, -1, 0, 1, longest] {
+                assert_eq!(counter.latched(register(truth + offset, width)), truth + offset, "width {width}");
+            }
+        }
+        // One move of 2^15 counts or more between two reads is beyond the rule: taken the
+        // other way (the host must read more often).
+        let mut counter = CountExtender::new(16);
+        counter.extend(register(0, 16));
+        assert_eq!(counter.extend(register(1 << 15, 16)), -(1 << 15));
+    }
+
+    #[test]
+    fn narrow_edge_times_extend_against_the_latch_time() {
+        let mut edges = EdgeTimeExtender::new(16);
+        // An edge 100 clocks before a latch just past a 2^16 boundary of TIMESTAMP, and
+        // one just before TIMESTAMP wraps at 2^32.
+        for (edge, latch) in [(0x0003_FFB0u32, 0x0004_0014u32), (0xFFFF_FFF0, 0x0000_0020), (70_000, 70_000)] {
+            let position = i64::from(edge);
+            assert_eq!(edges.extend(edge & 0xFFFF, latch, position), edge, "edge {edge:#x} latched at {latch:#x}");
+        }
+        // No new edge (same count, same word) for longer than 2^16 clocks: the last edge
+        // time stays.
+        assert_eq!(edges.extend(70_000 & 0xFFFF, 70_000 + 200_000, 70_000), 70_000);
+        // A new edge (the count moved) 2^16 - 1 clocks before the latch: the oldest exact.
+        let latch = 1_000_000u32;
+        let edge = latch - 0xFFFF;
+        assert_eq!(edges.extend(edge & 0xFFFF, latch, 1), edge);
+        // With 32-bit words the word is the time.
+        let mut wide = EdgeTimeExtender::new(32);
+        assert_eq!(wide.extend(0x1234_5678, 0x0000_0010, 0), 0x1234_5678);
+    }
 
     #[test]
     fn velocity_from_edge_times_is_exact_for_a_constant_rate() {

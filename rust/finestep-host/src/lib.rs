@@ -30,8 +30,8 @@ pub mod spidev;
 pub mod stream;
 
 pub use feedback::{
-    CountMode, EncoderSetup, FeedbackError, FeedbackSnapshot, HandWheelState, JogMultiplier, JogSetup, JogState,
-    ProbeHit, VelocityEstimator,
+    count_delta, CountExtender, CountMode, EdgeTimeExtender, EncoderSetup, FeedbackError, FeedbackSnapshot,
+    HandWheelState, JogMultiplier, JogSetup, JogState, ProbeHit, VelocityEstimator,
 };
 pub use finestep_interface::regs;
 pub use machine::{AxisSetup, Caps, Machine, Positions};

@@ -1,6 +1,7 @@
 //! [`Machine`]: one finestep core behind a [`Bus`], at the level a machine builder
 //! thinks in: identity, axis setup, faults, run, positions.
 
+use crate::feedback::{CountExtender, EdgeTimeExtender};
 use crate::machine_io::SpindleSetup;
 use crate::regs::{
     axis_enable, axis_mode, caps, clock_hz, command, control, fifo_level, id, latch_time, period_clocks, position,
@@ -64,6 +65,11 @@ pub struct Caps {
     /// a line or an arc on an axis pair. A core without it runs such a record's lanes as
     /// increments: the host sends them only to a core that reports it.
     pub has_pbp: bool,
+    /// Bits of each encoder channel's count and edge time: 16 on a core with
+    /// `VERSION.ENC_COUNT_16` (the CPLDs; docs/spec/encoder_bank.md#narrow-words), else 32.
+    /// [`Machine::feedback`] extends the counts to 64-bit positions and the edge times to
+    /// 32-bit `TIMESTAMP`s in either build.
+    pub enc_count_w: u32,
 }
 
 impl Caps {
@@ -130,6 +136,9 @@ pub struct Machine<B> {
     /// [`Machine::release_probe_snapshot`] that the period latch may not have replaced yet
     /// (running, it takes `POSITION` back at the next boundary, with `SEEN` already 0).
     pub(crate) released_probe_time: Option<u32>,
+    /// Per encoder channel, the extension of its count and edge-time reads
+    /// ([`Caps::enc_count_w`] bits) to a 64-bit position and a 32-bit `TIMESTAMP`.
+    pub(crate) encoder_tracks: Vec<(CountExtender, EdgeTimeExtender)>,
 }
 
 impl<B: Bus> Machine<B> {
@@ -166,6 +175,7 @@ impl<B: Bus> Machine<B> {
             axis_write_only: version::AXIS_WRITE_ONLY.get(version_word) != 0,
             inc_direct: version::INC_DIRECT.get(version_word) != 0,
             has_pbp: version::HAS_PBP.get(version_word) != 0,
+            enc_count_w: if version::ENC_COUNT_16.get(version_word) != 0 { 16 } else { 32 },
         };
         let Some(step_digit) = serial_digit(caps.n_axes, caps::STEP_ROUND_LOG2.get(caps_word)) else {
             let engine =
@@ -191,6 +201,7 @@ impl<B: Bus> Machine<B> {
             axis_write_only: caps.axis_write_only,
             inc_direct: caps.inc_direct,
             has_pbp: caps.has_pbp,
+            enc_count_w: caps.enc_count_w,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
@@ -208,6 +219,10 @@ impl<B: Bus> Machine<B> {
             period_clocks: period_clocks::CLOCKS_RESET,
             spindle: SpindleSetup::default(),
             released_probe_time: None,
+            encoder_tracks: vec![
+                (CountExtender::new(caps.enc_count_w), EdgeTimeExtender::new(caps.enc_count_w));
+                caps.n_enc
+            ],
         })
     }
 

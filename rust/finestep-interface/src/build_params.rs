@@ -266,6 +266,10 @@ pub struct TopParams {
     /// layer; no push sequence. Needs `INC_WRITE_ONLY` (an elaboration check, and
     /// [`Self::validate`]).
     pub inc_direct: bool,
+    /// `ENC_COUNT_W`: bits of each encoder channel's count and edge time (16 or 32;
+    /// `VERSION.ENC_COUNT_16`): 16 wraps the count at 2^16 and keeps `TIMESTAMP`'s low 16
+    /// bits as the edge time, read extended (docs/spec/encoder_bank.md#narrow-words).
+    pub enc_count_w: u32,
     /// `HAS_SPINDLE`: the spindle block (PWM or SPI DAC) is built.
     pub has_spindle: bool,
     /// `HAS_OUTPUTS`: the logic outputs and the interlock are built.
@@ -302,6 +306,7 @@ impl Default for TopParams {
             inc_write_only: finestep_top::INC_WRITE_ONLY.default != 0,
             axis_write_only: finestep_top::AXIS_WRITE_ONLY.default != 0,
             inc_direct: finestep_top::INC_DIRECT.default != 0,
+            enc_count_w: finestep_top::ENC_COUNT_W.default,
             has_spindle: finestep_top::HAS_SPINDLE.default != 0,
             has_outputs: finestep_top::HAS_OUTPUTS.default != 0,
             n_gpio: finestep_top::N_GPIO.default as usize,
@@ -334,6 +339,11 @@ impl TopParams {
         if self.inc_direct && !self.inc_write_only {
             let because = "INC_DIRECT needs INC_WRITE_ONLY = 1";
             return Err(finestep_top::INC_DIRECT.narrowed(1, 0, 0, because));
+        }
+        finestep_top::ENC_COUNT_W.check(self.enc_count_w)?;
+        if self.enc_count_w != 16 && self.enc_count_w != 32 {
+            let because = "ENC_COUNT_W 16 or 32 (VERSION.ENC_COUNT_16 tells one of the two)";
+            return Err(finestep_top::ENC_COUNT_W.narrowed(u64::from(self.enc_count_w), 16, 32, because));
         }
         finestep_top::HAS_SPINDLE.check(self.has_spindle)?;
         finestep_top::HAS_OUTPUTS.check(self.has_outputs)?;

@@ -45,6 +45,27 @@ const STORE_REGISTERS: [(u8, u8); 4] = [
     (regs::enc_edge_time::ADDR, regs::enc_edge_time::STRIDE),
 ];
 
+/// What a register read of a count (`ENC_COUNT`, `ENC_INDEX_LATCH`, `ENC_PROBE_LATCH`)
+/// returns in a build whose counts are `count_w` bits (`ENC_COUNT_W`, 16 or 32): the count
+/// modulo `2^count_w` as a signed number, sign-extended to 32 bits
+/// (docs/spec/encoder_bank.md#narrow-words).
+pub fn read_count(count: u32, count_w: u32) -> u32 {
+    if count_w >= 32 {
+        return count;
+    }
+    let shift = 32 - count_w;
+    (((count << shift) as i32) >> shift) as u32
+}
+
+/// What a register read of an edge time (`ENC_EDGE_TIME`) returns in a build whose words
+/// are `count_w` bits: `TIMESTAMP`'s low `count_w` bits, zero-extended.
+pub fn read_edge_time(edge_time: u32, count_w: u32) -> u32 {
+    if count_w >= 32 {
+        return edge_time;
+    }
+    edge_time & ((1u32 << count_w) - 1)
+}
+
 /// `S = max(N_ENC, 2)`: the slots of a round for `n_enc` channels.
 pub fn slots(n_enc: usize) -> usize {
     n_enc.max(2)
@@ -178,6 +199,8 @@ impl EncoderBankStatus {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct EncoderBank {
     n_enc: usize,
+    /// `ENC_COUNT_W`: the bits of the counts and edge times the registers show.
+    count_w: u32,
     /// The slot of this cycle, `0..S`.
     slot: usize,
     /// The prescaler, counted in rounds.
@@ -212,8 +235,15 @@ impl EncoderBank {
     /// The reset state of a bank of `n_enc` channels (at most [`MAX_CHANNELS`]; more are
     /// not built).
     pub fn new(n_enc: usize) -> Self {
+        Self::with_count_width(n_enc, 32)
+    }
+
+    /// The reset state of a bank of `n_enc` channels whose counts and edge times are
+    /// `count_w` bits (`ENC_COUNT_W`: 16 or 32; 32 and above act as 32).
+    pub fn with_count_width(n_enc: usize, count_w: u32) -> Self {
         EncoderBank {
             n_enc: n_enc.min(MAX_CHANNELS),
+            count_w: count_w.min(32),
             slot: 0,
             presc: 0,
             sampling: false,
@@ -237,6 +267,11 @@ impl EncoderBank {
     /// `N_ENC`.
     pub fn n_enc(&self) -> usize {
         self.n_enc
+    }
+
+    /// `ENC_COUNT_W`.
+    pub fn count_width(&self) -> u32 {
+        self.count_w
     }
 
     /// `S = max(N_ENC, 2)`, the slots of a round.
@@ -324,11 +359,13 @@ impl EncoderBank {
             ..EncoderBankStatus::default()
         };
         for (c, (ch, config)) in self.channels.iter().zip(channels).take(self.n_enc).enumerate() {
+            // A narrow build's words (ENC_COUNT_W 16) as its registers read them.
+            let w = self.count_w;
             status.channels[c] = ChannelStatus {
-                count: self.count_copy[c],
-                index_latch: ch.index_latch(),
-                probe_latch: self.probe_copy[c],
-                edge_time: self.edge_time_copy[c],
+                count: read_count(self.count_copy[c], w),
+                index_latch: read_count(ch.index_latch(), w),
+                probe_latch: read_count(self.probe_copy[c], w),
+                edge_time: read_edge_time(self.edge_time_copy[c], w),
                 illegal: ch.illegal(),
                 illegal_count: ch.illegal_count(),
                 index_seen: ch.index_seen(),
@@ -447,6 +484,29 @@ mod tests {
     /// every `PRESCALE + 1` rounds.
     fn sampling_round(round: u64, prescale: u16) -> bool {
         round >= 1 && (round - 1) % (u64::from(prescale) + 1) == 0
+    }
+
+    #[test]
+    fn narrow_words_read_counts_sign_extended_and_edge_times_zero_extended() {
+        // docs/spec/encoder_bank.md#narrow-words: the count modulo 2^16 as a signed number.
+        assert_eq!(read_count(0x7FFF, 16), 0x7FFF);
+        assert_eq!(read_count(0x8000, 16), 0xFFFF_8000);
+        assert_eq!(read_count(0xFFFF_FFFF, 16), 0xFFFF_FFFF, "-1 stays -1");
+        assert_eq!(read_count(0x0001_0005, 16), 5, "the count wrapped at 2^16");
+        assert_eq!(read_count(0xFFFE_7FFF, 16), 0x7FFF, "-98 305 wraps to +32 767");
+        assert_eq!(read_edge_time(0xABCD_8001, 16), 0x8001, "TIMESTAMP's low bits, not sign-extended");
+        for value in [0u32, 1, 0x8000_0000, 0xFFFF_FFFF] {
+            assert_eq!((read_count(value, 32), read_edge_time(value, 32)), (value, value));
+        }
+        // Through the register view: a channel's copy as the narrow build reads it.
+        let mut bank = EncoderBank::with_count_width(2, 16);
+        bank.count_copy[1] = 0x0001_8000;
+        bank.edge_time_copy[1] = 0x1234_FEDC;
+        bank.probe_copy[1] = 0xFFFF_0001;
+        let status = bank.status(&[ChannelConfig::default(); MAX_CHANNELS], &ProbeConfig::default()).channels[1];
+        assert_eq!((status.count, status.edge_time, status.probe_latch), (0xFFFF_8000, 0xFEDC, 1));
+        assert_eq!(bank.count_width(), 16);
+        assert_eq!(EncoderBank::new(2).count_width(), 32);
     }
 
     #[test]

@@ -807,6 +807,7 @@ impl RegisterFile {
                 let word = v::INC_WRITE_ONLY.set(word, u32::from(p.inc_write_only));
                 let word = v::HAS_PBP.set(word, u32::from(p.has_pbp));
                 let word = v::INC_DIRECT.set(word, u32::from(p.inc_direct));
+                let word = v::ENC_COUNT_16.set(word, u32::from(p.enc_count_w == 16));
                 v::AXIS_WRITE_ONLY.set(word, u32::from(p.axis_write_only))
             }
             regs::caps::ADDR => {

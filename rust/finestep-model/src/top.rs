@@ -445,7 +445,7 @@ impl Top {
             fifo: PositionFifo::new(params.fifo_depth_log2),
             safety,
             core: Core::new(params.core_params()),
-            encoders: EncoderBank::new(params.n_enc),
+            encoders: EncoderBank::with_count_width(params.n_enc, params.enc_count_w),
             hand_wheel: HandWheel::default(),
             jog: JogGenerator::default(),
             spindle: Spindle::default(),

@@ -47,6 +47,8 @@ fn params() -> impl Strategy<Value = TopParams> {
                 axis_write_only,
                 // INC_DIRECT needs INC_WRITE_ONLY; drawn with ONE_SNAPSHOT's bit
                 inc_direct: inc_write_only && one_snapshot,
+                // ENC_COUNT_W 16 or 32, drawn with AXIS_WRITE_ONLY's bit
+                enc_count_w: if axis_write_only { 16 } else { 32 },
                 has_spindle,
                 has_outputs,
                 n_gpio,

@@ -70,6 +70,8 @@ pub struct TopBuild {
     pub axis_write_only: bool,
     /// `INC_DIRECT`: a `RECORD_INC` write goes straight into the FIFO's record.
     pub inc_direct: bool,
+    /// `ENC_COUNT_W`: bits of the encoders' counts and edge times (16 or 32).
+    pub enc_count_w: u32,
     /// The spindle block is built (`HAS_SPINDLE`).
     pub has_spindle: bool,
     /// The logic outputs and the interlock input are built (`HAS_OUTPUTS`).
@@ -101,6 +103,7 @@ pub fn top_build_of(variant: TopVariant) -> TopBuild {
             inc_write_only: ffi::ft_inc_write_only(v) != 0,
             axis_write_only: ffi::ft_axis_write_only(v) != 0,
             inc_direct: ffi::ft_inc_direct(v) != 0,
+            enc_count_w: ffi::ft_enc_count_w(v),
             has_spindle: ffi::ft_has_spindle(v) != 0,
             has_outputs: ffi::ft_has_outputs(v) != 0,
             n_gpio: ffi::ft_n_gpio(v) as usize,
