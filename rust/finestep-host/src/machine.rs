@@ -182,6 +182,8 @@ impl<B: Bus> Machine<B> {
             inc_write_only: caps.inc_write_only,
             axis_write_only: caps.axis_write_only,
             inc_direct: caps.inc_direct,
+            // VERSION.HAS_PBP (0 on a core of map 1.0): the default is the simulated chip's 1.
+            has_pbp: version::HAS_PBP.get(version_word) != 0,
             ..finestep_interface::TopParams::default()
         };
         build.validate().map_err(|error| BusError::Caps { word: caps_word, clock_hz: clock, error })?;
