@@ -15,9 +15,10 @@ use finestep_model::pbp_interp::{arc_steps, ArcPath};
 use finestep_model::{DriveTiming, PeriodRecord};
 
 const PERIOD: u32 = 500;
-/// A decision every 12 clocks: the step engine's visits (S = 4) keep the drive timing
-/// (L = 3, max(S, H + U) = 4: two visits) with room.
-const TICK_DIV: u16 = 11;
+/// A decision every 40 clocks (the step engine's visits, S = 4, keep the drive timing
+/// with room): the line takes about 30 periods, the arc 8, so that the host's reads
+/// (an SPI read of two words is about 900 clocks at SCK = clk / 8) see them under way.
+const TICK_DIV: u16 = 39;
 
 /// A DDA record moving only pair 1 (axes 2 and 3) by whole steps.
 fn dda(steps: [i32; 2], flags: u8) -> PeriodRecord {
@@ -45,10 +46,11 @@ fn period_count_and_position_advance_through_pbp_records() {
     machine.clear_faults_and_errors().unwrap();
     machine.set_control(true, false, true).unwrap();
 
-    // A line of 240 + 130 decisions on pair 0, then an arc from (60, 0) over 100
-    // decisions (counter-clockwise, into the first quadrant): about 9 and 2.5 periods.
+    // A line of 240 + 130 decisions on pair 0 (X rises to 240, Y falls to -130), then an
+    // arc from (-60, 0) over 100 decisions (counter-clockwise, into the third quadrant:
+    // X rises on from 240, Y falls on from -130).
     let line = PbpLanes { x: 240, y: -130, tick_div: TICK_DIV, ..PbpLanes::default() };
-    let start = (60, 0);
+    let start = (-60, 0);
     let end = ArcPath::new(start.0, start.1, false).nth(99).unwrap().1;
     let steps = arc_steps(start, end, false).unwrap();
     let arc = PbpLanes { arc: true, x: start.0 as i32, y: start.1 as i32, steps, tick_div: TICK_DIV, ..line };
@@ -64,30 +66,30 @@ fn period_count_and_position_advance_through_pbp_records() {
 
     // Poll PERIOD_COUNT and POSITION until the arc has ended.
     let want01 = [240 + (end.0 - start.0) as i32, -130 + (end.1 - start.1) as i32];
-    let mut samples: Vec<(u32, [i32; 4])> = Vec::new();
+    let mut samples: Vec<(u32, [i32; 2])> = Vec::new();
     for _ in 0..400 {
         let bus = machine.bus();
         let count = bus.read_one(period_count::ADDR).unwrap();
-        let mut words = [0u32; 4];
+        let mut words = [0u32; 2];
         bus.read(position::addr(0), &mut words).unwrap();
         let pos = words.map(|w| w as i32);
         samples.push((count, pos));
-        if [pos[0], pos[1]] == want01 {
+        if pos == want01 {
             break;
         }
-        bus.wait(150).unwrap();
     }
     // During the line (axis 0 strictly between its start and its end): the latched
     // positions and the period count move on.
-    let during: Vec<&(u32, [i32; 4])> = samples.iter().filter(|(_, p)| p[0] > 0 && p[0] < 240).collect();
+    let during: Vec<&(u32, [i32; 2])> = samples.iter().filter(|(_, p)| p[0] > 0 && p[0] < 240).collect();
     let mut distinct: Vec<i32> = during.iter().map(|(_, p)| p[0]).collect();
     distinct.dedup();
     assert!(distinct.len() >= 4, "POSITION[0] during the line: {distinct:?}");
     let counts: Vec<u32> = during.iter().map(|(c, _)| *c).collect();
     assert!(counts.windows(2).all(|w| w[0] <= w[1]), "PERIOD_COUNT never goes back: {counts:?}");
-    assert!(counts.last().unwrap() - counts[0] >= 3, "PERIOD_COUNT during the line: {counts:?}");
-    // ... and during the arc (counter-clockwise from (60, 0): Y rises from the line's end).
-    let in_arc = samples.iter().filter(|(_, p)| p[1] > -130 && p[1] < want01[1]).count();
+    assert!(counts.last().unwrap() - counts[0] >= 10, "PERIOD_COUNT during the line: {counts:?}");
+    // ... and during the arc (past the line's end, not at the arc's).
+    assert!(want01[0] > 240 && want01[1] < -130, "the arc's end {want01:?}");
+    let in_arc = samples.iter().filter(|(_, p)| (p[0] > 240 || p[1] < -130) && *p != want01).count();
     assert!(in_arc >= 1, "POSITION during the arc: {samples:?}");
 
     wait_idle(machine.bus(), 1000, 40 * u64::from(PERIOD)).unwrap();
