@@ -55,6 +55,9 @@ module finestep_core #(
     // period record port
     input  wire                       rec_valid,
     output wire                       rec_ready,
+    // the period timer's boundary (its own rec_ready): a period ends in this cycle, also
+    // the idle periods it runs while a pbp record holds rec_ready low
+    output wire                       period_boundary,
     input  wire [32*N_AXES-1:0]       rec_inc,
     input  wire [7:0]                 rec_flags,
     // the alternate record (period_timer): rec_alt_inc on the rec_alt_lane lanes, zero
@@ -118,6 +121,8 @@ module finestep_core #(
     // visit (the engine holds it up to S clocks); 0 with a DDA and a shaper per axis.
     wire                 pbp_ext_pending;
 
+    assign period_boundary = timer_rec_ready;
+
     // The digit-serial engine is the CPLD's: its period timer is shaped for area (the
     // same behaviour, see period_timer).
     period_timer #(
@@ -149,11 +154,17 @@ module finestep_core #(
 
     generate
         if (HAS_PBP != 0) begin : with_pbp
-            // A pbp record's lanes: lane 0 {ARC, CW, PAIR, x}, lane 1 y, lane 2 the arc's
-            // decision count, lane 3 TICK_DIV (hdl/interface.toml, PBP_RECORD).
-            localparam COORD_W = 24;
-            localparam DIV_W   = 16;
-            localparam TOP     = 24;    // lane 0's top byte holds the PBP_RECORD bits
+            // A pbp record's fields (hdl/interface.toml [pbp]): the PBP_RECORD bits
+            // {ARC, CW, PAIR} at FS_PBP_BITS_LANE/LSB, X, Y, the arc's decision count and
+            // TICK_DIV each FS_PBP_<FIELD>_LSB +: _WIDTH of lane FS_PBP_<FIELD>_LANE.
+            localparam COORD_W = FS_PBP_X_WIDTH;
+            localparam DIV_W   = FS_PBP_TICK_DIV_WIDTH;
+            localparam COUNT_W = FS_PBP_COUNT_WIDTH;
+            localparam BITS    = FS_REC_INC_WIDTH * FS_PBP_BITS_LANE + FS_PBP_BITS_LSB;
+            localparam X_AT    = FS_REC_INC_WIDTH * FS_PBP_X_LANE + FS_PBP_X_LSB;
+            localparam Y_AT    = FS_REC_INC_WIDTH * FS_PBP_Y_LANE + FS_PBP_Y_LSB;
+            localparam COUNT_AT = FS_REC_INC_WIDTH * FS_PBP_COUNT_LANE + FS_PBP_COUNT_LSB;
+            localparam DIV_AT  = FS_REC_INC_WIDTH * FS_PBP_TICK_DIV_LANE + FS_PBP_TICK_DIV_LSB;
             // The clocks between two visits of an axis: the block's decisions must be at
             // least that far apart (one request per axis per visit, as the DDA's).
             localparam [DIV_W:0] S_CLOCKS = 1 << SL;
@@ -170,8 +181,8 @@ module finestep_core #(
             assign rec_ready       = timer_rec_ready && !wait_pbp;
             assign timer_rec_inc   = offered_pbp ? {32*N_AXES{1'b0}} : rec_inc;
             assign timer_rec_flags = offered_pbp ? (rec_flags & ~(8'd1 << FS_REC_FLAG_BLOCK_END_BIT)) : rec_flags;
-            wire [1:0] pair = rec_inc[TOP + FS_PBP_RECORD_PAIR_0_BIT +: 2];
-            wire [DIV_W-1:0] tick = rec_inc[96 +: DIV_W];
+            wire [1:0] pair = rec_inc[BITS + FS_PBP_RECORD_PAIR_0_BIT +: 2];
+            wire [DIV_W-1:0] tick = rec_inc[DIV_AT +: DIV_W];
             wire pair_ok = ({1'b0, pair, 1'b1} < N_AXES) && ({1'b0, tick} + 1'b1 >= S_CLOCKS);
             // Taken with the timer's record (a boundary while running); one on a pair not
             // built, or with decisions closer than S clocks, is refused (record_error) and
@@ -210,11 +221,11 @@ module finestep_core #(
                 .tick_div(tick_reg),
                 .rec_valid(take && pair_ok),
                 .rec_ready(ready_unused),
-                .rec_arc(rec_inc[TOP + FS_PBP_RECORD_ARC_BIT]),
-                .rec_cw(rec_inc[TOP + FS_PBP_RECORD_CW_BIT]),
-                .rec_x(rec_inc[0 +: COORD_W]),
-                .rec_y(rec_inc[32 +: COORD_W]),
-                .rec_steps(rec_inc[64 +: COORD_W + 3]),
+                .rec_arc(rec_inc[BITS + FS_PBP_RECORD_ARC_BIT]),
+                .rec_cw(rec_inc[BITS + FS_PBP_RECORD_CW_BIT]),
+                .rec_x(rec_inc[X_AT +: COORD_W]),
+                .rec_y(rec_inc[Y_AT +: COORD_W]),
+                .rec_steps(rec_inc[COUNT_AT +: COUNT_W]),
                 .req_valid(req_valid2),
                 .req_negative(req_negative2),
                 .busy(busy),
@@ -244,8 +255,15 @@ module finestep_core #(
 
     wire [N_AXES-1:0] dda_req_valid;
     wire [N_AXES-1:0] dda_req_negative;
+    // With a DDA and a shaper per axis, each axis's own request: the pbp block's while
+    // its record runs (the DDAs are idle then), else its DDA's. The gantry block sees
+    // these, so a pbp move of the master reaches the slave as a DDA step does.
+    wire [N_AXES-1:0] own_req_valid    = pbp_req_valid | dda_req_valid;
+    wire [N_AXES-1:0] own_req_negative = (pbp_req_valid & pbp_req_negative) | (~pbp_req_valid & dda_req_negative);
     wire              slave_req_valid, slave_req_negative;
     wire [2:0]        slave_axis;
+    // The request each axis's shaper takes (a DDA and a shaper per axis; 0 with an engine).
+    wire [N_AXES-1:0] shaper_req_valid, shaper_req_negative;
 
     generate
         if (HAS_GANTRY != 0 && STEP_SHARED == 0) begin : with_gantry
@@ -265,8 +283,8 @@ module finestep_core #(
                 .enc_master(enc_master),
                 .enc_slave(enc_slave),
                 .inc(inc),
-                .req_valid(dda_req_valid),
-                .req_negative(dda_req_negative),
+                .req_valid(own_req_valid),
+                .req_negative(own_req_negative),
                 .halt(halt),
                 .clear_errors(clear_errors),
                 .clear_counters(clear_counters),
@@ -337,8 +355,11 @@ module finestep_core #(
             assign dda_req_valid    = {N_AXES{1'b0}};
             assign dda_req_negative = {N_AXES{1'b0}};
             wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, RAM_BLOCK[0], pbp_req_valid,
-                                    pbp_req_negative};
+                                    pbp_req_negative, own_req_valid, own_req_negative,
+                                    shaper_req_valid, shaper_req_negative};
             assign pbp_ext_pending = 1'b0;
+            assign shaper_req_valid    = {N_AXES{1'b0}};
+            assign shaper_req_negative = {N_AXES{1'b0}};
         end else if (STEP_SHARED != 0) begin : shared
             step_engine #(
                 .N_AXES(N_AXES),
@@ -364,18 +385,19 @@ module finestep_core #(
             wire unused_slave = &{1'b0, slave_req_valid, slave_req_negative, slave_axis};
             assign dda_req_valid    = {N_AXES{1'b0}};
             assign dda_req_negative = {N_AXES{1'b0}};
-            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative};
+            wire unused_dda_req = &{1'b0, dda_req_valid, dda_req_negative, own_req_valid, own_req_negative,
+                                    shaper_req_valid, shaper_req_negative};
+            assign shaper_req_valid    = {N_AXES{1'b0}};
+            assign shaper_req_negative = {N_AXES{1'b0}};
         end else begin : per_axis
             assign start_ok = 1'b1;
             assign pbp_ext_pending = 1'b0;
             for (i = 0; i < N_AXES; i = i + 1) begin : axis
-                // The gantry's slave takes the gantry's request, every other axis its DDA's.
-                // A request of the pbp block (only while its record runs, when the DDAs
-                // are idle) goes to its pair's axes.
-                wire is_slave     = gantry_engaged && (slave_axis == i);
-                wire req_valid    = pbp_req_valid[i] || (is_slave ? slave_req_valid : dda_req_valid[i]);
-                wire req_negative = pbp_req_valid[i] ? pbp_req_negative[i] :
-                                    (is_slave ? slave_req_negative : dda_req_negative[i]);
+                // The gantry's engaged slave takes the gantry's request only (its own
+                // axis's DDA or pbp request is ignored), every other axis its own request.
+                wire is_slave = gantry_engaged && (slave_axis == i);
+                assign shaper_req_valid[i]    = is_slave ? slave_req_valid : own_req_valid[i];
+                assign shaper_req_negative[i] = is_slave ? slave_req_negative : own_req_negative[i];
 
                 dda_axis #(
                     .P_WIDTH(P_WIDTH)
@@ -404,8 +426,8 @@ module finestep_core #(
                     .axis_enable(axis_enable[i]),
                     .clear_errors(clear_errors),
                     .halt(halt),
-                    .req_valid(req_valid),
-                    .req_negative(req_negative),
+                    .req_valid(shaper_req_valid[i]),
+                    .req_negative(shaper_req_negative[i]),
                     .pin_a(pin_a[i]),
                     .pin_b(pin_b[i]),
                     .pin_en(pin_en[i]),
@@ -452,6 +474,27 @@ module finestep_core #(
 `endif
                 cover (f_busy && $past(f_busy) && |pbp_req_valid);
                 cover ($past(f_busy) && !f_busy && !$past(halt) && run);
+            end
+            if (HAS_GANTRY != 0 && STEP_SHARED == 0) begin : f_gantry
+                // With the gantry block: the gantry sees each axis's own request (the
+                // pbp block's where it requests, else the DDA's), and while engaged the
+                // slave axis's shaper takes exactly the gantry's request (a pbp or DDA
+                // request on the slave's own axis is ignored).
+                genvar k;
+                for (k = 0; k < N_AXES; k = k + 1) begin : f_axis
+                    always @(*) if (f_past_valid && !rst) begin
+                        assert (own_req_valid[k] == (pbp_req_valid[k] || dda_req_valid[k]));
+                        if (pbp_req_valid[k]) assert (own_req_negative[k] == pbp_req_negative[k]);
+                        if (gantry_engaged && slave_axis == k) begin
+                            assert (shaper_req_valid[k] == slave_req_valid);
+                            if (slave_req_valid) assert (shaper_req_negative[k] == slave_req_negative);
+                        end else begin
+                            assert (shaper_req_valid[k] == own_req_valid[k]);
+                        end
+                    end
+                end
+                always @(posedge clk) if (f_past_valid && !rst)
+                    cover (gantry_engaged && f_busy && |pbp_req_valid);
             end
         end
     endgenerate

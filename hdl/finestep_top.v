@@ -43,7 +43,7 @@ module finestep_top #(
     parameter N_GPIO          = 4,
     parameter HAS_PANEL       = 0,
     parameter HAS_GANTRY      = 0,
-    parameter HAS_PBP         = 0    // 1: the core's point-by-point interpolator (VERSION.HAS_PBP)
+    parameter HAS_PBP         = 1    // 1: the core's point-by-point interpolator (VERSION.HAS_PBP); every board top sets 0
 ) (
     // clock, reset
     input  wire              clk,
@@ -163,8 +163,10 @@ module finestep_top #(
     // Motion: the FIFO runs on RUN, the core also while the jog is engaged.
     wire fifo_run = run_request && !halt;
     wire core_run = (run_request || jog_engaged) && !halt;
-    wire rec_ready, fifo_rec_valid, gate, underrun, underrun_event;
-    wire boundary = core_run && rec_ready;
+    wire rec_ready, period_boundary, fifo_rec_valid, gate, underrun, underrun_event;
+    // A period boundary of the core's timer: PERIOD_COUNT, the period IRQ and the position
+    // latch count the idle periods a pbp record runs too (rec_ready is low through it).
+    wire boundary = core_run && period_boundary;
     wire rec_valid = jog_engaged ? 1'b1 : fifo_rec_valid;
     // The jog's record goes to the core's alternate record port: the core checks it apart
     // and chooses after the checks (period_timer), so jog_engaged is not in front of them.
@@ -414,7 +416,7 @@ module finestep_top #(
         .gantry_master(gantry_master), .gantry_slave(gantry_slave),
         .gantry_tick(gantry_tick), .gantry_deadband(gantry_deadband), .gantry_limit(gantry_limit),
         .enc_master(gantry_enc_master), .enc_slave(gantry_enc_slave), .clear_counters(clear_counters),
-        .rec_valid(rec_valid), .rec_ready(rec_ready),
+        .rec_valid(rec_valid), .rec_ready(rec_ready), .period_boundary(period_boundary),
         .rec_inc(rec_inc), .rec_flags(rec_flags),
         .rec_alt(jog_engaged), .rec_alt_lane(jog_lane), .rec_alt_inc(jog_word),
         .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),

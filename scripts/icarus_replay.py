@@ -37,10 +37,10 @@ FULL = {"top_smoke": None, "top_faults": None, "top_feedback": None}
 
 VARIANTS = {
     "full": {},
-    "motion": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0},
-    "motion-no-mpg": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0, "HAS_MPG": 0},
+    "motion": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0, "HAS_PBP": 0},
+    "motion-no-mpg": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0, "HAS_MPG": 0, "HAS_PBP": 0},
     # STEP_DIGIT as rust/finestep-rtl-sys's SERIAL_TOP_DIGIT (the CPLD boards' engine)
-    "motion-serial": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0, "STEP_DIGIT": 4},
+    "motion-serial": {"HAS_SPINDLE": 0, "HAS_OUTPUTS": 0, "N_GPIO": 0, "STEP_DIGIT": 4, "HAS_PBP": 0},
 }
 
 

@@ -43,6 +43,7 @@ module finestep_core_sim #(
     input  wire                       clear_counters,
     input  wire                       rec_valid,
     output wire                       rec_ready,
+    output wire                       period_boundary,
     input  wire [32*N_AXES-1:0]       rec_inc,
     input  wire [7:0]                 rec_flags,
     output wire [N_AXES-1:0]          pin_a,
@@ -148,6 +149,7 @@ module finestep_core_sim #(
         .clear_counters(clear_counters_q),
         .rec_valid(rec_valid_q),
         .rec_ready(rec_ready),
+        .period_boundary(period_boundary),
         .rec_inc(rec_inc_q),
         .rec_flags(rec_flags_q),
         .rec_alt(1'b0),                         // the core's record port only (the jog's is the chip's)

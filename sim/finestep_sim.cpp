@@ -195,7 +195,8 @@ struct Sim final : fs_sim {
         now.pin_en = top->pin_en;
         now.rate_error = top->rate_error;
         now.step_lost = top->step_lost;
-        now.flags = (top->rec_ready & 1) | ((top->record_error & 1) << 1) | ((top->block_end & 1) << 2);
+        now.flags = (top->rec_ready & 1) | ((top->record_error & 1) << 1) | ((top->block_end & 1) << 2) |
+                    ((top->period_boundary & 1) << 3);
         return now;
     }
 
@@ -213,6 +214,7 @@ struct Sim final : fs_sim {
         pins |= static_cast<uint64_t>(raw.flags & 1) << FS_BIT_REC_READY;
         pins |= static_cast<uint64_t>((raw.flags >> 1) & 1) << FS_BIT_RECORD_ERROR;
         pins |= static_cast<uint64_t>((raw.flags >> 2) & 1) << FS_BIT_BLOCK_END;
+        pins |= static_cast<uint64_t>((raw.flags >> 3) & 1) << FS_BIT_PERIOD_BOUNDARY;
         out.pins = pins;
         out.gantry_error = raw.gantry_error;
         out.gantry_corrections = raw.gantry_corrections;

@@ -17,12 +17,14 @@ extern "C" {
 #endif
 
 /* Packed pins word: bit 3i pin_a[i], 3i+1 pin_b[i], 3i+2 pin_en[i] (i < 8),
- * 24+i rate_error[i], 32+i step_lost[i], 40 rec_ready, 41 record_error, 42 block_end. */
+ * 24+i rate_error[i], 32+i step_lost[i], 40 rec_ready, 41 record_error, 42 block_end,
+ * 43 period_boundary. */
 #define FS_BIT_RATE_ERROR0 24
 #define FS_BIT_STEP_LOST0 32
 #define FS_BIT_REC_READY 40
 #define FS_BIT_RECORD_ERROR 41
 #define FS_BIT_BLOCK_END 42
+#define FS_BIT_PERIOD_BOUNDARY 43
 
 typedef struct fs_axis_config {
     fs_drive_timing timing;
@@ -89,7 +91,7 @@ int fs_trace_is_fst(void);
 /* STEP_DIGIT of the core with the digit-serial step engine (variant 2). */
 uint32_t fs_serial_digit(void);
 /* Variants 3 and 4: the core with the point-by-point interpolator (HAS_PBP) with a DDA
- * and a shaper per axis (3) and with the step engine (4), traced from both.
+ * and a shaper per axis and the gantry block (3) and with the step engine (4), traced.
  * A core built without waveform support (the fast one): variant 1 with the gantry block
  * and a DDA and a shaper per axis, 2 with the digit-serial step engine (STEP_DIGIT =
  * fs_serial_digit()), else (0) with the step engine. */

@@ -30,7 +30,7 @@
 #include "verilated_trace.h"
 
 #ifndef FT_N_AXES
-#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W, FT_FIFO_DEPTH_LOG2, FT_N_ENC, FT_HAS_MPG, FT_STEP_SHARED, FT_HAS_SPINDLE, FT_HAS_OUTPUTS and FT_N_GPIO must match the Verilated parameters"
+#error "FT_N_AXES, FT_P_WIDTH, FT_TIMING_W, FT_FIFO_DEPTH_LOG2, FT_N_ENC, FT_HAS_MPG, FT_STEP_SHARED, FT_HAS_SPINDLE, FT_HAS_OUTPUTS, FT_N_GPIO and FT_HAS_PBP must match the Verilated parameters"
 #endif
 
 struct ft_sim {
@@ -150,6 +150,8 @@ uint32_t ft_has_mpg(uint32_t variant) { return is_no_mpg(variant) ? 0 : FT_HAS_M
 uint32_t ft_has_spindle(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_SPINDLE; }
 uint32_t ft_has_outputs(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_OUTPUTS; }
 uint32_t ft_n_gpio(uint32_t variant) { return is_motion(variant) ? 0 : FT_N_GPIO; }
+// The motion variants are built as the board tops, without the pbp block (HAS_PBP = 0).
+uint32_t ft_has_pbp(uint32_t variant) { return is_motion(variant) ? 0 : FT_HAS_PBP; }
 uint32_t ft_step_digit(uint32_t variant) { return is_serial(variant) ? FT_SERIAL_DIGIT : 0; }
 // The serial variant is Verilated with the MAX II's ONE_SNAPSHOT = 1, INC_WRITE_ONLY = 1 and
 // AXIS_WRITE_ONLY = 1 (build.rs).

@@ -87,6 +87,7 @@ uint32_t ft_has_mpg(uint32_t variant);
 uint32_t ft_has_spindle(uint32_t variant);
 uint32_t ft_has_outputs(uint32_t variant);
 uint32_t ft_n_gpio(uint32_t variant);
+uint32_t ft_has_pbp(uint32_t variant);
 uint32_t ft_step_digit(uint32_t variant);
 uint32_t ft_one_snapshot(uint32_t variant);
 uint32_t ft_inc_write_only(uint32_t variant);

@@ -63,6 +63,7 @@ module machxo2_1200 #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
         .STEP_DIGIT(STEP_DIGIT), .ENC_COUNT_W(ENC_COUNT_W),
+        .HAS_PBP(0),        // no pbp block (the digit-serial engine takes none)
         .FIFO_HEAD_REG(0)   // the FIFO in distributed RAM: one register holds its head
     ) chip (
         .clk(clk), .rst(rst),

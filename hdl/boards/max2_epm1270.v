@@ -62,6 +62,7 @@ module max2_epm1270 #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
         .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(0), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
         .STEP_DIGIT(STEP_DIGIT),
+        .HAS_PBP(0),     // no pbp block (the digit-serial engine takes none)
         .READ_STORE(0),  // no RAM: the read multiplexer costs less than a store in flip-flops
         .FIFO_HEAD_REG(2),  // the FIFO in flip-flops: its head read from its slot, no head register
         .NO_RAM(1),         // the encoder bank's copies in flip-flops behind one read register

@@ -31,6 +31,11 @@ struct Params {
     has_spindle: i64,
     has_outputs: i64,
     n_gpio: i64,
+    has_pbp: i64,
+    /// The core's pbp block's widths: its record's X field and TICK_DIV field
+    /// (hdl/interface.toml `[pbp]`), with which `pbp_interp` alone is Verilated too.
+    pbp_coord_w: u32,
+    pbp_div_w: u32,
 }
 
 impl Params {
@@ -48,6 +53,9 @@ impl Params {
             has_spindle: default("HAS_SPINDLE"),
             has_outputs: default("HAS_OUTPUTS"),
             n_gpio: default("N_GPIO"),
+            has_pbp: default("HAS_PBP"),
+            pbp_coord_w: interface.pbp.x.width,
+            pbp_div_w: interface.pbp.tick_div.width,
         }
     }
 }
@@ -235,8 +243,9 @@ fn main() {
         .define("FT_HAS_SPINDLE", params.has_spindle.to_string().as_str())
         .define("FT_HAS_OUTPUTS", params.has_outputs.to_string().as_str())
         .define("FT_N_GPIO", params.n_gpio.to_string().as_str())
-        .define("PI_COORD_W", PBP_COORD_W.to_string().as_str())
-        .define("PI_DIV_W", PBP_DIV_W.to_string().as_str())
+        .define("FT_HAS_PBP", params.has_pbp.to_string().as_str())
+        .define("PI_COORD_W", params.pbp_coord_w.to_string().as_str())
+        .define("PI_DIV_W", params.pbp_div_w.to_string().as_str())
         .define("KP_PRE_W", KEYPAD_PRE_W.to_string().as_str())
         .define("KP_DEB_W", KEYPAD_DEB_W.to_string().as_str())
         .define("LM_PRE_W", LED_PRE_W.to_string().as_str())
@@ -285,10 +294,11 @@ fn main() {
             "Vfinestep_core_serial_traced",
             Some(trace_flag),
         ),
-        // The core with the point-by-point comparison interpolator (HAS_PBP, no gantry
-        // block), traced only (its own lockstep test): with a DDA and a shaper per axis,
-        // and with the step engine (STEP_SHARED = 1, every board top's).
-        (Build::Core { gantry: false, digit: 0, pbp: Some(false) }, "Vfinestep_core_pbp", Some(trace_flag)),
+        // The core with the point-by-point comparison interpolator (HAS_PBP), traced only
+        // (its own lockstep test): with a DDA and a shaper per axis and the gantry block
+        // (its tests run it disengaged and engaged), and with the step engine
+        // (STEP_SHARED = 1, every board top's; no gantry block).
+        (Build::Core { gantry: true, digit: 0, pbp: Some(false) }, "Vfinestep_core_pbp", Some(trace_flag)),
         (Build::Core { gantry: false, digit: 0, pbp: Some(true) }, "Vfinestep_core_pbp_shared", Some(trace_flag)),
         (Build::Top { motion: false, mpg: true, digit: 0 }, "Vfinestep_top", None),
         (Build::Top { motion: false, mpg: true, digit: 0 }, "Vfinestep_top_traced", Some(trace_flag)),
@@ -635,14 +645,15 @@ enum Build {
     /// `finestep_core` behind its input registers (`sim/finestep_core_sim.v`): with the
     /// gantry block and a DDA and a shaper per axis, or without it and with the shared
     /// step engine (`digit` 0: step_engine; 1, 2, 4, 8: step_serial with that digit);
-    /// `pbp`: with the point-by-point interpolator (`HAS_PBP`, no gantry block), with a
-    /// DDA and a shaper per axis (`Some(false)`) or the step engine (`Some(true)`).
+    /// `pbp`: with the point-by-point interpolator (`HAS_PBP`), with a DDA and a shaper
+    /// per axis (`Some(false)`, with the gantry block when `gantry`) or the step engine
+    /// (`Some(true)`, no gantry block).
     Core { gantry: bool, digit: u32, pbp: Option<bool> },
     /// `finestep_top`: with its defaults, or without the spindle and the logic outputs
     /// (`motion`, as every board top); without the hand wheel and the jog (`!mpg`); with
     /// the core's digit-serial step engine of `digit` bits a clock (0: the step engine).
     Top { motion: bool, mpg: bool, digit: u32 },
-    /// `pbp_interp` alone, with [`PBP_COORD_W`] and [`PBP_DIV_W`].
+    /// `pbp_interp` alone, with the core's widths (`Params::pbp_coord_w`, `pbp_div_w`).
     PbpInterp,
     /// `keypad_scan` alone, with [`KEYPAD_PRE_W`] and [`KEYPAD_DEB_W`].
     KeypadScan,
@@ -664,11 +675,6 @@ const SERIAL_CORE_DIGIT: u32 = 4;
 /// (`Vfinestep_top_motion_serial`: `STEP_DIGIT`, as the CPLD board tops build it); the
 /// shim reports it.
 const SERIAL_TOP_DIGIT: u32 = 4;
-
-/// The parameters the Verilated `pbp_interp` is built with (its defaults); the shim
-/// reports them.
-const PBP_COORD_W: u32 = 24;
-const PBP_DIV_W: u32 = 16;
 
 /// The parameters of the Verilated `keypad_scan` (its defaults); the shim reports them.
 const KEYPAD_PRE_W: u32 = 16;
@@ -746,8 +752,8 @@ fn verilate(
         .args(trace);
     if let Build::PbpInterp = build {
         let status = command
-            .arg(format!("-GCOORD_W={PBP_COORD_W}"))
-            .arg(format!("-GDIV_W={PBP_DIV_W}"))
+            .arg(format!("-GCOORD_W={}", params.pbp_coord_w))
+            .arg(format!("-GDIV_W={}", params.pbp_div_w))
             .args(sources)
             .status()
             .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));
@@ -830,6 +836,8 @@ fn verilate(
         .args(motion.map(|m| format!("-GHAS_SPINDLE={}", if m { 0 } else { params.has_spindle })))
         .args(motion.map(|m| format!("-GHAS_OUTPUTS={}", if m { 0 } else { params.has_outputs })))
         .args(motion.map(|m| format!("-GN_GPIO={}", if m { 0 } else { params.n_gpio })))
+        // The motion chips are the board tops' (HAS_PBP = 0), as is the gantry card's.
+        .args(motion.map(|m| format!("-GHAS_PBP={}", if m { 0 } else { params.has_pbp })))
         .args(sources)
         .status()
         .unwrap_or_else(|e| panic!("cannot run {verilator}: {e} (run `make setup` or set VERILATOR)"));

@@ -8,12 +8,14 @@
 // here checks every output pin on every clock (with !==, so an X or Z differs) at the
 // falling edge, where the shim reads its outputs, and keeps the first difference.
 // The parameters are the Verilated top's: finestep_top's defaults, or the motion chip
-// (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = 0), with or without the hand wheel (HAS_MPG).
+// (HAS_SPINDLE = HAS_OUTPUTS = N_GPIO = HAS_PBP = 0), with or without the hand wheel
+// (HAS_MPG).
 module finestep_top_pins #(
     parameter HAS_MPG     = 1,
     parameter HAS_SPINDLE = 1,
     parameter HAS_OUTPUTS = 1,
-    parameter N_GPIO      = 4
+    parameter N_GPIO      = 4,
+    parameter HAS_PBP     = 1
 ) (
     input  wire        clk,
     input  wire [63:0] in_word,
@@ -44,7 +46,8 @@ module finestep_top_pins #(
         .HAS_MPG    (HAS_MPG),
         .HAS_SPINDLE(HAS_SPINDLE),
         .HAS_OUTPUTS(HAS_OUTPUTS),
-        .N_GPIO     (N_GPIO)
+        .N_GPIO     (N_GPIO),
+        .HAS_PBP    (HAS_PBP)
     ) u_top (
         .clk          (clk),
         .rst          (in_word[0]),

@@ -31,6 +31,7 @@ pub fn panel_chip_params() -> TopParams {
         has_spindle: build.has_spindle,
         has_outputs: build.has_outputs,
         n_gpio: build.n_gpio,
+        has_pbp: build.has_pbp,
         has_panel: true,
         has_gantry: true,
         ..TopParams::default()

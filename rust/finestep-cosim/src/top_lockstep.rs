@@ -134,6 +134,7 @@ pub fn rtl_top_params_of(variant: TopVariant) -> TopParams {
         has_spindle: build.has_spindle,
         has_outputs: build.has_outputs,
         n_gpio: build.n_gpio,
+        has_pbp: build.has_pbp,
         ..TopParams::default()
     }
 }

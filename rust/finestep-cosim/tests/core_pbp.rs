@@ -5,9 +5,13 @@
 //! quadrant, CW and CCW, arcs crossing quadrants and whole turns, random decision
 //! dividers and `BLOCK_END`s; a halt (E-stop) in the middle of a pbp record and the
 //! motion after it; a record on a pair the core does not have. Both cores: with a DDA and
-//! a shaper per axis (`Vfinestep_core_pbp`) and with the step engine
-//! (`Vfinestep_core_pbp_shared`, `STEP_SHARED = 1` as every board top), whose shaper
-//! visits take the block's requests and which refuses a divider below a visit. The end positions are
+//! a shaper per axis and the gantry block (`Vfinestep_core_pbp`: disengaged, and engaged
+//! in forward and synchronised mode with pbp lines and arcs on the master's pair: the
+//! slave follows the block's requests as the DDAs', its own pair's are ignored) and with
+//! the step engine (`Vfinestep_core_pbp_shared`, `STEP_SHARED = 1` as every board top),
+//! whose shaper visits take the block's requests and which refuses a divider below a
+//! visit. The period timer's boundary (`period_boundary`) is compared too: it goes on
+//! through a pbp record while `rec_ready` is low. The end positions are
 //! checked against the records' displacements (a line's end point, an arc's end minus its
 //! start), exact. A failure prints the seed (rerun with FINESTEP_SEED) and the first
 //! cycle, signal, expected and actual value.
@@ -15,7 +19,7 @@
 use finestep_cosim::{Harness, ModelPath};
 use finestep_interface::{flags, PbpLanes};
 use finestep_model::pbp_interp::{arc_steps, ArcPath};
-use finestep_model::{AxisConfig, CoreInputs, DriveTiming, Increment, PeriodRecord, MAX_AXES};
+use finestep_model::{AxisConfig, CoreInputs, DriveTiming, GantryInputs, Increment, PeriodRecord, MAX_AXES};
 
 const PERIOD: u32 = 40;
 const AXES: usize = 4;
@@ -279,5 +283,95 @@ fn a_halt_stops_a_pbp_record_and_the_motion_after_it_is_exact() {
         inp.clear_errors = true;
         h.idle(&inp, 2).unwrap();
         assert!(!h.outputs().record_error(), "{variant:?} {path:?}: cleared");
+    }
+}
+
+#[test]
+fn the_period_boundary_goes_on_through_a_pbp_record() {
+    for variant in Variant::ALL {
+        let mut h = variant.harness("core_pbp_boundary", ModelPath::PerClock);
+        let mut inp = inputs();
+        h.idle(&inp, 4).unwrap();
+        inp.run = true;
+        let long = line(0, 60, 25, 5 + variant.slower(), 0);
+        h.feed(&mut inp, [long.record]).unwrap();
+        // The record runs for (60 + 25) decisions of 6 clocks or more: several periods.
+        let (mut boundaries, mut ready) = (0, 0);
+        for _ in 0..(4 * PERIOD) {
+            h.idle(&inp, 1).unwrap();
+            let out = h.outputs();
+            boundaries += u32::from(out.period_boundary());
+            ready += u32::from(out.rec_ready());
+        }
+        assert!(boundaries >= 3, "{variant:?}: {boundaries} boundaries in 4 periods of the record");
+        assert_eq!(ready, 0, "{variant:?}: rec_ready low while the record runs");
+    }
+}
+
+#[test]
+fn with_the_gantry_engaged_the_slave_follows_pbp_moves_of_the_master() {
+    let seed = finestep_testkit::seed("core_pbp_gantry");
+    eprintln!("core_pbp_gantry: FINESTEP_SEED={seed:#x} (rerun with this to reproduce)");
+    // Master axis 0 (X of pair 0), slave axis 3 (Y of pair 1).
+    let (master, slave) = (0, 3);
+    for sync in [false, true] {
+        let mut rng = Rng(seed | 1);
+        // Lines and arcs on pair 0 (the master's) between DDA records that also ask the
+        // slave's own DDA for steps, and lines on pair 1, whose Y is the slave: both
+        // ignored while engaged.
+        let mut moves = vec![
+            line(0, 17, -6, 4, 0),
+            dda([2, -1, 1, 3], 0),
+            arc(0, (-5, 7), true, 30, 5, 0),
+            line(1, 8, -9, 4, 0),
+            arc(0, (6, 2), false, 25, 4, flags::BLOCK_END),
+        ];
+        moves.extend(random_moves(&mut rng, finestep_testkit::cases(12) as usize, 0));
+        for path in [ModelPath::PerClock, ModelPath::Fast] {
+            let mut h = Variant::PerAxis.harness("core_pbp_gantry", path);
+            let mut inp = inputs();
+            inp.gantry = GantryInputs {
+                master: 0,
+                slave: 3,
+                sync,
+                tick: 23,
+                deadband: 0,
+                limit: 1000,
+                ..GantryInputs::default()
+            };
+            h.idle(&inp, 4).unwrap();
+            inp.gantry.enable = true;
+            h.idle(&inp, 4).unwrap();
+            assert_ne!(h.outputs().gantry_flags & 1, 0, "engaged at rest");
+            inp.run = true;
+            let half = moves.len() / 2;
+            stream(&mut h, &mut inp, &moves[..half], seed);
+            // Synchronised: the master's channel 2 counts ahead from here, so corrections
+            // (insertions and deletions of the master's pbp and DDA steps) run under the
+            // second half's moves; the channels square up again before its end.
+            if sync {
+                inp.gantry.enc_master = 2;
+            }
+            for m in &moves[half..] {
+                h.feed(&mut inp, [m.record]).unwrap_or_else(|e| panic!("FINESTEP_SEED={seed:#x}: {e}"));
+                if sync && inp.gantry.enc_master != 0 && h.outputs().gantry_corrections as i16 != 0 {
+                    inp.gantry.enc_slave = 2;
+                }
+            }
+            let end = stream(&mut h, &mut inp, &[], seed);
+            let out = h.outputs();
+            let corrections = i64::from(out.gantry_corrections as i16);
+            let want = sum(&moves);
+            let what = format!("sync {sync} {path:?} FINESTEP_SEED={seed:#x}");
+            assert_eq!([end[0], end[1], end[2]], [want[0], want[1], want[2]], "{what}: the other axes");
+            assert_eq!(end[slave], end[master] + corrections, "{what}: the slave is the master plus its corrections");
+            if sync {
+                assert_ne!(corrections, 0, "{what}: corrections applied");
+            } else {
+                assert_eq!(corrections, 0, "{what}");
+            }
+            assert_eq!(out.gantry_flags & 0b110, 0, "{what}: no alarm, no refusal");
+            assert!(!out.record_error() && !out.step_lost(slave), "{what}");
+        }
     }
 }

@@ -100,14 +100,12 @@ pub struct PbpLanes {
 }
 
 impl PbpLanes {
-    /// Lane 0's `PBP_RECORD` bits start at this bit.
-    pub const TOP: u32 = 24;
+    /// Lane 0's `PBP_RECORD` bits start at this bit (hdl/interface.toml `[pbp]`).
+    pub const TOP: u32 = crate::pbp_lanes::BITS_LSB;
     /// Bits of a coordinate (`pbp_interp`'s `COORD_W` in the core).
-    pub const COORD_W: u32 = 24;
+    pub const COORD_W: u32 = crate::pbp_lanes::X_WIDTH;
     /// Bits of an arc's decision count (`COORD_W + 3`).
-    pub const COUNT_W: u32 = 27;
-    pub(crate) const COORD_MASK: u32 = (1 << Self::COORD_W) - 1;
-    pub(crate) const COUNT_MASK: u32 = (1 << Self::COUNT_W) - 1;
+    pub const COUNT_W: u32 = crate::pbp_lanes::COUNT_WIDTH;
 
     /// Whether the coordinates, the count and the pair fit the record's fields: a line's
     /// `|x|, |y| < 2^23` (so `|x| + |y|` decisions fit), an arc's start within

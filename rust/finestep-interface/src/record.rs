@@ -51,21 +51,24 @@ impl PeriodRecord {
 
     /// A record with the flag PBP (docs/spec/pbp_interp.md#in-the-core): `pbp` on axis
     /// pair `pair` (axes `2 * pair`, `2 * pair + 1`), one decision every `tick_div + 1`
-    /// clocks, with `flags` besides PBP. Lanes (hdl/interface.toml, `PBP_RECORD`): lane 0
-    /// `{ARC, CW, PAIR}` in its top byte over `x` (24 bits), lane 1 `y` (24 bits), lane 2
-    /// the arc's decisions (27 bits), lane 3 `tick_div` (16 bits); values are cut to those
-    /// widths (the caller keeps them in range: [`PbpLanes::fits`]).
+    /// clocks, with `flags` besides PBP. Lanes (hdl/interface.toml `[pbp]`,
+    /// [`crate::pbp_lanes`]): lane 0 `{ARC, CW, PAIR}` in its top byte over `x` (24 bits),
+    /// lane 1 `y` (24 bits), lane 2 the arc's decisions (27 bits), lane 3 `tick_div` (16
+    /// bits); values are cut to those widths (the caller keeps them in range:
+    /// [`PbpLanes::fits`]).
     pub fn pbp(pbp: &PbpLanes, flags: u8) -> Self {
+        use crate::pbp_lanes as at;
         let top = (if pbp.arc { pbp_record::ARC } else { 0 })
             | (if pbp.cw { pbp_record::CW } else { 0 })
             | ((pbp.pair & 0b11) << pbp_record::PAIR_0_BIT);
-        let raw = [
-            ((u32::from(top) << PbpLanes::TOP) | (pbp.x as u32 & PbpLanes::COORD_MASK)) as i32,
-            (pbp.y as u32 & PbpLanes::COORD_MASK) as i32,
-            (pbp.steps & u64::from(PbpLanes::COUNT_MASK)) as i32,
-            i32::from(pbp.tick_div),
-        ];
-        PeriodRecord::from_raw(&raw, flags | flags::PBP)
+        let mask = |width: u32| u32::MAX >> (32 - width);
+        let mut raw = [0u32; 4];
+        raw[at::BITS_LANE] |= u32::from(top) << at::BITS_LSB;
+        raw[at::X_LANE] |= (pbp.x as u32 & mask(at::X_WIDTH)) << at::X_LSB;
+        raw[at::Y_LANE] |= (pbp.y as u32 & mask(at::Y_WIDTH)) << at::Y_LSB;
+        raw[at::COUNT_LANE] |= (pbp.steps as u32 & mask(at::COUNT_WIDTH)) << at::COUNT_LSB;
+        raw[at::TICK_DIV_LANE] |= (u32::from(pbp.tick_div) & mask(at::TICK_DIV_WIDTH)) << at::TICK_DIV_LSB;
+        PeriodRecord::from_raw(&raw.map(|w| w as i32), flags | flags::PBP)
     }
 
     /// The point-by-point lanes of a record with the flag PBP (the inverse of

@@ -49,6 +49,9 @@ pub mod pins {
     pub const RECORD_ERROR: u32 = 41;
     /// `block_end` pulse.
     pub const BLOCK_END: u32 = 42;
+    /// `period_boundary`: the period timer's own boundary (`rec_ready` without the pbp
+    /// block's hold).
+    pub const PERIOD_BOUNDARY: u32 = 43;
     /// The mask of bit `index`.
     pub const fn bit(index: u32) -> u64 {
         1 << index
@@ -99,6 +102,11 @@ impl CoreOutputs {
     /// `rec_ready`: this cycle is a period boundary.
     pub fn rec_ready(&self) -> bool {
         self.bit(pins::REC_READY)
+    }
+    /// `period_boundary`: a period of the timer ends in this cycle, also an idle period
+    /// run while a pbp record holds `rec_ready` low.
+    pub fn period_boundary(&self) -> bool {
+        self.bit(pins::PERIOD_BOUNDARY)
     }
     /// `record_error`.
     pub fn record_error(&self) -> bool {
@@ -175,19 +183,9 @@ pub(crate) struct PbpCore {
     refused: bool,
 }
 
-/// A pbp record's lanes (hdl/interface.toml, `PBP_RECORD`): lane 0 `{ARC, CW, PAIR, x}`
-/// with the bits in its top byte, lane 1 `y`, lane 2 the arc's decisions, lane 3 the
-/// decision divider.
-mod pbp_lanes {
-    /// Lane 0's bits above the X coordinate start here.
-    pub const TOP: u32 = 24;
-    /// `TICK_DIV`'s bits in lane 3 (`DIV_W`).
-    pub const DIV_W: u32 = 16;
-}
-
 impl PbpCore {
     fn new() -> PbpCore {
-        PbpCore { interp: PbpInterp::new(PbpParams::default()), pair: 0, tick_div: 0, block_end: false, refused: false }
+        PbpCore { interp: PbpInterp::new(PbpParams::core()), pair: 0, tick_div: 0, block_end: false, refused: false }
     }
 
     /// Whether a record runs (the period timer is offered none meanwhile).
@@ -371,6 +369,7 @@ impl Core {
         let (refused, pbp_end) =
             self.pbp.as_ref().map_or((false, false), |p| (p.refused, p.interp.outputs().done && p.block_end));
         out.pins |= u64::from(self.rec_ready()) << pins::REC_READY
+            | u64::from(self.timer.rec_ready()) << pins::PERIOD_BOUNDARY
             | u64::from(self.timer.record_error || refused) << pins::RECORD_ERROR
             | u64::from(self.timer.block_end || pbp_end) << pins::BLOCK_END;
         out.gantry_error = self.gantry.error;
@@ -411,13 +410,15 @@ impl Core {
         let slots = self.params.step_slots();
         let timer_ready = self.timer.rec_ready();
         let Some(p) = self.pbp.as_mut() else { return (inputs.rec_valid, inputs.record) };
-        use finestep_interface::{flags, pbp_record};
+        use finestep_interface::{flags, pbp_lanes as at, pbp_record};
         let record = &inputs.record;
         let offered = record.flags & flags::PBP != 0;
         let lane = |k: usize| record.inc[k].to_bits() as u32;
-        let top = lane(0) >> pbp_lanes::TOP;
+        // Field `lsb +: width` of lane `k` (hdl/interface.toml [pbp]).
+        let field = |k: usize, lsb: u32, width: u32| (lane(k) >> lsb) & (u32::MAX >> (32 - width));
+        let top = lane(at::BITS_LANE) >> at::BITS_LSB;
         let pair = ((top >> pbp_record::PAIR_0_BIT) & 0b11) as usize;
-        let tick_div = lane(3) & ((1 << pbp_lanes::DIV_W) - 1);
+        let tick_div = field(at::TICK_DIV_LANE, at::TICK_DIV_LSB, at::TICK_DIV_WIDTH);
         // The pair is built, and the decisions are at least a visit of the step engine
         // apart (S clocks; 1 without it): one request per axis per visit.
         let pair_ok = 2 * pair + 1 < n && tick_div + 1 >= slots;
@@ -426,9 +427,9 @@ impl Core {
         let rec = PbpRecord {
             arc: top & u32::from(pbp_record::ARC) != 0,
             cw: top & u32::from(pbp_record::CW) != 0,
-            x: i64::from(lane(0)),
-            y: i64::from(lane(1)),
-            steps: u64::from(lane(2)),
+            x: i64::from(field(at::X_LANE, at::X_LSB, at::X_WIDTH)),
+            y: i64::from(field(at::Y_LANE, at::Y_LSB, at::Y_WIDTH)),
+            steps: u64::from(field(at::COUNT_LANE, at::COUNT_LSB, at::COUNT_WIDTH)),
         };
         p.interp.step(&PbpInputs {
             halt: inputs.halt || !inputs.run,
@@ -494,14 +495,14 @@ impl Core {
         // With the pbp block its outputs change too: compared as a whole.
         let before = self.pbp.is_some().then(|| self.outputs());
         let wait = self.pbp_waits();
-        // The DDA requests of this cycle, and the gantry's choice among them.
-        let mut reqs = [0i8; MAX_AXES];
-        for (r, dda) in reqs.iter_mut().zip(&self.dda[..n]) {
-            *r = dda.req;
-        }
-        // The pbp block's requests, which take the pair's shapers while its record runs
-        // (the DDAs are idle then).
+        // Each axis's own request of this cycle: the pbp block's where it requests (only
+        // while its record runs, when the DDAs are idle), else its DDA's; the gantry sees
+        // these and chooses among them.
         let pbp_reqs = self.pbp_requests();
+        let mut reqs = [0i8; MAX_AXES];
+        for ((r, dda), &p) in reqs.iter_mut().zip(&self.dda[..n]).zip(&pbp_reqs) {
+            *r = if p != 0 { p } else { dda.req };
+        }
         let gantry = self.gantry;
         let increments = self.timer.inc;
         let axes = self.shaper[..n].iter_mut().zip(&mut self.dda[..n]).zip(&self.timer.inc[..n]).enumerate();
@@ -509,10 +510,8 @@ impl Core {
         let running = inputs.run && self.timer.active;
         if self.params.gantry_built() {
             for (i, ((shaper, dda), &d)) in axes {
-                let r = match pbp_reqs[i] {
-                    0 => gantry.shaper_request(i, &reqs, &increments, &inputs.gantry),
-                    r => r,
-                };
+                // The engaged slave takes the gantry's request only.
+                let r = gantry.shaper_request(i, &reqs, &increments, &inputs.gantry);
                 changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
                 dda.step(running, period, d, m);
             }
@@ -527,10 +526,9 @@ impl Core {
                 },
             );
         } else {
-            // No gantry block: every axis its own DDA's request; the gantry stays in reset.
+            // No gantry block: every axis its own request; the gantry stays in reset.
             for (i, ((shaper, dda), &d)) in axes {
-                let r = if pbp_reqs[i] != 0 { pbp_reqs[i] } else { reqs[i] };
-                changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
+                changed |= shaper.step(reqs[i], &axis(i), self.counter_max, inputs.clear_errors);
                 dda.step(running, period, d, m);
             }
         }

@@ -36,6 +36,13 @@ impl Default for PbpParams {
 }
 
 impl PbpParams {
+    /// The widths `finestep_core` builds the block with: its record's fields
+    /// (hdl/interface.toml `[pbp]`: `COORD_W` the X field's width, `DIV_W` TICK_DIV's).
+    pub fn core() -> Self {
+        use finestep_interface::pbp_lanes;
+        PbpParams { coord_w: pbp_lanes::X_WIDTH, div_w: pbp_lanes::TICK_DIV_WIDTH }
+    }
+
     /// `POS_W = COORD_W + 1`: an arc's position (up to `R + 1 < 2^COORD_W` in magnitude).
     pub fn pos_w(&self) -> u32 {
         self.coord_w + 1

@@ -156,9 +156,9 @@ impl FeedbackStatus {
 /// `!latch_hold && (boundary || !running)`, with `running` the core's run. It also asks
 /// the encoder bank for this cycle's `ENC_COUNT` and `ENC_EDGE_TIME`, copied at each
 /// channel's next visit.
-pub fn position_latch(core_run: bool, rec_ready: bool, latch_hold: bool) -> bool {
-    // `boundary || !running` with `boundary = running && rec_ready`.
-    !latch_hold && (rec_ready || !core_run)
+pub fn position_latch(core_run: bool, period_boundary: bool, latch_hold: bool) -> bool {
+    // `boundary || !running` with `boundary = running && period_boundary`.
+    !latch_hold && (period_boundary || !core_run)
 }
 
 /// Everything the register file sees in one cycle besides its own state.
@@ -168,8 +168,9 @@ pub struct RegisterFileInputs {
     pub served: Option<BusRequest>,
     /// Hardware values of this cycle.
     pub hw: HardwareStatus,
-    /// The core's `rec_ready`.
-    pub rec_ready: bool,
+    /// The core's `period_boundary` (its period timer's boundary, also the idle periods
+    /// a pbp record runs while `rec_ready` is low).
+    pub period_boundary: bool,
     /// The core's `block_end`.
     pub block_end: bool,
     /// The core's `position` of every axis.
@@ -969,7 +970,7 @@ impl RegisterFile {
     pub fn step(&mut self, inp: &RegisterFileInputs) {
         let hw = &inp.hw;
         let irq_next = self.irq_status(hw) & self.rw_field(regs::irq_mask::ADDR, regs::irq_mask::MASK) != 0;
-        let boundary = hw.core_run && inp.rec_ready;
+        let boundary = hw.core_run && inp.period_boundary;
         let clear_errors = self.clear_errors;
         let clear_counters = self.clear_counters;
 
@@ -1071,7 +1072,7 @@ impl RegisterFile {
             self.rw[usize::from(regs::outputs::ADDR)] = safe_before;
         }
 
-        let latch = position_latch(hw.core_run, inp.rec_ready, inp.latch_hold);
+        let latch = position_latch(hw.core_run, inp.period_boundary, inp.latch_hold);
         let snapshot = if self.params.one_snapshot { inp.probe_event || (latch && !inp.probe_seen) } else { latch };
         if snapshot {
             self.positions = inp.positions;
@@ -1108,7 +1109,7 @@ mod tests {
 
     #[test]
     fn rw_fields_keep_only_the_implemented_bits_and_reset_from_the_map() {
-        let params = TopParams { n_axes: 2, timing_w: 4, p_width: 12, ..TopParams::default() };
+        let params = TopParams { n_axes: 2, timing_w: 4, p_width: 12, has_pbp: false, ..TopParams::default() };
         let mut rf = RegisterFile::new(&params);
         let hw = HardwareStatus::default();
         assert_eq!(rf.read(regs::control::ADDR, &hw), regs::control::reset_word());
@@ -1168,7 +1169,7 @@ mod tests {
 
     #[test]
     fn a_push_holds_the_bus_writes_its_record_after_n_cycles_and_commits_it_in_the_next() {
-        let params = TopParams { n_axes: 3, ..TopParams::default() };
+        let params = TopParams { n_axes: 3, has_pbp: false, ..TopParams::default() };
         let mut rf = RegisterFile::new(&params);
         for (axis, raw) in [7u32, 0xFFFF_FFF0, 0x0001_0000].iter().enumerate() {
             rf.step(&write(regs::record_inc::addr(axis), *raw));

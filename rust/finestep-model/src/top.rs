@@ -818,7 +818,7 @@ impl Top {
             clear_counters,
             timestamp,
             positions: core_out.positions,
-            latch: position_latch(hw.core_run, core_out.rec_ready(), latch_hold),
+            latch: position_latch(hw.core_run, core_out.period_boundary(), latch_hold),
             // The bus stage's read (served in this cycle, granted in the last): a read of
             // the visited channel's store stalls the visit, so the store's read at this
             // cycle's edge sees no write.
@@ -857,7 +857,7 @@ impl Top {
         self.registers.step(&RegisterFileInputs {
             served,
             hw,
-            rec_ready: core_out.rec_ready(),
+            period_boundary: core_out.period_boundary(),
             block_end: core_out.block_end(),
             positions: core_out.positions,
             latch_hold,

@@ -74,7 +74,7 @@ fn scenario() -> impl Strategy<Value = Scenario> {
 
 /// A brought-up machine configured for `sc`, running (RUN = 1) with an empty FIFO.
 fn running(sc: &Scenario) -> (Bench, ParallelMaster, SpiMaster) {
-    let p = TopParams { n_axes: sc.n_axes, step_shared: sc.step_shared, ..TopParams::default() };
+    let p = TopParams { n_axes: sc.n_axes, step_shared: sc.step_shared, has_pbp: false, ..TopParams::default() };
     let bus = ParallelMaster::default();
     let spi = SpiMaster::default();
     let mut bench = Bench::new(p);

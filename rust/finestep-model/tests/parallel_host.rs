@@ -26,7 +26,7 @@ fn register_writes_read_back_as_stored() {
         (1..=MAX_AXES, 1..=16u32, master(), prop::collection::vec((any::<prop::sample::Index>(), any::<u32>()), 1..24));
     runner
         .run(&case, |(n_axes, timing_w, bus, writes)| {
-            let p = TopParams { n_axes, timing_w, ..TopParams::default() };
+            let p = TopParams { n_axes, timing_w, has_pbp: n_axes >= 4, ..TopParams::default() };
             let mut bench = Bench::new(p);
             let addrs = rw_addresses(&p);
             let mut expected: Vec<u32> = (0..128).map(|a| rw_reset(a as u8, &p)).collect();

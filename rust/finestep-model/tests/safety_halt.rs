@@ -95,7 +95,7 @@ fn halt_stops_pulses_cleanly_and_in_time() {
     let mut runner = finestep_testkit::runner("safety_halt_stops_pulses_cleanly", 96);
     runner
         .run(&case(), |case| {
-            let p = TopParams { n_axes: N_AXES, step_shared: case.step_shared, ..TopParams::default() };
+            let p = TopParams { n_axes: N_AXES, step_shared: case.step_shared, has_pbp: false, ..TopParams::default() };
             let bus = ParallelMaster::default();
             let spi = SpiMaster::default();
             let mut bench = Bench::new(p);

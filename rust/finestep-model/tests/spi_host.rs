@@ -31,6 +31,8 @@ fn params() -> impl Strategy<Value = TopParams> {
         .prop_map(
             |(n_axes, p_width, timing_w, fifo_depth_log2, wd_w, (n_enc, has_mpg, step_shared, step_digit))| {
                 let p = TopParams {
+                    // (the pbp block needs 4 axes and no digit-serial engine)
+                    has_pbp: false,
                     n_axes,
                     p_width,
                     timing_w,

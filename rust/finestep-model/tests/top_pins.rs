@@ -30,6 +30,8 @@ fn params() -> impl Strategy<Value = TopParams> {
             (has_spindle, has_outputs, n_gpio, step_digit, one_snapshot, inc_write_only, axis_write_only),
         )| {
             let p = TopParams {
+                // (the pbp block needs 4 axes and no digit-serial engine: apart, in core_pbp)
+                has_pbp: false,
                 n_axes,
                 p_width,
                 timing_w,
@@ -102,7 +104,7 @@ fn random_pins_never_break_the_top() {
 #[test]
 fn axis_registers_reach_the_idle_pins() {
     use finestep_interface::regs::{axis_enable, axis_mode};
-    let p = TopParams { n_axes: 3, ..TopParams::default() };
+    let p = TopParams { n_axes: 3, has_pbp: false, ..TopParams::default() };
     let bus = host::ParallelMaster::default();
     let mut bench = host::Bench::new(p);
     let inverts = [(false, false, true), (true, true, false), (true, false, true)];

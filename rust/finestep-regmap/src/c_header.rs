@@ -58,6 +58,15 @@ pub fn generate(spec: &InterfaceSpec) -> String {
             );
         }
     }
+    let pbp = &spec.pbp;
+    let _ = writeln!(out, "\n/* A record with the flag PBP: its fields' lanes, lowest bits and widths. */");
+    let _ = writeln!(out, "#define FS_PBP_BITS_LANE {}", pbp.bits.lane);
+    let _ = writeln!(out, "#define FS_PBP_BITS_LSB {}", pbp.bits.lsb);
+    for field in pbp.fields() {
+        for (what, value) in [("LANE", field.lane), ("LSB", field.lsb), ("WIDTH", field.width)] {
+            let _ = writeln!(out, "#define FS_PBP_{}_{what} {value}", field.name);
+        }
+    }
     for module in &spec.modules {
         let _ = writeln!(out, "\n/* Defaults of {}'s build parameters. */", module.name);
         for parameter in &module.parameters {

@@ -32,11 +32,58 @@ pub struct InterfaceSpec {
     pub enums: Vec<EnumSpec>,
     /// Bit vectors, in file order.
     pub bitsets: Vec<BitSetSpec>,
+    /// The lanes of a record with the flag PBP.
+    pub pbp: PbpSpec,
     /// The drive-timing fields, in file order (the order of the generated struct).
     pub timing: Vec<TimingFieldSpec>,
     /// Modules with build parameters, in file order.
     pub modules: Vec<ModuleSpec>,
 }
+
+/// One field of a pbp record: bits `lsb +: width` of lane `lane`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PbpFieldSpec {
+    /// The name (`X`, `Y`, `COUNT`, `TICK_DIV`, or the bit set's name).
+    pub name: String,
+    /// The record lane (axis) that holds it.
+    pub lane: u32,
+    /// Its lowest bit in the lane.
+    pub lsb: u32,
+    /// Its width.
+    pub width: u32,
+    /// What it holds.
+    pub description: String,
+}
+
+/// The lanes of a record with the flag PBP (docs/spec/pbp_interp.md#in-the-core): the
+/// bit set in one lane's top bits, the coordinates, the arc's decision count and the
+/// decision divider, each at the low end of a lane or beside the bit set.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PbpSpec {
+    /// What the record is.
+    pub description: String,
+    /// The bit set (a `[[bits]]` name) and where it lies.
+    pub bits: PbpFieldSpec,
+    /// The X coordinate (signed, the block's `COORD_W`).
+    pub x: PbpFieldSpec,
+    /// The Y coordinate (as wide as X).
+    pub y: PbpFieldSpec,
+    /// An arc's decision count (`COORD_W + 3` bits, the block's `rec_steps`).
+    pub count: PbpFieldSpec,
+    /// The decision divider (the block's `DIV_W`).
+    pub tick_div: PbpFieldSpec,
+}
+
+impl PbpSpec {
+    /// The fields in the order the generators list them: `X`, `Y`, `COUNT`, `TICK_DIV`.
+    pub fn fields(&self) -> [&PbpFieldSpec; 4] {
+        [&self.x, &self.y, &self.count, &self.tick_div]
+    }
+}
+
+/// The extra bits of an arc's decision count over a coordinate (pbp_interp's `rec_steps`
+/// is `COORD_W + 3` bits: up to 8 R decisions around a full circle).
+pub const PBP_COUNT_EXTRA: u32 = 3;
 
 /// A `REG.FIELD` reference, resolved against the map.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -438,6 +485,7 @@ struct RawInterface {
     enums: Vec<RawEnum>,
     #[serde(rename = "bits", default)]
     bitsets: Vec<RawBitSet>,
+    pbp: RawPbp,
     #[serde(default)]
     timing: Vec<RawTiming>,
     #[serde(rename = "module", default)]
@@ -528,6 +576,28 @@ struct RawBitSet {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
+struct RawPbp {
+    description: String,
+    bits: String,
+    bits_lane: i64,
+    bits_lsb: i64,
+    x: RawPbpField,
+    y: RawPbpField,
+    count: RawPbpField,
+    tick_div: RawPbpField,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPbpField {
+    lane: i64,
+    lsb: i64,
+    width: i64,
+    description: String,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawTiming {
     name: String,
     symbol: String,
@@ -600,10 +670,11 @@ impl Checker<'_> {
         let record = self.record(raw.record);
         let spi = self.spi(raw.spi);
         let enums = raw.enums.into_iter().map(|raw| self.enumeration(raw)).collect();
-        let bitsets = raw.bitsets.into_iter().map(|raw| self.bitset(raw)).collect();
+        let bitsets: Vec<BitSetSpec> = raw.bitsets.into_iter().map(|raw| self.bitset(raw)).collect();
+        let pbp = self.pbp(raw.pbp, &record, &bitsets);
         let timing = self.timing(raw.timing);
         let modules = raw.modules.into_iter().map(|raw| self.module(raw, &record)).collect();
-        InterfaceSpec { record, spi, enums, bitsets, timing, modules }
+        InterfaceSpec { record, spi, enums, bitsets, pbp, timing, modules }
     }
 
     /// Resolves `REG.FIELD`; a stand-in (width 1) when it does not.
@@ -891,6 +962,80 @@ impl Checker<'_> {
         BitSetSpec { name: raw.name, width, description: raw.description, bits }
     }
 
+    /// The pbp record's lanes: every field inside a lane of the record (and, as the core
+    /// needs, within its first four lanes), no two overlapping, X and Y equally wide and
+    /// the count `PBP_COUNT_EXTRA` bits wider, the bit set a `[[bits]]` set.
+    fn pbp(&mut self, raw: RawPbp, record: &RecordSpec, bitsets: &[BitSetSpec]) -> PbpSpec {
+        let at = place("pbp");
+        self.text(&at, &raw.description);
+        let lane_w = record.increment.width();
+        // The core builds the pbp block only with at least 4 axes (its HAS_PBP constraint).
+        let lanes = record.max_axes.value.clamp(0, 4) as u32;
+        let set_width = match bitsets.iter().find(|b| b.name == raw.bits) {
+            Some(set) => set.width,
+            None => {
+                self.report(&at, format!("bits {} is not a [[bits]] set", raw.bits));
+                1
+            }
+        };
+        let bits_raw = RawPbpField {
+            lane: raw.bits_lane,
+            lsb: raw.bits_lsb,
+            width: i64::from(set_width),
+            description: format!("the bit set {}", raw.bits),
+        };
+        let mut field = |name: &str, raw: RawPbpField| -> PbpFieldSpec {
+            let at = place(format!("pbp {name}"));
+            self.text(&at, &raw.description);
+            let ok = (0..i64::from(lanes)).contains(&raw.lane)
+                && raw.lsb >= 0
+                && raw.width >= 1
+                && raw.lsb + raw.width <= i64::from(lane_w);
+            if !ok {
+                self.report(
+                    &at,
+                    format!(
+                        "lane {} bits {} +: {} is not inside one of lanes 0..{lanes} ({lane_w} bits each)",
+                        raw.lane, raw.lsb, raw.width
+                    ),
+                );
+            }
+            let clamp = |v: i64, hi: i64| v.clamp(0, hi) as u32;
+            PbpFieldSpec {
+                name: name.to_string(),
+                lane: clamp(raw.lane, 7),
+                lsb: clamp(raw.lsb, 31),
+                width: clamp(raw.width, 32).max(1),
+                description: raw.description,
+            }
+        };
+        let bits = field(&raw.bits, bits_raw);
+        let x = field("X", raw.x);
+        let y = field("Y", raw.y);
+        let count = field("COUNT", raw.count);
+        let tick_div = field("TICK_DIV", raw.tick_div);
+        let spec = PbpSpec { description: raw.description, bits, x, y, count, tick_div };
+        if spec.x.width != spec.y.width {
+            self.report(&at, format!("X ({} bits) and Y ({} bits) must be equally wide", spec.x.width, spec.y.width));
+        }
+        if spec.count.width != spec.x.width + PBP_COUNT_EXTRA {
+            let message = format!(
+                "COUNT must be {PBP_COUNT_EXTRA} bits wider than a coordinate ({} + {PBP_COUNT_EXTRA}), not {}",
+                spec.x.width, spec.count.width
+            );
+            self.report(&at, message);
+        }
+        let all: Vec<&PbpFieldSpec> = std::iter::once(&spec.bits).chain(spec.fields()).collect();
+        for (k, a) in all.iter().enumerate() {
+            for b in &all[k + 1..] {
+                if a.lane == b.lane && a.lsb < b.lsb + b.width && b.lsb < a.lsb + a.width {
+                    self.report(&at, format!("{} and {} overlap in lane {}", a.name, b.name, a.lane));
+                }
+            }
+        }
+        spec
+    }
+
     fn timing(&mut self, raw: Vec<RawTiming>) -> Vec<TimingFieldSpec> {
         if raw.is_empty() {
             self.report(&place("timing"), "no [[timing]] fields".to_string());
@@ -1103,6 +1248,13 @@ pub fn verilog_names(spec: &InterfaceSpec) -> Vec<(String, String)> {
         names.push((format!("FS_{}_WIDTH", bitset.name), owner.clone()));
         for bit in &bitset.bits {
             names.push((format!("FS_{}_{}_BIT", bitset.name, bit.name), owner.clone()));
+        }
+    }
+    names.push(("FS_PBP_BITS_LANE".to_string(), "pbp".to_string()));
+    names.push(("FS_PBP_BITS_LSB".to_string(), "pbp".to_string()));
+    for field in spec.pbp.fields() {
+        for what in ["LANE", "LSB", "WIDTH"] {
+            names.push((format!("FS_PBP_{}_{what}", field.name), "pbp".to_string()));
         }
     }
     for module in &spec.modules {

@@ -128,6 +128,24 @@ pub fn generate(spec: &InterfaceSpec) -> String {
         }
     }
 
+    let pbp = &spec.pbp;
+    let _ = writeln!(
+        out,
+        "\n## PBP record lanes\n\n{}\n\n| field | lane | bits | meaning |\n| --- | --- | --- | --- |",
+        pbp.description
+    );
+    for field in std::iter::once(&pbp.bits).chain(pbp.fields()) {
+        let _ = writeln!(
+            out,
+            "| {} | {} | {}:{} | {} |",
+            field.name,
+            field.lane,
+            field.lsb + field.width - 1,
+            field.lsb,
+            cell(&field.description)
+        );
+    }
+
     let _ = writeln!(
         out,
         "\n## Drive timing\n\n\

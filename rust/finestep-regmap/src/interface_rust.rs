@@ -75,9 +75,31 @@ pub fn generate(spec: &InterfaceSpec) -> String {
         let _ = writeln!(out, "    pub const ALL: u8 = {all:#04x};");
         let _ = writeln!(out, "}}");
     }
+    pbp_lanes(&mut out, spec);
     params(&mut out, spec);
     timing(&mut out, spec);
     out
+}
+
+/// The `pbp_lanes` module: where each field of a record with the flag PBP lies.
+fn pbp_lanes(out: &mut String, spec: &InterfaceSpec) {
+    let pbp = &spec.pbp;
+    out.push('\n');
+    doc(out, "", &format!("The lanes of a record with the flag PBP: {}", pbp.description));
+    let _ = writeln!(out, "pub mod pbp_lanes {{");
+    doc(out, "    ", &format!("The lane of the bit set `{}`.", pbp.bits.name));
+    let _ = writeln!(out, "    pub const BITS_LANE: usize = {};", pbp.bits.lane);
+    doc(out, "    ", &format!("The lane bit of the bit set `{}`'s bit 0.", pbp.bits.name));
+    let _ = writeln!(out, "    pub const BITS_LSB: u32 = {};", pbp.bits.lsb);
+    for field in pbp.fields() {
+        doc(out, "    ", &format!("The lane of `{}`: {}", field.name, field.description));
+        let _ = writeln!(out, "    pub const {}_LANE: usize = {};", field.name, field.lane);
+        doc(out, "    ", &format!("The lowest lane bit of `{}`.", field.name));
+        let _ = writeln!(out, "    pub const {}_LSB: u32 = {};", field.name, field.lsb);
+        doc(out, "    ", &format!("The bits of `{}`.", field.name));
+        let _ = writeln!(out, "    pub const {}_WIDTH: u32 = {};", field.name, field.width);
+    }
+    let _ = writeln!(out, "}}");
 }
 
 fn access(out: &mut String) {

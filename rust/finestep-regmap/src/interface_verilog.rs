@@ -13,6 +13,7 @@
 //! | `FS_SPI_CMD_<NAME>`, `FS_SPI_RESULT_<NAME>` | `[7:0]` |
 //! | `FS_<ENUM>_WIDTH`; `FS_<ENUM>_<VALUE>` | integer; sized to the field |
 //! | `FS_<BITS>_WIDTH`, `FS_<BITS>_<BIT>_BIT` | integers |
+//! | `FS_PBP_BITS_LANE`, `FS_PBP_BITS_LSB`; `FS_PBP_<FIELD>_LANE`, `_LSB`, `_WIDTH` | integers |
 //! | `FS_<MODULE>_<PARAM>_DEFAULT`, `_MIN`, `_MAX` | integers |
 
 use crate::interface::{InterfaceSpec, ModuleSpec};
@@ -117,6 +118,22 @@ pub fn generate(spec: &InterfaceSpec) -> String {
                 "localparam integer FS_{}_{}_BIT = {}; // {}",
                 bitset.name, bit.name, bit.bit, bit.description
             );
+        }
+    }
+
+    let pbp = &spec.pbp;
+    let _ = writeln!(out, "\n// A record with the flag PBP: {}", pbp.description);
+    let _ = writeln!(
+        out,
+        "// {} in lane {} bits {} +: {}.",
+        pbp.bits.description, pbp.bits.lane, pbp.bits.lsb, pbp.bits.width
+    );
+    let _ = writeln!(out, "localparam integer FS_PBP_BITS_LANE = {};", pbp.bits.lane);
+    let _ = writeln!(out, "localparam integer FS_PBP_BITS_LSB = {};", pbp.bits.lsb);
+    for field in pbp.fields() {
+        let _ = writeln!(out, "// {}: {}", field.name, field.description);
+        for (what, value) in [("LANE", field.lane), ("LSB", field.lsb), ("WIDTH", field.width)] {
+            let _ = writeln!(out, "localparam integer FS_PBP_{}_{what} = {value};", field.name);
         }
     }
 

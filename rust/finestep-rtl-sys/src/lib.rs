@@ -93,10 +93,10 @@ pub fn serial_params() -> CoreParams {
 
 /// The parameters of the Verilated core [`Rtl::for_params`] makes with the point-by-point
 /// comparison interpolator (docs/spec/pbp_interp.md#in-the-core): [`params`] with
-/// `HAS_PBP`, a DDA and a shaper per axis and no gantry block. It is Verilated with
-/// waveform support only.
+/// `HAS_PBP`, a DDA and a shaper per axis and the gantry block (disengaged, the core
+/// without a gantry pair). It is Verilated with waveform support only.
 pub fn core_pbp_params() -> CoreParams {
-    CoreParams { has_pbp: true, step_shared: false, ..params() }
+    CoreParams { has_pbp: true, step_shared: false, has_gantry: true, ..params() }
 }
 
 /// The parameters of the Verilated core [`Rtl::for_params`] makes with the point-by-point

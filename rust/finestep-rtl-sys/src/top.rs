@@ -78,6 +78,9 @@ pub struct TopBuild {
     pub has_outputs: bool,
     /// General outputs (`N_GPIO`).
     pub n_gpio: usize,
+    /// The core's point-by-point comparison interpolator is built (`HAS_PBP`: the
+    /// default top's; the motion chips are built without it, as the board tops).
+    pub has_pbp: bool,
 }
 
 /// The build parameters of the Verilated top with `finestep_top`'s defaults.
@@ -107,6 +110,7 @@ pub fn top_build_of(variant: TopVariant) -> TopBuild {
             has_spindle: ffi::ft_has_spindle(v) != 0,
             has_outputs: ffi::ft_has_outputs(v) != 0,
             n_gpio: ffi::ft_n_gpio(v) as usize,
+            has_pbp: ffi::ft_has_pbp(v) != 0,
         }
     }
 }
