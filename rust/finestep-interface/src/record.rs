@@ -77,18 +77,20 @@ impl PeriodRecord {
         if self.flags & flags::PBP == 0 {
             return None;
         }
+        use crate::pbp_lanes as at;
         let lane = |i: usize| self.inc[i].to_bits() as u32;
-        let top = (lane(0) >> PbpLanes::TOP) as u8;
-        let shift = 32 - PbpLanes::COORD_W;
-        let coord = |word: u32| ((word << shift) as i32) >> shift;
+        // The field of `width` bits at `lsb` of lane `i`, unsigned, and signed.
+        let field = |i: usize, lsb: u32, width: u32| (lane(i) >> lsb) & (u32::MAX >> (32 - width));
+        let signed = |i: usize, lsb: u32, width: u32| ((field(i, lsb, width) << (32 - width)) as i32) >> (32 - width);
+        let top = field(at::BITS_LANE, at::BITS_LSB, pbp_record::WIDTH) as u8;
         Some(PbpLanes {
             arc: top & pbp_record::ARC != 0,
             cw: top & pbp_record::CW != 0,
             pair: (top >> pbp_record::PAIR_0_BIT) & 0b11,
-            x: coord(lane(0)),
-            y: coord(lane(1)),
-            steps: u64::from(lane(2) & PbpLanes::COUNT_MASK),
-            tick_div: (lane(3) & 0xFFFF) as u16,
+            x: signed(at::X_LANE, at::X_LSB, at::X_WIDTH),
+            y: signed(at::Y_LANE, at::Y_LSB, at::Y_WIDTH),
+            steps: u64::from(field(at::COUNT_LANE, at::COUNT_LSB, at::COUNT_WIDTH)),
+            tick_div: field(at::TICK_DIV_LANE, at::TICK_DIV_LSB, at::TICK_DIV_WIDTH) as u16,
         })
     }
 
