@@ -30,8 +30,6 @@ fn params() -> impl Strategy<Value = TopParams> {
             (has_spindle, has_outputs, n_gpio, step_digit, one_snapshot, inc_write_only, axis_write_only),
         )| {
             let p = TopParams {
-                // (the pbp block needs 4 axes and no digit-serial engine: apart, in core_pbp)
-                has_pbp: false,
                 n_axes,
                 p_width,
                 timing_w,
@@ -55,6 +53,7 @@ fn params() -> impl Strategy<Value = TopParams> {
                 has_outputs,
                 n_gpio,
                 has_panel: false,
+                // (the pbp block needs 4 axes and no digit-serial engine: apart, in core_pbp)
                 has_pbp: false,
                 has_gantry: false,
             };
