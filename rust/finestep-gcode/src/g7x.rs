@@ -649,7 +649,11 @@ impl Profile {
     }
 
     fn check_monotonic(&mut self) -> Result<()> {
-        let first = &mut self.segments[0];
+        // The corners' fitting drops segments shorter than the tolerance: a profile of
+        // such moves alone has nothing left to cut.
+        let Some(first) = self.segments.first_mut() else {
+            return fail("the profile has no move longer than the tolerance");
+        };
         if (first.end - first.start).z > 0.0 {
             first.start.z = first.end.z;
         }

@@ -1507,6 +1507,12 @@ fn lathe_cycle_errors_are_rs274s_at_their_word() {
     assert_eq!(err(&lathe(profile, "G17 G72.1 Q1 X8 Z2")), "t.ngc:6:5: G72.1 can only be used in XZ plane (G18)");
     assert_eq!(err(&lathe(profile, "G71.2 Q1 X8 Z2 I0")), "t.ngc:6:16: G71.2: I must be greater than zero");
     assert_eq!(err(&lathe("G1 X2 Z0\nG1 X4 Z-5\nG1 X3 Z-3", "G70 Q1 X8 Z2")), "t.ngc:7:1: G7X error: Not monotonic");
+    // A profile of moves shorter than the tolerance alone (the fuzz's lathe cycles at 10^6
+    // cases found it: an index into no segments; rs274 2.9 ends in a segmentation fault).
+    assert_eq!(
+        err(&lathe("o9 repeat [2]\nG1 W0.001\no9 endrepeat", "G70 Q1 X0 Z10.964 P1")),
+        "t.ngc:7:1: G7X error: the profile has no move longer than the tolerance"
+    );
     assert_eq!(
         err(&lathe(profile, "G70 Q2 X8 Z2")),
         "t.ngc:6:5: subroutine o2 is not defined here nor in a file of the subroutine path"
