@@ -404,7 +404,7 @@ fn unused_axes_stay_zero() {
     for _ in 0..100 {
         core.step(&inputs);
         let out = core.outputs();
-        let used = 0x1FF | (0b111 << 24) | (0b111 << 32) | (0b111 << 40);
+        let used = 0x1FF | (0b111 << 24) | (0b111 << 32) | (0b111 << 40) | (1 << finestep_model::pins::PERIOD_BOUNDARY);
         assert_eq!(out.pins & !used, 0);
         assert_eq!(out.positions[3..], [0; 5]);
     }
