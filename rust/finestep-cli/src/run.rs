@@ -743,19 +743,33 @@ mod tests {
     use finestep_host::{BusError, PinHost, PinTarget, PinTiming, SpiBus};
     use finestep_model::top::Top;
 
-    /// The model at its pins, one clock at a time: X's position counted from its step
-    /// and direction pins (step/dir mode: A steps on its rising edge, B high forward), and
-    /// every change of the spindle enable, mist and flood pins with X's position then.
+    /// The model at its pins, one clock at a time: chip axes 0 and 1 counted from their
+    /// step and direction pins (step/dir mode: A steps on its rising edge, B high
+    /// forward) with the cycle of each step, the spindle PWM's rising edges, and every
+    /// change of the `watched` output pins with the two positions then.
     struct Recorder {
         inner: ModelPins,
+        watched: u64,
         cycle: u64,
-        x: i64,
+        at: [i64; 2],
+        steps: [Vec<u64>; 2],
         pwm_rises: u64,
-        changes: Vec<(u64, u64, i64)>,
-        steps: Vec<u64>,
+        changes: Vec<(u64, u64, [i64; 2])>,
     }
 
-    const WATCHED: u64 = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_MIST | 1 << OUT_COOLANT_FLOOD | 1 << (OUT_GPIO0 + 1);
+    impl Recorder {
+        fn new(params: finestep_model::top::TopParams, watched: u64) -> Self {
+            Recorder {
+                inner: ModelPins(Top::new(params)),
+                watched,
+                cycle: 0,
+                at: [0; 2],
+                steps: [vec![], vec![]],
+                pwm_rises: 0,
+                changes: vec![],
+            }
+        }
+    }
 
     impl PinTarget for Recorder {
         fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
@@ -764,15 +778,18 @@ mod tests {
                 self.inner.drive(inputs, 1)?;
                 let now = self.inner.outputs();
                 self.cycle += 1;
-                if now >> OUT_PIN_A0 & 1 != 0 && before >> OUT_PIN_A0 & 1 == 0 {
-                    self.x += if now >> OUT_PIN_B0 & 1 != 0 { 1 } else { -1 };
-                    self.steps.push(self.cycle);
+                for axis in 0..2 {
+                    let (a, b) = (OUT_PIN_A0 + axis as u32, OUT_PIN_B0 + axis as u32);
+                    if now >> a & 1 != 0 && before >> a & 1 == 0 {
+                        self.at[axis] += if now >> b & 1 != 0 { 1 } else { -1 };
+                        self.steps[axis].push(self.cycle);
+                    }
                 }
                 if now >> OUT_SPINDLE_PWM & 1 != 0 && before >> OUT_SPINDLE_PWM & 1 == 0 {
                     self.pwm_rises += 1;
                 }
-                if (now ^ before) & WATCHED != 0 {
-                    self.changes.push((self.cycle, now & WATCHED, self.x));
+                if (now ^ before) & self.watched != 0 {
+                    self.changes.push((self.cycle, now & self.watched, self.at));
                 }
             }
             Ok(())
@@ -783,21 +800,16 @@ mod tests {
         }
     }
 
+    /// The spindle enable, mist, flood and general output 1 pins.
+    const WATCHED: u64 = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_MIST | 1 << OUT_COOLANT_FLOOD | 1 << (OUT_GPIO0 + 1);
+
     type RecordedChip = Machine<SpiBus<PinHost<Recorder>>>;
 
     /// `finestep run`'s machinery (resolution against the chip, planner, streamer with
     /// events) on the model's pins behind a recorder: `text` (named `name`) planned with
     /// `events` events and streamed; the chip and the configuration it was resolved to.
     fn stream_on_recorded_pins(text: &str, name: &str, events: usize) -> (RecordedChip, MachineConfig) {
-        let recorder = Recorder {
-            inner: ModelPins(Top::new(rtl_top_params())),
-            cycle: 0,
-            x: 0,
-            pwm_rises: 0,
-            changes: Vec::new(),
-            steps: Vec::new(),
-        };
-        let mut host = PinHost::new(recorder, PinTiming::default());
+        let mut host = PinHost::new(Recorder::new(rtl_top_params(), WATCHED), PinTiming::default());
         host.reset(4).unwrap();
         host.idle(8).unwrap();
         let mut chip = Machine::connect(SpiBus::new(host, 1)).unwrap();
@@ -822,18 +834,18 @@ mod tests {
         let text = "G1 X1 F600\nM3 S1000\nG1 X2\nM8\nG1 X3\nM5 M9\nM2\n";
         let (mut chip, _) = stream_on_recorded_pins(text, "io.ngc", 4);
         let recorder = chip.bus().link_mut().target();
-        assert_eq!(recorder.x, 3 * 800);
+        assert_eq!(recorder.at[0], 3 * 800);
         // Each pin change with X's position then: exactly the block's point.
         let (en, flood) = (1 << OUT_SPINDLE_EN, 1 << OUT_COOLANT_FLOOD);
-        let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, x)| (pins, x)).collect();
+        let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, at)| (pins, at[0])).collect();
         assert_eq!(states, vec![(en, 800), (en | flood, 1600), (flood, 2400), (0, 2400)], "{:?}", recorder.changes);
         // X at rest around each change: no step within four full-feed step intervals
         // (10 mm/s at 800 steps/mm: one step per 6250 clocks) either side, where blended
         // moves would pass X1 and X2 at full feed.
         let quiet = 4 * 6250;
         for &(cycle, _, _) in &recorder.changes {
-            let before = recorder.steps.iter().rev().find(|&&s| s <= cycle).copied().unwrap_or(0);
-            let after = recorder.steps.iter().find(|&&s| s > cycle).copied().unwrap_or(u64::MAX);
+            let before = recorder.steps[0].iter().rev().find(|&&s| s <= cycle).copied().unwrap_or(0);
+            let after = recorder.steps[0].iter().find(|&&s| s > cycle).copied().unwrap_or(u64::MAX);
             assert!(
                 cycle - before > quiet && after - cycle > quiet,
                 "steps at {before} and {after}, change at {cycle}"
@@ -850,7 +862,7 @@ mod tests {
         let text = "G1 X1 F600\nM64 P1\nG1 X2\nM63 P1\nG1 X3\nM2\n";
         let (mut chip, config) = stream_on_recorded_pins(text, "gpio.ngc", 2);
         let recorder = chip.bus().link_mut().target();
-        let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, x)| (pins, x)).collect();
+        let states: Vec<(u64, i64)> = recorder.changes.iter().map(|&(_, pins, at)| (pins, at[0])).collect();
         assert_eq!(states, vec![(1 << (OUT_GPIO0 + 1), 800), (0, 1600)], "{:?}", recorder.changes);
         // Output 8 does not exist on the chip: refused by line before anything moves.
         let program = finestep_gcode::parse_str("M64 P8\nG1 X1 F600\nM2\n", "gpio.ngc").unwrap();
@@ -910,57 +922,15 @@ mod tests {
         assert!(err.to_string().contains("the chip has no gantry (CAPS.HAS_GANTRY 0"), "{err}");
     }
 
-    /// A 4-axis model chip with the point-by-point interpolator (`HAS_PBP`, the build the
-    /// Verilated default chip gains) at its pins: the steps of chip axes 0 and 1 counted
-    /// from their step and direction pins with their cycles, and every change of the
-    /// spindle enable and flood pins with the two positions then.
-    struct PbpPins {
-        inner: ModelPins,
-        cycle: u64,
-        at: [i64; 2],
-        steps: [Vec<u64>; 2],
-        changes: Vec<(u64, u64, [i64; 2])>,
-    }
+    type PbpChip = Machine<SpiBus<PinHost<Recorder>>>;
 
-    impl PinTarget for PbpPins {
-        fn drive(&mut self, inputs: u64, cycles: u64) -> Result<(), BusError> {
-            for _ in 0..cycles {
-                let before = self.inner.outputs();
-                self.inner.drive(inputs, 1)?;
-                let now = self.inner.outputs();
-                self.cycle += 1;
-                for axis in 0..2 {
-                    let (a, b) = (OUT_PIN_A0 + axis as u32, OUT_PIN_B0 + axis as u32);
-                    if now >> a & 1 != 0 && before >> a & 1 == 0 {
-                        self.at[axis] += if now >> b & 1 != 0 { 1 } else { -1 };
-                        self.steps[axis].push(self.cycle);
-                    }
-                }
-                let watched = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_FLOOD;
-                if (now ^ before) & watched != 0 {
-                    self.changes.push((self.cycle, now & watched, self.at));
-                }
-            }
-            Ok(())
-        }
-
-        fn outputs(&self) -> u64 {
-            self.inner.outputs()
-        }
-    }
-
-    type PbpChip = Machine<SpiBus<PinHost<PbpPins>>>;
-
+    /// A 4-axis model chip at its pins with the point-by-point interpolator (`HAS_PBP`,
+    /// as the Verilated default chip builds it) or without, the spindle enable and flood
+    /// pins watched.
     fn pbp_chip(has_pbp: bool) -> PbpChip {
         let params = finestep_model::top::TopParams { has_pbp, ..rtl_top_params() };
-        let pins = PbpPins {
-            inner: ModelPins(Top::new(params)),
-            cycle: 0,
-            at: [0; 2],
-            steps: [vec![], vec![]],
-            changes: vec![],
-        };
-        let mut host = PinHost::new(pins, PinTiming::default());
+        let watched = 1 << OUT_SPINDLE_EN | 1 << OUT_COOLANT_FLOOD;
+        let mut host = PinHost::new(Recorder::new(params, watched), PinTiming::default());
         host.reset(4).unwrap();
         host.idle(8).unwrap();
         let mut chip = Machine::connect(SpiBus::new(host, 1)).unwrap();
