@@ -247,8 +247,11 @@ impl<'p> Periods<'p> {
     /// S-curve: plans the NURBS sub-pieces from `i` on whose junction speeds rise (or
     /// fall) all the way as one run ([`run_profiles`]), so that the acceleration is
     /// carried across their junctions; the longest such run (at most
-    /// [`MAX_RUN_ELEMENTS`]) where that is possible and faster, else halves of it.
-    /// Whether a run was planned (its profiles in `self.run` from `i`).
+    /// [`MAX_RUN_ELEMENTS`]) where that is possible and faster, else halves of it. Each
+    /// sub-piece's limits are derived at the run's higher end, and again at the highest
+    /// speed the run's speed change has in it ([`needs_limits`], `limits_at` of
+    /// [`run_profiles_into`]). Whether a run was planned (its profiles in `self.run`
+    /// from `i`).
     fn try_run(&mut self, i: usize, v0: f64, v1: f64) -> Result<bool, ProgramError> {
         let smooth = |e: &Element| matches!(e.shape, Shape::Nurbs { .. }) && !e.stop_after && !e.jump_after;
         if v0 == v1 || !smooth(self.path.element(i)) {
@@ -298,7 +301,9 @@ impl<'p> Periods<'p> {
         let mut n = elements.len();
         let mut planned = false;
         while n >= 2 {
-            if run_profiles_into(&elements[..n], &speeds[..=n], &mut self.run_trial) {
+            let (config, path) = (&self.config, &self.path);
+            let limits_at = |k: usize, v: f64| needs_limits(config, path.element(i + k), v).map(|(limits, _)| limits);
+            if run_profiles_into(&elements[..n], &speeds[..=n], &mut self.run_trial, &limits_at) {
                 std::mem::swap(&mut self.run, &mut self.run_trial);
                 self.run_first = i;
                 planned = true;

@@ -73,7 +73,8 @@
 //!   Each element keeps one tangential acceleration and jerk over its length (set
 //!   at its speed cap), and an S-curve brings the acceleration to zero at every element's
 //!   end (except inside a run of NURBS sub-pieces whose speeds rise or fall all the way,
-//!   planned as one change under the run's smallest limits, [`velocity::run_profiles`]),
+//!   planned as one change held to each element's limits at the speed it has there,
+//!   [`velocity::run_profiles`]),
 //!   so the limits are reached where the path allows, not followed everywhere.
 //! - [`bound`] gives an independent lower bound on the machining time, for figures.
 //! - Only line-line corners are blended; where a line meets an arc, or two arcs meet,

@@ -163,6 +163,60 @@ impl Half {
         self.distance_at(self.time_to_speed(v))
     }
 
+    /// The time into the half at which it has covered `d` (clamped to the half): Newton
+    /// on the distance (its derivative the speed) inside a bracket that bisection
+    /// narrows wherever a Newton step leaves it.
+    fn time_at_distance(&self, d: f64) -> f64 {
+        if d <= 0.0 {
+            return 0.0;
+        }
+        if d >= self.distance {
+            return self.time;
+        }
+        let (mut lo, mut hi) = (0.0, self.time);
+        let mut t = self.time * d / self.distance;
+        for _ in 0..100 {
+            let err = self.distance_at(t) - d;
+            if err < 0.0 {
+                lo = t;
+            } else {
+                hi = t;
+            }
+            if err.abs() <= 1e-13 * self.distance || hi - lo <= 1e-15 * self.time {
+                break;
+            }
+            let speed = self.speed_at(t);
+            let step = t - err / speed;
+            t = if speed > 0.0 && step > lo && step < hi { step } else { 0.5 * (lo + hi) };
+        }
+        t
+    }
+
+    /// The largest acceleration magnitude the half has between `t1` and `t2` (its
+    /// acceleration rises, holds and falls), and its jerk where it changes the
+    /// acceleration anywhere between them (else 0).
+    fn most_between(&self, t1: f64, t2: f64) -> (f64, f64) {
+        let (tj, ta, ap) = (self.t_jerk, self.t_accel, self.a_peak);
+        let accel_at = |t: f64| {
+            if t <= tj {
+                if tj > 0.0 {
+                    ap * t / tj
+                } else {
+                    ap
+                }
+            } else if t <= tj + ta {
+                ap
+            } else if tj > 0.0 {
+                (ap * (1.0 - (t - tj - ta) / tj)).max(0.0)
+            } else {
+                0.0
+            }
+        };
+        let accel = if t1 <= tj + ta && t2 >= tj { ap } else { accel_at(t1).max(accel_at(t2)) };
+        let jerk = if tj > 0.0 && t2 > t1 && (t1 < tj || t2 > tj + ta) { self.jerk } else { 0.0 };
+        (accel, jerk)
+    }
+
     /// Distance covered `t` (0..=time) into the half.
     #[inline]
     fn distance_at(&self, t: f64) -> f64 {
@@ -369,8 +423,14 @@ pub const MAX_RUN_ELEMENTS: usize = 64;
 /// (or fall) all the way, planned as one speed change instead of one per element, so
 /// that the acceleration is carried across the junctions inside the run instead of
 /// returning to zero at each: a cruise at the first speed, one half from the first to
-/// the last speed under the smallest acceleration and jerk limits of the run's
-/// elements, and a cruise at the last speed. The half is placed as early (rising) or as
+/// the last speed, and a cruise at the last speed. The half is planned first under the
+/// smallest acceleration and jerk limits of the run's elements, then under wider ones
+/// where every element it overlaps allows the acceleration and jerk the half has within
+/// it (with [`run_profiles_into`]'s `limits_at`, at the highest speed it has there;
+/// until plan27 under the least limits of the elements it overlaps, each taken at the
+/// run's higher end: on seed 002's star a long sub-piece the half entered at the top
+/// speed in its jerk phase held the whole deceleration into a tip to 0.945 of the
+/// axis's limit, 0.973 since). The half is placed as early (rising) or as
 /// late (falling) as every element's speed cap allows (the speed is monotone, so it is
 /// checked at the end of each element where it rises and at its start where it
 /// falls). The run starts and ends at its junction speeds with zero acceleration, as
@@ -381,17 +441,29 @@ pub const MAX_RUN_ELEMENTS: usize = 64;
 /// faster than the per-element profiles.
 pub fn run_profiles(elements: &[RunElement], speeds: &[f64]) -> Option<Vec<Profile>> {
     let mut out = Vec::with_capacity(elements.len());
-    run_profiles_into(elements, speeds, &mut out).then_some(out)
+    run_profiles_into(elements, speeds, &mut out, &|_, _| None).then_some(out)
 }
 
-/// [`run_profiles`] into `out` (cleared first; its room kept from run to run): whether
-/// the run was planned.
-pub fn run_profiles_into(elements: &[RunElement], speeds: &[f64], out: &mut Vec<Profile>) -> bool {
+/// [`run_profiles`] into `out` (cleared first; its room kept from run to run), with
+/// `limits_at(k, v)`: element k's limits where its speed stays at or below `v` (below
+/// its cap), where they can be derived for that speed: the half is held in each element
+/// to its limits at the highest speed it has there. Whether the run was planned.
+pub fn run_profiles_into(
+    elements: &[RunElement],
+    speeds: &[f64],
+    out: &mut Vec<Profile>,
+    limits_at: &dyn Fn(usize, f64) -> Option<Limits>,
+) -> bool {
     out.clear();
-    run_profiles_in(elements, speeds, out).is_some()
+    run_profiles_in(elements, speeds, out, limits_at).is_some()
 }
 
-fn run_profiles_in(elements: &[RunElement], speeds: &[f64], out: &mut Vec<Profile>) -> Option<()> {
+fn run_profiles_in(
+    elements: &[RunElement],
+    speeds: &[f64],
+    out: &mut Vec<Profile>,
+    limits_at: &dyn Fn(usize, f64) -> Option<Limits>,
+) -> Option<()> {
     let n = elements.len();
     if n < 2 || speeds.len() != n + 1 {
         return None;
@@ -413,19 +485,41 @@ fn run_profiles_in(elements: &[RunElement], speeds: &[f64], out: &mut Vec<Profil
     let length: f64 = elements.iter().map(|e| e.length).sum();
     let (mut limits, (mut half, mut spare, mut x)) = (limits, place_half(elements, &limits, v_a, v_b, length)?);
     // The acceleration and jerk are zero outside the half: only the elements it overlaps
-    // need hold it. Planned again under the least limits of those, it is kept where the
-    // elements it then overlaps all allow them.
-    for _ in 0..2 {
-        let wider = overlapped_limits(elements, &limits, x, half.distance, length);
+    // need hold it, each the acceleration and jerk the half has within it, at the highest
+    // speed it has there (`limits_at`: the normal acceleration and turning take less of
+    // the limits at a lower speed, and an element the half crosses in a jerk phase needs
+    // only the acceleration reached there). Planned again under wider limits read from
+    // what the elements allow ([`read_half`]), the half is kept where it still fits every
+    // element it then overlaps and the run takes less time; else halfway to them.
+    let run_time = |h: &Half, sp: f64, xx: f64| {
+        let pre = if xx > 0.0 { xx / v_a } else { 0.0 };
+        let post = if sp - xx > 0.0 && v_b > 0.0 { (sp - xx) / v_b } else { 0.0 };
+        pre + h.time + post
+    };
+    let mut time = run_time(&half, spare, x);
+    for _ in 0..4 {
+        let (_, wider) = read_half(elements, &limits, (&half, x), length, limits_at, false);
         if wider.accel <= limits.accel && wider.jerk <= limits.jerk {
             break;
         }
-        let Some((h, sp, xx)) = place_half(elements, &wider, v_a, v_b, length) else { break };
-        let held = overlapped_limits(elements, &limits, xx, h.distance, length);
-        if !(held.accel >= wider.accel && held.jerk >= wider.jerk) {
+        let mut candidate =
+            Limits { accel: wider.accel.max(limits.accel), jerk: wider.jerk.max(limits.jerk), ..limits };
+        let mut kept = false;
+        for _ in 0..3 {
+            if let Some((h, sp, xx)) = place_half(elements, &candidate, v_a, v_b, length) {
+                let t = run_time(&h, sp, xx);
+                if t < time && read_half(elements, &candidate, (&h, xx), length, limits_at, true).0 {
+                    (limits, half, spare, x, time) = (candidate, h, sp, xx, t);
+                    kept = true;
+                    break;
+                }
+            }
+            candidate.accel = 0.5 * (candidate.accel + limits.accel);
+            candidate.jerk = 0.5 * (candidate.jerk + limits.jerk);
+        }
+        if !kept {
             break;
         }
-        (limits, half, spare, x) = (wider, h, sp, xx);
     }
     let pre_time = if x > 0.0 { x / v_a } else { 0.0 };
     let post = spare - x;
@@ -471,20 +565,58 @@ fn run_profiles_in(elements: &[RunElement], speeds: &[f64], out: &mut Vec<Profil
     Some(())
 }
 
-/// The least acceleration and jerk limits of the `elements` (of total `length`) that
-/// the stretch `x .. x + distance` overlaps, of `kind` as `limits`.
-fn overlapped_limits(elements: &[RunElement], limits: &Limits, x: f64, distance: f64, length: f64) -> Limits {
+/// What `half` (planned under `limits`), placed `x` into the run's `elements` (of total
+/// `length`), asks of each element it overlaps against what the element allows: its
+/// limits at the highest speed the half has in it (at the element's end where the half
+/// rises, at its start where it falls) from `limits_at` where that gives them and they
+/// are at least the element's own, else the element's own. Whether every element
+/// allows the largest acceleration the half has within it and, where the half changes
+/// its acceleration there, the half's jerk; and the limits read as wider from them:
+/// the least over the elements of each limit scaled by the room the element leaves
+/// (the acceleration by what it allows over what the half has in it, which for an
+/// element the half crosses at its peak is what it allows). With `check_only`, only
+/// whether it fits (the limits read are not all read): an element whose own limits
+/// hold the half is not asked for its limits at the speed, and the first that does not
+/// allow the half ends the reading.
+fn read_half(
+    elements: &[RunElement],
+    limits: &Limits,
+    (half, x): (&Half, f64),
+    length: f64,
+    limits_at: &dyn Fn(usize, f64) -> Option<Limits>,
+    check_only: bool,
+) -> (bool, Limits) {
     let margin = 1e-9 * length;
-    let (mut start, mut accel, mut jerk) = (0.0, f64::INFINITY, f64::INFINITY);
-    for e in elements {
+    let rising = half.sign > 0.0;
+    let (mut start, mut fits) = (0.0, true);
+    let mut wider = Limits { kind: limits.kind, accel: f64::INFINITY, jerk: f64::INFINITY };
+    for (k, e) in elements.iter().enumerate() {
         let end = start + e.length;
-        if start < x + distance + margin && end > x - margin {
-            accel = accel.min(e.limits.accel);
-            jerk = jerk.min(e.limits.jerk);
+        if start < x + half.distance + margin && end > x - margin {
+            let (t1, t2) = (half.time_at_distance(start - x), half.time_at_distance(end - x));
+            let (accel, jerk) = half.most_between(t1, t2);
+            let within = |l: &Limits| accel <= l.accel * (1.0 + 1e-12) && jerk <= l.jerk * (1.0 + 1e-12);
+            if check_only && within(&e.limits) {
+                start = end;
+                continue;
+            }
+            let v = half.speed_at(if rising { t2 } else { t1 }) * (1.0 + 1e-9);
+            let allowed =
+                limits_at(k, v).filter(|l| l.accel >= e.limits.accel && l.jerk >= e.limits.jerk).unwrap_or(e.limits);
+            fits &= within(&allowed);
+            if check_only && !fits {
+                break;
+            }
+            if accel > 0.0 {
+                wider.accel = wider.accel.min(limits.accel * allowed.accel / accel);
+            }
+            if jerk > 0.0 {
+                wider.jerk = wider.jerk.min(allowed.jerk);
+            }
         }
         start = end;
     }
-    Limits { kind: limits.kind, accel, jerk }
+    (fits, wider)
 }
 
 /// The run's speed change from `v_a` to `v_b` under `limits` placed over the
@@ -673,6 +805,62 @@ mod tests {
             let expected = (dv * 2500.0).sqrt().min(250.0);
             assert!(a_top > 0.98 * expected, "peak acceleration {a_top}, {expected} expected");
         }
+    }
+
+    /// A falling run whose elements allow more acceleration at lower speeds (their
+    /// limits at the run's top speed as their own; `limits_at` as a normal acceleration
+    /// `c_k v^2` leaves more of 294 below it), its first element long and the most
+    /// curved: with `limits_at` the half is held in each element to its limits at the
+    /// speed it has there, and to the acceleration it has there (it crosses the first
+    /// element in its jerk phase): faster than under the elements' own limits, its peak
+    /// acceleration near what the last elements allow, and at every sample within the
+    /// limit at the sample's own speed.
+    #[test]
+    fn a_run_takes_each_elements_limits_at_the_speed_it_has_there() {
+        let curvature = [0.02, 0.012, 0.006, 0.003, 0.0];
+        let lengths = [9.6, 1.1, 1.0, 1.1, 0.85];
+        let top = 52.0;
+        let at =
+            |k: usize, v: f64| Limits { kind: ProfileKind::SCurve, accel: 294.0 - curvature[k] * v * v, jerk: 2900.0 };
+        let elements: Vec<RunElement> =
+            (0..5).map(|k| RunElement { length: lengths[k], limits: at(k, top), cap: top }).collect();
+        // Junction speeds of the per-element plan, backward from 11.5 at the end.
+        let mut speeds = vec![11.5];
+        for e in elements.iter().rev() {
+            let v = *speeds.last().unwrap();
+            speeds.push(e.limits.reachable(v, e.length * (1.0 - 1e-12)).min(e.cap));
+        }
+        speeds.reverse();
+        let fixed = run_profiles(&elements, &speeds).expect("a run under the elements' own limits");
+        let mut by_speed = Vec::new();
+        let limits_at = |k: usize, v: f64| Some(at(k, v));
+        assert!(run_profiles_into(&elements, &speeds, &mut by_speed, &limits_at), "a run at the speeds");
+        let duration = |run: &[Profile]| run.iter().map(|p| p.duration).sum::<f64>();
+        assert!(duration(&by_speed) < duration(&fixed), "{} s against {} s", duration(&by_speed), duration(&fixed));
+        let dt = 1e-4;
+        let mut samples: Vec<(f64, usize)> = Vec::new();
+        let (mut offset, mut t) = (0.0, 0.0);
+        for (k, p) in by_speed.iter().enumerate() {
+            while t <= p.duration {
+                samples.push((offset + p.distance_at(t), k));
+                t += dt;
+            }
+            t -= p.duration;
+            offset += lengths[k];
+        }
+        let mut a_top: f64 = 0.0;
+        for w in samples.windows(4) {
+            let v = (w[3].0 - w[2].0) / dt;
+            let a = (w[3].0 - 2.0 * w[2].0 + w[1].0) / dt / dt;
+            let limit = at(w[3].1, v).accel.max(at(w[0].1, v).accel);
+            assert!(a.abs() <= limit * (1.0 + 1e-4) + 1e-2, "accel {a} at {v} in element {}", w[3].1);
+            let j = (w[3].0 - 3.0 * w[2].0 + 3.0 * w[1].0 - w[0].0) / dt / dt / dt;
+            assert!(j.abs() <= 2900.0 * (1.0 + 1e-3) + 1.0, "jerk {j}");
+            a_top = a_top.max(a.abs());
+        }
+        // Under the own limits the half is held to the first element's 294 - 0.02 52^2.
+        let own = at(0, top).accel;
+        assert!(a_top > own + 0.5 * (294.0 - own), "peak acceleration {a_top}, {own} under the own limits");
     }
 
     #[test]
