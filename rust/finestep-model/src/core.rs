@@ -397,19 +397,23 @@ impl Core {
 
     /// The pbp block holds the record port: its record runs, or (with the step engine)
     /// one of its requests has not reached its axis's shaper visit yet.
+    #[inline]
     fn pbp_waits(&self) -> bool {
-        self.pbp.as_ref().is_some_and(PbpCore::busy)
-            || self.engine.as_ref().is_some_and(|e| e.ext_pending(&self.pbp_requests()))
+        // Without the block nothing is ever held (the engine holds only its requests).
+        let Some(p) = &self.pbp else { return false };
+        p.busy() || self.engine.as_ref().is_some_and(|e| e.ext_pending(&self.pbp_requests()))
     }
 
     /// The pbp block's edge (with the values of this cycle: the timer's boundary, `wait`
     /// = [`Self::pbp_waits`] before the edge) and the record the period timer is offered:
     /// none while the block waits; a pbp record as an idle period without `BLOCK_END`.
-    fn pbp_edge(&mut self, inputs: &CoreInputs, wait: bool) -> (bool, PeriodRecord) {
+    /// `None` without the block: the timer is offered `inputs`' record as it is.
+    fn pbp_edge(&mut self, inputs: &CoreInputs, wait: bool) -> Option<(bool, PeriodRecord)> {
+        self.pbp.as_ref()?;
         let n = self.params.n_axes;
         let slots = self.params.step_slots();
         let timer_ready = self.timer.rec_ready();
-        let Some(p) = self.pbp.as_mut() else { return (inputs.rec_valid, inputs.record) };
+        let p = self.pbp.as_mut()?;
         use finestep_interface::{flags, pbp_lanes as at, pbp_record};
         let record = &inputs.record;
         let offered = record.flags & flags::PBP != 0;
@@ -447,11 +451,11 @@ impl Core {
         } else if inputs.clear_errors {
             p.refused = false;
         }
-        if offered {
+        Some(if offered {
             (inputs.rec_valid && !wait, PeriodRecord::from_raw(&[], record.flags & !flags::BLOCK_END))
         } else {
             (inputs.rec_valid && !wait, *record)
-        }
+        })
     }
 
     /// The masked and decoded form of `inputs`.
@@ -614,13 +618,14 @@ impl Core {
     #[inline(always)]
     fn timer_edge(&mut self, inputs: &CoreInputs, period: u32, slot_bits: u32, slot: u32, pbp_wait: bool) -> bool {
         let timer_before = self.timer.output_bits();
-        let (rec_valid, record) = self.pbp_edge(inputs, pbp_wait);
+        let offered = self.pbp_edge(inputs, pbp_wait);
+        let (rec_valid, record) = offered.as_ref().map_or((inputs.rec_valid, &inputs.record), |(v, r)| (*v, r));
         self.timer.step(&TimerInputs {
             run: inputs.run,
             period,
             clear_errors: inputs.clear_errors,
             rec_valid,
-            record: &record,
+            record,
             n_axes: self.params.n_axes,
             slot_bits,
             slot,

@@ -183,13 +183,16 @@ impl StepEngine {
         }
         // The requests from outside: held from the next cycle until their axis's shaper
         // visit (the visit of this cycle takes the one held before, not one coming now).
-        for (a, &r) in inp.ext.iter().enumerate().take(n) {
-            let bit = 1u8 << a;
-            if r != 0 {
-                self.held |= bit;
-                self.held_negative = if r < 0 { self.held_negative | bit } else { self.held_negative & !bit };
-            } else if visited == Some(a) {
-                self.held &= !bit;
+        // Nothing to do while none is held or coming (always without the pbp block).
+        if self.held != 0 || inp.ext != [0; MAX_AXES] {
+            for (a, &r) in inp.ext.iter().enumerate().take(n) {
+                let bit = 1u8 << a;
+                if r != 0 {
+                    self.held |= bit;
+                    self.held_negative = if r < 0 { self.held_negative | bit } else { self.held_negative & !bit };
+                } else if visited == Some(a) {
+                    self.held &= !bit;
+                }
             }
         }
         self.slot = (self.slot + 1) & (self.slots() - 1);
