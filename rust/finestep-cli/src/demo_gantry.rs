@@ -150,7 +150,7 @@ fn run_once(
     sync: bool,
     records: &[PeriodRecord],
     load: (f64, f64, u32),
-) -> anyhow::Result<(PanelMachine, Resolved, GantryRun)> {
+) -> anyhow::Result<(PanelMachine, GantryRun)> {
     let (mut m, resolved) = connect(&format!("demo-gantry-{name}"), sync)?;
     machine_setup::check_gantry_records(&resolved, records, "<demo part 6>")?;
     let clock_hz = resolved.clock_hz;
@@ -216,7 +216,8 @@ fn run_once(
     }
     let halt = match (report.is_none(), chip.halted_since) {
         (true, Some(cycle)) => {
-            let k = (cycle - first) / u64::from(period) + 1;
+            let since = cycle.checked_sub(first).context("halted before the first period boundary")?;
+            let k = since / u64::from(period) + 1;
             if k != u64::from(periods) {
                 bail!("{name}: halted at cycle {cycle}, in period {k}, but PERIOD_COUNT counted {periods}");
             }
@@ -227,16 +228,18 @@ fn run_once(
     let end_ms = ms(end);
     let run =
         GantryRun { name, trace, peak, rms, lost: plant.lost, position: plant.position, status, load_ms, end_ms, halt };
-    Ok((m, resolved, run))
+    Ok((m, run))
 }
 
 /// The `TIMESTAMP` of the first period boundary of a run, read while the core runs:
 /// `LATCH_TIME` (the last boundary's) less the periods since the first
 /// (`PERIOD_COUNT` less `before`, its value before the run, less one), the count read
 /// on both sides of the latch until no boundary came between. The core must be running
-/// (it stops the count at a halt), else this waits for ever.
+/// (it stops the count at a halt): after 16 attempts (two periods of waiting for the
+/// first boundary) this gives up.
 fn first_boundary<B: Bus>(m: &mut finestep_host::Machine<B>, before: u32, period: u32) -> Result<u32, BusError> {
-    loop {
+    const ATTEMPTS: usize = 16;
+    for _ in 0..ATTEMPTS {
         let count = m.bus().read_one(period_count::ADDR)?;
         if count == before {
             // No boundary yet.
@@ -249,6 +252,7 @@ fn first_boundary<B: Bus>(m: &mut finestep_host::Machine<B>, before: u32, period
             return Ok(latch.wrapping_sub(since_first.wrapping_mul(period)));
         }
     }
+    Err(BusError::LatchMoving { attempts: ATTEMPTS, what: "first period boundary (PERIOD_COUNT and LATCH_TIME)" })
 }
 
 /// The peak |error| and its root mean square over the clocks `from..to` (the error
@@ -297,7 +301,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
     println!("    run            mode           peak      RMS    lost   corrections   error at end   alarm   panel");
     let mut runs = Vec::new();
     for (name, sync) in [("forward", false), ("synchronised", true)] {
-        let (mut m, _, run) = run_once(name, sync, &records, (LOAD_MS.0, LOAD_MS.1, LOAD_EVERY))?;
+        let (mut m, run) = run_once(name, sync, &records, (LOAD_MS.0, LOAD_MS.1, LOAD_EVERY))?;
         let panel = read_display(&mut m, &SCAN)?;
         print_row(&run, if sync { "synchronised" } else { "forward" }, &panel.text);
         if run.status.alarm || run.halt.is_some() {
@@ -348,7 +352,7 @@ pub fn run(out: &Path) -> anyhow::Result<()> {
         );
     }
 
-    let (mut m, resolved, stall) = run_once("stall", true, &records, (STALL_MS, f64::INFINITY, 1))?;
+    let (mut m, stall) = run_once("stall", true, &records, (STALL_MS, f64::INFINITY, 1))?;
     let panel = read_display(&mut m, &SCAN)?;
     print_row(&stall, "synchronised", &panel.text);
     let chip = m.bus_ref().link().target();
