@@ -28,8 +28,8 @@ const STEPS_PER_UNIT: [f64; 3] = [1000.0, 400.0, 100.0];
 const TRACED_PERIODS: u64 = 4;
 
 /// The demo on the Verilated chip in lockstep with the model, or with `bus`, parts 1
-/// and 2 on that chip (a board, a served chip, the model alone); parts 3 and 4 need the
-/// simulated machine on the chip's pins and run only in lockstep.
+/// and 2 (and 5) on that chip (a board, a served chip, the model alone); parts 3, 4 and 6
+/// need the simulated machine on the chip's pins and run only in lockstep.
 pub fn run(out: &Path, bus: Option<BusTarget>) -> anyhow::Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let bus = bus.unwrap_or(BusTarget::Lockstep);
@@ -60,14 +60,15 @@ pub fn run(out: &Path, bus: Option<BusTarget>) -> anyhow::Result<()> {
         lathe_part(&bus, out)?;
         println!();
         println!(
-            "finestep demo, parts 3 and 4 (feedback, hand wheel, roller compensation): skipped on {bus}; they need \
-             the simulated machine on the chip's pins (run `finestep demo` without --bus)"
+            "finestep demo, parts 3, 4 and 6 (feedback, hand wheel, roller compensation, the gantry card): skipped on \
+             {bus}; they need the simulated machine on the chip's pins (run `finestep demo` without --bus)"
         );
         return Ok(());
     }
     crate::demo_feedback::run()?;
     crate::roller::demo(out)?;
-    lathe_part(&bus, out)
+    lathe_part(&bus, out)?;
+    crate::demo_gantry::run(out)
 }
 
 /// Seed 003's lathe part (`tests/programs/lathe_pbp.ngc`) on its machine

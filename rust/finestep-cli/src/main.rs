@@ -8,6 +8,7 @@ mod config_file;
 mod conformance;
 mod demo;
 mod demo_feedback;
+mod demo_gantry;
 mod gantry_figure;
 mod machine_setup;
 mod parameter_file;
@@ -189,6 +190,14 @@ enum Command {
         #[arg(long, default_value = "target/demo")]
         out: PathBuf,
     },
+    /// The demo's part 6 alone: the gantry card at the chip's pins (forward, synchronised,
+    /// the alarm).
+    #[command(hide = true)]
+    GantryDemo {
+        /// Where the plot goes.
+        #[arg(long, default_value = "target/demo")]
+        out: PathBuf,
+    },
     /// A compensated X(Z) grinding program from a measured profile and a target.
     Compensate {
         /// The measured profile (`finestep measure`).
@@ -315,6 +324,10 @@ fn main() -> anyhow::Result<()> {
         Command::RollerDemo { out } => {
             std::fs::create_dir_all(&out)?;
             roller::demo(&out)
+        }
+        Command::GantryDemo { out } => {
+            std::fs::create_dir_all(&out)?;
+            demo_gantry::run(&out)
         }
         Command::Compensate { profile, target, target_x, window, tolerance, out } => {
             roller::compensate_file(&profile, target.as_deref(), target_x, window, tolerance, out.as_deref())

@@ -33,7 +33,10 @@ pub use finestep_rtl_sys::{TopVariant, TraceDepth};
 
 pub use gantry_pair::GantryPair;
 pub use mismatch::{describe_difference, Mismatch, WaveformError};
-pub use panel_chip::{panel_chip_params, GantryPlant, PanelChipLockstep, PanelChipMismatch};
+pub use panel_chip::{
+    acknowledge_power_up, panel_chip_params, read_display, DisplayReading, GantryPlant, PanelChipLockstep,
+    PanelChipMismatch, PanelMachine, SlaveLoad,
+};
 pub use pin_monitor::{ChipConfig, PinMonitor};
 pub use plant_loop::PlantLoop;
 pub use top_lockstep::{rtl_top_params, rtl_top_params_of, ModelPins, RtlPins, TopLockstep, TopMismatch};

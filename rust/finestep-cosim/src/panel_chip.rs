@@ -3,14 +3,18 @@
 //! ([`RtlPanelChip`]), a keypad matrix between the column and row pins
 //! ([`Keypad`], its keys changed at scheduled cycles, so a test bounces them), and a
 //! gantry plant ([`GantryPlant`]): two motors on the master's and the slave's step/dir
-//! pins with encoders on channels 0 and 1, the slave's able to stall (lose steps).
+//! pins with encoders on channels 0 and 1, the slave's able to stall (lose steps) or to
+//! run under a load that makes it lose some ([`SlaveLoad`]).
 //! Every packed output and every panel pin is compared on every clock; the host driver
-//! reaches the chip through [`PinTarget`].
+//! reaches the chip through [`PinTarget`] ([`PanelMachine`]). The card's start-up
+//! ([`acknowledge_power_up`]) and its LED display read back from the pins
+//! ([`read_display`]) serve the lockstep tests and `finestep demo`'s gantry part.
 
 use std::collections::VecDeque;
 use std::fmt;
 
-use finestep_host::{BusError, PinTarget};
+use finestep_host::regs::panel_menu;
+use finestep_host::{Bus, BusError, Machine, PanelMenu, PanelScan, PinHost, PinTarget, SpiBus};
 use finestep_model::keypad_scan::Keypad;
 use finestep_model::top::{top_pins, Top, TopInputs};
 use finestep_model::TopParams;
@@ -56,7 +60,27 @@ pub struct GantryPlant {
     pub stall_steps: u32,
     /// Steps it lost in all.
     pub lost: u32,
+    /// A load on the slave's motor, if any (it loses steps while it lasts).
+    pub load: Option<SlaveLoad>,
+    /// The sync error (master less slave position, steps = counts; 0 before the first
+    /// entry) from each cycle it changed in: `(cycle, error)`, in order (a change made to
+    /// `position` by the caller is entered at the next clock).
+    pub error_trace: Vec<(u64, i64)>,
+    load_pulses: u32,
     last_step: [bool; 2],
+}
+
+/// A load on the gantry's slave motor: in cycles `from..to` it loses one step pulse in
+/// `every` (the `every`-th, `2 * every`-th, ... pulse of the load; `every` 1: a stall,
+/// every pulse lost).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SlaveLoad {
+    /// The first cycle of the load.
+    pub from: u64,
+    /// The cycle it ends at (`u64::MAX`: for good).
+    pub to: u64,
+    /// One pulse lost in this many (0 is taken as 1).
+    pub every: u32,
 }
 
 impl GantryPlant {
@@ -70,6 +94,9 @@ impl GantryPlant {
             position: [0; 2],
             stall_steps: 0,
             lost: 0,
+            load: None,
+            error_trace: Vec::new(),
+            load_pulses: 0,
             last_step: [false; 2],
         }
     }
@@ -92,22 +119,44 @@ impl GantryPlant {
         word
     }
 
-    /// The motors take the step pulses of the chip's outputs `outputs` (a rise of the
-    /// step pin moves one step in the direction pin's sense).
-    fn follow(&mut self, outputs: u64) {
+    /// Whether the slave's step pulse in `cycle` is lost (a stall, or the load's turn).
+    fn slave_loses(&mut self, cycle: u64) -> bool {
+        if self.stall_steps > 0 {
+            self.stall_steps -= 1;
+            return true;
+        }
+        match self.load {
+            Some(load) if (load.from..load.to).contains(&cycle) => {
+                self.load_pulses += 1;
+                if self.load_pulses >= load.every.max(1) {
+                    self.load_pulses = 0;
+                    return true;
+                }
+                false
+            }
+            _ => false,
+        }
+    }
+
+    /// The motors take the step pulses of the chip's outputs `outputs` in `cycle` (a
+    /// rise of the step pin moves one step in the direction pin's sense).
+    fn follow(&mut self, cycle: u64, outputs: u64) {
         use top_pins::output as o;
         for (side, &axis) in [self.master, self.slave].iter().enumerate() {
             let step = outputs >> o::pin_a(axis) & 1 != 0;
             let dir = outputs >> o::pin_b(axis) & 1 != 0;
             if step && !self.last_step[side] {
-                if side == 1 && self.stall_steps > 0 {
-                    self.stall_steps -= 1;
+                if side == 1 && self.slave_loses(cycle) {
                     self.lost += 1;
                 } else {
                     self.position[side] += if dir { 1 } else { -1 };
                 }
             }
             self.last_step[side] = step;
+        }
+        let now = self.position[0] - self.position[1];
+        if now != self.error_trace.last().map_or(0, |&(_, e)| e) {
+            self.error_trace.push((cycle, now));
         }
     }
 }
@@ -268,7 +317,7 @@ impl PanelChipLockstep {
         self.outputs = actual.0;
         self.panel = actual.1;
         if let Some(plant) = &mut self.plant {
-            plant.follow(self.outputs);
+            plant.follow(self.cycle, self.outputs);
         }
         Ok(())
     }
@@ -285,4 +334,107 @@ impl PinTarget for PanelChipLockstep {
     fn outputs(&self) -> u64 {
         self.outputs
     }
+}
+
+/// The gantry card's chip behind the host driver's SPI master at its pins.
+pub type PanelMachine = Machine<SpiBus<PinHost<PanelChipLockstep>>>;
+
+/// The card's start-up after `COMMAND.CLEAR_FAULTS`: the E-stop fault of power-up is
+/// latched in the LED menu, which shows its ALARM page; the host acknowledges every
+/// latched alarm whose input is low and shows the MODE page (a write of `PANEL_MENU`
+/// with the page 0 and every other field 0: the card's mode forward, no override, no
+/// display override). Returns the menu as it was before.
+pub fn acknowledge_power_up<B: Bus>(machine: &mut Machine<B>) -> Result<PanelMenu, BusError> {
+    let menu = machine.panel_menu()?;
+    machine.clear_panel_alarms(0b1111)?;
+    machine.bus().write(panel_menu::ADDR, panel_menu::PAGE.set(0, 0))?;
+    machine.bus().wait(8)?;
+    Ok(menu)
+}
+
+/// The character a 7-segment digit shows, from its segment pins (bit 0 = a .. bit 6 =
+/// g; the decimal point, bit 7, ignored), by the glyph table of docs/spec/led_menu.md
+/// written as segment letters; `'?'` for a pattern not in it.
+pub fn glyph_of(segments: u8) -> char {
+    const TABLE: [(char, &str); 24] = [
+        ('0', "abcdef"),
+        ('1', "bc"),
+        ('2', "abdeg"),
+        ('3', "abcdg"),
+        ('4', "bcfg"),
+        ('5', "acdfg"),
+        ('6', "acdefg"),
+        ('7', "abc"),
+        ('8', "abcdefg"),
+        ('9', "abcdfg"),
+        ('A', "abcefg"),
+        ('b', "cdefg"),
+        ('C', "adef"),
+        ('d', "bcdeg"),
+        ('E', "adefg"),
+        ('F', "aefg"),
+        ('-', "g"),
+        ('r', "eg"),
+        ('n', "ceg"),
+        ('y', "bcdfg"),
+        ('c', "deg"),
+        ('h', "cefg"),
+        ('L', "def"),
+        (' ', ""),
+    ];
+    let bits = |letters: &str| letters.bytes().fold(0u8, |w, l| w | 1 << (l - b'a'));
+    TABLE.iter().find(|(_, s)| bits(s) == segments & 0x7f).map(|&(c, _)| c).unwrap_or('?')
+}
+
+/// What the LED display's pins showed ([`read_display`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DisplayReading {
+    /// The 8 characters, digit 7 first (`'?'` for a digit never lit alone, or a
+    /// pattern not in the glyph table).
+    pub text: String,
+    /// Digit 0's decimal point.
+    pub point: bool,
+}
+
+/// Why the display could not be read from the pins.
+#[derive(Debug, thiserror::Error)]
+pub enum DisplayError {
+    /// The bus failed while the display was watched.
+    #[error(transparent)]
+    Bus(#[from] BusError),
+    /// More than one digit was enabled in one clock (the multiplexing is broken).
+    #[error("cycle {cycle}: two digits lit at once (digit pins {digits:#04x})")]
+    TwoDigitsLit {
+        /// The cycle.
+        cycle: u64,
+        /// The digit pins.
+        digits: u8,
+    },
+}
+
+/// The 8 characters the display shows, read from the LED pins over two refreshes of the
+/// display set by `scan` (each digit `16 * refresh_div + 16` clocks): each digit's
+/// segments while it alone is enabled, and the decimal point of digit 0.
+pub fn read_display(machine: &mut PanelMachine, scan: &PanelScan) -> Result<DisplayReading, DisplayError> {
+    let digit_clocks = 16 * u64::from(scan.refresh_div) + 16;
+    let mut chars = ['?'; 8];
+    let mut point = false;
+    for _ in 0..2 * 8 * digit_clocks + 8 {
+        machine.bus().wait(1)?;
+        let chip = machine.bus_ref().link().target();
+        let panel = chip.panel();
+        let digits = (panel >> panel_bits::DIG) as u8;
+        let segments = (panel >> panel_bits::SEG) as u8;
+        if digits.count_ones() > 1 {
+            return Err(DisplayError::TwoDigitsLit { cycle: chip.cycle(), digits });
+        }
+        if digits != 0 {
+            let i = digits.trailing_zeros() as usize;
+            chars[i] = glyph_of(segments);
+            if i == 0 {
+                point = segments & 0x80 != 0;
+            }
+        }
+    }
+    Ok(DisplayReading { text: chars.iter().rev().collect(), point })
 }

@@ -11,16 +11,11 @@
 //! chosen by '#' at the card and overridden by the host, corrections at the slave's step
 //! pin closing the error, and the gantry's alarm latched and shown on the panel.
 
-use finestep_cosim::{GantryPlant, PanelChipLockstep};
+use finestep_cosim::{acknowledge_power_up, read_display, GantryPlant, PanelChipLockstep, PanelMachine as M};
 use finestep_host::regs::{control, panel_menu, status};
-use finestep_host::{
-    AxisSetup, Bus, BusError, GantrySetup, Machine, PanelDisplay, PanelScan, PinHost, PinTiming, SpiBus,
-};
+use finestep_host::{AxisSetup, Bus, GantrySetup, Machine, PanelDisplay, PanelScan, PinHost, PinTiming, SpiBus};
 use finestep_model::top::top_pins;
 use finestep_model::{DriveTiming, PeriodRecord};
-use finestep_rtl_sys::panel_chip::panel_bits;
-
-type M = Machine<SpiBus<PinHost<PanelChipLockstep>>>;
 
 const KEY_NEXT: u8 = 3; // 'A'
 const KEY_ACT: u8 = 14; // '#'
@@ -33,8 +28,14 @@ const SCAN: PanelScan = PanelScan { scan_div: 3, deb_scans: 2, refresh_div: 0 };
 const F: u64 = 16;
 const B: u64 = 2 * F;
 
-fn ok<T>(result: Result<T, BusError>) -> T {
+fn ok<T, E: std::fmt::Display>(result: Result<T, E>) -> T {
     result.unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The display read from the LED pins: its text and digit 0's point.
+fn display(m: &mut M) -> (String, bool) {
+    let reading = ok(read_display(m, &SCAN));
+    (reading.text, reading.point)
 }
 
 fn machine(name: &str) -> M {
@@ -50,11 +51,8 @@ fn machine(name: &str) -> M {
     ok(m.configure_panel(&SCAN));
     // The E-stop fault of power-up (cleared above) is latched in the menu, which shows
     // its ALARM page: the host acknowledges it and shows the MODE page.
-    let menu = ok(m.panel_menu());
+    let menu = ok(acknowledge_power_up(&mut m));
     assert_eq!((menu.alarms, menu.page), (0b0100, 2), "the power-up E-stop fault on the panel");
-    ok(m.clear_panel_alarms(0b1111));
-    ok(m.bus().write(panel_menu::ADDR, panel_menu::PAGE.set(0, 0)));
-    ok(m.bus().wait(8));
     let menu = ok(m.panel_menu());
     assert_eq!((menu.alarms, menu.page), (0, 0));
     m
@@ -102,60 +100,6 @@ fn slip(m: &mut M, delta: i64) {
     }
 }
 
-/// 7-segment glyphs as segment letters (docs/spec/led_menu.md), to read the digits back.
-fn glyph_of(segments: u8) -> char {
-    const TABLE: [(char, &str); 24] = [
-        ('0', "abcdef"),
-        ('1', "bc"),
-        ('2', "abdeg"),
-        ('3', "abcdg"),
-        ('4', "bcfg"),
-        ('5', "acdfg"),
-        ('6', "acdefg"),
-        ('7', "abc"),
-        ('8', "abcdefg"),
-        ('9', "abcdfg"),
-        ('A', "abcefg"),
-        ('b', "cdefg"),
-        ('C', "adef"),
-        ('d', "bcdeg"),
-        ('E', "adefg"),
-        ('F', "aefg"),
-        ('-', "g"),
-        ('r', "eg"),
-        ('n', "ceg"),
-        ('y', "bcdfg"),
-        ('c', "deg"),
-        ('h', "cefg"),
-        ('L', "def"),
-        (' ', ""),
-    ];
-    let bits = |letters: &str| letters.bytes().fold(0u8, |w, l| w | 1 << (l - b'a'));
-    TABLE.iter().find(|(_, s)| bits(s) == segments & 0x7f).map(|&(c, _)| c).unwrap_or('?')
-}
-
-/// The 8 characters (7..0) the display shows, read from the pins over two refreshes:
-/// each digit's segments while it alone is enabled; the decimal point of digit 0.
-fn read_display(m: &mut M) -> (String, bool) {
-    let mut chars = ['?'; 8];
-    let mut dp = false;
-    for _ in 0..2 * 8 * 16 + 8 {
-        ok(m.bus().wait(1));
-        let panel = chip(m).panel();
-        let dig = (panel >> panel_bits::DIG) as u8;
-        let seg = (panel >> panel_bits::SEG) as u8;
-        assert!(dig.count_ones() <= 1, "two digits lit: {dig:#x}");
-        if dig != 0 {
-            let i = dig.trailing_zeros() as usize;
-            chars[i] = glyph_of(seg);
-            if i == 0 {
-                dp = seg & 0x80 != 0;
-            }
-        }
-    }
-    (chars.iter().rev().collect(), dp)
-}
-
 /// Bounced presses through the matrix pins make one event each, read through the bus;
 /// the display override's value is read back from the LED pins.
 #[test]
@@ -187,13 +131,13 @@ fn panel_keys_bounced_and_display() {
     // The LED pins: the display override, decimal and hex; back to the MODE page.
     ok(m.set_panel_display(Some(PanelDisplay { value: (-1234i16) as u16, hex: false })));
     ok(m.bus().wait(8));
-    assert_eq!(read_display(&mut m).0, "   -1234");
+    assert_eq!(display(&mut m).0, "   -1234");
     ok(m.set_panel_display(Some(PanelDisplay { value: 0xBEEF, hex: true })));
     ok(m.bus().wait(8));
-    assert_eq!(read_display(&mut m).0, "   hbEEF");
+    assert_eq!(display(&mut m).0, "   hbEEF");
     ok(m.set_panel_display(None));
     ok(m.bus().wait(8));
-    assert_eq!(read_display(&mut m), ("     Frd".to_string(), false));
+    assert_eq!(display(&mut m), ("     Frd".to_string(), false));
 }
 
 /// The gantry engaged at rest with the slave 6 counts behind: forward mode leaves the
@@ -263,12 +207,12 @@ fn gantry_alarm_reaches_the_panel() {
     ok(m.configure_gantry(&setup));
     ok(m.enable_gantry(true));
     ok(m.bus().wait(16));
-    assert_eq!(read_display(&mut m), ("     Frd".to_string(), false));
+    assert_eq!(display(&mut m), ("     Frd".to_string(), false));
     // 'A' shows the ERROR page: "E      0".
     let at = chip(&mut m).cycle() + 5;
     let end = press(&mut m, KEY_NEXT, at, 100, 1);
     settle(&mut m, end);
-    assert_eq!(read_display(&mut m).0, "E      0");
+    assert_eq!(display(&mut m).0, "E      0");
 
     // The slave is pushed 5 counts ahead: error -5, past the limit of 4.
     slip(&mut m, 5);
@@ -277,7 +221,7 @@ fn gantry_alarm_reaches_the_panel() {
     assert!(s.alarm && s.error == -5, "{s:?}");
     let menu = ok(m.panel_menu());
     assert_eq!((menu.alarms, menu.page), (0b0001, 2), "flag 0 latched, the ALARM page shown");
-    assert_eq!(read_display(&mut m), ("AL  0001".to_string(), true));
+    assert_eq!(display(&mut m), ("AL  0001".to_string(), true));
 
     // '#' while the alarm's input is still high: the flag stays.
     let at = chip(&mut m).cycle() + 5;
@@ -294,7 +238,7 @@ fn gantry_alarm_reaches_the_panel() {
     let end = press(&mut m, KEY_ACT, at, 100, 4);
     settle(&mut m, end);
     assert_eq!(ok(m.panel_menu()).alarms, 0);
-    assert_eq!(read_display(&mut m), ("AL  0000".to_string(), false));
+    assert_eq!(display(&mut m), ("AL  0000".to_string(), false));
 }
 
 /// The gantry's alarm halts the machine as an E-stop does (docs/spec/finestep_top.md,
