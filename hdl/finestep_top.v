@@ -105,6 +105,9 @@ module finestep_top #(
     // times 32 / STEP_DIGIT with the digit-serial engine (derived in hdl/interface.toml,
     // as finestep_core derives it).
     localparam STEP_ROUND_LOG2 = FS_CHECK_STEP_ROUND_LOG2;
+    // Write-only timings with the digit-serial engine: the register file holds each as
+    // the engine reads it, its bits from log2 R up and whether X mod R != 0.
+    localparam TIMING_ROUND_L = (AXIS_WRITE_ONLY != 0 && STEP_SHARED != 0 && STEP_DIGIT != 0) ? STEP_ROUND_LOG2 : 0;
 
     // A FIFO record: the increments, then the flags (FS_REC_*).
     localparam INC_W   = FS_REC_INC_WIDTH * N_AXES;
@@ -298,7 +301,8 @@ module finestep_top #(
         .WD_W(WD_W), .CLOCK_HZ(CLOCK_HZ), .HAS_SPI(HAS_SPI), .HAS_PARALLEL(HAS_PARALLEL),
         .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .READ_STORE(READ_STORE), .RAM_BLOCK(RAM_BLOCK),
         .STEP_ROUND_LOG2(STEP_ROUND_LOG2), .ONE_SNAPSHOT(ONE_SNAPSHOT), .INC_WRITE_ONLY(INC_WRITE_ONLY),
-        .AXIS_WRITE_ONLY(AXIS_WRITE_ONLY), .INC_DIRECT(INC_DIRECT), .ENC_COUNT_W(ENC_COUNT_W)
+        .AXIS_WRITE_ONLY(AXIS_WRITE_ONLY), .INC_DIRECT(INC_DIRECT), .ENC_COUNT_W(ENC_COUNT_W),
+        .TIMING_ROUND_L(TIMING_ROUND_L)
     ) registers (
         .clk(clk), .rst(rst),
         .spi_req(spi_req), .spi_we(spi_we), .spi_addr(spi_addr), .spi_wdata(spi_wdata), .spi_grant(spi_grant),

@@ -25,7 +25,10 @@
 // flip-flop); 1 for area, the CPLD's (one check per lane of the offered record, whose
 // lanes outside rec_alt_lane are zero and always pass, each one carry chain against the
 // bound its sign and low half choose; the record zeroed at its load when not taken, by
-// the flip-flops' synchronous reset, so no gate on the way out).
+// the flip-flops' synchronous reset, so no gate on the way out; one bound register,
+// W = min(V - 1, 2^16), for every lane: floor(|d| / 2^16) >= V as one carry chain of
+// d's high half, inverted for a negative d, and a carry in for a negative d with a zero
+// low half, against W; the period counted from P down to 1, so no P - 1 register).
 module period_timer #(
     parameter N_AXES  = 4,
     parameter P_WIDTH = 20,
@@ -73,6 +76,7 @@ module period_timer #(
     reg [16:0]          bound_pos_reg;          // min(V, 2^16)
     reg [16:0]          bound_neg_reg;          // 2^16 - min(V, 2^16)
     reg [16:0]          bound_neg_zero_reg;     // 2^16 - min(V - 1, 2^16)
+    reg [16:0]          bound_w_reg;            // min(V - 1, 2^16) (AREA 1's one bound)
     // The record taken at the last boundary (or zeros) and whether it was acceptable: the
     // check's result ends at one flip-flop, which masks the increments and the flag on
     // their way out (inc = the record if acceptable, else zeros), instead of steering the
@@ -88,6 +92,11 @@ module period_timer #(
     reg                 boundary_reg;
 
     wire boundary = boundary_reg;
+    // AREA counts a period from P down to 1 (reloaded with p_act, stopped at 1), AREA 0
+    // from P - 1 down to 0 (reloaded with p_act_minus_one): remaining - R_ONE is the
+    // spec's remaining either way.
+    localparam [P_WIDTH-1:0] R_ONE = (AREA != 0) ? {{(P_WIDTH-1){1'b0}}, 1'b1} : {P_WIDTH{1'b0}};
+    wire [P_WIDTH-1:0] reload = (AREA != 0) ? p_act_reg : p_act_minus_one_reg;
     // max(P with its low SL bits cleared, 2^SL); with SL = 0, max(P, 1).
     localparam [P_WIDTH-1:0] P_MIN = {{(P_WIDTH-1){1'b0}}, 1'b1} << SL;
     wire [P_WIDTH-1:0] period_rounded = (period_clocks >> SL) << SL;
@@ -127,18 +136,6 @@ module period_timer #(
                                : ({1'b0, whole_high} >= b_pos);
         end
     endfunction
-    // The same check with one carry chain (AREA): the bound chosen by the sign and the
-    // low half first, then h >= bound, negated for a negative d (h < bound).
-    function lane_fails_one_chain;
-        input [31:0] d;
-        input [16:0] b_pos, b_neg, b_neg_zero;
-        reg   [16:0] bound;
-        begin
-            bound = !d[31] ? b_pos :
-                    (d[FS_REC_INC_FRAC_BITS-1:0] == {FS_REC_INC_FRAC_BITS{1'b0}}) ? b_neg_zero : b_neg;
-            lane_fails_one_chain = d[31] ^ ({1'b0, d[FS_REC_INC_FRAC_BITS +: 16]} >= bound);
-        end
-    endfunction
     // The alternate record's select: a constant 0 without it (HAS_ALT 0: in a hierarchical
     // build the parent's tie-off would not reach in here, leaving the select's logic).
     wire alt = (HAS_ALT != 0) && rec_alt;
@@ -149,6 +146,21 @@ module period_timer #(
         for (lane = 0; lane < N_AXES; lane = lane + 1)
             rec_offer[32*lane +: 32] = alt ? (rec_alt_lane[lane] ? rec_alt_inc : 32'd0) : rec_inc[32*lane +: 32];
     end
+    // AREA's check, with W = min(V - 1, 2^16): floor(|d| / 2^16) is x = h (d >= 0), or
+    // ~h + z for d < 0 (16 bits, z = 1 when the low half is zero: 2^16 - h; else
+    // 2^16 - 1 - h), and fails when x + z >= V, i.e. x + z > W (x + z <= 2^16, so
+    // replacing V - 1 by W changes no result): the carry out of x + ~W + z, one chain.
+    wire [N_AXES-1:0] lane_fails_w;
+    genvar w_lane;
+    generate
+        for (w_lane = 0; w_lane < N_AXES; w_lane = w_lane + 1) begin : w_check
+            wire [31:0] d = rec_offer[32*w_lane +: 32];
+            wire [17:0] sum = {2'b00, d[FS_REC_INC_FRAC_BITS +: 16] ^ {16{d[31]}}} + {1'b0, ~bound_w_reg} +
+                              {17'd0, d[31] && (d[FS_REC_INC_FRAC_BITS-1:0] == {FS_REC_INC_FRAC_BITS{1'b0}})};
+            assign lane_fails_w[w_lane] = sum[17];
+            wire unused_sum = &{1'b0, sum[16:0]};
+        end
+    endgenerate
     // AREA 0: the main record's lanes, each against the three bounds.
     reg main_ok;
     // AREA 1: the offered record's lanes, each against its one bound.
@@ -160,8 +172,7 @@ module period_timer #(
         for (axis = 0; axis < N_AXES; axis = axis + 1) begin
             if (AREA == 0 && lane_fails(rec_inc[32*axis +: 32], bound_pos_reg, bound_neg_reg, bound_neg_zero_reg))
                 main_ok = 1'b0;
-            if (AREA != 0 &&
-                    lane_fails_one_chain(rec_offer[32*axis +: 32], bound_pos_reg, bound_neg_reg, bound_neg_zero_reg))
+            if (AREA != 0 && lane_fails_w[axis])
                 offer_ok = 1'b0;
         end
     end
@@ -184,7 +195,7 @@ module period_timer #(
         if (!run) begin
             active_reg    <= 1'b0;
             boundary_reg  <= 1'b0;
-            remaining_reg <= {P_WIDTH{1'b0}};
+            remaining_reg <= R_ONE;
             inc_reg       <= {32*N_AXES{1'b0}};
             cur_end_reg   <= 1'b0;
             taken_ok_reg  <= 1'b0;
@@ -193,6 +204,7 @@ module period_timer #(
             bound_pos_reg       <= sat17(visits_sampled);
             bound_neg_reg       <= TWO_16 - sat17(visits_sampled);
             bound_neg_zero_reg  <= TWO_16 - sat17(visits_sampled_minus_one);
+            bound_w_reg         <= sat17(visits_sampled_minus_one);
         end else if (!active_reg) begin
             active_reg   <= start_ok;
             boundary_reg <= start_ok;       // remaining is 0 while stopped
@@ -201,12 +213,13 @@ module period_timer #(
             bound_pos_reg       <= sat17(visits_sampled);
             bound_neg_reg       <= TWO_16 - sat17(visits_sampled);
             bound_neg_zero_reg  <= TWO_16 - sat17(visits_sampled_minus_one);
+            bound_w_reg         <= sat17(visits_sampled_minus_one);
         end else if (!boundary) begin
             remaining_reg <= remaining_reg - {{(P_WIDTH-1){1'b0}}, 1'b1};
-            boundary_reg  <= (remaining_reg == {{(P_WIDTH-1){1'b0}}, 1'b1});
+            boundary_reg  <= (remaining_reg == R_ONE + {{(P_WIDTH-1){1'b0}}, 1'b1});
         end else begin
-            remaining_reg <= p_act_minus_one_reg;
-            boundary_reg  <= (p_act_minus_one_reg == {P_WIDTH{1'b0}});
+            remaining_reg <= reload;
+            boundary_reg  <= (reload == R_ONE);
             taken_ok_reg <= record_ok;
             if (take_record && (AREA == 0 || record_ok)) begin
                 inc_reg     <= rec_offer;
@@ -220,12 +233,13 @@ module period_timer #(
         if (rst) begin
             active_reg       <= 1'b0;
             boundary_reg     <= 1'b0;
-            remaining_reg    <= {P_WIDTH{1'b0}};
+            remaining_reg    <= R_ONE;
             p_act_reg        <= P_MIN;
             p_act_minus_one_reg <= P_MIN - {{(P_WIDTH-1){1'b0}}, 1'b1};
             bound_pos_reg        <= 17'd1;                  // V = 1
             bound_neg_reg        <= TWO_16 - 17'd1;
             bound_neg_zero_reg   <= TWO_16;
+            bound_w_reg          <= 17'd0;
             inc_reg          <= {32*N_AXES{1'b0}};
             cur_end_reg      <= 1'b0;
             taken_ok_reg     <= 1'b0;
@@ -255,6 +269,8 @@ module period_timer #(
         f_in_period <= !rst && run && (boundary || f_in_period);
     end
 
+    // The spec's remaining (see R_ONE).
+    wire [P_WIDTH-1:0] f_remaining = remaining_reg - R_ONE;
     integer f_axis;
     reg [31:0] f_magnitude, f_rec_magnitude;
     reg        f_record_ok;       // the definition: every floor(|d| / 2^16) < P
@@ -271,15 +287,17 @@ module period_timer #(
         assert (bound_pos_reg == sat17(p_act_reg >> SL));
         assert (bound_neg_reg == TWO_16 - sat17(p_act_reg >> SL));
         assert (bound_neg_zero_reg == TWO_16 - sat17((p_act_reg >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1}));
+        assert (bound_w_reg == sat17((p_act_reg >> SL) - {{(P_WIDTH-1){1'b0}}, 1'b1}));
         // With the shared engine a running period is a whole number of visits.
         if (active_reg && SL > 0) assert (((p_act_reg >> SL) << SL) == p_act_reg && (p_act_reg >> SL) != {P_WIDTH{1'b0}});
-        assert (boundary_reg == (active_reg && remaining_reg == {P_WIDTH{1'b0}}));
+        assert (boundary_reg == (active_reg && f_remaining == {P_WIDTH{1'b0}}));
+        assert (remaining_reg >= R_ONE);
         assert (record_ok == f_record_ok);
         assert (p_act_reg != {P_WIDTH{1'b0}});
-        assert (remaining_reg < p_act_reg);
+        assert (f_remaining < p_act_reg);
         if (active_reg && !boundary) assert (f_in_period);
-        if (f_in_period) assert (active_reg && f_since_boundary + {1'b0, remaining_reg} == {1'b0, p_act_reg});
-        if (!active_reg) assert (remaining_reg == {P_WIDTH{1'b0}} && inc_reg == {32*N_AXES{1'b0}});
+        if (f_in_period) assert (active_reg && f_since_boundary + {1'b0, f_remaining} == {1'b0, p_act_reg});
+        if (!active_reg) assert (f_remaining == {P_WIDTH{1'b0}} && inc_reg == {32*N_AXES{1'b0}});
         for (f_axis = 0; f_axis < N_AXES; f_axis = f_axis + 1) begin
             f_magnitude = inc[32*f_axis+31] ? (~inc[32*f_axis +: 32] + 32'd1) : inc[32*f_axis +: 32];
             if (active_reg) assert ({{P_WIDTH{1'b0}}, f_magnitude[31:FS_REC_INC_FRAC_BITS]} < {16'd0, p_act_reg >> SL});

@@ -35,7 +35,10 @@ module register_file #(
     parameter AXIS_WRITE_ONLY = 0,    // 1: AXIS_TIMING_A/B, AXIS_MODE read 0 (the same, with READ_STORE 0)
     parameter INC_DIRECT      = 0,    // 1: a RECORD_INC write goes straight into the FIFO's record being
                                       // written, no copy here and no push sequence (needs INC_WRITE_ONLY 1)
-    parameter ENC_COUNT_W     = 32    // the encoder bank's words (VERSION.ENC_COUNT_16 when 16)
+    parameter ENC_COUNT_W     = 32,   // the encoder bank's words (VERSION.ENC_COUNT_16 when 16)
+    parameter TIMING_ROUND_L  = 0     // L > 0 (write-only timings, the digit-serial engine of round
+                                      // 2^L): each timing X held as the engine reads it, X's bits
+                                      // from L up and bit 0 = (X mod 2^L != 0), bits 1 .. L-1 0
 ) (
     // clock, reset
     input  wire                         clk,
@@ -181,6 +184,16 @@ module register_file #(
     reg [TIMING_W*N_AXES-1:0]  step_space_reg;
     reg [TIMING_W*N_AXES-1:0]  dir_setup_reg;
     reg [TIMING_W*N_AXES-1:0]  dir_hold_reg;
+    // The timings as held (TIMING_ROUND_L): the digit-serial engine compares a counter of
+    // rounds with X >> L and X mod 2^L != 0 only (docs/spec/step_serial.md), so with
+    // write-only timings nothing else of X is ever seen: bits 1 .. L-1 are not kept.
+    localparam [TIMING_W-1:0] ROUND_LOW = (1 << TIMING_ROUND_L) - 1;
+    function [TIMING_W-1:0] held_timing;
+        input [TIMING_W-1:0] x;
+        begin
+            held_timing = (x & ~ROUND_LOW) | {{(TIMING_W-1){1'b0}}, |(x & ROUND_LOW)};
+        end
+    endfunction
     reg [FS_OUT_MODE_WIDTH*N_AXES-1:0] out_mode_reg;
     reg [FS_INVERT_WIDTH*N_AXES-1:0]   invert_reg;
     reg [INC_W*N_AXES-1:0]     record_inc_reg;
@@ -631,10 +644,10 @@ module register_file #(
             start_level_reg       <= FS_START_LEVEL_LEVEL_RESET;
             irq_mask_reg          <= FS_IRQ_MASK_MASK_RESET;
             axis_enable_reg       <= FS_AXIS_ENABLE_ENABLE_RESET[N_AXES-1:0];
-            step_len_reg          <= {N_AXES{FS_AXIS_TIMING_A_STEP_LEN_RESET[TIMING_W-1:0]}};
-            step_space_reg        <= {N_AXES{FS_AXIS_TIMING_A_STEP_SPACE_RESET[TIMING_W-1:0]}};
-            dir_setup_reg         <= {N_AXES{FS_AXIS_TIMING_B_DIR_SETUP_RESET[TIMING_W-1:0]}};
-            dir_hold_reg          <= {N_AXES{FS_AXIS_TIMING_B_DIR_HOLD_RESET[TIMING_W-1:0]}};
+            step_len_reg          <= {N_AXES{held_timing(FS_AXIS_TIMING_A_STEP_LEN_RESET[TIMING_W-1:0])}};
+            step_space_reg        <= {N_AXES{held_timing(FS_AXIS_TIMING_A_STEP_SPACE_RESET[TIMING_W-1:0])}};
+            dir_setup_reg         <= {N_AXES{held_timing(FS_AXIS_TIMING_B_DIR_SETUP_RESET[TIMING_W-1:0])}};
+            dir_hold_reg          <= {N_AXES{held_timing(FS_AXIS_TIMING_B_DIR_HOLD_RESET[TIMING_W-1:0])}};
             out_mode_reg          <= {N_AXES{FS_AXIS_MODE_OUT_MODE_RESET}};
             for (axis = 0; axis < N_AXES; axis = axis + 1) begin
                 invert_reg[FS_INVERT_WIDTH*axis + FS_INVERT_PIN_A_BIT]  <= FS_AXIS_MODE_INVERT_A_RESET;
@@ -662,15 +675,15 @@ module register_file #(
                 for (axis = 0; axis < N_AXES; axis = axis + 1) begin
                     if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + axis * FS_AXIS_TIMING_A_STRIDE) begin
                         step_len_reg[TIMING_W*axis +: TIMING_W] <=
-                            bus_wdata[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W];
+                            held_timing(bus_wdata[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]);
                         step_space_reg[TIMING_W*axis +: TIMING_W] <=
-                            bus_wdata[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W];
+                            held_timing(bus_wdata[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W]);
                     end
                     if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + axis * FS_AXIS_TIMING_B_STRIDE) begin
                         dir_setup_reg[TIMING_W*axis +: TIMING_W] <=
-                            bus_wdata[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W];
+                            held_timing(bus_wdata[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W]);
                         dir_hold_reg[TIMING_W*axis +: TIMING_W] <=
-                            bus_wdata[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W];
+                            held_timing(bus_wdata[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W]);
                     end
                     if ({{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + axis * FS_AXIS_MODE_STRIDE) begin
                         out_mode_reg[FS_OUT_MODE_WIDTH*axis +: FS_OUT_MODE_WIDTH] <=
@@ -925,6 +938,33 @@ module register_file #(
                 f_ff_word[INC_W-1:0] = record_inc_reg[INC_W*f_axis +: INC_W];
         end
     end
+    // The timings: a write of an axis's timing word lands in its registers as
+    // held_timing says (as written when TIMING_ROUND_L = 0), and every timing is always
+    // in that form (bits 1 .. L-1 clear).
+    integer f_t;
+    always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+        for (f_t = 0; f_t < N_AXES; f_t = f_t + 1) begin
+            assert (step_len_reg[TIMING_W*f_t +: TIMING_W] == held_timing(step_len_reg[TIMING_W*f_t +: TIMING_W]));
+            assert (step_space_reg[TIMING_W*f_t +: TIMING_W] == held_timing(step_space_reg[TIMING_W*f_t +: TIMING_W]));
+            assert (dir_setup_reg[TIMING_W*f_t +: TIMING_W] == held_timing(dir_setup_reg[TIMING_W*f_t +: TIMING_W]));
+            assert (dir_hold_reg[TIMING_W*f_t +: TIMING_W] == held_timing(dir_hold_reg[TIMING_W*f_t +: TIMING_W]));
+            if ($past(write) && {{(WORD_W-ADDR_W){1'b0}}, $past(bus_addr)} ==
+                    {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + f_t * FS_AXIS_TIMING_A_STRIDE) begin
+                assert (step_len_reg[TIMING_W*f_t +: TIMING_W] ==
+                        held_timing($past(bus_wdata[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W])));
+                assert (step_space_reg[TIMING_W*f_t +: TIMING_W] ==
+                        held_timing($past(bus_wdata[FS_AXIS_TIMING_A_STEP_SPACE_LSB +: TIMING_W])));
+            end
+            if ($past(write) && {{(WORD_W-ADDR_W){1'b0}}, $past(bus_addr)} ==
+                    {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + f_t * FS_AXIS_TIMING_B_STRIDE) begin
+                assert (dir_setup_reg[TIMING_W*f_t +: TIMING_W] ==
+                        held_timing($past(bus_wdata[FS_AXIS_TIMING_B_DIR_SETUP_LSB +: TIMING_W])));
+                assert (dir_hold_reg[TIMING_W*f_t +: TIMING_W] ==
+                        held_timing($past(bus_wdata[FS_AXIS_TIMING_B_DIR_HOLD_LSB +: TIMING_W])));
+            end
+        end
+    end
+
     // The word f_word of the store, once written, holds its register's readable fields
     // (the invariant that makes the read property inductive): the register behind f_word
     // is the one a write granted now would land in, decoded by f_word_reg below.

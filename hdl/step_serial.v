@@ -255,22 +255,30 @@ module step_serial #(
     // Compares cnt * R >= X, i.e. cnt >= (X >> LR) + (X mod R != 0): a borrow chain each.
     // The visit's timings are the ones its first clock sees: held for its later digits,
     // so a timing written in the middle of a visit applies from the axis's next visit.
-    reg  [TIMING_W-1:0] len_reg, space_reg, setup_reg, hold_reg;
-    wire [TIMING_W-1:0] len_x   = first ? len_all[TIMING_W*sh_axis +: TIMING_W] : len_reg;
-    wire [TIMING_W-1:0] space_x = first ? space_all[TIMING_W*sh_axis +: TIMING_W] : space_reg;
-    wire [TIMING_W-1:0] setup_x = first ? setup_all[TIMING_W*sh_axis +: TIMING_W] : setup_reg;
-    wire [TIMING_W-1:0] hold_x  = first ? hold_all[TIMING_W*sh_axis +: TIMING_W] : hold_reg;
-    wire [TIMING_W-1:0] cmp_a_x = c_half ? setup_x : len_x;     // dcnt against dir_setup
-    wire [15:0] ya = {{(16-TIMING_W+LR){1'b0}}, cmp_a_x[TIMING_W-1:LR]};
-    wire [15:0] yb = {{(16-TIMING_W+LR){1'b0}}, space_x[TIMING_W-1:LR]};
-    wire [15:0] yc = {{(16-TIMING_W+LR){1'b0}}, hold_x[TIMING_W-1:LR]};
+    // Each held as the compares read it: X >> LR above a bit for X mod R == 0.
+    localparam XW = TIMING_W - LR + 1;
+    function [XW-1:0] rounds;
+        input [TIMING_W-1:0] x;
+        begin
+            rounds = {x[TIMING_W-1:LR], x[LR-1:0] == {LR{1'b0}}};
+        end
+    endfunction
+    reg  [XW-1:0] len_reg, space_reg, setup_reg, hold_reg;
+    wire [XW-1:0] len_x   = first ? rounds(len_all[TIMING_W*sh_axis +: TIMING_W]) : len_reg;
+    wire [XW-1:0] space_x = first ? rounds(space_all[TIMING_W*sh_axis +: TIMING_W]) : space_reg;
+    wire [XW-1:0] setup_x = first ? rounds(setup_all[TIMING_W*sh_axis +: TIMING_W]) : setup_reg;
+    wire [XW-1:0] hold_x  = first ? rounds(hold_all[TIMING_W*sh_axis +: TIMING_W]) : hold_reg;
+    wire [XW-1:0] cmp_a_x = c_half ? setup_x : len_x;     // dcnt against dir_setup
+    wire [15:0] ya = {{(16-XW+1){1'b0}}, cmp_a_x[XW-1:1]};
+    wire [15:0] yb = {{(16-XW+1){1'b0}}, space_x[XW-1:1]};
+    wire [15:0] yc = {{(16-XW+1){1'b0}}, hold_x[XW-1:1]};
     reg          cya_reg, cyb_reg, cyc2_reg;
     wire [D:0]   cmp_a = {1'b0, cnt_new} + {1'b0, ~ya[D*k +: D]} +
-                         {{D{1'b0}}, k_first ? (cmp_a_x[LR-1:0] == {LR{1'b0}}) : cya_reg};
+                         {{D{1'b0}}, k_first ? cmp_a_x[0] : cya_reg};
     wire [D:0]   cmp_b = {1'b0, cnt_new} + {1'b0, ~yb[D*k +: D]} +
-                         {{D{1'b0}}, k_first ? (space_x[LR-1:0] == {LR{1'b0}}) : cyb_reg};
+                         {{D{1'b0}}, k_first ? space_x[0] : cyb_reg};
     wire [D:0]   cmp_c = {1'b0, cnt_new} + {1'b0, ~yc[D*k +: D]} +
-                         {{D{1'b0}}, k_first ? (hold_x[LR-1:0] == {LR{1'b0}}) : cyc2_reg};
+                         {{D{1'b0}}, k_first ? hold_x[0] : cyc2_reg};
     reg          len_new_reg, space_new_reg, hold_new_reg, cfull_new_reg;
 
     // Pin functions of the state the visit leaves.
