@@ -564,12 +564,15 @@ impl ObjectCache {
         let compiler = build.get_compiler();
         let version = Command::new(compiler.path()).arg("--version").output().map(|o| o.stdout).unwrap_or_default();
         // Its arguments without the include directories under OUT_DIR (their headers are
-        // hashed above; the directory differs between clippy's build and the tests').
+        // hashed above; the directory differs between clippy's build and the tests'), and
+        // with the repository's own path as `<repo>` (its files are hashed above): a git
+        // worktree of the same sources shares the entry.
         let out = env::var("OUT_DIR").unwrap_or_default();
+        let repo_path = repo.to_string_lossy();
         let args: Vec<String> = compiler
             .args()
             .iter()
-            .map(|arg| arg.to_string_lossy().into_owned())
+            .map(|arg| arg.to_string_lossy().replace(repo_path.as_ref(), "<repo>"))
             .filter(|arg| out.is_empty() || !arg.contains(&out))
             .collect();
         feed("compiler", format!("{} {args:?}", compiler.path().display()).as_bytes());
