@@ -21,7 +21,7 @@ use std::path::Path;
 use anyhow::{bail, Context};
 use finestep_cosim::{acknowledge_power_up, read_display, GantryPlant, PanelChipLockstep, PanelMachine, SlaveLoad};
 use finestep_host::regs::{control, latch_time, period_count, status};
-use finestep_host::stream::{self, RunReport, StreamEvent};
+use finestep_host::stream::{self, RunReport};
 use finestep_host::{Bus, BusError, GantryStatus, PanelMenu, PanelScan};
 use finestep_model::PeriodRecord;
 use finestep_planner::config::{GantryConfig, Resolved};
@@ -72,18 +72,6 @@ fn gantry_config(sync: bool) -> MachineConfig {
     };
     config
 }
-
-/// The stream ended by the observer: the machine halted.
-#[derive(Debug)]
-struct Halted;
-
-impl std::fmt::Display for Halted {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("the machine halted during the stream (STATUS.HALT)")
-    }
-}
-
-impl std::error::Error for Halted {}
 
 /// What one run showed.
 struct GantryRun {
@@ -161,7 +149,7 @@ fn run_once(
     // boundary is found at the next event, the core running.
     let mut t0 = None;
     let mut first_ts = None;
-    let result = stream::run(&mut m, records.iter().copied(), &machine_setup::stream_config(&resolved), |m, event| {
+    let result = stream::run(&mut m, records.iter().copied(), &machine_setup::stream_config(&resolved), |m, _| {
         if t0.is_some() && first_ts.is_none() {
             first_ts = Some(first_boundary(m, periods_before, period)?);
         }
@@ -173,14 +161,12 @@ fn run_once(
             let to = if load.1.is_finite() { now + clocks(load.1) } else { u64::MAX };
             plant.load = Some(SlaveLoad { from: now + clocks(load.0), to, every: load.2 });
         }
-        if event == StreamEvent::Waited && status::HALT.get(m.status()?) != 0 {
-            return Err(BusError::Transport(Box::new(Halted)));
-        }
         Ok(())
     });
     let report: Option<RunReport> = match result {
         Ok(report) => Some(report),
-        Err(BusError::Transport(e)) if e.is::<Halted>() => None,
+        // The streamer ends the run once it sees the halt (STATUS.HALT).
+        Err(BusError::Halted { .. }) => None,
         Err(e) => return Err(e.into()),
     };
     if let Some(report) = &report {

@@ -1,6 +1,7 @@
 //! Fault scenarios on the bus-level top, RTL and model in lockstep, driven through the
 //! host driver: a forced underrun, FIFO overflow (SPI and 8080), the watchdog, the
-//! E-stop, and coherent position reads while moving.
+//! E-stop (also mid-stream, through the streamer), and coherent position reads while
+//! moving.
 //!
 //! Every expectation is computed here from docs/spec/, not taken from the model: pulse
 //! counts are the DDA's round-half-up of the summed increments, counters and flags are
@@ -16,7 +17,7 @@ use finestep_host::regs::{
     axis_status, command, control, crc_error_count, estop_filter, frame_error_count, parallel_error_count, record_inc,
     record_push, refused_record_count, start_level, status, underrun_count, watchdog_timeout,
 };
-use finestep_host::stream::wait_idle;
+use finestep_host::stream::{self, wait_idle, StreamConfig, StreamEvent};
 use finestep_host::{AxisSetup, Bus, BusError, Machine, PinHost, PinTiming};
 use finestep_model::{DriveTiming, PeriodRecord};
 use pin_probe::{
@@ -396,6 +397,64 @@ fn estop_halts_mid_move() {
     assert_eq!(positions(&mut m), stopped);
     ok(m.command(command::CLEAR_FAULTS.set(0, 1)));
     resume_exactly(&mut m, &stopped, 31, P);
+}
+
+/// An E-stop while the streamer waits for room: the halt flushes the FIFO and clears
+/// RUN, so the room that appears is not records having run; `stream::run` polls STATUS
+/// with FIFO_LEVEL and ends with `BusError::Halted` at the first poll after the halt
+/// (it neither spins nor refills the flushed FIFO); a run started while halted is refused
+/// before it writes a record. The pins stop as on any halt.
+#[test]
+fn estop_mid_stream_ends_the_run() {
+    // Long enough for SPI to refill the FIFO faster than it runs (no underrun before the
+    // press: the halt's STATUS shows none).
+    const P: u32 = 4000;
+    const FILTER: u64 = 10;
+    const POLL: u64 = 150;
+    let mut m = spi_machine("estop_mid_stream_ends_the_run");
+    setup(&mut m, P, 4);
+    ok(m.bus().write(estop_filter::ADDR, FILTER as u32));
+    let planned = records(FIFO_DEPTH + 200, 41, true);
+    let config = StreamConfig { poll_clocks: POLL, prefill: 32, ..StreamConfig::default() };
+    let mut pressed = None;
+    let result = stream::run(&mut m, planned.iter().copied(), &config, |m, event| {
+        // Pressed at the first wait for room after the FIFO was filled once.
+        if let (StreamEvent::Waited, None) = (event, pressed) {
+            let host = m.bus().link_mut();
+            pressed = Some(host.target().cycle);
+            host.set_estop_pin(true);
+        }
+        Ok(())
+    });
+    let pressed = pressed.expect("the streamer waited for room");
+    let ended = probe(&mut m).cycle;
+    match result {
+        Err(BusError::Halted { status: word }) => {
+            assert_eq!(status::FAULT_ESTOP.get(word), 1, "{word:#x}");
+            assert_eq!(status::UNDERRUN.get(word), 0, "the stream kept up until the halt: {word:#x}");
+        }
+        other => panic!("expected BusError::Halted, got {other:?}"),
+    }
+    let drop = probe(&mut m).enables.last().unwrap().0;
+    let halt = drop - 1;
+    assert!(halt >= pressed + FILTER && halt <= pressed + 3 + FILTER, "pressed {pressed}, halted {halt}");
+    // Seen at the next poll: a wait and two read frames at most.
+    let limit = POLL + 2_000;
+    assert!(ended - halt <= limit, "the streamer saw the halt {} clocks after it (at most {limit})", ended - halt);
+    check_halted_pins(probe(&mut m), halt);
+    let stopped = check_halted_state(&mut m, status::FAULT_ESTOP.mask());
+    assert_ne!(stopped, all_rounded(&planned), "halted mid-stream");
+
+    // Still halted (the pin is held): a new run is refused, nothing queued or moved.
+    let again = records(FIFO_DEPTH + 40, 43, true);
+    let result = stream::run(&mut m, again.iter().copied(), &config, |_, _| Ok(()));
+    assert!(matches!(result, Err(BusError::Halted { .. })), "{result:?}");
+    assert_eq!(ok(m.fifo()), (0, FIFO_DEPTH as u32), "the refused run queued nothing");
+    assert_eq!(positions(&mut m), stopped);
+    host(&mut m).set_estop_pin(false);
+    ok(m.bus().wait(FILTER + 5));
+    ok(m.command(command::CLEAR_FAULTS.set(0, 1)));
+    resume_exactly(&mut m, &stopped, 45, P);
 }
 
 /// Positions read while moving are coherent: all axes from one clock, the clock

@@ -669,6 +669,8 @@ fn jog_and_run_exclude_each_other() {
     let jog = machine.jog().unwrap();
     assert!(!jog.engaged && jog.refused, "{jog:?}");
     wait_idle(machine.bus(), 1000, 1_000_000).unwrap();
+    // POSITION is latched at period boundaries: two more periods for the last steps.
+    machine.bus().wait(2 * u64::from(PERIOD)).unwrap();
     assert_eq!(machine.positions().unwrap().steps[0], 8);
     // A halt (E-stop) clears ENABLE and disengages.
     machine.set_control(false, false, true).unwrap();

@@ -112,7 +112,9 @@ fn spi_stream_moves_exactly() {
     let report = stream(machine.bus(), records.clone(), StreamConfig::default()).unwrap();
     assert_eq!(report.records, 40);
     wait_idle(machine.bus(), 1000, 200_000).unwrap();
-    machine.bus().wait(200).unwrap();
+    // POSITION is latched at period boundaries: two more periods for the last steps.
+    let settle = 2 * u64::from(machine.period_clocks());
+    machine.bus().wait(settle).unwrap();
     let positions = machine.positions().unwrap();
     for axis in 0..4 {
         assert_eq!(positions.steps[axis], expected_steps(&records, axis), "axis {axis}");
@@ -175,7 +177,9 @@ fn parallel_stream_moves_exactly() {
     let records = moves(12);
     stream(machine.bus(), records.clone(), StreamConfig::default()).unwrap();
     wait_idle(machine.bus(), 1000, 200_000).unwrap();
-    machine.bus().wait(200).unwrap();
+    // POSITION is latched at period boundaries: two more periods for the last steps.
+    let settle = 2 * u64::from(machine.period_clocks());
+    machine.bus().wait(settle).unwrap();
     let positions = machine.positions().unwrap();
     for axis in 0..4 {
         assert_eq!(positions.steps[axis], expected_steps(&records, axis), "axis {axis}");

@@ -195,6 +195,24 @@ pub enum BusError {
         /// Clocks waited.
         clocks: u64,
     },
+    /// The core halted (E-stop, watchdog or the gantry's alarm: `STATUS.HALT`) while
+    /// records were being streamed or run: the FIFO was flushed and `RUN` cleared, so
+    /// nothing more will run until the fault is cleared and the run requested again.
+    #[error("the core halted while streaming (STATUS {status:#06x}: E-stop, watchdog or the gantry's alarm)")]
+    Halted {
+        /// `STATUS` as read.
+        status: u32,
+    },
+    /// The FIFO took no record for `clocks` clocks while records were waiting to be
+    /// queued, and the core is not halted (`RUN` cleared by the host, or a record that
+    /// runs longer than the streamer was told).
+    #[error("the core took no record for {clocks} clocks (STATUS {status:#06x})")]
+    Stalled {
+        /// Clocks waited without room appearing.
+        clocks: u64,
+        /// `STATUS` as read.
+        status: u32,
+    },
     /// A feedback request the core cannot carry out (refused before anything was written).
     #[error(transparent)]
     Feedback(#[from] FeedbackError),

@@ -126,10 +126,35 @@ fn underruns<B: Bus>(bus: &mut B) -> Result<u16, BusError> {
     Ok(underrun_count::COUNT.get(bus.read_one(underrun_count::ADDR)?) as u16)
 }
 
+/// `STATUS` and `FIFO_LEVEL` in one read (adjacent registers): the streamer's poll. A
+/// halt (E-stop, watchdog, the gantry's alarm) flushes the FIFO and clears `RUN`, so the
+/// room that appears then is not records having run: every poll looks at `HALT` first.
+struct Poll {
+    status: u32,
+    free: usize,
+}
+
+const _: () = assert!(fifo_level::ADDR == status::ADDR + 1, "STATUS and FIFO_LEVEL are read in one frame");
+
+fn poll<B: Bus>(bus: &mut B) -> Result<Poll, BusError> {
+    let mut words = [0u32; 2];
+    bus.read(status::ADDR, &mut words)?;
+    let [status, level] = words;
+    if status::HALT.get(status) != 0 {
+        return Err(BusError::Halted { status });
+    }
+    Ok(Poll { status, free: fifo_level::FREE.get(level) as usize })
+}
+
+/// Queues `records` as the FIFO makes room. Ends with [`BusError::Halted`] at the first
+/// poll that finds the core halted, and, with `stall_clocks`, with [`BusError::Stalled`]
+/// once the room has not grown for that many clocks of waiting (`RUN` cleared by
+/// another, or a record running far longer than the configuration says).
 fn queue<F: Feed>(
     target: &mut F,
     records: impl IntoIterator<Item = PeriodRecord>,
     config: &StreamConfig,
+    stall_clocks: Option<u64>,
     mut observe: impl FnMut(&mut F, StreamEvent) -> Result<(), BusError>,
 ) -> Result<StreamReport, BusError> {
     let burst_max = config.burst.clamp(1, MAX_COUNT);
@@ -137,22 +162,33 @@ fn queue<F: Feed>(
     let mut report = StreamReport::default();
     let mut records = records.into_iter().peekable();
     let mut burst = Vec::with_capacity(burst_max);
+    // Clocks waited since the room last grew, and that room.
+    let (mut stalled, mut room) = (0u64, 0usize);
     while records.peek().is_some() {
         let bus = target.feed_bus();
-        let free = fifo_level::FREE.get(bus.read_one(fifo_level::ADDR)?) as usize;
+        let Poll { status: word, free } = poll(bus)?;
         report.polls += 1;
+        if free > room {
+            stalled = 0;
+        }
+        room = free;
         if free < burst_max {
             // Fill only in whole bursts while more than a burst is left, so the frame
             // overhead stays small; the tail goes as soon as it fits.
             let tail_fits = records.size_hint().1.is_some_and(|left| left <= free) && free > 0;
             if !tail_fits {
+                if stall_clocks.is_some_and(|limit| stalled >= limit) {
+                    return Err(BusError::Stalled { clocks: stalled, status: word });
+                }
                 bus.wait(config.poll_clocks)?;
+                stalled += config.poll_clocks;
                 observe(target, StreamEvent::Waited)?;
                 continue;
             }
         }
         burst.clear();
         burst.extend(records.by_ref().take(free.min(burst_max)));
+        room -= burst.len();
         bus.push_records(&burst)?;
         report.records += burst.len() as u64;
         report.bursts += 1;
@@ -171,9 +207,14 @@ fn idle<F: Feed>(
     let mut waited = 0;
     loop {
         let bus = target.feed_bus();
+        // FIFO_LEVEL, then STATUS: an empty FIFO and a closed gate after it is the end.
         let level = fifo_level::LEVEL.get(bus.read_one(fifo_level::ADDR)?);
-        let streaming = status::STREAMING.get(bus.read_one(status::ADDR)?) != 0;
-        if level == 0 && !streaming {
+        let word = bus.read_one(status::ADDR)?;
+        // A halt flushes the FIFO: an empty FIFO then is not the end of the records.
+        if status::HALT.get(word) != 0 {
+            return Err(BusError::Halted { status: word });
+        }
+        if level == 0 && status::STREAMING.get(word) == 0 {
             return Ok(());
         }
         if waited >= max_clocks {
@@ -199,7 +240,7 @@ pub fn stream<B: Bus>(
     records: impl IntoIterator<Item = PeriodRecord>,
     config: StreamConfig,
 ) -> Result<StreamReport, BusError> {
-    queue(&mut Bare(bus), records, &config, |_, _| Ok(()))
+    queue(&mut Bare(bus), records, &config, None, |_, _| Ok(()))
 }
 
 /// [`stream`] on a machine, calling `observe` after every burst and every wait.
@@ -209,7 +250,8 @@ pub fn stream_observed<B: Bus>(
     config: &StreamConfig,
     observe: impl FnMut(&mut Machine<B>, StreamEvent) -> Result<(), BusError>,
 ) -> Result<StreamReport, BusError> {
-    queue(machine, records, config, observe)
+    let limit = idle_limit(machine.caps().fifo_depth, u64::from(machine.period_clocks()), config);
+    queue(machine, records, config, Some(limit), observe)
 }
 
 /// Waits until the FIFO is empty and the gate has closed (the last record ran), polling
@@ -233,7 +275,9 @@ pub fn wait_idle_observed<B: Bus>(
 /// and the position latch then holds that boundary's time), keeps the FIFO fed, waits
 /// until the last record ran and two more periods for the step trains to settle, and
 /// reads the final positions. `observe` is called after every burst (the count includes
-/// the pre-fill) and every wait.
+/// the pre-fill) and every wait. A core halted before the start, or during the run, ends
+/// it with [`BusError::Halted`] (before the pre-fill is written; at the first poll after
+/// the halt).
 pub fn run<B: Bus>(
     machine: &mut Machine<B>,
     records: impl IntoIterator<Item = PeriodRecord>,
@@ -243,6 +287,9 @@ pub fn run<B: Bus>(
     let burst_max = config.burst.clamp(1, MAX_COUNT);
     let period = u64::from(machine.period_clocks());
     let fifo_depth = machine.caps().fifo_depth;
+    // A halted core would take the pre-fill and never run it: refused before anything
+    // is written.
+    poll(machine.bus())?;
     let underruns_before = underruns(machine.bus())?;
     let mut records = records.into_iter();
     let first: Vec<PeriodRecord> = records.by_ref().take(config.prefill.min(fifo_depth)).collect();
@@ -258,10 +305,13 @@ pub fn run<B: Bus>(
     let before_run = machine.positions()?.latch_time;
     machine.set_control(true, config.watchdog, config.estop_active_high)?;
     let first_boundary = machine.bus().read_one(latch_time::ADDR)?;
-    let streamed = queue(machine, records, config, |machine, event| match event {
-        StreamEvent::Queued { queued } => observe(machine, StreamEvent::Queued { queued: prefill.records + queued }),
-        StreamEvent::Waited => observe(machine, event),
-    })?;
+    let streamed =
+        queue(machine, records, config, Some(idle_limit(fifo_depth, period, config)), |machine, event| match event {
+            StreamEvent::Queued { queued } => {
+                observe(machine, StreamEvent::Queued { queued: prefill.records + queued })
+            }
+            StreamEvent::Waited => observe(machine, event),
+        })?;
     // Once the last record is queued the FIFO holds at most its depth, each record one
     // period (or the longest a record runs): twice that is a core that stopped taking
     // records.
@@ -303,6 +353,7 @@ pub fn run_with_events<B: Bus, E>(
 ) -> Result<RunReport, BusError> {
     let period = u64::from(machine.period_clocks());
     let fifo_depth = machine.caps().fifo_depth;
+    poll(machine.bus())?;
     let start_level_before = machine.bus().read_one(start_level::ADDR)?;
     let underruns_before = underruns(machine.bus())?;
     let mut records = records.into_iter().peekable();
@@ -325,7 +376,7 @@ pub fn run_with_events<B: Bus, E>(
             let start = stretch.len().min(config.prefill).min(fifo_depth).max(1);
             machine.set_start_level(start as u16)?;
             let queued_before = report.records;
-            let streamed = queue(machine, stretch, config, |machine, event| match event {
+            let streamed = queue(machine, stretch, config, Some(max_clocks), |machine, event| match event {
                 StreamEvent::Queued { queued } => {
                     observe(machine, StreamEvent::Queued { queued: queued_before + queued })
                 }
@@ -349,4 +400,67 @@ pub fn run_with_events<B: Bus, E>(
     report.underruns = underruns(machine.bus())?.wrapping_sub(underruns_before);
     let end = machine.positions()?;
     Ok(RunReport { stream: report, first_boundary, cycles: u64::from(end.latch_time.wrapping_sub(before_run)), end })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A core whose FIFO never makes room: `FREE` stays at `free`, `STATUS` is `status`;
+    /// counts the clocks waited and the records pushed.
+    struct Stuck {
+        status: u32,
+        free: u32,
+        waited: u64,
+        pushed: usize,
+    }
+
+    impl Bus for Stuck {
+        fn read(&mut self, addr: u8, out: &mut [u32]) -> Result<(), BusError> {
+            for (i, word) in out.iter_mut().enumerate() {
+                *word = match addr as usize + i {
+                    a if a == usize::from(status::ADDR) => self.status,
+                    a if a == usize::from(fifo_level::ADDR) => fifo_level::FREE.set(0, self.free),
+                    _ => 0,
+                };
+            }
+            Ok(())
+        }
+        fn write(&mut self, _: u8, _: u32) -> Result<(), BusError> {
+            Ok(())
+        }
+        fn push_records(&mut self, records: &[PeriodRecord]) -> Result<(), BusError> {
+            self.pushed += records.len();
+            self.free -= records.len() as u32;
+            Ok(())
+        }
+        fn wait(&mut self, clocks: u64) -> Result<(), BusError> {
+            self.waited += clocks;
+            Ok(())
+        }
+    }
+
+    fn records(n: usize) -> Vec<PeriodRecord> {
+        vec![PeriodRecord::from_raw(&[1 << 16], 0); n]
+    }
+
+    #[test]
+    fn a_fifo_that_never_makes_room_ends_the_stream_after_the_limit() {
+        let config = StreamConfig { poll_clocks: 100, ..StreamConfig::default() };
+        let mut bus = Stuck { status: status::RUNNING.mask(), free: 40, waited: 0, pushed: 0 };
+        let result = queue(&mut Bare(&mut bus), records(100), &config, Some(1000), |_, _| Ok(()));
+        assert!(matches!(result, Err(BusError::Stalled { clocks: 1000, .. })), "{result:?}");
+        // One burst of 32 fits; then the 8 left are never a whole burst and never the tail.
+        assert_eq!((bus.pushed, bus.waited), (32, 1000));
+    }
+
+    #[test]
+    fn a_halted_core_ends_the_stream_at_the_first_poll() {
+        let config = StreamConfig::default();
+        let mut bus =
+            Stuck { status: status::HALT.mask() | status::FAULT_ESTOP.mask(), free: 256, waited: 0, pushed: 0 };
+        let result = queue(&mut Bare(&mut bus), records(10), &config, None, |_, _| Ok(()));
+        assert!(matches!(result, Err(BusError::Halted { status }) if status == bus.status), "{result:?}");
+        assert_eq!((bus.pushed, bus.waited), (0, 0), "nothing queued into the flushed FIFO");
+    }
 }
