@@ -487,8 +487,25 @@ impl Core {
     /// those before it).
     #[inline(always)]
     fn edge(&mut self, inputs: &CoreInputs, period: u32, axis: impl Fn(usize) -> AxisSettings) -> bool {
+        // Without the pbp block none of its logic is compiled into the edge (`PBP`
+        // false): the per-clock path of every other build pays nothing for it.
+        if self.pbp.is_some() {
+            self.edge_of::<true>(inputs, period, axis)
+        } else {
+            self.edge_of::<false>(inputs, period, axis)
+        }
+    }
+
+    /// [`Self::edge`] for a core with (`PBP`) or without the pbp block.
+    #[inline(always)]
+    fn edge_of<const PBP: bool>(
+        &mut self,
+        inputs: &CoreInputs,
+        period: u32,
+        axis: impl Fn(usize) -> AxisSettings,
+    ) -> bool {
         if let Some(engine) = self.engine {
-            return self.engine_edge(engine, inputs, period, axis);
+            return self.engine_edge::<PBP>(engine, inputs, period, axis);
         }
         if self.serial.is_some() {
             return self.serial_edge(inputs, period, axis);
@@ -497,12 +514,12 @@ impl Core {
         let m = i64::from(self.timer.p_act) * ONE_STEP;
         let mut changed = false;
         // With the pbp block its outputs change too: compared as a whole.
-        let before = self.pbp.is_some().then(|| self.outputs());
-        let wait = self.pbp_waits();
+        let before = PBP.then(|| self.outputs());
+        let wait = PBP && self.pbp_waits();
         // Each axis's own request of this cycle: the pbp block's where it requests (only
         // while its record runs, when the DDAs are idle), else its DDA's; the gantry sees
         // these and chooses among them.
-        let pbp_reqs = self.pbp_requests();
+        let pbp_reqs = if PBP { self.pbp_requests() } else { [0; MAX_AXES] };
         let mut reqs = [0i8; MAX_AXES];
         for ((r, dda), &p) in reqs.iter_mut().zip(&self.dda[..n]).zip(&pbp_reqs) {
             *r = if p != 0 { p } else { dda.req };
@@ -536,14 +553,14 @@ impl Core {
                 dda.step(running, period, d, m);
             }
         }
-        changed |= self.timer_edge(inputs, period, 0, 0, wait);
+        changed |= self.timer_edge::<PBP>(inputs, period, 0, 0, wait);
         before.map_or(changed, |before| self.outputs() != before)
     }
 
     /// One rising edge of a core with the step engine (`engine` is its schedule in this
     /// cycle): the engine's visits, then the period timer with this cycle's slot.
     #[inline(always)]
-    fn engine_edge(
+    fn engine_edge<const PBP: bool>(
         &mut self,
         mut engine: StepEngine,
         inputs: &CoreInputs,
@@ -554,23 +571,23 @@ impl Core {
         let slot = engine.slot;
         // With the pbp block its outputs change too: compared as a whole. Its requests
         // reach the engine's shaper visits (held until then).
-        let before = self.pbp.is_some().then(|| self.outputs());
-        let wait = self.pbp_waits();
-        let changed = engine.step(
+        let before = PBP.then(|| self.outputs());
+        let wait = PBP && self.pbp_waits();
+        let changed = engine.step::<PBP>(
             &EngineInputs {
                 running: inputs.run && self.timer.active,
                 p_act: self.timer.p_act,
                 inc: &self.timer.inc,
                 clear_errors: inputs.clear_errors,
                 counter_max: self.counter_max,
-                ext: self.pbp_requests(),
+                ext: if PBP { self.pbp_requests() } else { [0; MAX_AXES] },
             },
             axis,
             &mut self.dda[..n],
             &mut self.shaper[..n],
         );
         self.engine = Some(engine);
-        let changed = changed | self.timer_edge(inputs, period, engine.slot_bits, slot, wait);
+        let changed = changed | self.timer_edge::<PBP>(inputs, period, engine.slot_bits, slot, wait);
         before.map_or(changed, |before| self.outputs() != before)
     }
 
@@ -608,17 +625,24 @@ impl Core {
         serial.engine.step(&inp);
         let bits = self.params.step_round_bits();
         // (no pbp block with the digit-serial engine: nothing waits)
-        self.timer_edge(inputs, period, bits, phase, false);
+        self.timer_edge::<false>(inputs, period, bits, phase, false);
         self.outputs() != before
     }
 
     /// The period timer's edge (with the engine's `SL` and this cycle's `slot`, 0 and 0
     /// without it; `pbp_wait`: [`Self::pbp_waits`] before the edge) and the cycle count;
-    /// returns whether the timer's outputs changed.
+    /// returns whether the timer's outputs changed. `PBP`: the core has the pbp block.
     #[inline(always)]
-    fn timer_edge(&mut self, inputs: &CoreInputs, period: u32, slot_bits: u32, slot: u32, pbp_wait: bool) -> bool {
+    fn timer_edge<const PBP: bool>(
+        &mut self,
+        inputs: &CoreInputs,
+        period: u32,
+        slot_bits: u32,
+        slot: u32,
+        pbp_wait: bool,
+    ) -> bool {
         let timer_before = self.timer.output_bits();
-        let offered = self.pbp_edge(inputs, pbp_wait);
+        let offered = if PBP { self.pbp_edge(inputs, pbp_wait) } else { None };
         let (rec_valid, record) = offered.as_ref().map_or((inputs.rec_valid, &inputs.record), |(v, r)| (*v, r));
         self.timer.step(&TimerInputs {
             run: inputs.run,

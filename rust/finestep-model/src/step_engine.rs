@@ -134,8 +134,10 @@ impl StepEngine {
     /// One rising edge over the stores `dda` and `shaper` (the first `n_axes` entries
     /// are the axes); `axis(i)` gives axis `i`'s masked settings. Returns whether an
     /// output (pins, flags, position) changed.
+    /// `EXT`: requests from outside may come (the core's pbp block); without them none
+    /// of their handling is compiled in.
     #[inline]
-    pub(crate) fn step(
+    pub(crate) fn step<const EXT: bool>(
         &mut self,
         inp: &EngineInputs<'_>,
         axis: impl Fn(usize) -> AxisSettings,
@@ -151,7 +153,7 @@ impl StepEngine {
             if visited == Some(i) {
                 // The request held for the axis, else the one the DDA visit of the
                 // previous cycle left.
-                let r = self.visit_request(i, dda[i].req);
+                let r = if EXT { self.visit_request(i, dda[i].req) } else { dda[i].req };
                 let d = sh.decide(r, &set, |count, x| Self::reached(self.slot_bits, count, x));
                 sh.apply(d, set.halt, inp.counter_max, inp.clear_errors);
                 // Pins A and B from the state the visit leaves.
@@ -184,7 +186,7 @@ impl StepEngine {
         // The requests from outside: held from the next cycle until their axis's shaper
         // visit (the visit of this cycle takes the one held before, not one coming now).
         // Nothing to do while none is held or coming (always without the pbp block).
-        if self.held != 0 || inp.ext != [0; MAX_AXES] {
+        if EXT && (self.held != 0 || inp.ext != [0; MAX_AXES]) {
             for (a, &r) in inp.ext.iter().enumerate().take(n) {
                 let bit = 1u8 << a;
                 if r != 0 {
@@ -228,7 +230,7 @@ mod tests {
                 for k in 0..e.slots() as usize {
                     assert_eq!(e.slot() as usize, k, "round {round}");
                     assert_eq!((e.dda_axis(n), e.shaper_axis(n)), (dda[k], shaper[k]), "SL {sl} slot {k}");
-                    e.step(&inp, |_| AxisSettings::default(), &mut d[..n], &mut s[..n]);
+                    e.step::<false>(&inp, |_| AxisSettings::default(), &mut d[..n], &mut s[..n]);
                 }
             }
         }
@@ -250,16 +252,16 @@ mod tests {
         };
         let mut d = [DdaAxis { acc: 12345, req: 1 }; 2];
         let mut s = [StepShaper::new(15); 2];
-        e.step(&running(false), |_| AxisSettings::default(), &mut d, &mut s);
+        e.step::<false>(&running(false), |_| AxisSettings::default(), &mut d, &mut s);
         assert_eq!((d[0].acc, d[0].req), (12345, 0), "stopped: the request clears, acc is left");
-        e.step(&running(true), |_| AxisSettings::default(), &mut d, &mut s);
+        e.step::<false>(&running(true), |_| AxisSettings::default(), &mut d, &mut s);
         assert_eq!((d[1].acc, d[1].req, e.live), (m / 2 - 1, 0, 0b10), "axis 1 from M/2");
-        e.step(&running(true), |_| AxisSettings::default(), &mut d, &mut s);
+        e.step::<false>(&running(true), |_| AxisSettings::default(), &mut d, &mut s);
         assert_eq!((d[0].acc, d[0].req, e.live), (m / 2 + (5 << 15) - m, 1, 0b11), "axis 0 from M/2, wraps");
         // One stopped cycle (a visit of axis 1 only) restarts axis 0 too.
-        e.step(&running(false), |_| AxisSettings::default(), &mut d, &mut s);
+        e.step::<false>(&running(false), |_| AxisSettings::default(), &mut d, &mut s);
         assert_eq!(e.live, 0);
-        e.step(&running(true), |_| AxisSettings::default(), &mut d, &mut s);
+        e.step::<false>(&running(true), |_| AxisSettings::default(), &mut d, &mut s);
         assert_eq!((d[0].acc, d[0].req), (m / 2 + (5 << 15) - m, 1), "from M/2 again");
     }
 
@@ -275,7 +277,7 @@ mod tests {
         let set = |_| AxisSettings { timing: DriveTiming::new(1, 1, 1, 1), ..AxisSettings::default() };
         let edge = |e: &mut StepEngine, d: &mut [DdaAxis], s: &mut [StepShaper], ext: [i8; MAX_AXES]| {
             let inp = EngineInputs { running: false, p_act: 8, inc: &inc, clear_errors: false, counter_max: 15, ext };
-            e.step(&inp, set, d, s);
+            e.step::<true>(&inp, set, d, s);
         };
         // (slot of the request's cycle m, the cycle m + wait of the visit that takes it)
         for (slot, wait) in [(1, 1), (2, 4), (3, 3), (0, 2)] {
