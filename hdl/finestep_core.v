@@ -117,6 +117,11 @@ module finestep_core #(
     wire                 timer_block_end;
     wire [N_AXES-1:0]    pbp_req_valid;
     wire [N_AXES-1:0]    pbp_req_negative;
+    // For the gantry: the axes of the pair a record runs on (not at rest), and the
+    // direction the block's next step would take each (see pbp_interp's move_up/down).
+    wire [N_AXES-1:0]    pbp_busy;
+    wire [N_AXES-1:0]    pbp_up;
+    wire [N_AXES-1:0]    pbp_down;
     // With the step engine: a request of the block not yet taken by its axis's shaper
     // visit (the engine holds it up to S clocks); 0 with a DDA and a shaper per axis.
     wire                 pbp_ext_pending;
@@ -208,7 +213,7 @@ module finestep_core #(
                     refused_reg <= 1'b0;
                 end
             end
-            wire [1:0] req_valid2, req_negative2;
+            wire [1:0] req_valid2, req_negative2, move_up2, move_down2;
             wire       ready_unused;
             // A stop (run low) aborts the record as a halt does.
             pbp_interp #(
@@ -229,13 +234,18 @@ module finestep_core #(
                 .req_valid(req_valid2),
                 .req_negative(req_negative2),
                 .busy(busy),
-                .done(done)
+                .done(done),
+                .move_up(move_up2),
+                .move_down(move_down2)
             );
             genvar k;
             for (k = 0; k < N_AXES; k = k + 1) begin : lane
                 wire on_pair = ({30'd0, pair_reg} == k / 2);
                 assign pbp_req_valid[k]    = on_pair && req_valid2[k % 2];
                 assign pbp_req_negative[k] = req_negative2[k % 2];
+                assign pbp_busy[k]         = on_pair && busy;
+                assign pbp_up[k]           = on_pair && move_up2[k % 2];
+                assign pbp_down[k]         = on_pair && move_down2[k % 2];
             end
             assign block_end    = timer_block_end || (done && end_reg);
             assign record_error = timer_record_error || refused_reg;
@@ -247,6 +257,9 @@ module finestep_core #(
             assign timer_rec_flags  = rec_flags;
             assign pbp_req_valid    = {N_AXES{1'b0}};
             assign pbp_req_negative = {N_AXES{1'b0}};
+            assign pbp_busy         = {N_AXES{1'b0}};
+            assign pbp_up           = {N_AXES{1'b0}};
+            assign pbp_down         = {N_AXES{1'b0}};
             assign block_end        = timer_block_end;
             assign record_error     = timer_record_error;
             wire unused_pending = &{1'b0, pbp_ext_pending};
@@ -261,7 +274,7 @@ module finestep_core #(
     wire [N_AXES-1:0] own_req_valid    = pbp_req_valid | dda_req_valid;
     wire [N_AXES-1:0] own_req_negative = (pbp_req_valid & pbp_req_negative) | (~pbp_req_valid & dda_req_negative);
     wire              slave_req_valid, slave_req_negative;
-    wire [2:0]        slave_axis;
+    wire [2:0]        master_axis, slave_axis;
     // The request each axis's shaper takes (a DDA and a shaper per axis; 0 with an engine).
     wire [N_AXES-1:0] shaper_req_valid, shaper_req_negative;
 
@@ -285,12 +298,16 @@ module finestep_core #(
                 .inc(inc),
                 .req_valid(own_req_valid),
                 .req_negative(own_req_negative),
+                .ext_busy(pbp_busy),
+                .ext_up(pbp_up),
+                .ext_down(pbp_down),
                 .halt(halt),
                 .clear_errors(clear_errors),
                 .clear_counters(clear_counters),
                 .slave_req_valid(slave_req_valid),
                 .slave_req_negative(slave_req_negative),
                 .engaged(gantry_engaged),
+                .master_axis(master_axis),
                 .slave_axis(slave_axis),
                 .alarm(gantry_alarm),
                 .refused(gantry_refused),
@@ -300,6 +317,7 @@ module finestep_core #(
         end else begin : without_gantry
             assign slave_req_valid    = 1'b0;
             assign slave_req_negative = 1'b0;
+            assign master_axis        = 3'd0;
             assign slave_axis         = 3'd0;
             assign gantry_engaged     = 1'b0;
             assign gantry_alarm       = 1'b0;
@@ -308,9 +326,11 @@ module finestep_core #(
             assign gantry_corrections = 16'd0;
             wire unused_gantry = &{1'b0, gantry_enable, gantry_sync_mode, gantry_master, gantry_slave,
                                    gantry_tick, gantry_deadband, gantry_limit, enc_master, enc_slave,
-                                   clear_counters};
+                                   clear_counters, pbp_busy, pbp_up, pbp_down};
         end
     endgenerate
+    // The master's axis is the formal properties' (the gantry's pbp rules below).
+    wire unused_master_axis = &{1'b0, master_axis};
 
     genvar i;
     generate
@@ -495,6 +515,35 @@ module finestep_core #(
                 end
                 always @(posedge clk) if (f_past_valid && !rst)
                     cover (gantry_engaged && f_busy && |pbp_req_valid);
+                // The gantry sees a pbp record's motion (docs/spec/gantry_sync.md): no
+                // engagement while a record runs on the pair of the master or the slave
+                // (their axes are not at rest), and no correction inserted (a slave step
+                // without a master step) against the direction the block shows for the
+                // master's next step (pbp_interp's move_up/move_down, whose every request
+                // follows them: sim/formal/pbp_interp.sby).
+                wire [7:0] f_master_valid = {{(8-N_AXES){1'b0}}, own_req_valid};
+                wire [7:0] f_master_up    = {{(8-N_AXES){1'b0}}, pbp_up};
+                wire [7:0] f_master_down  = {{(8-N_AXES){1'b0}}, pbp_down};
+                wire f_inserted = gantry_engaged && slave_req_valid && !f_master_valid[master_axis];
+                // An engagement was asked while a record ran on the master's pair.
+                reg f_asked_in_record;
+                always @(posedge clk)
+                    if (rst || gantry_engaged) f_asked_in_record <= 1'b0;
+                    else if (gantry_enable && f_busy && {1'b0, with_pbp.pair_reg} == gantry_master[2:1])
+                        f_asked_in_record <= 1'b1;
+                always @(*) if (f_past_valid && !rst) begin
+                    if (f_inserted) assert (!(slave_req_negative && f_master_up[master_axis])
+                                            && !(!slave_req_negative && f_master_down[master_axis]));
+                end
+                always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+                    if (gantry_engaged && !$past(gantry_engaged))
+                        assert (!($past(f_busy) && ({1'b0, $past(with_pbp.pair_reg)} == $past(gantry_master[2:1])
+                                                    || {1'b0, $past(with_pbp.pair_reg)} == $past(gantry_slave[2:1]))));
+                    // Covered: an engagement that waited for a record on the pair to end;
+                    // a correction inserted with the master's pbp motion.
+                    cover (gantry_engaged && !$past(gantry_engaged) && $past(f_asked_in_record));
+                    cover (f_inserted && f_busy && (f_master_up[master_axis] || f_master_down[master_axis]));
+                end
             end
         end
     endgenerate

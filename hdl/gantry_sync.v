@@ -11,9 +11,12 @@
 //
 // A correction against the master's motion deletes a master step rather than reversing
 // the slave (seed 001's deletion); one with the motion, or at rest, inserts a step.
-// Engagement waits until both axes have no increment (at rest), so the offset is taken
-// square and no speed changes under way; the alarm stops the corrections (and the top
-// halts on it): a dead or mirrored channel cannot run the slave away.
+// Engagement waits until both axes are at rest (no increment, and no ext_busy: a record
+// of the core's pbp block runs on the axis's pair), so the offset is taken square and no
+// speed changes under way. The master's motion is its increment's sign, or ext_up /
+// ext_down (the direction of the pbp block's next step on it). The alarm stops the
+// corrections (and the top halts on it): a dead or mirrored channel cannot run the
+// slave away.
 //
 // The core selects: the shaper of axis slave_axis takes slave_req_* while engaged.
 // Latency: a count change in cycle n is in diff at n+1, error at n+2, alarm at n+3; a
@@ -42,6 +45,11 @@ module gantry_sync #(
     input  wire [32*N_AXES-1:0] inc,
     input  wire [N_AXES-1:0] req_valid,
     input  wire [N_AXES-1:0] req_negative,
+    // every axis's motion besides its increment (the core's pbp block): busy (not at
+    // rest: a record runs on its pair) and the direction its next step would take
+    input  wire [N_AXES-1:0] ext_busy,
+    input  wire [N_AXES-1:0] ext_up,
+    input  wire [N_AXES-1:0] ext_down,
     // commands
     input  wire              halt,
     input  wire              clear_errors,
@@ -51,6 +59,7 @@ module gantry_sync #(
     output wire              slave_req_negative,
     // status
     output wire              engaged,
+    output wire [2:0]        master_axis,     // m (for the core's formal properties)
     output wire [2:0]        slave_axis,
     output wire              alarm,
     output wire              refused,
@@ -85,7 +94,11 @@ module gantry_sync #(
     // Increments of all eight possible axes (0 above N_AXES).
     wire [255:0] inc_all     = {{(256-32*N_AXES){1'b0}}, inc};
     wire [31:0]  master_inc  = inc_all[32*master_reg +: 32];
-    wire at_rest = (inc_all[32*master +: 32] == 32'd0) && (inc_all[32*slave +: 32] == 32'd0);
+    wire [7:0]   busy_all    = {{(8-N_AXES){1'b0}}, ext_busy};
+    wire [7:0]   up_all      = {{(8-N_AXES){1'b0}}, ext_up};
+    wire [7:0]   down_all    = {{(8-N_AXES){1'b0}}, ext_down};
+    wire at_rest = (inc_all[32*master +: 32] == 32'd0) && (inc_all[32*slave +: 32] == 32'd0)
+                   && !busy_all[master] && !busy_all[slave];
     wire engage       = !engaged_reg && enable && config_valid && at_rest;
     wire disengage    = engaged_reg && !enable;
 
@@ -109,8 +122,8 @@ module gantry_sync #(
     // deletion of a master request against it, or as an insertion in a cycle without a
     // master request unless the master moves against it (then it waits to delete); it
     // counts as applied unless halted (the halted shaper drops every request).
-    wire moving_up   = (master_inc != 32'd0) && !master_inc[31];
-    wire moving_down = master_inc[31];
+    wire moving_up   = ((master_inc != 32'd0) && !master_inc[31]) || up_all[master_reg];
+    wire moving_down = master_inc[31] || down_all[master_reg];
     wire against     = corr_negative_reg ? moving_up : moving_down;
     wire takes   = corr_valid_reg && sync && enable && !alarm_reg &&
                    (master_valid ? (master_negative != corr_negative_reg) : !against);
@@ -168,6 +181,7 @@ module gantry_sync #(
     end
 
     assign engaged     = engaged_reg;
+    assign master_axis = master_reg;
     assign slave_axis  = slave_reg;
     assign alarm       = alarm_reg;
     assign refused     = refused_reg;
@@ -206,7 +220,12 @@ module gantry_sync #(
         assert (f_applied_since_tick <= 2'd1);
         if (f_applied_since_tick != 2'd0) assert (!corr_valid_reg);   // until the next tick
         // An inserted step never goes against the master's motion: that is a deletion.
-        if (takes && !master_valid) assert (!(f_corr < 0 && moving_up) && !(f_corr > 0 && moving_down));
+        // (The motion: the master's increment's sign, or its ext_up/ext_down.)
+        if (takes && !master_valid) begin
+            assert (!(f_corr < 0 && ((inc_all[32*master_reg +: 32] != 32'd0 && !inc_all[32*master_reg + 31])
+                                     || up_all[master_reg])));
+            assert (!(f_corr > 0 && (inc_all[32*master_reg + 31] || down_all[master_reg])));
+        end
         if (takes) assert (sync && enable && !alarm_reg);
         assert (corrections_reg == f_net);
     end
@@ -219,9 +238,10 @@ module gantry_sync #(
         // ... and only then: the alarm rises exactly when the error passed the limit.
         if (alarm_reg && !$past(alarm_reg)) assert ($past(engaged_reg) && $past(error_mag) > {16'd0, $past(limit)});
         if ($past(engage)) assert (engaged_reg && offset_reg == $past(enc_master) - $past(enc_slave));
-        // Engaged only from rest.
+        // Engaged only from rest: no increment, no ext_busy.
         if (engaged_reg && !$past(engaged_reg))
-            assert ($past(inc_all[32*master +: 32]) == 32'd0 && $past(inc_all[32*slave +: 32]) == 32'd0);
+            assert ($past(inc_all[32*master +: 32]) == 32'd0 && $past(inc_all[32*slave +: 32]) == 32'd0
+                    && !$past(busy_all[master]) && !$past(busy_all[slave]));
         // No correction survives a halt, an alarm, forward mode or disengagement.
         if ($past(halt || alarm_reg || !sync || !engaged_reg || !enable)) assert (!corr_valid_reg);
         // At a tick the decision is the error's sign outside the deadband (computed apart).
@@ -237,6 +257,8 @@ module gantry_sync #(
         cover ($past(applied && !master_valid) && corr_valid_reg == 1'b0);         // inserted
         cover ($past(applied && master_valid) && !$past(slave_req_valid));         // deleted
         cover ($past(corr_valid_reg && !takes) && corr_valid_reg && engaged_reg);   // waited
+        cover ($past(corr_valid_reg && !takes && !master_valid && master_inc == 32'd0) && engaged_reg); // waited on ext motion
+        cover ($past(enable && config_valid && !engaged_reg && busy_all[master]) && !engaged_reg);     // ext_busy: no engagement
         cover (alarm_reg && !$past(alarm_reg));
         cover ($past(tick) && $past(tick, 3) && tick_clocks == 24'd2 && !$past(tick, 2));
     end

@@ -39,7 +39,12 @@ module pbp_interp #(
     output wire [1:0]                req_valid,
     output wire [1:0]                req_negative,
     output wire                      busy,
-    output wire                      done         // pulse with the last request
+    output wire                      done,        // pulse with the last request
+    // the motion of each axis (0 = X, 1 = Y) while busy, for the gantry: the direction
+    // its next step would take, +1 (up) or -1 (down); neither on a line's axis of zero
+    // coordinate (never stepped), and neither while not busy
+    output wire [1:0]                move_up,
+    output wire [1:0]                move_down
 );
 
     // Widths: an arc's position reaches R + 1 < 2^COORD_W in magnitude (R <= sqrt(2) *
@@ -159,6 +164,14 @@ module pbp_interp #(
     assign done         = done_reg;
     assign req_valid    = req_valid_reg;
     assign req_negative = req_negative_reg;
+    // Registered state through gates: a line's signs and |Xe|, |Ye| != 0; an arc's
+    // quadrant directions (both axes: an arc may step either).
+    wire x_dir_neg = arc_reg ? arc_x_negative : x_neg_reg;
+    wire y_dir_neg = arc_reg ? arc_y_negative : y_neg_reg;
+    wire x_moves   = busy_reg && (arc_reg || !x_zero);
+    wire y_moves   = busy_reg && (arc_reg || !y_zero);
+    assign move_up   = {y_moves && !y_dir_neg, x_moves && !x_dir_neg};
+    assign move_down = {y_moves && y_dir_neg, x_moves && x_dir_neg};
 
 
 `ifdef FORMAL
@@ -230,6 +243,14 @@ module pbp_interp #(
 
     always @(*) if (f_past_valid) begin
         assert (req_valid != 2'b11);               // one axis per decision
+        // The motion shown: one direction at most per axis, none while not busy.
+        assert ((move_up & move_down) == 2'b00);
+        if (!busy_reg) assert (move_up == 2'b00 && move_down == 2'b00);
+        // While busy the motion shown on the axis of the decision the state makes is its
+        // direction (the request's, a clock later, as asserted below), so an axis showing
+        // none (a line's of zero coordinate) is never stepped.
+        if (busy_reg && step_x) assert (move_up[0] == !step_neg && move_down[0] == step_neg);
+        if (busy_reg && !step_x) assert (move_up[1] == !step_neg && move_down[1] == step_neg);
         assert ((req_negative & ~req_valid) == 2'b00);
         assert (!(done && busy));
     end

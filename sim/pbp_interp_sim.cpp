@@ -83,6 +83,8 @@ void pi_read_outputs(const pi_sim *sim, pi_outputs *out) {
     out->done = sim->top->done;
     out->req_valid = sim->top->req_valid;
     out->req_negative = sim->top->req_negative;
+    out->move_up = sim->top->move_up;
+    out->move_down = sim->top->move_down;
 }
 
 uint64_t pi_cycle(const pi_sim *sim) { return sim->cycle; }

@@ -21,13 +21,15 @@ typedef struct pi_inputs {
     uint32_t rec_steps;
 } pi_inputs;
 
-/* req_valid, req_negative: bit 0 axis X, bit 1 axis Y. */
+/* req_valid, req_negative, move_up, move_down: bit 0 axis X, bit 1 axis Y. */
 typedef struct pi_outputs {
     uint8_t rec_ready;
     uint8_t busy;
     uint8_t done;
     uint8_t req_valid;
     uint8_t req_negative;
+    uint8_t move_up;
+    uint8_t move_down;
 } pi_outputs;
 
 typedef struct pi_sim pi_sim;

@@ -14,7 +14,10 @@
 //! through a pbp record while `rec_ready` is low. The end positions are
 //! checked against the records' displacements (a line's end point, an arc's end minus its
 //! start), exact. A failure prints the seed (rerun with FINESTEP_SEED) and the first
-//! cycle, signal, expected and actual value.
+//! cycle, signal, expected and actual value. The gantry sees a pbp record's motion: an
+//! engagement asked in the middle of a record on the master's or the slave's pair waits
+//! to the clock after its `done`, and a random mix enables and disables the gantry at
+//! random clocks, in and between records.
 
 use finestep_cosim::{Harness, ModelPath};
 use finestep_interface::{flags, PbpLanes};
@@ -374,4 +377,125 @@ fn with_the_gantry_engaged_the_slave_follows_pbp_moves_of_the_master() {
             assert!(!out.record_error() && !out.step_lost(slave), "{what}");
         }
     }
+}
+
+/// The gantry's engaged flag.
+fn engaged(h: &Harness) -> bool {
+    h.outputs().gantry_flags & 1 != 0
+}
+
+#[test]
+fn a_gantry_engagement_asked_in_a_pbp_record_on_its_pairs_waits_to_the_records_end() {
+    // (master, slave, the record's pair, its end point, whether the engagement waits): a
+    // record on the master's pair, on the slave's, a line on the master's pair that does
+    // not move the master (X = 0: the pair is busy all the same), and one on another pair.
+    let cases = [
+        (0u8, 3u8, 0u8, (31, -17), true),
+        (0, 3, 1, (-12, 25), true),
+        (0, 3, 0, (0, 40), true),
+        (2, 3, 0, (22, 14), false),
+        (1, 0, 1, (-9, -30), false),
+    ];
+    for (master, slave, pair, (xe, ye), waits) in cases {
+        for path in [ModelPath::PerClock, ModelPath::Fast] {
+            let what = format!("master {master} slave {slave}, a line on pair {pair}, {path:?}");
+            let mut h = Variant::PerAxis.harness("core_pbp_gantry_engage", path);
+            let mut inp = inputs();
+            inp.gantry = GantryInputs { master, slave, sync: true, tick: 7, limit: 1000, ..GantryInputs::default() };
+            h.idle(&inp, 4).unwrap();
+            inp.run = true;
+            let m = line(pair, xe, ye, 4, flags::BLOCK_END);
+            h.feed(&mut inp, [m.record]).unwrap();
+            // In the middle of the record: the gantry is asked to engage.
+            h.idle(&inp, 60).unwrap();
+            assert!(
+                !h.outputs().rec_ready() && h.model().pbp_motion()[usize::from(2 * pair)].busy,
+                "{what}: the record runs"
+            );
+            inp.gantry.enable = true;
+            let asked = h.cycle();
+            let (mut end, mut at) = (None, None);
+            for _ in 0..(5 * 60 + 40) {
+                h.idle(&inp, 1).unwrap();
+                if h.outputs().block_end() {
+                    end = Some(h.cycle());
+                }
+                if engaged(&h) {
+                    at = Some(h.cycle());
+                    break;
+                }
+            }
+            let at = at.unwrap_or_else(|| panic!("{what}: never engaged"));
+            if waits {
+                let end = end.unwrap_or_else(|| panic!("{what}: engaged before the record's end"));
+                assert_eq!(at, end + 1, "{what}: engaged the clock after done");
+            } else {
+                assert_eq!((at, end), (asked + 1, None), "{what}: engaged at once, the record runs on");
+            }
+            // The rest of the record (if any) and an idle period: the positions are the line's.
+            let end = stream(&mut h, &mut inp, &[], 0);
+            assert_eq!(end, m.delta, "{what}");
+            assert_eq!(h.outputs().gantry_flags & 0b110, 0, "{what}: no alarm, no refusal");
+        }
+    }
+}
+
+#[test]
+fn random_gantry_engagements_and_corrections_in_pbp_records_in_lockstep() {
+    let seed = finestep_testkit::seed("core_pbp_gantry_mix");
+    eprintln!("core_pbp_gantry_mix: FINESTEP_SEED={seed:#x} (rerun with this to reproduce)");
+    let mut rng = Rng(seed | 1);
+    // Cycles in which an engagement was asked and held by a pbp record on the gantry's
+    // pairs, and in which a correction was pending against the master's pbp motion.
+    let (mut held, mut waited) = (0u64, 0u64);
+    for run in 0..finestep_testkit::cases(6) {
+        let pairs = [(0u8, 3u8), (0, 1), (2, 1), (3, 0)];
+        let (master, slave) = pairs[rng.range(0, 3) as usize];
+        let path = if run % 2 == 0 { ModelPath::PerClock } else { ModelPath::Fast };
+        let what = format!("run {run} master {master} slave {slave} {path:?} FINESTEP_SEED={seed:#x}");
+        let mut h = Variant::PerAxis.harness("core_pbp_gantry_mix", path);
+        let mut inp = inputs();
+        inp.gantry = GantryInputs {
+            master,
+            slave,
+            sync: rng.range(0, 3) != 0,
+            tick: rng.range(1, 30) as u32,
+            deadband: rng.range(0, 1) as u16,
+            limit: 60_000,
+            ..GantryInputs::default()
+        };
+        h.idle(&inp, 4).unwrap();
+        inp.run = true;
+        let moves = random_moves(&mut rng, finestep_testkit::cases(24) as usize, 0);
+        for mv in &moves {
+            h.feed(&mut inp, [mv.record]).unwrap_or_else(|e| panic!("{what}: {e}"));
+            // Some clocks in the record (or the period) just taken: the gantry enabled or
+            // disabled at a random clock, the channels apart so that corrections run.
+            for _ in 0..rng.range(0, 3) {
+                h.idle(&inp, rng.range(1, 120) as u64).unwrap_or_else(|e| panic!("{what}: {e}"));
+                match rng.range(0, 3) {
+                    0 => inp.gantry.enable = !inp.gantry.enable,
+                    1 => inp.gantry.enc_master = inp.gantry.enc_master.wrapping_add(rng.range(-3, 3) as u32),
+                    2 => inp.gantry.enc_slave = inp.gantry.enc_slave.wrapping_add(rng.range(-3, 3) as u32),
+                    _ => inp.gantry.enable = true,
+                }
+                for _ in 0..rng.range(1, 40) {
+                    h.idle(&inp, 1).unwrap_or_else(|e| panic!("{what}: {e}"));
+                    let motion = h.model().pbp_motion();
+                    let (m, s) = (usize::from(master), usize::from(slave));
+                    let g = h.model().gantry();
+                    if inp.gantry.enable && !g.engaged() && (motion[m].busy || motion[s].busy) {
+                        held += 1;
+                    }
+                    if g.engaged() && ((g.corr() > 0 && motion[m].down) || (g.corr() < 0 && motion[m].up)) {
+                        waited += 1;
+                    }
+                }
+            }
+        }
+        stream(&mut h, &mut inp, &[], seed);
+        assert!(!h.outputs().record_error(), "{what}");
+    }
+    eprintln!("core_pbp_gantry_mix: {held} clocks of an engagement held by a pbp record, {waited} of a correction pending against the master's pbp motion");
+    assert!(held > 0 && waited > 0, "FINESTEP_SEED={seed:#x}: the mix covers held engagements ({held}) and corrections against pbp motion ({waited})");
 }

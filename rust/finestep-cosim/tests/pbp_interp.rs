@@ -120,6 +120,10 @@ fn diff(expected: &PbpOutputs, actual: &PbpOutputs) -> Option<String> {
         ("req_valid[1]", expected.req_valid[1], actual.req_valid[1]),
         ("req_negative[0]", expected.req_negative[0], actual.req_negative[0]),
         ("req_negative[1]", expected.req_negative[1], actual.req_negative[1]),
+        ("move_up[0]", expected.move_up[0], actual.move_up[0]),
+        ("move_up[1]", expected.move_up[1], actual.move_up[1]),
+        ("move_down[0]", expected.move_down[0], actual.move_down[0]),
+        ("move_down[1]", expected.move_down[1], actual.move_down[1]),
     ];
     fields.iter().find(|(_, e, a)| e != a).map(|(name, e, a)| format!("{name}: expected {e}, actual {a}"))
 }

@@ -12,7 +12,7 @@
 
 use crate::config::{AxisSettings, CoreInputs, CoreParams, ParamError};
 use crate::dda_axis::{DdaAxis, ONE_STEP};
-use crate::gantry_sync::{GantryContext, GantrySync};
+use crate::gantry_sync::{ExtMotion, GantryContext, GantrySync};
 use crate::pbp_interp::{PbpInputs, PbpInterp, PbpParams, PbpRecord};
 use crate::period_timer::{PeriodTimer, TimerInputs};
 use crate::record::PeriodRecord;
@@ -203,6 +203,15 @@ impl PbpCore {
             (true, true, false) => 1,
             _ => 0,
         }
+    }
+
+    /// The block's motion on axis `i` for the gantry: `busy` while a record runs on
+    /// the pair holding it, and the direction of its next step there.
+    fn motion(&self, i: usize) -> ExtMotion {
+        let out = self.interp.outputs();
+        let k = i % 2;
+        let on = i / 2 == self.pair;
+        ExtMotion { busy: on && out.busy, up: on && out.move_up[k], down: on && out.move_down[k] }
     }
 }
 
@@ -395,6 +404,18 @@ impl Core {
         reqs
     }
 
+    /// The pbp block's motion per axis as the gantry sees it (`ext_busy`, `ext_up`,
+    /// `ext_down`: docs/spec/pbp_interp.md#in-the-core); none without the block.
+    pub fn pbp_motion(&self) -> [ExtMotion; MAX_AXES] {
+        let mut ext = [ExtMotion::default(); MAX_AXES];
+        if let Some(p) = &self.pbp {
+            for (i, e) in ext.iter_mut().enumerate().take(self.params.n_axes) {
+                *e = p.motion(i);
+            }
+        }
+        ext
+    }
+
     /// The pbp block holds the record port: its record runs, or (with the step engine)
     /// one of its requests has not reached its axis's shaper visit yet.
     #[inline]
@@ -526,13 +547,14 @@ impl Core {
         }
         let gantry = self.gantry;
         let increments = self.timer.inc;
+        let ext = self.pbp_motion();
         let axes = self.shaper[..n].iter_mut().zip(&mut self.dda[..n]).zip(&self.timer.inc[..n]).enumerate();
         // The DDAs hold their phase at M/2 until the period timer is running.
         let running = inputs.run && self.timer.active;
         if self.params.gantry_built() {
             for (i, ((shaper, dda), &d)) in axes {
                 // The engaged slave takes the gantry's request only.
-                let r = gantry.shaper_request(i, &reqs, &increments, &inputs.gantry);
+                let r = gantry.shaper_request(i, &reqs, &increments, &ext, &inputs.gantry);
                 changed |= shaper.step(r, &axis(i), self.counter_max, inputs.clear_errors);
                 dda.step(running, period, d, m);
             }
@@ -542,6 +564,7 @@ impl Core {
                     n_axes: n,
                     master_req: reqs[gantry.master()],
                     inc: increments,
+                    ext,
                     halt: inputs.halt,
                     clear_errors: inputs.clear_errors,
                 },

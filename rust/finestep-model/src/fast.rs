@@ -167,6 +167,7 @@ impl Core {
                 n_axes: self.params.n_axes,
                 master_req: 0,
                 inc: self.timer.inc,
+                ext: self.pbp_motion(),
                 halt: inputs.halt,
                 clear_errors: inputs.clear_errors,
             },

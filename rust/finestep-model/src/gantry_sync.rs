@@ -10,8 +10,10 @@
 //! direction, and against the master's motion it waits to delete (the slave never
 //! reverses while the master moves). Forward mode copies the master's requests
 //! unchanged. In both modes the difference is measured against the one at engagement
-//! (which waits for both axes at rest) and `alarm` set past `limit`; the alarm stops
-//! the corrections.
+//! (which waits for both axes at rest: no increment, and no [`ExtMotion`] `busy`, the
+//! core's pbp block running a record on the axis's pair) and `alarm` set past `limit`;
+//! the alarm stops the corrections. The master's motion is its increment's sign or its
+//! [`ExtMotion`] direction.
 //!
 //! Latency: a count change in cycle `n` reaches `diff` in `n+1`, `error` in `n+2` and
 //! `alarm` in `n+3`; a tick in cycle `t` decides from `error` of cycle `t`, and the
@@ -40,6 +42,24 @@ pub mod flags {
     /// Sticky: an engagement was refused (`master`/`slave` not valid).
     pub const REFUSED: u8 = 1 << 2;
 }
+
+/// An axis's motion besides its increment (the core's pbp block, see
+/// docs/spec/pbp_interp.md#in-the-core): `busy` (a record runs on the axis's pair: the
+/// axis is not at rest) and the direction the block's next step on it would take, `up`
+/// or `down` (neither on a line's axis of zero coordinate). All false for a core
+/// without the block.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ExtMotion {
+    /// Not at rest: a pbp record runs on the axis's pair.
+    pub busy: bool,
+    /// The next step would be +1.
+    pub up: bool,
+    /// The next step would be -1.
+    pub down: bool,
+}
+
+/// No motion besides the increments, on every axis.
+pub const NO_EXT: [ExtMotion; crate::MAX_AXES] = [ExtMotion { busy: false, up: false, down: false }; crate::MAX_AXES];
 
 /// State of the gantry synchronisation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -74,6 +94,8 @@ pub(crate) struct GantryContext {
     pub(crate) master_req: i8,
     /// Every axis's increment in this period (the period timer's), 0 above `N_AXES`.
     pub(crate) inc: [i32; crate::MAX_AXES],
+    /// Every axis's motion besides its increment (none above `N_AXES`).
+    pub(crate) ext: [ExtMotion; crate::MAX_AXES],
     /// The core's `halt`.
     pub(crate) halt: bool,
     /// The core's `clear_errors`.
@@ -144,24 +166,26 @@ impl GantrySync {
     }
 
     /// Whether the correction goes into the slave's request in this cycle, with `r` the
-    /// master's request, `d` the master's increment and this cycle's `sync` and
-    /// `enable`: synchronised, enabled and no alarm; then as a deletion (`r == -corr`),
-    /// or as an insertion (`r == 0`) unless the master moves against it (`d` of the
-    /// other sign: the correction waits to delete a master step instead).
+    /// master's request, `d` the master's increment, `e` its motion besides it and this
+    /// cycle's `sync` and `enable`: synchronised, enabled and no alarm; then as a
+    /// deletion (`r == -corr`), or as an insertion (`r == 0`) unless the master moves
+    /// against it (up: `d > 0` or `e.up`; down: `d < 0` or `e.down`; against `+1` is
+    /// down, against `-1` up: the correction waits to delete a master step instead).
     #[inline]
-    pub fn takes(&self, r: i8, d: i32, sync: bool, enable: bool) -> bool {
+    pub fn takes(&self, r: i8, d: i32, e: ExtMotion, sync: bool, enable: bool) -> bool {
         let c = self.corr;
-        let against = (c < 0 && d > 0) || (c > 0 && d < 0);
+        let (up, down) = (d > 0 || e.up, d < 0 || e.down);
+        let against = (c < 0 && up) || (c > 0 && down);
         self.engaged && c != 0 && sync && enable && !self.alarm && if r != 0 { r == -c } else { !against }
     }
 
     /// The request the engaged pair gives the slave's shaper when the master's DDA
-    /// requests `r` in this cycle (see [`Self::takes`] for `d`, `sync`, `enable`):
+    /// requests `r` in this cycle (see [`Self::takes`] for `d`, `e`, `sync`, `enable`):
     /// `r + corr` when the correction goes in (a step inserted, or a master step
     /// deleted), else `r`.
     #[inline]
-    pub fn slave_request(&self, r: i8, d: i32, sync: bool, enable: bool) -> i8 {
-        if self.takes(r, d, sync, enable) {
+    pub fn slave_request(&self, r: i8, d: i32, e: ExtMotion, sync: bool, enable: bool) -> i8 {
+        if self.takes(r, d, e, sync, enable) {
             r + self.corr
         } else {
             r
@@ -169,13 +193,14 @@ impl GantrySync {
     }
 
     /// The request-selection rule: the request the step shaper of `axis` takes in this
-    /// cycle, given every axis's DDA request `reqs` and increment `inc` of this cycle:
-    /// the gantry's [`Self::slave_request`] when engaged and `axis` is the slave, else
-    /// its own DDA's.
+    /// cycle, given every axis's own request `reqs`, increment `inc` and motion besides
+    /// it `ext` of this cycle: the gantry's [`Self::slave_request`] when engaged and
+    /// `axis` is the slave, else its own request.
     #[inline]
-    pub fn shaper_request(&self, axis: usize, reqs: &[i8], inc: &[i32], inp: &GantryInputs) -> i8 {
+    pub fn shaper_request(&self, axis: usize, reqs: &[i8], inc: &[i32], ext: &[ExtMotion], inp: &GantryInputs) -> i8 {
         if self.engaged && axis == self.slave() {
-            self.slave_request(reqs[self.master()], inc[self.master()], inp.sync, inp.enable)
+            let m = self.master();
+            self.slave_request(reqs[m], inc[m], ext[m], inp.sync, inp.enable)
         } else {
             reqs[axis]
         }
@@ -184,8 +209,8 @@ impl GantrySync {
     /// Whether the correction is applied in this cycle: it goes in and the core is not
     /// halted (a halted shaper drops every request).
     #[inline]
-    fn applied(&self, r: i8, d: i32, inp: &GantryInputs, halt: bool) -> bool {
-        self.takes(r, d, inp.sync, inp.enable) && !halt
+    fn applied(&self, r: i8, d: i32, e: ExtMotion, inp: &GantryInputs, halt: bool) -> bool {
+        self.takes(r, d, e, inp.sync, inp.enable) && !halt
     }
 
     /// The next `tick_cnt` in a cycle without engagement or disengagement, and whether
@@ -240,11 +265,12 @@ impl GantrySync {
         let master = inp.master & AXIS_MASK;
         let slave = inp.slave & AXIS_MASK;
         let valid = master != slave && usize::from(master) < ctx.n_axes && usize::from(slave) < ctx.n_axes;
-        let at_rest = ctx.inc[usize::from(master)] == 0 && ctx.inc[usize::from(slave)] == 0;
+        let (mi, si) = (usize::from(master), usize::from(slave));
+        let at_rest = ctx.inc[mi] == 0 && ctx.inc[si] == 0 && !ctx.ext[mi].busy && !ctx.ext[si].busy;
         let engage = !self.engaged && inp.enable && valid && at_rest;
         let disengage = self.engaged && !inp.enable;
         let clear = ctx.clear_errors;
-        let applied = self.applied(ctx.master_req, ctx.inc[self.master()], inp, ctx.halt);
+        let applied = self.applied(ctx.master_req, ctx.inc[self.master()], ctx.ext[self.master()], inp, ctx.halt);
         let (tick, tick_cnt) = self.tick(inp.tick);
 
         let error = self.error as i32;
@@ -297,7 +323,14 @@ mod tests {
     const N: usize = 4;
 
     fn ctx(master_req: i8) -> GantryContext {
-        GantryContext { n_axes: N, master_req, inc: [0; crate::MAX_AXES], halt: false, clear_errors: false }
+        GantryContext {
+            n_axes: N,
+            master_req,
+            inc: [0; crate::MAX_AXES],
+            ext: NO_EXT,
+            halt: false,
+            clear_errors: false,
+        }
     }
 
     /// Enabled and synchronised, the rest default.
@@ -398,7 +431,7 @@ mod tests {
         assert!(!g.engaged());
         assert_eq!((g.corr(), g.tick_cnt()), (0, 0));
         assert_eq!(g.corrections(), 0, "the disengaging cycle passes the master's request unchanged");
-        assert_eq!(g.shaper_request(1, &[1, -1, 0, 0], &REST, &off), -1, "own DDA again");
+        assert_eq!(g.shaper_request(1, &[1, -1, 0, 0], &REST, &NO_EXT, &off), -1, "own DDA again");
         // Not engaged: tick_cnt does not count.
         g.step(&off, &ctx(0));
         assert_eq!(g.tick_cnt(), 0);
@@ -514,10 +547,10 @@ mod tests {
         ];
         for (corr, r, want, applied) in cases {
             let g = g(corr);
-            assert_eq!(g.shaper_request(0, &reqs(r), &REST, &ON), want, "corr {corr} r {r}");
-            assert_eq!(g.shaper_request(1, &reqs(r), &REST, &ON), 6, "other axes: own DDA");
-            assert_eq!(g.shaper_request(2, &reqs(r), &REST, &ON), r, "the master: own DDA");
-            assert_eq!(g.applied(r, 0, &ON, false), applied);
+            assert_eq!(g.shaper_request(0, &reqs(r), &REST, &NO_EXT, &ON), want, "corr {corr} r {r}");
+            assert_eq!(g.shaper_request(1, &reqs(r), &REST, &NO_EXT, &ON), 6, "other axes: own DDA");
+            assert_eq!(g.shaper_request(2, &reqs(r), &REST, &NO_EXT, &ON), r, "the master: own DDA");
+            assert_eq!(g.applied(r, 0, ExtMotion::default(), &ON, false), applied);
             let mut next = g;
             let inp = GantryInputs { enable: true, sync: true, tick: 100, ..GantryInputs::default() };
             next.step(&inp, &ctx(r));
@@ -527,7 +560,7 @@ mod tests {
         }
         // Not engaged: the slave's own request.
         let off = GantrySync { engaged: false, ..g(1) };
-        assert_eq!(off.shaper_request(0, &reqs(1), &REST, &ON), 5);
+        assert_eq!(off.shaper_request(0, &reqs(1), &REST, &NO_EXT, &ON), 5);
         // The counter wraps both ways.
         let mut w = GantrySync { corrections: u16::MAX, ..g(1) };
         let inp = GantryInputs { enable: true, sync: true, tick: 100, ..GantryInputs::default() };
@@ -631,7 +664,7 @@ mod tests {
         for k in 0..200u32 {
             reqs[3] = [0, 1, -1, 1, 0, 0, -1][(k % 7) as usize];
             reqs[0] = -reqs[3];
-            assert_eq!(g.shaper_request(0, &reqs, &REST, &inp), reqs[3]);
+            assert_eq!(g.shaper_request(0, &reqs, &REST, &NO_EXT, &inp), reqs[3]);
             g.step(&inp, &ctx(reqs[3]));
             assert_eq!(g.corr(), 0);
         }
@@ -662,20 +695,20 @@ mod tests {
         let g = GantrySync { engaged: true, m: 2, s: 0, corr: -1, ..GantrySync::default() };
         let mut inc = REST;
         inc[2] = 1000;
-        assert!(!g.takes(0, inc[2], true, true), "no reverse step while the master moves up");
-        assert_eq!(g.shaper_request(0, &[0, 0, 0, 0], &inc, &ON), 0);
-        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &ON), 0, "the next master step is deleted");
-        assert!(g.takes(1, inc[2], true, true));
+        assert!(!g.takes(0, inc[2], ExtMotion::default(), true, true), "no reverse step while the master moves up");
+        assert_eq!(g.shaper_request(0, &[0, 0, 0, 0], &inc, &NO_EXT, &ON), 0);
+        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &NO_EXT, &ON), 0, "the next master step is deleted");
+        assert!(g.takes(1, inc[2], ExtMotion::default(), true, true));
         // With the motion (corr = +1 while moving up): inserted between master steps.
         let with = GantrySync { corr: 1, ..g };
-        assert_eq!(with.shaper_request(0, &[0, 0, 0, 0], &inc, &ON), 1);
+        assert_eq!(with.shaper_request(0, &[0, 0, 0, 0], &inc, &NO_EXT, &ON), 1);
         // At rest either way is an insertion.
-        assert_eq!(g.shaper_request(0, &[0, 0, 0, 0], &REST, &ON), -1);
+        assert_eq!(g.shaper_request(0, &[0, 0, 0, 0], &REST, &NO_EXT, &ON), -1);
         // Forward mode, a disabled pair or an alarm: the master's request unchanged.
-        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &GantryInputs { sync: false, ..ON }), 1);
-        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &GantryInputs { enable: false, ..ON }), 1);
+        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &NO_EXT, &GantryInputs { sync: false, ..ON }), 1);
+        assert_eq!(g.shaper_request(0, &[0, 0, 1, 0], &inc, &NO_EXT, &GantryInputs { enable: false, ..ON }), 1);
         let alarmed = GantrySync { alarm: true, ..g };
-        assert_eq!(alarmed.shaper_request(0, &[0, 0, 1, 0], &inc, &ON), 1);
+        assert_eq!(alarmed.shaper_request(0, &[0, 0, 1, 0], &inc, &NO_EXT, &ON), 1);
     }
 
     #[test]
@@ -694,5 +727,50 @@ mod tests {
         let mut alarmed = GantrySync { alarm: true, error: 50, corr: 1, ..g };
         alarmed.step(&GantryInputs { limit: 1000, ..inp }, &ctx(0));
         assert_eq!((alarmed.corr(), alarmed.corrections()), (0, 0));
+    }
+
+    #[test]
+    fn a_pbp_record_on_either_axis_holds_engagement_and_its_direction_is_the_masters_motion() {
+        let inp = GantryInputs { master: 2, slave: 0, tick: 1, ..ON };
+        // The slave's or the master's pair busy (even without a direction: a line's axis
+        // of zero coordinate): no engagement; free again, it engages.
+        for (axis, e) in [
+            (0, ExtMotion { busy: true, ..ExtMotion::default() }),
+            (2, ExtMotion { busy: true, up: true, down: false }),
+        ] {
+            let mut g = GantrySync::default();
+            let mut held = ctx(0);
+            held.ext[axis] = e;
+            g.step(&inp, &held);
+            assert!(!g.engaged() && !g.refused(), "axis {axis} busy: waits");
+            g.step(&inp, &ctx(0));
+            assert!(g.engaged());
+        }
+        // Another pair's record does not hold it.
+        let mut g = GantrySync::default();
+        let mut other = ctx(0);
+        other.ext[1] = ExtMotion { busy: true, up: true, down: false };
+        g.step(&inp, &other);
+        assert!(g.engaged());
+        // Engaged, the master moving down by pbp (zero increment): +1 waits to delete a
+        // master step, -1 goes in; up: the other way round; busy without a direction: both.
+        let g = GantrySync { engaged: true, m: 2, s: 0, corr: 1, ..GantrySync::default() };
+        let down = ExtMotion { busy: true, up: false, down: true };
+        let up = ExtMotion { busy: true, up: true, down: false };
+        let busy = ExtMotion { busy: true, up: false, down: false };
+        for (e, plus, minus) in [(down, false, true), (up, true, false), (busy, true, true)] {
+            assert_eq!(g.takes(0, 0, e, true, true), plus, "{e:?} +1");
+            assert_eq!(GantrySync { corr: -1, ..g }.takes(0, 0, e, true, true), minus, "{e:?} -1");
+        }
+        let mut ext = NO_EXT;
+        ext[2] = down;
+        assert_eq!(g.shaper_request(0, &[0, 0, 0, 0], &REST, &ext, &ON), 0, "waits");
+        assert_eq!(g.shaper_request(0, &[0, 0, -1, 0], &REST, &ext, &ON), 0, "the master's step deleted");
+        // The applied count follows the same rule.
+        let mut w = g;
+        let mut c = ctx(0);
+        c.ext[2] = down;
+        w.step(&GantryInputs { tick: 100, ..inp }, &c);
+        assert_eq!((w.corr(), w.corrections()), (1, 0), "not applied against the pbp motion");
     }
 }

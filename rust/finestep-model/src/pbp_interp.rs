@@ -268,6 +268,12 @@ pub struct PbpOutputs {
     pub req_valid: [bool; 2],
     /// Its direction is negative.
     pub req_negative: [bool; 2],
+    /// While busy, the direction the next step on axis 0 (X) and 1 (Y) would take: +1
+    /// (a line's coordinate's sign, an arc's quadrant direction); neither on a line's
+    /// axis of zero coordinate, and neither while not busy (for the gantry).
+    pub move_up: [bool; 2],
+    /// See `move_up`: -1.
+    pub move_down: [bool; 2],
 }
 
 /// The block's state (the RTL's registers).
@@ -314,7 +320,17 @@ impl PbpInterp {
 
     /// The outputs in this cycle.
     pub fn outputs(&self) -> PbpOutputs {
+        // The directions of the two axes: a line's signs, an arc's quadrant's.
+        let negative = if self.arc {
+            let (x, y, _) = arc_signs(self.x, self.y, self.cw);
+            [x, y]
+        } else {
+            [self.x_negative, self.y_negative]
+        };
+        let moves = [self.busy && (self.arc || self.x != 0), self.busy && (self.arc || self.y != 0)];
         PbpOutputs {
+            move_up: [moves[0] && !negative[0], moves[1] && !negative[1]],
+            move_down: [moves[0] && negative[0], moves[1] && negative[1]],
             rec_ready: !self.busy,
             busy: self.busy,
             done: self.done,

@@ -77,6 +77,8 @@ impl RtlPbpInterp {
             done: raw.done != 0,
             req_valid: [bit(raw.req_valid, 0), bit(raw.req_valid, 1)],
             req_negative: [bit(raw.req_negative, 0), bit(raw.req_negative, 1)],
+            move_up: [bit(raw.move_up, 0), bit(raw.move_up, 1)],
+            move_down: [bit(raw.move_down, 0), bit(raw.move_down, 1)],
         }
     }
 
