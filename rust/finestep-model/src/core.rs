@@ -547,7 +547,7 @@ impl Core {
         }
         let gantry = self.gantry;
         let increments = self.timer.inc;
-        let ext = self.pbp_motion();
+        let ext = if PBP { self.pbp_motion() } else { [ExtMotion::default(); MAX_AXES] };
         let axes = self.shaper[..n].iter_mut().zip(&mut self.dda[..n]).zip(&self.timer.inc[..n]).enumerate();
         // The DDAs hold their phase at M/2 until the period timer is running.
         let running = inputs.run && self.timer.active;
