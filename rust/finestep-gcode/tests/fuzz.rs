@@ -515,10 +515,12 @@ fn profile_line() -> impl Strategy<Value = String> {
 }
 
 /// Random profiles under every lathe cycle: an error inside the input or finite moves,
-/// never a panic or a hang.
+/// never a panic or a hang (none interprets for more than a second of this thread's CPU
+/// time: a cycle's passes are bounded by its move limit).
 #[test]
 fn lathe_cycles_never_panic_or_hang() {
     let mut runner = finestep_testkit::runner("lathe_cycles_never_panic_or_hang", 1000);
+    let slowest = std::cell::RefCell::new((0.0f64, String::new()));
     let cycle =
         prop_oneof![Just("G70"), Just("G71"), Just("G71.1"), Just("G71.2"), Just("G72"), Just("G72.1"), Just("G72.2")];
     let words = (-20.0..20.0f64, -20.0..20.0f64, 0.0..2.0f64, 0.05..3.0f64, 1..4u8, any::<bool>());
@@ -531,8 +533,17 @@ fn lathe_cycles_never_panic_or_hang() {
                     "G18 {mode} F100\no1 sub\n{}\no1 endsub\n{cycle} Q1 X{x:.3} Z{z:.3} D{d:.3} I{i:.3} P{p} R0.3\nM2\n",
                     lines.join("\n")
                 );
-                check_location(&source, &parse_str(&source, "fuzz.ngc"))
+                let start = cpu_time::ThreadTime::now();
+                let result = parse_str(&source, "fuzz.ngc");
+                let took = start.elapsed().as_secs_f64();
+                if took > slowest.borrow().0 {
+                    *slowest.borrow_mut() = (took, source.clone());
+                }
+                prop_assert!(took < 1.0, "{took:.2} s for\n{source}");
+                check_location(&source, &result)
             },
         )
         .unwrap();
+    let (took, source) = slowest.into_inner();
+    println!("slowest case: {took:.3} s of CPU for\n{source}");
 }

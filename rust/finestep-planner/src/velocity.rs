@@ -173,23 +173,14 @@ impl Half {
         if d >= self.distance {
             return self.time;
         }
-        let (mut lo, mut hi) = (0.0, self.time);
-        let mut t = self.time * d / self.distance;
-        for _ in 0..100 {
-            let err = self.distance_at(t) - d;
-            if err < 0.0 {
-                lo = t;
-            } else {
-                hi = t;
-            }
-            if err.abs() <= 1e-13 * self.distance || hi - lo <= 1e-15 * self.time {
-                break;
-            }
-            let speed = self.speed_at(t);
-            let step = t - err / speed;
-            t = if speed > 0.0 && step > lo && step < hi { step } else { 0.5 * (lo + hi) };
-        }
-        t
+        invert_rising(
+            |t| self.distance_at(t),
+            |t| self.speed_at(t),
+            d,
+            (0.0, self.time),
+            self.time * d / self.distance,
+            (1e-13 * self.distance, 1e-15 * self.time),
+        )
     }
 
     /// The largest acceleration magnitude the half has between `t1` and `t2` (its
@@ -385,24 +376,46 @@ impl Profile {
     /// speed) from `from`, inside a bracket that bisection narrows wherever a Newton
     /// step leaves it (the distance rises with time).
     fn raw_time_at(&self, s: f64, from: f64, total: f64) -> f64 {
-        let (mut lo, mut hi) = (from.clamp(0.0, total), total);
-        let mut t = lo;
-        for _ in 0..100 {
-            let err = self.raw_distance_at(t) - s;
-            if err < 0.0 {
-                lo = t;
-            } else {
-                hi = t;
-            }
-            if err.abs() <= 1e-15 * s.abs().max(1e-300) || hi - lo <= 1e-15 * total {
-                break;
-            }
-            let speed = self.raw_speed_at(t);
-            let step = t - err / speed;
-            t = if speed > 0.0 && step > lo && step < hi { step } else { 0.5 * (lo + hi) };
-        }
-        t
+        let lo = from.clamp(0.0, total);
+        invert_rising(
+            |t| self.raw_distance_at(t),
+            |t| self.raw_speed_at(t),
+            s,
+            (lo, total),
+            lo,
+            (1e-15 * s.abs().max(1e-300), 1e-15 * total),
+        )
     }
+}
+
+/// The time at which a rising `distance` (its derivative `speed`) reaches `target`:
+/// Newton from `start` inside the bracket `(lo, hi)`, which bisection narrows wherever a
+/// Newton step would leave it; stops once the distance is within `tolerance.0` of the
+/// target or the bracket is narrower than `tolerance.1` (100 iterations at most).
+fn invert_rising(
+    distance: impl Fn(f64) -> f64,
+    speed: impl Fn(f64) -> f64,
+    target: f64,
+    (mut lo, mut hi): (f64, f64),
+    start: f64,
+    tolerance: (f64, f64),
+) -> f64 {
+    let mut t = start;
+    for _ in 0..100 {
+        let err = distance(t) - target;
+        if err < 0.0 {
+            lo = t;
+        } else {
+            hi = t;
+        }
+        if err.abs() <= tolerance.0 || hi - lo <= tolerance.1 {
+            break;
+        }
+        let v = speed(t);
+        let step = t - err / v;
+        t = if v > 0.0 && step > lo && step < hi { step } else { 0.5 * (lo + hi) };
+    }
+    t
 }
 
 /// One element of a run for [`run_profiles`]: its length, profile limits and speed cap.
