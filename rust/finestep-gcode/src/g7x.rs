@@ -874,11 +874,16 @@ impl Profile {
             cycle = 3;
         }
         let mut guard = 0u64;
+        // The state one pass of the loop starts from: a pass that leaves it as it was
+        // (no move made, neither the segment nor the layer advanced) repeats for ever.
+        let mut before: Option<(usize, f64, Pt, usize)> = None;
         while p < n {
             guard += 1;
-            if guard > 10_000_000 {
+            let state = (p, x, location, out.len());
+            if guard > 10_000_000 || before == Some(state) {
                 return fail("the roughing cycle does not end");
             }
+            before = Some(state);
             check_size(out)?;
             while x - TOLERANCE > location.x {
                 x -= self.delta;

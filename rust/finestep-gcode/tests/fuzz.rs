@@ -443,6 +443,31 @@ fn dialect_soup_never_panics_or_hangs() {
     println!("slowest case: {took:.3} s of CPU for\n{source}");
 }
 
+/// Roughing cycles whose profile leaves the pocket loop with nothing to do (found by the
+/// lathe-cycle soup at 10^6 cases: 1.0-1.5 s of CPU each before the loop noticed; rs274
+/// refuses the first and crashes on the second) fail at once with a clear error.
+#[test]
+fn a_roughing_cycle_that_cannot_end_fails_at_once() {
+    for profile in [
+        "G1 U9.770 W0.000\nG2 X0.000 Z4.268 I0.000 K-16.573\nG3 X0.000 Z3.001 I-9.326 K0.800\n",
+        "G1 X-19.545 Z3.527 C0.572\nG2 X12.972 Z-2.874 I18.315 K9.022\nG3 X0.000 Z-3.249 I-18.671 K-13.573\n",
+    ] {
+        for cycle in
+            ["G71.2 Q1 X8.192 Z13.538 D0.089 I2.138 P3 R0.3", "G71.2 Q1 X10.075 Z-15.193 D1.908 I0.050 P1 R0.3"]
+        {
+            let source = format!("G18 G7 F100\no1 sub\n{profile}o1 endsub\n{cycle}\nM2\n");
+            let start = cpu_time::ThreadTime::now();
+            let result = parse_str(&source, "stuck.ngc");
+            let took = start.elapsed().as_secs_f64();
+            // (A mixed pair may run: only an error must name the cycle's line.)
+            if let Err(e) = result {
+                assert!(e.to_string().contains("stuck.ngc:7:1"), "{source}: {e}");
+            }
+            assert!(took < 0.1, "{took:.2} s of CPU for\n{source}");
+        }
+    }
+}
+
 #[test]
 fn runaway_loops_stop_with_a_clear_error() {
     for (source, message) in [
