@@ -885,6 +885,15 @@ impl Profile {
             }
             before = Some(state);
             check_size(out)?;
+            // Down to the layer at the location: one layer a pass, so more layers than
+            // the cycle may make moves cannot be cut (and a location far below, e.g.
+            // where a dive followed the profile down without end, would take for ever).
+            if (x - TOLERANCE - location.x) / self.delta > MAX_MOVES as f64 {
+                return fail(format!(
+                    "the roughing needs more than {MAX_MOVES} layers from X{x:.3} down to X{:.3} (I too small for the profile?)",
+                    location.x
+                ));
+            }
             while x - TOLERANCE > location.x {
                 x -= self.delta;
             }

@@ -456,7 +456,8 @@ impl Slowest {
 
 /// Roughing cycles whose profile leaves the pocket loop with nothing to do (found by the
 /// lathe-cycle soup at 10^6 cases: 1.0-1.5 s of CPU each before the loop noticed; rs274
-/// refuses the first and crashes on the second) fail at once with a clear error.
+/// refuses the first and crashes on the second), or sends it billions of layers down (a
+/// hang, found the same way), fail at once with a clear error.
 #[test]
 fn a_roughing_cycle_that_cannot_end_fails_at_once() {
     for profile in [
@@ -477,6 +478,15 @@ fn a_roughing_cycle_that_cannot_end_fails_at_once() {
             assert!(took < 0.1, "{took:.2} s of CPU for\n{source}");
         }
     }
+    // G72 on a profile whose dive runs 5.9 * 10^9 units down: the layers below are
+    // refused by their count, not walked one by one.
+    let source = "G18 G8 F100\no1 sub\nG0 X15.675 Z11.549\nG2 X11.893 Z17.283 I-5.615 K-11.066\n\
+                  G2 X0.000 Z16.971 R17.997\nG2 X-5.644 Z14.187 I0.000 K-17.597\no9 repeat [1]\nG1 W4.883\n\
+                  o9 endrepeat\no1 endsub\nG72 Q1 X0.000 Z0.000 D0.058 I0.050 P1 R0.3\nM2\n";
+    let start = cpu_time::ThreadTime::now();
+    let err = parse_str(source, "stuck.ngc").unwrap_err().to_string();
+    assert!(err.contains("stuck.ngc:11:1") && err.contains("layers"), "{err}");
+    assert!(start.elapsed().as_secs_f64() < 0.1, "{:?} of CPU", start.elapsed());
 }
 
 #[test]
