@@ -572,8 +572,9 @@ impl ObjectCache {
         let args: Vec<String> = compiler
             .args()
             .iter()
-            .map(|arg| arg.to_string_lossy().replace(repo_path.as_ref(), "<repo>"))
+            .map(|arg| arg.to_string_lossy().into_owned())
             .filter(|arg| out.is_empty() || !arg.contains(&out))
+            .map(|arg| arg.replace(repo_path.as_ref(), "<repo>"))
             .collect();
         feed("compiler", format!("{} {args:?}", compiler.path().display()).as_bytes());
         feed("compiler version", &version);
