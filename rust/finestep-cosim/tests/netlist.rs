@@ -83,6 +83,8 @@ fn netlist_lockstep_rate() {
     )
     .unwrap_or_else(|e| panic!("{e}"));
     wait_idle(machine.bus(), 500, 4 * u64::from(RATE_PERIOD_CLOCKS) * 100).unwrap_or_else(|e| panic!("{e}"));
+    // POSITION is latched at period boundaries: two more periods for the last steps.
+    machine.bus().wait(2 * u64::from(RATE_PERIOD_CLOCKS)).unwrap_or_else(|e| panic!("{e}"));
     let elapsed = started.elapsed().as_secs_f64();
 
     assert_eq!(report.records, periods as u64);
