@@ -193,7 +193,12 @@ fn all_hold(module: &ModuleSpec, all: &BTreeMap<String, i64>) -> bool {
 /// units of each one's range) for which `keep` holds on the parameters and derived
 /// values: only the parameters the constraints and derived values read move, each over
 /// its whole range (or its least, default and greatest value when that is above 64
-/// values); the first of equals in the order tried.
+/// values); of equals, the first in the order that steps the last parameter fastest.
+///
+/// The space is a product of up to ~10^8 combinations, so it is searched branch and
+/// bound: each parameter's candidates nearest to the target first, and a branch whose
+/// partial distance already exceeds the best found is cut (the distances left to add are
+/// not negative). Exact: it returns what trying every combination in order would.
 fn nearest<'m>(
     module: &'m ModuleSpec,
     target: &[(&'m str, i64)],
@@ -206,41 +211,95 @@ fn nearest<'m>(
         .chain(module.derived.iter().map(|d| &d.value))
         .flat_map(|e| e.names())
         .collect();
-    let moving: Vec<(usize, Vec<i64>, f64)> = module
+    let moving: Vec<Moving> = module
         .parameters
         .iter()
         .enumerate()
         .filter(|(_, p)| read.contains(&p.name.as_str()))
-        .map(|(i, p)| {
+        .map(|(index, p)| {
             let (min, max) = (p.min.value, p.max.value);
-            let candidates = if max - min <= 64 { (min..=max).collect() } else { vec![min, p.default, max] };
-            (i, candidates, ((max - min) as f64).max(1.0))
+            let values: Vec<i64> = if max - min <= 64 { (min..=max).collect() } else { vec![min, p.default, max] };
+            let span = ((max - min) as f64).max(1.0);
+            let mut candidates: Vec<Candidate> = values
+                .into_iter()
+                .enumerate()
+                .map(|(order, value)| Candidate {
+                    order,
+                    value,
+                    distance: (value - target[index].1).abs() as f64 / span,
+                })
+                .collect();
+            candidates.sort_by(|a, b| a.distance.total_cmp(&b.distance).then(a.order.cmp(&b.order)));
+            Moving { index, candidates }
         })
         .collect();
-    let mut best: Option<(f64, Vec<(&str, i64)>)> = None;
-    let mut at = vec![0usize; moving.len()];
-    loop {
-        let mut values = target.to_vec();
-        let mut distance = 0.0;
-        for ((i, candidates, span), &k) in moving.iter().zip(&at) {
-            distance += (candidates[k] - values[*i].1).abs() as f64 / span;
-            values[*i].1 = candidates[k];
+    let mut search = Search {
+        moving: &moving,
+        module,
+        keep,
+        values: target.to_vec(),
+        order: vec![0; moving.len()],
+        distances: vec![0.0; moving.len()],
+        best: None,
+    };
+    search.walk(0, 0.0);
+    search.best.map(|best| best.values)
+}
+
+/// A parameter that [`nearest`] moves: its index in the module, its candidate values.
+struct Moving {
+    index: usize,
+    candidates: Vec<Candidate>,
+}
+
+/// A candidate value: its place in the full enumeration, its distance to the target.
+struct Candidate {
+    order: usize,
+    value: i64,
+    distance: f64,
+}
+
+/// The best combination so far: its distance, its places (the tie-break), its values.
+struct Best<'m> {
+    distance: f64,
+    order: Vec<usize>,
+    values: Vec<(&'m str, i64)>,
+}
+
+/// [`nearest`]'s depth-first walk over the moving parameters.
+struct Search<'a, 'm, K> {
+    moving: &'a [Moving],
+    module: &'m ModuleSpec,
+    keep: K,
+    values: Vec<(&'m str, i64)>,
+    order: Vec<usize>,
+    distances: Vec<f64>,
+    best: Option<Best<'m>>,
+}
+
+impl<K: Fn(&BTreeMap<String, i64>) -> bool> Search<'_, '_, K> {
+    fn walk(&mut self, depth: usize, partial: f64) {
+        if self.best.as_ref().is_some_and(|best| partial > best.distance) {
+            return;
         }
-        if best.as_ref().is_none_or(|(d, _)| distance < *d) && keep(&module.values(&values)) {
-            best = Some((distance, values));
+        if depth == self.moving.len() {
+            // Summed in parameter order, as the full enumeration sums it.
+            let distance: f64 = self.distances.iter().sum();
+            let better = self
+                .best
+                .as_ref()
+                .is_none_or(|best| distance < best.distance || (distance == best.distance && self.order < best.order));
+            if better && (self.keep)(&self.module.values(&self.values)) {
+                self.best = Some(Best { distance, order: self.order.clone(), values: self.values.clone() });
+            }
+            return;
         }
-        // The next combination, the last parameter fastest.
-        let mut digit = moving.len();
-        loop {
-            if digit == 0 {
-                return best.map(|(_, values)| values);
-            }
-            digit -= 1;
-            at[digit] += 1;
-            if at[digit] < moving[digit].1.len() {
-                break;
-            }
-            at[digit] = 0;
+        let moving = &self.moving[depth];
+        for candidate in &moving.candidates {
+            self.values[moving.index].1 = candidate.value;
+            self.order[depth] = candidate.order;
+            self.distances[depth] = candidate.distance;
+            self.walk(depth + 1, partial + candidate.distance);
         }
     }
 }
