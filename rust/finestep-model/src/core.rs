@@ -176,11 +176,11 @@ pub struct Core {
 /// of a record on a pair that is not built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct PbpCore {
-    interp: PbpInterp,
+    pub(crate) interp: PbpInterp,
     pair: usize,
     tick_div: u32,
     block_end: bool,
-    refused: bool,
+    pub(crate) refused: bool,
 }
 
 impl PbpCore {
@@ -419,7 +419,7 @@ impl Core {
     /// The pbp block holds the record port: its record runs, or (with the step engine)
     /// one of its requests has not reached its axis's shaper visit yet.
     #[inline]
-    fn pbp_waits(&self) -> bool {
+    pub(crate) fn pbp_waits(&self) -> bool {
         // Without the block nothing is ever held (the engine holds only its requests).
         let Some(p) = &self.pbp else { return false };
         p.busy() || self.engine.as_ref().is_some_and(|e| e.ext_pending(&self.pbp_requests()))

@@ -29,6 +29,10 @@
 //! cycles from `slot`, an axis whose visit is `c` cycles away is visited
 //! `ceil((k - c) / S)` times (0 when `k <= c`): `acc` adds `d` per DDA visit, `cnt` and
 //! `dcnt` count (saturating) per shaper visit, and `slot` moves on by `k`.
+//!
+//! With the pbp block (`has_pbp`) a cycle is quiet only while the block is idle (no
+//! record runs or waits, no `done` pulse, no refusal to clear): its records run clock by
+//! clock, and between them the skip is the one above.
 
 use crate::core::{ChunkEnd, Core, Event, Settings};
 use crate::dda_axis::{HALF_STEP, ONE_STEP};
@@ -45,10 +49,10 @@ impl Core {
         let set = self.settings(inputs);
         let mut ran = 0;
         while ran < max_cycles {
-            // The digit-serial engine and the pbp block have no skip rule yet: their
-            // cycles run one by one (exact, as fast as the per-clock path).
+            // The digit-serial engine has no skip rule yet: its cycles run one by one
+            // (exact, as fast as the per-clock path). The pbp block is quiet while idle.
             let quiet = match self.engine {
-                _ if self.serial.is_some() || self.pbp.is_some() => 0,
+                _ if self.serial.is_some() || !self.pbp_quiet(inputs) => 0,
                 Some(engine) => self.engine_quiet_cycles(&engine, &set, inputs),
                 None => self.quiet_cycles(&set, inputs),
             }
@@ -67,6 +71,18 @@ impl Core {
             }
         }
         ChunkEnd { cycles: ran, consumed: false }
+    }
+
+    /// Whether the pbp block (if built) lets this cycle be quiet: it does not hold the
+    /// record port ([`Core::pbp_waits`]: no record runs, none of its requests waits for
+    /// the step engine), its `done` pulse of the last edge is over (a request comes only
+    /// while a record runs or with `done`) and `clear_errors` has no refusal to clear.
+    /// Its edge then changes nothing, since a quiet cycle offers it no record
+    /// (`rec_ready` is low, or the idle `P = 1` boundary is offered none): the block sits
+    /// out the whole run, and the step engine and the gantry see no request or motion.
+    fn pbp_quiet(&self, inputs: &CoreInputs) -> bool {
+        let Some(p) = &self.pbp else { return true };
+        !(self.pbp_waits() || p.interp.outputs().done || p.refused && inputs.clear_errors)
     }
 
     /// How many cycles from the current one on are quiet with these inputs (0: the

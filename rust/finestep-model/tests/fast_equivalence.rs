@@ -176,8 +176,9 @@ fn case() -> impl Strategy<Value = Case> {
         prop::bool::weighted(0.8),
         prop::bool::weighted(0.4),
         prop_oneof![3 => Just(0u32), 1 => Just(1u32), 1 => Just(2u32), 1 => Just(4u32), 1 => Just(8u32)],
+        prop::bool::weighted(0.3),
     )
-        .prop_map(|(n_axes, p_width, timing_width, has_gantry, step_shared, step_digit)| {
+        .prop_map(|(n_axes, p_width, timing_width, has_gantry, step_shared, step_digit, has_pbp)| {
             let params = CoreParams {
                 n_axes,
                 p_width,
@@ -187,7 +188,7 @@ fn case() -> impl Strategy<Value = Case> {
                 step_digit: 0,
                 has_pbp: false,
             };
-            if step_shared && step_digit != 0 {
+            let built = if step_shared && step_digit != 0 {
                 // The digit-serial engine (its constraints: log2 R < TIMING_W <= 16,
                 // log2 R < P_WIDTH <= log2 R + 15).
                 let serial = CoreParams { step_shared, step_digit, ..params };
@@ -202,7 +203,11 @@ fn case() -> impl Strategy<Value = Case> {
                 CoreParams { step_shared, p_width, ..params }
             } else {
                 params
-            }
+            };
+            // The pbp block where it can be built (4 axes or more, not the digit-serial
+            // engine): the records' random flags make about half of them pbp records.
+            let has_pbp = has_pbp && built.n_axes >= 4 && !(built.step_shared && built.step_digit != 0);
+            CoreParams { has_pbp, ..built }
         });
     (params, period_value(), prop::array::uniform8(axis_config()), prop::collection::vec(chunk(), 1..40))
         .prop_map(|(params, period, axes, chunks)| Case { params, period, axes, chunks })
@@ -377,4 +382,68 @@ fn fast_path_skips_long_quiet_stretches() {
     core.run_chunk_fast(&inputs, 2_000_000, &mut events);
     let out = core.outputs();
     assert_eq!((out.position(0), out.position(1), out.position(2)), (-100_000, 250_000, 0));
+}
+
+/// With the pbp block built the fast path skips while the block is idle and runs its
+/// records clock by clock: lines and arcs on both pairs between increment records and
+/// idle stretches, with a DDA and a shaper per axis and with the step engine (its
+/// requests held for the shaper visits), identical to per-clock chunk by chunk; and a
+/// billion idle cycles after them at once.
+#[test]
+fn fast_path_skips_around_pbp_records() {
+    use finestep_interface::pbp::{arc_steps, PbpLanes};
+    let axis = AxisConfig { timing: DriveTiming::new(3, 2, 1, 2), enable: true, ..AxisConfig::default() };
+    let arc = |pair, (x, y): (i32, i32), end: (i64, i64), cw, tick_div| {
+        let steps = arc_steps((x.into(), y.into()), end, cw).unwrap();
+        PeriodRecord::pbp(&PbpLanes { arc: true, cw, pair, x, y, steps, tick_div }, 0)
+    };
+    let line = |pair, x, y, tick_div| {
+        PeriodRecord::pbp(&PbpLanes { arc: false, cw: false, pair, x, y, steps: 0, tick_div }, 0)
+    };
+    let records = [
+        line(0, 40, -17, 9),
+        PeriodRecord::from_raw(&[3 << 16, -(2 << 16), 1 << 15, 0], 0),
+        arc(1, (30, 0), (0, 30), false, 5),
+        line(1, -25, 0, 3),
+        line(3, 9, 9, 3),
+        arc(0, (0, -12), (12, 0), true, 20),
+        PeriodRecord::from_raw(&[0; 4], 0),
+    ];
+    for step_shared in [false, true] {
+        let params = CoreParams { step_shared, has_gantry: false, has_pbp: true, ..CoreParams::default() };
+        let mut inputs = CoreInputs { period_clocks: 2_000, axes: [axis; MAX_AXES], ..CoreInputs::default() };
+        let mut slow = Core::new(params);
+        let mut fast = slow.clone();
+        let (mut ev_slow, mut ev_fast) = (vec![], vec![]);
+        let mut chunks = vec![(false, false, 10, records[0]), (true, false, 5_000, records[0])];
+        for record in records {
+            chunks.push((true, true, u64::MAX, record));
+            chunks.push((true, false, 7_000, record));
+        }
+        for (k, (run, valid, max, record)) in chunks.into_iter().enumerate() {
+            inputs.run = run;
+            inputs.rec_valid = valid;
+            inputs.record = record;
+            ev_slow.clear();
+            ev_fast.clear();
+            let a = slow.run_chunk(&inputs, max, &mut ev_slow);
+            let b = fast.run_chunk_fast(&inputs, max, &mut ev_fast);
+            assert_eq!(a, b, "step_shared {step_shared}, chunk {k}");
+            assert_eq!(ev_slow, ev_fast, "step_shared {step_shared}, chunk {k}");
+            assert_eq!(slow, fast, "step_shared {step_shared}, chunk {k}");
+        }
+        let out = fast.outputs();
+        let at = |i| out.position(i);
+        // The lines' and arcs' end points, the increments' 3 and -2 steps, and axis 2's
+        // half step rounded up (the DDA starts from M / 2); pair 3 is not built (4
+        // axes): that record is refused.
+        assert_eq!(
+            (at(0), at(1), at(2), at(3)),
+            (40 + 12 + 3, -17 + 12 - 2, -30 - 25 + 1, 30),
+            "step_shared {step_shared}"
+        );
+        inputs.rec_valid = false;
+        let end = fast.run_chunk_fast(&inputs, 1_000_000_000, &mut ev_fast);
+        assert_eq!(end.cycles, 1_000_000_000);
+    }
 }
