@@ -2,7 +2,7 @@
 CARGO ?= cargo
 export VERILATOR ?= verilator
 
-.PHONY: conformance flash all setup demo test test-long check lint formal flows bench cargo-test wheel-check regmap clean \
+.PHONY: conformance flash all setup demo test test-long check lint formal formal-quick flows bench cargo-test wheel-check regmap clean \
         bitstream-ecp5 bitstream-ice40 bitstream-machxo2 quartus diamond report mutants mutants-quick \
         linuxcnc linuxcnc-quick netlist netlist-quick mutants-rtl mutants-rtl-quick icarus icarus-quick view-check
 
@@ -14,7 +14,7 @@ setup:
 demo: setup
 	$(CARGO) run --release -q -p finestep-cli -- demo
 
-TEST_STAGES = lint cargo-test wheel-check formal mutants-quick mutants-rtl-quick netlist-quick icarus-quick linuxcnc-quick flows
+TEST_STAGES = lint cargo-test wheel-check formal-quick mutants-quick mutants-rtl-quick netlist-quick icarus-quick linuxcnc-quick flows
 
 # The stages in this order, stopping at the first that fails; the minutes of each at the end.
 test: setup
@@ -40,6 +40,11 @@ wheel-check: setup
 
 formal: setup
 	@./scripts/formal.sh
+
+# The quick slice in make test: every task but those a .sby marks `# long:` (the
+# longest bounded checks and inductions; make formal and make test-long run them).
+formal-quick: setup
+	@./scripts/formal.sh --quick
 
 # Common-mode mutants (mutants/README.md): each spec misreading in mutants/LIST applied
 # identically to the RTL and the model in a scratch copy under build/mutants/, run against
@@ -87,7 +92,7 @@ view-check: setup
 flows: setup
 	@./scripts/bitstream_check.sh
 
-test-long: setup netlist icarus
+test-long: setup formal netlist icarus
 	FINESTEP_CASES=2000 $(CARGO) test --release --workspace
 
 # The synthesised netlist in lockstep (docs/verification.md): finestep_top after Yosys's

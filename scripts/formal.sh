@@ -2,8 +2,13 @@
 # SymbiYosys proofs and covers of every block that has an .sby file in sim/formal/,
 # with the YoWASP Yosys and Yices 2 from the project venv. Work directories go to build/formal.
 # The tasks are independent: FORMAL_JOBS of them (default: one per CPU) run at once.
+#   scripts/formal.sh            every task (make formal, make test-long)
+#   scripts/formal.sh --quick    all but the tasks a .sby names on a line `# long: TASK...`
+#                                (make test's slice: every block keeps its other tasks)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+quick=0
+[ "${1:-}" = --quick ] && quick=1
 export PATH="$PWD/.venv/bin:$PATH"
 mkdir -p build/formal
 # The generated Verilog headers (register map, interface constants) the blocks include.
@@ -16,7 +21,13 @@ for sby in sim/formal/*.sby; do
     # Run a copy with absolute [files] paths from build/formal, so that nothing sby
     # writes (work directories, its status database) lands in the source tree.
     sed -e "s|^\.\./\.\./hdl/|$PWD/hdl/|" -e "s|^\.\./\.\./build/|$PWD/build/|" "$sby" > "build/formal/$block.sby"
-    awk -v b="$block" '/^\[tasks\]/ { listing = 1; next } /^\[/ { listing = 0 } listing && NF { print b, $1 }' "$sby" >> "$list"
+    awk -v b="$block" -v quick="$quick" '
+        /^# long:/ { for (i = 3; i <= NF; i++) long[$i] = 1 }
+        /^\[tasks\]/ { listing = 1; next }
+        /^\[/ { listing = 0 }
+        listing && NF && $1 !~ /^#/ { tasks[++n] = $1 }
+        END { for (i = 1; i <= n; i++) if (!(quick && long[tasks[i]])) print b, tasks[i]; else skipped++
+              if (skipped) printf "formal: --quick leaves out %d long task(s) of %s\n", skipped, b > "/dev/stderr" }' "$sby" >> "$list"
 done
 # One task: its log, then a line PASS or FAIL in build/formal/<block>_<task>.status.
 run_task() {
