@@ -9,11 +9,13 @@
 # results reproduce. `--seed-offset K` uses the target's seed + K and, unless
 # `--variant` names one, writes to build/bitstream/TARGET-seedN/ (`make report`'s sweep);
 # `--name-only` prints the output folder's name (TARGET[-NAME]) and builds nothing.
-# TARGET: ecp5 (Colorlight 5A-75B v8), ice40-hx8k (iCE40-HX8K breakout), ice40-up5k
+# TARGET: ecp5 (Colorlight 5A-75B v8; ecp5-lathe and ecp5-gantry: its presets for seed
+# 003's lathe and seed 001's gantry card), ice40-hx8k (iCE40-HX8K breakout), ice40-up5k
 # (iCEBreaker), machxo2-1200 (CPLD configuration on an LCMXO2-1200HC), machxo3-6900
 # (LCMXO3LF-6900C, same architecture and tools, a configuration that fits). `-set PARAM VALUE` overrides a
 # parameter of the board top (Yosys chparam) and then needs `--variant NAME`: outputs go
-# to build/bitstream/TARGET[-NAME]/. `--allow-timing-fail` still writes every figure but
+# to build/bitstream/TARGET[-NAME]/; `-set CLOCK_HZ N` (with the PLL's dividers) holds the
+# variant to N Hz instead of the board's clock. `--allow-timing-fail` still writes every figure but
 # exits 0 when timing or placement fails (used by `make report`); `--pack-only` stops
 # after nextpnr's packing, for the size of a configuration that does not place;
 # `--router2` routes with nextpnr's router2 (it routes congested iCE40 designs that the
@@ -24,9 +26,20 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 [ $# -ge 1 ] || usage
 target=$1; shift
+# The papers' other machines on the Colorlight, each a preset variant of the ecp5 target
+# at the PLL clock it meets on three seeds (docs/bitstreams.md#the-papers-machines):
+# seed 003's lathe (the point-by-point interpolator) and seed 001's gantry card (the
+# panel and the gantry pair, which needs a DDA and a shaper per axis), at 62.5 MHz.
+pll_62m5=" -set CLOCK_HZ 62500000 -set CLKI_DIV 2 -set CLKFB_DIV 5 -set CLKOP_DIV 8"
+preset=""
+case $target in
+    ecp5-lathe) preset=lathe; chparam_preset=" -set HAS_PBP 1$pll_62m5" ;;
+    ecp5-gantry) preset=gantry; chparam_preset=" -set HAS_PANEL 1 -set HAS_GANTRY 1 -set STEP_SHARED 0$pll_62m5" ;;
+esac
+if [ -n "$preset" ]; then target=ecp5; fi
 allow_fail=0
 pack_only=0
 router2=0
@@ -48,6 +61,10 @@ while [ $# -gt 0 ]; do
         *) usage ;;
     esac
 done
+if [ -n "$preset" ]; then
+    chparam="$chparam_preset$chparam"
+    variant=$preset${variant:+-$variant}
+fi
 if [ -n "$chparam" ] && [ -z "$variant" ]; then
     echo "bitstream: -set needs --variant NAME (the outputs of the default build stay apart)"
     exit 2
@@ -106,9 +123,16 @@ case $target in
     *) usage ;;
 esac
 
+# A variant that sets the board top's CLOCK_HZ (with its PLL's dividers) is held to that
+# clock instead of the board's.
+clock_hz=$(printf '%s\n' "$chparam" | sed -n 's/.*-set CLOCK_HZ \([0-9]*\).*/\1/p')
+if [ -n "$clock_hz" ]; then
+    target_mhz=$(awk -v hz="$clock_hz" 'BEGIN { printf "%g", hz / 1e6 }')
+fi
+
 if [ -n "$seed_offset" ]; then
     seed=$((default_seed + seed_offset))
-    variant=${variant:-seed$seed}
+    if [ -z "$variant" ]; then variant=seed$seed; elif [ -n "$preset" ]; then variant=$variant-seed$seed; fi
 fi
 seed=${seed:-$default_seed}
 name=$target${variant:+-$variant}
