@@ -126,10 +126,11 @@ bitstream-ecp5: setup
 
 # The papers' other machines on the Colorlight (docs/bitstreams.md#the-papers-machines):
 # seed 003's lathe (point-by-point interpolation) and seed 001's gantry card (panel and
-# gantry pair), at the 62.5 MHz both meet.
+# gantry pair), at the 62.5 MHz both meet; and the lathe on the HX8K breakout (51 MHz).
 bitstream-ecp5-machines: setup
 	@./scripts/bitstream.sh ecp5-lathe
 	@./scripts/bitstream.sh ecp5-gantry
+	@./scripts/bitstream.sh ice40-hx8k-lathe
 
 bitstream-ice40: setup
 	@./scripts/bitstream.sh ice40-hx8k

@@ -10,7 +10,8 @@
 # `--variant` names one, writes to build/bitstream/TARGET-seedN/ (`make report`'s sweep);
 # `--name-only` prints the output folder's name (TARGET[-NAME]) and builds nothing.
 # TARGET: ecp5 (Colorlight 5A-75B v8; ecp5-lathe and ecp5-gantry: its presets for seed
-# 003's lathe and seed 001's gantry card), ice40-hx8k (iCE40-HX8K breakout), ice40-up5k
+# 003's lathe and seed 001's gantry card), ice40-hx8k (iCE40-HX8K breakout; ice40-hx8k-lathe
+# the lathe's preset), ice40-up5k
 # (iCEBreaker), machxo2-1200 (CPLD configuration on an LCMXO2-1200HC), machxo3-6900
 # (LCMXO3LF-6900C, same architecture and tools, a configuration that fits). `-set PARAM VALUE` overrides a
 # parameter of the board top (Yosys chparam) and then needs `--variant NAME`: outputs go
@@ -32,14 +33,16 @@ target=$1; shift
 # The papers' other machines on the Colorlight, each a preset variant of the ecp5 target
 # at the PLL clock it meets on three seeds (docs/bitstreams.md#the-papers-machines):
 # seed 003's lathe (the point-by-point interpolator) and seed 001's gantry card (the
-# panel and the gantry pair, which needs a DDA and a shaper per axis), at 62.5 MHz.
+# panel and the gantry pair, which needs a DDA and a shaper per axis), at 62.5 MHz; and
+# the lathe on the HX8K breakout at its board's 51 MHz.
 pll_62m5=" -set CLOCK_HZ 62500000 -set CLKI_DIV 2 -set CLKFB_DIV 5 -set CLKOP_DIV 8"
 preset=""
 case $target in
     ecp5-lathe) preset=lathe; chparam_preset=" -set HAS_PBP 1$pll_62m5" ;;
     ecp5-gantry) preset=gantry; chparam_preset=" -set HAS_PANEL 1 -set HAS_GANTRY 1 -set STEP_SHARED 0$pll_62m5" ;;
+    ice40-hx8k-lathe) preset=lathe; chparam_preset=" -set HAS_PBP 1" ;;
 esac
-if [ -n "$preset" ]; then target=ecp5; fi
+if [ -n "$preset" ]; then target=${target%-"$preset"}; fi
 allow_fail=0
 pack_only=0
 router2=0

@@ -96,9 +96,10 @@ run_target ice40-hx8k-full-per-axis ice40-hx8k --pack-only --variant full-per-ax
 # lathe and seed 001's gantry card, each on its seed and the next two.
 run_target ecp5-lathe ecp5-lathe
 run_target ecp5-gantry ecp5-gantry
+run_target ice40-hx8k-lathe ice40-hx8k-lathe
 # Each clocked target on two more placement seeds: a board is shipped at a clock met on all
 # three (`make test` builds each once, on the first).
-for target in ecp5 ecp5-lathe ecp5-gantry ice40-hx8k ice40-up5k machxo3-6900; do
+for target in ecp5 ecp5-lathe ecp5-gantry ice40-hx8k ice40-hx8k-lathe ice40-up5k machxo3-6900; do
     for offset in 1 2; do
         run_target "$(./scripts/bitstream.sh "$target" --seed-offset "$offset" --name-only)" \
             "$target" --seed-offset "$offset"
@@ -267,6 +268,7 @@ TARGETS = [
     ("ecp5-lathe", "LFE5U-25F-6BG256C (Colorlight), seed 003's lathe", "the same with the point-by-point interpolator (HAS_PBP), 62.5 MHz"),
     ("ecp5-gantry", "LFE5U-25F-6BG256C (Colorlight), seed 001's gantry card", "the same with the panel and the gantry pair (a DDA and a shaper per axis), 62.5 MHz"),
     ("ice40-hx8k", "iCE40HX8K-CT256 (HX8K breakout)", "4 axes, 4 enc, no MPG, SPI, FIFO 256"),
+    ("ice40-hx8k-lathe", "iCE40HX8K-CT256 (HX8K breakout), seed 003's lathe", "the same with the point-by-point interpolator (HAS_PBP)"),
     ("ice40-hx8k-full", "iCE40HX8K-CT256, router2", "4 axes, 4 enc, MPG, SPI, FIFO 256"),
     ("ice40-hx8k-full-per-axis", "iCE40HX8K-CT256, packed only", "the same with a DDA and a shaper per axis (STEP_SHARED 0)"),
     ("ice40-up5k", "iCE40UP5K-SG48 (iCEBreaker)", "2 axes, 1 enc, no MPG, SPI, FIFO 256"),
@@ -311,7 +313,7 @@ p("a board top's clock is chosen so that all three meet it.")
 p()
 p("| target | constrained MHz | Fmax per seed (MHz) | lowest | met on every seed |")
 p("| --- | ---: | --- | ---: | --- |")
-for target in ["ecp5", "ecp5-lathe", "ecp5-gantry", "ice40-hx8k", "ice40-up5k", "machxo3-6900"]:
+for target in ["ecp5", "ecp5-lathe", "ecp5-gantry", "ice40-hx8k", "ice40-hx8k-lathe", "ice40-up5k", "machxo3-6900"]:
     rows = seeds(target)
     if not rows:
         p(f"| {target} | - | not built | - | - |")
