@@ -32,13 +32,14 @@ usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 target=$1; shift
 # The papers' other machines on the Colorlight, each a preset variant of the ecp5 target
 # at the PLL clock it meets on three seeds (docs/bitstreams.md#the-papers-machines):
-# seed 003's lathe (the point-by-point interpolator) and seed 001's gantry card (the
-# panel and the gantry pair, which needs a DDA and a shaper per axis), at 62.5 MHz; and
-# the lathe on the HX8K breakout at its board's 51 MHz.
+# seed 003's lathe (the point-by-point interpolator; the spindle and the logic outputs on
+# the panel's pins, MACHINE_IO) and seed 001's gantry card (the panel and the gantry
+# pair, which needs a DDA and a shaper per axis), at 62.5 MHz; and the lathe's
+# interpolator on the HX8K breakout (no pins for a spindle there) at its board's 51 MHz.
 pll_62m5=" -set CLOCK_HZ 62500000 -set CLKI_DIV 2 -set CLKFB_DIV 5 -set CLKOP_DIV 8"
 preset=""
 case $target in
-    ecp5-lathe) preset=lathe; chparam_preset=" -set HAS_PBP 1$pll_62m5" ;;
+    ecp5-lathe) preset=lathe; chparam_preset=" -set HAS_PBP 1 -set MACHINE_IO 1$pll_62m5" ;;
     ecp5-gantry) preset=gantry; chparam_preset=" -set HAS_PANEL 1 -set HAS_GANTRY 1 -set STEP_SHARED 0$pll_62m5" ;;
     ice40-hx8k-lathe) preset=lathe; chparam_preset=" -set HAS_PBP 1" ;;
 esac

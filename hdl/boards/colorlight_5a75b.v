@@ -23,6 +23,9 @@ module colorlight_5a75b #(
     parameter HAS_PANEL       = 0,    // 1: 7 677 logic cells, over the 7 300 ceiling (flow_limits.txt)
     parameter HAS_GANTRY      = 0,
     parameter HAS_PBP         = 0,    // 1: the point-by-point interpolator (docs/spec/pbp_interp.md#cost)
+    // 1 (not with HAS_PANEL): the spindle and the logic outputs on the panel's pins
+    // (spi_board_chip; docs/bitstreams.md#the-papers-machines): the lathe preset's
+    parameter MACHINE_IO      = 0,
     // The PLL (below): parameters so that `scripts/bitstream.sh ecp5 --variant NAME -set ...`
     // can place and route another clock without editing this file.
     parameter CLOCK_HZ        = 87500000,
@@ -90,7 +93,7 @@ module colorlight_5a75b #(
     spi_board_chip #(
         .N_AXES(N_AXES), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2),
         .CLOCK_HZ(CLOCK_HZ), .STEP_SHARED(STEP_SHARED), .HAS_PANEL(HAS_PANEL), .HAS_GANTRY(HAS_GANTRY),
-        .HAS_PBP(HAS_PBP)
+        .HAS_PBP(HAS_PBP), .MACHINE_IO(MACHINE_IO)
     ) board (
         .clk(clk), .locked(pll_locked), .button_n(button_n), .rst(rst),
         .spi_cs_n(spi_cs_n), .spi_sck(spi_sck), .spi_mosi(spi_mosi), .spi_miso(spi_miso), .irq(irq),

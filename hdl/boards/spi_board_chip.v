@@ -3,6 +3,12 @@
 // What every SPI board top shares: board_reset (button and PLL lock) and finestep_top
 // with its SPI link and no 8080 bus, MISO driven only while the chip asks. A board top
 // adds its clock (oscillator, PLL) and its LED.
+//
+// With MACHINE_IO (not with HAS_PANEL) the panel's pins carry the spindle and the logic
+// outputs instead (HAS_SPINDLE, HAS_OUTPUTS, 4 general outputs): panel_seg[7:0] =
+// {coolant_flood, coolant_mist, dac_sdi, dac_sck, dac_cs_n, spindle_en, spindle_dir,
+// spindle_pwm}, panel_dig[4:0] = {gpio[3:0], light} (panel_dig[7:5] low), panel_col low,
+// and panel_row_n[0] is the interlock input (its polarity is INTERLOCK.ACTIVE_HIGH's).
 module spi_board_chip #(
     parameter N_AXES          = 4,
     parameter N_ENC           = 4,
@@ -15,7 +21,8 @@ module spi_board_chip #(
     parameter HAS_PANEL       = 0,
     parameter HAS_GANTRY      = 0,
     parameter HAS_PBP         = 0,   // the core's point-by-point interpolator (VERSION.HAS_PBP)
-    parameter ENC_COUNT_W     = 32   // 16: narrow encoder words (VERSION.ENC_COUNT_16)
+    parameter ENC_COUNT_W     = 32,  // 16: narrow encoder words (VERSION.ENC_COUNT_16)
+    parameter MACHINE_IO      = 0    // 1: the spindle and the logic outputs on the panel's pins (above)
 ) (
     // clock, reset
     input  wire              clk,
@@ -54,13 +61,15 @@ module spi_board_chip #(
         .clk(clk), .button_n(button_n), .locked(locked), .rst(rst)
     );
 
-    wire [8:0] io_unused;
-    wire [3:0] gpio_unused;
-    wire unused_io = &{1'b0, io_unused, gpio_unused};
+    wire spindle_pwm, spindle_dir, spindle_en, dac_cs_n, dac_sck, dac_sdi;
+    wire coolant_mist, coolant_flood, light;
+    wire [3:0] gpio;
+    wire [3:0] chip_col;
+    wire [7:0] chip_seg, chip_dig;
 
     finestep_top #(
         .N_AXES(N_AXES), .FIFO_DEPTH_LOG2(FIFO_DEPTH_LOG2), .CLOCK_HZ(CLOCK_HZ),
-        .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
+        .HAS_SPI(1), .HAS_PARALLEL(0), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(MACHINE_IO), .HAS_OUTPUTS(MACHINE_IO),
         .RAM_BLOCK(RAM_BLOCK), .STEP_SHARED(STEP_SHARED), .FIFO_HEAD_REG(FIFO_HEAD_REG),
         .HAS_PANEL(HAS_PANEL), .HAS_GANTRY(HAS_GANTRY), .HAS_PBP(HAS_PBP), .ENC_COUNT_W(ENC_COUNT_W)
     ) chip (
@@ -73,14 +82,32 @@ module spi_board_chip #(
         .enc_a(enc_a), .enc_b(enc_b), .enc_z(enc_z), .probe_pin(probe_pin),
         .mpg_a(mpg_a), .mpg_b(mpg_b),
         .irq(irq), .pin_a(pin_a), .pin_b(pin_b), .pin_en(pin_en),
-        // the spindle and the logic outputs are not built in this board (HAS_SPINDLE,
-        // HAS_OUTPUTS 0): their pins are constants
-        .spindle_pwm(io_unused[0]), .spindle_dir(io_unused[1]), .spindle_en(io_unused[2]),
-        .dac_cs_n(io_unused[3]), .dac_sck(io_unused[4]), .dac_sdi(io_unused[5]),
-        .interlock_pin(1'b0), .coolant_mist(io_unused[6]), .coolant_flood(io_unused[7]),
-        .light(io_unused[8]), .gpio(gpio_unused),
-        .panel_row_n(panel_row_n), .panel_col(panel_col), .panel_seg(panel_seg), .panel_dig(panel_dig)
+        // the spindle and the logic outputs: built with MACHINE_IO only (constants else)
+        .spindle_pwm(spindle_pwm), .spindle_dir(spindle_dir), .spindle_en(spindle_en),
+        .dac_cs_n(dac_cs_n), .dac_sck(dac_sck), .dac_sdi(dac_sdi),
+        .interlock_pin(MACHINE_IO != 0 && panel_row_n[0]), .coolant_mist(coolant_mist),
+        .coolant_flood(coolant_flood), .light(light), .gpio(gpio),
+        .panel_row_n(panel_row_n), .panel_col(chip_col), .panel_seg(chip_seg), .panel_dig(chip_dig)
     );
+
+    generate
+        if (MACHINE_IO != 0) begin : machine_io
+            if (HAS_PANEL != 0) begin : check
+                spi_board_chip_MACHINE_IO_needs_HAS_PANEL_0 MACHINE_IO_needs_HAS_PANEL_0 ();
+            end
+            assign panel_seg = {coolant_flood, coolant_mist, dac_sdi, dac_sck, dac_cs_n,
+                                spindle_en, spindle_dir, spindle_pwm};
+            assign panel_dig = {3'b000, gpio, light};
+            assign panel_col = 4'b0000;
+            wire unused_chip = &{1'b0, chip_col, chip_seg, chip_dig};
+        end else begin : panel_pins
+            assign panel_seg = chip_seg;
+            assign panel_dig = chip_dig;
+            assign panel_col = chip_col;
+            wire unused_io = &{1'b0, spindle_pwm, spindle_dir, spindle_en, dac_cs_n, dac_sck,
+                               dac_sdi, coolant_mist, coolant_flood, light, gpio};
+        end
+    endgenerate
 
     assign spi_miso = miso_oe ? miso : 1'bz;
 
