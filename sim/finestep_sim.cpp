@@ -15,18 +15,22 @@
 #include <cstring>
 #include <memory>
 
-#include "Vfinestep_core.h"
 #include "Vfinestep_core_gantry.h"
 #include "Vfinestep_core_gantry_traced.h"
+#ifndef FS_MINIMAL
+#include "Vfinestep_core.h"
 #include "Vfinestep_core_pbp.h"
 #include "Vfinestep_core_pbp_shared.h"
 #include "Vfinestep_core_serial.h"
 #include "Vfinestep_core_serial_traced.h"
 #include "Vfinestep_core_traced.h"
+#endif
 #ifdef FS_CLK_PREV
-#include "Vfinestep_core___024root.h"
 #include "Vfinestep_core_gantry___024root.h"
+#ifndef FS_MINIMAL
+#include "Vfinestep_core___024root.h"
 #include "Vfinestep_core_serial___024root.h"
+#endif
 #endif
 #include "verilated_trace.h"
 
@@ -295,20 +299,33 @@ int fs_trace_is_fst(void) { return VM_TRACE_FST ? 1 : 0; }
 
 uint32_t fs_serial_digit(void) { return FS_SERIAL_DIGIT; }
 
+// A minimal build (FS_MINIMAL: rust/finestep-rtl-sys's feature `minimal`, and every
+// netlist build) has only the core with the gantry block (the smoke test's): the other
+// variants are null.
 fs_sim *fs_new(int variant) {
+#ifdef FS_MINIMAL
+    if (variant != 1) return nullptr;
+    return new Sim<Untraced<Vfinestep_core_gantry>, false>;
+#else
     // The core with the point-by-point interpolator is Verilated traced only.
     if (variant == 3) return new Sim<Vfinestep_core_pbp, true>;
     if (variant == 4) return new Sim<Vfinestep_core_pbp_shared, true>;
     if (variant == 1) return new Sim<Untraced<Vfinestep_core_gantry>, false>;
     if (variant == 2) return new Sim<Untraced<Vfinestep_core_serial>, false>;
     return new Sim<Untraced<Vfinestep_core>, false>;
+#endif
 }
 fs_sim *fs_new_traced(int variant) {
+#ifdef FS_MINIMAL
+    if (variant != 1) return nullptr;
+    return new Sim<Vfinestep_core_gantry_traced, true>;
+#else
     if (variant == 3) return new Sim<Vfinestep_core_pbp, true>;
     if (variant == 4) return new Sim<Vfinestep_core_pbp_shared, true>;
     if (variant == 1) return new Sim<Vfinestep_core_gantry_traced, true>;
     if (variant == 2) return new Sim<Vfinestep_core_serial_traced, true>;
     return new Sim<Vfinestep_core_traced, true>;
+#endif
 }
 void fs_free(fs_sim *sim) { delete sim; }
 void fs_reset(fs_sim *sim) { sim->reset(); }

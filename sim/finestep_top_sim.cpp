@@ -8,7 +8,8 @@
 // ft_new_traced makes them untraced, and ft_trace_open fails on them. A
 // synthesised netlist (FT_NETLIST, rust/finestep-rtl-sys's netlist features) is Verilated
 // once, without tracing: ft_new and ft_new_traced make that top for either variant, and
-// ft_trace_open fails on it.
+// ft_trace_open fails on it. A minimal RTL build (FS_MINIMAL, the feature `minimal`) has
+// the default top, untraced and traced, and the motion chip: the other variants are null.
 #include "finestep_top_sim.h"
 
 #include <memory>
@@ -16,15 +17,19 @@
 #include "Vfinestep_top.h"
 #ifndef FT_NETLIST
 #include "Vfinestep_top_motion.h"
+#include "Vfinestep_top_traced.h"
+#ifndef FS_MINIMAL
 #include "Vfinestep_top_motion_nompg.h"
 #include "Vfinestep_top_motion_serial.h"
-#include "Vfinestep_top_traced.h"
+#endif
 #endif
 #ifdef FS_CLK_PREV
 #include "Vfinestep_top___024root.h"
 #include "Vfinestep_top_motion___024root.h"
+#ifndef FS_MINIMAL
 #include "Vfinestep_top_motion_nompg___024root.h"
 #include "Vfinestep_top_motion_serial___024root.h"
+#endif
 #endif
 #include "finestep_top_pins.h"
 #include "verilated_trace.h"
@@ -163,7 +168,20 @@ uint32_t ft_inc_direct(uint32_t variant) { return is_serial(variant) ? 1 : 0; }
 // ... and the CPLDs' narrow encoder words (ENC_COUNT_W = 16).
 uint32_t ft_enc_count_w(uint32_t variant) { return is_serial(variant) ? 16 : 32; }
 
-#ifndef FT_NETLIST
+#if defined(FS_MINIMAL) && !defined(FT_NETLIST)
+// A minimal RTL build (the feature `minimal`) has the default top and the motion chip:
+// the motion chip without the hand wheel and the serial one are null.
+ft_sim *ft_new(uint32_t variant) {
+    if (is_serial(variant) || is_no_mpg(variant)) return nullptr;
+    if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
+    return new TopSim<Untraced<Vfinestep_top>, false>;
+}
+ft_sim *ft_new_traced(uint32_t variant) {
+    if (is_serial(variant) || is_no_mpg(variant)) return nullptr;
+    if (is_motion(variant)) return new TopSim<Untraced<Vfinestep_top_motion>, false>;
+    return new TopSim<Vfinestep_top_traced, true>;
+}
+#elif !defined(FT_NETLIST)
 ft_sim *ft_new(uint32_t variant) {
     if (is_serial(variant)) return new TopSim<Untraced<Vfinestep_top_motion_serial>, false>;
     if (is_no_mpg(variant)) return new TopSim<Untraced<Vfinestep_top_motion_nompg>, false>;

@@ -147,6 +147,18 @@ fn yosys_share(repo: &Path) -> PathBuf {
     })
 }
 
+/// The models a minimal build Verilates (the feature `minimal`, and a netlist build, whose
+/// top is the netlist and has no other variant): the core with the gantry block and the
+/// default top, untraced and traced, and the motion chip; all the smoke tests and the
+/// netlist tests link.
+const MINIMAL_MODELS: [&str; 5] = [
+    "Vfinestep_core_gantry",
+    "Vfinestep_core_gantry_traced",
+    "Vfinestep_top",
+    "Vfinestep_top_traced",
+    "Vfinestep_top_motion",
+];
+
 fn main() {
     let manifest = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap());
     let repo = manifest.join("../..").canonicalize().expect("repository root");
@@ -178,6 +190,7 @@ fn main() {
         "step_serial_sim.h",
         "panel_chip_sim.cpp",
         "panel_chip_sim.h",
+        "absent_models.cpp",
     ] {
         println!("cargo:rerun-if-changed={}", sim.join(shim).display());
     }
@@ -254,6 +267,13 @@ fn main() {
         .define("SS_TIMING_W", params.timing_w.to_string().as_str());
     for flag in ["-std=c++20", "-Wno-unused-parameter", "-faligned-new", "-fcf-protection=none"] {
         build.flag_if_supported(flag);
+    }
+    // A minimal build (the feature `minimal`: the wheel check's) and a netlist build
+    // Verilate only the models their tests link (MINIMAL_MODELS); sim/absent_models.cpp
+    // stands for the other shims, whose constructors return null.
+    let minimal = env::var_os("CARGO_FEATURE_MINIMAL").is_some() || netlist.is_some();
+    if minimal {
+        build.define("FS_MINIMAL", None);
     }
     if netlist.is_some() {
         // A netlist's C++ is about 30 MB: -O1 without debug information compiles it about
@@ -335,6 +355,9 @@ fn main() {
         models
             .retain(|(_, prefix, _)| *prefix != "Vfinestep_top_traced" && !prefix.starts_with("Vfinestep_top_motion"));
     }
+    if minimal {
+        models.retain(|(_, prefix, _)| MINIMAL_MODELS.contains(prefix));
+    }
     let mut files = Vec::new();
     // The member each untraced core and top keeps `clk`'s last evaluated value in, and
     // each untraced core `load`'s, when all have the same one and an eval() that only
@@ -372,15 +395,17 @@ fn main() {
         for name in ["VM_GLOBAL_FAST", "VM_GLOBAL_SLOW"] {
             globals.extend(list(name));
         }
-        // The traced model's switches (VM_TRACE=1 ...) are a superset of the fast one's.
+        // The traced models' switches (VM_TRACE=1 ...) are a superset of the fast ones':
+        // each switch is on when any model has it on, whatever the models' order.
         for (name, value) in classes {
-            if name.starts_with("VM_") && value.trim().parse::<i64>().is_ok() {
-                defines.insert(name, value.trim().to_string());
+            if let (true, Ok(value)) = (name.starts_with("VM_"), value.trim().parse::<i64>()) {
+                let on = defines.entry(name).or_insert(value);
+                *on = (*on).max(value);
             }
         }
     }
     for (name, value) in &defines {
-        build.define(name, value.as_str());
+        build.define(name, value.to_string().as_str());
     }
     let mut skipped = "none";
     if let Some(Some(member)) = &clk_prev {
@@ -394,11 +419,19 @@ fn main() {
     files.extend(globals.into_iter().map(|stem| root.join("include").join(format!("{stem}.cpp"))));
     files.push(sim.join("finestep_sim.cpp"));
     files.push(sim.join("finestep_top_sim.cpp"));
-    files.push(sim.join("pbp_interp_sim.cpp"));
-    files.push(sim.join("keypad_scan_sim.cpp"));
-    files.push(sim.join("led_menu_sim.cpp"));
-    files.push(sim.join("step_serial_sim.cpp"));
-    files.push(sim.join("panel_chip_sim.cpp"));
+    if minimal {
+        files.push(sim.join("absent_models.cpp"));
+    } else {
+        for shim in [
+            "pbp_interp_sim.cpp",
+            "keypad_scan_sim.cpp",
+            "led_menu_sim.cpp",
+            "step_serial_sim.cpp",
+            "panel_chip_sim.cpp",
+        ] {
+            files.push(sim.join(shim));
+        }
+    }
     if netlist.as_ref().is_some_and(|n| n.family == "mutants") {
         files.push(sim.join("mutants_rtl/finestep_mutsel.cpp"));
     }

@@ -41,8 +41,9 @@ impl RtlLedMenu {
     /// (one clock with `rst`), at cycle 0.
     pub fn new(variant: usize) -> Self {
         let variant = u32::try_from(variant).expect("a variant number");
-        // SAFETY: lm_new returns a fresh object, or null for an unknown variant.
-        let sim = NonNull::new(unsafe { ffi::lm_new(variant) }).expect("no such led_menu variant");
+        // SAFETY: lm_new returns a fresh object, or null for an unknown variant or in a minimal build.
+        let sim = NonNull::new(unsafe { ffi::lm_new(variant) })
+            .unwrap_or_else(|| panic!("{}", if crate::MINIMAL { crate::ABSENT } else { "no such led_menu variant" }));
         RtlLedMenu { sim, _not_send: PhantomData }
     }
 

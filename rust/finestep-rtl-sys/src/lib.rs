@@ -47,6 +47,15 @@ pub const TOP_SOURCE: &str = env!("FINESTEP_TOP_SOURCE");
 pub const TOP_IS_NETLIST: bool =
     cfg!(any(feature = "netlist-ecp5", feature = "netlist-ice40", feature = "netlist-mutants"));
 
+/// Whether this build Verilated only the core with the gantry block and the default top,
+/// untraced and traced, and the motion chip (the feature `minimal`, and every netlist build): the constructors of every other
+/// model panic with [`ABSENT`].
+pub const MINIMAL: bool = cfg!(feature = "minimal") || TOP_IS_NETLIST;
+
+/// The panic of a constructor whose model this build does not have.
+pub(crate) const ABSENT: &str = "this finestep-rtl-sys build has no such model: the feature `minimal` and the \
+     netlist builds Verilate only the core with the gantry block, the default top and the motion chip (build.rs MINIMAL_MODELS)";
+
 /// The clock edges whose `eval()` the untraced core and top shims skip: `"clk load"`
 /// (the clock's fall, and the core shim's `load` fall), `"clk"` or `"none"`, as the
 /// build found the Verilated code (build.rs `edge_prev_members`; docs/verification.md).
@@ -198,7 +207,7 @@ impl Rtl {
     }
 
     fn build(variant: i32, traced: bool) -> Rtl {
-        // SAFETY: fs_new and fs_new_traced return a valid owned pointer, freed in Drop.
+        // SAFETY: fs_new and fs_new_traced return a valid owned pointer (null, refused in from_raw, for a variant a minimal build lacks), freed in Drop.
         Self::from_raw(unsafe {
             if traced {
                 ffi::fs_new_traced(variant)
@@ -209,7 +218,7 @@ impl Rtl {
     }
 
     fn from_raw(sim: *mut ffi::fs_sim) -> Rtl {
-        Rtl { sim: NonNull::new(sim).expect("fs_new returned null"), events: Vec::new(), _not_send: PhantomData }
+        Rtl { sim: NonNull::new(sim).expect(ABSENT), events: Vec::new(), _not_send: PhantomData }
     }
 
     /// One clock with `rst` high; the cycle count restarts at 0.

@@ -35,8 +35,10 @@ impl RtlStepSerial {
     /// (one clock with `rst`), at cycle 0.
     pub fn new(variant: usize) -> Self {
         let variant = u32::try_from(variant).expect("a variant number");
-        // SAFETY: ss_new returns a fresh object, or null for an unknown variant.
-        let sim = NonNull::new(unsafe { ffi::ss_new(variant) }).expect("no such step_serial variant");
+        // SAFETY: ss_new returns a fresh object, or null for an unknown variant or in a minimal build.
+        let sim = NonNull::new(unsafe { ffi::ss_new(variant) }).unwrap_or_else(|| {
+            panic!("{}", if crate::MINIMAL { crate::ABSENT } else { "no such step_serial variant" })
+        });
         RtlStepSerial { sim, _not_send: PhantomData }
     }
 

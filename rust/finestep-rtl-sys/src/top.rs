@@ -147,7 +147,7 @@ impl RtlTop {
 
     /// A top of `variant` without waveform support (fast).
     pub fn of(variant: TopVariant) -> RtlTop {
-        // SAFETY: ft_new returns a valid owned pointer, freed in Drop.
+        // SAFETY: ft_new returns a valid owned pointer (null for a variant a minimal build lacks), freed in Drop.
         Self::from_raw(unsafe { ffi::ft_new(variant.raw()) }, variant)
     }
 
@@ -160,12 +160,12 @@ impl RtlTop {
     /// A top of `variant` that can write waveforms ([`RtlTop::trace_open`]);
     /// the motion variants are Verilated without tracing: their `trace_open` fails.
     pub fn traced_of(variant: TopVariant) -> RtlTop {
-        // SAFETY: ft_new_traced returns a valid owned pointer, freed in Drop.
+        // SAFETY: ft_new_traced returns a valid owned pointer (null for a variant a minimal build lacks), freed in Drop.
         Self::from_raw(unsafe { ffi::ft_new_traced(variant.raw()) }, variant)
     }
 
     fn from_raw(sim: *mut ffi::ft_sim, variant: TopVariant) -> RtlTop {
-        let sim = NonNull::new(sim).expect("ft_new returned null");
+        let sim = NonNull::new(sim).expect(crate::ABSENT);
         RtlTop { sim, variant, events: Vec::new(), _not_send: PhantomData }
     }
 
