@@ -6,7 +6,10 @@
 // released, open drain); the rows are pulled up and read through a two-flip-flop
 // synchroniser. A scan step lasts P = max(scan_div, 3) + 1 clocks; at its last clock the
 // four keys of the driven column are sampled (a key is closed when its row reads low)
-// and the column moves on, so each key is sampled once every F = 4 * P clocks.
+// and the column moves on, so each key is sampled once every F = 4 * P clocks. The step's
+// end is decided from scan_div as it was one clock earlier (the spec's register sd), so
+// it is a register here: the divider's compare is not in series with the debounce and
+// the event logic (it limited the gantry card's clock).
 //
 // Debounce, per key: the debounced state takes a sample's value after deb_scans + 1
 // consecutive samples of that key with that value (a counter of consecutive samples that
@@ -41,6 +44,7 @@ module keypad_scan #(
     reg [3:0]          sync1_reg;
     reg [3:0]          sync2_reg;
     reg [PRE_W-1:0]    div_reg;
+    reg                step_end_reg;
     reg [1:0]          col_reg;
     reg [3:0]          col_drive_reg;
     reg [15:0]         down_reg;
@@ -48,8 +52,13 @@ module keypad_scan #(
     reg                valid_reg;
     reg [3:0]          code_reg;
 
-    // The step's last clock: the sample and the column change.
-    wire step_end = (div_reg >= scan_div) && (div_reg >= MIN_DIV);
+    // The step's last clock: the sample and the column change. The spec's step_end is
+    // div >= sd && div >= 3 with sd the scan_div of the clock before; it is computed a
+    // clock ahead from the divider's next value and this clock's scan_div (after a step's
+    // end the divider is 0, below the floor of 3).
+    wire             step_end = step_end_reg;
+    wire [PRE_W-1:0] div_inc  = div_reg + PRE_ONE;
+    wire             step_end_next = !step_end_reg && (div_inc >= scan_div) && (div_inc >= MIN_DIV);
 
     // Per key: the sample (closed = row low) when its column is sampled, the new state
     // and counter.
@@ -94,17 +103,19 @@ module keypad_scan #(
         cnt_reg   <= cnt_next;
         valid_reg <= event_now;
         if (event_now) code_reg <= rise_code;
+        step_end_reg <= step_end_next;
         if (step_end) begin
             div_reg       <= {PRE_W{1'b0}};
             col_reg       <= col_reg + 2'd1;
             col_drive_reg <= {col_drive_reg[2:0], col_drive_reg[3]};
         end else begin
-            div_reg <= div_reg + PRE_ONE;
+            div_reg <= div_inc;
         end
         if (rst) begin
             sync1_reg     <= 4'hf;
             sync2_reg     <= 4'hf;
             div_reg       <= {PRE_W{1'b0}};
+            step_end_reg  <= 1'b0;
             col_reg       <= 2'd0;
             col_drive_reg <= 4'b0001;
             down_reg      <= 16'h0000;
@@ -154,6 +165,10 @@ module keypad_scan #(
         end
     endfunction
 
+    // The spec's sd: scan_div one clock late (reset 0); step_end is stated on it.
+    reg [PRE_W-1:0] f_sd;
+    always @(posedge clk) f_sd <= rst ? {PRE_W{1'b0}} : scan_div;
+
     always @(posedge clk) begin
         if (f_sample_now) begin
             f_hist <= {f_hist[HIST-2:0], f_sample};
@@ -164,6 +179,7 @@ module keypad_scan #(
 
     always @(*) if (f_past_valid && !rst) begin
         assert (col_drive == (4'b0001 << col_reg));
+        assert (step_end == ((div_reg >= f_sd) && (div_reg >= MIN_DIV)));
         // The counter is the run of trailing samples that differ from the state.
         assert (f_seen <= HIST);
         assert (f_cnt <= f_seen && f_cnt < f_need);

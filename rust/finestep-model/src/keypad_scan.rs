@@ -77,6 +77,8 @@ pub struct KeypadScan {
     sync1: u8,
     sync2: u8,
     div: u32,
+    /// `scan_div` as it was one clock earlier: the step's end is decided on it.
+    sd: u32,
     col: u8,
     col_drive: u8,
     down: u16,
@@ -99,6 +101,7 @@ impl KeypadScan {
             sync1: 0xf,
             sync2: 0xf,
             div: 0,
+            sd: 0,
             col: 0,
             col_drive: 1,
             down: 0,
@@ -129,7 +132,7 @@ impl KeypadScan {
         let deb_mask = mask(self.params.deb_w);
         let scan_div = inputs.scan_div & pre_mask;
         let deb = inputs.deb_scans & deb_mask;
-        let step_end = self.div >= scan_div && self.div >= 3;
+        let step_end = self.div >= self.sd && self.div >= 3;
 
         let mut down = self.down;
         let mut cnt = self.cnt;
@@ -155,6 +158,7 @@ impl KeypadScan {
 
         self.sync2 = self.sync1;
         self.sync1 = inputs.row_n & 0xf;
+        self.sd = scan_div;
         self.valid = event;
         if event {
             self.code = down.trailing_zeros() as u8;
