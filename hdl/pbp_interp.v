@@ -78,6 +78,11 @@ module pbp_interp #(
     wire [COUNT_W-1:0] line_steps = {{(COUNT_W-POS_W){1'b0}}, rec_x_abs}
                                   + {{(COUNT_W-POS_W){1'b0}}, rec_y_abs};
     wire [COUNT_W-1:0] rec_count  = rec_arc ? rec_steps : line_steps;
+    // rec_count == 0 from the fields themselves (|x| + |y| is 0 only with both 0: it
+    // cannot wrap, COUNT_W >= POS_W), so that busy and done do not wait for the adder
+    // (the record comes straight from the FIFO's head: this was the lathe build's path).
+    wire rec_zero = rec_arc ? (rec_steps == {COUNT_W{1'b0}})
+                            : (rec_x == {COORD_W{1'b0}} && rec_y == {COORD_W{1'b0}});
 
     // The quadrant: the signs of the steps along the arc (CCW along (-y, x), CW along
     // (y, -x)); on an axis the quadrant the motion enters decides.
@@ -125,8 +130,8 @@ module pbp_interp #(
                 f_reg     <= {F_W{1'b0}};
                 count_reg <= rec_count;
                 div_reg   <= {DIV_W{1'b0}};
-                busy_reg  <= (rec_count != {COUNT_W{1'b0}});
-                done_reg  <= (rec_count == {COUNT_W{1'b0}});
+                busy_reg  <= !rec_zero;
+                done_reg  <= rec_zero;
             end
         end else if (tick) begin
             div_reg          <= {DIV_W{1'b0}};
