@@ -10,7 +10,7 @@ use finestep_gcode::{BlockKind, MessageKind, Program, SpindleRotation};
 use finestep_host::regs::underrun_count;
 use finestep_host::stream::{self, RunReport, StreamEvent};
 use finestep_host::{Bus, BusError, Machine, Outputs, SpindleSetup};
-use finestep_model::{Core, CoreInputs};
+use finestep_model::{Core, CoreInputs, PeriodRecord};
 use finestep_planner::config::AXIS_NAMES;
 use finestep_planner::config::{InterpolationMode, Resolved};
 use finestep_planner::pbp::{plan_pbp, record_clocks, record_decisions};
@@ -286,17 +286,15 @@ pub fn run_program_on(
         None => machine_setup::model_limits(),
     };
     if config.interpolation.mode == InterpolationMode::Pbp {
-        let Some(chip) = chip.as_mut() else {
-            bail!("{config_name}: interpolation.mode = \"pbp\" runs on a chip with VERSION.HAS_PBP: not with --fast (the model's core alone)")
-        };
         if view.is_some() {
             bail!("{config_name}: interpolation.mode = \"pbp\": --view is not supported in point-by-point mode yet");
         }
-        if !chip.caps().has_pbp {
+        // The chip's CAPS, or the model's build with --fast.
+        if !core.has_pbp {
             return Err(ChipLacksPbp { config: config_name.to_string() }.into());
         }
         let (config, resolved) = machine_setup::resolve(config, core, config_name)?;
-        return run_pbp(chip, program, name, bus, &config, &resolved, on_end);
+        return run_pbp(chip.as_mut(), program, name, bus, &config, &resolved, on_end);
     }
     let (config, resolved) = machine_setup::resolve(config, core, config_name)?;
     let planned = plan_program(&config, program).map_err(|e| anyhow!("{name}:{}: {}", e.line, e.reason))?;
@@ -424,11 +422,12 @@ impl std::error::Error for ChipLacksPbp {}
 /// `finestep run` in point-by-point mode: `program` planned by [`plan_pbp`] (G1/G2/G3 in
 /// the plane as point-by-point records on the chip pair, G0 as the DDA's records, the
 /// spindle and coolant at their exact stops), its decision rates checked against
-/// `interpolation.max_decision_hz`, streamed into `chip`, and the end positions read back
-/// (`POSITION`, on the chip axes the configuration maps the slots to) checked against
+/// `interpolation.max_decision_hz`, streamed into `chip` (or, with none, run on the
+/// model's core through its fast path: [`run_pbp_on_model`]), and the end positions read
+/// back (`POSITION`, on the chip axes the configuration maps the slots to) checked against
 /// where the records end, exactly.
 fn run_pbp<B: Bus>(
-    chip: &mut Machine<B>,
+    chip: Option<&mut Machine<B>>,
     program: &Program,
     name: &str,
     bus: &BusTarget,
@@ -461,7 +460,9 @@ fn run_pbp<B: Bus>(
         dda,
         resolved.period_s * 1e3,
         plan.clocks as f64 / resolved.clock_hz,
-        if bus.is_lockstep() {
+        if chip.is_none() {
+            "model fast path".to_string()
+        } else if bus.is_lockstep() {
             "streamed over SPI; RTL in lockstep with the model, every pin every clock".to_string()
         } else {
             format!("streamed over SPI on {bus}")
@@ -488,24 +489,68 @@ fn run_pbp<B: Bus>(
             pbp.min_interval
         );
     }
-    let start = chip.positions()?.steps;
-    let streamed = stream_planned(chip, planned, resolved, &config.spindle, name, |_, _| Ok(()))?;
-    // POSITION per chip axis, back in slot order (X, Y, Z, A).
-    let moved: Vec<i32> = (0..4)
-        .map(|slot| {
-            let axis = resolved.chip_axis[slot];
-            match (streamed.end.steps.get(axis), start.get(axis)) {
-                (Some(end), Some(start)) => end.wrapping_sub(*start),
-                _ => 0,
-            }
-        })
-        .collect();
-    println!(
-        "  {} records in {} bursts, {} underruns",
-        streamed.stream.records, streamed.stream.bursts, streamed.stream.underruns
-    );
-    report_end(planned, resolved, &moved, streamed.cycles, false, bus)?;
+    let fast = chip.is_none();
+    // The steps moved per chip axis and the clocks.
+    let (moved, cycles) = match chip {
+        Some(chip) => {
+            let start = chip.positions()?.steps;
+            let streamed = stream_planned(chip, planned, resolved, &config.spindle, name, |_, _| Ok(()))?;
+            println!(
+                "  {} records in {} bursts, {} underruns",
+                streamed.stream.records, streamed.stream.bursts, streamed.stream.underruns
+            );
+            let moved = streamed.end.steps.iter().zip(&start).map(|(end, start)| end.wrapping_sub(*start)).collect();
+            (moved, streamed.cycles)
+        }
+        None => run_pbp_on_model(planned, resolved, name)?,
+    };
+    // Back in slot order (X, Y, Z, A).
+    let moved: Vec<i32> = (0..4).map(|slot| moved.get(resolved.chip_axis[slot]).copied().unwrap_or(0)).collect();
+    report_end(planned, resolved, &moved, cycles, fast, bus)?;
     on_end()
+}
+
+/// `run --fast` in point-by-point mode: the records (pbp and DDA, in chip-axis lanes) fed
+/// to the model's core ([`machine_setup::model_core_params`], which has the pbp block)
+/// through its fast path, each configured slot's drive timing on its chip axis as
+/// [`machine_setup::configure`] writes it to a chip. The core takes the next record only
+/// once a pbp record has run out, so an idle record offered after the last one is taken
+/// only when the motion has ended; two periods more let the last steps reach the pins.
+/// A record the core refused (`record_error`) or an axis's rate or lost-step flag fails
+/// the run, as the chip's error bits do. Returns the steps moved per chip axis and the
+/// clocks; the spindle and coolant are not carried out (the core alone).
+fn run_pbp_on_model(planned: &PlannedProgram, resolved: &Resolved, name: &str) -> anyhow::Result<(Vec<i32>, u64)> {
+    let machine_events = planned.events.iter().filter(|t| !matches!(t.event.action, IoAction::Message { .. })).count();
+    if machine_events != 0 {
+        println!(
+            "  note: the fast path runs the motion core alone: {machine_events} spindle/coolant changes not carried out"
+        );
+    }
+    let mut inputs =
+        CoreInputs { run: true, period_clocks: resolved.period_clocks, rec_valid: true, ..Default::default() };
+    for slot in (0..resolved.axes.len()).filter(|&a| resolved.axes[a].present) {
+        inputs.axes[resolved.chip_axis[slot]] = machine_setup::axis_config(resolved, slot);
+    }
+    let mut core = Core::new(machine_setup::model_core_params());
+    let mut events = Vec::new();
+    let idle = PeriodRecord::default();
+    for record in planned.records.iter().chain(std::iter::once(&idle)) {
+        inputs.record = *record;
+        while !core.run_chunk_fast(&inputs, u64::MAX, &mut events).consumed {}
+        events.clear();
+    }
+    inputs.rec_valid = false;
+    core.run_chunk_fast(&inputs, 2 * u64::from(resolved.period_clocks), &mut events);
+    let outputs = core.outputs();
+    if outputs.record_error() {
+        bail!("{name}: the model's core refused a record (record_error)");
+    }
+    for axis in 0..core.params().n_axes {
+        if outputs.rate_error(axis) || outputs.step_lost(axis) {
+            bail!("{name}: chip axis {axis} stepped faster than its drive timing allows (rate or lost-step flag)");
+        }
+    }
+    Ok((outputs.positions.iter().map(|&p| p as i32).collect(), core.cycle()))
 }
 
 /// The motion plot's limits: the programmed feed of the block each period runs on, and the
@@ -1020,6 +1065,25 @@ mod tests {
             );
             assert!(shortest + slack >= interval, "{what}: {shortest} + {slack} < {interval}");
         }
+    }
+
+    /// `run --fast` in point-by-point mode: the lathe part's records on the model's core
+    /// through its fast path end where they end on the model chip at its pins (600 and
+    /// 50 steps on chip axes 0 and 1), and within a period of its clocks.
+    #[test]
+    fn the_lathe_part_runs_point_by_point_on_the_model_fast_path() {
+        let text = std::fs::read_to_string(repo("tests/programs/lathe_pbp.ngc")).unwrap();
+        let (_, _, report, _) = run_pbp_on_pins(&text);
+        let toml = std::fs::read_to_string(repo("tests/machines/lathe_pbp.toml")).unwrap();
+        let config = MachineConfig::from_toml_str(&toml, "lathe_pbp.toml").unwrap();
+        let (config, resolved) =
+            machine_setup::resolve(config, machine_setup::model_limits(), "lathe_pbp.toml").unwrap();
+        let program = finestep_gcode::parse_str(&text, "lathe_pbp.ngc").unwrap();
+        let plan = plan_pbp(&config, &program).unwrap();
+        let (moved, cycles) = run_pbp_on_model(&plan.planned, &resolved, "lathe_pbp.ngc").unwrap();
+        assert_eq!(moved[..4], report.end.steps[..4]);
+        assert_eq!(moved[..2], [600, 50]);
+        assert!(cycles >= plan.clocks, "{cycles} clocks run, {} planned", plan.clocks);
     }
 
     /// A point-by-point configuration on a chip without the interpolator is refused by
