@@ -37,6 +37,11 @@ yosys_stat() {
 CPLD="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 2 -set STEP_DIGIT 4 -set FIFO_HEAD_REG 0 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 -set ENC_COUNT_W 16 -set HAS_PBP 0 finestep_top"
 yosys_stat ice40_blocks "synth_ice40 -noflatten" "chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG 0 finestep_top"
 yosys_stat ecp5_blocks "synth_ecp5 -noflatten"
+# The papers' blocks the default core leaves out (seed 001's panel and gantry pair, which
+# needs a DDA and a shaper per axis), per block as above.
+PAPERS="-set HAS_PANEL 1 -set HAS_GANTRY 1 -set STEP_SHARED 0"
+yosys_stat ice40_papers "synth_ice40 -noflatten" "chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG 0 $PAPERS finestep_top"
+yosys_stat ecp5_papers "synth_ecp5 -noflatten" "chparam $PAPERS finestep_top"
 yosys_stat ice40_core "synth_ice40" "chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG 0 finestep_top"
 yosys_stat ecp5_core "synth_ecp5"
 yosys_stat ice40_cpld "synth_ice40" "$CPLD"
@@ -190,7 +195,8 @@ BLOCKS = [
     ("step_shaper", "step shaper"),
     ("period_timer", "period timer"),
     ("gantry_sync", "gantry sync"),
-    ("finestep_core", "motion core (period timer, DDAs, shapers, gantry)"),
+    ("finestep_core", "motion core (period timer, DDAs or the step engine, shapers, gantry, pbp interpolator)"),
+    ("pbp_interp", "point-by-point interpolator (seed 003; part of the motion core, HAS_PBP)"),
     ("quadrature_channel", "quadrature decoder (one visit's logic with its three filters; shared by the channels)"),
     ("encoder_bank", "encoder bank (shared decoder, stores, probe, latches)"),
     ("hand_wheel", "hand wheel"),
@@ -206,6 +212,15 @@ BLOCKS = [
     ("safety_monitor", "safety monitor"),
     ("spindle", "spindle (PWM or SPI DAC, ramp, its registers)"),
     ("logic_outputs", "logic outputs and interlock (its registers)"),
+]
+
+# The papers' blocks out of the default core, from the build with them (HAS_PANEL,
+# HAS_GANTRY, STEP_SHARED 0).
+PAPER_BLOCKS = [
+    ("gantry_sync", "gantry sync (seed 001; HAS_GANTRY, with a DDA and a shaper per axis)"),
+    ("keypad_scan", "keypad scan and debounce (seed 001; in the panel)"),
+    ("led_menu", "7-segment LED menu (seed 001; in the panel)"),
+    ("panel", "panel (keypad, LED menu, their registers; HAS_PANEL)"),
 ]
 
 p = print
@@ -234,6 +249,20 @@ e = ecp5(ecp_b[[m for m in ecp_b if base(m) == "finestep_top"][0]]["num_cells_by
 p(f"| top-level glue (muxes, fifo_free) | 1 | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
 i, e = ice40(ice_inc["finestep_top"]), ecp5(ecp_inc["finestep_top"])
 p(f"| **sum of blocks** | | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
+p()
+ice_p, ecp_p = load("ice40_papers"), load("ecp5_papers")
+ice_p_inc, ecp_p_inc, count_p = inclusive(ice_p), inclusive(ecp_p), instances(ice_p)
+p("The papers' blocks the default core leaves out, from `finestep_top` with `HAS_PANEL 1`,")
+p("`HAS_GANTRY 1` and `STEP_SHARED 0` (seed 001's gantry card, as the `ecp5-gantry` preset")
+p("builds it), the same way; the point-by-point interpolator is in the table above.")
+p()
+p("| block | n | iCE40 LUT4 | carry | FF | RAM4K | ECP5 LUT4 | CCU2C | FF | DP16KD |")
+p("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+for module, label in PAPER_BLOCKS:
+    if module not in ice_p_inc:
+        continue
+    i, e = ice40(ice_p_inc[module]), ecp5(ecp_p_inc[module])
+    p(f"| {label} | {count_p.get(module, 0)} | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
 p()
 
 p("## Whole core")
