@@ -511,33 +511,64 @@ impl MoveReader {
     }
 }
 
-/// Per-axis shares of the path speed for a unit path speed (an upper bound on arcs).
-fn axis_weights(shape: &Shape, length: f64) -> Vec4 {
+/// Per-axis shares of the path speed for a unit path speed (an upper bound on arcs);
+/// `normal` the shape's per-axis normal shares ([`normal_shares`]), which an arc's
+/// weights are made of.
+fn axis_weights(shape: &Shape, length: f64, normal: &Vec4) -> Vec4 {
     match *shape {
         Shape::Line { dir } => dir.map(f64::abs),
         Shape::Nurbs { .. } => [1.0, 1.0, 0.0, 0.0], // sub-pieces get their limits in `nurbs`
         // The tangent cos(theta) d1 + sin(theta) n1 for theta from 0 to the turn.
         Shape::Clothoid { d1, n1, half, sharpness, .. } => {
-            let turn = sharpness * half * half;
-            [0, 1, 2, 3].map(|a| largest_on_turn(d1[a], n1[a], turn).min(1.0))
+            let turn = Turn::new(sharpness * half * half);
+            [0, 1, 2, 3].map(|a| turn.largest(d1[a], n1[a]).min(1.0))
         }
-        Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
+        Shape::Arc { r0, r1, sweep, rise, .. } => {
             let planar = (r0.max(r1) * sweep.abs() / length).min(1.0);
             let radial = (r1 - r0).abs() / length;
-            [0, 1, 2, 3].map(|a| ((planar + radial) * e1[a].hypot(e2[a]) + (rise[a] / length).abs()).min(1.0))
+            [0, 1, 2, 3].map(|a| ((planar + radial) * normal[a] + (rise[a] / length).abs()).min(1.0))
         }
     }
 }
 
-/// The largest `|a cos(theta) + b sin(theta)|` for theta in `0..=turn` (turn <= pi):
-/// at an end, or `hypot(a, b)` where the stationary angle `atan2(b, a)` (mod pi) lies
-/// within the turn.
-fn largest_on_turn(a: f64, b: f64, turn: f64) -> f64 {
-    let ends = a.abs().max((a * turn.cos() + b * turn.sin()).abs());
-    if b.atan2(a).rem_euclid(std::f64::consts::PI) <= turn {
-        ends.max(a.hypot(b))
-    } else {
-        ends
+/// Per-axis shares of the normal direction over an element (what its normal
+/// acceleration and turning put on each axis, per unit): `hypot(e1, e2)` on an arc,
+/// the largest of the normal `n1 cos(theta) - d1 sin(theta)` over a clothoid pair's
+/// turn, 0 on a line and a NURBS sub-piece (its limits come from [`crate::nurbs`]).
+/// Computed once per element: [`limit`] reads them for both its caps.
+fn normal_shares(shape: &Shape) -> Vec4 {
+    match *shape {
+        Shape::Arc { e1, e2, .. } => [0, 1, 2, 3].map(|a| e1[a].hypot(e2[a])),
+        Shape::Clothoid { d1, n1, half, sharpness, .. } => {
+            let turn = Turn::new(sharpness * half * half);
+            [0, 1, 2, 3].map(|a| turn.largest(n1[a], -d1[a]))
+        }
+        Shape::Line { .. } | Shape::Nurbs { .. } => [0.0; 4],
+    }
+}
+
+/// A turn by `angle` (at most pi), its cosine and sine taken once for every axis.
+struct Turn {
+    angle: f64,
+    cos: f64,
+    sin: f64,
+}
+
+impl Turn {
+    fn new(angle: f64) -> Turn {
+        Turn { angle, cos: angle.cos(), sin: angle.sin() }
+    }
+
+    /// The largest `|a cos(theta) + b sin(theta)|` for theta in `0..=angle`: at an end,
+    /// or `hypot(a, b)` where the stationary angle `atan2(b, a)` (mod pi) lies within
+    /// the turn.
+    fn largest(&self, a: f64, b: f64) -> f64 {
+        let ends = a.abs().max((a * self.cos + b * self.sin).abs());
+        if b.atan2(a).rem_euclid(std::f64::consts::PI) <= self.angle {
+            ends.max(a.hypot(b))
+        } else {
+            ends
+        }
     }
 }
 
@@ -570,7 +601,8 @@ fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64,
 
 /// Fills in the speed, acceleration and jerk limits of an element.
 fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
-    let weights = axis_weights(&element.shape, element.length);
+    let normal = normal_shares(&element.shape);
+    let weights = axis_weights(&element.shape, element.length, &normal);
     let mut v_cap = feed;
     let mut accel = f64::INFINITY;
     let mut jerk = f64::INFINITY;
@@ -581,16 +613,20 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
             jerk = jerk.min(element.tangential_jerk_share * axis.max_jerk / w);
         }
     }
-    if let Shape::Arc { e1, e2, .. } = element.shape {
+    // The path's curvature, its change and the speed the chord error allows (seed
+    // 002), for both caps below: 0 and the feed on a line.
+    let (mut k, mut dk, mut v_limit) = (0.0, 0.0, feed);
+    if let Shape::Arc { .. } = element.shape {
         let (planar, r) = element.planar_fraction_and_radius();
-        let k = planar * planar / r; // curvature of the path
+        k = planar * planar / r; // curvature of the path
         let scurve = config.profile == ProfileKind::SCurve;
         // Chord error (seed 002): a chord of length c on radius r sags r - sqrt(r^2 - c^2/4).
         let delta = config.chord_tolerance_mm.min(r);
         let chord = 2.0 * (r * r - (r - delta).powi(2)).sqrt();
-        v_cap = v_cap.min(chord / config.period_s / planar.max(1e-12));
-        for axis in 0..4 {
-            let h = e1[axis].hypot(e2[axis]);
+        let chord_cap = chord / config.period_s / planar.max(1e-12);
+        v_cap = v_cap.min(chord_cap);
+        v_limit = v_limit.min(chord_cap);
+        for (axis, &h) in normal.iter().enumerate() {
             let limits = &config.axes[axis];
             if h < 1e-12 || !limits.present {
                 continue;
@@ -603,8 +639,7 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
             }
         }
         if scurve {
-            for axis in 0..4 {
-                let h = e1[axis].hypot(e2[axis]);
+            for (axis, &h) in normal.iter().enumerate() {
                 let limits = &config.axes[axis];
                 if h >= 1e-12 && limits.present {
                     // Tangential acceleration turning with the path: 3 k v a.
@@ -616,9 +651,9 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
         // ARC_JERK_SHARE by the caps above; both ARC_JERK_SHARE where not S-curve).
         element.turning_jerk_share = if scurve {
             (0..4)
-                .filter(|&axis| config.axes[axis].present && e1[axis].hypot(e2[axis]) >= 1e-12)
+                .filter(|&axis| config.axes[axis].present && normal[axis] >= 1e-12)
                 .map(|axis| {
-                    let h = e1[axis].hypot(e2[axis]);
+                    let h = normal[axis];
                     (k * k * v_cap.powi(3) * h + 3.0 * k * v_cap * accel * h) / config.axes[axis].max_jerk
                 })
                 .fold(0.0, f64::max)
@@ -627,16 +662,15 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
             2.0 * ARC_JERK_SHARE
         };
     }
-    if let Shape::Clothoid { d1, n1, half, sharpness, .. } = element.shape {
+    if let Shape::Clothoid { half, sharpness, .. } = element.shape {
         // As an arc of the peak curvature whose curvature also changes: the turning
         // terms (k^2 + |k'|) v^3 and 3 k v a_t within ARC_JERK_SHARE each.
-        let (k, dk) = (sharpness * half, sharpness);
-        let turn = sharpness * half * half;
+        (k, dk) = (sharpness * half, sharpness);
         let scurve = config.profile == ProfileKind::SCurve;
         let delta = config.chord_tolerance_mm.min(1.0 / k);
         let chord = 2.0 * (2.0 * delta / k - delta * delta).sqrt();
         v_cap = v_cap.min(chord / config.period_s);
-        let normal = [0, 1, 2, 3].map(|a| largest_on_turn(n1[a], -d1[a], turn));
+        v_limit = v_limit.min(chord / config.period_s);
         for (axis, &h) in normal.iter().enumerate() {
             let limits = &config.axes[axis];
             if h < 1e-12 || !limits.present {
@@ -668,23 +702,6 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
     }
     element.shared = Caps { v_cap, accel, jerk };
     // The limits shared by what the element needs (`crate::element`).
-    let mut v_limit = feed;
-    let (mut k, mut dk, mut normal) = (0.0, 0.0, [0.0; 4]);
-    if let Shape::Clothoid { d1, n1, half, sharpness, .. } = element.shape {
-        (k, dk) = (sharpness * half, sharpness);
-        let turn = sharpness * half * half;
-        let delta = config.chord_tolerance_mm.min(1.0 / k);
-        v_limit = v_limit.min(2.0 * (2.0 * delta / k - delta * delta).sqrt() / config.period_s);
-        normal = [0, 1, 2, 3].map(|a| largest_on_turn(n1[a], -d1[a], turn));
-    }
-    if let Shape::Arc { e1, e2, .. } = element.shape {
-        let (planar, r) = element.planar_fraction_and_radius();
-        k = planar * planar / r;
-        let delta = config.chord_tolerance_mm.min(r);
-        let chord = 2.0 * (r * r - (r - delta).powi(2)).sqrt();
-        v_limit = v_limit.min(chord / config.period_s / planar.max(1e-12));
-        normal = [0, 1, 2, 3].map(|a| e1[a].hypot(e2[a]));
-    }
     // An absent axis has no share (w = n = 0).
     let axes: [AxisShare; 4] = std::array::from_fn(|a| {
         let axis = &config.axes[a];
