@@ -879,7 +879,7 @@ pub struct PathElements {
 /// collected).
 pub fn elements(config: &Resolved, program: &Program) -> Result<PathElements, ProgramError> {
     let mut stream = PathStream::new(config, Cow::Borrowed(program))?;
-    let elements = stream.by_ref().collect::<Result<Vec<Element>, ProgramError>>()?;
+    let elements = stream.by_ref().map(|e| e.map(|e| *e)).collect::<Result<Vec<Element>, ProgramError>>()?;
     let (leading_dwell, leading_events) = (stream.leading_dwell(), stream.leading_events().to_vec());
     Ok(PathElements { elements, leading_dwell, leading_events, end: program_end(config, program), notes: Vec::new() })
 }
@@ -917,13 +917,14 @@ pub struct PathStream<'p> {
     current: Option<Move>,
     /// Where the current move's element starts (after the previous blend).
     start: Vec4,
-    pending_blend: Option<Element>,
+    pending_blend: Option<Box<Element>>,
     /// Elements made, the last held back: a move that makes no element puts its stop,
-    /// dwell and events after it.
-    made: VecDeque<Element>,
+    /// dwell and events after it. Boxed from here to the look-ahead window, so that
+    /// handing an element on from stage to stage moves a pointer, not the element.
+    made: VecDeque<Box<Element>>,
     sharing: Sharing,
     /// Elements ready to hand on, in order.
-    ready: VecDeque<Element>,
+    ready: VecDeque<Box<Element>>,
     done: bool,
     end: Arc<OnceLock<Vec4>>,
     /// Short lines read for the smoother ([`crate::smooth`]), not yet made.
@@ -1063,7 +1064,7 @@ impl<'p> PathStream<'p> {
                 if let Some(b) = self.pending_blend.take() {
                     self.made.push_back(b);
                 }
-                self.made.extend(pieces);
+                self.made.extend(pieces.into_iter().map(Box::new));
                 self.start = run[curved - 1].end;
                 while self.made.len() > 1 {
                     let e = self.made.pop_front().expect("an element");
@@ -1140,13 +1141,13 @@ impl<'p> PathStream<'p> {
             let last = pieces.last_mut().expect("a NURBS has a piece");
             last.block_end = true;
             take_after(last, m);
-            out.extend(pieces);
+            out.extend(pieces.into_iter().map(Box::new));
             self.start = m.end;
         } else if m.arc.is_some() {
             if let Some(mut e) = arc_element(config, m)? {
                 e.block_end = true;
                 take_after(&mut e, m);
-                out.push_back(e);
+                out.push_back(Box::new(e));
             } else if let Some(last) = out.back_mut() {
                 merge_after(last, m);
             }
@@ -1166,14 +1167,15 @@ impl<'p> PathStream<'p> {
                 if let Some((a, b, shape, length)) =
                     blend(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
                 {
-                    self.pending_blend = Some(limited(config, shape, a, b, length, n.line, m.feed.min(n.feed)));
+                    self.pending_blend =
+                        Some(Box::new(limited(config, shape, a, b, length, n.line, m.feed.min(n.feed))));
                     end_here = a;
                 }
             }
             if let Some(mut e) = line_element(config, m, self.start, end_here, m.feed) {
                 e.block_end = true;
                 take_after(&mut e, m);
-                out.push_back(e);
+                out.push_back(Box::new(e));
             } else if let Some(last) = out.back_mut() {
                 merge_after(last, m);
             }
@@ -1225,7 +1227,7 @@ fn continues(m: &Move, n: &Move) -> bool {
 }
 
 impl Iterator for PathStream<'_> {
-    type Item = Result<Element, ProgramError>;
+    type Item = Result<Box<Element>, ProgramError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
@@ -1268,7 +1270,7 @@ impl Iterator for PathStream<'_> {
 #[derive(Debug)]
 struct Sharing {
     /// Elements held, each with whether it takes the fixed shares.
-    held: VecDeque<(Element, bool)>,
+    held: VecDeque<(Box<Element>, bool)>,
     /// Length of the held elements after the first.
     behind_first: f64,
     /// Held elements that stop after them.
@@ -1309,7 +1311,7 @@ impl Sharing {
         4 * config.lookahead_moves.max(1)
     }
 
-    fn push(&mut self, config: &Resolved, mut e: Element, ready: &mut VecDeque<Element>) {
+    fn push(&mut self, config: &Resolved, mut e: Box<Element>, ready: &mut VecDeque<Box<Element>>) {
         let reach = self.reach;
         let mut shared = false;
         if let Some((before, _)) = self.held.back_mut() {
@@ -1374,7 +1376,7 @@ impl Sharing {
     }
 
     /// Hands on the first element held (with the fixed shares if `force`).
-    fn release(&mut self, force: bool, ready: &mut VecDeque<Element>) {
+    fn release(&mut self, force: bool, ready: &mut VecDeque<Box<Element>>) {
         let (mut e, take) = self.held.pop_front().expect("an element held");
         self.stops_held -= usize::from(e.stop_after);
         match self.held.front() {
@@ -1390,7 +1392,7 @@ impl Sharing {
     }
 
     /// The path's end: everything held goes on.
-    fn finish(&mut self, ready: &mut VecDeque<Element>) {
+    fn finish(&mut self, ready: &mut VecDeque<Box<Element>>) {
         while !self.held.is_empty() {
             self.release(false, ready);
         }

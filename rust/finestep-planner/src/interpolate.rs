@@ -71,15 +71,17 @@ pub struct Periods<'p> {
     run_trial: Vec<Profile>,
 }
 
-/// A source of a path's elements, in order, or the error that ends the path.
-pub type ElementSource<'p> = Box<dyn Iterator<Item = Result<Element, ProgramError>> + Send + 'p>;
+/// A source of a path's elements, in order, or the error that ends the path. Boxed,
+/// as the path stream makes them ([`crate::geometry::PathStream`]): the window moves
+/// pointers, not elements.
+pub type ElementSource<'p> = Box<dyn Iterator<Item = Result<Box<Element>, ProgramError>> + Send + 'p>;
 
 /// The elements of a path read from their source as far as the look-ahead asks, those
 /// the interpolation has left forgotten.
 struct PathWindow<'p> {
     source: ElementSource<'p>,
     /// Elements `base..base + elements.len()`.
-    elements: VecDeque<Element>,
+    elements: VecDeque<Box<Element>>,
     base: usize,
     complete: bool,
     error: Option<ProgramError>,
@@ -101,10 +103,9 @@ impl std::fmt::Debug for PathWindow<'_> {
 impl PathWindow<'_> {
     /// Forgets the elements before `i`.
     fn release(&mut self, i: usize) {
-        while self.base < i && !self.elements.is_empty() {
-            self.elements.pop_front();
-            self.base += 1;
-        }
+        let gone = i.saturating_sub(self.base).min(self.elements.len());
+        self.elements.drain(..gone);
+        self.base += gone;
     }
 }
 
@@ -145,7 +146,7 @@ impl ElementWindow for PathWindow<'_> {
 impl<'p> Periods<'p> {
     /// The periods of `elements`, after `leading_dwell` idle periods, from rest at the origin.
     pub fn new(config: Resolved, elements: Vec<Element>, leading_dwell: u64) -> Periods<'static> {
-        Periods::from_source(config, Box::new(elements.into_iter().map(Ok)), leading_dwell)
+        Periods::from_source(config, Box::new(elements.into_iter().map(|e| Ok(Box::new(e)))), leading_dwell)
     }
 
     /// The periods of the elements `source` produces, read as the look-ahead needs them,

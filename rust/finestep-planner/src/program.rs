@@ -67,7 +67,7 @@ impl PlanStream<'_> {
 }
 
 /// An element the interpolation can follow: a finite length and positive, finite limits.
-fn usable(e: Element) -> Result<Element, ProgramError> {
+fn usable(e: Box<Element>) -> Result<Box<Element>, ProgramError> {
     if e.length.is_finite() && e.v_cap > 0.0 && e.v_cap.is_finite() && e.accel > 0.0 && e.jerk > 0.0 {
         Ok(e)
     } else {
