@@ -92,6 +92,10 @@ pub fn junction_jumps(config: &Resolved, before: &Element, after: &Element) -> b
     })
 }
 
+/// Elements the look-ahead reads at a time before taking their junctions' caps
+/// ([`WindowedSpeeds`]).
+const READ_CHUNK: usize = 64;
+
 /// The speed cap of the junction between `before` and `after` (module docs).
 pub fn junction_cap(config: &Resolved, before: &Element, after: &Element) -> f64 {
     junction_cap_with(config, before, after, &[])
@@ -281,7 +285,15 @@ pub struct WindowedSpeeds {
     fixed: usize,
     /// Caps of junctions `fixed..fixed + caps.len()` (computed once per junction).
     caps: std::collections::VecDeque<f64>,
+    /// The profile limits and the length the passes read (a hair below the element's)
+    /// of elements `fixed..fixed + caps.len()`, taken with each junction's cap: the
+    /// passes read these instead of the elements, which lie apart in memory.
+    reach: std::collections::VecDeque<(Limits, f64)>,
+    /// The backward pass of the current window (junctions from `fixed`), and of the
+    /// window before it (junctions from `previous_fixed`).
     backward: Vec<f64>,
+    previous: Vec<f64>,
+    previous_fixed: usize,
     /// The jerk cap of the junction after a line paired with the one before it
     /// ([`pair_jerk_cap`]): junction, cap.
     paired: Option<(usize, PairCap)>,
@@ -296,7 +308,10 @@ impl WindowedSpeeds {
             base: 0,
             fixed: 0,
             caps: std::collections::VecDeque::new(),
+            reach: std::collections::VecDeque::new(),
             backward: Vec::new(),
+            previous: Vec::new(),
+            previous_fixed: 0,
             paired: None,
         }
     }
@@ -340,20 +355,14 @@ impl WindowedSpeeds {
         }
     }
 
-    /// One window: backward from rest at its end, forward from the last fixed junction,
-    /// the first half committed (all of it at the path's end).
-    fn advance<W: ElementWindow + ?Sized>(&mut self, config: &Resolved, path: &mut W) -> Result<(), ProgramError> {
-        let fixed = self.fixed;
-        // The window's elements and the one after it (the window's last junction).
-        path.reach(fixed + self.window + 1)?;
-        let n = if path.complete() { path.known() } else { usize::MAX };
-        let end = (fixed + self.window).min(n);
-        // The caps of the junctions before the window's last (which the window ends at
-        // rest): each is computed with the element after it known, so that a pair around
-        // a short line ([`pair_jerk_cap`]) is read the same in every window as on the
-        // whole path.
-        while fixed + self.caps.len() < end {
-            let i = fixed + self.caps.len();
+    /// The caps of the junctions before `to` not yet taken, `n` the path's element count
+    /// (`usize::MAX` while unknown): each is computed with the element after it known
+    /// (where there is one), so that a pair around a short line ([`pair_jerk_cap`]) is
+    /// read the same in every window as on the whole path; with each, the limits and
+    /// length the passes read of the element after it.
+    fn cap_junctions<W: ElementWindow + ?Sized>(&mut self, config: &Resolved, path: &W, to: usize, n: usize) {
+        while self.fixed + self.caps.len() < to {
+            let i = self.fixed + self.caps.len();
             let cap = if i == 0 || i == n {
                 0.0
             } else {
@@ -375,26 +384,65 @@ impl WindowedSpeeds {
                 junction_cap_with(config, before, after, &pairs[..count])
             };
             self.caps.push_back(cap);
-        }
-        self.backward.clear();
-        self.backward.resize(end - fixed + 1, 0.0);
-        for i in (fixed..end).rev() {
             // A hair below the exact reach, so that rounding never leaves a profile short.
             let element = path.element(i);
-            let limits = element_limits(config, element);
-            let reach = limits.reachable(self.backward[i + 1 - fixed], element.length * (1.0 - 1e-12));
-            self.backward[i - fixed] = self.caps[i - fixed].min(reach);
+            self.reach.push_back((element_limits(config, element), element.length * (1.0 - 1e-12)));
         }
+    }
+
+    /// One window: backward from rest at its end, forward from the last fixed junction,
+    /// the first half committed (all of it at the path's end).
+    fn advance<W: ElementWindow + ?Sized>(&mut self, config: &Resolved, path: &mut W) -> Result<(), ProgramError> {
+        let fixed = self.fixed;
+        // The window's elements and the one after it (the window's last junction), read
+        // [`READ_CHUNK`] at a time, each junction's cap taken as soon as the element
+        // after it is known (or the path has ended), while the elements are fresh in the
+        // cache: the same caps as read after the whole window.
+        let target = fixed + self.window + 1;
+        loop {
+            if !path.complete() && path.known() < target {
+                path.reach((path.known() + READ_CHUNK).min(target))?;
+            }
+            let n = if path.complete() { path.known() } else { usize::MAX };
+            let end = (fixed + self.window).min(n);
+            let capped_to = if path.complete() { end } else { end.min(path.known().saturating_sub(1)) };
+            self.cap_junctions(config, path, capped_to, n);
+            if path.complete() || path.known() >= target {
+                break;
+            }
+        }
+        let n = if path.complete() { path.known() } else { usize::MAX };
+        let end = (fixed + self.window).min(n);
+        // Backward from rest at the window's end. Each junction's speed is a function of
+        // the one after it alone, so where it comes out as the window before had it
+        // (the end of that window's braking reached), so does every junction before it:
+        // those are taken as they were.
+        std::mem::swap(&mut self.backward, &mut self.previous);
+        self.backward.clear();
+        self.backward.resize(end - fixed + 1, 0.0);
+        let previous_end = self.previous_fixed + self.previous.len();
+        for i in (fixed..end).rev() {
+            let (limits, length) = self.reach[i - fixed];
+            let v = self.caps[i - fixed].min(limits.reachable(self.backward[i + 1 - fixed], length));
+            self.backward[i - fixed] = v;
+            // (`fixed` never moves back: the window before starts at or before it.)
+            if i < previous_end && self.previous[i - self.previous_fixed].to_bits() == v.to_bits() {
+                let from = fixed - self.previous_fixed;
+                self.backward[..i - fixed].copy_from_slice(&self.previous[from..from + i - fixed]);
+                break;
+            }
+        }
+        self.previous_fixed = fixed;
         let commit = if end == n { n } else { fixed + self.window / 2 };
         for i in fixed..commit {
-            let element = path.element(i);
-            let limits = element_limits(config, element);
+            let (limits, length) = self.reach[i - fixed];
             let from = self.speeds[i - self.base];
-            let reach = limits.reachable(from, element.length * (1.0 - 1e-12));
+            let reach = limits.reachable(from, length);
             self.speeds.push_back(self.backward[i + 1 - fixed].min(reach));
         }
         for _ in fixed..commit {
             self.caps.pop_front();
+            self.reach.pop_front();
         }
         self.fixed = commit;
         Ok(())
