@@ -530,6 +530,23 @@ impl NurbsCurve {
         }
     }
 
+    /// [`NurbsCurve::speed_on`] at each of `us`, all on knot span `i`: the span's form
+    /// looked up once for the quadrature's nodes (the same values, node by node).
+    #[inline]
+    fn speeds_on<const N: usize>(&self, us: [f64; N], i: usize) -> [f64; N] {
+        if self.degree != 0 && !self.planar {
+            if let Some([_, c1, c2, c3]) = self.power.get(i - self.degree) {
+                let knot = self.knots[i];
+                return us.map(|u| {
+                    let t = u - knot;
+                    let a1: Vec4 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+                    (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt()
+                });
+            }
+        }
+        us.map(|u| self.speed_on(u, i))
+    }
+
     /// Arc length from `a` to `b` (within one span) by 5-point Gauss-Legendre quadrature,
     /// halved recursively wherever the speed |C'| varies by more than
     /// [`QUADRATURE_SPEED_SPREAD`] across the nodes. A heavy weight makes |C'| swing by
@@ -548,7 +565,7 @@ impl NurbsCurve {
 
     fn arc_length_from(&self, a: f64, b: f64, span: usize, depth: u32) -> f64 {
         let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
-        let speeds = GAUSS.map(|(x, _)| self.speed_on(mid + half * x, span));
+        let speeds = self.speeds_on(GAUSS.map(|(x, _)| mid + half * x), span);
         let (lo, hi) = speeds.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         // Halving stops where the spread can no longer matter (it bounds what the rule
         // can miss, times the interval): near a cusp |C'| runs to zero and the intervals
