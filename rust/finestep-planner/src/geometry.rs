@@ -572,9 +572,18 @@ impl Turn {
     }
 }
 
-/// A new element of `shape` with its limits set by [`limit`].
-fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64, line: usize, feed: f64) -> Element {
-    let element = Element {
+/// A new element of `shape` with its limits set by [`limit`], boxed where it is made
+/// (the path hands elements on boxed, [`PathStream`]) and limited in place.
+fn limited(
+    config: &Resolved,
+    shape: Shape,
+    start: Vec4,
+    end: Vec4,
+    length: f64,
+    line: usize,
+    feed: f64,
+) -> Box<Element> {
+    let mut element = Box::new(Element {
         shape,
         start,
         end,
@@ -595,12 +604,13 @@ fn limited(config: &Resolved, shape: Shape, start: Vec4, end: Vec4, length: f64,
         dwell_line: 0,
         block_end: false,
         events: Vec::new(),
-    };
-    limit(config, element, feed)
+    });
+    limit(config, &mut element, feed);
+    element
 }
 
 /// Fills in the speed, acceleration and jerk limits of an element.
-fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
+fn limit(config: &Resolved, element: &mut Element, feed: f64) {
     let normal = normal_shares(&element.shape);
     let weights = axis_weights(&element.shape, element.length, &normal);
     let mut v_cap = feed;
@@ -729,10 +739,9 @@ fn limit(config: &Resolved, mut element: Element, feed: f64) -> Element {
     element.v_cap = full.v_cap;
     element.accel = full.accel;
     element.jerk = full.jerk;
-    element
 }
 
-fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) -> Option<Element> {
+fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) -> Option<Box<Element>> {
     let delta = sub(end, start);
     let length = norm(delta);
     if length < 1e-12 {
@@ -743,7 +752,7 @@ fn line_element(config: &Resolved, m: &Move, start: Vec4, end: Vec4, feed: f64) 
 }
 
 /// The element of an arc move; `None` when rounding to steps left nothing to move.
-fn arc_element(config: &Resolved, m: &Move) -> Result<Option<Element>, ProgramError> {
+fn arc_element(config: &Resolved, m: &Move) -> Result<Option<Box<Element>>, ProgramError> {
     let (centre, (u, v), clockwise, extra_turns) = m.arc.expect("arc move");
     let fail = |reason: String| ProgramError::new(m.line, reason);
     let (cu, cv) = (centre[u], centre[v]);
@@ -1147,7 +1156,7 @@ impl<'p> PathStream<'p> {
             if let Some(mut e) = arc_element(config, m)? {
                 e.block_end = true;
                 take_after(&mut e, m);
-                out.push_back(Box::new(e));
+                out.push_back(e);
             } else if let Some(last) = out.back_mut() {
                 merge_after(last, m);
             }
@@ -1167,15 +1176,14 @@ impl<'p> PathStream<'p> {
                 if let Some((a, b, shape, length)) =
                     blend(m.end, scale(1.0 / l1, d1), scale(1.0 / l2, d2), tolerance, room)
                 {
-                    self.pending_blend =
-                        Some(Box::new(limited(config, shape, a, b, length, n.line, m.feed.min(n.feed))));
+                    self.pending_blend = Some(limited(config, shape, a, b, length, n.line, m.feed.min(n.feed)));
                     end_here = a;
                 }
             }
             if let Some(mut e) = line_element(config, m, self.start, end_here, m.feed) {
                 e.block_end = true;
                 take_after(&mut e, m);
-                out.push_back(Box::new(e));
+                out.push_back(e);
             } else if let Some(last) = out.back_mut() {
                 merge_after(last, m);
             }
