@@ -322,6 +322,36 @@ impl Element {
         }
     }
 
+    /// [`Element::tangent`] and [`Element::curvature`] at the same end, the shape
+    /// evaluated there once for both (a NURBS sub-piece's derivatives, an arc's angle):
+    /// the same values as the two apart, for the junction test every element meets
+    /// ([`crate::lookahead::junction_jumps`]).
+    pub fn tangent_and_curvature(&self, at_end: bool) -> (Vec4, Vec4) {
+        match self.shape {
+            Shape::Nurbs { ref curve, u0, u1 } => {
+                let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
+                let speed = d.speed();
+                let t = d.first.map(|c| c / speed);
+                let along: f64 = d.second.iter().zip(&t).map(|(a, b)| a * b).sum();
+                (t, std::array::from_fn(|c| (d.second[c] - along * t[c]) / (speed * speed)))
+            }
+            Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
+                let f: f64 = if at_end { 1.0 } else { 0.0 };
+                let r = r0 + f * (r1 - r0);
+                let (sin, cos) = (f * sweep).sin_cos();
+                let mut d = [0.0; 4];
+                for a in 0..4 {
+                    d[a] = (r1 - r0) * (cos * e1[a] + sin * e2[a]) + r * sweep * (cos * e2[a] - sin * e1[a]) + rise[a];
+                }
+                let n = norm(d);
+                let (planar, r) = self.planar_fraction_and_radius();
+                let k = planar * planar / r;
+                (scale(1.0 / n, d), scale(-k, [0, 1, 2, 3].map(|a| cos * e1[a] + sin * e2[a])))
+            }
+            Shape::Line { .. } | Shape::Clothoid { .. } => (self.tangent(at_end), self.curvature(at_end)),
+        }
+    }
+
     /// Curvature vector (acceleration per unit speed squared) at fraction 0 or 1.
     pub fn curvature(&self, at_end: bool) -> Vec4 {
         match self.shape {

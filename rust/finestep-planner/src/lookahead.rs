@@ -81,8 +81,10 @@ pub fn junction_jumps(config: &Resolved, before: &Element, after: &Element) -> b
     }
     let v = before.v_cap.min(after.v_cap);
     let period = config.period_s;
-    let tangent_jump = sub(after.tangent(false), before.tangent(true));
-    let curvature_jump = sub(after.curvature(false), before.curvature(true));
+    let (tangent_before, curvature_before) = before.tangent_and_curvature(true);
+    let (tangent_after, curvature_after) = after.tangent_and_curvature(false);
+    let tangent_jump = sub(tangent_after, tangent_before);
+    let curvature_jump = sub(curvature_after, curvature_before);
     config.axes.iter().enumerate().filter(|(_, axis)| axis.present).any(|(a, axis)| {
         let accel = v * tangent_jump[a].abs() / period;
         let jerk = accel / period + curvature_jump[a].abs() * v * v / period;
