@@ -471,11 +471,11 @@ fn run_pbp<B: Bus>(
     // The rate: one step per decision, so no axis steps faster than the decisions come.
     for (index, record) in planned.records.iter().enumerate() {
         if let Some((_, tick_div)) = record_decisions(record) {
-            if u32::from(tick_div) + 1 < pbp.min_interval {
+            if tick_div + 1 < pbp.min_interval {
                 bail!(
                     "{name}:{}: a decision every {} clocks, faster than interpolation.max_decision_hz or the drive timing allow ({} clocks)",
                     planned.lines[index],
-                    u32::from(tick_div) + 1,
+                    tick_div + 1,
                     pbp.min_interval
                 );
             }

@@ -48,7 +48,7 @@ impl Variant {
 
     /// Added to the streams' decision dividers (3 and up): with the engine the drive
     /// timing's step is whole visits, 2 S = 8 clocks, and a divider below S - 1 is refused.
-    fn slower(self) -> u16 {
+    fn slower(self) -> u32 {
         match self {
             Variant::PerAxis => 0,
             Variant::Shared => 4,
@@ -88,7 +88,7 @@ fn inputs() -> CoreInputs {
 }
 
 /// A line to `(xe, ye)` on `pair`.
-fn line(pair: u8, xe: i64, ye: i64, tick_div: u16, flags: u8) -> Move {
+fn line(pair: u8, xe: i64, ye: i64, tick_div: u32, flags: u8) -> Move {
     let lanes = PbpLanes { pair, x: xe as i32, y: ye as i32, tick_div, ..PbpLanes::default() };
     assert!(lanes.fits());
     let mut delta = [0; AXES];
@@ -98,7 +98,7 @@ fn line(pair: u8, xe: i64, ye: i64, tick_div: u16, flags: u8) -> Move {
 }
 
 /// An arc from `start` (relative to its centre) over `k` decisions of its path, on `pair`.
-fn arc(pair: u8, start: (i64, i64), cw: bool, k: usize, tick_div: u16, flags: u8) -> Move {
+fn arc(pair: u8, start: (i64, i64), cw: bool, k: usize, tick_div: u32, flags: u8) -> Move {
     let end = ArcPath::new(start.0, start.1, cw).nth(k - 1).expect("an arc's path is endless").1;
     let steps = arc_steps(start, end, cw).expect("the end is on the path");
     let lanes = PbpLanes { arc: true, cw, pair, x: start.0 as i32, y: start.1 as i32, steps, tick_div };
@@ -117,7 +117,7 @@ fn dda(steps: [i64; AXES], flags: u8) -> Move {
 
 /// Lines and arcs in every quadrant, both directions, on both pairs, between DDA records;
 /// the dividers `slower` more than 3 to 5.
-fn fixed_moves(slower: u16) -> Vec<Move> {
+fn fixed_moves(slower: u32) -> Vec<Move> {
     let mut moves = Vec::new();
     let (t3, t4, t5) = (3 + slower, 4 + slower, 5 + slower);
     for (q, &(sx, sy)) in [(1, 1), (-1, 1), (-1, -1), (1, -1)].iter().enumerate() {
@@ -137,11 +137,11 @@ fn fixed_moves(slower: u16) -> Vec<Move> {
     moves
 }
 
-fn random_moves(rng: &mut Rng, count: usize, slower: u16) -> Vec<Move> {
+fn random_moves(rng: &mut Rng, count: usize, slower: u32) -> Vec<Move> {
     let mut moves = Vec::new();
     while moves.len() < count {
         let pair = rng.range(0, 1) as u8;
-        let tick = rng.range(3, 9) as u16 + slower;
+        let tick = rng.range(3, 9) as u32 + slower;
         let end = if rng.range(0, 4) == 0 { flags::BLOCK_END } else { 0 };
         match rng.range(0, 2) {
             0 => {

@@ -18,7 +18,7 @@ const PERIOD: u32 = 500;
 /// A decision every 40 clocks (the step engine's visits, S = 4, keep the drive timing
 /// with room): the line takes about 30 periods, the arc 8, so that the host's reads
 /// (an SPI read of two words is about 900 clocks at SCK = clk / 8) see them under way.
-const TICK_DIV: u16 = 39;
+const TICK_DIV: u32 = 39;
 
 /// A DDA record moving only pair 1 (axes 2 and 3) by whole steps.
 fn dda(steps: [i32; 2], flags: u8) -> PeriodRecord {

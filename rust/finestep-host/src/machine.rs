@@ -254,10 +254,10 @@ impl<B: Bus> Machine<B> {
         if !lanes.fits() {
             return refuse(format!("{lanes:?} does not fit the record's fields"));
         }
-        if u32::from(lanes.tick_div) + 1 < self.caps.step_slots {
+        if lanes.tick_div + 1 < self.caps.step_slots {
             return refuse(format!(
                 "a decision every {} clocks is closer than the step engine's visit of {} clocks",
-                u32::from(lanes.tick_div) + 1,
+                lanes.tick_div + 1,
                 self.caps.step_slots
             ));
         }
@@ -578,6 +578,8 @@ mod tests {
         };
         assert!(refused(&m, PbpLanes { pair: 2, ..lanes }).contains("the core has 4 axes"));
         assert!(refused(&m, PbpLanes { x: 1 << 23, ..lanes }).contains("does not fit"));
+        assert!(refused(&m, PbpLanes { tick_div: 1 << PbpLanes::DIV_W, ..lanes }).contains("does not fit"));
+        assert!(m.pbp_record(&PbpLanes { tick_div: (1 << PbpLanes::DIV_W) - 1, ..lanes }, 0).is_ok());
         let plain = Machine::connect(snapshot_bus(0, false, 4)).unwrap();
         assert!(!plain.caps().has_pbp);
         assert!(refused(&plain, lanes).contains("VERSION.HAS_PBP 0"));

@@ -95,8 +95,8 @@ pub struct PbpLanes {
     pub y: i32,
     /// Arc: its decision count (`pbp_interp::arc_steps`); a line: ignored.
     pub steps: u64,
-    /// One decision every `tick_div + 1` clocks.
-    pub tick_div: u16,
+    /// One decision every `tick_div + 1` clocks ([`PbpLanes::DIV_W`] bits).
+    pub tick_div: u32,
 }
 
 impl PbpLanes {
@@ -106,13 +106,19 @@ impl PbpLanes {
     pub const COORD_W: u32 = crate::pbp_lanes::X_WIDTH;
     /// Bits of an arc's decision count (`COORD_W + 3`).
     pub const COUNT_W: u32 = crate::pbp_lanes::COUNT_WIDTH;
+    /// Bits of the decision divider (`pbp_interp`'s `DIV_W` in the core).
+    pub const DIV_W: u32 = crate::pbp_lanes::TICK_DIV_WIDTH;
 
-    /// Whether the coordinates, the count and the pair fit the record's fields: a line's
-    /// `|x|, |y| < 2^23` (so `|x| + |y|` decisions fit), an arc's start within
-    /// `-2^23..2^23` and its count below `2^27`.
+    /// Whether the coordinates, the count, the pair and the divider fit the record's
+    /// fields: a line's `|x|, |y| < 2^23` (so `|x| + |y|` decisions fit), an arc's start
+    /// within `-2^23..2^23`, its count below `2^27`, `tick_div` below `2^DIV_W`.
     pub fn fits(&self) -> bool {
         let half = 1i64 << (Self::COORD_W - 1);
         let coord = |c: i32| if self.arc { (-half..half).contains(&i64::from(c)) } else { i64::from(c).abs() < half };
-        coord(self.x) && coord(self.y) && self.pair <= 3 && self.steps < (1 << Self::COUNT_W)
+        coord(self.x)
+            && coord(self.y)
+            && self.pair <= 3
+            && self.steps < (1 << Self::COUNT_W)
+            && u64::from(self.tick_div) < (1 << Self::DIV_W)
     }
 }

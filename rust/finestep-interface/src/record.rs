@@ -53,7 +53,7 @@ impl PeriodRecord {
     /// pair `pair` (axes `2 * pair`, `2 * pair + 1`), one decision every `tick_div + 1`
     /// clocks, with `flags` besides PBP. Lanes (hdl/interface.toml `[pbp]`,
     /// [`crate::pbp_lanes`]): lane 0 `{ARC, CW, PAIR}` in its top byte over `x` (24 bits),
-    /// lane 1 `y` (24 bits), lane 2 the arc's decisions (27 bits), lane 3 `tick_div` (16
+    /// lane 1 `y` (24 bits), lane 2 the arc's decisions (27 bits), lane 3 `tick_div` (24
     /// bits); values are cut to those widths (the caller keeps them in range:
     /// [`PbpLanes::fits`]).
     pub fn pbp(pbp: &PbpLanes, flags: u8) -> Self {
@@ -67,7 +67,7 @@ impl PeriodRecord {
         raw[at::X_LANE] |= (pbp.x as u32 & mask(at::X_WIDTH)) << at::X_LSB;
         raw[at::Y_LANE] |= (pbp.y as u32 & mask(at::Y_WIDTH)) << at::Y_LSB;
         raw[at::COUNT_LANE] |= (pbp.steps as u32 & mask(at::COUNT_WIDTH)) << at::COUNT_LSB;
-        raw[at::TICK_DIV_LANE] |= (u32::from(pbp.tick_div) & mask(at::TICK_DIV_WIDTH)) << at::TICK_DIV_LSB;
+        raw[at::TICK_DIV_LANE] |= (pbp.tick_div & mask(at::TICK_DIV_WIDTH)) << at::TICK_DIV_LSB;
         PeriodRecord::from_raw(&raw.map(|w| w as i32), flags | flags::PBP)
     }
 
@@ -90,7 +90,7 @@ impl PeriodRecord {
             x: signed(at::X_LANE, at::X_LSB, at::X_WIDTH),
             y: signed(at::Y_LANE, at::Y_LSB, at::Y_WIDTH),
             steps: u64::from(field(at::COUNT_LANE, at::COUNT_LSB, at::COUNT_WIDTH)),
-            tick_div: field(at::TICK_DIV_LANE, at::TICK_DIV_LSB, at::TICK_DIV_WIDTH) as u16,
+            tick_div: field(at::TICK_DIV_LANE, at::TICK_DIV_LSB, at::TICK_DIV_WIDTH),
         })
     }
 
@@ -150,7 +150,7 @@ mod tests {
                 x: -(1 << 23),
                 y: (1 << 23) - 1,
                 steps: (1 << 27) - 1,
-                tick_div: 65535,
+                tick_div: (1 << 24) - 1,
             },
             PbpLanes { arc: false, cw: false, pair: 0, x: 5, y: -7, steps: 0, tick_div: 9 },
             PbpLanes { arc: true, cw: false, pair: 3, x: 0, y: -1, steps: 12, tick_div: 0 },

@@ -33,7 +33,7 @@ struct Bench {
     inputs: CoreInputs,
     /// The decision divider: a decision every `tick_div + 1` clocks, at least the
     /// drive timing's step (with the engine its timings are whole visits: 2 S clocks).
-    tick_div: u16,
+    tick_div: u32,
 }
 
 impl Bench {
@@ -46,7 +46,7 @@ impl Bench {
             CoreInputs { run: false, period_clocks: PERIOD, axes: [axis; MAX_AXES], ..CoreInputs::default() };
         core.step(&inputs);
         inputs.run = true;
-        let tick_div = if shared { 2 * params.step_slots() as u16 - 1 } else { 2 };
+        let tick_div = if shared { 2 * params.step_slots() - 1 } else { 2 };
         Bench { core, inputs, tick_div }
     }
 
@@ -117,7 +117,7 @@ impl Bench {
     }
 }
 
-fn line(pair: u8, xe: i64, ye: i64, tick_div: u16) -> PeriodRecord {
+fn line(pair: u8, xe: i64, ye: i64, tick_div: u32) -> PeriodRecord {
     let lanes = PbpLanes { pair, x: xe as i32, y: ye as i32, tick_div, ..PbpLanes::default() };
     PeriodRecord::pbp(&lanes, 0)
 }
@@ -145,7 +145,7 @@ fn every_line_up_to_10_on_both_pairs_stays_within_a_step_and_ends_exactly() {
 #[test]
 fn with_the_step_engine_decisions_closer_than_a_visit_are_refused() {
     let mut bench = Bench::new(true);
-    let slots = bench.core.params().step_slots() as u16;
+    let slots = bench.core.params().step_slots();
     let start = bench.positions();
     // S - 1 clocks apart: refused, an idle period, record_error; S apart: taken.
     bench.inputs.rec_valid = true;

@@ -473,8 +473,8 @@ pub struct ResolvedPbp {
     pub max_decision_hz: f64,
 }
 
-/// The largest `tick_div + 1` a record carries (`pbp_interp`'s 16-bit `DIV_W`).
-pub const PBP_INTERVAL_MAX: u32 = 1 << 16;
+/// The largest `tick_div + 1` a record carries (`pbp_interp`'s `DIV_W`, 24 bits).
+pub const PBP_INTERVAL_MAX: u32 = 1 << finestep_interface::PbpLanes::DIV_W;
 
 /// `finestep measure` (`[measure]`): a traverse of one axis at a steady feed while the chip
 /// latches two encoder channels on one clock at every period boundary: the traverse

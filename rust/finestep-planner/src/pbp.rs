@@ -38,7 +38,7 @@ pub enum PbpError {
 /// The records of a straight move from `from` to `to` (steps on the pair's X and Y): as
 /// few pieces as keep `|Xe|, |Ye| < 2^23`, the `k`-th ending at `floor(d * k / n)` (so
 /// the pieces sum to `d` exactly); none for a move of zero steps.
-pub fn line_records(from: (i64, i64), to: (i64, i64), tick_div: u16) -> Vec<PbpLanes> {
+pub fn line_records(from: (i64, i64), to: (i64, i64), tick_div: u32) -> Vec<PbpLanes> {
     let d = (to.0 - from.0, to.1 - from.1);
     let limit = (1u64 << (PbpLanes::COORD_W - 1)) - 1;
     let n = d.0.unsigned_abs().div_ceil(limit).max(d.1.unsigned_abs().div_ceil(limit)) as i64;
@@ -80,7 +80,7 @@ pub fn arc_records(
     cw: bool,
     extra_turns: u32,
     closed_is_turn: bool,
-    tick_div: u16,
+    tick_div: u32,
 ) -> Result<ArcRecords, PbpError> {
     let s = (start.0 - centre.0, start.1 - centre.1);
     let e = (end.0 - centre.0, end.1 - centre.1);
@@ -116,13 +116,13 @@ pub fn arc_records(
 
 /// The decision divider that spreads `decisions` over `seconds` at `clock_hz`:
 /// `round(clock_hz * seconds / decisions) - 1`, at least `min_tick` (the drive timing's
-/// `L + max(S, H + U) - 1`) and at most `u16::MAX`.
-pub fn tick_div(clock_hz: f64, seconds: f64, decisions: u64, min_tick: u16) -> u16 {
+/// `L + max(S, H + U) - 1`) and at most `PBP_INTERVAL_MAX - 1` (the record's field).
+pub fn tick_div(clock_hz: f64, seconds: f64, decisions: u64, min_tick: u32) -> u32 {
     if decisions == 0 {
         return min_tick;
     }
     let clocks = (clock_hz * seconds / decisions as f64).round() - 1.0;
-    clocks.clamp(f64::from(min_tick), f64::from(u16::MAX)) as u16
+    clocks.clamp(f64::from(min_tick), f64::from(PBP_INTERVAL_MAX - 1)) as u32
 }
 
 /// The decision interval (`tick_div + 1`, clocks) of a move of `decisions` decisions along
@@ -130,7 +130,7 @@ pub fn tick_div(clock_hz: f64, seconds: f64, decisions: u64, min_tick: u16) -> u
 /// the move's mean path speed at or below the feed, `ceil(clock_hz * length / (feed / 60) /
 /// decisions)` (rounded up: never faster than F), and at least `min_interval` (the
 /// decision-rate limit and the drive timing); `None` when it is beyond the record's
-/// [`PBP_INTERVAL_MAX`] (a feed too low for the 16-bit divider).
+/// [`PBP_INTERVAL_MAX`] (a feed too low for the record's divider).
 pub fn decision_interval(
     clock_hz: f64,
     length_mm: f64,
@@ -149,7 +149,7 @@ pub fn decision_interval(
 
 /// The decisions of a record with the flag PBP (a line's `|x| + |y|`, an arc's count) and
 /// its divider; `None` for any other record.
-pub fn record_decisions(record: &PeriodRecord) -> Option<(u64, u16)> {
+pub fn record_decisions(record: &PeriodRecord) -> Option<(u64, u32)> {
     let lanes = record.pbp_lanes()?;
     let decisions =
         if lanes.arc { lanes.steps } else { u64::from(lanes.x.unsigned_abs()) + u64::from(lanes.y.unsigned_abs()) };
@@ -234,10 +234,8 @@ pub fn plan_pbp(config: &MachineConfig, program: &Program) -> Result<PbpPlan, Pr
     let push_pbp = |plan: &mut PbpPlan, lanes: Vec<PbpLanes>, line: usize| {
         for mut l in lanes {
             l.pair = pbp.pair;
-            let (decisions, interval) = (
-                if l.arc { l.steps } else { u64::from(l.x.unsigned_abs() + l.y.unsigned_abs()) },
-                u32::from(l.tick_div) + 1,
-            );
+            let (decisions, interval) =
+                (if l.arc { l.steps } else { u64::from(l.x.unsigned_abs() + l.y.unsigned_abs()) }, l.tick_div + 1);
             plan.decisions += decisions;
             plan.clocks += decisions * u64::from(interval) + 1;
             plan.min_interval = Some(plan.min_interval.map_or(interval, |m| m.min(interval)));
@@ -269,7 +267,7 @@ pub fn plan_pbp(config: &MachineConfig, program: &Program) -> Result<PbpPlan, Pr
         }
         Ok(())
     };
-    let feed_interval = |line: usize, length_mm: f64, feed: f64, decisions: u64| -> Result<u16, ProgramError> {
+    let feed_interval = |line: usize, length_mm: f64, feed: f64, decisions: u64| -> Result<u32, ProgramError> {
         if !(feed.is_finite() && feed > 0.0) {
             return Err(ProgramError::new(line, format!("feed F{feed}: a point-by-point move needs a positive feed")));
         }
@@ -283,7 +281,7 @@ pub fn plan_pbp(config: &MachineConfig, program: &Program) -> Result<PbpPlan, Pr
                 ),
             )
         })?;
-        Ok((interval - 1) as u16)
+        Ok(interval - 1)
     };
     for block in &program.blocks {
         let line = block.line;
@@ -579,7 +577,7 @@ mod tests {
         // 1000 decisions in 10 ms at 50 MHz: 500 clocks each.
         assert_eq!(tick_div(50e6, 0.01, 1000, 3), 499);
         assert_eq!(tick_div(50e6, 1e-6, 1000, 3), 3, "at least the drive timing's");
-        assert_eq!(tick_div(50e6, 100.0, 10, 3), u16::MAX);
+        assert_eq!(tick_div(50e6, 100.0, 10, 3), PBP_INTERVAL_MAX - 1);
         assert_eq!(tick_div(50e6, 1.0, 0, 4), 4);
     }
 }

@@ -35,9 +35,13 @@ fn the_divider_keeps_the_mean_speed_at_or_below_the_feed() {
     assert_eq!(decision_interval(50e6, 1.0, 600.0, 300, 625), Some(16_667));
     // The rate limit and the drive timing's floor win over a fast feed.
     assert_eq!(decision_interval(50e6, 1.0, 600_000.0, 100, 6_250), Some(6_250));
-    // Beyond the 16-bit divider: refused, not clamped (that would run faster than F).
-    assert_eq!(decision_interval(50e6, 1.0, 600.0, 3, 625), None);
-    assert_eq!(decision_interval(50e6, 65_536.0 * 100.0 / 50e6 * 10.0, 600.0, 100, 1), Some(PBP_INTERVAL_MAX));
+    // Beyond the 24-bit divider: refused, not clamped (that would run faster than F):
+    // 100 mm at F600 in 3 decisions is 3.3 s, 1.7 * 10^8 clocks each.
+    assert_eq!(PBP_INTERVAL_MAX, 1 << 24);
+    assert_eq!(decision_interval(50e6, 100.0, 600.0, 3, 625), None);
+    let longest = f64::from(PBP_INTERVAL_MAX) * 100.0 / 50e6 * 10.0;
+    assert_eq!(decision_interval(50e6, longest, 600.0, 100, 1), Some(PBP_INTERVAL_MAX));
+    assert_eq!(decision_interval(50e6, longest * 1.001, 600.0, 100, 1), None);
 }
 
 #[test]
@@ -91,7 +95,7 @@ fn configurations_that_cannot_run_are_refused_by_key() {
     let (k, e) = key(&format!("{pbp}plane = \"XY\"\n[axes.X]\n"), core);
     assert!(k == "interpolation.plane" && e.contains("Y is not configured"), "{e}");
     assert_eq!(key(&format!("{pbp}max_decision_hz = 0\n"), core).0, "interpolation.max_decision_hz");
-    assert_eq!(key(&format!("{pbp}max_decision_hz = 100\n"), core).0, "interpolation.max_decision_hz");
+    assert_eq!(key(&format!("{pbp}max_decision_hz = 2\n"), core).0, "interpolation.max_decision_hz");
     assert_eq!(key("[interpolation]\nmode = \"pbp\"\n[gantry]\nenabled = true\n", core).0, "interpolation.mode");
     assert!(MachineConfig::from_toml_str("[interpolation]\nmode = \"fast\"\n", "m.toml").is_err());
 }
@@ -122,9 +126,14 @@ fn moves_that_leave_the_plane_are_refused_by_line() {
     assert!(line == 3 && why.contains("the arc (a helix) moves Y"), "{line}: {why}");
     let (line, why) = refused("G18\nG96 S100 M3\nG1 X1 F600\nM2\n");
     assert!(line == 2 && why.contains("G96"), "{line}: {why}");
-    // 0.01 mm at F1: 100 decisions... of 6 ms each, beyond the divider.
+    // 1 mm at F1: 100 decisions of 0.6 s each, beyond the 24-bit divider (2^24 clocks,
+    // 0.34 s at 50 MHz: F1.79 at least); at F60 (a finishing feed the 16-bit divider
+    // refused below F458) a decision every 500 000 clocks.
     let (line, why) = refused("G18\nG1 X1 F1\nM2\n");
     assert!(line == 2 && why.contains("too slow for the point-by-point divider"), "{line}: {why}");
+    assert!(why.contains("at least F1.788"), "{why}");
+    let slow = plan_pbp(&config, &finestep_gcode::parse_str("G18\nG1 X1 F60\nM2\n", "p.ngc").unwrap()).unwrap();
+    assert_eq!(slow.min_interval, Some(500_000));
     let (line, why) = refused("G18\nG41 D1\nG1 X1 F600\nM2\n");
     assert!(line == 2 && why.contains("cutter compensation"), "{line}: {why}");
     // G0 moves any axis, Y included, as the DDA's records.
@@ -171,7 +180,7 @@ fn the_lathe_part_ends_exactly_on_its_programmed_end() {
             Some(lanes) => {
                 assert_eq!(dda, [0, 0], "a pbp record after a DDA record at rest");
                 assert!(record.flags & flags::BLOCK_END != 0 && lanes.pair == 0);
-                assert!(u32::from(lanes.tick_div) + 1 >= 6_250, "{lanes:?}: faster than 8 kHz");
+                assert!(lanes.tick_div + 1 >= 6_250, "{lanes:?}: faster than 8 kHz");
                 if lanes.arc {
                     arcs.push(lanes);
                     // The arc's start relative to its centre is (x, y); it ends after
@@ -198,7 +207,7 @@ fn the_lathe_part_ends_exactly_on_its_programmed_end() {
     );
     // At F2400 (40 mm/s) a quarter of 157.08 steps' length in 200 decisions: 0.98 ms each.
     let expected = (50e6 * (std::f64::consts::FRAC_PI_2 * 100.0 / 100.0) / 40.0 / 200.0).ceil() as u32;
-    assert_eq!(u32::from(arcs[0].tick_div) + 1, expected.max(6_250));
+    assert_eq!(arcs[0].tick_div + 1, expected.max(6_250));
     // The face to the centre at F6000 (100 mm/s: 10 000 steps/s on X, 5000 clocks a
     // decision) is held to 8 kHz (6250 clocks), a line of 600 steps.
     let face = planned.records.iter().filter_map(|r| r.pbp_lanes()).next().unwrap();
