@@ -308,17 +308,7 @@ impl Element {
                 let speed = d.speed();
                 d.first.map(|c| c / speed)
             }
-            Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
-                let f: f64 = if at_end { 1.0 } else { 0.0 };
-                let r = r0 + f * (r1 - r0);
-                let (sin, cos) = (f * sweep).sin_cos();
-                let mut d = [0.0; 4];
-                for a in 0..4 {
-                    d[a] = (r1 - r0) * (cos * e1[a] + sin * e2[a]) + r * sweep * (cos * e2[a] - sin * e1[a]) + rise[a];
-                }
-                let n = norm(d);
-                scale(1.0 / n, d)
-            }
+            Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => arc_end_tangent(e1, e2, r0, r1, sweep, rise, at_end).0,
         }
     }
 
@@ -336,17 +326,10 @@ impl Element {
                 (t, std::array::from_fn(|c| (d.second[c] - along * t[c]) / (speed * speed)))
             }
             Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => {
-                let f: f64 = if at_end { 1.0 } else { 0.0 };
-                let r = r0 + f * (r1 - r0);
-                let (sin, cos) = (f * sweep).sin_cos();
-                let mut d = [0.0; 4];
-                for a in 0..4 {
-                    d[a] = (r1 - r0) * (cos * e1[a] + sin * e2[a]) + r * sweep * (cos * e2[a] - sin * e1[a]) + rise[a];
-                }
-                let n = norm(d);
+                let (t, sin, cos) = arc_end_tangent(e1, e2, r0, r1, sweep, rise, at_end);
                 let (planar, r) = self.planar_fraction_and_radius();
                 let k = planar * planar / r;
-                (scale(1.0 / n, d), scale(-k, [0, 1, 2, 3].map(|a| cos * e1[a] + sin * e2[a])))
+                (t, scale(-k, [0, 1, 2, 3].map(|a| cos * e1[a] + sin * e2[a])))
             }
             Shape::Line { .. } | Shape::Clothoid { .. } => (self.tangent(at_end), self.curvature(at_end)),
         }
@@ -384,6 +367,21 @@ impl Element {
             }
         }
     }
+}
+
+/// An arc's (helix's) unit tangent at its start or end, with the sine and cosine of the
+/// angle there (the curvature's direction needs them): its derivative along the
+/// parameter, `(r1 - r0) (cos e1 + sin e2) + r sweep (cos e2 - sin e1) + rise`, normed.
+fn arc_end_tangent(e1: Vec4, e2: Vec4, r0: f64, r1: f64, sweep: f64, rise: Vec4, at_end: bool) -> (Vec4, f64, f64) {
+    let f: f64 = if at_end { 1.0 } else { 0.0 };
+    let r = r0 + f * (r1 - r0);
+    let (sin, cos) = (f * sweep).sin_cos();
+    let mut d = [0.0; 4];
+    for a in 0..4 {
+        d[a] = (r1 - r0) * (cos * e1[a] + sin * e2[a]) + r * sweep * (cos * e2[a] - sin * e1[a]) + rise[a];
+    }
+    let n = norm(d);
+    (scale(1.0 / n, d), sin, cos)
 }
 
 /// The point at length `s` along a clothoid of curvature `sharpness * s` starting
