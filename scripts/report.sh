@@ -237,32 +237,29 @@ p("including its submodules; n is the number of instances in the core, the figur
 p("per instance. iCE40: SB_LUT4, SB_CARRY, flip-flops, 4 kbit RAMs; ECP5: LUT4, CCU2C")
 p("(each 2 LUT4 with carry), flip-flops, 18 kbit RAMs.")
 p()
-p("| block | n | iCE40 LUT4 | carry | FF | RAM4K | ECP5 LUT4 | CCU2C | FF | DP16KD |")
-p("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-for module, label in BLOCKS:
-    if module not in ice_inc:
-        continue
-    i, e = ice40(ice_inc[module]), ecp5(ecp_inc[module])
-    p(f"| {label} | {count.get(module, 0)} | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
+def block_table(blocks, ice_inc, ecp_inc, count):
+    """The per-block table's header and a row per block built (counts per instance)."""
+    p("| block | n | iCE40 LUT4 | carry | FF | RAM4K | ECP5 LUT4 | CCU2C | FF | DP16KD |")
+    p("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    for module, label in blocks:
+        if module not in ice_inc:
+            continue
+        i, e = ice40(ice_inc[module]), ecp5(ecp_inc[module])
+        p(f"| {label} | {count.get(module, 0)} | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
+
+block_table(BLOCKS, ice_inc, ecp_inc, count)
 i = ice40(ice_b[[m for m in ice_b if base(m) == "finestep_top"][0]]["num_cells_by_type"])
 e = ecp5(ecp_b[[m for m in ecp_b if base(m) == "finestep_top"][0]]["num_cells_by_type"])
 p(f"| top-level glue (muxes, fifo_free) | 1 | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
 i, e = ice40(ice_inc["finestep_top"]), ecp5(ecp_inc["finestep_top"])
 p(f"| **sum of blocks** | | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
 p()
-ice_p, ecp_p = load("ice40_papers"), load("ecp5_papers")
-ice_p_inc, ecp_p_inc, count_p = inclusive(ice_p), inclusive(ecp_p), instances(ice_p)
 p("The papers' blocks the default core leaves out, from `finestep_top` with `HAS_PANEL 1`,")
 p("`HAS_GANTRY 1` and `STEP_SHARED 0` (seed 001's gantry card, as the `ecp5-gantry` preset")
 p("builds it), the same way; the point-by-point interpolator is in the table above.")
 p()
-p("| block | n | iCE40 LUT4 | carry | FF | RAM4K | ECP5 LUT4 | CCU2C | FF | DP16KD |")
-p("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-for module, label in PAPER_BLOCKS:
-    if module not in ice_p_inc:
-        continue
-    i, e = ice40(ice_p_inc[module]), ecp5(ecp_p_inc[module])
-    p(f"| {label} | {count_p.get(module, 0)} | {i[0]} | {i[1]} | {i[2]} | {i[3]} | {e[0]} | {e[1]} | {e[2]} | {e[3]} |")
+ice_p, ecp_p = load("ice40_papers"), load("ecp5_papers")
+block_table(PAPER_BLOCKS, inclusive(ice_p), inclusive(ecp_p), instances(ice_p))
 p()
 
 p("## Whole core")
