@@ -96,6 +96,14 @@ module encoder_bank #(
     localparam integer    LAST      = S - 1;
     localparam [CH_W-1:0] LAST_SLOT = LAST[CH_W-1:0];
     localparam [CH_W-1:0] CH_ONE    = {{(CH_W-1){1'b0}}, 1'b1};
+    // The live store written a clock after the visit, from a register of the visit's
+    // result (three slots or more, the stores in distributed RAM: the ECP5 board build),
+    // so the visit's decode ends at a register beside it, not at a RAM the placer may put
+    // across the die (the ECP5 build's critical path at 100 MHz, seed 2: 2.65 ns of one
+    // route). The channel's next read comes at the edge ending the cycle before its next
+    // visit, S - 1 >= 2 clocks after this one: after the write. Two slots would read it
+    // at the write's own edge; block RAM (the iCE40) registers its write data anyway.
+    localparam LIVE_WR_REG = (S >= 3 && RAM_BLOCK == 0 && COPY_FF == 0) ? 1 : 0;
 
     // ---- The read side: which copy the served read addresses --------------------------
     // The four copy arrays, one word per channel each, at bases aligned to the four
@@ -162,6 +170,10 @@ module encoder_bank #(
     // is the state at the visit; the configuration is taken as it will be after the edge
     // (mode_next ...), and the pins from the synchronisers' first stage, so that the
     // chosen flip-flop is the second stage of the visited pin's two-flop synchroniser.
+    function [FILTER_W-1:0] filter_last;   // filter_step's last: max(len, 1) - 1
+        input [FILTER_W-1:0] len;
+        filter_last = (len == {FILTER_W{1'b0}}) ? {FILTER_W{1'b0}} : len - 1'b1;
+    endfunction
     wire [CH_W-1:0] ahead = rst ? {CH_W{1'b0}} : slot_next;   // the slot after this edge
     wire [31:0]     nx_i = {{(32-CH_W){1'b0}}, ahead};
     wire            nx_is_channel = (nx_i < N_ENC);
@@ -169,7 +181,8 @@ module encoder_bank #(
     reg             v_raw_a_reg, v_raw_b_reg, v_raw_z_reg;
     reg  [1:0]          v_mode_reg;
     reg                 v_zah_reg;
-    reg  [FILTER_W-1:0] v_filter_reg;
+    reg  [FILTER_W-1:0] v_filter_reg;   // the visited channel's filter as filter_step's last
+                                        // = max(filter_len, 1) - 1, from filter_len_next
     wire [1:0]          v_mode   = v_mode_reg;
     wire                v_zah    = v_zah_reg;
     wire [FILTER_W-1:0] v_filter = v_filter_reg;
@@ -179,10 +192,39 @@ module encoder_bank #(
     // ---- The store: live state, read the clock before the visit -------------------------
     wire [LIVE_W-1:0] live_rd;
     wire [LIVE_W-1:0] live_wr;
+`ifdef FORMAL
+    // One channel's word of the live store, any channel (the proof's invariant below).
+    (* anyconst *) reg [CH_W-1:0] f_peek_ch;
+    wire [LIVE_W-1:0] f_peek_word;
+`endif
+    wire              live_w_en;     // the store's write: the visit's, or a clock later (LIVE_WR_REG)
+    wire [CH_W-1:0]   live_w_addr;
+    wire [LIVE_W-1:0] live_w_data;
     generate
+        if (LIVE_WR_REG != 0) begin : live_wr_reg
+            reg              en_reg;
+            reg [CH_W-1:0]   addr_reg;
+            reg [LIVE_W-1:0] data_reg;
+            always @(posedge clk) begin
+                en_reg   <= visit && !rst;
+                addr_reg <= ch;
+                data_reg <= live_wr;
+            end
+            assign live_w_en   = en_reg;
+            assign live_w_addr = addr_reg;
+            assign live_w_data = data_reg;
+        end else begin : live_wr_direct
+            assign live_w_en   = visit;
+            assign live_w_addr = ch;
+            assign live_w_data = live_wr;
+        end
         if (COPY_FF == 0) begin : live_ram
             store_ram #(.WIDTH(LIVE_W), .DEPTH(S), .ADDR_W(CH_W), .BLOCK(RAM_BLOCK)) live_store (
-                .clk(clk), .wr_en(visit), .wr_addr(ch), .wr_data(live_wr), .rd_en(1'b1), .rd_addr(slot_next), .rd_data(live_rd)
+                .clk(clk), .wr_en(live_w_en), .wr_addr(live_w_addr), .wr_data(live_w_data), .rd_en(1'b1),
+                .rd_addr(slot_next), .rd_data(live_rd)
+`ifdef FORMAL
+                , .f_peek_addr(f_peek_ch), .f_peek_data(f_peek_word)
+`endif
             );
         end else begin : live_ff
             // In flip-flops (COPY_FF) the visited word is read in the visit itself: the edge
@@ -190,7 +232,10 @@ module encoder_bank #(
             // from slot_reg but at a stall, which writes nothing), so this is the word the
             // registered read took at that edge, without its register.
             reg [LIVE_W-1:0] live_mem [0:S-1];
-            always @(posedge clk) if (visit) live_mem[ch] <= live_wr;
+            always @(posedge clk) if (live_w_en) live_mem[live_w_addr] <= live_w_data;
+`ifdef FORMAL
+            assign f_peek_word = live_mem[f_peek_ch];
+`endif
             assign live_rd = live_mem[slot_reg];
         end
     endgenerate
@@ -206,7 +251,7 @@ module encoder_bank #(
     wire [FILTER_W-1:0] n_cnt_a, n_cnt_b, n_cnt_z;
     wire [COUNT_W-1:0]  n_count, n_edge;
     quadrature_channel #(.FILTER_W(FILTER_W), .COUNT_W(COUNT_W)) decoder (
-        .mode(v_mode), .z_active_high(v_zah), .filter_len(v_filter),
+        .mode(v_mode), .z_active_high(v_zah), .filter_last(v_filter),
         .sampling(sample_now), .raw_a(v_raw_a_reg), .raw_b(v_raw_b_reg),
         .raw_z(v_raw_z_reg), .timestamp(timestamp),
         .primed(v_primed), .a(v_a_reg), .b(v_b_reg), .z_level(v_z_reg),
@@ -368,7 +413,7 @@ module encoder_bank #(
             v_raw_z_reg       <= sync1_z_reg[nx_i];
             v_mode_reg        <= mode_next[2*nx_i +: 2];
             v_zah_reg         <= z_active_high_next[nx_i];
-            v_filter_reg      <= filter_len_next[FILTER_W*nx_i +: FILTER_W];
+            v_filter_reg      <= filter_last(filter_len_next[FILTER_W*nx_i +: FILTER_W]);
         end
 `ifdef FORMAL
         raw_a_reg   <= sync1_a_reg;
@@ -519,11 +564,30 @@ module encoder_bank #(
     always @(*) if (f_past_valid && !rst) begin
         // No read-during-write on any store.
         if (visit) assert (slot_next != ch);
+        if (live_w_en) assert (slot_next != live_w_addr);
         if (rd_copy && (copy_latch || copy_index || copy_probe)) assert (rd_ch != ch);
         assert ({{(32-CH_W){1'b0}}, slot_reg} < S);
         // Before its first sample a channel has count 0 and nothing decoded.
-        if (visit && !v_primed) assert (f_count[ch_i] == {COUNT_W{1'b0}} && f_edge[ch_i] == {COUNT_W{1'b0}});
-        if (visit) assert (v_count == f_count[ch_i] && v_edge == f_edge[ch_i]);
+        // (With LIVE_WR_REG stated for the channel the invariant below peeks at: any one, so
+        // every one.)
+        if (visit && !v_primed && (LIVE_WR_REG == 0 || ch == f_peek_ch))
+            assert (f_count[ch_i] == {COUNT_W{1'b0}} && f_edge[ch_i] == {COUNT_W{1'b0}});
+        if (visit && (LIVE_WR_REG == 0 || ch == f_peek_ch)) assert (v_count == f_count[ch_i] && v_edge == f_edge[ch_i]);
+        // With the write a clock late (LIVE_WR_REG), the invariant that carries the shadow
+        // from a visit to the channel's next one, for any channel p: a sampled channel's
+        // word is in the write register while its write is pending, else in the store; and
+        // the read register holds the store's word of the slot it serves.
+        if (LIVE_WR_REG != 0 && {{(32-CH_W){1'b0}}, f_peek_ch} < N_ENC && !primed_reg[f_peek_ch])
+            assert (f_count[f_peek_ch] == {COUNT_W{1'b0}} && f_edge[f_peek_ch] == {COUNT_W{1'b0}});
+        if (LIVE_WR_REG != 0 && {{(32-CH_W){1'b0}}, f_peek_ch} < N_ENC && primed_reg[f_peek_ch]) begin
+            if (live_w_en && live_w_addr == f_peek_ch)
+                assert (live_w_data[0 +: COUNT_W] == f_count[f_peek_ch] &&
+                        live_w_data[COUNT_W +: COUNT_W] == f_edge[f_peek_ch]);
+            else
+                assert (f_peek_word[0 +: COUNT_W] == f_count[f_peek_ch] &&
+                        f_peek_word[COUNT_W +: COUNT_W] == f_edge[f_peek_ch]);
+            if (slot_reg == f_peek_ch) assert (live_rd == f_peek_word);
+        end
         // The visit's flip-flops, chosen a clock ahead, are the visited channel's.
         if (slot_is_channel) assert (v_primed_reg == primed_reg[ch_i] && v_a_reg == a_reg[ch_i] &&
                                      v_b_reg == b_reg[ch_i] && v_z_reg == z_reg[ch_i] &&
@@ -531,7 +595,7 @@ module encoder_bank #(
                                      v_raw_a_reg == raw_a_reg[ch_i] && v_raw_b_reg == raw_b_reg[ch_i] &&
                                      v_raw_z_reg == raw_z_reg[ch_i] && v_mode_reg == mode[2*ch_i +: 2] &&
                                      v_zah_reg == z_active_high[ch_i] &&
-                                     v_filter_reg == filter_len[FILTER_W*ch_i +: FILTER_W]);
+                                     v_filter_reg == filter_last(filter_len[FILTER_W*ch_i +: FILTER_W]));
     end
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         if ($past(stall)) assert (slot_reg == $past(slot_reg));

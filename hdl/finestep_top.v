@@ -217,6 +217,15 @@ module finestep_top #(
     wire [31:0]           pbp_rdata = (HAS_PBP != 0 && bus_address == FS_VERSION_ADDR) ?
                                       (32'd1 << FS_VERSION_HAS_PBP_LSB) : 32'd0;
     wire                  interlock_inhibit, start_blocked;
+    // The feedback blocks' read words (feedback_registers, the spindle, the logic outputs,
+    // the panel, the gantry pair, VERSION.HAS_PBP), each from the bus stage's address and
+    // the state of a served read's cycle, taken at the edge ending it and held to the
+    // next served read: register_file ORs it after its read register (late_rdata, beside
+    // the encoder bank's copies), so a read returns the same word in the same cycle as
+    // when that register took them, and their multiplexers end here, not in front of it
+    // (the ECP5 board build's critical path at 100 MHz, seed 2: the feedback multiplexer
+    // into register_file's read register).
+    reg  [31:0]           feedback_word_reg;
 
     // The halt's rising edge empties the FIFO: its records belong to the motion that
     // was stopped.
@@ -309,7 +318,7 @@ module finestep_top #(
         .par_req(par_req), .par_we(par_we), .par_addr(par_addr), .par_wdata(par_wdata), .par_grant(par_grant),
         .rdata(rdata),
         .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
-        .feedback_rdata(feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata | pbp_rdata), .bus_read(bus_read), .late_rdata(enc_copy_rdata),
+        .bus_read(bus_read), .late_rdata(enc_copy_rdata | feedback_word_reg),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
@@ -613,6 +622,12 @@ module finestep_top #(
             assign panel_dig   = 8'd0;
         end
     endgenerate
+
+    always @(posedge clk) begin
+        if (rst) feedback_word_reg <= 32'd0;
+        else if (bus_read)
+            feedback_word_reg <= feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata | pbp_rdata;
+    end
 
     wire unused_top = &{1'b0, fifo_overflow_unused};
 

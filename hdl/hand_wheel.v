@@ -49,8 +49,9 @@ module hand_wheel #(
     wire                primed_next, a_next, b_next, z_unused, illegal_event, index_unused;
     wire [FILTER_W-1:0] cnt_a_next, cnt_b_next, cnt_z_unused;
     wire [31:0]         count_next, edge_time_unused;
+    wire [FILTER_W-1:0] filter_last = (filter_len == {FILTER_W{1'b0}}) ? {FILTER_W{1'b0}} : filter_len - 1'b1;
     quadrature_channel #(.FILTER_W(FILTER_W)) decoder (
-        .mode(2'd0), .z_active_high(1'b1), .filter_len(filter_len),
+        .mode(2'd0), .z_active_high(1'b1), .filter_last(filter_last),
         .sampling(sample), .raw_a(sync_a_reg[1]), .raw_b(sync_b_reg[1]), .raw_z(1'b0),
         .timestamp(32'd0),
         .primed(primed_reg), .a(a_reg), .b(b_reg), .z_level(1'b0),

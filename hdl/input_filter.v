@@ -34,8 +34,9 @@ module input_filter #(
     wire                raw = sync_reg[1];
     wire                level_next;
     wire [FILTER_W-1:0] count_next;
+    wire [FILTER_W-1:0] last = (filter_len == {FILTER_W{1'b0}}) ? {FILTER_W{1'b0}} : filter_len - 1'b1;
     filter_step #(.FILTER_W(FILTER_W)) rule (
-        .filter_len(filter_len), .sample(sample), .raw(raw), .primed(primed_reg),
+        .last(last), .sample(sample), .raw(raw), .primed(primed_reg),
         .level(level_reg), .count(count_reg), .level_next(level_next), .count_next(count_next)
     );
 

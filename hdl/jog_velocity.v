@@ -177,9 +177,13 @@ module jog_velocity (
             endcase
         end
     endfunction
-    wire [6:0]  step_next = restart ? SAMPLE_AT : step_reg + 7'd1;
+    // The operation of the next step: a restart's is SAMPLE_AT's, a constant, chosen after
+    // the decode of step + 1, so the restart (the period boundary through the jog's
+    // disengage decision, late in the clock) reaches the control registers through one
+    // multiplexer, not through the decoder (the ECP5 board build's critical path, seed 2).
+    localparam [10:0] CTL_SAMPLE = decode(SAMPLE_AT, 1'b0, 1'b0);
     wire        sign_now  = (step_reg == SAMPLE_AT) ? d_neg : sign_reg;   // the sign is sampled as ABS_AT is decoded
-    wire [10:0] ctl_next  = decode(step_next, sign_now, enable_reg);
+    wire [10:0] ctl_next  = restart ? CTL_SAMPLE : decode(step_reg + 7'd1, sign_now, enable_reg);
 
     wire        acc_neg   = acc_reg[33];
     wire        left_zero = (ctl_left_reg == L_ZERO) || (ctl_left_reg == L_ZERO_IF_NEG && acc_neg) ||

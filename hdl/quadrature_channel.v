@@ -20,7 +20,7 @@ module quadrature_channel #(
     // configuration
     input  wire [1:0]          mode,            // 0 x4, 1 x2, 2 x1, 3 step/dir
     input  wire                z_active_high,
-    input  wire [FILTER_W-1:0] filter_len,
+    input  wire [FILTER_W-1:0] filter_last,     // max(filter_len, 1) - 1 (filter_step's `last`)
     // the visit
     input  wire                sampling,        // this visit samples the pins
     input  wire                raw_a,           // synchronised pins
@@ -57,15 +57,15 @@ module quadrature_channel #(
 `include "finestep_interface.vh"
 
     filter_step #(.FILTER_W(FILTER_W)) filter_a (
-        .filter_len(filter_len), .sample(sampling), .raw(raw_a), .primed(primed),
+        .last(filter_last), .sample(sampling), .raw(raw_a), .primed(primed),
         .level(a), .count(cnt_a), .level_next(a_next), .count_next(cnt_a_next)
     );
     filter_step #(.FILTER_W(FILTER_W)) filter_b (
-        .filter_len(filter_len), .sample(sampling), .raw(raw_b), .primed(primed),
+        .last(filter_last), .sample(sampling), .raw(raw_b), .primed(primed),
         .level(b), .count(cnt_b), .level_next(b_next), .count_next(cnt_b_next)
     );
     filter_step #(.FILTER_W(FILTER_W)) filter_z (
-        .filter_len(filter_len), .sample(sampling), .raw(raw_z), .primed(primed),
+        .last(filter_last), .sample(sampling), .raw(raw_z), .primed(primed),
         .level(z_level), .count(cnt_z), .level_next(z_level_next), .count_next(cnt_z_next)
     );
     assign primed_next = primed || sampling;

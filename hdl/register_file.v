@@ -5,8 +5,8 @@
 // positions come from the generated finestep_regs.vh), the register-bus arbiter for the
 // two host links (SPI first), error counters, the interrupt, the per-period position
 // latch and the RECORD_PUSH path into the position FIFO. The feedback blocks' registers
-// live in feedback_registers on the same arbitrated bus; their read value comes in as
-// `feedback_rdata`.
+// live in feedback_registers on the same arbitrated bus; their read value, taken by
+// finestep_top at the edge ending the serving cycle, comes in with `late_rdata`.
 //
 // Latency: a request granted in cycle n is registered at the edge ending n (the bus
 // stage) and served in n+1: a write takes effect at the edge ending n+1 (its command
@@ -14,7 +14,9 @@
 // from the state of cycle n+1. Neither the grant nor the masters' multiplexer sits in
 // front of the read multiplexer or the write decode. The encoder bank's copies are read
 // from its store at the edge ending n+1 (addressed by the bus stage, so no grant decode
-// reaches its schedule) and come in as `late_rdata` in n+2, ORed after rdata's register.
+// reaches its schedule) and come in as `late_rdata` in n+2, ORed after rdata's register;
+// so do the feedback blocks' words (finestep_top's register of them, loaded at the same
+// edge from the same stage), so their multiplexers end at a register of their own.
 module register_file #(
     parameter N_AXES          = 4,
     parameter P_WIDTH         = 20,
@@ -60,7 +62,6 @@ module register_file #(
     output wire                         bus_write,
     output wire [6:0]                   bus_address,
     output wire [31:0]                  bus_write_data,
-    input  wire [31:0]                  feedback_rdata,
     output wire                         bus_read,       // a read served in this cycle (at bus_address)
     input  wire [31:0]                  late_rdata,     // a served read's word from the cycle after, held
     // configuration out
@@ -595,8 +596,15 @@ module register_file #(
     wire [WORD_W-1:0] push_stored    = written_reg[push_word_addr] ? store_rd : store_reset(2'd3);
     wire [INC_W-1:0]  push_ff_word   = record_inc_reg[INC_W*push_axis +: INC_W];
     wire [INC_W-1:0]  push_inc       = STORED ? push_stored[INC_W-1:0] : push_ff_word;
-    wire [COUNT_W-1:0] refused_now = (push_refused ? {{(COUNT_W-1){1'b0}}, 1'b1} : {COUNT_W{1'b0}}) +
-                                     ((HAS_SPI != 0 && spi_refused) ? {{(COUNT_W-8){1'b0}}, spi_refused_count} : {COUNT_W{1'b0}});
+    // REFUSED_RECORD_COUNT counts a refused push (1) and the records of a refused SPI
+    // commit (spi_refused_count) of this cycle, as one carry chain: the SPI count is the
+    // addend and the push's refusal, which decides late (on the FIFO's fill), the carry
+    // in ({count, 1} + {addend, carry}), so the counter's sum waits for no sum before it
+    // (the ECP5 board build's critical path at 100 MHz, seed 2, with a sum of the two).
+    wire [COUNT_W-1:0] spi_refused_add = (HAS_SPI != 0 && spi_refused) ? {{(COUNT_W-8){1'b0}}, spi_refused_count} :
+                                                                       {COUNT_W{1'b0}};
+    wire [COUNT_W:0]   refused_sum     = {refused_count_reg, 1'b1} + {spi_refused_add, push_refused};
+    wire unused_refused_sum = &{1'b0, refused_sum[0]};
 
     // Time and the position latch. With ONE_SNAPSHOT it is the probe's snapshot too: a
     // probe event takes it (whatever latch_hold says), and while PROBE_STATUS.SEEN the
@@ -626,7 +634,7 @@ module register_file #(
             rdata_reg <= {WORD_W{1'b0}};
         end else begin
             irq_reg <= |(irq_status & irq_mask_reg);
-            if (read) rdata_reg <= (stage_stored ? stored_word : read_word(bus_addr)) | feedback_rdata;
+            if (read) rdata_reg <= stage_stored ? stored_word : read_word(bus_addr);
         end
     end
 
@@ -777,7 +785,7 @@ module register_file #(
             if (spi_crc_error) crc_error_count_reg <= crc_error_count_reg + 1'b1;
             if (spi_frame_error) frame_error_count_reg <= frame_error_count_reg + 1'b1;
             if (par_error) parallel_error_count_reg <= parallel_error_count_reg + 1'b1;
-            refused_count_reg <= refused_count_reg + refused_now;
+            refused_count_reg <= refused_sum[COUNT_W:1];
         end
     end
 
@@ -887,7 +895,8 @@ module register_file #(
                     crc_error_count_reg == $past(crc_error_count_reg) + {15'd0, $past(spi_crc_error)} &&
                     frame_error_count_reg == $past(frame_error_count_reg) + {15'd0, $past(spi_frame_error)} &&
                     parallel_error_count_reg == $past(parallel_error_count_reg) + {15'd0, $past(par_error)} &&
-                    refused_count_reg == $past(refused_count_reg) + $past(refused_now));
+                    refused_count_reg == $past(refused_count_reg) + {15'd0, $past(push_refused)} +
+                                         ((HAS_SPI != 0 && $past(spi_refused)) ? {8'd0, $past(spi_refused_count)} : 16'd0));
         if ($past(write && bus_addr == FS_RECORD_PUSH_ADDR)) assert (push_reg);
         assert (push_commit == $past(push_stage));
         if (!DIRECT && $past(push_go) && !$past(push_last) && !$past(fifo_flush)) assert (push_go);
@@ -1017,13 +1026,13 @@ module register_file #(
     always @(*) if (f_past_valid && !rst) assert (irq_mask_reg == f_irq_mask);
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (irq == $past(|(irq_status & f_irq_mask)));
-        if ($past(read && bus_addr == FS_IRQ_MASK_ADDR && !stage_stored && feedback_rdata == 32'd0))
+        if ($past(read && bus_addr == FS_IRQ_MASK_ADDR && !stage_stored))
             assert (rdata_reg[IRQ_W-1:0] == $past(f_irq_mask));
         // Without a link its error counters read 0, whatever its (absent) error inputs do.
-        if (HAS_SPI == 0 && $past(read && feedback_rdata == 32'd0 &&
+        if (HAS_SPI == 0 && $past(read &&
                 (bus_addr == FS_CRC_ERROR_COUNT_ADDR || bus_addr == FS_FRAME_ERROR_COUNT_ADDR)))
             assert (rdata_reg == 32'd0);
-        if (HAS_PARALLEL == 0 && $past(read && feedback_rdata == 32'd0 && bus_addr == FS_PARALLEL_ERROR_COUNT_ADDR))
+        if (HAS_PARALLEL == 0 && $past(read && bus_addr == FS_PARALLEL_ERROR_COUNT_ADDR))
             assert (rdata_reg == 32'd0);
         // The position latch (spec): the core's positions and TIMESTAMP of the cycle of a
         // period latch (latch_now) or, with ONE_SNAPSHOT, of a probe event, the period
@@ -1033,10 +1042,10 @@ module register_file #(
             assert (position_latch_reg == $past(position) && latch_time_reg == $past(timestamp_reg));
         else
             assert (position_latch_reg == $past(position_latch_reg) && latch_time_reg == $past(latch_time_reg));
-        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && feedback_rdata == 32'd0 &&
+        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored &&
                 {{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_PROBE_POSITION_ADDR}))
             assert (rdata_reg == $past(position_latch_reg[POS_W-1:0]));
-        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && feedback_rdata == 32'd0 && bus_addr == FS_PROBE_TIME_ADDR))
+        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && bus_addr == FS_PROBE_TIME_ADDR))
             assert (rdata_reg == $past(latch_time_reg));
     end
 `endif
