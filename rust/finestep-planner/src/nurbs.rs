@@ -76,6 +76,12 @@ pub struct NurbsCurve {
     /// larger of its norms at the span's ends), for [`NurbsCursor::advance`]; empty
     /// otherwise.
     second_max: Vec<f64>,
+    /// A B-spline of the smoother in power-basis form whose homogeneous weight is
+    /// exactly 1 on every span (`c0` 1, `c1 .. c3` 0 in the last coordinate, as de
+    /// Boor on weights of 1 gives them): its point and derivatives are the first four
+    /// coordinates of the span's polynomial and its derivatives, the projection's
+    /// divisions by 1 and subtractions of 0 skipped (the same values).
+    unit: bool,
     base: Vec4,
     /// The first and last control points, which the clamped curve passes exactly.
     ends: [Vec4; 2],
@@ -267,6 +273,7 @@ impl NurbsCurve {
             d2,
             power: Vec::new(),
             second_max: Vec::new(),
+            unit: false,
             base,
             ends,
             planar,
@@ -284,6 +291,10 @@ impl NurbsCurve {
                         at(0.0).max(at(h)) * (1.0 + 1e-9)
                     })
                     .collect();
+                curve.unit = curve
+                    .power
+                    .iter()
+                    .all(|[c0, c1, c2, c3]| c0[4] == 1.0 && c1[4] == 0.0 && c2[4] == 0.0 && c3[4] == 0.0);
             }
         }
         curve
@@ -436,6 +447,16 @@ impl NurbsCurve {
 
     /// [`NurbsCurve::derivatives_on`] on knot span `i` ([`NurbsCurve::span_index`]).
     pub(crate) fn derivatives_in(&self, u: f64, i: usize) -> Derivatives {
+        if self.unit {
+            // Weight 1 (`NurbsCurve::unit`): the polynomial's first four coordinates.
+            let [c0, c1, c2, c3] = &self.power[i - self.degree];
+            let t = u - self.knots[i];
+            return Derivatives {
+                point: std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c]))),
+                first: std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c])),
+                second: std::array::from_fn(|c| 2.0 * c2[c] + t * 6.0 * c3[c]),
+            };
+        }
         let (a, a1, a2) = self.homogeneous_on(i, u);
         let w = a[4];
         let point: Vec4 = std::array::from_fn(|c| a[c] / w);
@@ -485,6 +506,11 @@ impl NurbsCurve {
     /// [`NurbsCurve::point`] at `u` inside the domain on knot span `i`
     /// ([`NurbsCurve::span_index`] of `u`).
     fn point_in(&self, u: f64, i: usize) -> Vec4 {
+        if self.unit {
+            let [c0, c1, c2, c3] = &self.power[i - self.degree];
+            let t = u - self.knots[i];
+            return std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])));
+        }
         let a = match self.power.get(i - self.degree) {
             Some([c0, c1, c2, c3]) => {
                 let t = u - self.knots[i];
@@ -537,14 +563,15 @@ impl NurbsCurve {
         if self.degree != 0 && !self.planar {
             if let Some([_, c1, c2, c3]) = self.power.get(i - self.degree) {
                 let knot = self.knots[i];
-                return us.map(|u| {
-                    let t = u - knot;
+                // (`from_fn`, not `map`: `map` left a call per node.)
+                return std::array::from_fn(|k| {
+                    let t = us[k] - knot;
                     let a1: Vec4 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
                     (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt()
                 });
             }
         }
-        us.map(|u| self.speed_on(u, i))
+        std::array::from_fn(|k| self.speed_on(us[k], i))
     }
 
     /// Arc length from `a` to `b` (within one span) by 5-point Gauss-Legendre quadrature,
@@ -565,7 +592,7 @@ impl NurbsCurve {
 
     fn arc_length_from(&self, a: f64, b: f64, span: usize, depth: u32) -> f64 {
         let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
-        let speeds = self.speeds_on(GAUSS.map(|(x, _)| mid + half * x), span);
+        let speeds = self.speeds_on(std::array::from_fn::<f64, 5, _>(|k| mid + half * GAUSS[k].0), span);
         let (lo, hi) = speeds.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| (lo.min(v), hi.max(v)));
         // Halving stops where the spread can no longer matter (it bounds what the rule
         // can miss, times the interval): near a cusp |C'| runs to zero and the intervals

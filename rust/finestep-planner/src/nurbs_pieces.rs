@@ -53,35 +53,53 @@ fn cusp_error(d: &Derivatives) -> NurbsError {
     NurbsError::Cusp { x: d.point[0], y: d.point[1] }
 }
 
+/// One evaluation of the curve at a sample parameter: the derivatives there, with the
+/// speed `|C'|`, the unit tangent and the curvature's magnitude read from them once.
+#[derive(Clone, Copy)]
+struct Eval {
+    u: f64,
+    d: Derivatives,
+    speed: f64,
+    tangent: Vec4,
+    k: f64,
+}
+
+impl Eval {
+    fn at(curve: &NurbsCurve, u: f64, span: usize) -> Eval {
+        let d = curve.derivatives_in(u, span);
+        let speed = d.speed();
+        Eval { u, d, speed, tangent: std::array::from_fn(|c| d.first[c] / speed), k: d.curvature().abs() }
+    }
+}
+
 /// The sample parameters of the span `ua..ub`: [`SAMPLES_PER_SPAN`] + 1 uniform ones,
 /// then bisected wherever the tangent turns by more than [`MAX_SAMPLE_TURN`] between
 /// neighbours, so that no sharp bend hides between samples. A turn of more than a
 /// right angle that bisection cannot resolve is a cusp: refused.
-/// With each parameter the derivatives there (evaluated once: an interval's end is the
-/// next one's start, a bisected interval's start the first half's).
-/// The parameters go to `out` (cleared first), `stack` is room for the bisection.
+/// With each parameter the curve's evaluation there ([`Eval`], once: an interval's end
+/// is the next one's start, a bisected interval's start the first half's).
+/// The evaluations go to `out` (cleared first), `stack` is room for the bisection.
 fn sample_parameters(
     curve: &NurbsCurve,
     (ua, ub): (f64, f64),
     per_span: usize,
-    out: &mut Vec<(f64, Derivatives)>,
+    out: &mut Vec<Eval>,
     stack: &mut Vec<(f64, f64, u32)>,
 ) -> Result<(), NurbsError> {
     let span = curve.span_index(ua);
     // The last two evaluations, by parameter.
-    let mut memo: [(f64, Vec4, Derivatives); 2] = [(f64::NAN, [0.0; 4], curve.derivatives_in(ua, span)); 2];
-    let mut tangent = |u: f64| {
-        if let Some(&(_, t, d)) = memo.iter().find(|m| m.0 == u) {
-            return (t, d);
+    let first = Eval::at(curve, ua, span);
+    let mut memo: [Eval; 2] = [Eval { u: f64::NAN, ..first }, first];
+    let mut eval = |u: f64| {
+        if let Some(e) = memo.iter().find(|m| m.u == u) {
+            return *e;
         }
-        let d = curve.derivatives_in(u, span);
-        let speed = d.speed();
-        let t = d.first.map(|c| c / speed);
-        memo = [memo[1], (u, t, d)];
-        (t, d)
+        let e = Eval::at(curve, u, span);
+        memo = [memo[1], e];
+        e
     };
     out.clear();
-    out.push((ua, tangent(ua).1));
+    out.push(eval(ua));
     stack.clear();
     stack.extend(
         (0..per_span).rev().map(|j| {
@@ -89,17 +107,19 @@ fn sample_parameters(
         }),
     );
     while let Some((a, b, depth)) = stack.pop() {
-        let (ta, da) = tangent(a);
-        let (tb, db) = tangent(b);
+        let ea = eval(a);
+        let eb = eval(b);
+        let (ta, tb) = (ea.tangent, eb.tangent);
         let cos = ta.iter().zip(&tb).map(|(a, b)| a * b).sum::<f64>().clamp(-1.0, 1.0);
         if cos.is_nan() {
-            return Err(cusp_error(&db));
+            return Err(cusp_error(&eb.d));
         }
         // The curvature changing fast between samples (a heavy weight bends the curve
         // within a sliver of the parameter): halve until it changes by at most
         // MAX_SAMPLE_CURVATURE_CHANGE, where the bend there is more than a thousandth of
         // a radian, so that no peak of the normal acceleration hides between samples.
-        let (ka, kb) = (da.curvature().abs(), db.curvature().abs());
+        let (da, db) = (&ea.d, &eb.d);
+        let (ka, kb) = (ea.k, eb.k);
         let chord = if curve.planar() {
             (db.point[0] - da.point[0]).hypot(db.point[1] - da.point[1])
         } else {
@@ -121,10 +141,10 @@ fn sample_parameters(
                 continue;
             }
             if cos < 0.0 {
-                return Err(cusp_error(&db));
+                return Err(cusp_error(&eb.d));
             }
         }
-        out.push((b, db));
+        out.push(eb);
         if out.len() > 1 << 16 {
             return Err(NurbsError::TooSharp);
         }
@@ -224,13 +244,12 @@ pub fn pieces_sampled(
         sample_parameters(&curve, (ua, ub), per_span, &mut params, &mut stack)?;
         let m = params.len() - 1;
         samples.clear();
-        for &(u, d) in &params {
-            let speed = d.speed();
+        for e in &params {
+            let speed = e.speed;
             if speed.is_nan() || speed <= 1e-9 * size / (ub - ua).max(1e-300) || !speed.is_finite() {
-                return Err(cusp_error(&d));
+                return Err(cusp_error(&e.d));
             }
-            let k = d.curvature().abs();
-            samples.push(Sample { u, k, tangent: d.first.map(|c| c / speed), cap: f64::INFINITY });
+            samples.push(Sample { u: e.u, k: e.k, tangent: e.tangent, cap: f64::INFINITY });
         }
         // |dk/ds| by differences between samples.
         ds.clear();
@@ -269,7 +288,7 @@ pub fn pieces_sampled(
             for (i, slot) in f.iter_mut().enumerate().take(4).skip(1) {
                 let d = &inner_d[j][i - 1];
                 let speed = d.speed();
-                *slot = d.first.map(|c| c / speed);
+                *slot = std::array::from_fn(|c| d.first[c] / speed);
             }
             std::array::from_fn(|c| {
                 let mut top = f.iter().map(|t| t[c].abs()).fold(0.0, f64::max);
