@@ -107,11 +107,14 @@ fn hodograph(points: &[H], knots: &[f64], p: usize) -> Vec<H> {
 /// De Boor's algorithm: the B-spline of degree `p` with control points `points` on
 /// `knots` at `u` in the knot span `i` (`knots[i] <= u < knots[i + 1]`, p <= i).
 fn de_boor(points: &[H], knots: &[f64], p: usize, i: usize, u: f64) -> H {
-    // Cubics and below (the smoother's curves, most G5.2 curves) on a small stack array.
-    if p <= 3 {
-        de_boor_in::<4>(points, knots, p, i, u)
-    } else {
-        de_boor_in::<24>(points, knots, p, i, u)
+    // Cubics and below (the smoother's curves, most G5.2 curves) on a small stack array,
+    // the degree a constant (the triangle unrolled).
+    match p {
+        3 => de_boor_in::<4>(points, knots, 3, i, u),
+        2 => de_boor_in::<4>(points, knots, 2, i, u),
+        1 => de_boor_in::<4>(points, knots, 1, i, u),
+        0 => de_boor_in::<4>(points, knots, 0, i, u),
+        _ => de_boor_in::<24>(points, knots, p, i, u),
     }
 }
 

@@ -163,7 +163,7 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, k0: Option<Vec4>, d1: Vec4, i
         // One row of the normal equations: the fixed control points move to the target's
         // side, the free ones (consecutive indices here, rows of the band) add their
         // products.
-        let mut add_row = |coef: &[(usize, f64)], target: Vec4, weight: f64| {
+        let add_row = |m: &mut [[f64; 4]], rhs: &mut [Vec4], coef: &[(usize, f64)], target: Vec4, weight: f64| {
             let mut r = target;
             let mut free_row = [(0usize, 0.0f64); 4];
             let mut n_free = 0;
@@ -196,11 +196,23 @@ fn fit_spans(points: &[Vec4], s: &[f64], d0: Vec4, k0: Option<Vec4>, d1: Vec4, i
             let (p, u) = data(k);
             let i = span_of(&knots, u);
             let n = basis(&knots, i, u.min(total));
+            if i >= first_free + 3 && i < count - 2 {
+                // All four control points free (most rows): `add_row`'s products, in its
+                // order, straight into the band.
+                let a0 = i - 3 - first_free;
+                for x in 0..4 {
+                    rhs[a0 + x] = add_scaled(rhs[a0 + x], n[x], p);
+                    for y in 0..=x {
+                        m[a0 + x][x - y] += n[x] * n[y];
+                    }
+                }
+                continue;
+            }
             let coef: [(usize, f64); 4] = std::array::from_fn(|r| (i - 3 + r, n[r]));
-            add_row(&coef, p, 1.0);
+            add_row(&mut m, &mut rhs, &coef, p, 1.0);
         }
         for j in 1..count - 1 {
-            add_row(&[(j - 1, 1.0), (j, -2.0), (j + 1, 1.0)], [0.0; 4], FAIRING);
+            add_row(&mut m, &mut rhs, &[(j - 1, 1.0), (j, -2.0), (j + 1, 1.0)], [0.0; 4], FAIRING);
         }
         band_solve(m, &mut rhs)?;
         q[first_free..first_free + free].copy_from_slice(&rhs);
