@@ -270,12 +270,17 @@ impl RateChecker {
     pub fn check(&mut self, record: &PeriodRecord) -> Result<(), (usize, RateError)> {
         let p = u64::from(self.period_clocks.max(1)) << 16;
         for (axis, t) in self.timings.iter().enumerate() {
+            // Within both limits whatever the direction: nothing more to read (most
+            // increments).
+            let (forward, reversal) = self.intervals[axis];
+            let magnitude = u64::from(record.inc[axis].to_bits().unsigned_abs());
+            if magnitude * forward <= p && magnitude * reversal <= p {
+                continue;
+            }
             let settled = self.axes[axis].settled_sign();
             // The conditions of `check_increment_in` on the intervals computed once; it
             // states the error where one holds.
             let d = record.inc[axis];
-            let magnitude = u64::from(d.to_bits().unsigned_abs());
-            let (forward, reversal) = self.intervals[axis];
             let reversing = magnitude != 0 && sign(d) != settled;
             if magnitude * forward > p || reversing && magnitude * reversal > p {
                 check_increment_in(t, self.period_clocks, settled, d, self.slots).map_err(|e| (axis, e))?;
