@@ -479,6 +479,21 @@ impl NurbsCurve {
         Derivatives { point, first, second }
     }
 
+    /// [`NurbsCurve::derivatives_in`] where only C' and C'' are read (the point left at
+    /// 0 on a curve of weight 1, [`NurbsCurve::unit`], whose derivatives do not need it).
+    pub(crate) fn slopes_in(&self, u: f64, i: usize) -> Derivatives {
+        if self.unit {
+            let [_, c1, c2, c3] = &self.power[i - self.degree];
+            let t = u - self.knots[i];
+            return Derivatives {
+                point: [0.0; 4],
+                first: std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c])),
+                second: std::array::from_fn(|c| 2.0 * c2[c] + t * 6.0 * c3[c]),
+            };
+        }
+        self.derivatives_in(u, i)
+    }
+
     /// The point at `u` over all four axes (exactly the end control points at the ends
     /// of the domain).
     pub fn point(&self, u: f64) -> Vec4 {
@@ -691,7 +706,7 @@ impl NurbsCursor {
             return self.u;
         }
         let span = *self.span.get_or_insert_with(|| curve.span(self.u0));
-        let d = curve.derivatives_in(self.u, span);
+        let d = curve.slopes_in(self.u, span);
         let sp2: f64 = d.first.iter().map(|c| c * c).sum();
         let sp = sp2.sqrt();
         let along: f64 = d.first.iter().zip(&d.second).map(|(a, b)| a * b).sum();

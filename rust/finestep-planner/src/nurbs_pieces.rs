@@ -90,13 +90,15 @@ fn sample_parameters(
     // The last two evaluations, by parameter.
     let first = Eval::at(curve, ua, span);
     let mut memo: [Eval; 2] = [Eval { u: f64::NAN, ..first }, first];
+    // The slot the next evaluation replaces (the older one).
+    let mut older = 0;
     let mut eval = |u: f64| {
         if let Some(e) = memo.iter().find(|m| m.u == u) {
             return *e;
         }
-        let e = Eval::at(curve, u, span);
-        memo = [memo[1], e];
-        e
+        memo[older] = Eval::at(curve, u, span);
+        older ^= 1;
+        memo[older ^ 1]
     };
     out.clear();
     out.push(eval(ua));
@@ -271,7 +273,7 @@ pub fn pieces_sampled(
         inner_d.clear();
         inner_d.extend((0..m).map(|j| {
             let (a, b) = (samples[j].u, samples[j + 1].u);
-            std::array::from_fn(|i| curve.derivatives_in(a + (b - a) * (i + 1) as f64 / 4.0, span))
+            std::array::from_fn(|i| curve.slopes_in(a + (b - a) * (i + 1) as f64 / 4.0, span))
         }));
         inner_k.clear();
         inner_k.extend(inner_d.iter().map(|d| d.iter().map(|d| d.curvature().abs()).fold(0.0, f64::max)));
