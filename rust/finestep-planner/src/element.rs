@@ -306,7 +306,7 @@ impl Element {
             Shape::Nurbs { ref curve, u0, u1 } => {
                 let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
                 let speed = d.speed();
-                d.first.map(|c| c / speed)
+                std::array::from_fn(|c| d.first[c] / speed)
             }
             Shape::Arc { e1, e2, r0, r1, sweep, rise, .. } => arc_end_tangent(e1, e2, r0, r1, sweep, rise, at_end).0,
         }
@@ -321,7 +321,7 @@ impl Element {
             Shape::Nurbs { ref curve, u0, u1 } => {
                 let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
                 let speed = d.speed();
-                let t = d.first.map(|c| c / speed);
+                let t: Vec4 = std::array::from_fn(|c| d.first[c] / speed);
                 let along: f64 = d.second.iter().zip(&t).map(|(a, b)| a * b).sum();
                 (t, std::array::from_fn(|c| (d.second[c] - along * t[c]) / (speed * speed)))
             }
@@ -329,7 +329,7 @@ impl Element {
                 let (t, sin, cos) = arc_end_tangent(e1, e2, r0, r1, sweep, rise, at_end);
                 let (planar, r) = self.planar_fraction_and_radius();
                 let k = planar * planar / r;
-                (t, scale(-k, [0, 1, 2, 3].map(|a| cos * e1[a] + sin * e2[a])))
+                (t, scale(-k, std::array::from_fn(|a: usize| cos * e1[a] + sin * e2[a])))
             }
             Shape::Line { .. } | Shape::Clothoid { .. } => (self.tangent(at_end), self.curvature(at_end)),
         }
@@ -343,7 +343,7 @@ impl Element {
                 // (C'' - (C''.T) T) / |C'|^2
                 let d = curve.derivatives_on(if at_end { u1 } else { u0 }, u0);
                 let speed = d.speed();
-                let t = d.first.map(|c| c / speed);
+                let t: Vec4 = std::array::from_fn(|c| d.first[c] / speed);
                 let along: f64 = d.second.iter().zip(&t).map(|(a, b)| a * b).sum();
                 std::array::from_fn(|c| (d.second[c] - along * t[c]) / (speed * speed))
             }
@@ -352,7 +352,7 @@ impl Element {
                 let f: f64 = if at_end { 1.0 } else { 0.0 };
                 let (sin, cos) = (f * sweep).sin_cos();
                 let k = planar * planar / r;
-                scale(-k, [0, 1, 2, 3].map(|a| cos * e1[a] + sin * e2[a]))
+                scale(-k, std::array::from_fn(|a: usize| cos * e1[a] + sin * e2[a]))
             }
         }
     }

@@ -521,12 +521,12 @@ fn axis_weights(shape: &Shape, length: f64, normal: &Vec4) -> Vec4 {
         // The tangent cos(theta) d1 + sin(theta) n1 for theta from 0 to the turn.
         Shape::Clothoid { d1, n1, half, sharpness, .. } => {
             let turn = Turn::new(sharpness * half * half);
-            [0, 1, 2, 3].map(|a| turn.largest(d1[a], n1[a]).min(1.0))
+            std::array::from_fn(|a: usize| turn.largest(d1[a], n1[a]).min(1.0))
         }
         Shape::Arc { r0, r1, sweep, rise, .. } => {
             let planar = (r0.max(r1) * sweep.abs() / length).min(1.0);
             let radial = (r1 - r0).abs() / length;
-            [0, 1, 2, 3].map(|a| ((planar + radial) * normal[a] + (rise[a] / length).abs()).min(1.0))
+            std::array::from_fn(|a: usize| ((planar + radial) * normal[a] + (rise[a] / length).abs()).min(1.0))
         }
     }
 }
@@ -538,10 +538,10 @@ fn axis_weights(shape: &Shape, length: f64, normal: &Vec4) -> Vec4 {
 /// Computed once per element: [`limit`] reads them for both its caps.
 fn normal_shares(shape: &Shape) -> Vec4 {
     match *shape {
-        Shape::Arc { e1, e2, .. } => [0, 1, 2, 3].map(|a| e1[a].hypot(e2[a])),
+        Shape::Arc { e1, e2, .. } => std::array::from_fn(|a: usize| e1[a].hypot(e2[a])),
         Shape::Clothoid { d1, n1, half, sharpness, .. } => {
             let turn = Turn::new(sharpness * half * half);
-            [0, 1, 2, 3].map(|a| turn.largest(n1[a], -d1[a]))
+            std::array::from_fn(|a: usize| turn.largest(n1[a], -d1[a]))
         }
         Shape::Line { .. } | Shape::Nurbs { .. } => [0.0; 4],
     }
