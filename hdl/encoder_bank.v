@@ -5,7 +5,7 @@
 // decoder in turn, and the probe input. Slot s of S = max(N_ENC, 2) is a visit of
 // channel s: its state is read from the store (a RAM where the part has one) the clock
 // before, updated by the one quadrature_channel datapath, and written back at the
-// visit's edge. The copies the host reads (counts and edge times taken with the
+// visit's edge (with LIVE_WR_REG, from a register at the edge after it). The copies the host reads (counts and edge times taken with the
 // position latch, index and probe latches) are written at the channel's first visit at
 // or after the cycle asking for them, from the values before the visit's update, which
 // are the values of that cycle: one instant for every channel, within S clocks.
@@ -100,9 +100,10 @@ module encoder_bank #(
     // result (three slots or more, the stores in distributed RAM: the ECP5 board build),
     // so the visit's decode ends at a register beside it, not at a RAM the placer may put
     // across the die (the ECP5 build's critical path at 100 MHz, seed 2: 2.65 ns of one
-    // route). The channel's next read comes at the edge ending the cycle before its next
-    // visit, S - 1 >= 2 clocks after this one: after the write. Two slots would read it
-    // at the write's own edge; block RAM (the iCE40) registers its write data anyway.
+    // route; on also in the Cyclone IV build and the simulated chip, LIVE_W + 3 flip-flops).
+    // The channel's next read comes at the edge ending the cycle before its next visit,
+    // S - 1 >= 2 clocks after this one: after the write. Two slots would read it at the
+    // write's own edge; block RAM (the iCE40) registers its write data anyway.
     localparam LIVE_WR_REG = (S >= 3 && RAM_BLOCK == 0 && COPY_FF == 0) ? 1 : 0;
 
     // ---- The read side: which copy the served read addresses --------------------------
@@ -614,6 +615,17 @@ module encoder_bank #(
         cover ($past(stall));
         cover ($past(copy_probe) && $past(v_count) != {COUNT_W{1'b0}});
     end
+
+    // LIVE_WR_REG: a sampled channel's moved count pending in the write register, and a
+    // moved count read back from the store at a visit of the channel the invariant peeks at.
+    generate
+        if (LIVE_WR_REG != 0) begin : f_wr_reg_cover
+            always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
+                cover (live_w_en && primed_reg[live_w_addr] && live_w_data[0 +: COUNT_W] != {COUNT_W{1'b0}});
+                cover (visit && v_primed && v_count != {COUNT_W{1'b0}} && ch == f_peek_ch);
+            end
+        end
+    endgenerate
 
 `ifdef FORMAL_READBACK
     // What a copy read returns, stated from the spec's rules: a shadow of each copy

@@ -5,7 +5,9 @@
 // configuration fields, their one-shot arms, and their read values. It sits beside
 // register_file on the same arbitrated register bus, served from its bus stage: writes
 // take effect at the edge ending the serving cycle, pulses are high in the cycle after,
-// and register_file ORs `rdata` into its read data (unmapped addresses read 0 here).
+// and finestep_top takes `rdata` into its feedback word at the edge ending a served
+// read's cycle, which register_file ORs after its read register (unmapped addresses read
+// 0 here).
 module feedback_registers #(
     parameter N_ENC   = 4,
     parameter N_AXES  = 4,

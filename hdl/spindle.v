@@ -199,7 +199,7 @@ module spindle #(
     end
 
     // Reads: the rw fields and the status; CAPS.HAS_SPINDLE from here, since the block
-    // knows it is built (register_file ORs this into its read data).
+    // knows it is built (finestep_top's feedback word takes it, ORed into the read data).
     always @* begin
         rdata = 32'd0;
         case (addr)
