@@ -104,6 +104,25 @@ fn hodograph(points: &[H], knots: &[f64], p: usize) -> Vec<H> {
         .collect()
 }
 
+/// A power-basis span `c0 + c1 t + c2 t^2 + c3 t^3` ([`NurbsCurve`]'s `power`) at `t`,
+/// its first `N` coordinates (5: the homogeneous curve; 4: a curve of weight 1).
+#[inline(always)]
+fn span_value<const N: usize>(c0: &H, c1: &H, c2: &H, c3: &H, t: f64) -> [f64; N] {
+    std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])))
+}
+
+/// The span's first derivative at `t` ([`span_value`]).
+#[inline(always)]
+fn span_first<const N: usize>(c1: &H, c2: &H, c3: &H, t: f64) -> [f64; N] {
+    std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]))
+}
+
+/// The span's second derivative at `t` ([`span_value`]).
+#[inline(always)]
+fn span_second<const N: usize>(c2: &H, c3: &H, t: f64) -> [f64; N] {
+    std::array::from_fn(|c| 2.0 * c2[c] + t * 6.0 * c3[c])
+}
+
 /// De Boor's algorithm: the B-spline of degree `p` with control points `points` on
 /// `knots` at `u` in the knot span `i` (`knots[i] <= u < knots[i + 1]`, p <= i).
 fn de_boor(points: &[H], knots: &[f64], p: usize, i: usize, u: f64) -> H {
@@ -335,9 +354,9 @@ impl NurbsCurve {
         let p = self.degree;
         if let Some([c0, c1, c2, c3]) = self.power.get(i - p) {
             let t = u - self.knots[i];
-            let a = std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])));
-            let a1 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
-            let a2 = std::array::from_fn(|c| 2.0 * c2[c] + t * 6.0 * c3[c]);
+            let a = span_value(c0, c1, c2, c3, t);
+            let a1 = span_first(c1, c2, c3, t);
+            let a2 = span_second(c2, c3, t);
             return (a, a1, a2);
         }
         let a = de_boor(&self.points, &self.knots, p, i, u);
@@ -353,8 +372,8 @@ impl NurbsCurve {
         let p = self.degree;
         if let Some([c0, c1, c2, c3]) = self.power.get(i - p) {
             let t = u - self.knots[i];
-            let a = std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])));
-            let a1 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+            let a = span_value(c0, c1, c2, c3, t);
+            let a1 = span_first(c1, c2, c3, t);
             return (a, a1);
         }
         let a = de_boor(&self.points, &self.knots, p, i, u);
@@ -455,9 +474,9 @@ impl NurbsCurve {
             let [c0, c1, c2, c3] = &self.power[i - self.degree];
             let t = u - self.knots[i];
             return Derivatives {
-                point: std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c]))),
-                first: std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c])),
-                second: std::array::from_fn(|c| 2.0 * c2[c] + t * 6.0 * c3[c]),
+                point: span_value(c0, c1, c2, c3, t),
+                first: span_first(c1, c2, c3, t),
+                second: span_second(c2, c3, t),
             };
         }
         let (a, a1, a2) = self.homogeneous_on(i, u);
@@ -485,11 +504,7 @@ impl NurbsCurve {
         if self.unit {
             let [_, c1, c2, c3] = &self.power[i - self.degree];
             let t = u - self.knots[i];
-            return Derivatives {
-                point: [0.0; 4],
-                first: std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c])),
-                second: std::array::from_fn(|c| 2.0 * c2[c] + t * 6.0 * c3[c]),
-            };
+            return Derivatives { point: [0.0; 4], first: span_first(c1, c2, c3, t), second: span_second(c2, c3, t) };
         }
         self.derivatives_in(u, i)
     }
@@ -527,12 +542,12 @@ impl NurbsCurve {
         if self.unit {
             let [c0, c1, c2, c3] = &self.power[i - self.degree];
             let t = u - self.knots[i];
-            return std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])));
+            return span_value(c0, c1, c2, c3, t);
         }
         let a = match self.power.get(i - self.degree) {
             Some([c0, c1, c2, c3]) => {
                 let t = u - self.knots[i];
-                std::array::from_fn(|c| c0[c] + t * (c1[c] + t * (c2[c] + t * c3[c])))
+                span_value(c0, c1, c2, c3, t)
             }
             None => de_boor(&self.points, &self.knots, self.degree, i, u),
         };
@@ -559,7 +574,7 @@ impl NurbsCurve {
             if let Some([_, c1, c2, c3]) = self.power.get(i - self.degree) {
                 // Weights 1: C' is the derivative of the span's polynomial, no point needed.
                 let t = u - self.knots[i];
-                let a1: Vec4 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+                let a1: Vec4 = span_first(c1, c2, c3, t);
                 return (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt();
             }
         }
@@ -584,7 +599,7 @@ impl NurbsCurve {
                 // (`from_fn`, not `map`: `map` left a call per node.)
                 return std::array::from_fn(|k| {
                     let t = us[k] - knot;
-                    let a1: Vec4 = std::array::from_fn(|c| c1[c] + t * (2.0 * c2[c] + t * 3.0 * c3[c]));
+                    let a1: Vec4 = span_first(c1, c2, c3, t);
                     (a1[0] * a1[0] + a1[1] * a1[1] + a1[2] * a1[2] + a1[3] * a1[3]).sqrt()
                 });
             }
