@@ -151,7 +151,16 @@ pub fn run(socket: &Path, target: Target, machine: Machine, faults: &[Fault], on
             Fault::DeadEncoder => link,
         };
     }
-    let listener = UnixListener::bind(socket).with_context(|| format!("binding {}", socket.display()))?;
+    // Bound and listening under a sibling name, then renamed into place: a client that
+    // waits for the socket file to appear (the tests, linuxcnc_run.sh) would otherwise
+    // meet it between bind and listen and be refused.
+    let mut binding = socket.as_os_str().to_owned();
+    binding.push(".binding");
+    let binding = std::path::PathBuf::from(binding);
+    let _ = std::fs::remove_file(&binding);
+    let listener = UnixListener::bind(&binding).with_context(|| format!("binding {}", binding.display()))?;
+    std::fs::rename(&binding, socket)
+        .with_context(|| format!("moving {} to {}", binding.display(), socket.display()))?;
     println!(
         "finestep sim-chip: {target:?} chip on {} ({machine:?} on its pins; faults: {faults:?})",
         socket.display()
