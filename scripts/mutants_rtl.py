@@ -92,6 +92,13 @@ LOCKSTEP_TESTS = [
     "jog_edges::distance_beyond_two_to_the_forty",
     "jog_edges::tiny_acceleration_lands_exactly",
     "jog_edges::large_acceleration_brakes_below_the_limit",
+    "top_smoke::start_level_zero_and_beyond_the_fifo",
+    "top_spindle::safe_outputs_take_both_patterns",
+    "top_spindle::interlock_filter_counts_its_samples",
+    "top_feedback::channels_resting_off_phase_zero_adopt_their_pins",
+    "top_feedback::probe_latches_negative_positions_through_a_long_filter",
+    "top_feedback::hand_wheel_samples_at_a_long_prescale",
+    "top_feedback::probe_filter_counts_through_copy_reads",
 ]
 QUICK = 6  # mutants in the quick slice (make test)
 QUICK_TESTS = 6  # of LOCKSTEP_TESTS, the cheapest, in the quick slice

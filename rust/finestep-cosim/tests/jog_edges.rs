@@ -87,7 +87,7 @@ fn control_word(enable: bool, follow: bool, multiplier: u32) -> u32 {
 /// dropped. Then a halt mid-move.
 #[test]
 fn drop_mode_large_windows_and_scales() {
-    let cases: [(JogMultiplier, i32, u16, i64); 8] = [
+    let cases: [(JogMultiplier, i32, u16, i64); 10] = [
         (JogMultiplier::X100, 3 << 16 | 12345, 1000, 12), // ~319 steps a detent, 3 fit
         (JogMultiplier::X100, -(3 << 16 | 12345), 1000, -12), // negative travel
         (JogMultiplier::X1, i32::MAX, 65535, 5),          // 32768 steps: two fit
@@ -96,6 +96,13 @@ fn drop_mode_large_windows_and_scales() {
         (JogMultiplier::X100, i32::MIN, 65535, 3),        // the largest travel: all dropped
         (JogMultiplier::X10, -(7 << 16 | 1), 0, 6),       // no window
         (JogMultiplier::X1, 1, 0, -9),                    // 1/65536 step with no window: all dropped
+        // -1.5 steps a detent (bit 15 of the travel set), window 3: from rest the 2nd quick
+        // detent lands exactly on -W, followed (mutant 66 of the 5c605a1 draw, the bound's
+        // half step dropped, survived the cases above).
+        (JogMultiplier::X1, -(3 << 15), 3, 6),
+        // -43691 LSB a detent (bit 1 clear), window 2: the 3rd quick detent from rest
+        // leaves the bound 1 LSB short, dropped (mutant 70, the bound off by 2 LSB).
+        (JogMultiplier::X1, -43691, 2, 3),
     ];
     for (i, (multiplier, scale, window, detents)) in cases.into_iter().enumerate() {
         let mut machine = connect(&format!("drop_mode_large_windows_and_scales_{i}"), wheel_plant(FAST_BOUNCE));
@@ -110,7 +117,7 @@ fn drop_mode_large_windows_and_scales() {
         assert!(wheel_done(&machine));
         assert!(jog.engaged, "case {i}: {jog:?}");
         assert!(jog.dropped > 0, "case {i}: {jog:?}");
-        if i >= 5 {
+        if (5..8).contains(&i) {
             // Every detent dropped: the target never moved.
             assert!(jog.remaining == 0 && jog.velocity == Increment::ZERO, "case {i}: {jog:?}");
         }

@@ -6,7 +6,8 @@
 
 use finestep_host::pins::layout::{IN_ENC_A0, IN_ENC_B0, IN_MPG_A, IN_MPG_B};
 use finestep_host::regs::{
-    control, fifo_level, jog_control, jog_velocity, latch_time, period_count, position, probe_status, status,
+    control, enc_count, fifo_level, jog_control, jog_velocity, latch_time, mpg_count, mpg_detents, period_count,
+    position, probe_status, status,
 };
 use finestep_host::stream::{stream, wait_idle, StreamConfig};
 use finestep_host::{Bus, BusError, CountMode, EncoderSetup, JogMultiplier, JogSetup, PinTarget};
@@ -490,10 +491,10 @@ fn narrow_counts_wrap_and_extend_on_the_serial_chip() {
     assert_eq!(machine.encoder_errors(0).unwrap(), (false, 0));
 }
 
-/// With `one_snapshot` (docs/spec/register_file.md#one-snapshot) `POSITION` and
-/// `LATCH_TIME` hold the probe's snapshot until the next arm; else the period latch's.
-fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_snapshot: bool) {
-    let plant_config = PlantConfig {
+/// Two lagging axes with a grating each (2 and 4 counts a step) and a probe on axis 1,
+/// active low, touching between steps 50 and 60.
+fn probe_plant() -> PlantConfig {
+    PlantConfig {
         drives: vec![lagging(300); 2],
         channels: vec![
             ChannelConfig { axis: 0, encoder: EncoderConfig::linear_grating(CountsPerStep::integer(2).unwrap(), None) },
@@ -506,7 +507,13 @@ fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_sn
             active_high: false,
         }),
         hand_wheel: None,
-    };
+    }
+}
+
+/// With `one_snapshot` (docs/spec/register_file.md#one-snapshot) `POSITION` and
+/// `LATCH_TIME` hold the probe's snapshot until the next arm; else the period latch's.
+fn probe_latches_everything(connect: fn(&str, Plant) -> Chip, name: &str, one_snapshot: bool) {
+    let plant_config = probe_plant();
     let mut machine = connect(name, Plant::new(plant_config, 9).unwrap());
     machine.arm_probe(false, 2).unwrap();
     run_records(&mut machine, moves(&vec![(1 << 15, 1 << 16); 100]), 20_000);
@@ -794,4 +801,148 @@ fn random_jogs_land_exactly() {
             Ok(())
         })
         .unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Encoders resting off phase 00 at power-on adopt their pins at the first sample: four
+/// gratings whose quadrature state at position 0 is 10, 11, 01 and 10 (plant offsets 1, 2,
+/// 3 and 5) read count 0 and no illegal transition after `connect`, then count exactly
+/// from there (the plant's count less its offset) through a move both ways. RTL and model
+/// in lockstep on every read (a mutant treating every channel's first sample as primed,
+/// decoding it from the reset levels 00, survived: mutant 29 of the 5c605a1 draw; no test
+/// gave an encoder a nonzero offset).
+#[test]
+fn channels_resting_off_phase_zero_adopt_their_pins() {
+    const OFFSETS: [i64; 4] = [1, 2, 3, 5];
+    let channels = OFFSETS
+        .iter()
+        .enumerate()
+        .map(|(c, &offset)| {
+            let mut encoder = EncoderConfig::linear_grating(CountsPerStep::integer(1 + c as u32).unwrap(), None);
+            encoder.offset = offset;
+            ChannelConfig { axis: c % 2, encoder }
+        })
+        .collect();
+    let plant = Plant::new(PlantConfig { drives: vec![lagging(300); 2], channels, probe: None, hand_wheel: None }, 4);
+    let mut machine = connect("channels_resting_off_phase_zero_adopt_their_pins", plant.unwrap());
+    assert_eq!(machine.feedback().unwrap().counts, vec![0; 4], "the first sample adopts the pins");
+    for channel in 0..4 {
+        assert_eq!(machine.encoder_errors(channel).unwrap(), (false, 0), "channel {channel}");
+    }
+    let increments: Vec<(i32, i32)> =
+        (0..24).map(|k| if k < 12 { (3 << 15, -(1 << 16)) } else { (-(1 << 16), 1 << 15) }).collect();
+    run_records(&mut machine, moves(&increments), 20 * 300);
+    let counts = machine.feedback().unwrap().counts;
+    for (channel, &offset) in OFFSETS.iter().enumerate() {
+        let ideal = plant_of(&machine).encoder(channel).ideal_count();
+        assert_eq!(i64::from(counts[channel]), ideal - offset, "channel {channel}");
+        assert_eq!(machine.encoder_errors(channel).unwrap(), (false, 0), "channel {channel}");
+    }
+}
+
+/// A probe touch with axis 0 moving negative and the probe's filter at 7 samples: the
+/// latches hold axis 0's negative position (PROBE_POSITION[0] with bit 15 set) and
+/// channel 0's negative count, taken on one clock, 7 samples of 4 clocks (ENC_PRESCALE 0)
+/// after the touch. RTL and model in lockstep on every read (PROBE_TIME, the latches).
+/// (The probe test's axis 0 moved positive and its filter took 2 samples: mutants 24 and
+/// 37 of the 5c605a1 draw, PROBE_POSITION[0] bit 15 stuck at 0 and a filter count of 4
+/// read as 6 between samples, survived.)
+#[test]
+fn probe_latches_negative_positions_through_a_long_filter() {
+    let plant_config = probe_plant();
+    let mut machine =
+        connect("probe_latches_negative_positions_through_a_long_filter", Plant::new(plant_config, 9).unwrap());
+    machine.arm_probe(false, 7).unwrap();
+    run_records(&mut machine, moves(&vec![(-(1 << 15), 1 << 16); 100]), 20_000);
+    let hit = machine.probe_hit().unwrap().expect("the probe touched at Z = 50 steps");
+    assert!((200..=204).contains(&hit.counts[1]), "{hit:?}");
+    assert!((hit.counts[0] + hit.counts[1] / 4).abs() <= 2, "X at minus half Z's speed: {hit:?}");
+    assert!(hit.steps[1] >= 50 && hit.steps[1] <= 55, "{hit:?}");
+    assert!((hit.steps[0] + hit.steps[1] / 2).abs() <= 1 && hit.steps[0] < 0, "{hit:?}");
+    assert_eq!(probe_status::ARMED.get(machine.bus().read_one(probe_status::ADDR).unwrap()), 0);
+    assert_eq!(machine.positions().unwrap().steps[..2], [-50, 100]);
+}
+
+/// The hand wheel at MPG PRESCALE 1000 (a sample every 1001 clocks, FILTER 1): a clean
+/// wheel turned 3 detents, an edge every 2 500 clocks, MPG_COUNT read every few hundred
+/// clocks throughout, so an edge taken at another sample is a different read; then at the
+/// odd detent count MPG_DETENTS is read three times, the last a clock later, so that the
+/// reads fall on both clock parities. RTL and model in lockstep on every read. (The
+/// tests' prescales stayed below 512 and read the detents at even counts or on one
+/// parity: mutants 46 and 50 of the 5c605a1 draw, the prescaler's bit 9 stuck at 0 and
+/// MPG_DETENTS bit 30 toggling on every other clock while the count is odd, survived.)
+#[test]
+fn hand_wheel_samples_at_a_long_prescale() {
+    let config = PlantConfig {
+        drives: vec![DriveConfig::default(); 2],
+        channels: vec![],
+        probe: None,
+        hand_wheel: Some(HandWheelConfig { rest_phase: 2, bounce: None }),
+    };
+    let mut machine = connect("hand_wheel_samples_at_a_long_prescale", Plant::new(config, 2).unwrap());
+    machine.configure_hand_wheel(1000, 1).unwrap();
+    // The reset PRESCALE's interval (500 clocks) runs out before the new one counts.
+    machine.bus().wait(600).unwrap();
+    turn(&mut machine, 3, 2500);
+    let mut reads = 0;
+    loop {
+        let edges = machine.bus().read_one(mpg_count::ADDR).unwrap() as i32;
+        assert!((0..=12).contains(&edges), "{edges}");
+        reads += 1;
+        let plant_loop = machine.bus_ref().link().target();
+        if plant_loop.plant().hand_wheel().unwrap().script_end() + 3000 <= plant_loop.cycle() {
+            break;
+        }
+        machine.bus().wait(50).unwrap();
+    }
+    assert!(reads > 40, "{reads} reads");
+    let state = machine.hand_wheel().unwrap();
+    assert_eq!((state.edges, state.detents, state.illegal_count), (12, 3, 0), "{state:?}");
+    let mut detents = Vec::new();
+    for wait in [0, 0, 1, 0, 1] {
+        machine.bus().wait(wait).unwrap();
+        detents.push(machine.bus().read_one(mpg_detents::ADDR).unwrap());
+    }
+    assert_eq!(detents, vec![3; 5], "MPG_DETENTS on both clock parities");
+}
+
+/// The probe's filter counts its samples through encoder stalls: ENC_PRESCALE 250 (the
+/// probe sampled at the first visit of every 251st round, 1 004 clocks apart plus one per
+/// stall) and PROBE_CONTROL.FILTER 7, with ENC_COUNT[0..4] read back to back all through
+/// the approach, so that copy reads served in their channel's slot (a stall each) fall
+/// between the samples the filter counts (docs/spec/encoder_bank.md: a stall delays the
+/// schedule by a clock). RTL and model in lockstep on every read (the event's PROBE_TIME
+/// and latches). (No test read copies while the probe filter counted: mutant 52 of the
+/// 5c605a1 draw, the probe filter's count bit 0 stored inverted every clock, transparent
+/// unless an odd number of stalls lies between two samples, survived.)
+#[test]
+fn probe_filter_counts_through_copy_reads() {
+    let plant_config = PlantConfig {
+        drives: vec![lagging(300); 2],
+        channels: vec![],
+        probe: Some(ProbeConfig {
+            axis: 1,
+            counts_per_step: CountsPerStep::integer(1).unwrap(),
+            touching: vec![20..=30],
+            active_high: false,
+        }),
+        hand_wheel: None,
+    };
+    let mut machine = connect("probe_filter_counts_through_copy_reads", Plant::new(plant_config, 9).unwrap());
+    machine.set_encoder_prescale(250).unwrap();
+    machine.arm_probe(false, 7).unwrap();
+    machine.bus().push_records(&moves(&vec![(0, 1 << 16); 40])).unwrap();
+    machine.set_control(true, false, true).unwrap();
+    // Z passes 20 steps about 20 periods after the start: read until 30 periods.
+    let end = machine.bus_ref().link().target().cycle() + 30 * u64::from(PERIOD);
+    let mut counts = [0u32; 4];
+    let mut reads = 0;
+    while machine.bus_ref().link().target().cycle() < end {
+        machine.bus().read(enc_count::addr(0), &mut counts).unwrap();
+        reads += 1;
+    }
+    assert!(reads > 30, "{reads} reads");
+    wait_idle(machine.bus(), 1000, 1_000_000).unwrap();
+    let hit = machine.probe_hit().unwrap().expect("the probe touched at Z = 20 steps");
+    assert!(hit.steps[1] >= 20 && hit.steps[1] <= 25, "{hit:?}");
+    assert_eq!(probe_status::ARMED.get(machine.bus().read_one(probe_status::ADDR).unwrap()), 0);
 }

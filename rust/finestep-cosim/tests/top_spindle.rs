@@ -9,7 +9,7 @@
 
 use finestep_cosim::TopLockstep;
 use finestep_host::pins::layout::*;
-use finestep_host::regs::{command, estop_filter, spindle_control, status, watchdog_timeout};
+use finestep_host::regs::{command, estop_filter, interlock, outputs_safe, spindle_control, status, watchdog_timeout};
 use finestep_host::{
     Bus, BusError, InterlockSetup, Machine, Outputs, PeriodRecord, PinHost, PinTarget, PinTiming, SpiBus, SpindleSetup,
 };
@@ -248,4 +248,108 @@ fn interlock_holds_the_start() {
     assert_eq!(status::STREAMING.get(word), 1, "an open gate stays open: {word:#x}");
     assert_eq!(ok(m.interlock()), (true, false), "no blocked start under an open gate");
     assert!(ok(m.fifo()).0 >= 2, "the threshold still reached while the interlock was active");
+}
+
+/// Polls INTERLOCK (each read goes out on MISO, compared with the model's) until ACTIVE
+/// reads `active`, a short wait between reads; returns the clocks from trace index `from`
+/// to the end of that read.
+fn poll_interlock(m: &mut M, active: bool, from: usize, limit: usize) -> usize {
+    loop {
+        let (now, _) = ok(m.interlock());
+        let at = trace(m).len() - from;
+        if now == active {
+            return at;
+        }
+        assert!(at < limit, "ACTIVE not {active} {at} clocks after the pin");
+        ok(m.bus().wait(50));
+    }
+}
+
+/// The interlock filter counts exactly FILTER samples (0 and 1 alike: one) at an even
+/// PRESCALE, both ways: INTERLOCK is read right after reset (the map's reset values,
+/// ACTIVE 0), then for FILTER 1, 3, 5, 4 and 0 at PRESCALE 1000 (a sample every 1001
+/// clocks) the pin is raised and dropped and INTERLOCK polled every few hundred clocks
+/// (an SPI read frame and 50 clocks), so a level taken one sample early or late is a
+/// different read; FILTER and PRESCALE read back as written. Per docs/spec/input_filter.md
+/// the level follows 2 clocks plus max(FILTER, 1) samples after the pin. (The older
+/// interlock test, FILTER 3 at PRESCALE 6 read hundreds of clocks after the pin, missed
+/// filters one or several samples off, mutants 32-56 of the 5c605a1 draw.)
+#[test]
+fn interlock_filter_counts_its_samples() {
+    const PRESCALE: u16 = 1000;
+    const SAMPLE: usize = PRESCALE as usize + 1;
+    let mut m = machine("interlock_filter_counts_its_samples");
+    let word = ok(m.bus().read_one(interlock::ADDR));
+    assert_eq!(
+        (interlock::ENABLE.get(word), interlock::ACTIVE_HIGH.get(word), interlock::FILTER.get(word)),
+        (0, 1, 50),
+        "{word:#x}"
+    );
+    assert_eq!((interlock::PRESCALE.get(word), interlock::ACTIVE.get(word)), (4999, 0), "{word:#x}");
+    for filter in [1u8, 3, 5, 4, 0] {
+        let setup = InterlockSetup { enable: true, active_high: true, filter_samples: filter, prescale: PRESCALE };
+        ok(m.configure_interlock(&setup));
+        let word = ok(m.bus().read_one(interlock::ADDR));
+        assert_eq!(interlock::FILTER.get(word), u32::from(filter), "FILTER read back: {word:#x}");
+        assert_eq!(interlock::PRESCALE.get(word), u32::from(PRESCALE), "PRESCALE read back: {word:#x}");
+        // The reset PRESCALE's 5 000 clocks run out before the new one counts (the first
+        // round); then two samples at rest.
+        ok(m.bus().wait(if filter == 1 { 5_000 } else { 2 * SAMPLE as u64 }));
+        let samples = usize::from(filter.max(1));
+        for active in [true, false] {
+            let from = trace(&mut m).len();
+            m.bus().link_mut().set_interlock_pin(active);
+            let seen = poll_interlock(&mut m, active, from, (samples + 3) * SAMPLE);
+            assert!(
+                seen > (samples - 1) * SAMPLE && seen <= samples * SAMPLE + 1000,
+                "FILTER {filter}: ACTIVE {active} read {seen} clocks after the pin"
+            );
+            // Held a while at the new level: one more read, unchanged.
+            ok(m.bus().wait(SAMPLE as u64));
+            assert_eq!(ok(m.interlock()).0, active, "FILTER {filter}");
+        }
+    }
+}
+
+/// The safe levels both ways: OUTPUTS_SAFE written with a pattern and its complement
+/// (every field 0 in one and 1 in the other), read back each time; a halt (the E-stop)
+/// with the outputs at the complement drives the safe pattern to the pins on the clock
+/// after the axes' enables drop, and OUTPUTS reads it. (`spindle_pwm_ramp_and_estop`'s
+/// one pattern, GPIO 0b0001, left mutants 84 and 88 of the 5c605a1 draw alive: a safe
+/// GPIO1 stuck at 0 and a safe GPIO0 stuck at 1.)
+#[test]
+fn safe_outputs_take_both_patterns() {
+    let mut m = machine("safe_outputs_take_both_patterns");
+    ok(m.bus().write(estop_filter::ADDR, 4));
+    let safe = Outputs { mist: true, flood: true, light: false, gpio: 0b1110 };
+    let other = Outputs { mist: false, flood: false, light: true, gpio: 0b0001 };
+    for pattern in [other, safe, other, safe] {
+        ok(m.set_safe_outputs(&pattern));
+        let word = ok(m.bus().read_one(outputs_safe::ADDR));
+        assert_eq!(word, safe_word(&pattern), "OUTPUTS_SAFE read back");
+    }
+    ok(m.set_outputs(&other));
+    ok(m.bus().wait(20));
+    assert_eq!(ok(m.outputs()), other);
+    let before = trace(&mut m).len();
+    m.bus().link_mut().set_estop_pin(true);
+    ok(m.bus().wait(200));
+    let t = trace(&mut m)[before..].to_vec();
+    let drop = enables_drop(&t);
+    assert!(!bit(t[drop - 1], OUT_COOLANT_MIST) && bit(t[drop - 1], OUT_LIGHT), "the outputs until the halt");
+    assert_eq!(t[drop - 1] >> OUT_GPIO0 & 0xF, 0b0001);
+    for (i, &out) in t.iter().enumerate().skip(drop) {
+        assert!(bit(out, OUT_COOLANT_MIST) && bit(out, OUT_COOLANT_FLOOD) && !bit(out, OUT_LIGHT), "({i})");
+        assert_eq!(out >> OUT_GPIO0 & 0xF, 0b1110, "safe levels ({i})");
+    }
+    assert_eq!(ok(m.outputs()), safe, "OUTPUTS holds the safe levels");
+    assert_eq!(ok(m.bus().read_one(outputs_safe::ADDR)), safe_word(&safe));
+}
+
+/// OUTPUTS_SAFE's word for `o` (the map's layout).
+fn safe_word(o: &Outputs) -> u32 {
+    let word = outputs_safe::MIST.set(0, u32::from(o.mist));
+    let word = outputs_safe::FLOOD.set(word, u32::from(o.flood));
+    let word = outputs_safe::LIGHT.set(word, u32::from(o.light));
+    outputs_safe::GPIO.set(word, u32::from(o.gpio))
 }
