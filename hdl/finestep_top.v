@@ -43,7 +43,8 @@ module finestep_top #(
     parameter N_GPIO          = 4,
     parameter HAS_PANEL       = 0,
     parameter HAS_GANTRY      = 0,
-    parameter HAS_PBP         = 1    // 1: the core's point-by-point interpolator (VERSION.HAS_PBP); every board top sets 0
+    parameter HAS_PBP         = 1,   // 1: the core's point-by-point interpolator (VERSION.HAS_PBP); every board top sets 0
+    parameter FEEDBACK_REG    = 1    // 1: the feedback read words in a register of their own; 0: in register_file's read register
 ) (
     // clock, reset
     input  wire              clk,
@@ -224,7 +225,11 @@ module finestep_top #(
     // the encoder bank's copies), so a read returns the same word in the same cycle as
     // when that register took them, and their multiplexers end here, not in front of it
     // (the ECP5 board build's critical path at 100 MHz, seed 2: the feedback multiplexer
-    // into register_file's read register).
+    // into register_file's read register). With FEEDBACK_REG 0 (the CPLDs, 32 flip-flops
+    // fewer) the word goes into register_file's read register instead (early_rdata), taken
+    // at the same edge: the same word in the same cycle.
+    wire [31:0]           feedback_word = feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata |
+                                          gantry_rdata | pbp_rdata;
     reg  [31:0]           feedback_word_reg;
 
     // The halt's rising edge empties the FIFO: its records belong to the motion that
@@ -319,6 +324,7 @@ module finestep_top #(
         .rdata(rdata),
         .bus_write(bus_write), .bus_address(bus_address), .bus_write_data(bus_write_data),
         .bus_read(bus_read), .late_rdata(enc_copy_rdata | feedback_word_reg),
+        .early_rdata((FEEDBACK_REG != 0) ? 32'd0 : feedback_word),
         .run(run_request), .watchdog_enable(watchdog_enable), .estop_active_high(estop_active_high),
         .period_clocks(period_clocks), .watchdog_timeout(watchdog_timeout), .estop_filter(estop_filter),
         .start_level(start_level), .axis_enable(axis_enable),
@@ -624,9 +630,8 @@ module finestep_top #(
     endgenerate
 
     always @(posedge clk) begin
-        if (rst) feedback_word_reg <= 32'd0;
-        else if (bus_read)
-            feedback_word_reg <= feedback_rdata | spindle_rdata | outputs_rdata | panel_rdata | gantry_rdata | pbp_rdata;
+        if (rst || FEEDBACK_REG == 0) feedback_word_reg <= 32'd0;
+        else if (bus_read) feedback_word_reg <= feedback_word;
     end
 
     wire unused_top = &{1'b0, fifo_overflow_unused};

@@ -6,7 +6,8 @@
 // two host links (SPI first), error counters, the interrupt, the per-period position
 // latch and the RECORD_PUSH path into the position FIFO. The feedback blocks' registers
 // live in feedback_registers on the same arbitrated bus; their read value, taken by
-// finestep_top at the edge ending the serving cycle, comes in with `late_rdata`.
+// finestep_top at the edge ending the serving cycle, comes in with `late_rdata`, or with
+// FEEDBACK_REG 0 (the CPLDs: 32 flip-flops fewer) as `early_rdata` into the read register.
 //
 // Latency: a request granted in cycle n is registered at the edge ending n (the bus
 // stage) and served in n+1: a write takes effect at the edge ending n+1 (its command
@@ -64,6 +65,7 @@ module register_file #(
     output wire [31:0]                  bus_write_data,
     output wire                         bus_read,       // a read served in this cycle (at bus_address)
     input  wire [31:0]                  late_rdata,     // a served read's word from the cycle after, held
+    input  wire [31:0]                  early_rdata,    // a served read's word from its serving cycle (0: none)
     // configuration out
     output wire                         run,
     output wire                         watchdog_enable,
@@ -233,6 +235,7 @@ module register_file #(
     reg               stage_we_reg;
     reg  [ADDR_W-1:0] stage_addr_reg;
     reg  [WORD_W-1:0] stage_wdata_reg;
+    reg  [5:0]        stage_map_reg;    // store_map of the stage's address, taken with it
     // The push sequence: push_seq = k in the k-th cycle after the cycle serving a
     // RECORD_PUSH write (1..N_AXES), 0 when idle. The store is read for RECORD_INC[k] in
     // cycle k (0..N_AXES-1: bus_hold), and that word goes into the FIFO record's
@@ -278,6 +281,7 @@ module register_file #(
             stage_we_reg    <= 1'b0;
             stage_addr_reg  <= {ADDR_W{1'b0}};
             stage_wdata_reg <= {WORD_W{1'b0}};
+            stage_map_reg   <= store_map({ADDR_W{1'b0}});
             push_served_reg <= 1'b0;
         end else begin
             stage_valid_reg <= granted;
@@ -286,6 +290,7 @@ module register_file #(
                 stage_we_reg    <= granted_we;
                 stage_addr_reg  <= granted_addr;
                 stage_wdata_reg <= granted_wdata;
+                stage_map_reg   <= store_map(granted_addr);
             end
         end
     end
@@ -396,7 +401,7 @@ module register_file #(
     wire unused_maps = &{1'b0, grant_map[4:0], rd_map[5], wr_map[5]};   // grant_map's word: the proof's
     // RECORD_INC[k]'s store word, k = the push sequence's cycle (0 while serving the write).
     wire [4:0]        push_read_word = {push_seq_reg[2:0], 2'd3};
-    wire [5:0]        stage_map  = store_map(bus_addr);
+    wire [5:0]        stage_map  = PAR_ONLY ? store_map(bus_addr) : stage_map_reg;
     wire              store_write = STORED && granted && granted_we && grant_map[5];
     wire [WORD_W-1:0] store_rd;
     reg  [31:0]       written_reg;
@@ -474,52 +479,142 @@ module register_file #(
 
     // The read value of an address, from the state of this cycle. A function called only
     // on a read, so a simulator evaluates this wide mux only when a read is served.
-    function [WORD_W-1:0] read_word(input [ADDR_W-1:0] addr);
+    // The read multiplexer in two halves: read_sel decodes an address into one select
+    // per readable word (at most one set: the map keeps addresses distinct), read_mux ORs
+    // the selected words. With a bus stage the selects are decoded from the granted
+    // address into rsel_reg as the stage takes it, so the multiplexer of the serving
+    // cycle starts from flip-flops instead of after the address compares (the ECP5
+    // board build's critical path on one seed or another: the stage's address -> seven
+    // LUTs -> rdata_reg).
+    localparam R_ID = 0, R_VERSION = 1, R_CAPS = 2, R_CLOCK_HZ = 3, R_CONTROL = 4, R_STATUS = 5,
+               R_FIFO_LEVEL = 6, R_WATERMARK = 7, R_START_LEVEL = 8, R_PERIOD = 9, R_WATCHDOG = 10,
+               R_ESTOP_FILTER = 11, R_IRQ_STATUS = 12, R_IRQ_MASK = 13, R_TIMESTAMP = 14,
+               R_LATCH_TIME = 15, R_PROBE_TIME = 16, R_PERIOD_COUNT = 17, R_UNDERRUN = 18,
+               R_CRC_ERRORS = 19, R_FRAME_ERRORS = 20, R_PAR_ERRORS = 21, R_REFUSED = 22,
+               R_AXIS_STATUS = 23, R_AXIS_ENABLE = 24, R_SCALARS = 25;
+    localparam R_POSITION = R_SCALARS, R_TIMING_A = R_SCALARS + N_AXES, R_TIMING_B = R_SCALARS + 2 * N_AXES,
+               R_MODE = R_SCALARS + 3 * N_AXES, R_INC = R_SCALARS + 4 * N_AXES, N_SEL = R_SCALARS + 5 * N_AXES;
+    function [N_SEL-1:0] read_sel(input [ADDR_W-1:0] addr);
         integer index;
-        reg [WORD_W-1:0] read_value;
-        reg [WORD_W-1:0] timing_a_word, timing_b_word, mode_word;   // one axis's
+        reg [WORD_W-1:0] a;
         begin
-            read_value = {WORD_W{1'b0}};
+            read_sel = {N_SEL{1'b0}};
+            a = {{(WORD_W-ADDR_W){1'b0}}, addr};
             case (addr)
-                FS_ID_ADDR:       read_value = FS_ID_MAGIC_VALUE;
-                FS_VERSION_ADDR:  read_value = VERSION_WORD;
-                FS_CAPS_ADDR:     read_value = CAPS_WORD;
-                FS_CLOCK_HZ_ADDR: read_value = CLOCK_HZ;
-                FS_CONTROL_ADDR: begin
-                    read_value[FS_CONTROL_RUN_LSB]               = run_reg;
-                    read_value[FS_CONTROL_WATCHDOG_ENABLE_LSB]   = watchdog_enable_reg;
-                    read_value[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB] = estop_active_high_reg;
-                end
-                FS_STATUS_ADDR: read_value = status_word;
-                FS_FIFO_LEVEL_ADDR: begin
-                    read_value[FS_FIFO_LEVEL_LEVEL_LSB +: FIFO_DEPTH_LOG2 + 1] = fifo_level;
-                    read_value[FS_FIFO_LEVEL_FREE_LSB +: FIFO_DEPTH_LOG2 + 1]  = fifo_free;
-                end
-                FS_FIFO_WATERMARK_ADDR:   read_value[WATERMARK_W-1:0] = watermark_reg;
-                FS_START_LEVEL_ADDR:      read_value[START_W-1:0] = start_level_reg;
-                FS_PERIOD_CLOCKS_ADDR:    read_value[P_WIDTH-1:0] = period_reg;
-                FS_WATCHDOG_TIMEOUT_ADDR: read_value[WD_W-1:0] = watchdog_timeout_reg;
-                FS_ESTOP_FILTER_ADDR:     read_value[FILTER_W-1:0] = estop_filter_reg;
-                FS_IRQ_STATUS_ADDR:       read_value[IRQ_W-1:0] = irq_status;
-                FS_IRQ_MASK_ADDR:         read_value[IRQ_W-1:0] = irq_mask_reg;
-                FS_TIMESTAMP_ADDR:        read_value = timestamp_reg;
-                FS_LATCH_TIME_ADDR:       read_value = latch_time_reg;
-                FS_PROBE_TIME_ADDR:       if (ONE_SNAPSHOT != 0) read_value = latch_time_reg;
-                FS_PERIOD_COUNT_ADDR:     read_value = period_count_reg;
-                FS_UNDERRUN_COUNT_ADDR:       read_value[COUNT_W-1:0] = underrun_count_reg;
-                FS_CRC_ERROR_COUNT_ADDR:      read_value[COUNT_W-1:0] = crc_error_count;
-                FS_FRAME_ERROR_COUNT_ADDR:    read_value[COUNT_W-1:0] = frame_error_count;
-                FS_PARALLEL_ERROR_COUNT_ADDR: read_value[COUNT_W-1:0] = parallel_error_count;
-                FS_REFUSED_RECORD_COUNT_ADDR: read_value[COUNT_W-1:0] = refused_count_reg;
-                FS_AXIS_STATUS_ADDR: begin
-                    read_value[FS_AXIS_STATUS_RATE_ERROR_LSB +: N_AXES] = rate_error;
-                    read_value[FS_AXIS_STATUS_STEP_LOST_LSB +: N_AXES]  = step_lost;
-                end
-                FS_AXIS_ENABLE_ADDR: read_value[N_AXES-1:0] = axis_enable_reg;
+                FS_ID_ADDR:                   read_sel[R_ID] = 1'b1;
+                FS_VERSION_ADDR:              read_sel[R_VERSION] = 1'b1;
+                FS_CAPS_ADDR:                 read_sel[R_CAPS] = 1'b1;
+                FS_CLOCK_HZ_ADDR:             read_sel[R_CLOCK_HZ] = 1'b1;
+                FS_CONTROL_ADDR:              read_sel[R_CONTROL] = 1'b1;
+                FS_STATUS_ADDR:               read_sel[R_STATUS] = 1'b1;
+                FS_FIFO_LEVEL_ADDR:           read_sel[R_FIFO_LEVEL] = 1'b1;
+                FS_FIFO_WATERMARK_ADDR:       read_sel[R_WATERMARK] = 1'b1;
+                FS_START_LEVEL_ADDR:          read_sel[R_START_LEVEL] = 1'b1;
+                FS_PERIOD_CLOCKS_ADDR:        read_sel[R_PERIOD] = 1'b1;
+                FS_WATCHDOG_TIMEOUT_ADDR:     read_sel[R_WATCHDOG] = 1'b1;
+                FS_ESTOP_FILTER_ADDR:         read_sel[R_ESTOP_FILTER] = 1'b1;
+                FS_IRQ_STATUS_ADDR:           read_sel[R_IRQ_STATUS] = 1'b1;
+                FS_IRQ_MASK_ADDR:             read_sel[R_IRQ_MASK] = 1'b1;
+                FS_TIMESTAMP_ADDR:            read_sel[R_TIMESTAMP] = 1'b1;
+                FS_LATCH_TIME_ADDR:           read_sel[R_LATCH_TIME] = 1'b1;
+                FS_PROBE_TIME_ADDR:           read_sel[R_PROBE_TIME] = (ONE_SNAPSHOT != 0);
+                FS_PERIOD_COUNT_ADDR:         read_sel[R_PERIOD_COUNT] = 1'b1;
+                FS_UNDERRUN_COUNT_ADDR:       read_sel[R_UNDERRUN] = 1'b1;
+                FS_CRC_ERROR_COUNT_ADDR:      read_sel[R_CRC_ERRORS] = 1'b1;
+                FS_FRAME_ERROR_COUNT_ADDR:    read_sel[R_FRAME_ERRORS] = 1'b1;
+                FS_PARALLEL_ERROR_COUNT_ADDR: read_sel[R_PAR_ERRORS] = 1'b1;
+                FS_REFUSED_RECORD_COUNT_ADDR: read_sel[R_REFUSED] = 1'b1;
+                FS_AXIS_STATUS_ADDR:          read_sel[R_AXIS_STATUS] = 1'b1;
+                FS_AXIS_ENABLE_ADDR:          read_sel[R_AXIS_ENABLE] = 1'b1;
                 default: ;
             endcase
-            // The per-axis arrays: an OR of masked words (the map keeps addresses distinct),
-            // a shallow tree where overriding ifs would put a multiplexer per register in series.
+            for (index = 0; index < N_AXES; index = index + 1) begin
+                read_sel[R_POSITION + index] =
+                    a == {{(WORD_W-ADDR_W){1'b0}}, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE ||
+                    (ONE_SNAPSHOT != 0 && a == {{(WORD_W-ADDR_W){1'b0}}, FS_PROBE_POSITION_ADDR} + index * FS_PROBE_POSITION_STRIDE);
+                // Without the readback store the per-axis arrays from their flip-flops,
+                // unless write-only (AXIS_WRITE_ONLY: they read 0).
+                read_sel[R_TIMING_A + index] = !STORED && AXIS_WRITE_ONLY == 0 &&
+                    a == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE;
+                read_sel[R_TIMING_B + index] = !STORED && AXIS_WRITE_ONLY == 0 &&
+                    a == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE;
+                read_sel[R_MODE + index] = !STORED && AXIS_WRITE_ONLY == 0 &&
+                    a == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE;
+                // RECORD_INC, unless write-only (INC_WRITE_ONLY: it reads 0).
+                read_sel[R_INC + index] = !STORED && INC_WRITE_ONLY == 0 &&
+                    a == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE;
+            end
+        end
+    endfunction
+    // An OR of masked words, a shallow tree where overriding ifs would put a multiplexer
+    // per register in series.
+    function [WORD_W-1:0] read_mux(input [N_SEL-1:0] sel);
+        integer index;
+        reg [WORD_W-1:0] read_value;
+        reg [WORD_W-1:0] control_word, fifo_level_word;
+        reg [WORD_W-1:0] watermark_word, start_word, period_word, watchdog_word, estop_word, irq_status_word, irq_mask_word, underrun_word, crc_word, frame_word, par_word, refused_word, axis_enable_word;
+        reg [WORD_W-1:0] timing_a_word, timing_b_word, mode_word, axis_status_word;   // one axis's
+        begin
+            control_word = {WORD_W{1'b0}};
+            control_word[FS_CONTROL_RUN_LSB]               = run_reg;
+            control_word[FS_CONTROL_WATCHDOG_ENABLE_LSB]   = watchdog_enable_reg;
+            control_word[FS_CONTROL_ESTOP_ACTIVE_HIGH_LSB] = estop_active_high_reg;
+            fifo_level_word = {WORD_W{1'b0}};
+            fifo_level_word[FS_FIFO_LEVEL_LEVEL_LSB +: FIFO_DEPTH_LOG2 + 1] = fifo_level;
+            fifo_level_word[FS_FIFO_LEVEL_FREE_LSB +: FIFO_DEPTH_LOG2 + 1]  = fifo_free;
+            watermark_word = {WORD_W{1'b0}};
+            watermark_word[WATERMARK_W-1:0] = watermark_reg;
+            start_word = {WORD_W{1'b0}};
+            start_word[START_W-1:0] = start_level_reg;
+            period_word = {WORD_W{1'b0}};
+            period_word[P_WIDTH-1:0] = period_reg;
+            watchdog_word = {WORD_W{1'b0}};
+            watchdog_word[WD_W-1:0] = watchdog_timeout_reg;
+            estop_word = {WORD_W{1'b0}};
+            estop_word[FILTER_W-1:0] = estop_filter_reg;
+            irq_status_word = {WORD_W{1'b0}};
+            irq_status_word[IRQ_W-1:0] = irq_status;
+            irq_mask_word = {WORD_W{1'b0}};
+            irq_mask_word[IRQ_W-1:0] = irq_mask_reg;
+            underrun_word = {WORD_W{1'b0}};
+            underrun_word[COUNT_W-1:0] = underrun_count_reg;
+            crc_word = {WORD_W{1'b0}};
+            crc_word[COUNT_W-1:0] = crc_error_count;
+            frame_word = {WORD_W{1'b0}};
+            frame_word[COUNT_W-1:0] = frame_error_count;
+            par_word = {WORD_W{1'b0}};
+            par_word[COUNT_W-1:0] = parallel_error_count;
+            refused_word = {WORD_W{1'b0}};
+            refused_word[COUNT_W-1:0] = refused_count_reg;
+            axis_enable_word = {WORD_W{1'b0}};
+            axis_enable_word[N_AXES-1:0] = axis_enable_reg;
+            axis_status_word = {WORD_W{1'b0}};
+            axis_status_word[FS_AXIS_STATUS_RATE_ERROR_LSB +: N_AXES] = rate_error;
+            axis_status_word[FS_AXIS_STATUS_STEP_LOST_LSB +: N_AXES]  = step_lost;
+            read_value = ({WORD_W{sel[R_ID]}} & FS_ID_MAGIC_VALUE)
+                | ({WORD_W{sel[R_VERSION]}} & VERSION_WORD)
+                | ({WORD_W{sel[R_CAPS]}} & CAPS_WORD)
+                | ({WORD_W{sel[R_CLOCK_HZ]}} & CLOCK_HZ)
+                | ({WORD_W{sel[R_CONTROL]}} & control_word)
+                | ({WORD_W{sel[R_STATUS]}} & status_word)
+                | ({WORD_W{sel[R_FIFO_LEVEL]}} & fifo_level_word)
+                | ({WORD_W{sel[R_WATERMARK]}} & watermark_word)
+                | ({WORD_W{sel[R_START_LEVEL]}} & start_word)
+                | ({WORD_W{sel[R_PERIOD]}} & period_word)
+                | ({WORD_W{sel[R_WATCHDOG]}} & watchdog_word)
+                | ({WORD_W{sel[R_ESTOP_FILTER]}} & estop_word)
+                | ({WORD_W{sel[R_IRQ_STATUS]}} & irq_status_word)
+                | ({WORD_W{sel[R_IRQ_MASK]}} & irq_mask_word)
+                | ({WORD_W{sel[R_TIMESTAMP]}} & timestamp_reg)
+                | ({WORD_W{sel[R_LATCH_TIME] || sel[R_PROBE_TIME]}} & latch_time_reg)
+                | ({WORD_W{sel[R_PERIOD_COUNT]}} & period_count_reg)
+                | ({WORD_W{sel[R_UNDERRUN]}} & underrun_word)
+                | ({WORD_W{sel[R_CRC_ERRORS]}} & crc_word)
+                | ({WORD_W{sel[R_FRAME_ERRORS]}} & frame_word)
+                | ({WORD_W{sel[R_PAR_ERRORS]}} & par_word)
+                | ({WORD_W{sel[R_REFUSED]}} & refused_word)
+                | ({WORD_W{sel[R_AXIS_STATUS]}} & axis_status_word)
+                | ({WORD_W{sel[R_AXIS_ENABLE]}} & axis_enable_word);
             for (index = 0; index < N_AXES; index = index + 1) begin
                 timing_a_word = {WORD_W{1'b0}};
                 timing_a_word[FS_AXIS_TIMING_A_STEP_LEN_LSB +: TIMING_W]   = step_len_reg[TIMING_W*index +: TIMING_W];
@@ -534,24 +629,23 @@ module register_file #(
                 mode_word[FS_AXIS_MODE_INVERT_B_LSB]  = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_B_BIT];
                 mode_word[FS_AXIS_MODE_INVERT_EN_LSB] = invert_reg[FS_INVERT_WIDTH*index + FS_INVERT_PIN_EN_BIT];
                 read_value = read_value
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_POSITION_ADDR} + index * FS_POSITION_STRIDE ||
-                           (ONE_SNAPSHOT != 0 &&
-                            {{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_PROBE_POSITION_ADDR} + index * FS_PROBE_POSITION_STRIDE)}} &
-                       position_latch_reg[POS_W*index +: POS_W]);
-                // Without the readback store the per-axis arrays from their flip-flops,
-                // unless write-only (AXIS_WRITE_ONLY: they read 0).
-                if (!STORED && AXIS_WRITE_ONLY == 0) read_value = read_value
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_A_ADDR} + index * FS_AXIS_TIMING_A_STRIDE}} & timing_a_word)
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_TIMING_B_ADDR} + index * FS_AXIS_TIMING_B_STRIDE}} & timing_b_word)
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_AXIS_MODE_ADDR} + index * FS_AXIS_MODE_STRIDE}} & mode_word);
-                // RECORD_INC, unless write-only (INC_WRITE_ONLY: it reads 0).
-                if (!STORED && INC_WRITE_ONLY == 0) read_value = read_value
-                    | ({32{{{(WORD_W-ADDR_W){1'b0}}, addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_RECORD_INC_ADDR} + index * FS_RECORD_INC_STRIDE}} &
-                       record_inc_reg[INC_W*index +: INC_W]);
+                    | ({WORD_W{sel[R_POSITION + index]}} & position_latch_reg[POS_W*index +: POS_W])
+                    | ({WORD_W{sel[R_TIMING_A + index]}} & timing_a_word)
+                    | ({WORD_W{sel[R_TIMING_B + index]}} & timing_b_word)
+                    | ({WORD_W{sel[R_MODE + index]}} & mode_word)
+                    | ({WORD_W{sel[R_INC + index]}} & record_inc_reg[INC_W*index +: INC_W]);
             end
-            read_word = read_value;
+            read_mux = read_value;
         end
     endfunction
+    // The selects of the word the stage serves, taken with the stage (PAR_ONLY: the
+    // slave's own address, decoded in the serving cycle).
+    reg  [N_SEL-1:0] rsel_reg;
+    always @(posedge clk) begin
+        if (rst) rsel_reg <= read_sel({ADDR_W{1'b0}});
+        else if (granted) rsel_reg <= read_sel(granted_addr);
+    end
+    wire [N_SEL-1:0] bus_sel = PAR_ONLY ? read_sel(bus_addr) : rsel_reg;
 
     integer axis;
 
@@ -634,7 +728,7 @@ module register_file #(
             rdata_reg <= {WORD_W{1'b0}};
         end else begin
             irq_reg <= |(irq_status & irq_mask_reg);
-            if (read) rdata_reg <= stage_stored ? stored_word : read_word(bus_addr);
+            if (read) rdata_reg <= (stage_stored ? stored_word : read_mux(bus_sel)) | early_rdata;
         end
     end
 
@@ -865,6 +959,8 @@ module register_file #(
         // The sequence counts 1..N_AXES after the cycle serving the write; the hold's
         // flip-flops say what the stage and the sequence say.
         assert (push_served_reg == (stage_valid_reg && bus_we && bus_addr == FS_RECORD_PUSH_ADDR));
+        // The stage's decoded selects and store word are its address's.
+        if (!PAR_ONLY) assert (rsel_reg == read_sel(stage_addr_reg) && stage_map_reg == store_map(stage_addr_reg));
         assert (seq_hold_reg == (push_seq_reg != {SEQ_W{1'b0}} && {28'd0, push_seq_reg} < N_AXES));
         assert ({28'd0, push_seq_reg} <= N_AXES);
         if (!DIRECT) assert (push_reg == (push_seq_reg == {{(SEQ_W-1){1'b0}}, 1'b1}));
@@ -1026,13 +1122,15 @@ module register_file #(
     always @(*) if (f_past_valid && !rst) assert (irq_mask_reg == f_irq_mask);
     always @(posedge clk) if (f_past_valid && !$past(rst) && !rst) begin
         assert (irq == $past(|(irq_status & f_irq_mask)));
-        if ($past(read && bus_addr == FS_IRQ_MASK_ADDR && !stage_stored))
+        // early_rdata's bits reach the read register with the served read's word.
+        if ($past(read)) assert ((rdata_reg & $past(early_rdata)) == $past(early_rdata));
+        if ($past(read && bus_addr == FS_IRQ_MASK_ADDR && !stage_stored && early_rdata == 32'd0))
             assert (rdata_reg[IRQ_W-1:0] == $past(f_irq_mask));
         // Without a link its error counters read 0, whatever its (absent) error inputs do.
-        if (HAS_SPI == 0 && $past(read &&
+        if (HAS_SPI == 0 && $past(read && early_rdata == 32'd0 &&
                 (bus_addr == FS_CRC_ERROR_COUNT_ADDR || bus_addr == FS_FRAME_ERROR_COUNT_ADDR)))
             assert (rdata_reg == 32'd0);
-        if (HAS_PARALLEL == 0 && $past(read && bus_addr == FS_PARALLEL_ERROR_COUNT_ADDR))
+        if (HAS_PARALLEL == 0 && $past(read && early_rdata == 32'd0 && bus_addr == FS_PARALLEL_ERROR_COUNT_ADDR))
             assert (rdata_reg == 32'd0);
         // The position latch (spec): the core's positions and TIMESTAMP of the cycle of a
         // period latch (latch_now) or, with ONE_SNAPSHOT, of a probe event, the period
@@ -1042,10 +1140,10 @@ module register_file #(
             assert (position_latch_reg == $past(position) && latch_time_reg == $past(timestamp_reg));
         else
             assert (position_latch_reg == $past(position_latch_reg) && latch_time_reg == $past(latch_time_reg));
-        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored &&
+        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && early_rdata == 32'd0 &&
                 {{(WORD_W-ADDR_W){1'b0}}, bus_addr} == {{(WORD_W-ADDR_W){1'b0}}, FS_PROBE_POSITION_ADDR}))
             assert (rdata_reg == $past(position_latch_reg[POS_W-1:0]));
-        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && bus_addr == FS_PROBE_TIME_ADDR))
+        if (ONE_SNAPSHOT != 0 && $past(read && !stage_stored && early_rdata == 32'd0 && bus_addr == FS_PROBE_TIME_ADDR))
             assert (rdata_reg == $past(latch_time_reg));
     end
 `endif

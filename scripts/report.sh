@@ -34,7 +34,7 @@ yosys_stat() {
     fi
     echo "report: $name ($((SECONDS - start)) s)"
 }
-CPLD="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 2 -set STEP_DIGIT 4 -set FIFO_HEAD_REG 0 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 -set ENC_COUNT_W 16 -set HAS_PBP 0 finestep_top"
+CPLD="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 1 -set FIFO_DEPTH_LOG2 2 -set STEP_DIGIT 4 -set FIFO_HEAD_REG 0 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 -set ENC_COUNT_W 16 -set HAS_PBP 0 -set FEEDBACK_REG 0 finestep_top"
 yosys_stat ice40_blocks "synth_ice40 -noflatten" "chparam -set RAM_BLOCK 1 -set FIFO_HEAD_REG 0 finestep_top"
 yosys_stat ecp5_blocks "synth_ecp5 -noflatten"
 # The papers' blocks the default core leaves out (seed 001's panel and gantry pair, which
@@ -48,7 +48,7 @@ yosys_stat ice40_cpld "synth_ice40" "$CPLD"
 yosys_stat xo2_cpld "synth_lattice -family xo2" "$CPLD"
 # The MAX II configuration (hdl/boards/max2_epm1270.v: seed 002's set, no hand wheel or
 # jog; no RAM: the FIFO of 2 records in flip-flops) as generic LUT4s.
-MAX2="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 0 -set FIFO_DEPTH_LOG2 1 -set STEP_DIGIT 4 -set READ_STORE 0 -set FIFO_HEAD_REG 2 -set NO_RAM 1 -set ONE_SNAPSHOT 1 -set INC_WRITE_ONLY 1 -set AXIS_WRITE_ONLY 1 -set INC_DIRECT 1 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 -set ENC_COUNT_W 16 -set HAS_PBP 0 finestep_top"
+MAX2="chparam -set HAS_SPI 0 -set HAS_PARALLEL 1 -set N_ENC 2 -set HAS_MPG 0 -set FIFO_DEPTH_LOG2 1 -set STEP_DIGIT 4 -set READ_STORE 0 -set FIFO_HEAD_REG 2 -set NO_RAM 1 -set ONE_SNAPSHOT 1 -set INC_WRITE_ONLY 1 -set AXIS_WRITE_ONLY 1 -set INC_DIRECT 1 -set HAS_SPINDLE 0 -set HAS_OUTPUTS 0 -set ENC_COUNT_W 16 -set HAS_PBP 0 -set FEEDBACK_REG 0 finestep_top"
 yosys_stat lut4_max2 "synth -lut 4" "$MAX2"
 
 # One step channel and one encoder channel out of context, against the peers the silicon

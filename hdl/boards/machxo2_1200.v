@@ -64,7 +64,8 @@ module machxo2_1200 #(
         .HAS_SPI(0), .HAS_PARALLEL(1), .N_ENC(N_ENC), .HAS_MPG(HAS_MPG), .HAS_SPINDLE(0), .HAS_OUTPUTS(0),
         .STEP_DIGIT(STEP_DIGIT), .ENC_COUNT_W(ENC_COUNT_W),
         .HAS_PBP(0),        // no pbp block (the digit-serial engine takes none)
-        .FIFO_HEAD_REG(0)   // the FIFO in distributed RAM: one register holds its head
+        .FIFO_HEAD_REG(0),  // the FIFO in distributed RAM: one register holds its head
+        .FEEDBACK_REG(0)    // the feedback read words into the read register: 32 flip-flops fewer
     ) chip (
         .clk(clk), .rst(rst),
         .spi_cs_n(1'b1), .spi_sck(1'b0), .spi_mosi(1'b0),

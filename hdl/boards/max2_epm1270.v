@@ -72,7 +72,8 @@ module max2_epm1270 #(
         .AXIS_WRITE_ONLY(1), // AXIS_TIMING_A/B and AXIS_MODE read 0: 4 x 3 words fewer into it
         .INC_DIRECT(1),     // RECORD_INC written straight into the FIFO's record: no 4 x 32-bit copy
                             // and no push sequence (docs/spec/register_file.md)
-        .ENC_COUNT_W(ENC_COUNT_W)
+        .ENC_COUNT_W(ENC_COUNT_W),
+        .FEEDBACK_REG(0)    // the feedback read words into the read register: 32 flip-flops fewer
     ) chip (
         .clk(clk50), .rst(rst),
         .spi_cs_n(1'b1), .spi_sck(1'b0), .spi_mosi(1'b0),

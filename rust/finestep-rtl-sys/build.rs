@@ -854,7 +854,8 @@ fn verilate(
         // AXIS_WRITE_ONLY; the shim's ft_one_snapshot, ft_inc_write_only and
         // ft_axis_write_only tell the model) and RECORD_INC straight into the FIFO's
         // record (INC_DIRECT, ft_inc_direct), and the CPLDs' narrow encoder words
-        // (ENC_COUNT_W 16, ft_enc_count_w), so the lockstep runs those shapes too.
+        // (ENC_COUNT_W 16, ft_enc_count_w), and the feedback words in the read register
+        // (FEEDBACK_REG 0), so the lockstep runs those shapes too.
         .args(
             matches!(build, Build::Top { digit, .. } if digit != 0)
                 .then_some([
@@ -866,6 +867,7 @@ fn verilate(
                     "-GAXIS_WRITE_ONLY=1",
                     "-GINC_DIRECT=1",
                     "-GENC_COUNT_W=16",
+                    "-GFEEDBACK_REG=0",
                 ])
                 .into_iter()
                 .flatten(),
